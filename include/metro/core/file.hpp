@@ -1,0 +1,27 @@
+// File helpers: atomic output, whole-file input and SHA-256 of inputs.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "metro/core/status.hpp"
+
+namespace metro {
+
+// Writes `contents` to `path` atomically: the data go to a temporary file in the same
+// directory, are flushed to disk (fsync), and the temporary is renamed over `path`. A
+// reader never sees a partial file and a failure leaves any previous `path` untouched.
+Status WriteFileAtomically(const std::string& path, std::string_view contents);
+
+// Reads a whole file. Errors name the path and the operating system's reason.
+Result<std::string> ReadFile(const std::string& path);
+
+// Lower-case hex SHA-256 of a byte string and of a file's contents.
+std::string Sha256Hex(std::string_view bytes);
+Result<std::string> Sha256File(const std::string& path);
+
+// True if both paths name the same existing file (same device and inode). Used to refuse
+// writing an output over one of the inputs.
+bool IsSameFile(const std::string& a, const std::string& b);
+
+}  // namespace metro
