@@ -1,0 +1,93 @@
+// Session: the in-memory form of a logged tag session, whatever file it came from.
+//
+// A session holds one Tag per sensor number. Each tag has its observation times t_s
+// (seconds, strictly increasing), the 1-based source line of every observation, and one
+// Quantity per numeric column (values[i] belongs to t_s[i]). Quantities keep the units of
+// the file (a column `ax_g` stays in g); nothing is converted on load.
+//
+// Canonical column names (docs/formats.md) and their units:
+//   t_s [s] (required), sensor (tag number, default 1),
+//   qw qx qy qz [1] (quaternion, w first),
+//   yaw_deg pitch_deg roll_deg [deg] (derived from the quaternion when absent),
+//   ax_g ay_g az_g [g] | ax_mps2.. [m/s^2] | ax_lsb.. [LSB],
+//   gx_dps gy_dps gz_dps [deg/s] | gx_rads.. [rad/s] | gx_lsb.. [LSB],
+//   temp_c [degC], table_rate_dps [deg/s] (empty = unknown, 0 = stopped),
+//   table_angle_deg [deg], payload_hex (text: the receiver's 9 undecoded payload bytes).
+// Any other column is "unknown": carried through, numeric if every value parses.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace metro {
+
+enum class SessionFormat { kAuto, kCsv, kReceiver, kImuTk };
+
+// "csv", "receiver", "imutk" ("auto" for kAuto).
+const char* SessionFormatName(SessionFormat format);
+
+enum class QuantityOrigin {
+  kFile,     // A canonical column read from the file.
+  kDerived,  // Computed by metro (Euler angles from the quaternion).
+  kUnknown,  // A column metro does not know; carried through as read.
+};
+
+struct Quantity {
+  std::string name;  // Column name, e.g. "pitch_deg".
+  std::string unit;  // "deg", "g", "m/s^2", "LSB", "deg/s", "rad/s", "degC", "s", "1";
+                     // for unknown columns the unit implied by the suffix, or "".
+  QuantityOrigin origin = QuantityOrigin::kFile;
+  std::vector<double> values;  // One per observation. NaN only where an empty field is
+                               // allowed (table_rate_dps, table_angle_deg: "unknown").
+};
+
+struct TextColumn {
+  std::string name;
+  std::vector<std::string> values;  // One per observation.
+};
+
+// Receiver frame counts for one tag (all zero for session.csv input).
+struct FrameCounts {
+  int64_t frames = 0;  // Frames in which the tag's row appeared.
+  int64_t fresh = 0;   // NewData 01: a new packet; these rows are the observations.
+  int64_t stale = 0;   // NewData 00: a repeat of the previous packet; not an observation.
+  int64_t never = 0;   // NewData ff: nothing ever received; not an observation.
+  // Packet loss ratio per metrology-notes sec. 1: stale frames / all frames.
+  double PacketLossRatio() const {
+    return frames > 0 ? static_cast<double>(stale) / static_cast<double>(frames) : 0.0;
+  }
+};
+
+struct Tag {
+  int sensor = 1;
+  std::vector<double> t_s;        // Observation times [s], strictly increasing.
+  std::vector<uint32_t> line;     // 1-based source line of each observation.
+  std::vector<Quantity> quantities;
+  std::vector<TextColumn> text_columns;
+  FrameCounts counts;
+
+  size_t size() const { return t_s.size(); }
+  // The quantity with this column name, or nullptr.
+  const Quantity* Find(std::string_view name) const;
+  Quantity* Find(std::string_view name);
+};
+
+struct Session {
+  std::string path;    // As given by the user.
+  std::string sha256;  // Of the file's bytes (of both files for imu_tk input, "a+b").
+  SessionFormat format = SessionFormat::kCsv;
+  int64_t rows = 0;           // Data rows read (receiver: all lines with a tag row).
+  int64_t rejected_rows = 0;  // Rows skipped in lenient mode.
+  std::vector<int64_t> rejected_lines;  // First few rejected line numbers (lenient mode).
+  std::vector<std::string> rejected_reasons;  // Their messages, same order.
+  std::vector<std::string> columns;          // Header names in file order.
+  std::vector<std::string> unknown_columns;  // Names in `columns` metro does not know.
+  double frame_period_s = 0.0;               // Receiver input only.
+  std::vector<Tag> tags;                     // Sorted by sensor number.
+
+  const Tag* FindTag(int sensor) const;
+};
+
+}  // namespace metro

@@ -1,0 +1,45 @@
+// Loading and writing sessions: the canonical session.csv, the central receiver's raw hex
+// capture, and imu_tk's two-file text format. Formats are specified in docs/formats.md.
+//
+// Strict by default: the first malformed row stops the load with an Error naming the file,
+// the 1-based line (and field) and what was expected. With `lenient`, malformed rows are
+// skipped and counted in Session::rejected_rows (the first few line numbers and messages are
+// kept). Structural problems (empty file, header-only, binary data, no t_s column, an
+// incomplete axis family) are errors in both modes.
+#pragma once
+
+#include <string>
+
+#include "metro/core/status.hpp"
+#include "metro/io/session.hpp"
+
+namespace metro {
+
+struct LoadOptions {
+  SessionFormat format = SessionFormat::kAuto;  // kAuto: detected from the content.
+  bool lenient = false;
+  double frame_period_s = 0.10013;  // Receiver frames: DELTAT = 3281 ticks / 32768 Hz.
+  bool derive_euler = true;         // Add yaw/pitch/roll_deg from qw..qz when absent.
+  int threads = 0;                  // Parser threads; 0 = all cores.
+  size_t max_rejected_kept = 10;    // How many rejected line numbers to keep.
+
+  bool IsValid(std::string* why) const;
+};
+
+// Detects the format of a file from its first meaningful line.
+Result<SessionFormat> DetectSessionFormat(const std::string& path);
+
+// Loads a session.csv or a receiver capture (options.format, or detected).
+Result<Session> LoadSession(const std::string& path, const LoadOptions& options = {});
+
+// Loads imu_tk's two files (whitespace-separated `t_s x y z` raw counts, identical
+// timestamps) as one tag with ax_lsb..az_lsb and gx_lsb..gz_lsb.
+Result<Session> LoadImuTk(const std::string& acc_path, const std::string& gyro_path,
+                          const LoadOptions& options = {});
+
+// Renders a session as canonical session.csv text: t_s, sensor, then every quantity and
+// text column in the order of the first tag's columns; rows ordered by time, then sensor.
+// Derived columns are written only if `include_derived`.
+std::string FormatSessionCsv(const Session& session, bool include_derived = true);
+
+}  // namespace metro
