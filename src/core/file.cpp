@@ -28,8 +28,8 @@ std::string DirectoryOf(const std::string& path) {
 
 Status WriteFileAtomically(const std::string& path, std::string_view contents) {
   std::random_device entropy;
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid()) + "-" +
-                          std::to_string(entropy() & 0xFFFFFFu);
+  const std::string tmp =
+      path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entropy() & 0xFFFFFFu);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return MakeError(OsError("cannot create temporary file for", path));
   const char* data = contents.data();
@@ -117,7 +117,8 @@ Result<std::string> Sha256File(const std::string& path) {
 }
 
 bool IsSameFile(const std::string& a, const std::string& b) {
-  struct stat sa {}, sb {};
+  struct stat sa {
+  }, sb{};
   if (::stat(a.c_str(), &sa) != 0 || ::stat(b.c_str(), &sb) != 0) return false;
   return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }

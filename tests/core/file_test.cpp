@@ -11,10 +11,8 @@ namespace {
 
 TEST_CASE("SHA-256 of known strings", "[core]") {
   // FIPS 180-2 appendix B.1 and the empty string.
-  CHECK(Sha256Hex("abc") ==
-        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
-  CHECK(Sha256Hex("") ==
-        "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  CHECK(Sha256Hex("abc") == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  CHECK(Sha256Hex("") == "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
 }
 
 TEST_CASE("WriteFileAtomically replaces a file and ReadFile reads it back", "[core]") {

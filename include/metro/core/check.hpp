@@ -8,11 +8,10 @@
 #include <cstdio>
 #include <cstdlib>
 
-#define METRO_CHECK(condition)                                               \
-  do {                                                                       \
-    if (!(condition)) {                                                      \
-      std::fprintf(stderr, "%s:%d: METRO_CHECK failed: %s\n", __FILE__,      \
-                   __LINE__, #condition);                                    \
-      std::abort();                                                          \
-    }                                                                        \
+#define METRO_CHECK(condition)                                                                 \
+  do {                                                                                         \
+    if (!(condition)) {                                                                        \
+      std::fprintf(stderr, "%s:%d: METRO_CHECK failed: %s\n", __FILE__, __LINE__, #condition); \
+      std::abort();                                                                            \
+    }                                                                                          \
   } while (false)

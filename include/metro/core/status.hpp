@@ -52,9 +52,9 @@ class Status {
 template <typename T>
 class Result {
  public:
-  Result(T value) : data_(std::move(value)) {}       // NOLINT: implicit by design.
-  Result(Error error) : data_(std::move(error)) {}   // NOLINT: implicit by design.
-  Result(Status status) : data_(status.error()) {}   // NOLINT: only from a failed Status.
+  Result(T value) : data_(std::move(value)) {}      // NOLINT: implicit by design.
+  Result(Error error) : data_(std::move(error)) {}  // NOLINT: implicit by design.
+  Result(Status status) : data_(status.error()) {}  // NOLINT: only from a failed Status.
 
   bool ok() const { return std::holds_alternative<T>(data_); }
   const T& value() const& {

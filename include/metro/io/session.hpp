@@ -62,8 +62,8 @@ struct FrameCounts {
 
 struct Tag {
   int sensor = 1;
-  std::vector<double> t_s;        // Observation times [s], strictly increasing.
-  std::vector<uint32_t> line;     // 1-based source line of each observation.
+  std::vector<double> t_s;     // Observation times [s], strictly increasing.
+  std::vector<uint32_t> line;  // 1-based source line of each observation.
   std::vector<Quantity> quantities;
   std::vector<TextColumn> text_columns;
   FrameCounts counts;
@@ -78,14 +78,14 @@ struct Session {
   std::string path;    // As given by the user.
   std::string sha256;  // Of the file's bytes (of both files for imu_tk input, "a+b").
   SessionFormat format = SessionFormat::kCsv;
-  int64_t rows = 0;           // Data rows read (receiver: all lines with a tag row).
-  int64_t rejected_rows = 0;  // Rows skipped in lenient mode.
+  int64_t rows = 0;                     // Data rows read (receiver: all lines with a tag row).
+  int64_t rejected_rows = 0;            // Rows skipped in lenient mode.
   std::vector<int64_t> rejected_lines;  // First few rejected line numbers (lenient mode).
   std::vector<std::string> rejected_reasons;  // Their messages, same order.
-  std::vector<std::string> columns;          // Header names in file order.
-  std::vector<std::string> unknown_columns;  // Names in `columns` metro does not know.
-  double frame_period_s = 0.0;               // Receiver input only.
-  std::vector<Tag> tags;                     // Sorted by sensor number.
+  std::vector<std::string> columns;           // Header names in file order.
+  std::vector<std::string> unknown_columns;   // Names in `columns` metro does not know.
+  double frame_period_s = 0.0;                // Receiver input only.
+  std::vector<Tag> tags;                      // Sorted by sensor number.
 
   const Tag* FindTag(int sensor) const;
 };

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "metro/core/status.hpp"
+#include "metro/io/receiver.hpp"
 #include "metro/io/session.hpp"
 
 namespace metro {
@@ -18,10 +19,12 @@ namespace metro {
 struct LoadOptions {
   SessionFormat format = SessionFormat::kAuto;  // kAuto: detected from the content.
   bool lenient = false;
-  double frame_period_s = 0.10013;  // Receiver frames: DELTAT = 3281 ticks / 32768 Hz.
-  bool derive_euler = true;         // Add yaw/pitch/roll_deg from qw..qz when absent.
-  int threads = 0;                  // Parser threads; 0 = all cores.
-  size_t max_rejected_kept = 10;    // How many rejected line numbers to keep.
+  // Receiver frame period: the central's DELTAT = 3281 ticks of its 32768 Hz RTC, i.e.
+  // 0.10013 s (exactly 0.100128173828125 s).
+  double frame_period_s = kReceiverFramePeriodS;
+  bool derive_euler = true;       // Add yaw/pitch/roll_deg from qw..qz when absent.
+  int threads = 0;                // Parser threads; 0 = all cores.
+  size_t max_rejected_kept = 10;  // How many rejected line numbers to keep.
 
   bool IsValid(std::string* why) const;
 };

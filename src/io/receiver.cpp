@@ -1,0 +1,210 @@
+#include "metro/io/receiver.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstring>
+#include <map>
+
+#include "io/session_internal.hpp"
+#include "metro/core/file.hpp"
+
+namespace metro {
+namespace {
+
+int HexValue(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+float FloatFromLittleEndian(const uint8_t* b) {
+  const uint32_t bits = static_cast<uint32_t>(b[0]) | (static_cast<uint32_t>(b[1]) << 8) |
+                        (static_cast<uint32_t>(b[2]) << 16) | (static_cast<uint32_t>(b[3]) << 24);
+  float f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
+void FloatToLittleEndian(float f, uint8_t* b) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  for (int i = 0; i < 4; ++i) b[i] = static_cast<uint8_t>(bits >> (8 * i));
+}
+
+// A unit quaternion from the DMP has |q| = 1 to float precision; anything this far off is
+// not a quaternion (a garbled or misframed line).
+constexpr double kQuaternionNormTolerance = 0.05;
+
+}  // namespace
+
+void EncodeQuaternion(const Quaternion& q, ReceiverPayload* payload) {
+  FloatToLittleEndian(static_cast<float>(q.w), payload->data() + 0);
+  FloatToLittleEndian(static_cast<float>(q.x), payload->data() + 4);
+  FloatToLittleEndian(static_cast<float>(q.y), payload->data() + 8);
+  FloatToLittleEndian(static_cast<float>(q.z), payload->data() + 12);
+}
+
+std::string FormatReceiverLine(int sensor, NewDataFlag flag, const ReceiverPayload& payload) {
+  std::string line = fmt::format("{:02x}{:02x}", sensor, static_cast<int>(flag));
+  for (uint8_t b : payload) line += fmt::format("{:02x}", b);
+  return line;
+}
+
+namespace internal {
+
+Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& options) {
+  auto text_or = ReadFile(path);
+  if (!text_or.ok()) return text_or.error();
+  const std::string& text = text_or.value();
+  if (text.empty()) return MakeError(path, 0, "empty file: expected receiver capture lines");
+
+  struct Builder {
+    Tag tag;
+    std::vector<std::string> payload_hex;
+  };
+  std::map<int, Builder> tags;
+  Session session;
+  session.path = path;
+  session.format = SessionFormat::kReceiver;
+  session.frame_period_s = options.frame_period_s;
+  session.columns = {"sensor", "new_data", "qw", "qx", "qy", "qz", "payload_hex"};
+
+  int64_t frame = -1;
+  int previous_sensor = 256;
+  int64_t line_number = 0;
+  size_t pos = 0;
+
+  auto reject = [&](int64_t column, const std::string& message) -> Status {
+    if (!options.lenient) return MakeError(path, line_number, column, message);
+    ++session.rejected_rows;
+    ++session.rows;
+    if (session.rejected_lines.size() < options.max_rejected_kept) {
+      session.rejected_lines.push_back(line_number);
+      session.rejected_reasons.push_back(message);
+    }
+    return Status::Ok();
+  };
+
+  while (pos < text.size()) {
+    size_t nl = text.find('\n', pos);
+    if (nl == std::string::npos) nl = text.size();
+    std::string_view line(text.data() + pos, nl - pos);
+    pos = nl + 1;
+    ++line_number;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.empty() || line.front() == '#') continue;
+
+    if (line.size() != static_cast<size_t>(kReceiverLineHexChars)) {
+      const std::string message = fmt::format(
+          "receiver line has {} characters: expected {} hex characters (sensor, NewData flag, "
+          "{} payload bytes)",
+          line.size(), kReceiverLineHexChars, kReceiverPayloadBytes);
+      if (Status s = reject(0, message); !s.ok()) return s.error();
+      continue;
+    }
+    uint8_t bytes[2 + kReceiverPayloadBytes];
+    int64_t bad_column = 0;
+    for (size_t i = 0; i < line.size(); i += 2) {
+      const int hi = HexValue(line[i]);
+      const int lo = HexValue(line[i + 1]);
+      if (hi < 0 || lo < 0) {
+        bad_column = static_cast<int64_t>(i) + (hi < 0 ? 1 : 2);
+        break;
+      }
+      bytes[i / 2] = static_cast<uint8_t>(hi * 16 + lo);
+    }
+    if (bad_column > 0) {
+      const std::string message = fmt::format(
+          "non-hex character '{}' at column {}: expected 0-9 or a-f",
+          std::isprint(static_cast<unsigned char>(line[bad_column - 1]))
+              ? std::string(1, line[bad_column - 1])
+              : fmt::format("\\x{:02x}", static_cast<unsigned char>(line[bad_column - 1])),
+          bad_column);
+      if (Status s = reject(bad_column, message); !s.ok()) return s.error();
+      continue;
+    }
+    const int sensor = bytes[0];
+    const int flag = bytes[1];
+    if (sensor == 0) {
+      if (Status s = reject(1, "sensor number 00: expected a tag number 01..ff"); !s.ok()) {
+        return s.error();
+      }
+      continue;
+    }
+    if (flag != 0x00 && flag != 0x01 && flag != 0xFF) {
+      const std::string message = fmt::format(
+          "NewData flag {:02x}: expected 01 (fresh), 00 (stale) or ff (never received)", flag);
+      if (Status s = reject(3, message); !s.ok()) return s.error();
+      continue;
+    }
+    Quaternion q;
+    if (flag == 0x01) {
+      q.w = FloatFromLittleEndian(bytes + 2);
+      q.x = FloatFromLittleEndian(bytes + 6);
+      q.y = FloatFromLittleEndian(bytes + 10);
+      q.z = FloatFromLittleEndian(bytes + 14);
+      const double norm = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+      if (!std::isfinite(norm) || std::abs(norm - 1.0) > kQuaternionNormTolerance) {
+        const std::string message = fmt::format(
+            "fresh row with quaternion norm {}: expected a unit quaternion (w, x, y, z as "
+            "float32 little-endian in payload bytes 1..16)",
+            norm);
+        if (Status s = reject(5, message); !s.ok()) return s.error();
+        continue;
+      }
+    }
+    // A new frame starts when the sensor number does not increase.
+    if (sensor <= previous_sensor) ++frame;
+    previous_sensor = sensor;
+    ++session.rows;
+
+    Builder& b = tags[sensor];
+    b.tag.sensor = sensor;
+    ++b.tag.counts.frames;
+    if (flag == 0x00) {
+      ++b.tag.counts.stale;
+      continue;
+    }
+    if (flag == 0xFF) {
+      ++b.tag.counts.never;
+      continue;
+    }
+    ++b.tag.counts.fresh;
+    if (b.tag.quantities.empty()) {
+      for (const char* name : {"qw", "qx", "qy", "qz"}) {
+        b.tag.quantities.push_back(Quantity{name, "1", QuantityOrigin::kFile, {}});
+      }
+    }
+    b.tag.t_s.push_back(static_cast<double>(frame) * options.frame_period_s);
+    b.tag.line.push_back(static_cast<uint32_t>(line_number));
+    b.tag.quantities[0].values.push_back(q.w);
+    b.tag.quantities[1].values.push_back(q.x);
+    b.tag.quantities[2].values.push_back(q.y);
+    b.tag.quantities[3].values.push_back(q.z);
+    std::string extra(line.substr(4 + 2 * 16));
+    for (char& c : extra) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    b.payload_hex.push_back(std::move(extra));
+  }
+  if (session.rows == session.rejected_rows) {
+    if (session.rejected_rows > 0) {
+      return MakeError(path, 0,
+                       fmt::format("no valid receiver lines: all {} were rejected (first: line "
+                                   "{}: {})",
+                                   session.rejected_rows, session.rejected_lines.front(),
+                                   session.rejected_reasons.front()));
+    }
+    return MakeError(path, 0, "no receiver lines: only blank or comment lines");
+  }
+  for (auto& [sensor, b] : tags) {
+    if (!b.tag.t_s.empty()) {
+      b.tag.text_columns.push_back(TextColumn{"payload_hex", std::move(b.payload_hex)});
+    }
+    session.tags.push_back(std::move(b.tag));
+  }
+  return session;
+}
+
+}  // namespace internal
+}  // namespace metro

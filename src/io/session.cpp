@@ -1,0 +1,283 @@
+#include "metro/io/session.hpp"
+
+#include <fast_float/fast_float.h>
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <iterator>
+#include <queue>
+#include <thread>
+
+#include "io/session_internal.hpp"
+#include "metro/core/angles.hpp"
+#include "metro/core/file.hpp"
+#include "metro/io/receiver.hpp"
+#include "metro/io/session_io.hpp"
+
+namespace metro {
+
+const char* SessionFormatName(SessionFormat format) {
+  switch (format) {
+    case SessionFormat::kAuto:
+      return "auto";
+    case SessionFormat::kCsv:
+      return "csv";
+    case SessionFormat::kReceiver:
+      return "receiver";
+    case SessionFormat::kImuTk:
+      return "imutk";
+  }
+  return "?";
+}
+
+const Quantity* Tag::Find(std::string_view name) const {
+  for (const Quantity& q : quantities) {
+    if (q.name == name) return &q;
+  }
+  return nullptr;
+}
+
+Quantity* Tag::Find(std::string_view name) {
+  for (Quantity& q : quantities) {
+    if (q.name == name) return &q;
+  }
+  return nullptr;
+}
+
+const Tag* Session::FindTag(int sensor) const {
+  for (const Tag& t : tags) {
+    if (t.sensor == sensor) return &t;
+  }
+  return nullptr;
+}
+
+bool LoadOptions::IsValid(std::string* why) const {
+  if (!(frame_period_s > 0.0) || !std::isfinite(frame_period_s)) {
+    if (why) *why = "frame_period_s must be a positive number of seconds";
+    return false;
+  }
+  if (threads < 0) {
+    if (why) *why = "threads must be >= 0 (0 = all cores)";
+    return false;
+  }
+  return true;
+}
+
+namespace internal {
+
+void AddTextOrUnknownColumn(const std::string& name, bool unknown, const std::string& unit,
+                            std::vector<std::string> values, Tag* tag) {
+  if (unknown) {
+    std::vector<double> numbers(values.size());
+    bool numeric = true;
+    for (size_t i = 0; i < values.size() && numeric; ++i) {
+      const std::string& s = values[i];
+      const char* b = s.data();
+      const char* e = s.data() + s.size();
+      if (b < e && *b == '+') ++b;
+      const auto r = fast_float::from_chars(b, e, numbers[i]);
+      numeric = b < e && r.ec == std::errc() && r.ptr == e && std::isfinite(numbers[i]);
+    }
+    if (numeric) {
+      Quantity q;
+      q.name = name;
+      q.unit = unit;
+      q.origin = QuantityOrigin::kUnknown;
+      q.values = std::move(numbers);
+      tag->quantities.push_back(std::move(q));
+      return;
+    }
+  }
+  tag->text_columns.push_back(TextColumn{name, std::move(values)});
+}
+
+void DeriveEulerIfAbsent(Tag* tag) {
+  const Quantity* qw = tag->Find("qw");
+  const Quantity* qx = tag->Find("qx");
+  const Quantity* qy = tag->Find("qy");
+  const Quantity* qz = tag->Find("qz");
+  if (!qw || !qx || !qy || !qz) return;
+  if (tag->Find("yaw_deg") || tag->Find("pitch_deg") || tag->Find("roll_deg")) return;
+  const size_t n = tag->size();
+  Quantity yaw{"yaw_deg", "deg", QuantityOrigin::kDerived, std::vector<double>(n)};
+  Quantity pitch{"pitch_deg", "deg", QuantityOrigin::kDerived, std::vector<double>(n)};
+  Quantity roll{"roll_deg", "deg", QuantityOrigin::kDerived, std::vector<double>(n)};
+  for (size_t i = 0; i < n; ++i) {
+    const EulerDeg e =
+        EulerFromQuaternion({qw->values[i], qx->values[i], qy->values[i], qz->values[i]});
+    yaw.values[i] = e.yaw_deg;
+    pitch.values[i] = e.pitch_deg;
+    roll.values[i] = e.roll_deg;
+  }
+  tag->quantities.push_back(std::move(yaw));
+  tag->quantities.push_back(std::move(pitch));
+  tag->quantities.push_back(std::move(roll));
+}
+
+}  // namespace internal
+
+namespace {
+
+bool IsHexDigit(char c) {
+  return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F');
+}
+
+bool LooksLikeReceiverLine(std::string_view line) {
+  if (line.size() != static_cast<size_t>(kReceiverLineHexChars)) return false;
+  return std::all_of(line.begin(), line.end(), IsHexDigit);
+}
+
+}  // namespace
+
+Result<SessionFormat> DetectSessionFormat(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return MakeError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  std::string head(1 << 16, '\0');
+  ssize_t got = 0;
+  for (;;) {
+    got = ::read(fd, head.data(), head.size());
+    if (got >= 0 || errno != EINTR) break;
+  }
+  ::close(fd);
+  if (got < 0) return MakeError(path, 0, std::string("cannot read: ") + std::strerror(errno));
+  head.resize(static_cast<size_t>(got));
+  if (head.empty()) {
+    return MakeError(path, 0, "empty file: expected a session.csv or a receiver capture");
+  }
+  size_t control = 0;
+  for (unsigned char c : head) {
+    if (c == 0) {
+      return MakeError(path, 0,
+                       "binary data (NUL bytes): expected a text session.csv or a "
+                       "receiver capture");
+    }
+    if (c < 0x20 && c != '\n' && c != '\r' && c != '\t') ++control;
+  }
+  if (control * 20 > head.size()) {
+    return MakeError(path, 0,
+                     "binary data (control bytes): expected a text session.csv or "
+                     "a receiver capture");
+  }
+  size_t pos = 0;
+  while (pos < head.size()) {
+    size_t nl = head.find('\n', pos);
+    if (nl == std::string::npos) nl = head.size();
+    std::string_view line(head.data() + pos, nl - pos);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    while (!line.empty() && (line.front() == ' ' || line.front() == '\t')) line.remove_prefix(1);
+    if (!line.empty() && line.front() != '#') {
+      return LooksLikeReceiverLine(line) ? SessionFormat::kReceiver : SessionFormat::kCsv;
+    }
+    pos = nl + 1;
+  }
+  return MakeError(path, 0,
+                   "no data: only blank or comment lines; expected a session.csv "
+                   "header or receiver lines");
+}
+
+Result<Session> LoadSession(const std::string& path, const LoadOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(path, 0, "invalid load options: " + why);
+  SessionFormat format = options.format;
+  if (format == SessionFormat::kAuto) {
+    auto detected = DetectSessionFormat(path);
+    if (!detected.ok()) return detected.error();
+    format = detected.value();
+  }
+  if (format == SessionFormat::kImuTk) {
+    return MakeError(path, 0, "imu_tk input is two files: use LoadImuTk(acc, gyro)");
+  }
+  // Hash the bytes on a second thread while the parser works.
+  Result<std::string> digest = std::string();
+  std::thread hasher([&] { digest = Sha256File(path); });
+  Result<Session> session = format == SessionFormat::kCsv
+                                ? internal::LoadSessionCsv(path, options)
+                                : internal::LoadReceiverCapture(path, options);
+  hasher.join();
+  if (!session.ok()) return session;
+  if (!digest.ok()) return digest.error();
+  Session out = std::move(session).value();
+  out.sha256 = digest.value();
+  if (options.derive_euler) {
+    for (Tag& tag : out.tags) internal::DeriveEulerIfAbsent(&tag);
+  }
+  return out;
+}
+
+std::string FormatSessionCsv(const Session& session, bool include_derived) {
+  // Column union: numeric quantities then text columns, in first-seen order.
+  std::vector<std::string> numeric;
+  std::vector<std::string> text;
+  for (const Tag& tag : session.tags) {
+    for (const Quantity& q : tag.quantities) {
+      if (q.origin == QuantityOrigin::kDerived && !include_derived) continue;
+      if (std::find(numeric.begin(), numeric.end(), q.name) == numeric.end()) {
+        numeric.push_back(q.name);
+      }
+    }
+    for (const TextColumn& c : tag.text_columns) {
+      if (std::find(text.begin(), text.end(), c.name) == text.end()) text.push_back(c.name);
+    }
+  }
+  std::string out;
+  out.reserve(64 * 1024);
+  auto it = std::back_inserter(out);
+  fmt::format_to(it, "t_s,sensor");
+  for (const auto& n : numeric) fmt::format_to(it, ",{}", n);
+  for (const auto& n : text) fmt::format_to(it, ",{}", n);
+  out += '\n';
+
+  struct Column {
+    std::vector<const std::vector<double>*> numeric;
+    std::vector<const std::vector<std::string>*> text;
+  };
+  std::vector<Column> columns(session.tags.size());
+  for (size_t k = 0; k < session.tags.size(); ++k) {
+    const Tag& tag = session.tags[k];
+    for (const auto& n : numeric) {
+      const Quantity* q = tag.Find(n);
+      columns[k].numeric.push_back(q ? &q->values : nullptr);
+    }
+    for (const auto& n : text) {
+      const std::vector<std::string>* values = nullptr;
+      for (const TextColumn& c : tag.text_columns) {
+        if (c.name == n) values = &c.values;
+      }
+      columns[k].text.push_back(values);
+    }
+  }
+  // Merge the tags by time (then by sensor number: tags are sorted by sensor).
+  using Head = std::pair<double, size_t>;  // (t, tag index)
+  auto later = [](const Head& a, const Head& b) {
+    return a.first != b.first ? a.first > b.first : a.second > b.second;
+  };
+  std::priority_queue<Head, std::vector<Head>, decltype(later)> heads(later);
+  std::vector<size_t> cursor(session.tags.size(), 0);
+  for (size_t k = 0; k < session.tags.size(); ++k) {
+    if (!session.tags[k].t_s.empty()) heads.push({session.tags[k].t_s[0], k});
+  }
+  while (!heads.empty()) {
+    const size_t k = heads.top().second;
+    heads.pop();
+    const Tag& tag = session.tags[k];
+    const size_t i = cursor[k]++;
+    fmt::format_to(it, "{},{}", tag.t_s[i], tag.sensor);
+    for (const auto* values : columns[k].numeric) {
+      out += ',';
+      if (values != nullptr && std::isfinite((*values)[i])) fmt::format_to(it, "{}", (*values)[i]);
+    }
+    for (const auto* values : columns[k].text) {
+      out += ',';
+      if (values != nullptr) out += (*values)[i];
+    }
+    out += '\n';
+    if (cursor[k] < tag.t_s.size()) heads.push({tag.t_s[cursor[k]], k});
+  }
+  return out;
+}
+
+}  // namespace metro

@@ -1,0 +1,175 @@
+#include "metro/stats/type_a.hpp"
+
+#include <fftw3.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <boost/math/distributions/students_t.hpp>
+#include <cmath>
+#include <mutex>
+#include <vector>
+
+namespace metro {
+namespace {
+
+// FFTW's planner is not thread-safe; plans are made and destroyed under this lock and
+// executed outside it (fftw_execute on distinct plans is thread-safe).
+std::mutex& FftwPlannerMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+// Smallest 2^a 3^b 5^c 7^d >= n: sizes FFTW transforms fastest.
+size_t NextFastFftSize(size_t n) {
+  for (size_t m = std::max<size_t>(n, 1);; ++m) {
+    size_t r = m;
+    for (size_t p : {2u, 3u, 5u, 7u}) {
+      while (r % p == 0) r /= p;
+    }
+    if (r == 1) return m;
+  }
+}
+
+// Direct lag-k autocovariance sum of the centred series d.
+double LagSum(const double* d, size_t n, size_t k) {
+  double acc = 0.0;
+  for (size_t i = 0; i + k < n; ++i) acc += d[i] * d[i + k];
+  return acc;
+}
+
+// Up to this many lags are computed directly before switching to the FFT.
+constexpr size_t kDirectLags = 16;
+
+}  // namespace
+
+bool TypeAOptions::IsValid(std::string* why) const {
+  if (!(band_confidence > 0.0 && band_confidence < 1.0)) {
+    if (why) *why = "band_confidence must be in (0, 1)";
+    return false;
+  }
+  if (!(max_lag_fraction > 0.0 && max_lag_fraction <= 0.5)) {
+    if (why) *why = "max_lag_fraction must be in (0, 0.5]";
+    return false;
+  }
+  return true;
+}
+
+void Autocorrelation(const double* x, size_t n, size_t max_lag, double* rho) {
+  METRO_CHECK(n >= 1 && max_lag < n);
+  double mean = 0.0;
+  for (size_t i = 0; i < n; ++i) mean += x[i];
+  mean /= static_cast<double>(n);
+  // Zero padding to >= n + max_lag makes the circular correlation linear for those lags.
+  const size_t size = NextFastFftSize(n + max_lag + 1);
+  double* buffer = fftw_alloc_real(size);
+  fftw_complex* spectrum = fftw_alloc_complex(size / 2 + 1);
+  fftw_plan forward, backward;
+  {
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    forward = fftw_plan_dft_r2c_1d(static_cast<int>(size), buffer, spectrum, FFTW_ESTIMATE);
+    backward = fftw_plan_dft_c2r_1d(static_cast<int>(size), spectrum, buffer, FFTW_ESTIMATE);
+  }
+  for (size_t i = 0; i < n; ++i) buffer[i] = x[i] - mean;
+  std::fill(buffer + n, buffer + size, 0.0);
+  fftw_execute(forward);
+  for (size_t k = 0; k < size / 2 + 1; ++k) {
+    const double re = spectrum[k][0];
+    const double im = spectrum[k][1];
+    spectrum[k][0] = re * re + im * im;
+    spectrum[k][1] = 0.0;
+  }
+  fftw_execute(backward);
+  const double c0 = buffer[0];
+  for (size_t k = 0; k <= max_lag; ++k) rho[k] = c0 > 0.0 ? buffer[k] / c0 : 0.0;
+  rho[0] = 1.0;
+  {
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    fftw_destroy_plan(forward);
+    fftw_destroy_plan(backward);
+  }
+  fftw_free(buffer);
+  fftw_free(spectrum);
+}
+
+Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("invalid Type A options: " + why);
+  if (n < 2) {
+    return MakeError(fmt::format("{} observation{}: a Type A evaluation needs at least 2", n,
+                                 n == 1 ? "" : "s"));
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(values[i])) {
+      return MakeError(fmt::format("observation {} is not finite", i + 1));
+    }
+  }
+  const double dn = static_cast<double>(n);
+  // Corrected two-pass algorithm (Chan, Golub & LeVeque 1983): centre on a first mean,
+  // then correct with the residual sum, so no large sums of squares cancel.
+  double first = 0.0;
+  for (size_t i = 0; i < n; ++i) first += values[i];
+  first /= dn;
+  double s1 = 0.0, s2 = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const double d = values[i] - first;
+    s1 += d;
+    s2 += d * d;
+  }
+  TypeAResult r;
+  r.n = static_cast<int64_t>(n);
+  r.mean = first + s1 / dn;
+  r.variance = std::max(0.0, (s2 - s1 * s1 / dn) / (dn - 1.0));  // JCGM 100 4.2.2
+  r.std = std::sqrt(r.variance);
+  r.variance_of_mean = r.variance / dn;  // JCGM 100 4.2.3
+  r.std_of_mean = std::sqrt(r.variance_of_mean);
+  r.dof = r.n - 1;
+  r.n_eff = dn;
+  r.std_of_mean_autocorr = r.std_of_mean;
+  if (!options.autocorrelation || n < 4 || r.variance == 0.0) return r;
+
+  // Zhang (2006): variance factor from the autocorrelation up to the cut-off lag.
+  std::vector<double> centred(n);
+  for (size_t i = 0; i < n; ++i) centred[i] = values[i] - r.mean;
+  const double c0 = LagSum(centred.data(), n, 0);
+  const size_t max_lag = std::max<size_t>(1, static_cast<size_t>(options.max_lag_fraction * dn));
+  const boost::math::students_t t_dist(dn - 1.0);
+  const double t_q =
+      boost::math::quantile(boost::math::complement(t_dist, (1.0 - options.band_confidence) / 2));
+
+  std::vector<double> rho;  // Filled by FFT only if the direct lags do not suffice.
+  double factor = 1.0;
+  double sum_rho2 = 0.0;
+  size_t cutoff = max_lag;
+  bool inside = false;
+  for (size_t k = 1; k <= max_lag; ++k) {
+    double rho_k;
+    if (k <= kDirectLags) {
+      rho_k = LagSum(centred.data(), n, k) / c0;
+    } else {
+      if (rho.empty()) {
+        rho.resize(max_lag + 1);
+        Autocorrelation(values, n, max_lag, rho.data());
+      }
+      rho_k = rho[k];
+    }
+    if (k == 1) r.rho1 = rho_k;
+    // Bartlett's formula for the standard error of rho_k under "rho_j = 0 for j >= k".
+    const double band = t_q * std::sqrt((1.0 + 2.0 * sum_rho2) / dn);
+    if (std::abs(rho_k) <= band) {
+      cutoff = k - 1;
+      inside = true;
+      break;
+    }
+    factor += 2.0 * (1.0 - static_cast<double>(k) / dn) * rho_k;
+    sum_rho2 += rho_k * rho_k;
+  }
+  r.cutoff_lag = static_cast<int64_t>(cutoff);
+  r.cutoff_reached_limit = !inside;
+  // A strongly negative correlation can drive F towards 0; n_eff is bounded by n^2.
+  r.variance_factor = std::max(factor, 1.0 / dn);
+  r.n_eff = dn / r.variance_factor;
+  r.std_of_mean_autocorr = std::sqrt(r.variance_factor * r.variance / dn);
+  return r;
+}
+
+}  // namespace metro

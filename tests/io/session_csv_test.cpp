@@ -1,0 +1,228 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <string>
+
+#include "metro/io/session_io.hpp"
+#include "support/temp_file.hpp"
+
+namespace metro {
+namespace {
+
+using testing::TempFile;
+
+Result<Session> Load(const std::string& text, LoadOptions options = {}) {
+  TempFile file(text);
+  auto r = LoadSession(file.path(), options);
+  if (!r.ok()) {
+    // Make messages independent of the temporary name.
+    Error e = r.error();
+    e.file = "session.csv";
+    return e;
+  }
+  return r;
+}
+
+std::string ErrorOf(const std::string& text, LoadOptions options = {}) {
+  auto r = Load(text, options);
+  REQUIRE_FALSE(r.ok());
+  return r.error().ToString();
+}
+
+TEST_CASE("session.csv loads tags, units and comments", "[io][csv]") {
+  auto r = Load(
+      "# a comment before the header\n"
+      "t_s,sensor,pitch_deg,ax_g,ay_g,az_g,table_rate_dps\r\n"
+      "0.0,2,1.5,0,0,1,\r\n"
+      "  # a comment between rows\n"
+      "0.0,1,2.5,0,0,1,0\r\n"
+      "\n"
+      "0.1,2,1.7,0,0,1,10\r\n");
+  REQUIRE(r.ok());
+  const Session& s = r.value();
+  CHECK(s.rows == 3);
+  REQUIRE(s.tags.size() == 2);
+  CHECK(s.tags[0].sensor == 1);
+  CHECK(s.tags[1].sensor == 2);
+  const Tag& t2 = s.tags[1];
+  REQUIRE(t2.size() == 2);
+  CHECK(t2.line[0] == 3);
+  CHECK(t2.line[1] == 7);
+  const Quantity* pitch = t2.Find("pitch_deg");
+  REQUIRE(pitch != nullptr);
+  CHECK(pitch->unit == "deg");
+  CHECK(pitch->values[1] == 1.7);
+  CHECK(t2.Find("ax_g")->unit == "g");
+  CHECK(std::isnan(t2.Find("table_rate_dps")->values[0]));
+  CHECK(t2.Find("table_rate_dps")->values[1] == 10.0);
+  CHECK(s.sha256.size() == 64);
+}
+
+TEST_CASE("session.csv without a sensor column is tag 1", "[io][csv]") {
+  auto r = Load("t_s,roll_deg\n0,1\n1,2\n");
+  REQUIRE(r.ok());
+  REQUIRE(r.value().tags.size() == 1);
+  CHECK(r.value().tags[0].sensor == 1);
+}
+
+TEST_CASE("Euler angles are derived from quaternions of thesis Listing 1", "[io][csv]") {
+  auto r = Load(
+      "t_s,sensor,qw,qx,qy,qz\n"
+      "0,1,0.996276,0.078654,0.007692,0.034479\n"
+      "0,2,0.967565,0.015171,-0.011132,0.251919\n");
+  REQUIRE(r.ok());
+  const Tag& s1 = r.value().tags[0];
+  const Tag& s2 = r.value().tags[1];
+  REQUIRE(s1.Find("yaw_deg") != nullptr);
+  CHECK(s1.Find("yaw_deg")->origin == QuantityOrigin::kDerived);
+  CHECK(s1.Find("yaw_deg")->values[0] == Approx(4.009102).margin(5e-4));
+  CHECK(s1.Find("pitch_deg")->values[0] == Approx(0.567438).margin(5e-4));
+  CHECK(s1.Find("roll_deg")->values[0] == Approx(9.047937).margin(5e-4));
+  CHECK(s2.Find("yaw_deg")->values[0] == Approx(29.167585).margin(5e-4));
+  CHECK(s2.Find("pitch_deg")->values[0] == Approx(-1.672434).margin(5e-4));
+  CHECK(s2.Find("roll_deg")->values[0] == Approx(1.361458).margin(5e-4));
+}
+
+TEST_CASE("Euler angles in the file are not replaced", "[io][csv]") {
+  auto r = Load("t_s,qw,qx,qy,qz,yaw_deg\n0,1,0,0,0,5\n");
+  REQUIRE(r.ok());
+  CHECK(r.value().tags[0].Find("yaw_deg")->values[0] == 5.0);
+  CHECK(r.value().tags[0].Find("pitch_deg") == nullptr);
+}
+
+TEST_CASE("Unknown columns are carried through and reported", "[io][csv]") {
+  auto r = Load("t_s,humidity_pct,note,pressure_hpa\n0,40,start,1013\n1,41,x y,1012.5\n");
+  REQUIRE(r.ok());
+  const Session& s = r.value();
+  CHECK(s.unknown_columns == std::vector<std::string>{"humidity_pct", "note", "pressure_hpa"});
+  const Tag& t = s.tags[0];
+  REQUIRE(t.Find("humidity_pct") != nullptr);
+  CHECK(t.Find("humidity_pct")->origin == QuantityOrigin::kUnknown);
+  CHECK(t.Find("pressure_hpa")->values[1] == 1012.5);
+  REQUIRE(t.text_columns.size() == 1);
+  CHECK(t.text_columns[0].name == "note");
+  CHECK(t.text_columns[0].values[1] == "x y");
+}
+
+TEST_CASE("session.csv bad input: each class names file, line and what was expected", "[io][csv]") {
+  CHECK(ErrorOf("t_s,pitch_deg\n0,1\n1,abc\n") ==
+        "session.csv:3:2: pitch_deg: expected a finite number, found 'abc' (not a number)");
+  CHECK(ErrorOf("t_s,pitch_deg,roll_deg\n0,1,2\n1,2\n") ==
+        "session.csv:3:3: missing field: expected 3 fields (t_s,pitch_deg,roll_deg), found 2");
+  CHECK(ErrorOf("t_s,pitch_deg\n0,1,7\n") == "session.csv:2:3: expected 2 fields, found 3");
+  CHECK(ErrorOf("t_s,pitch_deg\n0,nan\n") ==
+        "session.csv:2:2: pitch_deg: expected a finite number, found 'nan' (not finite)");
+  CHECK(ErrorOf("t_s,pitch_deg\n0,-inf\n") ==
+        "session.csv:2:2: pitch_deg: expected a finite number, found '-inf' (not finite)");
+  CHECK(ErrorOf("t_s,pitch_deg\n0,\n") ==
+        "session.csv:2:2: pitch_deg: expected a finite number, found '' (empty)");
+  CHECK(ErrorOf("t_s,sensor,pitch_deg\n0,1,1\n1,1,1\n0.5,1,1\n") ==
+        "session.csv:4:1: t_s = 0.5 is not after t_s = 1 of sensor 1 on line 3: rows must "
+        "be sorted by strictly increasing time per tag");
+  CHECK(ErrorOf("t_s,sensor,pitch_deg\n0,0,1\n") ==
+        "session.csv:2:2: sensor: expected a tag number 1..255, found '0'");
+  CHECK(ErrorOf("t_s,Pitch (deg)\n0,1\n") ==
+        "session.csv:1:2: header: column 2 is 'Pitch (deg)': expected a lower-case name with "
+        "its unit, e.g. pitch_deg ([a-z][a-z0-9_]*; see docs/formats.md)");
+  CHECK(ErrorOf("t_s,pitch_deg,pitch_deg\n0,1,1\n") ==
+        "session.csv:1:3: header: column 'pitch_deg' appears twice (columns 2 and 3)");
+  CHECK(ErrorOf("time,ax,ay\n0,1,1\n") ==
+        "session.csv:1: header: no t_s column; expected a session.csv header naming t_s (time "
+        "in seconds) and quantities with units, e.g. t_s,sensor,qw,qx,qy,qz; found "
+        "'time,ax,ay'");
+  CHECK(ErrorOf("t_s,ax_g,ay_g\n0,1,1\n") ==
+        "session.csv:1: header: 'ax_g' needs its whole axis family (3 columns of family "
+        "accel_g), found only ax_g,ay_g");
+  CHECK(ErrorOf("") == "session.csv: empty file: expected a session.csv or a receiver capture");
+  CHECK(ErrorOf("t_s,pitch_deg\n") ==
+        "session.csv:1: header only: no data rows after the header; expected one row per "
+        "observation");
+  CHECK(ErrorOf("# only a comment\n\n") ==
+        "session.csv: no data: only blank or comment lines; expected a session.csv header or "
+        "receiver lines");
+  CHECK(ErrorOf(std::string("\x7f"
+                            "ELF\x02\x01\x01\0\0\0",
+                            10)) ==
+        "session.csv: binary data (NUL bytes): expected a text session.csv or a receiver "
+        "capture");
+}
+
+TEST_CASE("Lenient mode skips and counts malformed rows", "[io][csv]") {
+  LoadOptions lenient;
+  lenient.lenient = true;
+  auto r = Load("t_s,pitch_deg\n0,1\n1,x\n2,3\n1.5,4\n3,,\n4,5\n", lenient);
+  REQUIRE(r.ok());
+  const Session& s = r.value();
+  CHECK(s.rows == 6);
+  CHECK(s.rejected_rows == 3);
+  CHECK(s.rejected_lines == std::vector<int64_t>{3, 5, 6});
+  REQUIRE(s.tags[0].size() == 3);
+  CHECK(s.tags[0].Find("pitch_deg")->values[2] == 5.0);
+  // All rows bad: an error even in lenient mode.
+  auto all_bad = Load("t_s,pitch_deg\n0,x\n", lenient);
+  REQUIRE_FALSE(all_bad.ok());
+  CHECK(all_bad.error().message ==
+        "no valid data rows: all 1 rows were rejected (first: line 2: pitch_deg: expected a "
+        "finite number, found 'x' (not a number))");
+}
+
+TEST_CASE("Parallel parsing equals sequential parsing", "[io][csv]") {
+  // ~3 MB so the file is cut into several blocks; bad rows spread through it.
+  std::string text = "t_s,sensor,pitch_deg,roll_deg\n";
+  for (int i = 0; i < 120000; ++i) {
+    const int sensor = 1 + i % 3;
+    const double t = (i / 3) * 0.01;
+    if (i % 9973 == 500) {
+      text += "oops,1,2,3\n";
+      continue;
+    }
+    text += std::to_string(t) + "," + std::to_string(sensor) + "," + std::to_string(i * 1e-3) +
+            "," + std::to_string(-i * 2e-3) + "\n";
+  }
+  LoadOptions one, two;
+  one.lenient = two.lenient = true;
+  one.threads = 1;
+  two.threads = 2;
+  TempFile file(text);
+  auto a = LoadSession(file.path(), one);
+  auto b = LoadSession(file.path(), two);
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  CHECK(a.value().rows == 120000);
+  CHECK(a.value().rejected_rows == b.value().rejected_rows);
+  CHECK(a.value().rejected_lines == b.value().rejected_lines);
+  REQUIRE(a.value().tags.size() == 3);
+  for (size_t k = 0; k < 3; ++k) {
+    CHECK(a.value().tags[k].t_s == b.value().tags[k].t_s);
+    CHECK(a.value().tags[k].line == b.value().tags[k].line);
+    CHECK(a.value().tags[k].Find("roll_deg")->values == b.value().tags[k].Find("roll_deg")->values);
+  }
+  // Strict mode reports the first bad line in file order, whatever the thread count.
+  LoadOptions strict2;
+  strict2.threads = 2;
+  auto c = LoadSession(file.path(), strict2);
+  REQUIRE_FALSE(c.ok());
+  CHECK(c.error().line == 502);
+}
+
+TEST_CASE("FormatSessionCsv round-trips a session", "[io][csv]") {
+  const std::string text =
+      "t_s,sensor,qw,qx,qy,qz,table_rate_dps,note\n"
+      "0,2,0.967565,0.015171,-0.011132,0.251919,,a\n"
+      "0,1,0.996276,0.078654,0.007692,0.034479,0,b\n"
+      "0.1,1,1,0,0,0,5.5,c\n";
+  auto first = Load(text);
+  REQUIRE(first.ok());
+  const std::string csv = FormatSessionCsv(first.value(), false);
+  CHECK(csv ==
+        "t_s,sensor,qw,qx,qy,qz,table_rate_dps,note\n"
+        "0,1,0.996276,0.078654,0.007692,0.034479,0,b\n"
+        "0,2,0.967565,0.015171,-0.011132,0.251919,,a\n"
+        "0.1,1,1,0,0,0,5.5,c\n");
+  auto second = Load(csv);
+  REQUIRE(second.ok());
+  CHECK(second.value().tags[0].Find("yaw_deg")->values ==
+        first.value().tags[0].Find("yaw_deg")->values);
+}
+
+}  // namespace
+}  // namespace metro
