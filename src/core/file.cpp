@@ -10,6 +10,8 @@
 #include <memory>
 #include <random>
 
+#include "metro/core/check.hpp"
+
 namespace metro {
 namespace {
 
@@ -26,43 +28,68 @@ std::string DirectoryOf(const std::string& path) {
 
 }  // namespace
 
-Status WriteFileAtomically(const std::string& path, std::string_view contents) {
+AtomicFileWriter::AtomicFileWriter(std::string path) : path_(std::move(path)) {}
+
+AtomicFileWriter::~AtomicFileWriter() {
+  if (fd_ >= 0) {
+    ::close(fd_);
+    ::unlink(tmp_.c_str());
+  }
+}
+
+Status AtomicFileWriter::Open() {
   std::random_device entropy;
-  const std::string tmp =
-      path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entropy() & 0xFFFFFFu);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) return MakeError(OsError("cannot create temporary file for", path));
-  const char* data = contents.data();
-  size_t left = contents.size();
+  tmp_ = path_ + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entropy() & 0xFFFFFFu);
+  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd_ < 0) return MakeError(OsError("cannot create temporary file for", path_));
+  return Status::Ok();
+}
+
+Status AtomicFileWriter::Write(std::string_view chunk) {
+  METRO_CHECK(fd_ >= 0);
+  const char* data = chunk.data();
+  size_t left = chunk.size();
   while (left > 0) {
-    const ssize_t n = ::write(fd, data, left);
+    const ssize_t n = ::write(fd_, data, left);
     if (n < 0) {
       if (errno == EINTR) continue;
-      const std::string why = OsError("cannot write", path);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return MakeError(why);
+      return MakeError(OsError("cannot write", path_));
     }
     data += n;
     left -= static_cast<size_t>(n);
   }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    const std::string why = OsError("cannot flush", path);
-    ::unlink(tmp.c_str());
+  return Status::Ok();
+}
+
+Status AtomicFileWriter::Commit() {
+  METRO_CHECK(fd_ >= 0);
+  const bool flushed = ::fsync(fd_) == 0;
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
+  if (!flushed || !closed) {
+    const std::string why = OsError("cannot flush", path_);
+    ::unlink(tmp_.c_str());
     return MakeError(why);
   }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = OsError("cannot rename temporary file onto", path);
-    ::unlink(tmp.c_str());
+  if (::rename(tmp_.c_str(), path_.c_str()) != 0) {
+    const std::string why = OsError("cannot rename temporary file onto", path_);
+    ::unlink(tmp_.c_str());
     return MakeError(why);
   }
   // Make the rename itself durable.
-  const int dir_fd = ::open(DirectoryOf(path).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const int dir_fd = ::open(DirectoryOf(path_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir_fd >= 0) {
     ::fsync(dir_fd);
     ::close(dir_fd);
   }
   return Status::Ok();
+}
+
+Status WriteFileAtomically(const std::string& path, std::string_view contents) {
+  AtomicFileWriter writer(path);
+  if (Status s = writer.Open(); !s.ok()) return s;
+  if (Status s = writer.Write(contents); !s.ok()) return s;
+  return writer.Commit();
 }
 
 Result<std::string> ReadFile(const std::string& path) {

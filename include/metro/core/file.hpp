@@ -25,3 +25,27 @@ Result<std::string> Sha256File(const std::string& path);
 bool IsSameFile(const std::string& a, const std::string& b);
 
 }  // namespace metro
+
+namespace metro {
+
+// Streams a large output to `path` atomically: chunks go to a temporary file in the same
+// directory; Commit() flushes, fsyncs and renames it over `path`. Destroying the writer
+// without a successful Commit() removes the temporary and leaves `path` untouched.
+class AtomicFileWriter {
+ public:
+  explicit AtomicFileWriter(std::string path);
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+  ~AtomicFileWriter();
+
+  Status Open();
+  Status Write(std::string_view chunk);
+  Status Commit();
+
+ private:
+  std::string path_;
+  std::string tmp_;
+  int fd_ = -1;
+};
+
+}  // namespace metro

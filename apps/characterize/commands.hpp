@@ -1,0 +1,19 @@
+// The characterize subcommands. Each Add*Command registers its options and callback on
+// the CLI11 app; the callback runs the command and records its exit code.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace metro::apps {
+
+// Exit codes (STYLE.md rule 16).
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailed = 1;
+inline constexpr int kExitUsage = 2;
+
+// The main job: `characterize SESSION --type-a ...` (options on the top-level app).
+void AddAnalyzeOptions(CLI::App& app, int* exit_code);
+void AddConvertCommand(CLI::App& app, int* exit_code);
+void AddSimulateCommand(CLI::App& app, int* exit_code);
+
+}  // namespace metro::apps

@@ -1,0 +1,21 @@
+// characterize: GUM Type A/Type B evaluation, Monte Carlo and noise analysis of IMU tag
+// sessions. A dispatch table: the work is done by the metro library.
+#include <CLI/CLI.hpp>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"metro characterize: uncertainty evaluation of IMU sensor-tag sessions"};
+  app.require_subcommand(0, 1);
+  int exit_code = metro::apps::kExitOk;
+  metro::apps::AddAnalyzeOptions(app, &exit_code);
+  metro::apps::AddConvertCommand(app, &exit_code);
+  metro::apps::AddSimulateCommand(app, &exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : metro::apps::kExitUsage;
+  }
+  return exit_code;
+}

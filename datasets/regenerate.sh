@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Regenerates the bundled sample sessions from the simulator (docs/simulator.md).
+# Usage: datasets/regenerate.sh [path/to/characterize]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+characterize="${1:-build/apps/characterize/characterize}"
+here=datasets
+
+# Thesis-like static chest tag (Table 8.3 experiment): sensor 2, ~10 Hz, 500 s.
+"$characterize" simulate --seed 8 --sensor 2 --duration-s 500 \
+  -o "$here/static_chest.csv"
+"$characterize" simulate --seed 8 --sensor 2 --duration-s 500 --format receiver \
+  -o "$here/static_chest_receiver.txt"
+# A 15-tag capture as the central prints it; tag 13 never connects.
+"$characterize" simulate --seed 15 --tags 15 --never 13 --duration-s 30 --packet-loss 0.05 \
+  --format receiver -o "$here/capture_15tags_receiver.txt"
+"$characterize" convert "$here/capture_15tags_receiver.txt" -o "$here/capture_15tags.csv"
+# Raw IMU columns at 100 Hz (accelerometer, gyroscope, temperature), 60 s.
+"$characterize" simulate --seed 3 --sensor 1 --columns imu --rate-hz 100 --duration-s 60 \
+  -o "$here/static_imu_100hz.csv"

@@ -1,0 +1,89 @@
+// Type A evaluation of a whole session: every tag, every numeric quantity, in a window.
+//
+// Windows are applied per tag, in this order: skip the first `skip_samples` observations;
+// skip observations earlier than the tag's first time + `skip_seconds`; keep
+// from_s <= t_s <= to_s; then, with `settle_auto`, drop the start-up transient found by
+// MSER-5 (stats/settle.hpp), the largest truncation over the evaluated quantities.
+//
+// Angles that wrap at +-180 deg (yaw_deg, roll_deg, table_angle_deg) are unwrapped before
+// the statistics (each step taken as the shortest turn) and the mean is wrapped back into
+// (-180, 180]; the report says so ("angle_handling": "unwrapped").
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "metro/core/status.hpp"
+#include "metro/io/session.hpp"
+#include "metro/stats/settle.hpp"
+#include "metro/stats/type_a.hpp"
+
+namespace metro {
+
+struct WindowOptions {
+  int64_t skip_samples = 0;
+  double skip_seconds = 0.0;
+  std::optional<double> from_s;
+  std::optional<double> to_s;
+  bool settle_auto = false;
+
+  bool IsValid(std::string* why) const;
+};
+
+struct SessionTypeAOptions {
+  WindowOptions window;
+  std::vector<int> sensors;             // Empty: every tag.
+  std::vector<std::string> quantities;  // Empty: every numeric quantity.
+  TypeAOptions type_a;
+  int threads = 0;  // 0: all cores.
+
+  bool IsValid(std::string* why) const;
+};
+
+struct AppliedWindow {
+  size_t n_total = 0;  // Observations of the tag.
+  size_t begin = 0;    // First observation kept (index).
+  size_t end = 0;      // One past the last kept.
+  size_t settle_samples = 0;
+  bool settle_at_limit = false;
+  double t_first_s = 0.0;  // Times of the first and last kept observation.
+  double t_last_s = 0.0;
+  uint32_t first_line = 0;
+  uint32_t last_line = 0;
+  size_t n() const { return end - begin; }
+};
+
+struct QuantityTypeA {
+  std::string name;
+  std::string unit;
+  QuantityOrigin origin = QuantityOrigin::kFile;
+  bool ok = false;  // False: `error` says why there is no evaluation.
+  std::string error;
+  TypeAResult type_a;
+  std::string angle_handling = "linear";  // or "unwrapped"
+  int unwrap_jumps = 0;
+  size_t settle_samples = 0;  // This quantity's own MSER-5 truncation (settle_auto).
+  std::vector<std::string> warnings;
+};
+
+struct TagTypeA {
+  int sensor = 0;
+  FrameCounts counts;
+  AppliedWindow window;
+  std::vector<QuantityTypeA> quantities;
+  std::vector<std::string> warnings;
+};
+
+struct SessionTypeA {
+  std::vector<TagTypeA> tags;
+};
+
+// Errors: an unknown --sensor or --quantity, invalid options.
+Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
+                                          const SessionTypeAOptions& options);
+
+// True for quantities that wrap at +-180 deg.
+bool IsWrappingAngle(const std::string& quantity_name);
+
+}  // namespace metro

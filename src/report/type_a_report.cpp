@@ -1,0 +1,180 @@
+#include "metro/report/type_a_report.hpp"
+
+#include <fmt/format.h>
+
+#include "metro/core/rounding.hpp"
+#include "metro/core/version.hpp"
+
+namespace metro {
+namespace {
+
+const char* OriginName(QuantityOrigin origin) {
+  switch (origin) {
+    case QuantityOrigin::kFile:
+      return "file";
+    case QuantityOrigin::kDerived:
+      return "derived";
+    case QuantityOrigin::kUnknown:
+      return "unknown_column";
+  }
+  return "?";
+}
+
+nlohmann::ordered_json OptionalNumber(const std::optional<double>& v) {
+  return v ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
+}
+
+}  // namespace
+
+nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionTypeA& result,
+                                       const SessionTypeAOptions& options,
+                                       const TagRegistry& registry) {
+  using json = nlohmann::ordered_json;
+  json report;
+  report["schema"] = kReportSchema;
+  report["tool"] = {{"name", kToolName}, {"version", kVersion}};
+  json input;
+  input["path"] = session.path;
+  input["sha256"] = session.sha256;
+  input["format"] = SessionFormatName(session.format);
+  input["rows"] = session.rows;
+  input["rejected_rows"] = session.rejected_rows;
+  json rejected = json::array();
+  for (size_t i = 0; i < session.rejected_lines.size(); ++i) {
+    rejected.push_back(
+        {{"line", session.rejected_lines[i]}, {"reason", session.rejected_reasons[i]}});
+  }
+  input["rejected"] = rejected;
+  input["columns"] = session.columns;
+  input["unknown_columns"] = session.unknown_columns;
+  if (session.format == SessionFormat::kReceiver) {
+    input["frame_period_s"] = session.frame_period_s;
+  }
+  report["input"] = input;
+
+  const WindowOptions& w = options.window;
+  report["options"] = {
+      {"skip_samples", w.skip_samples},
+      {"skip_seconds", w.skip_seconds},
+      {"from_s", OptionalNumber(w.from_s)},
+      {"to_s", OptionalNumber(w.to_s)},
+      {"settle", w.settle_auto ? "auto" : "none"},
+      {"sensors", options.sensors},
+      {"quantities", options.quantities},
+      {"autocorrelation",
+       {{"method", "Zhang 2006, Bartlett band, first lag inside the band ends the sum"},
+        {"band_confidence", options.type_a.band_confidence},
+        {"max_lag_fraction", options.type_a.max_lag_fraction}}}};
+
+  json sensors = json::array();
+  for (const TagTypeA& t : result.tags) {
+    json s;
+    s["sensor"] = t.sensor;
+    s["name"] = registry.Name(t.sensor);
+    s["frames"] = t.counts.frames;
+    s["fresh"] = t.counts.fresh;
+    s["stale"] = t.counts.stale;
+    s["never"] = t.counts.never;
+    s["packet_loss_ratio"] = t.counts.PacketLossRatio();
+    const AppliedWindow& a = t.window;
+    json window = {{"n_total", a.n_total},
+                   {"n", a.n()},
+                   {"first_index", a.begin},
+                   {"end_index", a.end},
+                   {"t_first_s", a.n() ? json(a.t_first_s) : json(nullptr)},
+                   {"t_last_s", a.n() ? json(a.t_last_s) : json(nullptr)},
+                   {"first_line", a.n() ? json(a.first_line) : json(nullptr)},
+                   {"last_line", a.n() ? json(a.last_line) : json(nullptr)}};
+    if (w.settle_auto) {
+      window["settle"] = {
+          {"method", "MSER-5"}, {"samples", a.settle_samples}, {"at_limit", a.settle_at_limit}};
+    }
+    s["window"] = window;
+    json quantities = json::object();
+    for (const QuantityTypeA& q : t.quantities) {
+      json jq;
+      jq["unit"] = q.unit;
+      jq["origin"] = OriginName(q.origin);
+      jq["angle_handling"] = q.angle_handling;
+      if (q.angle_handling == "unwrapped") jq["unwrap_jumps"] = q.unwrap_jumps;
+      if (q.ok) {
+        const TypeAResult& r = q.type_a;
+        jq["type_a"] = {{"n", r.n},
+                        {"mean", r.mean},
+                        {"variance", r.variance},
+                        {"std", r.std},
+                        {"variance_of_mean", r.variance_of_mean},
+                        {"std_of_mean", r.std_of_mean},
+                        {"dof", r.dof},
+                        {"n_eff", r.n_eff},
+                        {"std_of_mean_autocorr", r.std_of_mean_autocorr},
+                        {"autocorr_cutoff_lag", r.cutoff_lag},
+                        {"rho1", r.rho1}};
+      } else {
+        jq["type_a"] = nullptr;
+        jq["error"] = q.error;
+      }
+      if (w.settle_auto) jq["settle_samples"] = q.settle_samples;
+      jq["warnings"] = q.warnings;
+      quantities[q.name] = jq;
+    }
+    s["quantities"] = quantities;
+    s["warnings"] = t.warnings;
+    sensors.push_back(s);
+  }
+  report["sensors"] = sensors;
+  return report;
+}
+
+std::string TypeAReportTable(const nlohmann::ordered_json& report) {
+  std::string out;
+  auto it = std::back_inserter(out);
+  fmt::format_to(it, "{} ({}, {} rows, {} rejected)\n", report["input"]["path"].get<std::string>(),
+                 report["input"]["format"].get<std::string>(),
+                 report["input"]["rows"].get<int64_t>(),
+                 report["input"]["rejected_rows"].get<int64_t>());
+  fmt::format_to(it, "{:>6} {:<16} {:<18} {:>8} {:>14} {:>10} {:>10} {:>10} {:>10}\n", "sensor",
+                 "name", "quantity", "n", "mean", "s", "s(mean)", "n_eff", "u(mean)");
+  for (const auto& s : report["sensors"]) {
+    const int sensor = s["sensor"].get<int>();
+    const std::string name = s["name"].get<std::string>();
+    if (s["quantities"].empty()) {
+      fmt::format_to(it, "{:>6} {:<16} (no observations: frames {}, stale {}, never {})\n", sensor,
+                     name, s["frames"].get<int64_t>(), s["stale"].get<int64_t>(),
+                     s["never"].get<int64_t>());
+    }
+    for (const auto& [qname, q] : s["quantities"].items()) {
+      if (q["type_a"].is_null()) {
+        fmt::format_to(it, "{:>6} {:<16} {:<18} {}\n", sensor, name, qname,
+                       q["error"].get<std::string>());
+        continue;
+      }
+      const auto& a = q["type_a"];
+      // GUM 7.2.6: mean rounded to the autocorrelation-aware u(mean) (2 significant digits).
+      const RoundedResult r =
+          RoundForStatement(a["mean"].get<double>(), a["std_of_mean_autocorr"].get<double>());
+      fmt::format_to(it, "{:>6} {:<16} {:<18} {:>8} {:>14} {:>10.3g} {:>10.2g} {:>10.1f} {:>10}\n",
+                     sensor, name, qname, a["n"].get<int64_t>(), r.value, a["std"].get<double>(),
+                     a["std_of_mean"].get<double>(), a["n_eff"].get<double>(), r.uncertainty);
+    }
+  }
+  bool any_warning = false;
+  for (const auto& s : report["sensors"]) {
+    for (const auto& wmsg : s["warnings"]) {
+      if (!any_warning) out += "\nwarnings:\n";
+      any_warning = true;
+      fmt::format_to(it, "  sensor {}: {}\n", s["sensor"].get<int>(), wmsg.get<std::string>());
+    }
+    for (const auto& [qname, q] : s["quantities"].items()) {
+      for (const auto& wmsg : q["warnings"]) {
+        if (!any_warning) out += "\nwarnings:\n";
+        any_warning = true;
+        fmt::format_to(it, "  sensor {} {}: {}\n", s["sensor"].get<int>(), qname,
+                       wmsg.get<std::string>());
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace metro

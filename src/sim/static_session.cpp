@@ -1,0 +1,215 @@
+#include "metro/sim/static_session.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <pcg_random.hpp>
+#include <random>
+
+namespace metro {
+namespace {
+
+constexpr double kRadPerDeg = M_PI / 180.0;
+constexpr size_t kFlushBytes = size_t{8} << 20;
+
+struct TagState {
+  StaticTagTruth truth;
+  bool never = false;
+  double noise[3] = {0, 0, 0};
+  bool have_packet = false;
+  ReceiverPayload last_payload{};
+};
+
+// Accelerometer reading of gravity for a tag at rest: R^T (0, 0, 1) in g, where R is the
+// world-from-body rotation of the (1,2,3) Euler angles (it does not depend on yaw).
+void GravityInBody(const EulerDeg& e, double out[3]) {
+  const double cp = std::cos(e.pitch_deg * kRadPerDeg), sp = std::sin(e.pitch_deg * kRadPerDeg);
+  const double cr = std::cos(e.roll_deg * kRadPerDeg), sr = std::sin(e.roll_deg * kRadPerDeg);
+  // Third row of R = Rz(yaw) Ry(pitch) Rx(roll), i.e. the world z axis in body axes.
+  out[0] = -sp;
+  out[1] = cp * sr;
+  out[2] = cp * cr;
+}
+
+double Quantize(double v, double step) { return step > 0 ? std::round(v / step) * step : v; }
+
+int16_t ToInt16(double v) {
+  return static_cast<int16_t>(std::clamp(std::lround(v), -32768L, 32767L));
+}
+
+}  // namespace
+
+bool StaticSimulationOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (sensors.empty() && never_sensors.empty()) return fail("no sensors to simulate");
+  for (int s : sensors) {
+    if (s < 1 || s > 255) return fail(fmt::format("sensor {} is not in 1..255", s));
+    if (std::count(sensors.begin(), sensors.end(), s) > 1) {
+      return fail(fmt::format("sensor {} is listed twice", s));
+    }
+  }
+  for (int s : never_sensors) {
+    if (s < 1 || s > 255) return fail(fmt::format("sensor {} is not in 1..255", s));
+    if (std::count(sensors.begin(), sensors.end(), s) > 0) {
+      return fail(fmt::format("sensor {} cannot both send and never connect", s));
+    }
+  }
+  if (!(duration_s > 0.0) || !std::isfinite(duration_s)) return fail("duration_s must be > 0");
+  if (!(rate_hz >= 0.0) || !std::isfinite(rate_hz)) return fail("rate_hz must be >= 0");
+  if (!(frame_period_s > 0.0)) return fail("frame_period_s must be > 0");
+  if (!(noise_ar1 >= 0.0 && noise_ar1 < 1.0)) return fail("noise_ar1 must be in [0, 1)");
+  if (!(packet_loss >= 0.0 && packet_loss < 1.0)) return fail("packet_loss must be in [0, 1)");
+  if (!(transient_tau_s > 0.0)) return fail("transient_tau_s must be > 0");
+  if (!(quantization_deg >= 0.0)) return fail("quantization_deg must be >= 0");
+  return true;
+}
+
+Status SimulateStaticSession(const StaticSimulationOptions& options, SessionFormat format,
+                             const TextSink& sink, std::vector<StaticTagTruth>* truth) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("invalid simulation options: " + why);
+  if (format != SessionFormat::kCsv && format != SessionFormat::kReceiver) {
+    return MakeError("the simulator writes session.csv or receiver captures");
+  }
+  const bool receiver = format == SessionFormat::kReceiver;
+  const double dt_s =
+      receiver || options.rate_hz == 0.0 ? options.frame_period_s : 1.0 / options.rate_hz;
+  const double rate_hz = 1.0 / dt_s;
+  const double phi = std::pow(options.noise_ar1, dt_s / options.frame_period_s);
+  const double innovation = std::sqrt(1.0 - phi * phi);
+  const double accel_noise_g = 400e-6 * std::sqrt(rate_hz / 2.0);
+  const double gyro_noise_dps = 0.005 * std::sqrt(rate_hz / 2.0);
+
+  pcg64 rng(options.seed);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform;
+
+  std::vector<int> all = options.sensors;
+  all.insert(all.end(), options.never_sensors.begin(), options.never_sensors.end());
+  std::sort(all.begin(), all.end());
+  std::vector<TagState> tags(all.size());
+  for (size_t k = 0; k < all.size(); ++k) {
+    TagState& s = tags[k];
+    s.truth.sensor = all[k];
+    s.never = std::count(options.never_sensors.begin(), options.never_sensors.end(), all[k]) > 0;
+    // Sensor 2 (chest) lies flat as in thesis 8.4.2; the others at random attitudes.
+    if (all[k] != 2) {
+      s.truth.attitude = {360.0 * uniform(rng) - 180.0, 60.0 * uniform(rng) - 30.0,
+                          60.0 * uniform(rng) - 30.0};
+    }
+    s.truth.transient_offset = {options.transient_std_deg[0] * normal(rng),
+                                options.transient_std_deg[1] * normal(rng),
+                                options.transient_std_deg[2] * normal(rng)};
+    for (int a = 0; a < 3; ++a) {
+      s.truth.accel_bias_g[a] = 0.02 * normal(rng);
+      s.truth.gyro_bias_dps[a] = 3.0 * normal(rng);
+      s.noise[a] = options.noise_std_deg[a] * normal(rng);  // Stationary start.
+    }
+  }
+  if (truth != nullptr) {
+    truth->clear();
+    for (const TagState& s : tags) truth->push_back(s.truth);
+  }
+
+  std::string out;
+  out.reserve(kFlushBytes + 4096);
+  auto it = std::back_inserter(out);
+  const bool angles = options.columns != SimColumns::kImu;
+  const bool imu = options.columns != SimColumns::kAngles;
+  if (!receiver) {
+    out += "# metro simulate: static session, ";
+    fmt::format_to(it, "seed {}, {} s at {:.6g} Hz\n", options.seed, options.duration_s, rate_hz);
+    out += "t_s,sensor";
+    if (angles) out += ",qw,qx,qy,qz";
+    if (imu) out += ",ax_g,ay_g,az_g,gx_dps,gy_dps,gz_dps,temp_c";
+    out += '\n';
+  }
+  const int64_t steps = static_cast<int64_t>(std::floor(options.duration_s / dt_s));
+  for (int64_t k = 0; k < steps; ++k) {
+    const double t = static_cast<double>(k) * dt_s;
+    const double settle = std::exp(-t / options.transient_tau_s);
+    for (TagState& s : tags) {
+      if (s.never) {
+        if (receiver) {
+          out += FormatReceiverLine(s.truth.sensor, NewDataFlag::kNever, ReceiverPayload{});
+          out += '\n';
+        }
+        continue;
+      }
+      // Draw every random number for every step so the two formats share one truth.
+      double e[3];
+      for (int a = 0; a < 3; ++a) {
+        s.noise[a] = phi * s.noise[a] + innovation * options.noise_std_deg[a] * normal(rng);
+      }
+      const double attitude[3] = {s.truth.attitude.yaw_deg, s.truth.attitude.pitch_deg,
+                                  s.truth.attitude.roll_deg};
+      const double offset[3] = {s.truth.transient_offset.yaw_deg,
+                                s.truth.transient_offset.pitch_deg,
+                                s.truth.transient_offset.roll_deg};
+      for (int a = 0; a < 3; ++a) {
+        e[a] = attitude[a] + offset[a] * settle + s.noise[a];
+        if (a == 0) e[a] = WrapDeg180(e[a] + options.yaw_drift_dps * t);
+        e[a] = Quantize(e[a], options.quantization_deg);
+      }
+      const EulerDeg euler{e[0], e[1], e[2]};
+      double accel[3], gyro[3];
+      GravityInBody(euler, accel);
+      for (int a = 0; a < 3; ++a) {
+        accel[a] += s.truth.accel_bias_g[a] + accel_noise_g * normal(rng);
+        gyro[a] = s.truth.gyro_bias_dps[a] + gyro_noise_dps * normal(rng);
+      }
+      const double temp_c = Quantize(25.0 + 5.0 * (1.0 - std::exp(-t / 600.0)), 1.0 / 340.0);
+      const bool lost = uniform(rng) < options.packet_loss;
+      const Quaternion q = QuaternionFromEuler(euler);
+      if (receiver) {
+        if (lost) {
+          out += FormatReceiverLine(s.truth.sensor,
+                                    s.have_packet ? NewDataFlag::kStale : NewDataFlag::kNever,
+                                    s.last_payload);
+        } else {
+          ReceiverPayload p{};
+          EncodeQuaternion(q, &p);
+          // Bytes 17..25: packet type #0 with yaw, pitch, roll as int16 at 0.01 deg
+          // (little-endian), then a 16-bit packet counter.
+          p[16] = 0;
+          const int16_t v[3] = {ToInt16(e[0] * 100.0), ToInt16(e[1] * 100.0),
+                                ToInt16(e[2] * 100.0)};
+          for (int a = 0; a < 3; ++a) {
+            p[17 + 2 * a] = static_cast<uint8_t>(static_cast<uint16_t>(v[a]) & 0xFF);
+            p[18 + 2 * a] = static_cast<uint8_t>(static_cast<uint16_t>(v[a]) >> 8);
+          }
+          p[23] = static_cast<uint8_t>(k & 0xFF);
+          p[24] = static_cast<uint8_t>((k >> 8) & 0xFF);
+          s.last_payload = p;
+          s.have_packet = true;
+          out += FormatReceiverLine(s.truth.sensor, NewDataFlag::kFresh, p);
+        }
+        out += '\n';
+        continue;
+      }
+      if (lost) continue;
+      fmt::format_to(it, "{:.6f},{}", t, s.truth.sensor);
+      if (angles) {
+        fmt::format_to(it, ",{:.8f},{:.8f},{:.8f},{:.8f}", q.w, q.x, q.y, q.z);
+      }
+      if (imu) {
+        fmt::format_to(it, ",{:.6f},{:.6f},{:.6f},{:.4f},{:.4f},{:.4f},{:.3f}", accel[0], accel[1],
+                       accel[2], gyro[0], gyro[1], gyro[2], temp_c);
+      }
+      out += '\n';
+    }
+    if (out.size() >= kFlushBytes) {
+      if (Status st = sink(out); !st.ok()) return st;
+      out.clear();
+    }
+  }
+  if (!out.empty()) return sink(out);
+  return Status::Ok();
+}
+
+}  // namespace metro

@@ -1,0 +1,268 @@
+#include "metro/stats/session_type_a.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+#include "metro/core/angles.hpp"
+
+namespace metro {
+namespace {
+
+std::string JoinSensors(const Session& session) {
+  std::vector<int> sensors;
+  for (const Tag& t : session.tags) sensors.push_back(t.sensor);
+  return fmt::format("{}", fmt::join(sensors, ", "));
+}
+
+bool Selected(const std::vector<std::string>& wanted, const std::string& name) {
+  return wanted.empty() || std::find(wanted.begin(), wanted.end(), name) != wanted.end();
+}
+
+// The quantity's values in [begin, end), unwrapped if it is a wrapping angle.
+std::vector<double> WindowValues(const Quantity& q, size_t begin, size_t end, int* jumps) {
+  std::vector<double> x(q.values.begin() + static_cast<ptrdiff_t>(begin),
+                        q.values.begin() + static_cast<ptrdiff_t>(end));
+  *jumps = IsWrappingAngle(q.name) ? UnwrapDegInPlace(&x) : 0;
+  return x;
+}
+
+// Table columns may be empty ("unknown"): those observations are left out.
+std::vector<double> Finite(std::vector<double> x, size_t* dropped) {
+  const auto it = std::remove_if(x.begin(), x.end(), [](double v) { return !std::isfinite(v); });
+  *dropped = static_cast<size_t>(x.end() - it);
+  x.erase(it, x.end());
+  return x;
+}
+
+AppliedWindow ExplicitWindow(const Tag& tag, const WindowOptions& w) {
+  AppliedWindow a;
+  a.n_total = tag.size();
+  size_t begin = std::min<size_t>(tag.size(), static_cast<size_t>(w.skip_samples));
+  if (w.skip_seconds > 0.0 && !tag.t_s.empty()) {
+    const double t0 = tag.t_s.front() + w.skip_seconds;
+    begin =
+        std::max(begin, static_cast<size_t>(std::lower_bound(tag.t_s.begin(), tag.t_s.end(), t0) -
+                                            tag.t_s.begin()));
+  }
+  size_t end = tag.size();
+  if (w.from_s) {
+    begin = std::max(
+        begin, static_cast<size_t>(std::lower_bound(tag.t_s.begin(), tag.t_s.end(), *w.from_s) -
+                                   tag.t_s.begin()));
+  }
+  if (w.to_s) {
+    end = std::min(end,
+                   static_cast<size_t>(std::upper_bound(tag.t_s.begin(), tag.t_s.end(), *w.to_s) -
+                                       tag.t_s.begin()));
+  }
+  a.begin = std::min(begin, end);
+  a.end = end;
+  return a;
+}
+
+void FillWindowTimes(const Tag& tag, AppliedWindow* a) {
+  if (a->n() == 0) return;
+  a->t_first_s = tag.t_s[a->begin];
+  a->t_last_s = tag.t_s[a->end - 1];
+  a->first_line = tag.line[a->begin];
+  a->last_line = tag.line[a->end - 1];
+}
+
+struct Job {
+  size_t tag;
+  size_t quantity;  // Index into the tag's quantities.
+  size_t slot;      // Index into TagTypeA::quantities.
+};
+
+}  // namespace
+
+bool IsWrappingAngle(const std::string& name) {
+  return name == "yaw_deg" || name == "roll_deg" || name == "table_angle_deg";
+}
+
+bool WindowOptions::IsValid(std::string* why) const {
+  auto fail = [&](const char* m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (skip_samples < 0) return fail("skip_samples must be >= 0");
+  if (!(skip_seconds >= 0.0) || !std::isfinite(skip_seconds)) {
+    return fail("skip_seconds must be a finite number >= 0");
+  }
+  if (from_s && !std::isfinite(*from_s)) return fail("from_s must be finite");
+  if (to_s && !std::isfinite(*to_s)) return fail("to_s must be finite");
+  if (from_s && to_s && !(*from_s < *to_s)) return fail("from_s must be before to_s");
+  return true;
+}
+
+bool SessionTypeAOptions::IsValid(std::string* why) const {
+  if (!window.IsValid(why)) return false;
+  if (!type_a.IsValid(why)) return false;
+  if (threads < 0) {
+    if (why) *why = "threads must be >= 0";
+    return false;
+  }
+  return true;
+}
+
+Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
+                                          const SessionTypeAOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("invalid options: " + why);
+  for (int sensor : options.sensors) {
+    if (session.FindTag(sensor) == nullptr) {
+      return MakeError(session.path, 0,
+                       fmt::format("--sensor {}: no such tag in the session (tags: {})", sensor,
+                                   JoinSensors(session)));
+    }
+  }
+  for (const std::string& name : options.quantities) {
+    bool found = false;
+    for (const Tag& t : session.tags) found = found || t.Find(name) != nullptr;
+    if (!found) {
+      std::vector<std::string> names;
+      for (const Tag& t : session.tags) {
+        for (const Quantity& q : t.quantities) {
+          if (std::find(names.begin(), names.end(), q.name) == names.end()) names.push_back(q.name);
+        }
+      }
+      return MakeError(session.path, 0,
+                       fmt::format("--quantity {}: no such quantity in the session (quantities: "
+                                   "{})",
+                                   name, fmt::join(names, ", ")));
+    }
+  }
+
+  SessionTypeA out;
+  std::vector<const Tag*> tags;
+  for (const Tag& tag : session.tags) {
+    if (!options.sensors.empty() && std::find(options.sensors.begin(), options.sensors.end(),
+                                              tag.sensor) == options.sensors.end()) {
+      continue;
+    }
+    tags.push_back(&tag);
+    TagTypeA t;
+    t.sensor = tag.sensor;
+    t.counts = tag.counts;
+    t.window = ExplicitWindow(tag, options.window);
+    if (tag.size() == 0) {
+      t.warnings.push_back(fmt::format("no fresh observations (frames {}, stale {}, never {})",
+                                       tag.counts.frames, tag.counts.stale, tag.counts.never));
+    }
+    for (const Quantity& q : tag.quantities) {
+      if (!Selected(options.quantities, q.name)) continue;
+      QuantityTypeA r;
+      r.name = q.name;
+      r.unit = q.unit;
+      r.origin = q.origin;
+      r.angle_handling = IsWrappingAngle(q.name) ? "unwrapped" : "linear";
+      t.quantities.push_back(std::move(r));
+    }
+    out.tags.push_back(std::move(t));
+  }
+
+  // Settle detection: the largest MSER-5 truncation over the tag's evaluated quantities.
+  if (options.window.settle_auto) {
+    for (size_t k = 0; k < tags.size(); ++k) {
+      TagTypeA& t = out.tags[k];
+      size_t settle = 0;
+      bool at_limit = false;
+      for (QuantityTypeA& r : t.quantities) {
+        const Quantity* q = tags[k]->Find(r.name);
+        int jumps = 0;
+        size_t dropped = 0;
+        const std::vector<double> x =
+            Finite(WindowValues(*q, t.window.begin, t.window.end, &jumps), &dropped);
+        if (dropped > 0) continue;  // Columns with gaps (table_*) do not decide the settle.
+        const SettleResult s = DetectSettleMser5(x.data(), x.size());
+        r.settle_samples = s.samples;
+        if (s.samples > settle) {
+          settle = s.samples;
+          at_limit = s.at_limit;
+        }
+      }
+      t.window.settle_samples = settle;
+      t.window.settle_at_limit = at_limit;
+      t.window.begin = std::min(t.window.end, t.window.begin + settle);
+      if (at_limit) {
+        t.warnings.push_back(fmt::format(
+            "--settle auto: the transient did not end within the first half of the window "
+            "({} samples dropped); the tag may still be settling or drifting",
+            settle));
+      }
+    }
+  }
+  for (size_t k = 0; k < tags.size(); ++k) FillWindowTimes(*tags[k], &out.tags[k].window);
+
+  // Evaluate every (tag, quantity) on all cores.
+  std::vector<Job> jobs;
+  for (size_t k = 0; k < tags.size(); ++k) {
+    for (size_t slot = 0; slot < out.tags[k].quantities.size(); ++slot) {
+      const std::string& name = out.tags[k].quantities[slot].name;
+      const auto it = std::find_if(tags[k]->quantities.begin(), tags[k]->quantities.end(),
+                                   [&](const Quantity& q) { return q.name == name; });
+      jobs.push_back({k, static_cast<size_t>(it - tags[k]->quantities.begin()), slot});
+    }
+  }
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (;;) {
+      const size_t j = next.fetch_add(1);
+      if (j >= jobs.size()) return;
+      const Job& job = jobs[j];
+      const Tag& tag = *tags[job.tag];
+      TagTypeA& t = out.tags[job.tag];
+      const Quantity& q = tag.quantities[job.quantity];
+      QuantityTypeA& r = t.quantities[job.slot];
+      size_t dropped = 0;
+      std::vector<double> x =
+          Finite(WindowValues(q, t.window.begin, t.window.end, &r.unwrap_jumps), &dropped);
+      auto a = EvaluateTypeA(x.data(), x.size(), options.type_a);
+      if (!a.ok()) {
+        r.error = a.error().message;
+        continue;
+      }
+      r.ok = true;
+      r.type_a = a.value();
+      if (r.angle_handling == "unwrapped") r.type_a.mean = WrapDeg180(r.type_a.mean);
+      if (dropped > 0) {
+        r.warnings.push_back(fmt::format("{} empty (unknown) values left out", dropped));
+      }
+      const TypeAResult& ta = r.type_a;
+      if (ta.n_eff < 0.5 * static_cast<double>(ta.n)) {
+        r.warnings.push_back(fmt::format(
+            "n_eff = {:.1f} < n/2 = {:.1f}: the observations are autocorrelated; "
+            "std_of_mean ({:.3g}) understates the uncertainty of the mean, use "
+            "std_of_mean_autocorr ({:.3g})",
+            ta.n_eff, 0.5 * static_cast<double>(ta.n), ta.std_of_mean, ta.std_of_mean_autocorr));
+      }
+      if (ta.cutoff_reached_limit) {
+        r.warnings.push_back(
+            "the autocorrelation did not decay within n/4 lags (drift or a trend): even "
+            "std_of_mean_autocorr is optimistic; see the Allan deviation");
+      }
+      if (q.name == "pitch_deg") {
+        double worst = 0.0;
+        for (double v : x) worst = std::max(worst, std::abs(v));
+        if (worst >= kGimbalLockWarnPitchDeg) {
+          r.warnings.push_back(fmt::format(
+              "|pitch| reaches {:.2f} deg: near gimbal lock yaw and roll are ill-defined", worst));
+        }
+      }
+    }
+  };
+  int threads =
+      options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
+  threads = std::clamp(threads, 1, std::max(1, static_cast<int>(jobs.size())));
+  std::vector<std::thread> pool;
+  for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
+  worker();
+  for (auto& th : pool) th.join();
+  return out;
+}
+
+}  // namespace metro

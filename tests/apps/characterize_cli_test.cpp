@@ -1,0 +1,169 @@
+// End-to-end tests of the characterize program: exit codes, messages, files.
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "support/temp_file.hpp"
+
+namespace metro {
+namespace {
+
+using testing::TempFile;
+
+struct Run {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+Run Characterize(const std::string& args) {
+  static int counter = 0;
+  const std::string err_path = "metro_cli_err_" + std::to_string(++counter) + ".txt";
+  const std::string cmd = std::string(METRO_CHARACTERIZE_EXE) + " " + args + " 2>" + err_path;
+  Run r{};
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  char buffer[4096];
+  size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream err(err_path);
+  std::stringstream ss;
+  ss << err.rdbuf();
+  r.err = ss.str();
+  std::remove(err_path.c_str());
+  return r;
+}
+
+bool Exists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+const std::string kDatasets = std::string(METRO_SOURCE_DIR) + "/datasets/";
+
+TEST_CASE("characterize --type-a writes the report and prints a table", "[apps]") {
+  const std::string out = "metro_cli_report.json";
+  std::remove(out.c_str());
+  Run r = Characterize(kDatasets + "static_chest.csv --type-a --settle auto -o " + out);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.out.find("Chest") != std::string::npos);
+  CHECK(r.out.find("pitch_deg") != std::string::npos);
+  std::ifstream in(out);
+  const auto report = nlohmann::json::parse(in);
+  CHECK(report["schema"] == "metro.report/1");
+  CHECK(report["input"]["format"] == "csv");
+  const auto& s = report["sensors"][0];
+  CHECK(s["sensor"] == 2);
+  CHECK(s["name"] == "Chest");
+  const auto& pitch = s["quantities"]["pitch_deg"]["type_a"];
+  CHECK(pitch["dof"].get<int64_t>() == pitch["n"].get<int64_t>() - 1);
+  CHECK(pitch["variance_of_mean"].get<double>() ==
+        Approx(pitch["variance"].get<double>() / pitch["n"].get<double>()));
+  CHECK(pitch["std_of_mean_autocorr"].get<double>() > pitch["std_of_mean"].get<double>());
+  std::remove(out.c_str());
+}
+
+TEST_CASE("characterize reads the receiver capture with frame counts", "[apps]") {
+  Run r = Characterize(kDatasets + "capture_15tags_receiver.txt --type-a --sensor 13 --sensor 4");
+  REQUIRE(r.exit_code == 0);
+  const auto report = nlohmann::json::parse(r.out);
+  CHECK(report["input"]["format"] == "receiver");
+  REQUIRE(report["sensors"].size() == 2);
+  const auto& s4 = report["sensors"][0];
+  const auto& s13 = report["sensors"][1];
+  CHECK(s4["sensor"] == 4);
+  CHECK(s4["frames"].get<int64_t>() ==
+        s4["fresh"].get<int64_t>() + s4["stale"].get<int64_t>() + s4["never"].get<int64_t>());
+  // Only fresh rows are observations.
+  CHECK(s4["quantities"]["qw"]["type_a"]["n"] == s4["fresh"]);
+  CHECK(s13["never"] == s13["frames"]);
+  CHECK(s13["quantities"].empty());
+}
+
+TEST_CASE("characterize bad input: exit 2, file:line message, no report left", "[apps]") {
+  TempFile bad("t_s,pitch_deg\n0,1\n1,2\n2,oops\n");
+  const std::string out = "metro_cli_bad.json";
+  std::remove(out.c_str());
+  Run r = Characterize(bad.path() + " --type-a -o " + out);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: " + bad.path() +
+                     ":4:2: pitch_deg: expected a finite number, found 'oops' (not a number)\n");
+  CHECK_FALSE(Exists(out));
+  // --lenient: the row is skipped and counted.
+  Run lenient = Characterize(bad.path() + " --type-a --lenient");
+  REQUIRE(lenient.exit_code == 0);
+  const auto report = nlohmann::json::parse(lenient.out);
+  CHECK(report["input"]["rejected_rows"] == 1);
+  CHECK(report["input"]["rejected"][0]["line"] == 4);
+  CHECK(report["sensors"][0]["quantities"]["pitch_deg"]["type_a"]["n"] == 2);
+}
+
+TEST_CASE("characterize refuses to write over its input and unknown selections", "[apps]") {
+  TempFile session("t_s,pitch_deg\n0,1\n1,2\n2,3\n");
+  Run same = Characterize(session.path() + " --type-a -o " + session.path());
+  CHECK(same.exit_code == 2);
+  CHECK(same.err.find("is the input file: refusing to overwrite it") != std::string::npos);
+  Run sensor = Characterize(session.path() + " --type-a --sensor 9");
+  CHECK(sensor.exit_code == 2);
+  CHECK(sensor.err.find("--sensor 9: no such tag in the session (tags: 1)") != std::string::npos);
+  Run quantity = Characterize(session.path() + " --type-a --quantity yaw_deg");
+  CHECK(quantity.exit_code == 2);
+  CHECK(quantity.err.find("--quantity yaw_deg: no such quantity") != std::string::npos);
+  Run missing = Characterize("/nonexistent/session.csv --type-a");
+  CHECK(missing.exit_code == 2);
+}
+
+TEST_CASE("characterize windows: skip samples, seconds and time range", "[apps]") {
+  TempFile session("t_s,pitch_deg\n0,10\n1,1\n2,2\n3,3\n4,4\n5,50\n");
+  Run r = Characterize(session.path() + " --type-a --skip-samples 1 --to-s 4");
+  REQUIRE(r.exit_code == 0);
+  auto a = nlohmann::json::parse(r.out)["sensors"][0]["quantities"]["pitch_deg"]["type_a"];
+  CHECK(a["n"] == 4);
+  CHECK(a["mean"].get<double>() == Approx(2.5));
+  CHECK(a["variance"].get<double>() == Approx(5.0 / 3.0));
+  Run s = Characterize(session.path() + " --type-a --skip-seconds 2 --from-s 1");
+  auto b = nlohmann::json::parse(s.out)["sensors"][0]["quantities"]["pitch_deg"]["type_a"];
+  CHECK(b["n"] == 4);
+  CHECK(b["mean"].get<double>() == Approx((2 + 3 + 4 + 50) / 4.0));
+}
+
+TEST_CASE("characterize takes the circular mean of yaw near 180 deg", "[apps]") {
+  TempFile session("t_s,yaw_deg\n0,179.9\n1,-179.9\n2,179.8\n3,-179.8\n");
+  Run r = Characterize(session.path() + " --type-a");
+  REQUIRE(r.exit_code == 0);
+  auto q = nlohmann::json::parse(r.out)["sensors"][0]["quantities"]["yaw_deg"];
+  CHECK(q["angle_handling"] == "unwrapped");
+  CHECK(q["unwrap_jumps"] == 3);
+  // Unwrapped 179.9, 180.1, 179.8, 180.2: mean 180, s^2 = 0.1/3.
+  CHECK(std::abs(q["type_a"]["mean"].get<double>()) == Approx(180.0));
+  CHECK(q["type_a"]["variance"].get<double>() == Approx(0.1 / 3.0));
+}
+
+TEST_CASE("characterize convert round-trips the receiver capture", "[apps]") {
+  const std::string out = "metro_cli_convert.csv";
+  std::remove(out.c_str());
+  Run c = Characterize("convert " + kDatasets + "capture_15tags_receiver.txt -o " + out);
+  REQUIRE(c.exit_code == 0);
+  Run a = Characterize(kDatasets + "capture_15tags_receiver.txt --type-a --quantity pitch_deg");
+  Run b = Characterize(out + " --type-a --quantity pitch_deg");
+  REQUIRE(a.exit_code == 0);
+  REQUIRE(b.exit_code == 0);
+  const auto ja = nlohmann::json::parse(a.out)["sensors"];
+  const auto jb = nlohmann::json::parse(b.out)["sensors"];
+  // The capture's never-connected tag 13 has no rows in session.csv.
+  REQUIRE(ja.size() == jb.size() + 1);
+  CHECK(ja[0]["quantities"]["pitch_deg"]["type_a"] == jb[0]["quantities"]["pitch_deg"]["type_a"]);
+  CHECK(ja[14]["quantities"]["pitch_deg"]["type_a"] == jb[13]["quantities"]["pitch_deg"]["type_a"]);
+  std::remove(out.c_str());
+}
+
+}  // namespace
+}  // namespace metro
