@@ -9,6 +9,7 @@
 #include <cstring>
 #include <memory>
 #include <random>
+#include <vector>
 
 #include "metro/core/check.hpp"
 
@@ -123,10 +124,9 @@ Result<std::string> ReadFile(const std::string& path) {
   return out;
 }
 
-std::string Sha256Hex(std::string_view bytes) {
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  EVP_Digest(bytes.data(), bytes.size(), digest, &length, EVP_sha256(), nullptr);
+namespace {
+
+std::string HexDigest(const unsigned char* digest, unsigned int length) {
   static const char kHex[] = "0123456789abcdef";
   std::string out;
   out.reserve(2 * length);
@@ -137,10 +137,38 @@ std::string Sha256Hex(std::string_view bytes) {
   return out;
 }
 
+}  // namespace
+
+std::string Sha256Hex(std::string_view bytes) {
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int length = 0;
+  EVP_Digest(bytes.data(), bytes.size(), digest, &length, EVP_sha256(), nullptr);
+  return HexDigest(digest, length);
+}
+
 Result<std::string> Sha256File(const std::string& path) {
-  auto contents = ReadFile(path);
-  if (!contents.ok()) return contents.error();
-  return Sha256Hex(contents.value());
+  // Streamed in 1 MiB chunks: hashing a large session costs no memory.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return MakeError(OsError("cannot open", path));
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
+  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
+  std::vector<char> buffer(size_t{1} << 20);
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const std::string why = OsError("cannot read", path);
+      ::close(fd);
+      return MakeError(why);
+    }
+    if (n == 0) break;
+    EVP_DigestUpdate(ctx.get(), buffer.data(), static_cast<size_t>(n));
+  }
+  ::close(fd);
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int length = 0;
+  EVP_DigestFinal_ex(ctx.get(), digest, &length);
+  return HexDigest(digest, length);
 }
 
 bool IsSameFile(const std::string& a, const std::string& b) {

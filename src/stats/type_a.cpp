@@ -30,15 +30,38 @@ size_t NextFastFftSize(size_t n) {
   }
 }
 
-// Direct lag-k autocovariance sum of the centred series d.
-double LagSum(const double* d, size_t n, size_t k) {
-  double acc = 0.0;
-  for (size_t i = 0; i + k < n; ++i) acc += d[i] * d[i + k];
-  return acc;
+// Lags computed directly (in one fused pass) before switching to the FFT.
+constexpr size_t kDirectLags = 8;
+
+// Lag sums c_k = sum_i d_i d_{i+k} for k = 0..kDirectLags of the centred series d, in one
+// pass with independent accumulators (the loop over k vectorises; no reassociation of a
+// single running sum is needed).
+void DirectLagSums(const double* d, size_t n, double* c) {
+  double acc[kDirectLags + 1] = {};
+  const size_t body = n > kDirectLags ? n - kDirectLags : 0;
+  for (size_t i = 0; i < body; ++i) {
+    const double di = d[i];
+    for (size_t k = 0; k <= kDirectLags; ++k) acc[k] += di * d[i + k];
+  }
+  for (size_t i = body; i < n; ++i) {
+    for (size_t k = 0; i + k < n && k <= kDirectLags; ++k) acc[k] += d[i] * d[i + k];
+  }
+  for (size_t k = 0; k <= kDirectLags; ++k) c[k] = acc[k];
 }
 
-// Up to this many lags are computed directly before switching to the FFT.
-constexpr size_t kDirectLags = 16;
+// Sum of x with four interleaved partial sums (pairwise-like accuracy, vectorisable).
+double Sum4(const double* x, size_t n) {
+  double a[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    a[0] += x[i];
+    a[1] += x[i + 1];
+    a[2] += x[i + 2];
+    a[3] += x[i + 3];
+  }
+  for (; i < n; ++i) a[0] += x[i];
+  return (a[0] + a[1]) + (a[2] + a[3]);
+}
 
 }  // namespace
 
@@ -106,15 +129,23 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   const double dn = static_cast<double>(n);
   // Corrected two-pass algorithm (Chan, Golub & LeVeque 1983): centre on a first mean,
   // then correct with the residual sum, so no large sums of squares cancel.
-  double first = 0.0;
-  for (size_t i = 0; i < n; ++i) first += values[i];
-  first /= dn;
-  double s1 = 0.0, s2 = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    const double d = values[i] - first;
-    s1 += d;
-    s2 += d * d;
+  const double first = Sum4(values, n) / dn;
+  double p1[4] = {0, 0, 0, 0}, p2[4] = {0, 0, 0, 0};
+  size_t i4 = 0;
+  for (; i4 + 4 <= n; i4 += 4) {
+    for (size_t j = 0; j < 4; ++j) {
+      const double d = values[i4 + j] - first;
+      p1[j] += d;
+      p2[j] += d * d;
+    }
   }
+  for (; i4 < n; ++i4) {
+    const double d = values[i4] - first;
+    p1[0] += d;
+    p2[0] += d * d;
+  }
+  const double s1 = (p1[0] + p1[1]) + (p1[2] + p1[3]);
+  const double s2 = (p2[0] + p2[1]) + (p2[2] + p2[3]);
   TypeAResult r;
   r.n = static_cast<int64_t>(n);
   r.mean = first + s1 / dn;
@@ -130,7 +161,9 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   // Zhang (2006): variance factor from the autocorrelation up to the cut-off lag.
   std::vector<double> centred(n);
   for (size_t i = 0; i < n; ++i) centred[i] = values[i] - r.mean;
-  const double c0 = LagSum(centred.data(), n, 0);
+  double direct[kDirectLags + 1];
+  DirectLagSums(centred.data(), n, direct);
+  const double c0 = direct[0];
   const size_t max_lag = std::max<size_t>(1, static_cast<size_t>(options.max_lag_fraction * dn));
   const boost::math::students_t t_dist(dn - 1.0);
   const double t_q =
@@ -144,7 +177,7 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   for (size_t k = 1; k <= max_lag; ++k) {
     double rho_k;
     if (k <= kDirectLags) {
-      rho_k = LagSum(centred.data(), n, k) / c0;
+      rho_k = direct[k] / c0;
     } else {
       if (rho.empty()) {
         rho.resize(max_lag + 1);
