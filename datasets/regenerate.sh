@@ -17,4 +17,4 @@ here=datasets
 "$characterize" convert "$here/capture_15tags_receiver.txt" -o "$here/capture_15tags.csv"
 # Raw IMU columns at 100 Hz (accelerometer, gyroscope, temperature), 60 s.
 "$characterize" simulate --seed 3 --sensor 1 --columns imu --rate-hz 100 --duration-s 60 \
-  -o "$here/static_imu_100hz.csv"
+  --packet-loss 0   -o "$here/static_imu_100hz.csv"

@@ -8,8 +8,12 @@
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/io/tag_registry.hpp"
+#include "metro/noise/allan.hpp"
+#include "metro/report/allan_section.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/stats/session_type_a.hpp"
+#include "metro/uncertainty/budget_report.hpp"
+#include "metro/uncertainty/session_resolver.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -31,6 +35,11 @@ struct AnalyzeOptions {
   std::string output;
   std::string tag_registry;
   int threads = 0;
+  bool allan = false;
+  std::string taus = "octave";
+  std::string estimator = "oadev";
+  std::string allan_csv;
+  std::string budget;
 };
 
 int RunAnalyze(const AnalyzeOptions& o) {
@@ -64,8 +73,9 @@ int RunAnalyze(const AnalyzeOptions& o) {
     }
     registry = loaded.value();
   }
-  if (!o.output.empty()) {
-    if (Status s = CheckOutputPath(o.output, {o.session}); !s.ok()) {
+  for (const std::string* out : {&o.output, &o.allan_csv}) {
+    if (out->empty()) continue;
+    if (Status s = CheckOutputPath(*out, {o.session, o.budget}); !s.ok()) {
       PrintError(s.error());
       return kExitUsage;
     }
@@ -84,8 +94,51 @@ int RunAnalyze(const AnalyzeOptions& o) {
     PrintError(result.error());
     return kExitUsage;
   }
-  const auto report = TypeAReportJson(session.value(), result.value(), options, registry);
+  auto report = TypeAReportJson(session.value(), result.value(), options, registry);
+  std::string allan_csv;
+  if (o.allan) {
+    SessionAllanOptions allan;
+    auto taus = ParseTauSpacing(o.taus);
+    auto estimator = ParseAllanEstimator(o.estimator);
+    if (!taus.ok() || !estimator.ok()) {
+      PrintError(!taus.ok() ? taus.error() : estimator.error());
+      return kExitUsage;
+    }
+    allan.allan.taus = taus.value();
+    allan.allan.estimator = estimator.value();
+    allan.allan.threads = o.threads;
+    allan.quantities = o.quantities;
+    if (Status s = AddAllanToReport(session.value(), result.value(), allan, &report,
+                                    o.allan_csv.empty() ? nullptr : &allan_csv);
+        !s.ok()) {
+      PrintError(s.error());
+      return kExitUsage;
+    }
+  }
+  std::string budget_table;
+  if (!o.budget.empty()) {
+    // Budget inputs without a "session" refer to this session, in the same window.
+    auto budget = LoadBudget(
+        o.budget, MakeSessionQuantityResolver(session.value(), result.value(), options.window));
+    if (!budget.ok()) {
+      PrintError(budget.error());
+      return kExitUsage;
+    }
+    auto evaluation = EvaluateBudget(budget.value());
+    if (!evaluation.ok()) {
+      PrintError(evaluation.error());
+      return kExitFailed;
+    }
+    report["budget"] = BudgetReportJson(evaluation.value());
+    budget_table = BudgetReportTable(evaluation.value());
+  }
   const std::string json = report.dump(2) + "\n";
+  if (!o.allan_csv.empty()) {
+    if (Status s = WriteFileAtomically(o.allan_csv, allan_csv); !s.ok()) {
+      PrintError(s.error());
+      return kExitFailed;
+    }
+  }
   if (o.output.empty()) {
     std::fwrite(json.data(), 1, json.size(), stdout);
     return kExitOk;
@@ -94,7 +147,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
     PrintError(s.error());
     return kExitFailed;
   }
-  const std::string table = TypeAReportTable(report);
+  const std::string table = TypeAReportTable(report) + budget_table;
   std::fwrite(table.data(), 1, table.size(), stdout);
   return kExitOk;
 }
@@ -132,6 +185,16 @@ void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
                  "write the JSON report here (atomically) and print a table to stdout");
   app.add_option("--tag-registry", o->tag_registry,
                  R"(JSON {"1": "Forehead", ...} naming the tags (default: thesis Table 5.2))")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--allan", o->allan,
+               "Allan deviation and IEEE 952 noise terms of the rate quantities (docs/noise.md)");
+  app.add_option("--taus", o->taus, "Allan taus: octave, decade:N, all")->capture_default_str();
+  app.add_option("--estimator", o->estimator, "Allan estimator: oadev, mdev, ohdev")
+      ->capture_default_str();
+  app.add_option("--allan-csv", o->allan_csv, "also write the Allan curves as CSV here");
+  app.add_option("--budget", o->budget,
+                 "evaluate this uncertainty budget (docs/budget-format.md); its session inputs "
+                 "refer to SESSION")
       ->check(CLI::ExistingFile);
   app.add_option("--threads", o->threads, "worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);

@@ -2,7 +2,9 @@
 // sessions. A dispatch table: the work is done by the metro library.
 #include <CLI/CLI.hpp>
 
+#include "budget_command.hpp"
 #include "commands.hpp"
+#include "metro/uncertainty/session_resolver.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"metro characterize: uncertainty evaluation of IMU sensor-tag sessions"};
@@ -11,6 +13,9 @@ int main(int argc, char** argv) {
   metro::apps::AddAnalyzeOptions(app, &exit_code);
   metro::apps::AddConvertCommand(app, &exit_code);
   metro::apps::AddSimulateCommand(app, &exit_code);
+  metro::apps::AddBudgetCommand(app, &exit_code);
+  // Budget files may name sessions; they are evaluated in full (no window).
+  metro::SetBudgetSessionResolver(metro::MakeSessionQuantityResolver("", {}, {}));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

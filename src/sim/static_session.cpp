@@ -157,8 +157,9 @@ Status SimulateStaticSession(const StaticSimulationOptions& options, SessionForm
         e[a] = Quantize(e[a], options.quantization_deg);
       }
       const EulerDeg euler{e[0], e[1], e[2]};
+      // The accelerometer sees the tag's physical (static) attitude, not the DMP's noise.
       double accel[3], gyro[3];
-      GravityInBody(euler, accel);
+      GravityInBody(s.truth.attitude, accel);
       for (int a = 0; a < 3; ++a) {
         accel[a] += s.truth.accel_bias_g[a] + accel_noise_g * normal(rng);
         gyro[a] = s.truth.gyro_bias_dps[a] + gyro_noise_dps * normal(rng);

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -163,6 +164,65 @@ TEST_CASE("characterize convert round-trips the receiver capture", "[apps]") {
   CHECK(ja[0]["quantities"]["pitch_deg"]["type_a"] == jb[0]["quantities"]["pitch_deg"]["type_a"]);
   CHECK(ja[14]["quantities"]["pitch_deg"]["type_a"] == jb[13]["quantities"]["pitch_deg"]["type_a"]);
   std::remove(out.c_str());
+}
+
+}  // namespace
+}  // namespace metro
+
+namespace metro {
+namespace {
+
+TEST_CASE("characterize --allan adds the Allan deviation of the rate quantities", "[apps]") {
+  Run r = Characterize(kDatasets + "static_imu_100hz.csv --type-a --allan --quantity gx_dps");
+  REQUIRE(r.exit_code == 0);
+  const auto q = nlohmann::json::parse(r.out)["sensors"][0]["quantities"]["gx_dps"];
+  const auto& allan = q["allan"];
+  REQUIRE(allan.contains("adev"));
+  CHECK(allan["estimator"] == "oadev");
+  CHECK(allan["tau_s"][0].get<double>() == Approx(0.01).epsilon(1e-9));
+  // The simulator's gyro noise is white with a one-sided density of 0.005 deg/s/sqrt(Hz)
+  // (docs/simulator.md): N = 0.005 / sqrt(2) deg/s*sqrt(s). 6000 samples give N to ~1.5 %.
+  const auto& n = allan["noise"]["random_walk"];
+  CHECK(n["value"].get<double>() == Approx(0.005 / std::sqrt(2.0)).epsilon(0.05));
+  CHECK(n["density_one_sided"].get<double>() == Approx(0.005).epsilon(0.05));
+  // For white noise the Allan-predicted u of the mean equals the Type A u.
+  CHECK(q["allan_type_a_link"]["u_mean_allan"].get<double>() ==
+        Approx(q["type_a"]["std_of_mean_autocorr"].get<double>()).epsilon(0.1));
+}
+
+TEST_CASE("characterize --allan refuses gaps with line numbers", "[apps]") {
+  TempFile session(
+      "t_s,gx_dps,gy_dps,gz_dps\n0,1,0,0\n0.01,1.1,0,0\n0.02,0.9,0,0\n0.05,1,0,0\n"
+      "0.06,1.2,0,0\n0.07,1,0,0\n");
+  Run r = Characterize(session.path() + " --type-a --allan");
+  REQUIRE(r.exit_code == 0);
+  const auto allan = nlohmann::json::parse(r.out)["sensors"][0]["quantities"]["gx_dps"]["allan"];
+  REQUIRE(allan.contains("error"));
+  CHECK(allan["error"].get<std::string>().find(session.path() + ":5:") == 0);
+  Run none = Characterize(session.path() + " --type-a --allan --quantity t_s");
+  CHECK(none.exit_code == 2);
+}
+
+TEST_CASE("characterize --budget takes its Type A input from the session", "[apps]") {
+  Run r = Characterize(kDatasets + "static_chest.csv --type-a --settle auto --quantity pitch_deg " +
+                       "--quantity yaw_deg --budget " + kDatasets +
+                       "budgets/tag_static_angle_session.json");
+  REQUIRE(r.exit_code == 0);
+  const auto report = nlohmann::json::parse(r.out);
+  const auto& pitch = report["sensors"][0]["quantities"]["pitch_deg"]["type_a"];
+  const auto& budget = report["budget"];
+  CHECK(budget["schema"] == "metro.budget-report/1");
+  bool found = false;
+  for (const auto& line : budget["budget"]) {
+    if (line["name"] != "obs") continue;
+    found = true;
+    CHECK(line["value"].get<double>() == pitch["mean"].get<double>());
+    CHECK(line["u"].get<double>() == pitch["std_of_mean_autocorr"].get<double>());
+    CHECK(line["dof"].get<double>() == Approx(pitch["n_eff"].get<double>() - 1.0));
+  }
+  CHECK(found);
+  // u_c combines the Type A u with the Type B terms (mounting dominates: 0.1/sqrt(3)).
+  CHECK(budget["result"]["u"].get<double>() > 0.1 / std::sqrt(3.0));
 }
 
 }  // namespace

@@ -1,0 +1,82 @@
+#include "budget_command.hpp"
+
+#include <cstdio>
+#include <memory>
+#include <utility>
+
+#include "metro/core/file.hpp"
+#include "metro/uncertainty/budget_report.hpp"
+
+namespace metro {
+namespace {
+
+SessionQuantityResolver& BudgetResolver() {
+  static SessionQuantityResolver resolver;
+  return resolver;
+}
+
+}  // namespace
+
+void SetBudgetSessionResolver(SessionQuantityResolver resolver) {
+  BudgetResolver() = std::move(resolver);
+}
+
+void AddBudgetCommand(CLI::App& app, int* exit_code) {
+  auto options = std::make_shared<BudgetOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "budget", "Evaluate an uncertainty budget (GUM + JCGM 101 Monte Carlo) from a JSON file");
+  sub->add_option("BUDGET", options->budget_path, "Budget file (docs/budget-format.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", options->output_path,
+                  "Write the metro.budget-report/1 JSON here and print the table");
+  sub->callback([options, exit_code]() {
+    const int code = RunBudget(*options);
+    if (exit_code != nullptr) {
+      *exit_code = code;
+    } else if (code != 0) {
+      throw CLI::RuntimeError(code);
+    }
+  });
+}
+
+int RunBudget(const BudgetOptions& options) { return RunBudget(options, BudgetResolver()); }
+
+int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resolver) {
+  if (!options.output_path.empty() && IsSameFile(options.output_path, options.budget_path)) {
+    std::fprintf(stderr, "error: the output would overwrite the budget %s\n",
+                 options.budget_path.c_str());
+    return 2;
+  }
+  auto budget = LoadBudget(options.budget_path, resolver);
+  if (!budget.ok()) {
+    std::fprintf(stderr, "error: %s\n", budget.error().ToString().c_str());
+    return 2;
+  }
+  auto evaluation = EvaluateBudget(budget.value());
+  if (!evaluation.ok()) {
+    // Bad models (NaN, undefined) and impossible joint distributions are input errors.
+    std::fprintf(stderr, "error: %s\n", evaluation.error().ToString().c_str());
+    return 2;
+  }
+  const std::string json = BudgetReportJson(evaluation.value()).dump(2) + "\n";
+  if (options.output_path.empty()) {
+    std::fputs(json.c_str(), stdout);
+  } else {
+    const Status written = WriteFileAtomically(options.output_path, json);
+    if (!written.ok()) {
+      std::fprintf(stderr, "error: %s\n", written.error().ToString().c_str());
+      return 1;
+    }
+    std::fputs(BudgetReportTable(evaluation.value()).c_str(), stdout);
+  }
+  if (!evaluation.value().ok) {
+    std::fprintf(stderr, "error: %s\n",
+                 evaluation.value().monte_carlo ? evaluation.value().monte_carlo->message.c_str()
+                                                : "evaluation failed");
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace metro

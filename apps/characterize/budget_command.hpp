@@ -1,0 +1,35 @@
+// `characterize budget BUDGET.json [-o REPORT.json]`: evaluates an uncertainty budget (GUM
+// framework, Monte Carlo, GUF validation) and writes the "metro.budget-report/1" JSON.
+// With -o the JSON goes to the file and the readable table to stdout; without, the JSON
+// goes to stdout. Exit codes: 0 ok, 1 the work failed (adaptive Monte Carlo did not settle,
+// output not written), 2 usage or input error (the message names the input).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "metro/uncertainty/budget.hpp"
+
+namespace metro {
+
+struct BudgetOptions {
+  std::string budget_path;
+  std::string output_path;  // Empty: JSON to stdout.
+};
+
+// Registers the `budget` subcommand. Its callback stores RunBudget's exit code in
+// *exit_code (the dispatch style of commands.hpp); with exit_code null a non-zero code is
+// raised as CLI::RuntimeError(code) for CLI11_PARSE. Session quantities in the budget are
+// resolved with the resolver set by SetBudgetSessionResolver (none by default: such inputs
+// are errors naming the input).
+void AddBudgetCommand(CLI::App& app, int* exit_code = nullptr);
+void SetBudgetSessionResolver(SessionQuantityResolver resolver);
+
+int RunBudget(const BudgetOptions& options);
+int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resolver);
+
+namespace apps {
+using metro::AddBudgetCommand;
+}  // namespace apps
+
+}  // namespace metro

@@ -1,0 +1,67 @@
+/* libFuzzer target: the blob validator, the sensor decoder and apply on arbitrary bytes.
+ * The validator is given the device id found in the input itself, so the fuzzer can reach
+ * the section walker and the decoder. Run by fuzz/run.sh under ASan and UBSan. */
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "metro_fw/blob.h"
+#include "metro_fw/crc.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
+
+static void Check(const uint8_t* data, size_t size);
+
+/* Each input is checked as is and, so the fuzzer gets past the CRC, with a correct CRC word
+ * written at total_len - 4 when total_len lies inside the input. */
+int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  static uint8_t copy[2 * METRO_FW_MAX_LEN];
+  uint32_t total, crc;
+  if (size > sizeof(copy)) return 0;
+  Check(data, size);
+  if (size < 12) return 0;
+  total = (uint32_t)data[8] | ((uint32_t)data[9] << 8);
+  if (total < 8 || total > size) return 0;
+  memcpy(copy, data, size);
+  crc = metro_fw_crc32(0, copy, total - 4);
+  copy[total - 4] = (uint8_t)crc;
+  copy[total - 3] = (uint8_t)(crc >> 8);
+  copy[total - 2] = (uint8_t)(crc >> 16);
+  copy[total - 1] = (uint8_t)(crc >> 24);
+  Check(copy, size);
+  return 0;
+}
+
+static void Check(const uint8_t* data, size_t size) {
+  metro_fw_buffer buf;
+  metro_fw_blob_info info;
+  metro_fw_config cfg;
+  metro_fw_sensor_cal cal;
+  uint32_t id[2] = {0, 0};
+  int i;
+  if (size >= 24) {
+    for (i = 0; i < 4; ++i) {
+      id[0] |= (uint32_t)data[16 + i] << (8 * i);
+      id[1] |= (uint32_t)data[20 + i] << (8 * i);
+    }
+  }
+  buf.data = data;
+  buf.len = (uint32_t)size;
+  if (metro_fw_blob_validate(metro_fw_buffer_read, &buf, (uint32_t)size, id, &info) !=
+      METRO_FW_OK) {
+    return;
+  }
+  cfg.device_id[0] = id[0];
+  cfg.device_id[1] = id[1];
+  cfg.accel_fs_sel = 0;
+  cfg.gyro_fs_sel = 0;
+  cfg.dlpf_cfg = 3;
+  if (metro_fw_sensor_decode(metro_fw_buffer_read, &buf, info.accel_off, info.accel_len,
+                             info.accel_version, METRO_FW_ACCEL, &cfg, &cal) == METRO_FW_OK) {
+    const int16_t raw[3] = {32767, -32768, 1};
+    float y[3];
+    (void)metro_fw_apply(&cal, raw, 30.0f, y);
+  }
+  (void)metro_fw_sensor_decode(metro_fw_buffer_read, &buf, info.gyro_off, info.gyro_len,
+                               info.gyro_version, METRO_FW_GYRO, &cfg, &cal);
+}

@@ -1,0 +1,194 @@
+/* Calibration blob format v1: validation, active-slot choice, load at boot and the model.
+ *
+ * Model (docs/calibration-blob.md section 3), raw int16 counts in, SI out (accelerometer
+ * m/s^2, gyroscope rad/s):
+ *
+ *   y = M * (r - b0 - b1*dT - b2*dT^2),  dT = clamp(T, t_valid_min_c, t_valid_max_c) - t_ref_c
+ *
+ * Bias is removed before scaling, in raw counts; M (row-major, SI per LSB) holds nominal
+ * sensitivity, scale, misalignment and any sensor-to-body rotation. M = diag(s_nom), b = 0 is
+ * the identity used when a sensor is uncalibrated.
+ *
+ * Nothing here allocates or touches stdio; the caller owns every struct. */
+#ifndef METRO_FW_BLOB_H_
+#define METRO_FW_BLOB_H_
+
+#include <stdint.h>
+
+#include "metro_fw/error.h"
+#include "metro_fw/flash.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Header (section 2.1). */
+#define METRO_FW_MAGIC 0x4C414349u /* "ICAL" little-endian */
+#define METRO_FW_ERASED_WORD 0xFFFFFFFFu
+#define METRO_FW_FMT_MAJOR 1u
+#define METRO_FW_FMT_MINOR 0u
+#define METRO_FW_HEADER_LEN 32u
+#define METRO_FW_MAX_LEN 1024u
+#define METRO_FW_SEQ_MIN 1u
+#define METRO_FW_SEQ_MAX 0xFFFFFFFEu
+#define METRO_FW_FLAG_ACCEL 0x01u
+#define METRO_FW_FLAG_GYRO 0x02u
+#define METRO_FW_FLAG_TEMP_MODEL 0x04u
+#define METRO_FW_FLAG_PROVISIONAL 0x08u
+
+/* Sections (section 2.2). */
+#define METRO_FW_SECTION_HEADER_LEN 8u
+#define METRO_FW_SEC_META 0x0001u
+#define METRO_FW_SEC_ACCEL 0x0010u
+#define METRO_FW_SEC_GYRO 0x0011u
+#define METRO_FW_SEC_VERSION_1_0 0x0100u
+#define METRO_FW_META_BODY_LEN 128u
+#define METRO_FW_SENSOR_BODY_LEN 176u
+#define METRO_FW_V1_TOTAL_LEN 540u
+
+/* Sensor model bits (section 2.4). */
+#define METRO_FW_MODEL_BIAS 0x01u
+#define METRO_FW_MODEL_FULL_M 0x02u
+#define METRO_FW_MODEL_LINEAR_T 0x04u
+#define METRO_FW_MODEL_QUADRATIC_T 0x08u
+#define METRO_FW_MODEL_HW_OFFSETS 0x80u
+
+#define METRO_FW_SLOT_NONE (-1)
+
+/* Reads len bytes at offset of a blob into dst; 0 on success, negative on failure. The
+ * validator reads through this so a slot is never copied whole into RAM. */
+typedef int (*metro_fw_read_fn)(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len);
+
+/* A blob in RAM, for metro_fw_buffer_read. */
+typedef struct {
+  const uint8_t* data;
+  uint32_t len;
+} metro_fw_buffer;
+
+/* metro_fw_read_fn over a metro_fw_buffer (ctx). Returns METRO_FW_E_BOUNDS past its end. */
+int metro_fw_buffer_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len);
+
+/* A flash slot seen as a blob: reads at slot offsets go to flash->read at base + offset. */
+typedef struct {
+  const metro_fw_flash* flash;
+  uint32_t base;
+} metro_fw_slot;
+
+/* metro_fw_read_fn over a metro_fw_slot (ctx). Returns METRO_FW_E_BOUNDS past the page end,
+ * METRO_FW_E_FLASH when flash->read fails. */
+int metro_fw_slot_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len);
+
+/* What the validator learned about a valid blob. Body offsets are from the blob start; an
+ * offset of 0 means the section is absent. */
+typedef struct {
+  uint16_t fmt_major;
+  uint16_t fmt_minor;
+  uint16_t total_len;
+  uint16_t header_len;
+  uint32_t seq;
+  uint32_t device_id[2];
+  uint32_t flags;
+  uint32_t crc32;
+  uint16_t meta_off, meta_len, meta_version;
+  uint16_t accel_off, accel_len, accel_version;
+  uint16_t gyro_off, gyro_len, gyro_version;
+} metro_fw_blob_info;
+
+/* Validates the blob readable through read/ctx, of which avail_len bytes exist (1024 for a
+ * flash slot), against the chip's device_id[2], in the order of section 4:
+ * METRO_FW_E_EMPTY, METRO_FW_E_MAGIC, METRO_FW_E_UNSUPPORTED, METRO_FW_E_BOUNDS,
+ * METRO_FW_E_CRC, METRO_FW_E_FOREIGN, METRO_FW_E_SEQ, METRO_FW_E_SECTION; METRO_FW_E_ARG for
+ * NULL pointers; a failing read returns its code. info may be NULL; it is filled (header
+ * fields at least) whenever the header could be read. Never reads outside [0, avail_len). */
+int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
+                           const uint32_t device_id[2], metro_fw_blob_info* info);
+
+/* Validates both slots of flash and picks the active one (larger seq, slot A on a tie).
+ * result[i] receives slot i's validator code, info[i] its info, *active 0, 1 or
+ * METRO_FW_SLOT_NONE. Returns METRO_FW_OK, or METRO_FW_E_ARG for NULL pointers. */
+int metro_fw_choose_active(const metro_fw_flash* flash, const uint32_t device_id[2],
+                           metro_fw_blob_info info[2], int result[2], int* active);
+
+/* Per-sensor status after loading (section 3.1). */
+enum metro_fw_sensor_status {
+  METRO_FW_SENSOR_OK = 0,              /* calibrated from the active slot */
+  METRO_FW_SENSOR_ABSENT = 1,          /* no active slot or no section: defaults */
+  METRO_FW_SENSOR_UNSUPPORTED = 2,     /* section major unknown: defaults */
+  METRO_FW_SENSOR_NONFINITE = 3,       /* NaN/Inf, or a negative uncertainty: defaults */
+  METRO_FW_SENSOR_BAD_MODEL = 4,       /* unknown model bits: defaults */
+  METRO_FW_SENSOR_CONFIG_MISMATCH = 5, /* fs_sel/dlpf_cfg differ from the firmware's */
+  METRO_FW_SENSOR_LIMITS = 6           /* constants outside physical limits: defaults */
+};
+
+typedef enum { METRO_FW_ACCEL = 0, METRO_FW_GYRO = 1 } metro_fw_sensor_kind;
+
+/* The constants the firmware applies. Terms whose model bit is clear are zero (and M is
+ * diagonal without METRO_FW_MODEL_FULL_M), so metro_fw_apply needs no branches on bits. */
+typedef struct {
+  float m[9];  /* row-major, SI per LSB */
+  float b0[3]; /* LSB */
+  float b1[3]; /* LSB/degC */
+  float b2[3]; /* LSB/degC^2 */
+  float t_ref_c;
+  float t_valid_min_c;
+  float t_valid_max_c;
+  int16_t hw_offs[3]; /* MPU6050 offset register values (informational) */
+  uint8_t model_bits;
+  uint8_t status; /* enum metro_fw_sensor_status */
+} metro_fw_sensor_cal;
+
+/* The firmware's own configuration, which a section must match. */
+typedef struct {
+  uint32_t device_id[2]; /* FICR DEVICEID[0], DEVICEID[1] */
+  uint8_t accel_fs_sel;  /* 0..3 */
+  uint8_t gyro_fs_sel;   /* 0..3 */
+  uint8_t dlpf_cfg;      /* 0..6 */
+} metro_fw_config;
+
+/* The result of loading at boot: what the firmware publishes. */
+typedef struct {
+  metro_fw_sensor_cal accel;
+  metro_fw_sensor_cal gyro;
+  int slot;           /* 0 = A, 1 = B, METRO_FW_SLOT_NONE = uncalibrated */
+  int slot_result[2]; /* validator code of each slot */
+  uint32_t seq;       /* of the active slot, 0 if none */
+  uint32_t crc32;     /* of the active slot, 0 if none */
+  uint32_t flags;     /* header flags of the active slot, 0 if none */
+} metro_fw_calibration;
+
+/* Nominal sensitivity, SI per LSB: accel 9.80665 / (16384 >> fs_sel) m/s^2, gyro
+ * (250 << fs_sel) / 32768 * pi / 180 rad/s (MPU6050 PS-MPU-6000A rev 3.4 tables 6.1, 6.2). */
+float metro_fw_nominal_sensitivity(metro_fw_sensor_kind kind, uint8_t fs_sel);
+
+/* Identity defaults for fs_sel: M = diag(s_nom), b = 0, t_ref 25 degC, valid -40..85 degC,
+ * status METRO_FW_SENSOR_ABSENT. Returns METRO_FW_E_ARG for NULL or fs_sel > 3. */
+int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw_sensor_cal* out);
+
+/* Decodes the sensor section body at body_off (body_len bytes, section version `version`)
+ * of a blob the validator accepted, and checks it against cfg (section 3.1). On a usable
+ * section *out holds its constants with status METRO_FW_SENSOR_OK; otherwise *out holds the
+ * defaults and the status says why. Returns METRO_FW_OK (whatever the status), METRO_FW_E_ARG
+ * for NULL pointers or a bad kind, or a failing read's code (out then holds the defaults). */
+int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, uint32_t body_len,
+                           uint16_t version, metro_fw_sensor_kind kind, const metro_fw_config* cfg,
+                           metro_fw_sensor_cal* out);
+
+/* Boot: chooses the active slot and decodes both sensors (never writes flash). Without a
+ * valid slot both sensors get the defaults and out->slot is METRO_FW_SLOT_NONE. Returns
+ * METRO_FW_OK, or METRO_FW_E_ARG for NULL pointers / fs_sel > 3 (out is then untouched). */
+int metro_fw_load(const metro_fw_flash* flash, const metro_fw_config* cfg,
+                  metro_fw_calibration* out);
+
+/* y = M * (r - b0 - b1*dT - b2*dT^2) with dT = clamp(temp_c, valid range) - t_ref_c; a NaN
+ * temp_c counts as t_ref_c. Returns METRO_FW_OK or METRO_FW_E_ARG for NULL pointers. */
+int metro_fw_apply(const metro_fw_sensor_cal* cal, const int16_t raw_lsb[3], float temp_c,
+                   float out_si[3]);
+
+/* MPU6050 die temperature: T = raw / 340 + 36.53 degC (PS-MPU-6000A rev 3.4 sec. 6.4). */
+float metro_fw_mpu6050_temp_c(int16_t raw_lsb);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* METRO_FW_BLOB_H_ */

@@ -1,0 +1,365 @@
+#include "metro_fw/blob.h"
+
+#include "le.h"
+#include "metro_fw/crc.h"
+
+/* Bytes read per call while computing the CRC: small enough for the boot stack. */
+#define METRO_FW_CHUNK 32u
+
+/* Physical limits of section 3.1. */
+#define METRO_FW_TEMP_MIN_C (-40.0f)
+#define METRO_FW_TEMP_MAX_C 85.0f
+#define METRO_FW_DEFAULT_T_REF_C 25.0f
+/* 0.25 g in accel counts at fs_sel 0 (16384 LSB/g); 60 deg/s in gyro counts at fs_sel 0
+ * (32768 / 250 = 131.072 LSB per deg/s). Both halve with each fs_sel step. */
+#define METRO_FW_ACCEL_BIAS_LIMIT_LSB 4096
+#define METRO_FW_GYRO_BIAS_LIMIT_LSB 7864
+/* 9.80665 / 16384 m/s^2 per LSB and 250 / 32768 * pi / 180 rad/s per LSB at fs_sel 0. */
+#define METRO_FW_ACCEL_SENS_FS0 5.98550415e-4f
+#define METRO_FW_GYRO_SENS_FS0 1.33158055e-4f
+
+int metro_fw_buffer_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len) {
+  const metro_fw_buffer* b = (const metro_fw_buffer*)ctx;
+  uint32_t i;
+  if (b == 0 || dst == 0) return METRO_FW_E_ARG;
+  if (offset > b->len || len > b->len - offset) return METRO_FW_E_BOUNDS;
+  for (i = 0; i < len; ++i) dst[i] = b->data[offset + i];
+  return METRO_FW_OK;
+}
+
+/* Section walk (section 2.2). Fills the section fields of info. */
+static int WalkSections(metro_fw_read_fn read, void* ctx, metro_fw_blob_info* info) {
+  const uint32_t end = (uint32_t)info->total_len - 4u;
+  uint32_t off = info->header_len;
+  uint8_t h[METRO_FW_SECTION_HEADER_LEN];
+  while (off < end) {
+    uint16_t type, version, body_len;
+    uint16_t* body_off_field = 0;
+    uint16_t* body_len_field = 0;
+    uint16_t* version_field = 0;
+    uint32_t min_len = 0;
+    int rc;
+    if (end - off < METRO_FW_SECTION_HEADER_LEN) return METRO_FW_E_SECTION;
+    rc = read(ctx, off, h, METRO_FW_SECTION_HEADER_LEN);
+    if (rc != METRO_FW_OK) return rc;
+    type = metro_fw_get_u16(h);
+    version = metro_fw_get_u16(h + 2);
+    body_len = metro_fw_get_u16(h + 4);
+    off += METRO_FW_SECTION_HEADER_LEN;
+    if (type == 0x0000u || type == 0xFFFFu) return METRO_FW_E_SECTION;
+    if ((body_len & 3u) != 0u || body_len > end - off) return METRO_FW_E_SECTION;
+    if (type == METRO_FW_SEC_META) {
+      body_off_field = &info->meta_off;
+      body_len_field = &info->meta_len;
+      version_field = &info->meta_version;
+      min_len = METRO_FW_META_BODY_LEN;
+    } else if (type == METRO_FW_SEC_ACCEL) {
+      body_off_field = &info->accel_off;
+      body_len_field = &info->accel_len;
+      version_field = &info->accel_version;
+      min_len = METRO_FW_SENSOR_BODY_LEN;
+    } else if (type == METRO_FW_SEC_GYRO) {
+      body_off_field = &info->gyro_off;
+      body_len_field = &info->gyro_len;
+      version_field = &info->gyro_version;
+      min_len = METRO_FW_SENSOR_BODY_LEN;
+    }
+    if (body_off_field != 0) {
+      if (*body_off_field != 0u) return METRO_FW_E_SECTION; /* duplicate */
+      /* A major this firmware knows must carry at least the v1.0 body. */
+      if ((version >> 8) == (METRO_FW_SEC_VERSION_1_0 >> 8) && body_len < min_len) {
+        return METRO_FW_E_SECTION;
+      }
+      *body_off_field = (uint16_t)off;
+      *body_len_field = body_len;
+      *version_field = version;
+    }
+    off += body_len;
+  }
+  return METRO_FW_OK; /* off == end: sections tile the blob exactly */
+}
+
+int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
+                           const uint32_t device_id[2], metro_fw_blob_info* info) {
+  metro_fw_blob_info local;
+  metro_fw_blob_info* in = info != 0 ? info : &local;
+  uint8_t buf[METRO_FW_CHUNK];
+  uint32_t magic, crc, off, crc_off;
+  int rc;
+  if (read == 0 || device_id == 0) return METRO_FW_E_ARG;
+  {
+    uint8_t* z = (uint8_t*)in;
+    uint32_t i;
+    for (i = 0; i < sizeof(*in); ++i) z[i] = 0;
+  }
+  if (avail_len < 4u) return METRO_FW_E_BOUNDS;
+  rc = read(ctx, 0, buf, 4);
+  if (rc != METRO_FW_OK) return rc;
+  magic = metro_fw_get_u32(buf);
+  if (magic == METRO_FW_ERASED_WORD) return METRO_FW_E_EMPTY;
+  if (magic != METRO_FW_MAGIC) return METRO_FW_E_MAGIC;
+  if (avail_len < METRO_FW_HEADER_LEN) return METRO_FW_E_BOUNDS;
+  rc = read(ctx, 0, buf, METRO_FW_HEADER_LEN);
+  if (rc != METRO_FW_OK) return rc;
+  in->fmt_major = metro_fw_get_u16(buf + 4);
+  in->fmt_minor = metro_fw_get_u16(buf + 6);
+  in->total_len = metro_fw_get_u16(buf + 8);
+  in->header_len = metro_fw_get_u16(buf + 10);
+  in->seq = metro_fw_get_u32(buf + 12);
+  in->device_id[0] = metro_fw_get_u32(buf + 16);
+  in->device_id[1] = metro_fw_get_u32(buf + 20);
+  in->flags = metro_fw_get_u32(buf + 24);
+  if (in->fmt_major != METRO_FW_FMT_MAJOR) return METRO_FW_E_UNSUPPORTED;
+  if ((in->header_len & 3u) != 0u || in->header_len < METRO_FW_HEADER_LEN) {
+    return METRO_FW_E_BOUNDS;
+  }
+  if ((in->total_len & 3u) != 0u || in->total_len > METRO_FW_MAX_LEN || in->total_len > avail_len ||
+      (uint32_t)in->header_len + 4u > in->total_len) {
+    return METRO_FW_E_BOUNDS;
+  }
+  crc_off = (uint32_t)in->total_len - 4u;
+  crc = 0;
+  for (off = 0; off < crc_off; off += METRO_FW_CHUNK) {
+    uint32_t n = crc_off - off < METRO_FW_CHUNK ? crc_off - off : METRO_FW_CHUNK;
+    rc = read(ctx, off, buf, n);
+    if (rc != METRO_FW_OK) return rc;
+    crc = metro_fw_crc32(crc, buf, n);
+  }
+  rc = read(ctx, crc_off, buf, 4);
+  if (rc != METRO_FW_OK) return rc;
+  in->crc32 = metro_fw_get_u32(buf);
+  if (crc != in->crc32) return METRO_FW_E_CRC;
+  if (in->device_id[0] != device_id[0] || in->device_id[1] != device_id[1]) {
+    return METRO_FW_E_FOREIGN;
+  }
+  if (in->seq < METRO_FW_SEQ_MIN || in->seq > METRO_FW_SEQ_MAX) return METRO_FW_E_SEQ;
+  return WalkSections(read, ctx, in);
+}
+
+int metro_fw_slot_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len) {
+  const metro_fw_slot* s = (const metro_fw_slot*)ctx;
+  if (s == 0 || s->flash == 0 || s->flash->read == 0 || dst == 0) return METRO_FW_E_ARG;
+  if (offset > METRO_FW_PAGE_SIZE || len > METRO_FW_PAGE_SIZE - offset) return METRO_FW_E_BOUNDS;
+  return s->flash->read(s->flash->ctx, s->base + offset, dst, len) == 0 ? METRO_FW_OK
+                                                                        : METRO_FW_E_FLASH;
+}
+
+int metro_fw_choose_active(const metro_fw_flash* flash, const uint32_t device_id[2],
+                           metro_fw_blob_info info[2], int result[2], int* active) {
+  int i;
+  if (flash == 0 || flash->read == 0 || device_id == 0 || info == 0 || result == 0 || active == 0) {
+    return METRO_FW_E_ARG;
+  }
+  for (i = 0; i < 2; ++i) {
+    metro_fw_slot s;
+    s.flash = flash;
+    s.base = flash->slot_addr[i];
+    result[i] =
+        metro_fw_blob_validate(metro_fw_slot_read, &s, METRO_FW_PAGE_SIZE, device_id, &info[i]);
+  }
+  if (result[0] == METRO_FW_OK && result[1] == METRO_FW_OK) {
+    *active = info[1].seq > info[0].seq ? 1 : 0;
+  } else if (result[0] == METRO_FW_OK) {
+    *active = 0;
+  } else if (result[1] == METRO_FW_OK) {
+    *active = 1;
+  } else {
+    *active = METRO_FW_SLOT_NONE;
+  }
+  return METRO_FW_OK;
+}
+
+float metro_fw_nominal_sensitivity(metro_fw_sensor_kind kind, uint8_t fs_sel) {
+  const float scale = (float)(int32_t)(1 << (fs_sel & 3u));
+  return (kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_SENS_FS0 : METRO_FW_GYRO_SENS_FS0) * scale;
+}
+
+int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw_sensor_cal* out) {
+  uint8_t* z;
+  uint32_t i;
+  float s;
+  if (out == 0 || fs_sel > 3u || (kind != METRO_FW_ACCEL && kind != METRO_FW_GYRO)) {
+    return METRO_FW_E_ARG;
+  }
+  z = (uint8_t*)out;
+  for (i = 0; i < sizeof(*out); ++i) z[i] = 0;
+  s = metro_fw_nominal_sensitivity(kind, fs_sel);
+  out->m[0] = s;
+  out->m[4] = s;
+  out->m[8] = s;
+  out->t_ref_c = METRO_FW_DEFAULT_T_REF_C;
+  out->t_valid_min_c = METRO_FW_TEMP_MIN_C;
+  out->t_valid_max_c = METRO_FW_TEMP_MAX_C;
+  out->status = METRO_FW_SENSOR_ABSENT;
+  return METRO_FW_OK;
+}
+
+/* |x| by clearing the sign bit: no soft-float compare on the M0. */
+static float AbsF(float x) {
+  union {
+    float f;
+    uint32_t u;
+  } v;
+  v.f = x;
+  v.u &= 0x7FFFFFFFu;
+  return v.f;
+}
+
+/* lo <= x <= hi; false for NaN. */
+static int InRange(float x, float lo, float hi) { return x >= lo && x <= hi; }
+
+/* Section 3.1 physical limits on decoded constants (model bits already applied). */
+static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind, uint8_t fs_sel) {
+  const float s = metro_fw_nominal_sensitivity(kind, fs_sel);
+  const float* m = c->m;
+  const int32_t limit_fs0 =
+      kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_BIAS_LIMIT_LSB : METRO_FW_GYRO_BIAS_LIMIT_LSB;
+  const float bias_limit = (float)(limit_fs0 >> fs_sel);
+  float det = 0.0f;
+  float d_max, d_hi;
+  int i, j;
+  if (!InRange(c->t_ref_c, METRO_FW_TEMP_MIN_C, METRO_FW_TEMP_MAX_C) ||
+      !InRange(c->t_valid_min_c, METRO_FW_TEMP_MIN_C, METRO_FW_TEMP_MAX_C) ||
+      !InRange(c->t_valid_max_c, METRO_FW_TEMP_MIN_C, METRO_FW_TEMP_MAX_C) ||
+      !(c->t_valid_min_c < c->t_valid_max_c)) {
+    return 0;
+  }
+  d_max = AbsF(c->t_valid_min_c - c->t_ref_c);
+  d_hi = AbsF(c->t_valid_max_c - c->t_ref_c);
+  if (d_hi > d_max) d_max = d_hi;
+  for (i = 0; i < 3; ++i) {
+    const int k1 = (i + 1) % 3;
+    const int k2 = (i + 2) % 3;
+    float n2 = 0.0f;
+    for (j = 0; j < 3; ++j) n2 += m[3 * i + j] * m[3 * i + j];
+    /* Row norm within +-10 % of s_nom: (1 - 0.1)^2 = 0.81, (1 + 0.1)^2 = 1.21. */
+    if (!InRange(n2, 0.81f * s * s, 1.21f * s * s)) return 0;
+    /* det(M) = row0 . (row1 x row2) */
+    det += m[i] * (m[3 + k1] * m[6 + k2] - m[3 + k2] * m[6 + k1]);
+    /* |b0| + |b1|*D + |b2|*D^2 bounds the bias over the validity range, D = max |dT|. */
+    if (!(AbsF(c->b0[i]) + (AbsF(c->b1[i]) + AbsF(c->b2[i]) * d_max) * d_max <= bias_limit)) {
+      return 0;
+    }
+  }
+  return det > 0.0f;
+}
+
+int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, uint32_t body_len,
+                           uint16_t version, metro_fw_sensor_kind kind, const metro_fw_config* cfg,
+                           metro_fw_sensor_cal* out) {
+  uint8_t b[METRO_FW_SENSOR_BODY_LEN];
+  uint8_t fs_sel, bits;
+  uint32_t i;
+  int rc;
+  metro_fw_sensor_cal c;
+  if (read == 0 || cfg == 0 || out == 0) return METRO_FW_E_ARG;
+  fs_sel = kind == METRO_FW_ACCEL ? cfg->accel_fs_sel : cfg->gyro_fs_sel;
+  rc = metro_fw_sensor_defaults(kind, fs_sel, out);
+  if (rc != METRO_FW_OK) return rc;
+  if (body_off == 0u) return METRO_FW_OK; /* ABSENT */
+  if ((version >> 8) != (METRO_FW_SEC_VERSION_1_0 >> 8)) {
+    out->status = METRO_FW_SENSOR_UNSUPPORTED;
+    return METRO_FW_OK;
+  }
+  if (body_len < METRO_FW_SENSOR_BODY_LEN) return METRO_FW_E_ARG; /* validator forbids */
+  rc = read(ctx, body_off, b, METRO_FW_SENSOR_BODY_LEN);
+  if (rc != METRO_FW_OK) return rc;
+  /* Every f32 from t_ref_c (4) to t_valid_max_c (160) finite; from u_M (80) to resid_rms
+   * (152) also not negative. Checked on the bits: exponent 0xFF is Inf or NaN. */
+  for (i = 4; i < 164; i += 4) {
+    const uint32_t u = metro_fw_get_u32(b + i);
+    if ((u & 0x7F800000u) == 0x7F800000u) {
+      out->status = METRO_FW_SENSOR_NONFINITE;
+      return METRO_FW_OK;
+    }
+    if (i >= 80u && i < 156u && (u & 0x80000000u) != 0u && (u & 0x7FFFFFFFu) != 0u) {
+      out->status = METRO_FW_SENSOR_NONFINITE;
+      return METRO_FW_OK;
+    }
+  }
+  bits = b[2];
+  if ((bits & (uint8_t) ~(METRO_FW_MODEL_BIAS | METRO_FW_MODEL_FULL_M | METRO_FW_MODEL_LINEAR_T |
+                          METRO_FW_MODEL_QUADRATIC_T | METRO_FW_MODEL_HW_OFFSETS)) != 0u) {
+    out->status = METRO_FW_SENSOR_BAD_MODEL;
+    return METRO_FW_OK;
+  }
+  if (b[0] != fs_sel || b[1] != cfg->dlpf_cfg) {
+    out->status = METRO_FW_SENSOR_CONFIG_MISMATCH;
+    return METRO_FW_OK;
+  }
+  c = *out;
+  c.model_bits = bits;
+  c.t_ref_c = metro_fw_get_f32(b + 4);
+  for (i = 0; i < 9; ++i) {
+    const int diagonal = (i % 4u) == 0u;
+    c.m[i] = (diagonal || (bits & METRO_FW_MODEL_FULL_M)) ? metro_fw_get_f32(b + 8 + 4 * i) : 0.0f;
+  }
+  for (i = 0; i < 3; ++i) {
+    c.b0[i] = (bits & METRO_FW_MODEL_BIAS) ? metro_fw_get_f32(b + 44 + 4 * i) : 0.0f;
+    c.b1[i] = (bits & METRO_FW_MODEL_LINEAR_T) ? metro_fw_get_f32(b + 56 + 4 * i) : 0.0f;
+    c.b2[i] = (bits & METRO_FW_MODEL_QUADRATIC_T) ? metro_fw_get_f32(b + 68 + 4 * i) : 0.0f;
+    c.hw_offs[i] = metro_fw_get_i16(b + 164 + 2 * i);
+  }
+  c.t_valid_min_c = metro_fw_get_f32(b + 156);
+  c.t_valid_max_c = metro_fw_get_f32(b + 160);
+  if (!WithinLimits(&c, kind, fs_sel)) {
+    out->status = METRO_FW_SENSOR_LIMITS;
+    return METRO_FW_OK;
+  }
+  c.status = METRO_FW_SENSOR_OK;
+  *out = c;
+  return METRO_FW_OK;
+}
+
+int metro_fw_load(const metro_fw_flash* flash, const metro_fw_config* cfg,
+                  metro_fw_calibration* out) {
+  metro_fw_blob_info info[2];
+  int active, rc;
+  metro_fw_slot s;
+  if (flash == 0 || cfg == 0 || out == 0 || cfg->accel_fs_sel > 3u || cfg->gyro_fs_sel > 3u) {
+    return METRO_FW_E_ARG;
+  }
+  rc = metro_fw_choose_active(flash, cfg->device_id, info, out->slot_result, &active);
+  if (rc != METRO_FW_OK) return rc;
+  metro_fw_sensor_defaults(METRO_FW_ACCEL, cfg->accel_fs_sel, &out->accel);
+  metro_fw_sensor_defaults(METRO_FW_GYRO, cfg->gyro_fs_sel, &out->gyro);
+  out->slot = active;
+  out->seq = 0;
+  out->crc32 = 0;
+  out->flags = 0;
+  if (active == METRO_FW_SLOT_NONE) return METRO_FW_OK;
+  out->seq = info[active].seq;
+  out->crc32 = info[active].crc32;
+  out->flags = info[active].flags;
+  s.flash = flash;
+  s.base = flash->slot_addr[active];
+  /* A read failing here leaves that sensor at its defaults; the other is still decoded. */
+  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, info[active].accel_off,
+                               info[active].accel_len, info[active].accel_version, METRO_FW_ACCEL,
+                               cfg, &out->accel);
+  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, info[active].gyro_off, info[active].gyro_len,
+                               info[active].gyro_version, METRO_FW_GYRO, cfg, &out->gyro);
+  return METRO_FW_OK;
+}
+
+int metro_fw_apply(const metro_fw_sensor_cal* cal, const int16_t raw_lsb[3], float temp_c,
+                   float out_si[3]) {
+  float d[3];
+  float t = temp_c;
+  float dt;
+  int i;
+  if (cal == 0 || raw_lsb == 0 || out_si == 0) return METRO_FW_E_ARG;
+  if (t != t) t = cal->t_ref_c; /* NaN */
+  if (t < cal->t_valid_min_c) t = cal->t_valid_min_c;
+  if (t > cal->t_valid_max_c) t = cal->t_valid_max_c;
+  dt = t - cal->t_ref_c;
+  for (i = 0; i < 3; ++i) {
+    d[i] = (float)raw_lsb[i] - cal->b0[i] - (cal->b1[i] + cal->b2[i] * dt) * dt;
+  }
+  for (i = 0; i < 3; ++i) {
+    out_si[i] = cal->m[3 * i] * d[0] + cal->m[3 * i + 1] * d[1] + cal->m[3 * i + 2] * d[2];
+  }
+  return METRO_FW_OK;
+}
+
+float metro_fw_mpu6050_temp_c(int16_t raw_lsb) { return (float)raw_lsb * (1.0f / 340.0f) + 36.53f; }

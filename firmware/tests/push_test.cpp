@@ -1,0 +1,369 @@
+// Receive side of the push protocol, driven as the PC would drive it, with transfer faults.
+#include "metro_fw/push.h"
+
+#include <catch2/catch.hpp>
+#include <memory>
+
+#include "metro_fw/crc.h"
+#include "test_support.hpp"
+
+using fwtest::Build;
+using fwtest::FakeFlash;
+using fwtest::StandardBlob;
+
+namespace {
+
+struct Response {
+  uint8_t op = 0;
+  uint8_t txn = 0;
+  std::vector<uint8_t> payload;
+  uint8_t result() const { return payload.empty() ? 0 : payload[0]; }
+};
+
+// The tag on a link that delivers 20-byte NUS payloads.
+class Link {
+ public:
+  Link() : push_(std::make_unique<metro_fw_push>()) {
+    flash_if_ = flash.Interface();
+    REQUIRE(metro_fw_push_init(push_.get(), &flash_if_, fwtest::kDeviceId, &Link::Send, this) ==
+            METRO_FW_OK);
+  }
+
+  // Sends raw bytes in 20-byte chunks; returns the decoded responses.
+  std::vector<Response> SendBytes(const std::vector<uint8_t>& bytes) {
+    for (size_t off = 0; off < bytes.size(); off += 20) {
+      const size_t n = std::min<size_t>(20, bytes.size() - off);
+      metro_fw_push_rx(push_.get(), bytes.data() + off, static_cast<uint32_t>(n));
+    }
+    return Decode();
+  }
+
+  std::vector<uint8_t> Encode(uint8_t op, uint8_t txn, const std::vector<uint8_t>& payload) {
+    uint8_t frame[64];
+    uint32_t n = 0;
+    REQUIRE(metro_fw_frame_build(op, txn, payload.data(), static_cast<uint32_t>(payload.size()),
+                                 frame, sizeof(frame), &n) == METRO_FW_OK);
+    uint8_t enc[160];
+    uint32_t m = 0;
+    REQUIRE(metro_fw_slip_encode(frame, n, enc, sizeof(enc), &m) == METRO_FW_OK);
+    return std::vector<uint8_t>(enc, enc + m);
+  }
+
+  // One request, one response expected.
+  Response Call(uint8_t op, const std::vector<uint8_t>& payload) {
+    const auto responses = SendBytes(Encode(op, ++txn_, payload));
+    REQUIRE(responses.size() == 1);
+    CHECK(responses[0].op == (op | 0x80));
+    CHECK(responses[0].txn == txn_);
+    return responses[0];
+  }
+  uint8_t txn() const { return txn_; }
+
+  static std::vector<uint8_t> Create(uint16_t total, uint32_t crc, uint32_t seq) {
+    std::vector<uint8_t> p(10);
+    p[0] = static_cast<uint8_t>(total);
+    p[1] = static_cast<uint8_t>(total >> 8);
+    for (int i = 0; i < 4; ++i) p[2 + i] = static_cast<uint8_t>(crc >> (8 * i));
+    for (int i = 0; i < 4; ++i) p[6 + i] = static_cast<uint8_t>(seq >> (8 * i));
+    return p;
+  }
+  static std::vector<uint8_t> Write(const std::vector<uint8_t>& blob, size_t off) {
+    const size_t n = std::min<size_t>(16, blob.size() - off);
+    std::vector<uint8_t> p(2 + n);
+    p[0] = static_cast<uint8_t>(off);
+    p[1] = static_cast<uint8_t>(off >> 8);
+    for (size_t i = 0; i < n; ++i) p[2 + i] = blob[off + i];
+    return p;
+  }
+
+  // The whole transfer, as calibrate push does it; returns EXECUTE's response.
+  Response Push(const std::vector<uint8_t>& blob, uint32_t seq) {
+    const uint32_t crc = metro_fw_crc32(0, blob.data(), static_cast<uint32_t>(blob.size()));
+    REQUIRE(Call(METRO_FW_OP_CAL_CREATE, Create(static_cast<uint16_t>(blob.size()), crc, seq))
+                .result() == METRO_FW_RES_SUCCESS);
+    for (size_t off = 0; off < blob.size(); off += 16) {
+      REQUIRE(Call(METRO_FW_OP_CAL_WRITE, Write(blob, off)).result() == METRO_FW_RES_SUCCESS);
+    }
+    return Call(METRO_FW_OP_CAL_EXECUTE, {});
+  }
+
+  std::vector<uint8_t> ReadBack(size_t total) {
+    std::vector<uint8_t> out;
+    for (size_t off = 0; off < total; off += 16) {
+      const auto n = static_cast<uint8_t>(std::min<size_t>(16, total - off));
+      auto r = Call(METRO_FW_OP_CAL_READ,
+                    {static_cast<uint8_t>(off), static_cast<uint8_t>(off >> 8), n});
+      REQUIRE(r.result() == METRO_FW_RES_SUCCESS);
+      out.insert(out.end(), r.payload.begin() + 1, r.payload.end());
+    }
+    return out;
+  }
+
+  FakeFlash flash;
+  metro_fw_push* push() { return push_.get(); }
+
+ private:
+  static int Send(void* ctx, const uint8_t* data, uint32_t len) {
+    auto* self = static_cast<Link*>(ctx);
+    self->tx_.insert(self->tx_.end(), data, data + len);
+    return 0;
+  }
+
+  // Independent SLIP decoder (RFC 1055) and frame check.
+  std::vector<Response> Decode() {
+    std::vector<Response> out;
+    std::vector<uint8_t> frame;
+    bool esc = false;
+    for (uint8_t c : tx_) {
+      if (c == 0xC0) {
+        if (frame.size() >= 6) {
+          const uint16_t len = static_cast<uint16_t>(frame[2] | frame[3] << 8);
+          REQUIRE(frame.size() == len + 6u);
+          const uint16_t crc = metro_fw_crc16(0xFFFF, frame.data(), len + 4u);
+          REQUIRE(crc == (frame[4 + len] | frame[5 + len] << 8));
+          Response r;
+          r.op = frame[0];
+          r.txn = frame[1];
+          r.payload.assign(frame.begin() + 4, frame.begin() + 4 + len);
+          out.push_back(r);
+        }
+        frame.clear();
+      } else if (c == 0xDB) {
+        esc = true;
+      } else {
+        frame.push_back(esc ? (c == 0xDC ? 0xC0 : 0xDB) : c);
+        esc = false;
+      }
+    }
+    tx_.clear();
+    return out;
+  }
+
+  std::unique_ptr<metro_fw_push> push_;
+  metro_fw_flash flash_if_{};
+  std::vector<uint8_t> tx_;
+  uint8_t txn_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("GET_INFO reports the format, device id and active slot", "[fw][push]") {
+  Link link;
+  link.flash.Program(METRO_FW_SLOT_B_ADDR, Build(StandardBlob(12)));
+  const auto r = link.Call(METRO_FW_OP_GET_INFO, {});
+  REQUIRE(r.payload.size() == 22u);
+  CHECK(r.result() == METRO_FW_RES_SUCCESS);
+  CHECK(r.payload[1] == 1);
+  CHECK(r.payload[3] == 1);  // slot B
+  CHECK(fwtest::Get32(r.payload, 6) == fwtest::kDeviceId[0]);
+  CHECK(fwtest::Get32(r.payload, 10) == fwtest::kDeviceId[1]);
+  CHECK(fwtest::Get32(r.payload, 14) == 12u);
+  CHECK(fwtest::Get32(r.payload, 18) == fwtest::Get32(Build(StandardBlob(12)), 0x218));
+}
+
+TEST_CASE("A clean push commits the blob and reads back byte for byte", "[fw][push]") {
+  Link link;
+  link.flash.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(4)));
+  const auto blob = Build(StandardBlob(5));
+  const auto r = link.Push(blob, 5);
+  CHECK(r.result() == METRO_FW_RES_SUCCESS);
+  CHECK(r.payload[1] == 1);
+  CHECK(fwtest::Get32(r.payload, 2) == 5u);
+  CHECK(link.push()->updated == 1);
+  CHECK(link.ReadBack(blob.size()) == blob);
+}
+
+TEST_CASE("A lost chunk is detected by offset and the transfer resumes", "[fw][push]") {
+  Link link;
+  const auto blob = Build(StandardBlob(1));
+  const uint32_t crc = metro_fw_crc32(0, blob.data(), 540);
+  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, crc, 1)).result() ==
+          METRO_FW_RES_SUCCESS);
+  REQUIRE(link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, 0)).result() == METRO_FW_RES_SUCCESS);
+  // The chunk at 16 is lost; the one at 32 arrives.
+  const auto r = link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, 32));
+  CHECK(r.result() == METRO_FW_RES_INVALID_OFFSET);
+  CHECK((r.payload[1] | r.payload[2] << 8) == 16);
+  const auto g = link.Call(METRO_FW_OP_CAL_GET_CRC, {});
+  CHECK((g.payload[1] | g.payload[2] << 8) == 16);
+  CHECK(fwtest::Get32(g.payload, 3) == metro_fw_crc32(0, blob.data(), 16));
+  for (size_t off = 16; off < 540; off += 16) {
+    REQUIRE(link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, off)).result() ==
+            METRO_FW_RES_SUCCESS);
+  }
+  CHECK(link.Call(METRO_FW_OP_CAL_EXECUTE, {}).result() == METRO_FW_RES_SUCCESS);
+}
+
+TEST_CASE("A duplicated request is answered again without being executed again", "[fw][push]") {
+  Link link;
+  const auto blob = Build(StandardBlob(1));
+  const uint32_t crc = metro_fw_crc32(0, blob.data(), 540);
+  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, crc, 1)).result() ==
+          METRO_FW_RES_SUCCESS);
+  for (size_t off = 0; off < 540; off += 16) {
+    REQUIRE(link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, off)).result() ==
+            METRO_FW_RES_SUCCESS);
+  }
+  const auto exec = link.Encode(METRO_FW_OP_CAL_EXECUTE, 200, {});
+  auto twice = exec;
+  twice.insert(twice.end(), exec.begin(), exec.end());
+  const auto responses = link.SendBytes(twice);
+  REQUIRE(responses.size() == 2);
+  CHECK(responses[0].payload == responses[1].payload);
+  CHECK(responses[0].result() == METRO_FW_RES_SUCCESS);
+  CHECK(link.flash.ops == 3);  // one update only
+  // A duplicated CAL_WRITE after a later one does not move received_len backwards.
+  Link l2;
+  REQUIRE(l2.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, crc, 1)).result() ==
+          METRO_FW_RES_SUCCESS);
+  const auto w0 = l2.Encode(METRO_FW_OP_CAL_WRITE, 50, Link::Write(blob, 0));
+  const auto w1 = l2.Encode(METRO_FW_OP_CAL_WRITE, 51, Link::Write(blob, 16));
+  std::vector<uint8_t> seq = w0;
+  seq.insert(seq.end(), w1.begin(), w1.end());
+  seq.insert(seq.end(), w0.begin(), w0.end());
+  const auto rs = l2.SendBytes(seq);
+  REQUIRE(rs.size() == 3);
+  CHECK((rs[2].payload[1] | rs[2].payload[2] << 8) == 32);
+}
+
+TEST_CASE("A corrupted frame gets a NAK and changes nothing", "[fw][push]") {
+  Link link;
+  auto bytes = link.Encode(METRO_FW_OP_CAL_CREATE, 1, Link::Create(540, 0, 1));
+  bytes[5] ^= 0x01;
+  const auto r = link.SendBytes(bytes);
+  REQUIRE(r.size() == 1);
+  CHECK(r[0].op == METRO_FW_OP_NAK);
+  CHECK(r[0].result() == METRO_FW_RES_FRAME_ERROR);
+  CHECK(link.push()->receiving == 0);
+  // A bad SLIP escape and an overlong frame are NAKed too.
+  const auto esc = link.SendBytes({0xC0, 0x01, 0xDB, 0x11, 0x00, 0x00, 0xC0});
+  REQUIRE(esc.size() == 1);
+  CHECK(esc[0].op == METRO_FW_OP_NAK);
+  std::vector<uint8_t> longframe(60, 0x01);
+  longframe.insert(longframe.begin(), 0xC0);
+  longframe.push_back(0xC0);
+  const auto lf = link.SendBytes(longframe);
+  REQUIRE(lf.size() == 1);
+  CHECK(lf[0].op == METRO_FW_OP_NAK);
+}
+
+TEST_CASE("A stale seq is refused at CREATE", "[fw][push]") {
+  Link link;
+  link.flash.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(9)));
+  for (uint32_t seq : {9u, 3u, 0u, 0xFFFFFFFFu}) {
+    CHECK(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, 0, seq)).result() ==
+          METRO_FW_RES_STALE_SEQ);
+  }
+}
+
+TEST_CASE("EXECUTE without CREATE or before all bytes arrived is a bad state", "[fw][push]") {
+  Link link;
+  CHECK(link.Call(METRO_FW_OP_CAL_EXECUTE, {}).result() == METRO_FW_RES_BAD_STATE);
+  CHECK(link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(Build(StandardBlob(1)), 0)).result() ==
+        METRO_FW_RES_BAD_STATE);
+  const auto blob = Build(StandardBlob(1));
+  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, 0, 1)).result() ==
+          METRO_FW_RES_SUCCESS);
+  REQUIRE(link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, 0)).result() == METRO_FW_RES_SUCCESS);
+  CHECK(link.Call(METRO_FW_OP_CAL_EXECUTE, {}).result() == METRO_FW_RES_BAD_STATE);
+  CHECK(link.Call(METRO_FW_OP_ABORT, {}).result() == METRO_FW_RES_SUCCESS);
+  CHECK(link.Call(METRO_FW_OP_CAL_GET_CRC, {}).result() == METRO_FW_RES_BAD_STATE);
+}
+
+TEST_CASE("A wrong CRC at CREATE is a CRC mismatch at EXECUTE", "[fw][push]") {
+  Link link;
+  const auto blob = Build(StandardBlob(1));
+  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, 0x12345678u, 1)).result() ==
+          METRO_FW_RES_SUCCESS);
+  for (size_t off = 0; off < 540; off += 16)
+    link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, off));
+  CHECK(link.Call(METRO_FW_OP_CAL_EXECUTE, {}).result() == METRO_FW_RES_CRC_MISMATCH);
+  CHECK(link.flash.ops == 0);
+}
+
+TEST_CASE("Blob-level refusals map to protocol results", "[fw][push]") {
+  {
+    Link link;
+    auto foreign = StandardBlob(1);
+    foreign.device_id[0] = 77;
+    CHECK(link.Push(Build(foreign), 1).result() == METRO_FW_RES_FOREIGN_DEVICE);
+  }
+  {
+    Link link;
+    auto newer = StandardBlob(1);
+    newer.fmt_major = 2;
+    CHECK(link.Push(Build(newer), 1).result() == METRO_FW_RES_UNSUPPORTED_FORMAT);
+  }
+  {
+    Link link;  // the blob's seq differs from CREATE's
+    CHECK(link.Push(Build(StandardBlob(2)), 3).result() == METRO_FW_RES_INVALID_PARAM);
+  }
+  {
+    Link link;
+    link.flash.fail_at = 0;  // the erase fails
+    CHECK(link.Push(Build(StandardBlob(1)), 1).result() == METRO_FW_RES_FLASH_ERROR);
+    CHECK(link.push()->updated == 0);
+  }
+}
+
+TEST_CASE("Malformed requests are invalid parameters", "[fw][push]") {
+  Link link;
+  CHECK(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(1028, 0, 1)).result() ==
+        METRO_FW_RES_INVALID_PARAM);
+  CHECK(link.Call(METRO_FW_OP_CAL_CREATE, {1, 2, 3}).result() == METRO_FW_RES_INVALID_PARAM);
+  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(40, 0, 1)).result() ==
+          METRO_FW_RES_SUCCESS);
+  CHECK(link.Call(METRO_FW_OP_CAL_WRITE, {32, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9}).result() ==
+        METRO_FW_RES_INVALID_PARAM);  // 32 + 9 > 40
+  CHECK(link.Call(0x33, {}).result() == METRO_FW_RES_UNKNOWN_OP);
+  CHECK(link.Call(METRO_FW_OP_CAL_READ, {0, 0, 4}).result() == METRO_FW_RES_NO_CALIBRATION);
+}
+
+TEST_CASE("A disconnect mid-transfer is recovered by a new CREATE", "[fw][push]") {
+  Link link;
+  const auto blob = Build(StandardBlob(1));
+  const uint32_t crc = metro_fw_crc32(0, blob.data(), 540);
+  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, crc, 1)).result() ==
+          METRO_FW_RES_SUCCESS);
+  link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, 0));
+  // Half a frame, then the link drops.
+  auto partial = link.Encode(METRO_FW_OP_CAL_WRITE, 99, Link::Write(blob, 16));
+  partial.resize(partial.size() / 2);
+  CHECK(link.SendBytes(partial).empty());
+  // The PC reconnects: its leading END closes the half frame (NAK), then it starts over.
+  const auto r = link.SendBytes(link.Encode(METRO_FW_OP_GET_INFO, 1, {}));
+  REQUIRE(r.size() == 2);
+  CHECK(r[0].op == METRO_FW_OP_NAK);
+  CHECK(r[1].op == (METRO_FW_OP_GET_INFO | 0x80));
+  CHECK(link.Push(blob, 1).result() == METRO_FW_RES_SUCCESS);
+  CHECK(link.ReadBack(540) == blob);
+}
+
+TEST_CASE("Frame parser checks length and CRC", "[fw][push]") {
+  uint8_t frame[64];
+  uint32_t n = 0;
+  const uint8_t payload[3] = {1, 2, 3};
+  REQUIRE(metro_fw_frame_build(0x02, 7, payload, 3, frame, sizeof(frame), &n) == METRO_FW_OK);
+  REQUIRE(n == 9u);
+  uint8_t op, txn;
+  const uint8_t* p;
+  uint32_t pn;
+  REQUIRE(metro_fw_frame_parse(frame, n, &op, &txn, &p, &pn) == METRO_FW_OK);
+  CHECK(op == 0x02);
+  CHECK(txn == 7);
+  CHECK(pn == 3u);
+  CHECK(metro_fw_frame_parse(frame, n - 1, &op, &txn, &p, &pn) == METRO_FW_E_FRAME);
+  frame[4] ^= 0x80;
+  CHECK(metro_fw_frame_parse(frame, n, &op, &txn, &p, &pn) == METRO_FW_E_FRAME);
+  CHECK(metro_fw_frame_build(0, 0, payload, 33, frame, sizeof(frame), &n) == METRO_FW_E_ARG);
+}
+
+TEST_CASE("SLIP escapes END and ESC bytes", "[fw][push]") {
+  const uint8_t in[4] = {0xC0, 0x01, 0xDB, 0x02};
+  uint8_t out[16];
+  uint32_t n = 0;
+  REQUIRE(metro_fw_slip_encode(in, 4, out, sizeof(out), &n) == METRO_FW_OK);
+  const std::vector<uint8_t> expected = {0xC0, 0xDB, 0xDC, 0x01, 0xDB, 0xDD, 0x02, 0xC0};
+  CHECK(std::vector<uint8_t>(out, out + n) == expected);
+  CHECK(metro_fw_slip_encode(in, 4, out, 9, &n) == METRO_FW_E_ARG);
+}

@@ -1,0 +1,143 @@
+// Allan-variance family of a rate ("frequency") series, with chi-squared confidence
+// intervals from the Greenhall-Riley equivalent degrees of freedom.
+//
+// Rate samples y_k [q] (k = 0..M-1, spacing tau0) are integrated to phase after their mean is
+// removed (no cancellation against a large gyro bias; the estimators are blind to the mean):
+//   x_0 = 0,  x_{k+1} = x_k + (y_k - mean(y)) tau0            N = M + 1 phase points [q*s]
+// With tau = m tau0 (NIST SP 1065, Riley 2008):
+//   oadev  5.2.4: s^2 = sum_{i=0}^{N-2m-1} (x_{i+2m} - 2x_{i+m} + x_i)^2 / (2 tau^2 (N-2m))
+//   mdev   5.2.5: s^2 = sum_{j=0}^{N-3m} (sum_{i=j}^{j+m-1} (x_{i+2m} - 2x_{i+m} + x_i))^2
+//                       / (2 m^2 tau^2 (N-3m+1))
+//   ohdev  5.2.9: s^2 = sum_{i=0}^{N-3m-1} (x_{i+3m} - 3x_{i+2m} + 3x_{i+m} - x_i)^2
+//                       / (6 tau^2 (N-3m))
+//   adev   5.2.2, hdev 5.2.8: the same sums over i = 0, m, 2m, ... only (non-overlapping).
+// Each is one O(N) pass per tau. The deviation is reported in [q].
+//
+// Tau spacings (m = tau / tau0, 1 <= m <= max_m):
+//   octave     m = 1, 2, 4, ...                                  cost O(N log2 max_m)
+//   decade:K   m = round(10^(j/K)), j = 0, 1, ..., duplicates dropped
+//   all        "all tau, thinned as Stable32 does": every m below 53, then
+//              m_next = m + floor(m/53) + 1 (steps of ~1.9 %, ~120 taus per decade);
+//              identical to Stable32's all-tau averaging factors.       cost O(N * 120 log10 max_m)
+//   every      every m = 1..max_m, no thinning.                        cost O(N * max_m)
+//              (N = 1e6: ~2e11 operations, minutes; use "all" unless every m is required).
+// max_m defaults to floor(M / stop_ratio) with Stable32's stop ratios: 4 for oadev, mdev and
+// ohdev, 5 for adev and hdev.
+//
+// Confidence intervals (SP 1065 5.3.2): chi-squared with the EDF of GreenhallRileyEdf()
+// (edf.hpp) for the power-law noise type alpha (S_y ~ f^alpha) identified at each tau by the
+// lag-1 autocorrelation (noise_id.hpp), or a fixed alpha.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "metro/core/status.hpp"
+
+namespace metro {
+
+enum class AllanEstimator { kOadev, kMdev, kOhdev, kAdev, kHdev };
+
+// "oadev", "mdev", "ohdev", "adev", "hdev".
+const char* AllanEstimatorName(AllanEstimator estimator);
+Result<AllanEstimator> ParseAllanEstimator(const std::string& text);
+
+// Parameters of the estimator for the EDF: difference order d (2 Allan, 3 Hadamard), whether
+// the sum overlaps (stride tau0) and whether it is a modified variance.
+struct EstimatorShape {
+  int d = 2;
+  bool overlapping = true;
+  bool modified = false;
+};
+EstimatorShape ShapeOf(AllanEstimator estimator);
+
+enum class TauSpacingKind { kOctave, kDecade, kAll, kEvery };
+
+struct TauSpacing {
+  TauSpacingKind kind = TauSpacingKind::kOctave;
+  int per_decade = 0;  // Only for kDecade: points per decade, >= 1.
+};
+
+// "octave", "decade:K" (K an integer 1..1000), "all", "every".
+Result<TauSpacing> ParseTauSpacing(const std::string& text);
+std::string TauSpacingName(const TauSpacing& spacing);
+
+enum class NoiseIdMethod {
+  kLag1Acf,  // Lag-1 autocorrelation per tau (Riley & Greenhall 2004), see noise_id.hpp.
+  kFixed,    // AllanOptions::fixed_alpha at every tau.
+};
+
+// Where the alpha used for a tau's confidence interval came from.
+enum class AlphaSource {
+  kLag1Acf,  // Identified at this tau.
+  kCarried,  // Too few averages at this tau: the alpha of the largest smaller tau that had
+             // enough (Riley's "use the last reliable identification").
+  kDefault,  // No tau had enough averages: white rate noise (alpha = 0) is assumed.
+  kFixed,    // Given by the caller.
+};
+const char* AlphaSourceName(AlphaSource source);
+
+struct AllanOptions {
+  AllanEstimator estimator = AllanEstimator::kOadev;
+  TauSpacing taus;
+  // Explicit averaging factors; when non-empty they replace `taus` (sorted, de-duplicated).
+  std::vector<int64_t> m_list;
+  // Largest averaging factor; 0 = floor(M / stop_ratio) (see above).
+  int64_t max_m = 0;
+  // Two-sided confidence level of [ci_low, ci_high], in (0, 1).
+  double confidence = 0.683;
+  NoiseIdMethod noise_id = NoiseIdMethod::kLag1Acf;
+  int fixed_alpha = 0;  // Used with kFixed; -2..2 (Allan), -4..2 (Hadamard).
+  // Fewest averages (M / m) at which the lag-1 ACF identification is trusted (Riley: 30).
+  int64_t min_points_noise_id = 30;
+  // Worker threads for the variance sums; 0 = all hardware threads.
+  int threads = 0;
+
+  bool IsValid(std::string* why) const;
+};
+
+// One curve; every vector has one entry per tau, in increasing tau.
+struct AllanCurve {
+  AllanEstimator estimator = AllanEstimator::kOadev;
+  double tau0_s = 0.0;
+  int64_t n_rate_samples = 0;  // M
+  double rate_mean = 0.0;      // Mean removed before integration [q].
+  double confidence = 0.683;
+  std::vector<int64_t> m;
+  std::vector<double> tau_s;
+  std::vector<double> dev;       // Deviation [q].
+  std::vector<double> ci_low;    // [q]; NaN where no EDF exists.
+  std::vector<double> ci_high;   // [q]; NaN where no EDF exists.
+  std::vector<double> edf;       // NaN where no EDF exists.
+  std::vector<int64_t> n_terms;  // Terms in the sum (Stable32's "#").
+  std::vector<int> alpha;
+  std::vector<AlphaSource> alpha_source;
+
+  size_t size() const { return tau_s.size(); }
+};
+
+// Integrates rate samples to phase as above (N = M + 1 points). *mean_out (optional) receives
+// the mean that was removed. Precondition: tau0_s > 0.
+std::vector<double> PhaseFromRate(const std::vector<double>& rate, double tau0_s,
+                                  double* mean_out = nullptr);
+
+// Number of terms in the sum at averaging factor m for N phase points (0 if none).
+int64_t AllanTermCount(AllanEstimator estimator, int64_t n_phase, int64_t m);
+
+// Averaging factors for M rate samples (validates the spacing and max_m; errors name the cause).
+Result<std::vector<int64_t>> AveragingFactors(AllanEstimator estimator, const TauSpacing& taus,
+                                              int64_t n_rate, int64_t max_m);
+
+// Variances (not deviations) for each m, from phase data, in one blocked pass over the data
+// per thread. Preconditions: every m has AllanTermCount() >= 1; tau0_s > 0.
+std::vector<double> AllanVariances(const std::vector<double>& phase, double tau0_s,
+                                   const std::vector<int64_t>& m, AllanEstimator estimator,
+                                   int threads = 1);
+
+// The whole curve: checks the input (finite samples, tau0 > 0, enough samples), integrates,
+// computes the variance, identifies the noise type and the confidence interval at each tau.
+Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
+                                const AllanOptions& options = AllanOptions());
+
+}  // namespace metro

@@ -1,0 +1,118 @@
+// IEEE Std 952-1997 Annex C noise terms from an Allan (or Hadamard) curve: a weighted least-
+// squares fit of the model of noise_model.hpp, the classic slope read-offs, the Allan
+// minimum, and the uncertainty of a mean predicted from the fitted model.
+//
+// Fit. The model is linear in c = [Q^2, N^2, B^2, K^2, R^2]. Every non-empty subset of the
+// allowed terms is fitted to the variances s_i^2 by iteratively reweighted least squares with
+//   var(s_i^2) = model_i^2 (2 / edf_i + (2 relative_floor)^2)
+// (chi-squared variance of a variance estimate, plus a floor for model error such as a
+// sensor's low-pass roll-off). A subset is admissible when every coefficient is positive and
+// at least min_significance times its standard uncertainty; among admissible subsets the one
+// with the smallest BIC = chi2 + k ln(n) wins. u(c) is the WLS covariance scaled by
+// max(1, chi2 / (n - k)) (Birge ratio); u of a term is u(c) / (2 sqrt(c)). Points without an
+// EDF get edf = 1. With thin_to_octave the fit uses points at least a factor 1.9 apart, so
+// that a dense "all" curve is not counted as hundreds of independent points; neighbouring
+// overlapping estimates remain correlated, which the Birge scaling only partly absorbs.
+// Each term reports the tau range where it contributes at least 25 % of the fitted variance.
+//
+// Read-offs (IEEE 952 Annex C): the line of the term's slope through the curve points whose
+// local log-log slope is within 0.15 of it (edf-weighted mean in log space), evaluated at
+// Q: tau = sqrt(3) s, N: 1 s, K: 3 s, R: sqrt(2) s; B = sigma_min / 0.6643 (Allan) at the
+// curve minimum. u from the points' confidence intervals (half-width / 1, as 68 % ~ 1 sigma).
+//
+// Mean uncertainty. For the mean of the rate over a duration T, the fitted deviation at
+// tau = T, sigma_model(T), is the repeatability of successive T-averages. It equals the
+// Type A s / sqrt(n) when the noise is white and keeps its meaning for flicker and random-
+// walk rate noise, where the autocorrelation-corrected n_eff of a single record does not
+// converge. It is an extrapolation when T lies outside the fitted tau range.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include "metro/core/status.hpp"
+#include "metro/noise/allan.hpp"
+#include "metro/noise/noise_model.hpp"
+
+namespace metro {
+
+struct NoiseFitOptions {
+  std::array<bool, kNoiseTermCount> allow = {true, true, true, true, true};
+  double relative_floor = 0.01;   // On the deviation; >= 0.
+  double min_significance = 2.0;  // c / u(c) for a term to count as supported; >= 0.
+  double tau_min_s = 0.0;         // Fit only points with tau_min_s <= tau <= tau_max_s.
+  double tau_max_s = 1e300;
+  bool thin_to_octave = true;
+  int iterations = 8;  // IRLS passes; >= 1.
+
+  bool IsValid(std::string* why) const;
+};
+
+struct NoiseTermEstimate {
+  bool supported = false;  // Kept by the fit.
+  double value = 0.0;      // Coefficient in base units (0 if not supported).
+  double u = 0.0;          // Standard uncertainty, base units.
+  double tau_min_s = 0.0;  // Where the term carries >= 25 % of the fitted variance.
+  double tau_max_s = 0.0;
+};
+
+// Summary of the fit; the defaults read as failure.
+struct NoiseFit {
+  bool success = false;
+  std::string message = "not fitted";
+  AllanEstimator estimator = AllanEstimator::kOadev;
+  std::array<NoiseTermEstimate, kNoiseTermCount> terms;  // Indexed by NoiseTerm.
+  // Covariance of the squared coefficients c (zero rows/columns for unsupported terms).
+  std::array<std::array<double, kNoiseTermCount>, kNoiseTermCount> covariance_c{};
+  double chi2 = 0.0;
+  int n_points = 0;          // Points used.
+  int dof = 0;               // n_points - supported terms.
+  double birge_ratio = 0.0;  // sqrt(chi2 / dof), 0 when dof = 0.
+  double fit_tau_min_s = 0.0;
+  double fit_tau_max_s = 0.0;
+
+  const NoiseTermEstimate& term(NoiseTerm t) const { return terms[static_cast<int>(t)]; }
+};
+
+// Errors: invalid options, mdev curve, fewer than 2 usable points, no admissible subset.
+Result<NoiseFit> FitNoiseTerms(const AllanCurve& curve,
+                               const NoiseFitOptions& options = NoiseFitOptions());
+
+// Fitted variance at tau (sum over supported terms); 0 for a failed fit.
+double ModelVariance(const NoiseFit& fit, double tau_s);
+
+struct ReadOff {
+  bool found = false;
+  double value = 0.0;  // Base units.
+  double u = 0.0;
+  double tau_read_s = 0.0;  // Where the line is read (1 s for N, ...).
+  double tau_min_s = 0.0;   // Curve points used.
+  double tau_max_s = 0.0;
+};
+
+// One read-off per term (indexed by NoiseTerm). Bias instability uses 0.6643 (Allan) or
+// sqrt((4 ln2 - 1.5 ln3)/pi) = 0.5984 (Hadamard); mdev curves get nothing.
+std::array<ReadOff, kNoiseTermCount> ReadOffNoiseTerms(const AllanCurve& curve);
+
+struct AllanMinimum {
+  bool found = false;
+  double tau_s = 0.0;  // Where the deviation is smallest: averaging longer stops helping.
+  double dev = 0.0;
+  double ci_low = 0.0;
+  double ci_high = 0.0;
+  bool at_end = false;  // The minimum is the longest tau: averaging still helped there.
+};
+AllanMinimum FindAllanMinimum(const AllanCurve& curve);
+
+struct MeanUncertaintyPrediction {
+  double duration_s = 0.0;
+  double u = 0.0;                               // sigma_model(T) [q].
+  double u_of_u = 0.0;                          // Its standard uncertainty from the fit covariance.
+  NoiseTerm dominant = NoiseTerm::kRandomWalk;  // Largest contribution at T.
+  bool extrapolated = false;                    // T outside [fit_tau_min_s, fit_tau_max_s].
+};
+
+// Errors: failed fit, duration not finite or <= 0.
+Result<MeanUncertaintyPrediction> PredictMeanUncertainty(const NoiseFit& fit, double duration_s);
+
+}  // namespace metro

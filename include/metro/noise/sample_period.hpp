@@ -1,0 +1,52 @@
+// Sample period of a logged series from its timestamps, with jitter, gaps and resets.
+//
+// tau0 is the median of the intervals dt_i = t_{i+1} - t_i (robust against a few gaps).
+// An interval is a gap when dt > gap_factor * tau0 (about round(dt / tau0) - 1 samples are
+// missing there) and a reset when dt <= 0 (time stands still or runs backwards). Jitter is the
+// RMS of dt - tau0 over the intervals that are not gaps. The Allan estimators need uniformly
+// spaced samples, so resets always refuse, gaps refuse unless allowed, and jitter above
+// max_relative_jitter * tau0 refuses. Every event names the 1-based source line of the sample
+// that ends the interval (line[i + 1]).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "metro/core/status.hpp"
+
+namespace metro {
+
+struct SamplePeriodOptions {
+  double gap_factor = 1.5;           // > 1.
+  bool allow_gaps = false;           // false: any gap refuses.
+  double max_relative_jitter = 0.1;  // RMS jitter / tau0 above this refuses; > 0.
+
+  bool IsValid(std::string* why) const;
+};
+
+struct TimingGap {
+  uint32_t line = 0;            // Source line of the sample after the gap.
+  double dt_s = 0.0;            // The interval.
+  int64_t missing_samples = 0;  // round(dt / tau0) - 1.
+};
+
+struct SamplePeriod {
+  double tau0_s = 0.0;        // Median interval.
+  double rate_hz = 0.0;       // 1 / tau0.
+  double mean_dt_s = 0.0;     // (t_last - t_first) / (n - 1), gaps included.
+  double jitter_rms_s = 0.0;  // RMS of dt - tau0 over regular intervals.
+  double max_abs_jitter_s = 0.0;
+  int64_t n_samples = 0;
+  int64_t missing_samples = 0;        // Sum over gaps.
+  std::vector<TimingGap> gaps;        // Only filled when gaps are allowed.
+  std::vector<std::string> warnings;  // Human-readable, one per gap (with its line).
+};
+
+// Errors: sizes differ, fewer than 3 samples, a non-finite time, a reset, a gap (unless
+// allowed) or too much jitter; each names the source lines (the first five, then a count).
+Result<SamplePeriod> EstimateSamplePeriod(const std::vector<double>& t_s,
+                                          const std::vector<uint32_t>& line,
+                                          const SamplePeriodOptions& options = {});
+
+}  // namespace metro

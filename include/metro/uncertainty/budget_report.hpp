@@ -1,0 +1,41 @@
+// Budget evaluation and its report: the GUM framework, the Monte Carlo method and the GUF
+// validation of JCGM 101 clause 8 in one call, rendered as "metro.budget-report/1" JSON
+// (full precision) or as a readable table (statement rounded per JCGM 100 7.2.6 with
+// metro/core/rounding.hpp: two significant digits of U, the value to the same place).
+//
+// JSON layout (docs/budget-format.md): schema, budget_file, measurand {name, unit, model},
+// result {value, u, dof_eff, k, U, coverage, interval, ...}, budget [{name, value, u,
+// distribution, sensitivity, contribution, dof, percent, note}], correlations, monte_carlo
+// {trials, seed, generator, value, u, interval_symmetric, interval_shortest, delta, d_low,
+// d_high, guf_validated, ...} (null when disabled). Every number is in the measurand's or
+// the input's own unit; an infinite dof is written as null.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "metro/core/status.hpp"
+#include "metro/uncertainty/budget.hpp"
+#include "metro/uncertainty/gum.hpp"
+#include "metro/uncertainty/monte_carlo.hpp"
+
+namespace metro {
+
+struct BudgetEvaluation {
+  Budget budget;
+  GumResult gum;
+  std::optional<McResult> monte_carlo;      // Absent when budget.monte_carlo.enabled is false.
+  std::optional<GufValidation> validation;  // With monte_carlo.
+  // True when every requested part succeeded (an adaptive run that did not settle: false).
+  bool ok = false;
+};
+
+// GUM evaluation, then (if enabled) the Monte Carlo run and the GUF validation, each with
+// the options stored in the budget.
+Result<BudgetEvaluation> EvaluateBudget(const Budget& budget);
+
+nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& evaluation);
+std::string BudgetReportTable(const BudgetEvaluation& evaluation);
+
+}  // namespace metro

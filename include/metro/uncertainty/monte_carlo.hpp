@@ -1,0 +1,84 @@
+// Monte Carlo propagation of distributions (JCGM 101:2008).
+//
+// Each trial draws every input from its distribution (6.4) and evaluates the model. Trials
+// are grouped in chunks of kChunkTrials; chunk c draws from pcg64 (pcg-cpp, PCG XSL RR
+// 128/64) seeded with state splitmix64(seed + c) on stream c, so the values depend on the
+// seed only, never on the number of threads or on how chunks are shared between them.
+// Chunks are spread over std::thread workers (McOptions::threads, default: all cores).
+//
+//   estimate y = mean of the M model values, u(y) their standard deviation      (7.6)
+//   q = round(p M); probabilistically symmetric interval [y_(r), y_(r+q)],
+//   r = (M - q)/2 rounded up; shortest interval: the r minimising y_(r+q) - y_(r)  (7.7)
+//   Order statistics by partial selection (std::nth_element), never a full sort.
+//
+// Adaptive run (7.9) with the robust stopping rule of docs/uncertainty.md: blocks of
+// M_b = max(100/(1-p), 1e4) trials (rounded up to whole chunks); after h >= 10 blocks stop
+// when t_0.975(h-1) * s(h block values)/sqrt(h) <= delta for the mean, u(y) and both
+// symmetric end points, delta = 1/2 10^l with u(y) = c 10^l, c an ndig-digit integer
+// (7.9.2). The reported results come from the pooled h M_b values.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "metro/core/status.hpp"
+#include "metro/uncertainty/budget.hpp"
+#include "metro/uncertainty/gum.hpp"
+
+namespace metro {
+
+constexpr int64_t kChunkTrials = 1000;
+
+struct CoverageInterval {
+  double low = std::numeric_limits<double>::quiet_NaN();
+  double high = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct McResult {
+  bool ok = false;  // False until a run finished (and, adaptive, converged).
+  bool adaptive = false;
+  bool converged = false;  // Adaptive: the stopping rule was met before max_trials.
+  int64_t trials = 0;      // M actually used.
+  int64_t blocks = 0;      // h (adaptive), else 1.
+  uint64_t seed = 0;
+  int threads = 0;
+  std::string generator;
+  double coverage = std::numeric_limits<double>::quiet_NaN();
+  double value = std::numeric_limits<double>::quiet_NaN();  // y
+  double u = std::numeric_limits<double>::quiet_NaN();      // u(y)
+  CoverageInterval symmetric;
+  CoverageInterval shortest;
+  double delta = std::numeric_limits<double>::quiet_NaN();  // Numerical tolerance (7.9.2).
+  std::string message;                                      // Why not ok, or notes.
+  std::vector<double> samples;  // The M model values (unordered), if McOptions asked.
+};
+
+// Runs the Monte Carlo method with the budget's own McOptions (budget.monte_carlo).
+Result<McResult> RunMonteCarlo(const Budget& budget);
+// With explicit options; keep_samples returns the model values in McResult::samples.
+Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options,
+                               bool keep_samples = false);
+
+// Coverage intervals of a sample (reordered in place). Precondition: 0 < p < 1, at least
+// one value, no NaN.
+CoverageInterval SymmetricInterval(std::vector<double>* values, double coverage);
+CoverageInterval ShortestInterval(std::vector<double>* values, double coverage);
+
+// Numerical tolerance of u with ndig significant digits (JCGM 101 7.9.2): u = c 10^l with
+// c an ndig-digit integer, delta = 10^l / 2 (0.0996, ndig 2 -> c = 10, l = -2, 0.005).
+double NumericalTolerance(double u, int ndig);
+
+// GUF validation (JCGM 101 8.2): d_low = |y - U - y_low|, d_high = |y + U - y_high| against
+// the MCM shortest interval, delta from the GUF u(y) at ndig digits (from the MCM u(y)
+// when the GUF u is zero); validated when both are <= delta.
+struct GufValidation {
+  double delta = std::numeric_limits<double>::quiet_NaN();
+  double d_low = std::numeric_limits<double>::quiet_NaN();
+  double d_high = std::numeric_limits<double>::quiet_NaN();
+  bool validated = false;
+};
+GufValidation ValidateGuf(const GumResult& gum, const McResult& mc, int ndig);
+
+}  // namespace metro

@@ -1,0 +1,272 @@
+#include "metro/uncertainty/gum.hpp"
+
+#include <algorithm>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "uncertainty/model.hpp"
+
+namespace metro {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+Result<internal::MeasurementModel> BuildModel(const Budget& budget) {
+  if (budget.model.empty()) {
+    std::vector<double> c;
+    for (const auto& in : budget.inputs) {
+      if (!in.sensitivity) {
+        return MakeError(budget.file, 0,
+                         "input '" + in.name + "': missing 'sensitivity' (no model)");
+      }
+      c.push_back(*in.sensitivity);
+    }
+    return internal::MeasurementModel::Linear(std::move(c));
+  }
+  std::vector<std::string> names;
+  for (const auto& in : budget.inputs) names.push_back(in.name);
+  auto model = internal::MeasurementModel::FromExpression(budget.model, names);
+  if (!model.ok()) return MakeError(budget.file, 0, model.error().message);
+  return model;
+}
+
+// Finds the representative of i (union-find without ranks; budgets are small).
+size_t Root(std::vector<size_t>* parent, size_t i) {
+  while ((*parent)[i] != i) i = (*parent)[i] = (*parent)[(*parent)[i]];
+  return i;
+}
+
+}  // namespace
+
+double CoverageFactor(double coverage, double dof) {
+  const double tail = 0.5 * (1.0 + coverage);
+  if (!std::isfinite(dof)) return boost::math::quantile(boost::math::normal(), tail);
+  return boost::math::quantile(boost::math::students_t(dof), tail);
+}
+
+Result<GumResult> EvaluateGum(const Budget& budget) { return EvaluateGum(budget, budget.gum); }
+
+Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(budget.file, 0, "GUM options: " + why);
+  auto model_result = BuildModel(budget);
+  if (!model_result.ok()) return model_result.error();
+  const internal::MeasurementModel& model = model_result.value();
+  const size_t n = budget.inputs.size();
+  std::vector<double> x(n);
+  std::vector<double> u(n);
+  for (size_t i = 0; i < n; ++i) {
+    x[i] = budget.inputs[i].value;
+    u[i] = budget.inputs[i].u;
+  }
+  GumResult result;
+  result.coverage = options.coverage;
+  result.second_order = options.second_order;
+  result.dof_policy = options.correlated_dof;
+  result.value = model.Evaluate(x.data());
+  if (!std::isfinite(result.value)) {
+    return MakeError(
+        budget.file, 0,
+        "model evaluates to " + std::to_string(result.value) + " at the input estimates");
+  }
+  // f at x with some coordinates displaced.
+  std::vector<double> work = x;
+  const auto f_at = [&](std::initializer_list<std::pair<size_t, double>> shifts) {
+    for (const auto& [i, dx] : shifts) work[i] = x[i] + dx;
+    const double y = model.Evaluate(work.data());
+    for (const auto& [i, dx] : shifts) work[i] = x[i];
+    return y;
+  };
+
+  // Sensitivity coefficients, JCGM 100 5.1.3 (central differences, step scaled to u_i).
+  std::vector<double> c(n, 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    if (budget.model.empty()) {
+      c[i] = *budget.inputs[i].sensitivity;
+      continue;
+    }
+    const bool exact = u[i] == 0.0;
+    const double h = exact ? 1e-6 * std::max(std::fabs(x[i]), 1e-6) : options.step_fraction * u[i];
+    const double plus = f_at({{i, h}});
+    const double minus = f_at({{i, -h}});
+    c[i] = (plus - minus) / (2.0 * h);
+    if (!std::isfinite(c[i])) {
+      if (exact) {
+        c[i] = 0.0;  // A constant: its coefficient multiplies u = 0 anyway.
+        continue;
+      }
+      return MakeError(budget.file, 0,
+                       "model is not finite at input '" + budget.inputs[i].name +
+                           "' = " + std::to_string(x[i]) + " +- " + std::to_string(h) +
+                           " (sensitivity by central differences)");
+    }
+  }
+
+  // Correlation matrix, JCGM 100 5.2.2.
+  std::vector<std::vector<double>> r(n, std::vector<double>(n, 0.0));
+  for (size_t i = 0; i < n; ++i) r[i][i] = 1.0;
+  std::map<std::string, size_t> index;
+  for (size_t i = 0; i < n; ++i) index[budget.inputs[i].name] = i;
+  for (const auto& corr : budget.correlations) {
+    const size_t a = index.at(corr.a);
+    const size_t b = index.at(corr.b);
+    r[a][b] = r[b][a] = corr.r;
+  }
+  std::vector<double> contribution(n);
+  for (size_t i = 0; i < n; ++i) contribution[i] = std::fabs(c[i]) * u[i];
+  double variance = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = 0; j < n; ++j) variance += c[i] * c[j] * u[i] * u[j] * r[i][j];
+  }
+  if (variance < 0.0) variance = 0.0;  // Rounding only: R is positive definite.
+  result.u_first_order = std::sqrt(variance);
+
+  bool correlated = false;
+  std::vector<size_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j) {
+      if (r[i][j] != 0.0 && contribution[i] > 0.0 && contribution[j] > 0.0) {
+        correlated = true;
+        parent[Root(&parent, i)] = Root(&parent, j);
+      }
+    }
+  }
+  result.correlated = correlated;
+
+  double total = variance;
+  if (options.second_order && !budget.model.empty()) {
+    if (correlated) {
+      return MakeError(budget.file, 0,
+                       "second-order terms (JCGM 100 5.1.2 note) assume independent inputs; "
+                       "the budget has correlated inputs");
+    }
+    // JCGM 100 5.1.2 note, steps h_i = u_i.
+    const double f0 = result.value;
+    const auto second = [&](size_t i, size_t j) {
+      const double hi = u[i];
+      const double hj = u[j];
+      if (i == j) return (f_at({{i, hi}}) - 2.0 * f0 + f_at({{i, -hi}})) / (hi * hi);
+      return (f_at({{i, hi}, {j, hj}}) - f_at({{i, hi}, {j, -hj}}) - f_at({{i, -hi}, {j, hj}}) +
+              f_at({{i, -hi}, {j, -hj}})) /
+             (4.0 * hi * hj);
+    };
+    // d3f / (dxi dxj^2).
+    const auto third = [&](size_t i, size_t j) {
+      const double hi = u[i];
+      const double hj = u[j];
+      if (i == j) {
+        return (f_at({{i, 2.0 * hi}}) - 2.0 * f_at({{i, hi}}) + 2.0 * f_at({{i, -hi}}) -
+                f_at({{i, -2.0 * hi}})) /
+               (2.0 * hi * hi * hi);
+      }
+      const auto d2j = [&](double dxi) {
+        return (f_at({{i, dxi}, {j, hj}}) - 2.0 * f_at({{i, dxi}}) + f_at({{i, dxi}, {j, -hj}})) /
+               (hj * hj);
+      };
+      return (d2j(hi) - d2j(-hi)) / (2.0 * hi);
+    };
+    double extra = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      if (u[i] == 0.0) continue;
+      for (size_t j = 0; j < n; ++j) {
+        if (u[j] == 0.0) continue;
+        const double fij = second(i, j);
+        const double fijj = third(i, j);
+        extra += (0.5 * fij * fij + c[i] * fijj) * u[i] * u[i] * u[j] * u[j];
+      }
+    }
+    if (!std::isfinite(extra)) {
+      return MakeError(budget.file, 0, "second-order terms are not finite (model NaN near x)");
+    }
+    total = std::max(0.0, variance + extra);
+  }
+  result.u = std::sqrt(total);
+
+  // Effective degrees of freedom, JCGM 100 G.4.1, with the stated policy for correlations.
+  double denominator = 0.0;
+  if (!correlated || options.correlated_dof == CorrelatedDofPolicy::kIgnore) {
+    for (size_t i = 0; i < n; ++i) {
+      if (contribution[i] > 0.0 && std::isfinite(budget.inputs[i].dof)) {
+        denominator += std::pow(contribution[i], 4) / budget.inputs[i].dof;
+      }
+    }
+    result.dof_note = correlated ? "Welch-Satterthwaite (JCGM 100 G.4.1) on the individual "
+                                   "contributions; correlations ignored in nu_eff (policy "
+                                   "'ignore')"
+                                 : "Welch-Satterthwaite (JCGM 100 G.4.1), independent inputs";
+  } else if (options.correlated_dof == CorrelatedDofPolicy::kReject) {
+    for (size_t i = 0; i < n; ++i) {
+      for (size_t j = i + 1; j < n; ++j) {
+        if (r[i][j] != 0.0 && contribution[i] > 0.0 && contribution[j] > 0.0 &&
+            (std::isfinite(budget.inputs[i].dof) || std::isfinite(budget.inputs[j].dof))) {
+          return MakeError(budget.file, 0,
+                           "inputs '" + budget.inputs[i].name + "' and '" + budget.inputs[j].name +
+                               "' are correlated and have finite degrees of freedom: "
+                               "Welch-Satterthwaite does not apply (dof_policy 'reject')");
+        }
+      }
+    }
+    for (size_t i = 0; i < n; ++i) {
+      if (contribution[i] > 0.0 && std::isfinite(budget.inputs[i].dof)) {
+        denominator += std::pow(contribution[i], 4) / budget.inputs[i].dof;
+      }
+    }
+    result.dof_note =
+        "Welch-Satterthwaite (JCGM 100 G.4.1); correlated inputs all have "
+        "infinite dof (policy 'reject')";
+  } else {
+    // kGroup: each group of linked inputs is one component with the smallest dof.
+    std::map<size_t, std::pair<double, double>> groups;  // root -> (u_g^2, nu_g)
+    for (size_t i = 0; i < n; ++i) {
+      if (contribution[i] == 0.0) continue;
+      auto& g = groups.try_emplace(Root(&parent, i), 0.0, kInf).first->second;
+      g.second = std::min(g.second, budget.inputs[i].dof);
+      for (size_t j = 0; j < n; ++j) {
+        if (contribution[j] > 0.0 && Root(&parent, j) == Root(&parent, i)) {
+          g.first += c[i] * c[j] * u[i] * u[j] * r[i][j];
+        }
+      }
+    }
+    for (const auto& [root, g] : groups) {
+      (void)root;
+      if (std::isfinite(g.second)) denominator += g.first * g.first / g.second;
+    }
+    result.dof_note =
+        "Welch-Satterthwaite (JCGM 100 G.4.1) with each group of correlated "
+        "inputs as one component u_g^2 = sum c_i c_j u_i u_j r_ij at the "
+        "group's smallest dof (policy 'group')";
+  }
+  const double uc4 = variance * variance;
+  result.dof_eff = (denominator > 0.0 && uc4 > 0.0) ? uc4 / denominator : kInf;
+  if (options.truncate_dof && std::isfinite(result.dof_eff)) {
+    result.dof_eff = std::max(1.0, std::floor(result.dof_eff));  // JCGM 100 G.6.4
+  }
+  result.k = CoverageFactor(options.coverage, result.dof_eff);
+  result.expanded = result.k * result.u;
+  result.interval_low = result.value - result.expanded;
+  result.interval_high = result.value + result.expanded;
+
+  for (size_t i = 0; i < n; ++i) {
+    const BudgetInput& in = budget.inputs[i];
+    BudgetLine line;
+    line.name = in.name;
+    line.value = in.value;
+    line.u = in.u;
+    line.distribution = DistributionName(in.distribution);
+    line.sensitivity = c[i];
+    line.contribution = contribution[i];
+    line.dof = in.dof;
+    line.percent = variance > 0.0 ? 100.0 * contribution[i] * contribution[i] / variance : 0.0;
+    result.budget.push_back(line);
+  }
+  std::stable_sort(
+      result.budget.begin(), result.budget.end(),
+      [](const BudgetLine& a, const BudgetLine& b) { return a.contribution > b.contribution; });
+  return result;
+}
+
+}  // namespace metro

@@ -1,0 +1,89 @@
+#include "metro/uncertainty/session_resolver.hpp"
+
+#include <fmt/format.h>
+
+#include <map>
+#include <memory>
+
+namespace metro {
+namespace {
+
+Result<TypeASummary> Summarize(const std::string& path, const SessionQuantityRef& ref,
+                               const TagTypeA& tag) {
+  const QuantityTypeA* q = nullptr;
+  for (const QuantityTypeA& candidate : tag.quantities) {
+    if (candidate.name == ref.quantity) q = &candidate;
+  }
+  if (q == nullptr) {
+    return MakeError(path, 0,
+                     fmt::format("sensor {} has no quantity {}", ref.sensor, ref.quantity));
+  }
+  if (!q->ok) {
+    return MakeError(path, 0, fmt::format("sensor {} {}: {}", ref.sensor, ref.quantity, q->error));
+  }
+  TypeASummary s;
+  s.mean = q->type_a.mean;
+  s.u = q->type_a.std_of_mean_autocorr;
+  s.dof = std::max(1.0, q->type_a.n_eff - 1.0);
+  s.n = q->type_a.n;
+  s.note = fmt::format("Type A of {} sensor {} {}: n = {}, n_eff = {:.1f}, u = s/sqrt(n_eff)", path,
+                       ref.sensor, ref.quantity, q->type_a.n, q->type_a.n_eff);
+  return s;
+}
+
+Result<TypeASummary> EvaluateRef(const Session& session, const SessionQuantityRef& ref,
+                                 const WindowOptions& window) {
+  SessionTypeAOptions options;
+  options.window = window;
+  options.sensors = {ref.sensor};
+  options.quantities = {ref.quantity};
+  auto evaluated = EvaluateSessionTypeA(session, options);
+  if (!evaluated.ok()) return evaluated.error();
+  return Summarize(session.path, ref, evaluated.value().tags.at(0));
+}
+
+}  // namespace
+
+SessionQuantityResolver MakeSessionQuantityResolver(const Session& session,
+                                                    const SessionTypeA& evaluated,
+                                                    WindowOptions window) {
+  return [&session, &evaluated, window](const SessionQuantityRef& ref) -> Result<TypeASummary> {
+    if (!ref.session.empty() && ref.session != session.path) {
+      LoadOptions load;
+      auto other = LoadSession(ref.session, load);
+      if (!other.ok()) return other.error();
+      return EvaluateRef(other.value(), ref, window);
+    }
+    for (const TagTypeA& tag : evaluated.tags) {
+      if (tag.sensor != ref.sensor) continue;
+      for (const QuantityTypeA& q : tag.quantities) {
+        if (q.name == ref.quantity) return Summarize(session.path, ref, tag);
+      }
+    }
+    return EvaluateRef(session, ref, window);
+  };
+}
+
+SessionQuantityResolver MakeSessionQuantityResolver(std::string default_session, LoadOptions load,
+                                                    WindowOptions window) {
+  auto cache = std::make_shared<std::map<std::string, Session>>();
+  return [default_session = std::move(default_session), load, window,
+          cache](const SessionQuantityRef& ref) -> Result<TypeASummary> {
+    const std::string path = ref.session.empty() ? default_session : ref.session;
+    if (path.empty()) {
+      return MakeError(
+          fmt::format("quantity {} names no session and none was given on the "
+                      "command line",
+                      ref.quantity));
+    }
+    auto it = cache->find(path);
+    if (it == cache->end()) {
+      auto loaded = LoadSession(path, load);
+      if (!loaded.ok()) return loaded.error();
+      it = cache->emplace(path, std::move(loaded).value()).first;
+    }
+    return EvaluateRef(it->second, ref, window);
+  };
+}
+
+}  // namespace metro

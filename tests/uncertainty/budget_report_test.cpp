@@ -1,0 +1,51 @@
+// Report rendering and the JCGM 100 7.2.6 rounding of the statement.
+#include "metro/uncertainty/budget_report.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <string>
+
+namespace metro {
+namespace {
+
+TEST_CASE("Budget report JSON for GUM H.1 with Monte Carlo", "[uncertainty][report]") {
+  auto b = LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/gum_h1_end_gauge.json");
+  REQUIRE(b.ok());
+  Budget budget = b.value();
+  budget.monte_carlo.trials = 100000;
+  auto e = EvaluateBudget(budget);
+  REQUIRE(e.ok());
+  const auto j = BudgetReportJson(e.value());
+  CHECK(j["schema"] == "metro.budget-report/1");
+  CHECK(j["result"]["u"].get<double>() == Approx(31.66388).margin(5e-4));
+  CHECK(j["result"]["dof_eff"].get<double>() == Approx(16.7519).margin(2e-3));
+  CHECK(j["result"]["coverage"].get<double>() == 0.99);
+  CHECK(j["result"]["interval"].size() == 2);
+  // nu_eff = 16.75 kept fractional: k = t_0.995(16.75) = 2.9035, U = 91.94 nm -> "92".
+  CHECK(j["result"]["statement"] == "l = (50000838 +- 92) nm, k = 2.90, p = 99 %");
+  REQUIRE(j["budget"].size() == 9);
+  CHECK(j["budget"][0]["name"] == "ls");
+  CHECK(j["budget"][0]["dof"].get<double>() == 18.0);
+  for (const char* key :
+       {"name", "value", "u", "distribution", "sensitivity", "contribution", "dof", "percent"}) {
+    CHECK(j["budget"][0].contains(key));
+  }
+  // Infinite dof is written as null.
+  bool saw_null = false;
+  for (const auto& line : j["budget"]) saw_null = saw_null || line["dof"].is_null();
+  CHECK(saw_null);
+  const auto& mc = j["monte_carlo"];
+  CHECK(mc["trials"] == 100000);
+  CHECK(mc["seed"] == 1);
+  CHECK(mc["generator"].get<std::string>().find("pcg64") == 0);
+  for (const char* key : {"value", "u", "interval_symmetric", "interval_shortest", "delta", "d_low",
+                          "d_high", "guf_validated"}) {
+    CHECK(mc.contains(key));
+  }
+  const std::string table = BudgetReportTable(e.value());
+  CHECK(table.find("Result (JCGM 100 7.2.6): l = (50000838 +- 92) nm") != std::string::npos);
+  CHECK(table.find("Monte Carlo (JCGM 101): M = 100000") != std::string::npos);
+}
+
+}  // namespace
+}  // namespace metro

@@ -1,0 +1,217 @@
+// Budget parsing: Type A / Type B standard uncertainties and every class of bad input.
+#include "metro/uncertainty/budget.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <string>
+
+namespace metro {
+namespace {
+
+Result<Budget> P(const std::string& inputs, const std::string& extra = "",
+                 const std::string& model = "x") {
+  return ParseBudget(R"({"measurand": {"name": "y", "model": ")" + model + R"("}, "inputs": [)" +
+                         inputs + "]" + extra + "}",
+                     "b.json");
+}
+
+const BudgetInput& First(const Result<Budget>& b) {
+  if (!b.ok()) FAIL(b.error().ToString());
+  return b.value().inputs.front();
+}
+
+void ExpectError(const Result<Budget>& b, const std::string& text) {
+  REQUIRE_FALSE(b.ok());
+  INFO(b.error().ToString());
+  CHECK(b.error().ToString().find(text) != std::string::npos);
+}
+
+TEST_CASE("Type B standard uncertainties of JCGM 100 4.3 and JCGM 101 6.4",
+          "[uncertainty][budget]") {
+  CHECK(
+      First(P(R"({"name": "x", "value": 1, "distribution": "rectangular", "half_width": 3})")).u ==
+      Approx(std::sqrt(3.0)));
+  const BudgetInput lu =
+      First(P(R"({"name": "x", "distribution": "rectangular", "lower": 9.5, "upper": 13.5})"));
+  CHECK(lu.value == Approx(11.5));
+  CHECK(lu.u == Approx(2.0 / std::sqrt(3.0)));
+  CHECK(First(P(R"({"name": "x", "value": 0, "distribution": "triangular", "half_width": 6})")).u ==
+        Approx(6.0 / std::sqrt(6.0)));
+  CHECK(First(P(R"({"name": "x", "value": 0, "distribution": "arcsine", "half_width": 0.5})")).u ==
+        Approx(0.5 / std::sqrt(2.0)));
+  CHECK(
+      First(
+          P(R"({"name": "x", "value": 0, "distribution": "trapezoidal", "half_width": 2, "beta": 0.5})"))
+          .u == Approx(2.0 * std::sqrt(1.25 / 6.0)));
+  CHECK(
+      First(
+          P(R"({"name": "x", "value": 0, "distribution": "ctrap", "half_width": 0.05, "d": 0.025})"))
+          .u == Approx(std::sqrt(0.0025 / 3 + 0.000625 / 9)));
+  // Normal from U and k (H.1: 75 nm at k = 3 -> 25 nm); from U at 95 % (z = 1.959964) and
+  // with dof 5 (t_0.975(5) = 2.570582).
+  CHECK(First(P(R"({"name": "x", "value": 0, "expanded": 0.075, "k": 3})")).u == Approx(0.025));
+  CHECK(First(P(R"({"name": "x", "value": 0, "expanded": 1.959964, "coverage": 0.95})")).u ==
+        Approx(1.0).epsilon(1e-6));
+  const BudgetInput y =
+      First(P(R"({"name": "x", "value": 0, "expanded": 0.01, "coverage": 0.95, "dof": 5})"));
+  CHECK(y.u == Approx(0.01 / 2.570582).epsilon(1e-6));
+  CHECK(y.dof == 5.0);
+  // Reliability 25 % -> nu = 1/(2 * 0.0625) = 8 (JCGM 100 G.4.2).
+  CHECK(First(P(R"({"name": "x", "value": 0, "u": 1, "reliability": 0.25})")).dof == Approx(8.0));
+  CHECK(std::isinf(First(P(R"({"name": "x", "value": 0, "u": 1})")).dof));
+  const BudgetInput t =
+      First(P(R"({"name": "x", "value": 5, "distribution": "t", "scale": 2, "dof": 7})"));
+  CHECK(t.u == 2.0);
+  CHECK(t.dof == 7.0);
+}
+
+TEST_CASE("Type A inputs from observations, summaries and sessions", "[uncertainty][budget]") {
+  // 1.2, 1.3, 1.1: mean 1.2, s = 0.1, s/sqrt(3) = 0.057735, dof 2.
+  const BudgetInput a = First(P(R"({"name": "x", "type_a": {"values": [1.2, 1.3, 1.1]}})"));
+  CHECK(a.value == Approx(1.2));
+  CHECK(a.u == Approx(0.1 / std::sqrt(3.0)));
+  CHECK(a.dof == 2.0);
+  CHECK(a.distribution == Distribution::kTypeA);
+  // Thesis Table 8.3 pitch: s 0.03077, n = 4704 -> s(mean) = 0.000449 deg.
+  const BudgetInput b =
+      First(P(R"({"name": "x", "type_a": {"mean": -0.09228, "std": 0.03077, "n": 4704}})"));
+  CHECK(b.u == Approx(0.03077 / std::sqrt(4704.0)));
+  CHECK(b.dof == 4703.0);
+  // Session quantity through the resolver; the path is relative to the budget file.
+  SessionQuantityRef seen;
+  const SessionQuantityResolver resolver =
+      [&](const SessionQuantityRef& ref) -> Result<TypeASummary> {
+    seen = ref;
+    return TypeASummary{0.5, 0.01, 19.45, 40, "autocorrelation-aware"};
+  };
+  auto s = ParseBudget(R"({"measurand": {"name": "y", "model": "p"}, "inputs": [
+      {"name": "p", "type_a": {"session": "s.csv", "sensor": 2, "quantity": "pitch_deg"}}]})",
+                       "/data/budgets/b.json", resolver);
+  REQUIRE(s.ok());
+  CHECK(seen.session == "/data/budgets/s.csv");
+  CHECK(seen.sensor == 2);
+  CHECK(seen.quantity == "pitch_deg");
+  CHECK(s.value().inputs[0].u == 0.01);
+  CHECK(s.value().inputs[0].dof == 19.45);
+  CHECK(s.value().inputs[0].note == "autocorrelation-aware");
+  // Without a resolver: an error naming the input.
+  ExpectError(
+      P(R"({"name": "p", "type_a": {"session": "s.csv", "quantity": "pitch_deg"}})", "", "p"),
+      "input 'p': refers to session quantity 'pitch_deg' but no session resolver");
+  // A resolver failure is passed on with the input's name.
+  const SessionQuantityResolver failing = [](const SessionQuantityRef&) -> Result<TypeASummary> {
+    return MakeError("s.csv", 0, "no quantity 'pitch_deg' for sensor 2");
+  };
+  auto f = ParseBudget(R"({"measurand": {"name": "y", "model": "p"}, "inputs": [
+      {"name": "p", "type_a": {"session": "s.csv", "sensor": 2, "quantity": "pitch_deg"}}]})",
+                       "b.json", failing);
+  ExpectError(f, "input 'p': s.csv: no quantity 'pitch_deg' for sensor 2");
+}
+
+TEST_CASE("Bad input: unknown distribution", "[uncertainty][budget]") {
+  ExpectError(P(R"({"name": "x", "value": 0, "distribution": "lognormal", "u": 1})"),
+              "b.json: input 'x': unknown distribution 'lognormal'");
+}
+
+TEST_CASE("Bad input: missing parameter", "[uncertainty][budget]") {
+  ExpectError(P(R"({"name": "x", "value": 0, "distribution": "rectangular"})"),
+              "input 'x': rectangular needs 'half_width' (or 'lower' and 'upper')");
+  ExpectError(P(R"({"name": "x", "value": 0})"), "input 'x': missing 'u'");
+  ExpectError(P(R"({"name": "x", "value": 0, "distribution": "t", "scale": 1})"),
+              "input 'x': missing 'dof'");
+  ExpectError(P(R"({"name": "x", "value": 0, "distribution": "trapezoidal", "half_width": 1})"),
+              "input 'x': missing 'beta'");
+  ExpectError(P(R"({"name": "x", "value": 0, "expanded": 1})"),
+              "input 'x': 'expanded' needs 'k' or 'coverage'");
+  ExpectError(P(R"({"name": "x", "type_a": {"mean": 1, "std": 0.1}})"),
+              "input 'x': missing 'type_a.n'");
+  ExpectError(P(R"({"value": 0, "u": 1})"), "inputs[0]: missing 'name'");
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1})", "", ""),
+              "input 'x': missing 'sensitivity' (needed when the budget has no model)");
+}
+
+TEST_CASE("Bad input: negative u and other out-of-range parameters", "[uncertainty][budget]") {
+  ExpectError(P(R"({"name": "x", "value": 0, "u": -1})"), "input 'x': u must be >= 0, got -1");
+  ExpectError(P(R"({"name": "x", "value": 0, "distribution": "rectangular", "half_width": -2})"),
+              "input 'x': 'half_width' must be >= 0");
+  ExpectError(P(R"({"name": "x", "value": 0, "distribution": "ctrap", "half_width": 1, "d": 2})"),
+              "input 'x': 'd' must be in [0, half_width]");
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1, "dof": 0})"), "input 'x': 'dof' must be > 0");
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1, "halfwidth": 1})"),
+              "input 'x': unknown key 'halfwidth'");
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1})", R"(, "coverage": 1.5)"),
+              "'coverage' must be in (0, 1)");
+}
+
+TEST_CASE("Bad input: correlation coefficient beyond 1", "[uncertainty][budget]") {
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1}, {"name": "z", "value": 0, "u": 1})",
+                R"(, "correlations": [{"a": "x", "b": "z", "r": 1.2}])", "x + z"),
+              "correlation x/z: |r| must be <= 1, got 1.2");
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1})",
+                R"(, "correlations": [{"a": "x", "b": "w", "r": 0.2}])"),
+              "correlation x/w: input 'w' is not defined");
+}
+
+TEST_CASE("Bad input: correlation matrix not positive definite", "[uncertainty][budget]") {
+  // r_ab = r_bc = 0.9 forces r_ac >= 0.62; r_ac = -0.9 is impossible.
+  ExpectError(
+      P(R"({"name": "a", "value": 0, "u": 1}, {"name": "b", "value": 0, "u": 1},
+                   {"name": "c", "value": 0, "u": 1})",
+        R"(, "correlations": [{"a": "a", "b": "b", "r": 0.9}, {"a": "b", "b": "c", "r": 0.9},
+                                      {"a": "a", "b": "c", "r": -0.9}])",
+        "a + b + c"),
+      "the correlation matrix is not positive definite: input 'c'");
+}
+
+TEST_CASE("Bad input: undefined name in the model", "[uncertainty][budget]") {
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1})", "", "x + zz*2"),
+              "model 'x + zz*2' uses 'zz', which is not an input");
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1})", "", "x + (2"), "model 'x + (2'");
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1, "sensitivity": 2})"),
+              "input 'x': 'sensitivity' is only for budgets without a model");
+}
+
+TEST_CASE("Bad input: model evaluating to NaN", "[uncertainty][budget]") {
+  ExpectError(P(R"({"name": "x", "value": -1, "u": 0.1})", "", "sqrt(x)"),
+              "model 'sqrt(x)' evaluates to");
+  ExpectError(P(R"({"name": "x", "value": -1, "u": 0.1})", "", "sqrt(x)"),
+              "at the input estimates");
+}
+
+TEST_CASE("Bad input: invalid JSON reports line and column", "[uncertainty][budget]") {
+  auto b = ParseBudget("{\n  \"measurand\": {\"name\": \"y\"},\n  \"inputs\": [,]\n}", "b.json");
+  REQUIRE_FALSE(b.ok());
+  CHECK(b.error().line == 3);
+  CHECK(b.error().ToString().find("b.json:3:") == 0);
+}
+
+TEST_CASE("Budget options from the file", "[uncertainty][budget]") {
+  auto b = P(R"({"name": "x", "value": 0, "u": 1})",
+             R"(, "coverage": 0.99, "gum": {"second_order": true, "dof_policy": "ignore"},
+                "monte_carlo": {"trials": 20000, "seed": 9, "threads": 1})");
+  REQUIRE(b.ok());
+  CHECK(b.value().gum.coverage == 0.99);
+  CHECK(b.value().gum.second_order);
+  CHECK(b.value().gum.correlated_dof == CorrelatedDofPolicy::kIgnore);
+  CHECK(b.value().monte_carlo.coverage == 0.99);
+  CHECK_FALSE(b.value().monte_carlo.adaptive);
+  CHECK(b.value().monte_carlo.trials == 20000);
+  CHECK(b.value().monte_carlo.seed == 9);
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1})", R"(, "gum": {"dof_policy": "magic"})"),
+              "gum: unknown dof_policy 'magic'");
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1})", R"(, "monte_carlo": {"trials": 1})"),
+              "monte_carlo: trials must be at least 2");
+}
+
+TEST_CASE("Example budgets in datasets parse", "[uncertainty][budget]") {
+  for (const char* name :
+       {"gum_h1_end_gauge.json", "jcgm101_9_5_gauge_block.json", "jcgm101_9_3_mass.json",
+        "tag_static_angle.json", "fingertip_chord.json", "fingertip_sagitta.json"}) {
+    INFO(name);
+    auto b = LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/" + name);
+    if (!b.ok()) FAIL(b.error().ToString());
+  }
+}
+
+}  // namespace
+}  // namespace metro

@@ -1,0 +1,234 @@
+// GUM framework against the published examples of JCGM 100:2008 Annex H.
+#include "metro/uncertainty/gum.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <string>
+
+#include "metro/uncertainty/budget.hpp"
+
+namespace metro {
+namespace {
+
+Budget Load(const std::string& name) {
+  auto b = LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/" + name);
+  if (!b.ok()) FAIL(b.error().ToString());
+  return b.value();
+}
+
+Budget Parse(const std::string& text) {
+  auto b = ParseBudget(text, "test.json");
+  if (!b.ok()) FAIL(b.error().ToString());
+  return b.value();
+}
+
+TEST_CASE("GUM H.1 end gauge first order", "[uncertainty][gum]") {
+  const Budget budget = Load("gum_h1_end_gauge.json");
+  auto r = EvaluateGum(budget);
+  REQUIRE(r.ok());
+  const GumResult& g = r.value();
+  // JCGM 100 H.1: l = 50.000 838 mm, u_c = 31.664 nm (printed 32 nm), nu_eff = 16.75
+  // (printed 16 after G.6.4 truncation), k99 = 2.92, U99 = 93 nm. Deterministic: the only
+  // error is the central-difference rounding (<1e-6 relative).
+  CHECK(g.value == Approx(50000838.0).margin(0.5));
+  CHECK(g.u == Approx(31.66388).margin(5e-4));
+  CHECK(g.dof_eff == Approx(16.7519).margin(2e-3));
+  // Fractional nu_eff: k lies between the table values t_99(17) = 2.898 and t_99(16) = 2.921.
+  CHECK(g.k > 2.898);
+  CHECK(g.k < 2.921);
+  // Sensitivities of H.1 Table H.1: c(da) = -ls theta = 5.000 062 3e6 nm/degC,
+  // c(dth) = -ls als = -575.007 nm/degC, c(als) = c(theta) = 0.
+  for (const BudgetLine& line : g.budget) {
+    if (line.name == "da") CHECK(line.sensitivity == Approx(5.0000623e6).epsilon(1e-6));
+    if (line.name == "dth") CHECK(line.sensitivity == Approx(-575.007).epsilon(1e-6));
+    if (line.name == "als") CHECK(line.sensitivity == Approx(0.0).margin(1e-3));
+    if (line.name == "dlt") CHECK(line.contribution == Approx(0.0).margin(1e-9));
+  }
+  // Sorted by contribution, ls (25 nm) first, then dth (16.6 nm).
+  REQUIRE(g.budget.size() == 9);
+  CHECK(g.budget[0].name == "ls");
+  CHECK(g.budget[1].name == "dth");
+  double percent = 0.0;
+  for (const BudgetLine& line : g.budget) percent += line.percent;
+  CHECK(percent == Approx(100.0).margin(1e-9));
+}
+
+TEST_CASE("GUM H.1 with truncated dof and second-order terms", "[uncertainty][gum]") {
+  const Budget budget = Load("gum_h1_end_gauge.json");
+  GumOptions options = budget.gum;
+  options.truncate_dof = true;
+  auto truncated = EvaluateGum(budget, options);
+  REQUIRE(truncated.ok());
+  CHECK(truncated.value().dof_eff == 16.0);  // JCGM 100 G.6.4 and H.1.6
+  // H.1.6: k99 = t_99(16) = 2.92, U99 = 2.92 x 32 nm = 93 nm with the rounded u_c; with
+  // the unrounded u_c = 31.664 nm, U = 2.920782 x 31.66388 = 92.48 nm.
+  CHECK(truncated.value().k == Approx(2.920782).margin(1e-5));
+  CHECK(truncated.value().expanded == Approx(92.484).margin(0.005));
+  CHECK(std::round(truncated.value().k * std::round(truncated.value().u)) == 93.0);
+  options.truncate_dof = false;
+  options.second_order = true;
+  auto second = EvaluateGum(budget, options);
+  REQUIRE(second.ok());
+  // H.1.7: with the second-order terms u_c = 34 nm. Closed form (independent inputs): the
+  // only non-zero second derivatives are d2l/(dda dtheta) = d2l/(dals ddth) = -ls, so
+  // u^2 = u1^2 + ls^2 u(da)^2 u(theta)^2 + ls^2 u(als)^2 u(dth)^2 with u(theta)^2 =
+  // 0.2^2 + 0.5^2/2 spread over th0 and dlt.
+  const double ls = 50000623.0;
+  const double u_da = 1e-6 / std::sqrt(3.0);
+  const double u_als = 2e-6 / std::sqrt(3.0);
+  const double u_dth = 0.05 / std::sqrt(3.0);
+  const double u_theta2 = 0.04 + 0.125;
+  const double u1 = second.value().u_first_order;
+  const double expected = std::sqrt(u1 * u1 + ls * ls * u_da * u_da * u_theta2 +
+                                    ls * ls * u_als * u_als * u_dth * u_dth);
+  CHECK(second.value().u == Approx(expected).epsilon(1e-6));
+  CHECK(std::round(second.value().u) == 34.0);
+}
+
+// JCGM 100 H.2: simultaneous resistance and reactance from five simultaneous observations of
+// V, I (mA) and phi (Table H.2). Published (H.2.3, approach 1): R = 127.732 ohm, u = 0.071;
+// X = 219.847, u = 0.295; Z = 254.260, u = 0.236. The correlation coefficients are computed
+// here from the observations (the printed -0.36, 0.86, -0.65 are rounded).
+const double kV[5] = {5.007, 4.994, 5.005, 4.990, 4.999};
+const double kI[5] = {19.663, 19.639, 19.640, 19.685, 19.678};
+const double kPhi[5] = {1.0456, 1.0438, 1.0468, 1.0428, 1.0433};
+
+double SampleR(const double* a, const double* b) {
+  double ma = 0, mb = 0;
+  for (int k = 0; k < 5; ++k) ma += a[k] / 5, mb += b[k] / 5;
+  double sab = 0, saa = 0, sbb = 0;
+  for (int k = 0; k < 5; ++k) {
+    sab += (a[k] - ma) * (b[k] - mb);
+    saa += (a[k] - ma) * (a[k] - ma);
+    sbb += (b[k] - mb) * (b[k] - mb);
+  }
+  return sab / std::sqrt(saa * sbb);  // JCGM 100 5.2.3 / C.3.6
+}
+
+std::string H2(const std::string& model) {
+  const auto values = [](const double* x) {
+    std::string s;
+    for (int k = 0; k < 5; ++k) s += (k ? ", " : "") + std::to_string(x[k]);
+    return "{\"values\": [" + s + "]}";
+  };
+  return R"({"measurand": {"name": "y", "unit": "ohm", "model": ")" + model + R"("},
+    "inputs": [{"name": "V", "type_a": )" +
+         values(kV) + R"(},
+               {"name": "I", "type_a": )" +
+         values(kI) + R"(},
+               {"name": "phi", "type_a": )" +
+         values(kPhi) + R"(}],
+    "correlations": [{"a": "V", "b": "I", "r": )" +
+         std::to_string(SampleR(kV, kI)) + R"(},
+                     {"a": "V", "b": "phi", "r": )" +
+         std::to_string(SampleR(kV, kPhi)) + R"(},
+                     {"a": "I", "b": "phi", "r": )" +
+         std::to_string(SampleR(kI, kPhi)) + R"(}],
+    "monte_carlo": false})";
+}
+
+TEST_CASE("GUM H.2 resistance reactance impedance", "[uncertainty][gum]") {
+  CHECK(SampleR(kV, kI) == Approx(-0.36).margin(0.005));  // As printed in H.2.
+  CHECK(SampleR(kV, kPhi) == Approx(0.86).margin(0.005));
+  CHECK(SampleR(kI, kPhi) == Approx(-0.65).margin(0.005));
+  struct Case {
+    const char* model;
+    double value;
+    double u;
+  };
+  for (const Case& c :
+       {Case{"V/(I*1e-3)*cos(phi)", 127.732, 0.071}, Case{"V/(I*1e-3)*sin(phi)", 219.847, 0.295},
+        Case{"V/(I*1e-3)", 254.260, 0.236}}) {
+    INFO(c.model);
+    auto r = EvaluateGum(Parse(H2(c.model)));
+    REQUIRE(r.ok());
+    // Half a unit of the last published digit (u: +-0.6e-3, the GUM truncates 0.2956).
+    CHECK(r.value().value == Approx(c.value).margin(5e-4));
+    CHECK(r.value().u == Approx(c.u).margin(6e-4));
+    // One ensemble of means from the same 5 observations: nu = 4 (group policy).
+    CHECK(r.value().dof_eff == Approx(4.0).margin(1e-12));
+    CHECK(r.value().correlated);
+  }
+  // Independent check of u(R) with the analytic Jacobian and the sample covariance.
+  double mean[3] = {0, 0, 0};
+  const double* data[3] = {kV, kI, kPhi};
+  for (int a = 0; a < 3; ++a) {
+    for (int k = 0; k < 5; ++k) mean[a] += data[a][k] / 5;
+  }
+  double cov[3][3] = {};
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      for (int k = 0; k < 5; ++k) cov[a][b] += (data[a][k] - mean[a]) * (data[b][k] - mean[b]) / 20;
+    }
+  }
+  const double v = mean[0], i = mean[1] * 1e-3, phi = mean[2];
+  const double grad[3] = {std::cos(phi) / i, -v * std::cos(phi) / (i * i) * 1e-3,
+                          -v * std::sin(phi) / i};
+  double var = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) var += grad[a] * grad[b] * cov[a][b];
+  }
+  auto r = EvaluateGum(Parse(H2("V/(I*1e-3)*cos(phi)")));
+  REQUIRE(r.ok());
+  CHECK(r.value().u == Approx(std::sqrt(var)).epsilon(1e-5));
+}
+
+TEST_CASE("GUM H.3 thermometer correction at 30 degC", "[uncertainty][gum]") {
+  // H.3.4: b(30 degC) = y1 + y2 (30 - 20) = -0.1494 degC, u = 0.0041 degC, from
+  // y1 = -0.1712 (s 0.0029), y2 = 0.00218 (s 0.00067), r = -0.930, nu = 9.
+  auto r = EvaluateGum(Parse(R"j({"measurand": {"name": "b", "unit": "degC",
+      "model": "y1 + y2*(30 - 20)"},
+    "inputs": [{"name": "y1", "value": -0.1712, "u": 0.0029, "dof": 9},
+               {"name": "y2", "value": 0.00218, "u": 0.00067, "dof": 9}],
+    "correlations": [{"a": "y1", "b": "y2", "r": -0.930}], "monte_carlo": false})j"));
+  REQUIRE(r.ok());
+  CHECK(r.value().value == Approx(-0.1494).margin(5e-5));
+  const double closed =
+      std::sqrt(0.0029 * 0.0029 + 100 * 0.00067 * 0.00067 + 2 * 10 * -0.930 * 0.0029 * 0.00067);
+  CHECK(r.value().u == Approx(closed).epsilon(1e-7));
+  CHECK(r.value().u == Approx(0.0041).margin(5e-5));
+  CHECK(r.value().dof_eff == Approx(9.0));
+}
+
+TEST_CASE("Budget table without a model and the dof policies", "[uncertainty][gum]") {
+  // y = 2 a + b: u^2 = 4 u_a^2 + u_b^2 + 2 * 2 * r u_a u_b.
+  const std::string text = R"({"measurand": {"name": "y"},
+    "inputs": [{"name": "a", "value": 1.0, "u": 0.3, "dof": 5, "sensitivity": 2.0},
+               {"name": "b", "value": 4.0, "u": 0.4, "dof": 10, "sensitivity": 1.0},
+               {"name": "c", "value": 0.0, "u": 0.5, "dof": 20, "sensitivity": 1.0}],
+    "correlations": [{"a": "a", "b": "b", "r": 0.5}], "monte_carlo": false})";
+  Budget budget = Parse(text);
+  auto group = EvaluateGum(budget);
+  REQUIRE(group.ok());
+  CHECK(group.value().value == Approx(6.0));
+  const double ug2 = 0.36 + 0.16 + 2 * 2 * 0.5 * 0.3 * 0.4;
+  const double uc2 = ug2 + 0.25;
+  CHECK(group.value().u == Approx(std::sqrt(uc2)));
+  // Group {a, b}: u_g^2 at min(5, 10) dof; c alone at 20.
+  CHECK(group.value().dof_eff == Approx(uc2 * uc2 / (ug2 * ug2 / 5 + 0.25 * 0.25 / 20)));
+  budget.gum.correlated_dof = CorrelatedDofPolicy::kIgnore;
+  auto ignore = EvaluateGum(budget);
+  REQUIRE(ignore.ok());
+  CHECK(ignore.value().dof_eff ==
+        Approx(uc2 * uc2 / (std::pow(0.6, 4) / 5 + std::pow(0.4, 4) / 10 + std::pow(0.5, 4) / 20)));
+  CHECK(ignore.value().dof_note.find("ignore") != std::string::npos);
+  budget.gum.correlated_dof = CorrelatedDofPolicy::kReject;
+  auto reject = EvaluateGum(budget);
+  REQUIRE_FALSE(reject.ok());
+  CHECK(reject.error().message.find("inputs 'a' and 'b' are correlated") != std::string::npos);
+}
+
+TEST_CASE("Coverage factor from Boost students_t with fractional dof", "[uncertainty][gum]") {
+  // Tabulated t quantiles (JCGM 100 Table G.2): t_95(10) = 2.23, t_99(16) = 2.92,
+  // t_95(inf) = 1.96.
+  CHECK(CoverageFactor(0.95, 10) == Approx(2.228139).margin(1e-6));
+  CHECK(CoverageFactor(0.99, 16) == Approx(2.920782).margin(1e-6));
+  CHECK(CoverageFactor(0.95, std::numeric_limits<double>::infinity()) ==
+        Approx(1.959964).margin(1e-6));
+  // Fractional dof lies between its neighbours.
+  CHECK(CoverageFactor(0.99, 16.75) < CoverageFactor(0.99, 16));
+  CHECK(CoverageFactor(0.99, 16.75) > CoverageFactor(0.99, 17));
+}
+
+}  // namespace
+}  // namespace metro
