@@ -1,0 +1,77 @@
+// calibrate apply calibration.json SESSION -o calibrated.csv
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "metro/calibration/calibration_io.hpp"
+#include "metro/core/file.hpp"
+#include "metro/io/session_io.hpp"
+
+namespace metro::calibrate_app {
+namespace {
+
+struct ApplyOptions {
+  std::string calibration;
+  std::vector<std::string> inputs;  // SESSION, or ACC GYRO with --imutk.
+  std::string output;
+  bool imutk = false;
+};
+
+int RunApply(const ApplyOptions& a) {
+  if (a.inputs.size() != (a.imutk ? 2u : 1u)) {
+    fmt::print(stderr, "error: apply takes one SESSION (or ACC GYRO with --imutk)\n");
+    return kExitUsage;
+  }
+  for (const std::string& in : a.inputs) {
+    if (IsSameFile(in, a.output) || IsSameFile(a.calibration, a.output)) {
+      fmt::print(stderr, "error: the output {} is one of the inputs\n", a.output);
+      return kExitUsage;
+    }
+  }
+  Result<Calibration> cal = LoadCalibration(a.calibration);
+  if (!cal.ok()) {
+    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    return kExitUsage;
+  }
+  Result<Session> session =
+      a.imutk ? LoadImuTk(a.inputs[0], a.inputs[1]) : LoadSession(a.inputs[0]);
+  if (!session.ok()) {
+    fmt::print(stderr, "error: {}\n", session.error().ToString());
+    return kExitUsage;
+  }
+  Session s = std::move(session).value();
+  Result<ApplySummary> summary = ApplyCalibration(cal.value(), &s);
+  if (!summary.ok()) {
+    fmt::print(stderr, "error: {}\n", summary.error().ToString());
+    return kExitUsage;
+  }
+  if (Status w = WriteFileAtomically(a.output, FormatSessionCsv(s, true)); !w.ok()) {
+    fmt::print(stderr, "error: {}\n", w.error().ToString());
+    return kExitFailed;
+  }
+  fmt::print(stderr, "wrote {}: {} tags, {} rows calibrated\n", a.output,
+             summary.value().tags_calibrated, summary.value().rows);
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddApplyCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<ApplyOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "apply",
+      "write a session with calibrated ax_g.. and gx_dps.. columns (all rows and "
+      "columns kept)");
+  sub->add_option("calibration", o->calibration, "calibration.json")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("session", o->inputs, "SESSION (or ACC GYRO with --imutk)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", o->output, "calibrated session.csv to write")->required();
+  sub->add_flag("--imutk", o->imutk, "the session is an imu_tk pair: ACC GYRO");
+  sub->callback([o, exit_code] { *exit_code = RunApply(*o); });
+}
+
+}  // namespace metro::calibrate_app

@@ -1,0 +1,143 @@
+// calibrate fit SESSION... -o calibration.json [--sensor N] [--model bias|scale|full] ...
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "metro/calibration/calibration_io.hpp"
+#include "metro/core/file.hpp"
+#include "metro/io/session_io.hpp"
+
+namespace metro::calibrate_app {
+namespace {
+
+struct FitOptions {
+  std::vector<std::string> inputs;
+  std::string output;
+  bool imutk = false;  // Inputs are imu_tk pairs: ACC GYRO [ACC GYRO ...].
+  int sensor = 0;
+  std::string model = "full";
+  std::string accel_model;
+  std::string gyro_model;
+  double gravity_mps2 = kStandardGravityMps2;
+  double accel_fs_g = 2.0;
+  double gyro_fs_dps = 250.0;
+  std::string temperature = "auto";
+  std::string loss = "none";
+  double loss_scale = 3.0;
+  bool accel_only = false;
+};
+
+int RunFit(const FitOptions& f) {
+  CalibrationOptions o;
+  const std::optional<ModelKind> model = ParseModelKind(f.model);
+  const std::optional<ModelKind> am =
+      ParseModelKind(f.accel_model.empty() ? f.model : f.accel_model);
+  const std::optional<ModelKind> gm = ParseModelKind(f.gyro_model.empty() ? f.model : f.gyro_model);
+  const std::optional<LossKind> loss = ParseLossKind(f.loss);
+  if (!model || !am || !gm || !loss) {
+    fmt::print(stderr, "error: --model takes bias, scale or full; --loss none, huber or cauchy\n");
+    return kExitUsage;
+  }
+  o.accel_model = *am;
+  o.gyro_model = *gm;
+  o.loss = *loss;
+  o.loss_scale = f.loss_scale;
+  o.gravity_mps2 = f.gravity_mps2;
+  o.accel_fs_g = f.accel_fs_g;
+  o.gyro_fs_dps = f.gyro_fs_dps;
+  o.sensor = f.sensor;
+  o.fit_gyro = !f.accel_only;
+  o.temperature = f.temperature == "on"    ? TemperatureMode::kOn
+                  : f.temperature == "off" ? TemperatureMode::kOff
+                                           : TemperatureMode::kAuto;
+  std::string why;
+  if (!o.IsValid(&why)) {
+    fmt::print(stderr, "error: {}\n", why);
+    return kExitUsage;
+  }
+  if (f.imutk && f.inputs.size() % 2 != 0) {
+    fmt::print(stderr, "error: --imutk takes pairs of files: ACC GYRO [ACC GYRO ...]\n");
+    return kExitUsage;
+  }
+  for (const std::string& in : f.inputs) {
+    if (IsSameFile(in, f.output)) {
+      fmt::print(stderr, "error: the output {} is one of the inputs\n", f.output);
+      return kExitUsage;
+    }
+  }
+  std::vector<Session> sessions;
+  const size_t step = f.imutk ? 2 : 1;
+  for (size_t i = 0; i < f.inputs.size(); i += step) {
+    Result<Session> s =
+        f.imutk ? LoadImuTk(f.inputs[i], f.inputs[i + 1]) : LoadSession(f.inputs[i]);
+    if (!s.ok()) {
+      fmt::print(stderr, "error: {}\n", s.error().ToString());
+      return kExitUsage;
+    }
+    sessions.push_back(std::move(s).value());
+  }
+  std::vector<const Session*> ptrs;
+  for (const Session& s : sessions) ptrs.push_back(&s);
+  Result<Calibration> cal = CalibrateSessions(ptrs, o);
+  if (!cal.ok()) {
+    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    return kExitFailed;
+  }
+  if (Status w = WriteFileAtomically(f.output, FormatCalibrationJson(cal.value())); !w.ok()) {
+    fmt::print(stderr, "error: {}\n", w.error().ToString());
+    return kExitFailed;
+  }
+  for (const TagCalibration& t : cal.value().tags) {
+    int counts[3] = {0, 0, 0};
+    for (const Segment& s : t.segments) ++counts[static_cast<int>(s.kind)];
+    fmt::print(stderr, "sensor {}: {} static, {} table, {} rotation segments (factor {})\n",
+               t.sensor, counts[0], counts[1], counts[2], t.threshold_factor);
+    if (t.accel) {
+      fmt::print(stderr, "  accel residual rms {:.3g} {} ({:.3g} m/s^2)\n", t.accel->residual_rms,
+                 t.accel->residual_unit, t.accel->residual_rms * kStandardGravityMps2);
+    }
+    if (t.gyro) {
+      fmt::print(stderr, "  gyro residual rms {:.3g} {}\n", t.gyro->residual_rms,
+                 t.gyro->residual_unit);
+    }
+    for (const std::string& w : t.warnings) fmt::print(stderr, "  warning: {}\n", w);
+  }
+  fmt::print(stderr, "wrote {}\n", f.output);
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddFitCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<FitOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "fit",
+      "fit the calibration of every tag in the sessions (static poses, table runs, "
+      "hand rotations) and write calibration.json");
+  sub->add_option("sessions", o->inputs, "SESSION... (session.csv; ACC GYRO pairs with --imutk)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", o->output, "calibration.json to write")->required();
+  sub->add_flag("--imutk", o->imutk, "inputs are imu_tk file pairs: ACC GYRO [ACC GYRO ...]");
+  sub->add_option("--sensor", o->sensor, "calibrate only this tag (0 = every tag)");
+  sub->add_option("--model", o->model, "bias | scale | full, for both sensors")
+      ->check(CLI::IsMember({"bias", "scale", "full"}));
+  sub->add_option("--accel-model", o->accel_model, "override --model for the accelerometer")
+      ->check(CLI::IsMember({"bias", "scale", "full"}));
+  sub->add_option("--gyro-model", o->gyro_model, "override --model for the gyroscope")
+      ->check(CLI::IsMember({"bias", "scale", "full"}));
+  sub->add_option("--gravity-mps2", o->gravity_mps2, "local gravity [m/s^2]");
+  sub->add_option("--accel-fs-g", o->accel_fs_g, "accelerometer full scale of raw counts [g]");
+  sub->add_option("--gyro-fs-dps", o->gyro_fs_dps, "gyroscope full scale of raw counts [deg/s]");
+  sub->add_option("--temperature", o->temperature,
+                  "linear temperature term of the biases: auto (when temp_c varies), on, off")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
+  sub->add_option("--loss", o->loss, "robust loss: none | huber | cauchy")
+      ->check(CLI::IsMember({"none", "huber", "cauchy"}));
+  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, in standard deviations");
+  sub->add_flag("--accel-only", o->accel_only, "calibrate the accelerometer only");
+  sub->callback([o, exit_code] { *exit_code = RunFit(*o); });
+}
+
+}  // namespace metro::calibrate_app

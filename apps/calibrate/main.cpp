@@ -1,0 +1,22 @@
+// calibrate: accelerometer and gyroscope calibration with the uncertainty of every constant.
+// A dispatch table: the work is done by the metro library (metro/calibration/).
+#include <CLI/CLI.hpp>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  namespace app_ns = metro::calibrate_app;
+  CLI::App app{"metro calibrate: IMU calibration (bias, scale, misalignment) with uncertainties"};
+  app.require_subcommand(1);
+  int exit_code = app_ns::kExitOk;
+  app_ns::AddFitCommand(app, &exit_code);
+  app_ns::AddApplyCommand(app, &exit_code);
+  app_ns::AddReportCommand(app, &exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : app_ns::kExitUsage;
+  }
+  return exit_code;
+}

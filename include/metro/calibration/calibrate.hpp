@@ -1,0 +1,129 @@
+// Accelerometer and gyroscope calibration with the standard uncertainty of every constant.
+//
+// Model: see imu_model.hpp (calibrated = T * K * (raw - b), bias removed before scaling).
+// Method (docs/calibration-model.md):
+//  1. Segment each record (segments.hpp) into static poses, table runs and hand rotations.
+//  2. Accelerometer: one residual per static pose, |M_a (r_mean - b)| - g_local/g_n = 0
+//     (gravity-norm method of Tedaldi et al., ICRA 2014), started from a closed-form
+//     axis-aligned ellipsoid fit of the pose means (or the nominal scale for fewer than 6
+//     poses).
+//  3. Gyroscope: static residuals r_mean - b = 0 (the bias is estimated, not frozen), table
+//     residuals |M_g (r_mean - b)| - |table_rate| = 0, and for each hand rotation between two
+//     static poses the gravity direction of the first pose rotated by the integrated gyroscope
+//     minus the gravity direction of the second (imu_tk's method), started from the static
+//     means and a one-dimensional search for an isotropic scale.
+//  4. A joint Ceres fit of all residual groups, each whitened by its own residual standard
+//     deviation from the separate fits; the covariance of the free parameters comes from
+//     Ceres's Covariance API and is scaled by the residual variance of the joint fit (Type A,
+//     JCGM 100:2008 4.2 and G.4), then propagated to M (JCGM 100:2008 5.1.2).
+// A problem whose Jacobian is rank deficient is an error, never a set of numbers.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "metro/calibration/imu_model.hpp"
+#include "metro/calibration/segments.hpp"
+#include "metro/core/status.hpp"
+#include "metro/io/session.hpp"
+
+namespace metro {
+
+enum class TemperatureMode { kAuto, kOn, kOff };
+enum class LossKind { kTrivial, kHuber, kCauchy };
+const char* LossKindName(LossKind kind);  // "none", "huber", "cauchy"
+std::optional<LossKind> ParseLossKind(std::string_view name);
+
+struct CalibrationOptions {
+  ModelKind accel_model = ModelKind::kFull;
+  ModelKind gyro_model = ModelKind::kFull;
+  double gravity_mps2 = kStandardGravityMps2;  // Local gravity; the accel target norm is
+                                               // gravity_mps2 / 9.80665 g.
+  double accel_fs_g = 2.0;     // Full-scale setting of raw (LSB) accelerometer data.
+  double gyro_fs_dps = 250.0;  // Full-scale setting of raw (LSB) gyroscope data.
+  TemperatureMode temperature = TemperatureMode::kAuto;
+  double min_temp_span_c = 2.0;  // kAuto fits b1 when the static poses span at least this.
+  LossKind loss = LossKind::kTrivial;
+  double loss_scale = 3.0;  // Of the robust loss, in units of the whitened residual.
+  int sensor = 0;           // Calibrate only this tag; 0 = every tag.
+  bool fit_gyro = true;     // False: accelerometer only.
+  int max_iterations = 200;
+  double max_rotation_s = 60.0;  // Longer hand rotations are not integrated (drift).
+  SegmentationOptions segmentation;
+
+  bool IsValid(std::string* why) const;
+};
+
+// One residual group of a fit.
+struct ResidualGroup {
+  std::string kind;  // "static_pose_norm", "static_rate", "table_rate", "rotation_gravity".
+  int count = 0;     // Residual blocks (poses, intervals, runs, rotations).
+  double rms = 0;    // Root mean square of the unwhitened residuals, in `unit`.
+  std::string unit;  // e.g. "g", "LSB", "deg/s", "rad".
+};
+
+struct SensorCalibration {
+  SensorModel model;
+  // Standard uncertainties (k = 1) of the constants, in the units of the constants;
+  // 0 for a constant the model holds fixed.
+  Eigen::Vector3d bias_u = Eigen::Vector3d::Zero();
+  Eigen::Vector3d scale_u = Eigen::Vector3d::Zero();
+  std::vector<double> misalignment_u;
+  Eigen::Vector3d bias_per_c_u = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d matrix_u = Eigen::Matrix3d::Zero();  // Of each element of M.
+  // Derived: sensitivity s = 1/k [input unit / output unit] and its uncertainty u_k / k^2.
+  Eigen::Vector3d sensitivity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d sensitivity_u = Eigen::Vector3d::Zero();
+  // Covariance of the free parameters, in the layout of imu_model.hpp restricted to the names.
+  std::vector<std::string> parameter_names;
+  Eigen::MatrixXd covariance;
+  Eigen::MatrixXd Correlation() const;
+  double residual_rms = 0;    // Main residual (accel: gravity norm per pose; gyro:
+  std::string residual_unit;  // rotation gravity angle, else table rate), in this unit.
+  std::vector<ResidualGroup> groups;
+  std::vector<Segment> segments;  // The segments this sensor's fit used.
+  int dof = 0;                    // Residual degrees of freedom minus free parameters.
+  double reduced_chi2 = 0;        // Of the whitened fit (about 1 when consistent).
+  double coverage_factor_95 = 0;  // Student t_0.975(dof) (JCGM 100:2008 G.3.2).
+};
+
+struct TagCalibration {
+  int sensor = 1;
+  std::optional<SensorCalibration> accel;
+  std::optional<SensorCalibration> gyro;
+  std::vector<Segment> segments;  // Every segment found, in every input.
+  double threshold_factor = 0;    // Static detector factor chosen (first input).
+  int saturated_samples = 0;      // Excluded samples (either sensor).
+  int iterations = 0;
+  std::vector<std::string> warnings;
+};
+
+struct InputFile {
+  std::string path;
+  std::string sha256;
+};
+
+// The content of calibration.json ("metro.calibration/1", docs/calibration-format.md).
+struct Calibration {
+  double gravity_mps2 = kStandardGravityMps2;
+  std::vector<InputFile> inputs;
+  std::string tool_version;
+  std::string date_utc;  // ISO 8601, e.g. "2024-05-01T12:00:00Z".
+  std::vector<TagCalibration> tags;
+
+  const TagCalibration* FindTag(int sensor) const;
+};
+
+// Calibrates one tag from one or more records of it (e.g. a static multi-pose session and a
+// rotation-table session). Errors say what to collect.
+Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,
+                                    const CalibrationOptions& options);
+
+// Calibrates every tag (or options.sensor) found in the sessions; a tag's records from several
+// sessions are fitted together. Fills inputs, tool version and date.
+Result<Calibration> CalibrateSessions(const std::vector<const Session*>& sessions,
+                                      const CalibrationOptions& options);
+
+}  // namespace metro

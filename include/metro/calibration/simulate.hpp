@@ -1,0 +1,84 @@
+// Simulated calibration sessions with known truth: multi-pose static records with hand
+// rotations between the poses, optionally with rotation-table runs at each pose and a
+// temperature ramp. The output is raw MPU6050 counts (ax_lsb.. gx_lsb.., int16, saturating),
+// so the calibrator sees what a tag sends.
+//
+// Truth (drawn when random_truth, seedable, per metrology-notes sec. 6, datasheet
+// PS-MPU-6000A-00 rev 3.4): accel zero-g offset uniform in +-50 mg (x, y) and +-80 mg (z),
+// sensitivity uniform in +-3 % of 16384 LSB/g (at +-2 g), cross-axis uniform in +-2 %;
+// gyro zero-rate offset uniform in +-20 deg/s, sensitivity +-3 % of 131 LSB/(deg/s),
+// cross-axis +-2 %; temperature coefficients uniform in +-0.5 mg/degC (accel, 35 mg over
+// 70 degC) and +-0.16 deg/s/degC (gyro, 20 deg/s over 125 degC).
+// Noise: white, standard deviation density * sqrt(bandwidth_hz) per sample: 400 ug/sqrt(Hz)
+// and 0.005 deg/s/sqrt(Hz). raw = round(M^-1 * truth + b(temp) + noise), clamped to int16.
+//
+// Motion: pose i has gravity ("up", the accelerometer's specific force) along body direction
+// u_i and a random heading. Between poses the body turns about one fixed body axis with a
+// minimum-jerk angle profile; the gyroscope sample at t_k is the mean body rate over
+// (t_{k-1}, t_k], so integrating sample k over that interval is exact. The tag turns about its
+// own origin (no linear acceleration). On the table the tag turns about the vertical.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "metro/calibration/imu_model.hpp"
+#include "metro/core/status.hpp"
+#include "metro/io/session.hpp"
+
+namespace metro {
+
+struct ImuTruth {
+  SensorModel accel;  // LSB -> g
+  SensorModel gyro;   // LSB -> deg/s
+};
+
+enum class PoseSet {
+  kCube,       // Faces, then corners, then edges of a cube (26 directions), cycled.
+  kSphere,     // A Fibonacci sphere of `poses` directions.
+  kUpperOnly,  // Directions with the body z axis at least 30 deg above the horizon (bad).
+  kFaces,      // The 6 faces of a cube only, cycled (too few distinct directions: bad).
+};
+
+struct SimulationOptions {
+  uint64_t seed = 1;
+  int sensor = 1;
+  double rate_hz = 100.0;
+  int poses = 26;
+  PoseSet pose_set = PoseSet::kCube;
+  double dwell_s = 3.0;  // Static time at each pose.
+  double move_s = 2.0;   // Duration of each hand rotation.
+  double accel_fs_g = 2.0;
+  double gyro_fs_dps = 250.0;
+  double gravity_mps2 = kStandardGravityMps2;
+  double accel_noise_ug_rthz = 400.0;
+  double gyro_noise_dps_rthz = 0.005;
+  double bandwidth_hz = 50.0;
+  std::vector<double> table_rates_dps;  // Runs at each pose, in this order; empty: no table.
+  double table_run_s = 4.0;
+  bool write_table_column = false;  // table_rate_dps even without runs (all 0).
+  bool temperature = false;         // temp_c column, ramp temp_start_c -> temp_end_c.
+  double temp_start_c = 25.0;
+  double temp_end_c = 35.0;
+  bool random_truth = true;  // Draw the truth; else use `truth` as given.
+  ImuTruth truth;            // Used when !random_truth (units LSB -> g and LSB -> deg/s).
+
+  bool IsValid(std::string* why) const;
+};
+
+struct SimulatedSession {
+  Session session;  // One tag, columns t_s ax_lsb.. gx_lsb.. [temp_c] [table_rate_dps].
+  ImuTruth truth;
+  std::vector<Eigen::Vector3d> true_accel_g;   // Per sample, body frame.
+  std::vector<Eigen::Vector3d> true_gyro_dps;  // Per sample, mean over (t_{k-1}, t_k].
+  int saturated_samples = 0;
+};
+
+// Draws a truth per the datasheet tolerances above (full models, temperature terms included
+// when `temperature`).
+ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool temperature);
+
+Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& options);
+
+}  // namespace metro

@@ -1,0 +1,548 @@
+#include "metro/calibration/calibration_io.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <exception>
+
+#include "metro/core/file.hpp"
+
+namespace metro {
+
+using nlohmann::json;
+
+namespace {
+
+json Vec(const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); }
+
+json Mat(const Eigen::MatrixXd& m) {
+  json rows = json::array();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    json row = json::array();
+    for (Eigen::Index j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+json SegmentJson(const Segment& s) {
+  json j = {{"kind", SegmentKindName(s.kind)},
+            {"input", s.piece},
+            {"begin_index", s.begin},
+            {"end_index", s.end},
+            {"start_s", s.start_s},
+            {"end_s", s.end_s},
+            {"used", s.used}};
+  if (s.kind == SegmentKind::kTable) j["table_rate_dps"] = s.table_rate_dps;
+  if (!s.note.empty()) j["note"] = s.note;
+  return j;
+}
+
+json SensorJson(const SensorCalibration& c) {
+  const SensorModel& m = c.model;
+  json j;
+  j["model"] = ModelKindName(m.kind);
+  j["input_unit"] = m.input_unit;
+  j["output_unit"] = m.output_unit;
+  j["bias"] = Vec(m.bias);
+  j["bias_u"] = Vec(c.bias_u);
+  j["scale"] = Vec(m.scale);
+  j["scale_u"] = Vec(c.scale_u);
+  std::vector<double> mis = m.misalignment;
+  if (mis.empty()) mis.assign(static_cast<size_t>(MisalignmentCount(m.sensor)), 0.0);
+  j["misalignment"] = mis;
+  std::vector<double> mis_u = c.misalignment_u;
+  if (mis_u.empty()) mis_u.assign(mis.size(), 0.0);
+  j["misalignment_u"] = mis_u;
+  j["matrix"] = Mat(m.Matrix());
+  j["matrix_u"] = Mat(c.matrix_u);
+  j["sensitivity"] = Vec(c.sensitivity);
+  j["sensitivity_u"] = Vec(c.sensitivity_u);
+  if (m.has_temperature) {
+    j["temperature"] = {{"t_ref_c", m.t_ref_c},
+                        {"bias_per_c", Vec(m.bias_per_c)},
+                        {"bias_per_c_u", Vec(c.bias_per_c_u)}};
+  }
+  j["parameters"] = c.parameter_names;
+  j["covariance"] = Mat(c.covariance);
+  j["correlation"] = Mat(c.Correlation());
+  j["dof"] = c.dof;
+  j["reduced_chi2"] = c.reduced_chi2;
+  j["coverage_factor_95"] = c.coverage_factor_95;
+  j["residual_rms"] = c.residual_rms;
+  j["residual_unit"] = c.residual_unit;
+  json groups = json::array();
+  for (const ResidualGroup& g : c.groups) {
+    groups.push_back({{"kind", g.kind}, {"count", g.count}, {"rms", g.rms}, {"unit", g.unit}});
+  }
+  j["residual_groups"] = groups;
+  json segs = json::array();
+  for (const Segment& s : c.segments) segs.push_back(SegmentJson(s));
+  j["segments"] = segs;
+  return j;
+}
+
+// Typed access with errors that name the key path.
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+  bool failed() const { return !message_.empty(); }
+  Error error() const { return MakeError(file_, 0, message_); }
+
+  const json* Get(const json& j, const std::string& path, const char* key) {
+    if (failed()) return nullptr;
+    if (!j.is_object() || !j.contains(key)) {
+      Fail(fmt::format("missing key '{}{}'", path, key));
+      return nullptr;
+    }
+    return &j.at(key);
+  }
+  double Number(const json& j, const std::string& path, const char* key) {
+    const json* v = Get(j, path, key);
+    if (v == nullptr) return 0;
+    if (!v->is_number()) {
+      Fail(fmt::format("'{}{}' must be a number", path, key));
+      return 0;
+    }
+    return v->get<double>();
+  }
+  std::string String(const json& j, const std::string& path, const char* key) {
+    const json* v = Get(j, path, key);
+    if (v == nullptr) return "";
+    if (!v->is_string()) {
+      Fail(fmt::format("'{}{}' must be a string", path, key));
+      return "";
+    }
+    return v->get<std::string>();
+  }
+  std::vector<double> Numbers(const json& j, const std::string& path, const char* key, size_t n) {
+    const json* v = Get(j, path, key);
+    std::vector<double> out;
+    if (v == nullptr) return out;
+    if (!v->is_array() || (n != 0 && v->size() != n)) {
+      Fail(fmt::format("'{}{}' must be an array of {} numbers", path, key, n));
+      return out;
+    }
+    for (const json& e : *v) {
+      if (!e.is_number()) {
+        Fail(fmt::format("'{}{}' must contain numbers only", path, key));
+        return {};
+      }
+      out.push_back(e.get<double>());
+    }
+    return out;
+  }
+  Eigen::Vector3d Vec3(const json& j, const std::string& path, const char* key) {
+    const std::vector<double> v = Numbers(j, path, key, 3);
+    return v.size() == 3 ? Eigen::Vector3d(v[0], v[1], v[2]) : Eigen::Vector3d::Zero();
+  }
+  Eigen::MatrixXd Matrix(const json& j, const std::string& path, const char* key) {
+    const json* v = Get(j, path, key);
+    if (v == nullptr) return {};
+    if (!v->is_array()) {
+      Fail(fmt::format("'{}{}' must be an array of rows", path, key));
+      return {};
+    }
+    const size_t n = v->size();
+    Eigen::MatrixXd m(n, n);
+    for (size_t r = 0; r < n; ++r) {
+      const json& row = (*v)[r];
+      if (!row.is_array() || row.size() != n) {
+        Fail(fmt::format("'{}{}' must be a square matrix", path, key));
+        return {};
+      }
+      for (size_t c = 0; c < n; ++c) {
+        if (!row[c].is_number()) {
+          Fail(fmt::format("'{}{}' must contain numbers only", path, key));
+          return {};
+        }
+        m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c].get<double>();
+      }
+    }
+    return m;
+  }
+  void Fail(std::string message) {
+    if (message_.empty()) message_ = std::move(message);
+  }
+
+ private:
+  std::string file_;
+  std::string message_;
+};
+
+std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const std::string& path,
+                                             ImuSensor sensor) {
+  SensorCalibration c;
+  SensorModel& m = c.model;
+  m.sensor = sensor;
+  const std::string kind = rd->String(j, path, "model");
+  if (rd->failed()) return std::nullopt;
+  const std::optional<ModelKind> k = ParseModelKind(kind);
+  if (!k) {
+    rd->Fail(fmt::format("'{}model' is '{}'; expected bias, scale or full", path, kind));
+    return std::nullopt;
+  }
+  m.kind = *k;
+  m.input_unit = rd->String(j, path, "input_unit");
+  m.output_unit = rd->String(j, path, "output_unit");
+  const std::string expected_out = sensor == ImuSensor::kAccel ? "g" : "deg/s";
+  if (!rd->failed() && m.output_unit != expected_out) {
+    rd->Fail(
+        fmt::format("'{}output_unit' is '{}'; expected '{}'", path, m.output_unit, expected_out));
+  }
+  if (!rd->failed() && !NominalScale(sensor, m.input_unit, 1.0)) {
+    rd->Fail(fmt::format("'{}input_unit' '{}' is not a unit of the {}", path, m.input_unit,
+                         ImuSensorName(sensor)));
+  }
+  m.bias = rd->Vec3(j, path, "bias");
+  c.bias_u = rd->Vec3(j, path, "bias_u");
+  m.scale = rd->Vec3(j, path, "scale");
+  c.scale_u = rd->Vec3(j, path, "scale_u");
+  const size_t nm = static_cast<size_t>(MisalignmentCount(sensor));
+  m.misalignment = rd->Numbers(j, path, "misalignment", nm);
+  c.misalignment_u = rd->Numbers(j, path, "misalignment_u", nm);
+  if (j.contains("temperature")) {
+    const json& t = j.at("temperature");
+    const std::string tp = path + "temperature.";
+    m.has_temperature = true;
+    m.t_ref_c = rd->Number(t, tp, "t_ref_c");
+    m.bias_per_c = rd->Vec3(t, tp, "bias_per_c");
+    c.bias_per_c_u = rd->Vec3(t, tp, "bias_per_c_u");
+  }
+  c.covariance = rd->Matrix(j, path, "covariance");
+  const json* names = rd->Get(j, path, "parameters");
+  if (names != nullptr) {
+    if (!names->is_array()) {
+      rd->Fail(fmt::format("'{}parameters' must be an array of names", path));
+    } else {
+      for (const json& n : *names) {
+        if (n.is_string()) c.parameter_names.push_back(n.get<std::string>());
+      }
+    }
+  }
+  if (!rd->failed() && static_cast<Eigen::Index>(c.parameter_names.size()) != c.covariance.rows()) {
+    rd->Fail(fmt::format("'{}covariance' has {} rows for {} parameters", path, c.covariance.rows(),
+                         c.parameter_names.size()));
+  }
+  c.residual_rms = rd->Number(j, path, "residual_rms");
+  c.residual_unit = rd->String(j, path, "residual_unit");
+  c.dof = static_cast<int>(rd->Number(j, path, "dof"));
+  c.reduced_chi2 = j.value("reduced_chi2", 0.0);
+  c.coverage_factor_95 = rd->Number(j, path, "coverage_factor_95");
+  if (rd->failed()) return std::nullopt;
+  // Derived values are recomputed from the constants rather than trusted.
+  for (int a = 0; a < 3; ++a) {
+    if (!(m.scale[a] != 0 && std::isfinite(m.scale[a]))) {
+      rd->Fail(fmt::format("'{}scale' must be finite and non-zero", path));
+      return std::nullopt;
+    }
+    c.sensitivity[a] = 1.0 / m.scale[a];
+    c.sensitivity_u[a] = c.scale_u[a] / (m.scale[a] * m.scale[a]);
+  }
+  if (j.contains("matrix_u")) {
+    const Eigen::MatrixXd mu = rd->Matrix(j, path, "matrix_u");
+    if (mu.rows() == 3) c.matrix_u = mu;
+  }
+  if (j.contains("residual_groups") && j.at("residual_groups").is_array()) {
+    for (const json& g : j.at("residual_groups")) {
+      ResidualGroup rg;
+      rg.kind = g.value("kind", "");
+      rg.count = g.value("count", 0);
+      rg.rms = g.value("rms", 0.0);
+      rg.unit = g.value("unit", "");
+      c.groups.push_back(rg);
+    }
+  }
+  if (j.contains("segments") && j.at("segments").is_array()) {
+    for (const json& s : j.at("segments")) {
+      Segment seg;
+      const std::string kind_name = s.value("kind", "static");
+      seg.kind = kind_name == "table"      ? SegmentKind::kTable
+                 : kind_name == "rotation" ? SegmentKind::kRotation
+                                           : SegmentKind::kStatic;
+      seg.piece = s.value("input", 0);
+      seg.begin = s.value("begin_index", size_t{0});
+      seg.end = s.value("end_index", size_t{0});
+      seg.start_s = s.value("start_s", 0.0);
+      seg.end_s = s.value("end_s", 0.0);
+      seg.used = s.value("used", true);
+      seg.table_rate_dps = s.value("table_rate_dps", 0.0);
+      seg.note = s.value("note", "");
+      c.segments.push_back(seg);
+    }
+  }
+  return c;
+}
+
+std::string Fixed(double v, int digits) { return fmt::format("{:.{}g}", v, digits); }
+
+std::string ValueU(double v, double u) {
+  if (u > 0) return fmt::format("{:.7g} ({:.2g})", v, u);
+  return fmt::format("{:.7g} (fixed)", v);
+}
+
+void ReportSensor(const SensorCalibration& c, std::string* out) {
+  const SensorModel& m = c.model;
+  const char* axes = "xyz";
+  *out += fmt::format("  {}: model {}, {} -> {}\n", ImuSensorName(m.sensor), ModelKindName(m.kind),
+                      m.input_unit, m.output_unit);
+  *out += fmt::format(
+      "    calibrated = T K (raw - b); standard uncertainties (k = 1) in "
+      "brackets; k95 = {:.3f} (dof {})\n",
+      c.coverage_factor_95, c.dof);
+  for (int a = 0; a < 3; ++a) {
+    *out += fmt::format("    b_{}  = {} {}    k_{} = {} {}/{}\n", axes[a],
+                        ValueU(m.bias[a], c.bias_u[a]), m.input_unit, axes[a],
+                        ValueU(m.scale[a], c.scale_u[a]), m.output_unit, m.input_unit);
+  }
+  const char* const acc_names[] = {"a_yz", "a_zy", "a_zx"};
+  const char* const gyr_names[] = {"g_yz", "g_zy", "g_xz", "g_zx", "g_xy", "g_yx"};
+  const char* const* names = m.sensor == ImuSensor::kAccel ? acc_names : gyr_names;
+  for (size_t i = 0; i < m.misalignment.size(); ++i) {
+    const double u = i < c.misalignment_u.size() ? c.misalignment_u[i] : 0.0;
+    *out += fmt::format("    {} = {} rad\n", names[i], ValueU(m.misalignment[i], u));
+  }
+  if (m.has_temperature) {
+    *out += fmt::format("    temperature: t_ref = {:.2f} degC\n", m.t_ref_c);
+    for (int a = 0; a < 3; ++a) {
+      *out += fmt::format("    b1_{} = {} {}/degC\n", axes[a],
+                          ValueU(m.bias_per_c[a], c.bias_per_c_u[a]), m.input_unit);
+    }
+  }
+  const Eigen::Matrix3d mm = m.Matrix();
+  *out += "    M =\n";
+  for (int r = 0; r < 3; ++r) {
+    *out +=
+        fmt::format("      [{:>14.7g} {:>14.7g} {:>14.7g}]   u [{:.2g} {:.2g} {:.2g}]\n", mm(r, 0),
+                    mm(r, 1), mm(r, 2), c.matrix_u(r, 0), c.matrix_u(r, 1), c.matrix_u(r, 2));
+  }
+  *out += fmt::format("    residual rms {} {}, reduced chi^2 {:.3f}\n", Fixed(c.residual_rms, 4),
+                      c.residual_unit, c.reduced_chi2);
+  for (const ResidualGroup& g : c.groups) {
+    *out +=
+        fmt::format("      {:<18} n = {:<6} rms {} {}\n", g.kind, g.count, Fixed(g.rms, 4), g.unit);
+  }
+  int counts[3] = {0, 0, 0};
+  for (const Segment& s : c.segments) ++counts[static_cast<int>(s.kind)];
+  *out += fmt::format("    segments used: {} static, {} table, {} rotation\n", counts[0], counts[1],
+                      counts[2]);
+}
+
+Status SetColumn(Tag* tag, const std::string& name, const std::string& unit,
+                 std::vector<double> values) {
+  for (Quantity& q : tag->quantities) {
+    if (q.name == name) {
+      q.unit = unit;
+      q.origin = QuantityOrigin::kFile;
+      q.values = std::move(values);
+      return Status::Ok();
+    }
+  }
+  Quantity q;
+  q.name = name;
+  q.unit = unit;
+  q.origin = QuantityOrigin::kFile;
+  q.values = std::move(values);
+  tag->quantities.push_back(std::move(q));
+  return Status::Ok();
+}
+
+const Quantity* FindColumn(const Tag& tag, const std::string& name) {
+  for (const Quantity& q : tag.quantities) {
+    if (q.name == name) return &q;
+  }
+  return nullptr;
+}
+
+const char* Suffix(ImuSensor sensor, const std::string& unit) {
+  if (unit == "LSB") return "_lsb";
+  if (sensor == ImuSensor::kAccel) return unit == "g" ? "_g" : "_mps2";
+  return unit == "deg/s" ? "_dps" : "_rads";
+}
+
+Status ApplySensor(const SensorCalibration& c, const std::string& file, Tag* tag) {
+  const ImuSensor sensor = c.model.sensor;
+  const char prefix = sensor == ImuSensor::kAccel ? 'a' : 'g';
+  const std::string suffix = Suffix(sensor, c.model.input_unit);
+  const Quantity* in[3];
+  for (int a = 0; a < 3; ++a) {
+    const std::string name = std::string(1, prefix) + "xyz"[a] + suffix;
+    in[a] = FindColumn(*tag, name);
+    if (in[a] == nullptr) {
+      return MakeError(
+          file, 0,
+          fmt::format("sensor {}: the {} calibration takes {} input ({} columns) "
+                      "but the session has no {} column",
+                      tag->sensor, ImuSensorName(sensor), c.model.input_unit, suffix, name));
+    }
+  }
+  const Quantity* temp = FindColumn(*tag, "temp_c");
+  if (c.model.has_temperature && temp == nullptr) {
+    return MakeError(file, 0,
+                     fmt::format("sensor {}: the {} calibration has a temperature term but the "
+                                 "session has no temp_c column",
+                                 tag->sensor, ImuSensorName(sensor)));
+  }
+  const size_t n = tag->size();
+  std::vector<double> out[3];
+  for (auto& o : out) o.resize(n);
+  const Eigen::Matrix3d m = c.model.Matrix();
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d raw(in[0]->values[i], in[1]->values[i], in[2]->values[i]);
+    const double t = temp != nullptr ? temp->values[i] : 0.0;
+    const Eigen::Vector3d y = m * (raw - c.model.BiasAt(t));
+    for (int a = 0; a < 3; ++a) out[a][i] = y[a];
+  }
+  const std::string out_suffix = sensor == ImuSensor::kAccel ? "_g" : "_dps";
+  for (int a = 0; a < 3; ++a) {
+    SetColumn(tag, std::string(1, prefix) + "xyz"[a] + out_suffix, c.model.output_unit,
+              std::move(out[a]));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+json CalibrationToJson(const Calibration& cal) {
+  json j;
+  j["schema"] = kCalibrationSchema;
+  j["tool_version"] = cal.tool_version;
+  j["date_utc"] = cal.date_utc;
+  j["gravity_mps2"] = cal.gravity_mps2;
+  json inputs = json::array();
+  for (const InputFile& f : cal.inputs) inputs.push_back({{"path", f.path}, {"sha256", f.sha256}});
+  j["inputs"] = inputs;
+  json tags = json::array();
+  for (const TagCalibration& t : cal.tags) {
+    json tj;
+    tj["sensor"] = t.sensor;
+    tj["threshold_factor"] = t.threshold_factor;
+    tj["saturated_samples"] = t.saturated_samples;
+    tj["iterations"] = t.iterations;
+    tj["warnings"] = t.warnings;
+    json segs = json::array();
+    for (const Segment& s : t.segments) segs.push_back(SegmentJson(s));
+    tj["segments_found"] = segs;
+    if (t.accel) tj["accel"] = SensorJson(*t.accel);
+    if (t.gyro) tj["gyro"] = SensorJson(*t.gyro);
+    tags.push_back(tj);
+  }
+  j["tags"] = tags;
+  return j;
+}
+
+Result<Calibration> CalibrationFromJson(const json& j, const std::string& file) {
+  Reader rd(file);
+  Calibration cal;
+  const std::string schema = rd.String(j, "", "schema");
+  if (rd.failed()) return rd.error();
+  if (schema != kCalibrationSchema) {
+    return MakeError(file, 0,
+                     fmt::format("schema is '{}'; expected '{}'", schema, kCalibrationSchema));
+  }
+  cal.gravity_mps2 = rd.Number(j, "", "gravity_mps2");
+  cal.tool_version = j.value("tool_version", "");
+  cal.date_utc = j.value("date_utc", "");
+  if (j.contains("inputs") && j.at("inputs").is_array()) {
+    for (const json& f : j.at("inputs")) {
+      cal.inputs.push_back({f.value("path", ""), f.value("sha256", "")});
+    }
+  }
+  const json* tags = rd.Get(j, "", "tags");
+  if (rd.failed()) return rd.error();
+  if (!tags->is_array() || tags->empty()) {
+    return MakeError(file, 0, "'tags' must be a non-empty array");
+  }
+  for (size_t i = 0; i < tags->size(); ++i) {
+    const json& tj = (*tags)[i];
+    const std::string path = fmt::format("tags[{}].", i);
+    TagCalibration t;
+    t.sensor = static_cast<int>(rd.Number(tj, path, "sensor"));
+    if (rd.failed()) return rd.error();
+    if (!tj.contains("accel") && !tj.contains("gyro")) {
+      return MakeError(file, 0, fmt::format("'{}' has neither 'accel' nor 'gyro'", path));
+    }
+    if (tj.contains("accel")) {
+      t.accel = ParseSensor(&rd, tj.at("accel"), path + "accel.", ImuSensor::kAccel);
+    }
+    if (tj.contains("gyro") && !rd.failed()) {
+      t.gyro = ParseSensor(&rd, tj.at("gyro"), path + "gyro.", ImuSensor::kGyro);
+    }
+    if (rd.failed()) return rd.error();
+    t.threshold_factor = tj.value("threshold_factor", 0.0);
+    t.saturated_samples = tj.value("saturated_samples", 0);
+    t.iterations = tj.value("iterations", 0);
+    if (tj.contains("warnings") && tj.at("warnings").is_array()) {
+      for (const json& w : tj.at("warnings")) {
+        if (w.is_string()) t.warnings.push_back(w.get<std::string>());
+      }
+    }
+    cal.tags.push_back(std::move(t));
+  }
+  return cal;
+}
+
+std::string FormatCalibrationJson(const Calibration& calibration) {
+  return CalibrationToJson(calibration).dump(2) + "\n";
+}
+
+Result<Calibration> LoadCalibration(const std::string& path) {
+  Result<std::string> text = ReadFile(path);
+  if (!text.ok()) return text.error();
+  json j;
+  try {
+    j = json::parse(text.value());
+  } catch (const std::exception& e) {
+    return MakeError(path, 0, std::string("not valid JSON: ") + e.what());
+  }
+  return CalibrationFromJson(j, path);
+}
+
+std::string FormatCalibrationReport(const Calibration& cal) {
+  std::string out;
+  out +=
+      fmt::format("calibration ({}), {}, {}\n", kCalibrationSchema, cal.tool_version, cal.date_utc);
+  out += fmt::format("gravity {} m/s^2\n", cal.gravity_mps2);
+  for (const InputFile& f : cal.inputs) {
+    out += fmt::format("input {} sha256 {}\n", f.path, f.sha256);
+  }
+  for (const TagCalibration& t : cal.tags) {
+    out += fmt::format("sensor {}: static detector factor {}, {} saturated samples excluded\n",
+                       t.sensor, t.threshold_factor, t.saturated_samples);
+    if (t.accel) ReportSensor(*t.accel, &out);
+    if (t.gyro) ReportSensor(*t.gyro, &out);
+    for (const std::string& w : t.warnings) out += "  warning: " + w + "\n";
+  }
+  return out;
+}
+
+Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* session) {
+  METRO_CHECK(session != nullptr);
+  ApplySummary summary;
+  for (Tag& tag : session->tags) {
+    const TagCalibration* tc = calibration.FindTag(tag.sensor);
+    if (tc == nullptr) {
+      std::string have;
+      for (const TagCalibration& t : calibration.tags) {
+        have += (have.empty() ? "" : ", ") + std::to_string(t.sensor);
+      }
+      return MakeError(session->path, 0,
+                       fmt::format("sensor {} has no calibration (the calibration file has "
+                                   "sensors {})",
+                                   tag.sensor, have));
+    }
+    if (tc->accel) {
+      Status s = ApplySensor(*tc->accel, session->path, &tag);
+      if (!s.ok()) return s.error();
+    }
+    if (tc->gyro) {
+      Status s = ApplySensor(*tc->gyro, session->path, &tag);
+      if (!s.ok()) return s.error();
+    }
+    ++summary.tags_calibrated;
+    summary.rows += static_cast<int64_t>(tag.size());
+  }
+  return summary;
+}
+
+}  // namespace metro

@@ -1,0 +1,319 @@
+// Recovery of simulated truth, coverage of the reported uncertainties, and bad input.
+#include "metro/calibration/calibrate.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <map>
+
+#include "metro/calibration/simulate.hpp"
+
+namespace metro {
+namespace {
+
+struct Deviation {
+  std::string name;
+  double error;  // estimate - truth
+  double u;      // reported standard uncertainty
+};
+
+// Every estimated constant against the truth, with its reported uncertainty.
+std::vector<Deviation> Deviations(const SensorCalibration& c, const SensorModel& truth) {
+  std::vector<Deviation> out;
+  const SensorModel& m = c.model;
+  for (int a = 0; a < 3; ++a) {
+    const double b_true = truth.has_temperature ? truth.BiasAt(m.t_ref_c)[a] : truth.bias[a];
+    out.push_back({"b" + std::to_string(a), m.bias[a] - b_true, c.bias_u[a]});
+    if (m.kind != ModelKind::kBias) {
+      out.push_back({"k" + std::to_string(a), m.scale[a] - truth.scale[a], c.scale_u[a]});
+    }
+    if (m.has_temperature) {
+      out.push_back(
+          {"b1" + std::to_string(a), m.bias_per_c[a] - truth.bias_per_c[a], c.bias_per_c_u[a]});
+    }
+  }
+  if (m.kind == ModelKind::kFull) {
+    for (size_t i = 0; i < m.misalignment.size(); ++i) {
+      out.push_back({"m" + std::to_string(i), m.misalignment[i] - truth.misalignment[i],
+                     c.misalignment_u[i]});
+    }
+  }
+  return out;
+}
+
+void CheckRecovered(const SensorCalibration& c, const SensorModel& truth, double k) {
+  for (const Deviation& d : Deviations(c, truth)) {
+    INFO(ImuSensorName(truth.sensor) << " " << d.name << " error " << d.error << " u " << d.u);
+    CHECK(d.u > 0);
+    CHECK(std::abs(d.error) <= k * d.u);
+  }
+}
+
+TagCalibration Fit(const SimulatedSession& sim, CalibrationOptions o = {}) {
+  Result<TagCalibration> r = CalibrateTag({&sim.session.tags.front()}, o);
+  if (!r.ok()) FAIL(r.error().ToString());
+  return r.value();
+}
+
+TEST_CASE("Hand-rotation session: full models recovered within the uncertainties",
+          "[calibration]") {
+  SimulationOptions so;
+  so.seed = 11;
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  const TagCalibration t = Fit(sim);
+  REQUIRE(t.accel.has_value());
+  REQUIRE(t.gyro.has_value());
+  CHECK(t.accel->segments.size() == 26);
+  // 4.5 u: a single draw of ~20 normal deviates stays inside with probability > 0.9998.
+  CheckRecovered(*t.accel, sim.truth.accel, 4.5);
+  CheckRecovered(*t.gyro, sim.truth.gyro, 4.5);
+  // The accelerometer fit is at the noise level: a pose mean of ~200 samples of 2.8 mg.
+  CHECK(t.accel->residual_rms < 0.5e-3);
+  // Scale known to better than 0.1 %, misalignment to better than 1 mrad.
+  for (int a = 0; a < 3; ++a) CHECK(t.accel->scale_u[a] / t.accel->model.scale[a] < 1e-3);
+  for (double u : t.gyro->misalignment_u) CHECK(u < 1e-3);
+  CHECK(t.accel->reduced_chi2 == Approx(1.0).margin(0.5));
+  CHECK(t.gyro->reduced_chi2 == Approx(1.0).margin(0.5));
+}
+
+TEST_CASE("Rotation-table session: gyroscope recovered from known rates", "[calibration]") {
+  SimulationOptions so;
+  so.seed = 12;
+  so.poses = 14;
+  so.table_rates_dps = {90.0, -90.0};
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  const TagCalibration t = Fit(sim);
+  REQUIRE(t.gyro.has_value());
+  int tables = 0;
+  for (const Segment& s : t.gyro->segments) tables += s.kind == SegmentKind::kTable ? 1 : 0;
+  CHECK(tables == 28);
+  CheckRecovered(*t.accel, sim.truth.accel, 4.5);
+  CheckRecovered(*t.gyro, sim.truth.gyro, 4.5);
+}
+
+TEST_CASE("Temperature ramp: linear bias terms recovered", "[calibration]") {
+  SimulationOptions so;
+  so.seed = 13;
+  so.temperature = true;
+  so.temp_start_c = 20;
+  so.temp_end_c = 40;
+  // The cube order (faces, corners, edges, then again) mixes orientation and time; a sphere
+  // walked from +z to -z during a ramp would confound b1_z with k_z (refused as degenerate).
+  so.poses = 40;
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  const TagCalibration t = Fit(sim);
+  REQUIRE(t.accel->model.has_temperature);
+  REQUIRE(t.gyro->model.has_temperature);
+  CheckRecovered(*t.accel, sim.truth.accel, 4.5);
+  CheckRecovered(*t.gyro, sim.truth.gyro, 4.5);
+  CalibrationOptions off;
+  off.temperature = TemperatureMode::kOff;
+  CHECK_FALSE(Fit(sim, off).accel->model.has_temperature);
+  SimulationOptions walk = so;
+  walk.pose_set = PoseSet::kSphere;
+  const SimulatedSession confounded = SimulateCalibrationSession(walk).value();
+  Result<TagCalibration> r = CalibrateTag({&confounded.session.tags.front()}, {});
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message,
+             Catch::Contains("degenerate calibration: the data do not determine"));
+}
+
+TEST_CASE("Bias and scale models hold the other constants", "[calibration]") {
+  SimulationOptions so;
+  so.seed = 14;
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  CalibrationOptions o;
+  o.accel_model = ModelKind::kBias;
+  o.gyro_model = ModelKind::kScale;
+  const TagCalibration t = Fit(sim, o);
+  CHECK(t.accel->parameter_names.size() == 3);
+  CHECK(t.accel->scale_u.isZero());
+  CHECK(t.accel->model.scale[0] == Approx(1.0 / 16384));
+  CHECK(t.gyro->parameter_names.size() == 6);
+  for (double m : t.gyro->model.misalignment) CHECK(m == 0.0);
+}
+
+TEST_CASE("Two sessions of one tag are fitted together", "[calibration]") {
+  SimulationOptions a;
+  a.seed = 15;
+  a.poses = 12;
+  const SimulatedSession s1 = SimulateCalibrationSession(a).value();
+  SimulationOptions b = a;
+  b.seed = 16;
+  b.random_truth = false;
+  b.truth = s1.truth;
+  b.poses = 12;
+  b.pose_set = PoseSet::kSphere;
+  const SimulatedSession s2 = SimulateCalibrationSession(b).value();
+  CalibrationOptions o;
+  Result<Calibration> cal = CalibrateSessions({&s1.session, &s2.session}, o);
+  REQUIRE(cal.ok());
+  REQUIRE(cal.value().tags.size() == 1);
+  const TagCalibration& t = cal.value().tags.front();
+  CHECK(t.accel->segments.size() == 24);
+  CHECK(cal.value().inputs.size() == 2);
+  CheckRecovered(*t.accel, s1.truth.accel, 4.5);
+  CheckRecovered(*t.gyro, s1.truth.gyro, 4.5);
+}
+
+// Coverage: over many simulated tags the truth lies within k95 * u (Student t with the fit's
+// degrees of freedom) in about 95 % of the cases, per constant. With 200 tags the binomial
+// standard deviation of a 95 % rate is 1.5 %; pooled over the three axes (600 trials, 0.9 %),
+// the accepted band 0.91 .. 0.985 is about -4.5 and +3.9 standard deviations.
+TEST_CASE("Coverage of the reported uncertainties on 200 simulated tags", "[calibration][slow]") {
+  std::map<std::string, std::pair<int, int>> inside;  // name -> (inside, total)
+  for (uint64_t seed = 1000; seed < 1200; ++seed) {
+    SimulationOptions so;
+    so.seed = seed;
+    so.dwell_s = 2.0;
+    so.move_s = 1.5;
+    const SimulatedSession sim = SimulateCalibrationSession(so).value();
+    const TagCalibration t = Fit(sim);
+    for (const auto& [c, truth] :
+         {std::pair{&*t.accel, &sim.truth.accel}, std::pair{&*t.gyro, &sim.truth.gyro}}) {
+      for (const Deviation& d : Deviations(*c, *truth)) {
+        const std::string key =
+            std::string(ImuSensorName(truth->sensor)) + "." + d.name.substr(0, 1);
+        auto& [in, total] = inside[key];
+        in += std::abs(d.error) <= c->coverage_factor_95 * d.u ? 1 : 0;
+        ++total;
+      }
+    }
+  }
+  for (const auto& [key, counts] : inside) {
+    const double rate = static_cast<double>(counts.first) / counts.second;
+    INFO(key << " coverage " << rate << " of " << counts.second);
+    CHECK(rate >= 0.91);
+    CHECK(rate <= 0.985);
+  }
+}
+
+TEST_CASE("Too few static poses is an error that says what to collect", "[calibration]") {
+  SimulationOptions so;
+  so.poses = 8;
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  Result<TagCalibration> r = CalibrateTag({&sim.session.tags.front()}, {});
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message,
+             Catch::Contains("8 static poses found; the accelerometer 'full' model has 9 "
+                             "parameters and needs at least 12 poses"));
+  CHECK_THAT(r.error().message, Catch::Contains("Collect more static poses"));
+}
+
+TEST_CASE("Poses that do not span the sphere are refused", "[calibration]") {
+  SimulationOptions so;
+  so.poses = 20;
+  so.pose_set = PoseSet::kUpperOnly;
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  Result<TagCalibration> r = CalibrateTag({&sim.session.tags.front()}, {});
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message, Catch::Contains("the static poses do not span the sphere"));
+  CHECK_THAT(r.error().message, Catch::Contains("-Z"));
+  // The bias model only warns.
+  CalibrationOptions o;
+  o.accel_model = ModelKind::kBias;
+  o.fit_gyro = false;
+  Result<TagCalibration> b = CalibrateTag({&sim.session.tags.front()}, o);
+  REQUIRE(b.ok());
+  REQUIRE_FALSE(b.value().warnings.empty());
+  CHECK_THAT(b.value().warnings.front(), Catch::Contains("do not span the sphere"));
+}
+
+TEST_CASE("A degenerate pose set is detected, not returned as numbers", "[calibration]") {
+  SimulationOptions so;
+  so.poses = 18;  // Only the 6 face directions, three times each.
+  so.pose_set = PoseSet::kFaces;
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  CalibrationOptions o;
+  o.fit_gyro = false;
+  Result<TagCalibration> r = CalibrateTag({&sim.session.tags.front()}, o);
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message, Catch::Contains("degenerate calibration"));
+  CHECK_THAT(r.error().message, Catch::Contains("do not determine"));
+  // The scale model is determined by the six faces.
+  o.accel_model = ModelKind::kScale;
+  CHECK(CalibrateTag({&sim.session.tags.front()}, o).ok());
+}
+
+TEST_CASE("Saturated samples are flagged and excluded", "[calibration]") {
+  SimulationOptions so;
+  so.seed = 21;
+  so.move_s = 1.0;  // Up to 340 deg/s: the larger turns exceed the +-250 deg/s range.
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  REQUIRE(sim.saturated_samples > 0);
+  const TagCalibration t = Fit(sim);
+  CHECK(t.saturated_samples == sim.saturated_samples);
+  bool warned = false;
+  for (const std::string& w : t.warnings) {
+    warned = warned || w.find(
+                           "gyroscope samples at the count limits (saturated) were "
+                           "excluded") != std::string::npos;
+  }
+  CHECK(warned);
+  int excluded = 0;
+  for (const Segment& s : t.segments) {
+    excluded += (s.kind == SegmentKind::kRotation && s.note == "saturated gyroscope samples");
+  }
+  CHECK(excluded > 0);
+  CheckRecovered(*t.accel, sim.truth.accel, 4.5);
+}
+
+TEST_CASE("A table column with no runs is a warning", "[calibration]") {
+  SimulationOptions so;
+  so.seed = 22;
+  so.write_table_column = true;
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  const TagCalibration t = Fit(sim);
+  REQUIRE_FALSE(t.warnings.empty());
+  CHECK_THAT(t.warnings.front(), Catch::Contains("table_rate_dps is present but has no runs"));
+}
+
+TEST_CASE("A session without accelerometer columns is an error", "[calibration]") {
+  SimulationOptions so;
+  SimulatedSession sim = SimulateCalibrationSession(so).value();
+  Tag& tag = sim.session.tags.front();
+  tag.quantities.erase(tag.quantities.begin(), tag.quantities.begin() + 3);  // ax ay az.
+  Result<TagCalibration> r = CalibrateTag({&tag}, {});
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message, Catch::Contains("sensor 1: no accelerometer columns"));
+  // An incomplete family is named.
+  SimulatedSession sim2 = SimulateCalibrationSession(so).value();
+  Tag& tag2 = sim2.session.tags.front();
+  tag2.quantities.erase(tag2.quantities.begin() + 1);  // ay_lsb.
+  Result<TagCalibration> r2 = CalibrateTag({&tag2}, {});
+  REQUIRE_FALSE(r2.ok());
+  CHECK_THAT(r2.error().message, Catch::Contains("incomplete ax_lsb ay_lsb az_lsb columns"));
+}
+
+TEST_CASE("No rotations and no table: the gyroscope scale is not fitted", "[calibration]") {
+  // One long static record in 14 poses, the hand rotations cut out.
+  SimulationOptions so;
+  so.seed = 23;
+  so.poses = 14;
+  SimulatedSession sim = SimulateCalibrationSession(so).value();
+  CalibrationOptions o;
+  o.max_rotation_s = 0.1;  // Every rotation is refused as too long.
+  Result<TagCalibration> r = CalibrateTag({&sim.session.tags.front()}, o);
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message,
+             Catch::Contains("0 hand rotations between static poses and 0 table runs found"));
+  o.gyro_model = ModelKind::kBias;
+  Result<TagCalibration> b = CalibrateTag({&sim.session.tags.front()}, o);
+  REQUIRE(b.ok());
+  CheckRecovered(*b.value().accel, sim.truth.accel, 4.5);
+}
+
+TEST_CASE("Calibration options are validated", "[calibration]") {
+  CalibrationOptions o;
+  std::string why;
+  CHECK(o.IsValid(&why));
+  o.gravity_mps2 = 1.0;
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK(why == "gravity_mps2 = 1 is not a gravity on Earth (9.7 .. 9.9 m/s^2)");
+  o = CalibrationOptions();
+  o.gyro_fs_dps = 0;
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK_THAT(why, Catch::Contains("gyro_fs_dps must be > 0"));
+}
+
+}  // namespace
+}  // namespace metro
