@@ -4,12 +4,13 @@
 
 #include <CLI/CLI.hpp>
 
+#include "exit_codes.hpp"
+
 namespace metro::calibrate_app {
 
-// Exit codes (STYLE.md rule 16).
-inline constexpr int kExitOk = 0;
-inline constexpr int kExitFailed = 1;
-inline constexpr int kExitUsage = 2;
+using apps::kExitFailed;
+using apps::kExitOk;
+using apps::kExitUsage;
 
 void AddFitCommand(CLI::App& app, int* exit_code);
 void AddApplyCommand(CLI::App& app, int* exit_code);

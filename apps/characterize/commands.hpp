@@ -4,12 +4,9 @@
 
 #include <CLI/CLI.hpp>
 
-namespace metro::apps {
+#include "exit_codes.hpp"
 
-// Exit codes (STYLE.md rule 16).
-inline constexpr int kExitOk = 0;
-inline constexpr int kExitFailed = 1;
-inline constexpr int kExitUsage = 2;
+namespace metro::apps {
 
 // The main job: `characterize SESSION --type-a ...` (options on the top-level app).
 void AddAnalyzeOptions(CLI::App& app, int* exit_code);
