@@ -6,14 +6,8 @@
 
 #include "commands.hpp"
 #include "metro/core/file.hpp"
-#include "metro/io/session_io.hpp"
-#include "metro/io/tag_registry.hpp"
 #include "metro/noise/allan.hpp"
-#include "metro/report/allan_section.hpp"
-#include "metro/report/type_a_report.hpp"
-#include "metro/stats/session_type_a.hpp"
-#include "metro/uncertainty/budget_report.hpp"
-#include "metro/uncertainty/session_resolver.hpp"
+#include "metro/report/session_analysis.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -43,35 +37,35 @@ struct AnalyzeOptions {
 };
 
 int RunAnalyze(const AnalyzeOptions& o) {
-  LoadOptions load;
+  SessionAnalysisOptions options;
+  LoadOptions& load = options.load;
   load.format = o.format == "csv"        ? SessionFormat::kCsv
                 : o.format == "receiver" ? SessionFormat::kReceiver
                                          : SessionFormat::kAuto;
   load.lenient = o.lenient;
   load.frame_period_s = o.frame_period_s;
   load.threads = o.threads;
-  SessionTypeAOptions options;
-  options.window.skip_samples = o.skip_samples;
-  options.window.skip_seconds = o.skip_seconds;
-  options.window.from_s = o.from_s;
-  options.window.to_s = o.to_s;
-  options.window.settle_auto = o.settle == "auto";
-  options.sensors = o.sensors;
-  options.quantities = o.quantities;
-  options.threads = o.threads;
+  SessionTypeAOptions& type_a = options.type_a;
+  type_a.window.skip_samples = o.skip_samples;
+  type_a.window.skip_seconds = o.skip_seconds;
+  type_a.window.from_s = o.from_s;
+  type_a.window.to_s = o.to_s;
+  type_a.window.settle_auto = o.settle == "auto";
+  type_a.sensors = o.sensors;
+  type_a.quantities = o.quantities;
+  type_a.threads = o.threads;
   std::string why;
-  if (!load.IsValid(&why) || !options.IsValid(&why)) {
+  if (!options.IsValid(&why)) {
     PrintError(MakeError(why));
     return kExitUsage;
   }
-  TagRegistry registry = TagRegistry::Default();
   if (!o.tag_registry.empty()) {
     auto loaded = TagRegistry::Load(o.tag_registry);
     if (!loaded.ok()) {
       PrintError(loaded.error());
       return kExitUsage;
     }
-    registry = loaded.value();
+    options.registry = loaded.value();
   }
   for (const std::string* out : {&o.output, &o.allan_csv}) {
     if (out->empty()) continue;
@@ -80,61 +74,34 @@ int RunAnalyze(const AnalyzeOptions& o) {
       return kExitUsage;
     }
   }
-  auto session = LoadSession(o.session, load);
-  if (!session.ok()) {
-    PrintError(session.error());
-    return kExitUsage;
-  }
-  if (session.value().rejected_rows > 0) {
-    fmt::print(stderr, "note: --lenient skipped {} malformed rows (first at line {})\n",
-               session.value().rejected_rows, session.value().rejected_lines.front());
-  }
-  auto result = EvaluateSessionTypeA(session.value(), options);
-  if (!result.ok()) {
-    PrintError(result.error());
-    return kExitUsage;
-  }
-  auto report = TypeAReportJson(session.value(), result.value(), options, registry);
-  std::string allan_csv;
   if (o.allan) {
-    SessionAllanOptions allan;
     auto taus = ParseTauSpacing(o.taus);
     auto estimator = ParseAllanEstimator(o.estimator);
     if (!taus.ok() || !estimator.ok()) {
       PrintError(!taus.ok() ? taus.error() : estimator.error());
       return kExitUsage;
     }
-    allan.allan.taus = taus.value();
-    allan.allan.estimator = estimator.value();
-    allan.allan.threads = o.threads;
-    allan.quantities = o.quantities;
-    if (Status s = AddAllanToReport(session.value(), result.value(), allan, &report,
-                                    o.allan_csv.empty() ? nullptr : &allan_csv);
-        !s.ok()) {
-      PrintError(s.error());
-      return kExitUsage;
-    }
+    options.allan = true;
+    options.allan_options.allan.taus = taus.value();
+    options.allan_options.allan.estimator = estimator.value();
+    options.allan_options.allan.threads = o.threads;
+    options.allan_options.quantities = o.quantities;
+    options.allan_csv = !o.allan_csv.empty();
   }
-  std::string budget_table;
-  if (!o.budget.empty()) {
-    // Budget inputs without a "session" refer to this session, in the same window.
-    auto budget = LoadBudget(
-        o.budget, MakeSessionQuantityResolver(session.value(), result.value(), options.window));
-    if (!budget.ok()) {
-      PrintError(budget.error());
-      return kExitUsage;
-    }
-    auto evaluation = EvaluateBudget(budget.value());
-    if (!evaluation.ok()) {
-      PrintError(evaluation.error());
-      return kExitFailed;
-    }
-    report["budget"] = BudgetReportJson(evaluation.value());
-    budget_table = BudgetReportTable(evaluation.value());
+  options.budget_path = o.budget;
+
+  const SessionAnalysis analysis = AnalyzeSession(o.session, options);
+  if (!analysis.ok) {
+    PrintError(analysis.error);
+    return analysis.input_error ? kExitUsage : kExitFailed;
   }
-  const std::string json = report.dump(2) + "\n";
+  if (analysis.session.rejected_rows > 0) {
+    fmt::print(stderr, "note: --lenient skipped {} malformed rows (first at line {})\n",
+               analysis.session.rejected_rows, analysis.session.rejected_lines.front());
+  }
+  const std::string json = analysis.report.dump(2) + "\n";
   if (!o.allan_csv.empty()) {
-    if (Status s = WriteFileAtomically(o.allan_csv, allan_csv); !s.ok()) {
+    if (Status s = WriteFileAtomically(o.allan_csv, analysis.allan_csv); !s.ok()) {
       PrintError(s.error());
       return kExitFailed;
     }
@@ -147,8 +114,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
     PrintError(s.error());
     return kExitFailed;
   }
-  const std::string table = TypeAReportTable(report) + budget_table;
-  std::fwrite(table.data(), 1, table.size(), stdout);
+  std::fwrite(analysis.table.data(), 1, analysis.table.size(), stdout);
   return kExitOk;
 }
 

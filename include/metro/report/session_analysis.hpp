@@ -1,0 +1,50 @@
+// One session through the main job: load, Type A (JCGM 100 4.2) per tag and quantity, and
+// optionally the Allan deviation (IEEE Std 952) and an uncertainty budget (JCGM 100/101).
+// `characterize SESSION --type-a` and `characterize batch` both call AnalyzeSession, so a
+// report means the same thing whichever way it was made.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "metro/core/status.hpp"
+#include "metro/io/session.hpp"
+#include "metro/io/session_io.hpp"
+#include "metro/io/tag_registry.hpp"
+#include "metro/report/allan_section.hpp"
+#include "metro/stats/session_type_a.hpp"
+
+namespace metro {
+
+struct SessionAnalysisOptions {
+  LoadOptions load;
+  SessionTypeAOptions type_a;
+  TagRegistry registry = TagRegistry::Default();
+  bool allan = false;
+  SessionAllanOptions allan_options;  // Used when `allan`.
+  bool allan_csv = false;             // Also render the Allan curves as CSV.
+  // Uncertainty budget file (docs/budget-format.md); empty: none. Inputs without a
+  // "session" refer to the analysed session, in the same window.
+  std::string budget_path;
+
+  bool IsValid(std::string* why) const;
+};
+
+// What AnalyzeSession produced. The defaults read as failure.
+struct SessionAnalysis {
+  bool ok = false;
+  // Set when !ok. `input_error` distinguishes bad input or options (exit 2) from a
+  // computation that failed on valid input (exit 1).
+  Error error;
+  bool input_error = true;
+
+  Session session;
+  SessionTypeA type_a;
+  nlohmann::ordered_json report;  // "metro.report/1" (docs/report-schema.md).
+  std::string table;              // TypeAReportTable + the budget table, for people.
+  std::string allan_csv;          // When options.allan_csv.
+};
+
+SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOptions& options);
+
+}  // namespace metro

@@ -1,0 +1,53 @@
+#include "metro/report/session_analysis.hpp"
+
+#include "metro/report/type_a_report.hpp"
+#include "metro/uncertainty/budget.hpp"
+#include "metro/uncertainty/budget_report.hpp"
+#include "metro/uncertainty/session_resolver.hpp"
+
+namespace metro {
+
+bool SessionAnalysisOptions::IsValid(std::string* why) const {
+  return load.IsValid(why) && type_a.IsValid(why);
+}
+
+SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOptions& options) {
+  SessionAnalysis out;
+  auto fail = [&out](Error error, bool input_error) {
+    out.ok = false;
+    out.error = std::move(error);
+    out.input_error = input_error;
+    return std::move(out);
+  };
+  std::string why;
+  if (!options.IsValid(&why)) return fail(MakeError(why), true);
+  auto session = LoadSession(path, options.load);
+  if (!session.ok()) return fail(session.error(), true);
+  out.session = std::move(session).value();
+  auto type_a = EvaluateSessionTypeA(out.session, options.type_a);
+  if (!type_a.ok()) return fail(type_a.error(), true);
+  out.type_a = std::move(type_a).value();
+  out.report = TypeAReportJson(out.session, out.type_a, options.type_a, options.registry);
+  if (options.allan) {
+    if (Status s = AddAllanToReport(out.session, out.type_a, options.allan_options, &out.report,
+                                    options.allan_csv ? &out.allan_csv : nullptr);
+        !s.ok()) {
+      return fail(s.error(), true);
+    }
+  }
+  out.table = TypeAReportTable(out.report);
+  if (!options.budget_path.empty()) {
+    auto budget =
+        LoadBudget(options.budget_path,
+                   MakeSessionQuantityResolver(out.session, out.type_a, options.type_a.window));
+    if (!budget.ok()) return fail(budget.error(), true);
+    auto evaluation = EvaluateBudget(budget.value());
+    if (!evaluation.ok()) return fail(evaluation.error(), false);
+    out.report["budget"] = BudgetReportJson(evaluation.value());
+    out.table += BudgetReportTable(evaluation.value());
+  }
+  out.ok = true;
+  return out;
+}
+
+}  // namespace metro
