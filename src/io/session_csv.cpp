@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -22,6 +23,7 @@
 #include <limits>
 #include <map>
 #include <new>
+#include <optional>
 #include <thread>
 
 #include "io/columns.hpp"
@@ -184,15 +186,54 @@ std::string Printable(const char* b, const char* e) {
   return s;
 }
 
+// Exact powers of ten 10^0 .. 10^15 (all exactly representable in binary64).
+constexpr double kPow10[] = {1e0, 1e1, 1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                             1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
+
+// The commonest number in a session file, a plain decimal "[-]d*[.d*]" with at most 15
+// digits, parsed as m / 10^f with m and 10^f exact in binary64: one correctly rounded
+// division, so the result is the correctly rounded value of the decimal, bit for bit what
+// fast_float returns (this is Clinger's fast path, without its generality). Returns the
+// end of the number, or nullptr for anything else (exponents, long mantissas, '+', inf,
+// nan), which then goes to fast_float.
+inline const char* PlainDecimal(const char* p, const char* e, double* out) {
+  const bool negative = p < e && *p == '-';
+  const char* q = p + (negative ? 1 : 0);
+  uint64_t m = 0;
+  int digits = 0;
+  while (q < e && static_cast<unsigned>(*q - '0') < 10) {
+    m = m * 10 + static_cast<unsigned>(*q++ - '0');
+    ++digits;
+  }
+  int fraction = 0;
+  if (q < e && *q == '.') {
+    ++q;
+    while (q < e && static_cast<unsigned>(*q - '0') < 10) {
+      m = m * 10 + static_cast<unsigned>(*q++ - '0');
+      ++fraction;
+    }
+  }
+  digits += fraction;
+  if (digits == 0 || digits > 15) return nullptr;
+  if (q < e && (*q == 'e' || *q == 'E' || static_cast<unsigned>(*q - '0') < 10)) return nullptr;
+  const double v = static_cast<double>(m) / kPow10[fraction];
+  *out = negative ? -v : v;
+  return q;
+}
+
 // Fast path for one numeric field: a number directly at `p` followed by ',' (or the end
 // of the line for the last field), no spaces, finite. Returns the position after the
 // separator, or nullptr if the field needs the general path.
 inline const char* FastNumber(const char* p, const char* e, bool last, double* out) {
-  const auto r = fast_float::from_chars(p, e, *out);
-  if (r.ec != std::errc() || r.ptr == p) return nullptr;
-  if (last ? r.ptr != e : (r.ptr == e || *r.ptr != ',')) return nullptr;
+  const char* end = PlainDecimal(p, e, out);
+  if (end == nullptr) {
+    const auto r = fast_float::from_chars(p, e, *out);
+    if (r.ec != std::errc() || r.ptr == p) return nullptr;
+    end = r.ptr;
+  }
+  if (last ? end != e : (end == e || *end != ',')) return nullptr;
   if (!std::isfinite(*out)) return nullptr;
-  return r.ptr + 1;
+  return end + 1;
 }
 
 // Parses one data line into the block. Returns false if the row is bad (recorded).
@@ -465,6 +506,278 @@ std::vector<Block> CutBlocks(const MappedFile& file, size_t data_begin, int thre
   return blocks;
 }
 
+// Runs fn(i) for i in [0, n) on up to `threads` threads (the caller is one of them).
+template <typename Fn>
+void ParallelFor(size_t n, int threads, Fn fn) {
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i);
+  };
+  std::vector<std::thread> pool;
+  const int workers = std::min<int>(threads, static_cast<int>(n));
+  for (int k = 1; k < workers; ++k) pool.emplace_back(worker);
+  worker();
+  for (auto& th : pool) th.join();
+}
+
+// ---- The clean-file path -------------------------------------------------------------
+// Most session files have no malformed row, no text column and time increasing per tag.
+// For those, two parallel passes put every number straight into its tag column: pass 1
+// counts each block's rows per sensor (only the sensor field is read), which fixes where
+// every row goes; pass 2 parses each block into those places. Nothing is copied twice and
+// no pass is sequential. Anything unusual (a field the fast parser does not accept, a
+// sensor that is not a plain 1..255 integer, time not increasing) abandons this path, and
+// the general loader below, which explains every error exactly, reads the file instead.
+
+struct CleanBlock {
+  size_t begin = 0;
+  size_t end = 0;
+  uint32_t lines = 0;
+  bool irregular = false;
+  std::array<uint32_t, 256> rows{};   // Rows per sensor (pass 1), then write cursors.
+  std::array<uint32_t, 256> limit{};  // End of the block's rows in each tag column.
+};
+
+inline bool SkipBlankOrComment(const char* lb, const char* te) {
+  const char* first = lb;
+  while (first < te && (*first == ' ' || *first == '\t')) ++first;
+  return first == te || *first == '#';
+}
+
+// The sensor of a data line: the plain integer 1..255 in field `sensor_field`, or 0 if
+// the field is anything else.
+inline int SensorOfLine(const char* lb, const char* te, int sensor_field) {
+  const char* p = lb;
+  for (int f = 0; f < sensor_field; ++f) {
+    p = static_cast<const char*>(std::memchr(p, ',', static_cast<size_t>(te - p)));
+    if (p == nullptr) return 0;
+    ++p;
+  }
+  int v = 0;
+  const char* q = p;
+  while (q < te && q - p < 3 && *q >= '0' && *q <= '9') v = v * 10 + (*q++ - '0');
+  if (q == p || (q < te && *q != ',')) return 0;
+  return v >= 1 && v <= 255 ? v : 0;
+}
+
+void CountBlock(const MappedFile& file, const ColumnPlan& plan, CleanBlock* block) {
+  const char* p = file.data() + block->begin;
+  const char* end = file.data() + block->end;
+  uint32_t line = 0;
+  while (p < end) {
+    const char* nl = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p)));
+    const char* lb = p;
+    const char* te = nl != nullptr ? nl : end;
+    p = nl != nullptr ? nl + 1 : end;
+    ++line;
+    if (te > lb && te[-1] == '\r') --te;
+    if (SkipBlankOrComment(lb, te)) continue;
+    const int sensor = plan.sensor_field < 0 ? 1 : SensorOfLine(lb, te, plan.sensor_field);
+    if (sensor == 0) {
+      block->irregular = true;
+      break;
+    }
+    ++block->rows[static_cast<size_t>(sensor)];
+  }
+  block->lines = line;
+  file.Release(block->begin, block->end);
+}
+
+struct CleanColumns {
+  double* t_s = nullptr;
+  uint32_t* line = nullptr;
+  std::vector<double*> values;  // One per numeric slot.
+};
+
+// End of a line's last field at `q`: "\n", "\r\n" or the end of the block. Returns the
+// start of the next line, or nullptr if `q` is not at the end of the line.
+inline const char* EndOfLine(const char* q, const char* end) {
+  if (q == end) return end;
+  if (*q == '\n') return q + 1;
+  if (*q == '\r' && (q + 1 == end || q[1] == '\n')) return q + 1 == end ? end : q + 2;
+  return nullptr;
+}
+
+// Pass 2 for one block. Numbers are parsed straight from the block (no separate search
+// for the end of each line). Returns false at the first line the fast parser does not
+// accept.
+bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t first_line,
+                     const std::vector<CleanColumns>& columns, CleanBlock* block) {
+  const char* p = file.data() + block->begin;
+  const char* end = file.data() + block->end;
+  const int nf = static_cast<int>(plan.names.size());
+  std::vector<double> row(plan.numeric_fields.size());
+  uint32_t line = 0;
+  bool ok = true;
+  while (p < end && ok) {
+    const uint32_t this_line = line++;
+    if (*p == '#' || *p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
+      // Possibly a blank or comment line; a data line starting with a blank is left to
+      // the general loader.
+      const char* nl = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p)));
+      const char* lb = p;
+      const char* te = nl != nullptr ? nl : end;
+      p = nl != nullptr ? nl + 1 : end;
+      if (te > lb && te[-1] == '\r') --te;
+      if (SkipBlankOrComment(lb, te)) continue;
+      ok = false;
+      break;
+    }
+    const char* q = p;
+    double t = 0.0;
+    int sensor = 1;
+    for (int f = 0; f < nf; ++f) {
+      const bool last = f == nf - 1;
+      double v;
+      const char* number_end;
+      if (plan.info[f].allow_empty && (q == end || *q == ',' || *q == '\n' || *q == '\r')) {
+        v = kNaN;  // An empty field where the format allows one ("unknown").
+        number_end = q;
+      } else {
+        number_end = PlainDecimal(q, end, &v);
+        if (number_end == nullptr) {
+          const auto r = fast_float::from_chars(q, end, v);
+          number_end = r.ec == std::errc() && r.ptr != q && std::isfinite(v) ? r.ptr : nullptr;
+        }
+      }
+      const char* next = nullptr;
+      if (number_end != nullptr) {
+        if (last) {
+          next = EndOfLine(number_end, end);
+        } else if (number_end < end && *number_end == ',') {
+          next = number_end + 1;
+        }
+      }
+      if (next == nullptr) {
+        ok = false;
+        break;
+      }
+      q = next;
+      if (f == plan.time_field) {
+        t = v;
+      } else if (f == plan.sensor_field) {
+        if (!(v >= 1.0 && v <= 255.0 && v == std::floor(v))) ok = false;
+        sensor = ok ? static_cast<int>(v) : 1;
+      } else {
+        row[static_cast<size_t>(plan.numeric_slot[f])] = v;
+      }
+    }
+    if (!ok) break;
+    p = q;
+    uint32_t& cursor = block->rows[static_cast<size_t>(sensor)];
+    const CleanColumns& c = columns[static_cast<size_t>(sensor)];
+    if (cursor >= block->limit[static_cast<size_t>(sensor)]) {
+      ok = false;  // More rows of this sensor than pass 1 counted: the file changed.
+      break;
+    }
+    c.t_s[cursor] = t;
+    c.line[cursor] = static_cast<uint32_t>(first_line + this_line);
+    for (size_t k = 0; k < row.size(); ++k) c.values[k][cursor] = row[k];
+    ++cursor;
+  }
+  file.Release(block->begin, block->end);
+  return ok && block->rows == block->limit;
+}
+
+std::atomic<int64_t> clean_path_loads{0};
+
+// The clean-file path. Returns no value when the file needs the general loader.
+std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& file,
+                                    const HeaderLine& header, const ColumnPlan& plan, int threads) {
+  if (!plan.text_fields.empty()) return std::nullopt;
+  std::vector<CleanBlock> blocks;
+  for (const Block& b : CutBlocks(file, header.data_begin, threads)) {
+    CleanBlock c;
+    c.begin = b.begin;
+    c.end = b.end;
+    blocks.push_back(c);
+  }
+  // Pass 1.
+  ParallelFor(blocks.size(), threads, [&](size_t i) { CountBlock(file, plan, &blocks[i]); });
+  std::array<int64_t, 256> total{};
+  for (CleanBlock& b : blocks) {
+    if (b.irregular) return std::nullopt;
+    for (size_t s = 0; s < 256; ++s) {
+      const uint32_t n = b.rows[s];
+      b.rows[s] = static_cast<uint32_t>(total[s]);  // Now the block's first row index.
+      total[s] += n;
+      b.limit[s] = static_cast<uint32_t>(total[s]);
+    }
+  }
+  if (std::any_of(total.begin(), total.end(), [](int64_t n) { return n > UINT32_MAX; })) {
+    return std::nullopt;
+  }
+  if (std::all_of(total.begin(), total.end(), [](int64_t n) { return n == 0; })) {
+    return std::nullopt;  // Header only: the general loader words the error.
+  }
+  Session session;
+  session.path = path;
+  session.format = SessionFormat::kCsv;
+  session.columns = plan.names;
+  std::vector<CleanColumns> columns(256);
+  const size_t nq = plan.numeric_fields.size();
+  for (int s = 1; s < 256; ++s) {
+    const size_t rows = static_cast<size_t>(total[static_cast<size_t>(s)]);
+    if (rows == 0) continue;
+    Tag tag;
+    tag.sensor = s;
+    auto size_column = [rows](auto& v) {
+      v.reserve(rows);
+      AdviseHugePages(v.data(), rows * sizeof(v[0]));
+      v.resize(rows);
+    };
+    size_column(tag.t_s);
+    size_column(tag.line);
+    for (size_t q = 0; q < nq; ++q) {
+      Quantity quantity;
+      const int f = plan.numeric_fields[q];
+      quantity.name = plan.names[static_cast<size_t>(f)];
+      quantity.unit = plan.info[static_cast<size_t>(f)].unit;
+      quantity.origin = QuantityOrigin::kFile;
+      size_column(quantity.values);
+      tag.quantities.push_back(std::move(quantity));
+    }
+    tag.counts.frames = tag.counts.fresh = static_cast<int64_t>(rows);
+    session.rows += static_cast<int64_t>(rows);
+    session.tags.push_back(std::move(tag));
+  }
+  for (Tag& tag : session.tags) {
+    CleanColumns& c = columns[static_cast<size_t>(tag.sensor)];
+    c.t_s = tag.t_s.data();
+    c.line = tag.line.data();
+    for (Quantity& q : tag.quantities) c.values.push_back(q.values.data());
+  }
+  // Pass 2.
+  std::vector<int64_t> first_line(blocks.size());
+  int64_t line = header.line_number + 1;
+  for (size_t i = 0; i < blocks.size(); ++i) {
+    first_line[i] = line;
+    line += blocks[i].lines;
+  }
+  std::atomic<bool> clean{true};
+  ParallelFor(blocks.size(), threads, [&](size_t i) {
+    if (clean.load(std::memory_order_relaxed) &&
+        !ParseCleanBlock(file, plan, first_line[i], columns, &blocks[i])) {
+      clean.store(false);
+    }
+  });
+  if (!clean.load()) return std::nullopt;
+  // Time must increase strictly per tag; if it does not, the general loader reports (or,
+  // with --lenient, rejects) the rows in file order.
+  ParallelFor(session.tags.size(), threads, [&](size_t i) {
+    const std::vector<double>& t = session.tags[i].t_s;
+    for (size_t k = 1; k < t.size(); ++k) {
+      if (!(t[k] > t[k - 1])) {
+        clean.store(false);
+        return;
+      }
+    }
+  });
+  if (!clean.load()) return std::nullopt;
+  clean_path_loads.fetch_add(1);
+  return session;
+}
+
 struct TagBuilder {
   Tag tag;
   double last_t = -std::numeric_limits<double>::infinity();
@@ -474,7 +787,10 @@ struct TagBuilder {
 
 }  // namespace
 
-Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& options) {
+int64_t CleanPathLoads() { return clean_path_loads.load(); }
+
+Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& options,
+                               bool allow_clean_path) {
   MappedFile file;
   if (Status s = file.Open(path); !s.ok()) return s.error();
   if (file.size() == 0) {
@@ -495,6 +811,9 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   int threads =
       options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
   threads = std::max(1, threads);
+  if (allow_clean_path) {
+    if (auto session = LoadCleanCsv(path, file, header, plan, threads)) return *std::move(session);
+  }
   std::vector<Block> blocks = CutBlocks(file, header.data_begin, threads);
 
   // Parse blocks in parallel. In strict mode, blocks after the first one with an error

@@ -10,7 +10,12 @@
 
 namespace metro::internal {
 
-Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& options);
+// `allow_clean_path` = false forces the general (sequential-distribution) loader; the
+// result is the same either way (tests compare the two).
+Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& options,
+                               bool allow_clean_path = true);
+// How many loads the clean-file path has completed in this process (for tests).
+int64_t CleanPathLoads();
 Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& options);
 
 // Adds a text column to the tag, or, for an unknown column whose every value is a finite

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <boost/math/distributions/students_t.hpp>
 #include <cmath>
+#include <map>
 #include <mutex>
 #include <vector>
 
@@ -48,6 +49,81 @@ void DirectLagSums(const double* d, size_t n, double* c) {
   }
   for (size_t k = 0; k <= kDirectLags; ++k) c[k] = acc[k];
 }
+
+// Forward (r2c) and backward (c2r) plans of one transform size, made once per process
+// and shared by all threads through FFTW's new-array execute functions (thread-safe).
+struct FftPlans {
+  fftw_plan forward = nullptr;
+  fftw_plan backward = nullptr;
+};
+
+const FftPlans& PlansForSize(size_t size) {
+  static std::map<size_t, FftPlans> cache;
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  FftPlans& plans = cache[size];
+  if (plans.forward == nullptr) {
+    double* real = fftw_alloc_real(size);
+    fftw_complex* spectrum = fftw_alloc_complex(size / 2 + 1);
+    plans.forward = fftw_plan_dft_r2c_1d(static_cast<int>(size), real, spectrum, FFTW_ESTIMATE);
+    plans.backward = fftw_plan_dft_c2r_1d(static_cast<int>(size), spectrum, real, FFTW_ESTIMATE);
+    fftw_free(real);
+    fftw_free(spectrum);
+  }
+  return plans;
+}
+
+// Lag sums c_k = sum_i d_i d_{i+k}, k = 0..block, of the centred series d (length n), by
+// block-wise FFT correlation (block a power of two). With x_b = d[b*L, (b+1)*L) and
+// y_b = d[b*L, (b+2)*L), both zero-padded to M = 2L, circular correlation of x_b with y_b
+// has no wrap-around for lags k <= L, so
+//   c_k = sum_b IDFT(conj(X_b) . Y_b)[k] = IDFT(sum_b conj(X_b) . Y_b)[k] / M,
+// and Y_b = X_b + (-1)^j X_{b+1} (x_{b+1} sits L = M/2 samples later). One forward
+// transform of size M per block of L samples plus one backward transform in all: about
+// 2n log2(2L) operations, in cache, instead of 3n log2(1.5n) for the whole-series padding.
+void BlockLagSums(const double* d, size_t n, size_t block, double* c) {
+  const size_t size = 2 * block;
+  const size_t bins = block + 1;  // size / 2 + 1
+  const FftPlans& plans = PlansForSize(size);
+  double* real = fftw_alloc_real(size);
+  fftw_complex* current = fftw_alloc_complex(bins);
+  fftw_complex* next = fftw_alloc_complex(bins);
+  fftw_complex* sum = fftw_alloc_complex(bins);
+  auto transform = [&](size_t b, fftw_complex* out) {
+    const size_t begin = b * block;
+    const size_t count = begin < n ? std::min(block, n - begin) : 0;
+    std::copy(d + begin, d + begin + count, real);
+    std::fill(real + count, real + size, 0.0);
+    fftw_execute_dft_r2c(plans.forward, real, out);
+  };
+  std::fill(&sum[0][0], &sum[0][0] + 2 * bins, 0.0);
+  const size_t blocks = (n + block - 1) / block;
+  transform(0, current);
+  for (size_t b = 0; b < blocks; ++b) {
+    if (b + 1 < blocks) {
+      transform(b + 1, next);
+    } else {
+      std::fill(&next[0][0], &next[0][0] + 2 * bins, 0.0);
+    }
+    for (size_t j = 0; j < bins; ++j) {
+      const double sign = (j & 1) != 0 ? -1.0 : 1.0;
+      const double yr = current[j][0] + sign * next[j][0];
+      const double yi = current[j][1] + sign * next[j][1];
+      // conj(X) * Y
+      sum[j][0] += current[j][0] * yr + current[j][1] * yi;
+      sum[j][1] += current[j][0] * yi - current[j][1] * yr;
+    }
+    std::swap(current, next);
+  }
+  fftw_execute_dft_c2r(plans.backward, sum, real);
+  for (size_t k = 0; k <= block; ++k) c[k] = real[k] / static_cast<double>(size);
+  fftw_free(real);
+  fftw_free(current);
+  fftw_free(next);
+  fftw_free(sum);
+}
+
+// First block length tried for lags beyond the direct ones; each retry is 16 x longer.
+constexpr size_t kFirstLagBlock = 2048;
 
 // Sum of x with four interleaved partial sums (pairwise-like accuracy, vectorisable).
 double Sum4(const double* x, size_t n) {
@@ -169,7 +245,10 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   const double t_q =
       boost::math::quantile(boost::math::complement(t_dist, (1.0 - options.band_confidence) / 2));
 
-  std::vector<double> rho;  // Filled by FFT only if the direct lags do not suffice.
+  // Lags beyond the direct ones come from BlockLagSums, first up to kFirstLagBlock, then
+  // (only if the cut-off is not found there) up to 16 x further, and so on.
+  std::vector<double> lag_sums;
+  size_t lags_known = 0;
   double factor = 1.0;
   double sum_rho2 = 0.0;
   size_t cutoff = max_lag;
@@ -179,11 +258,16 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
     if (k <= kDirectLags) {
       rho_k = direct[k] / c0;
     } else {
-      if (rho.empty()) {
-        rho.resize(max_lag + 1);
-        Autocorrelation(values, n, max_lag, rho.data());
+      if (k > lags_known) {
+        size_t block = lags_known == 0 ? kFirstLagBlock : 16 * lags_known;
+        size_t max_block = 1;
+        while (max_block < max_lag) max_block *= 2;
+        block = std::min(block, max_block);
+        lag_sums.resize(block + 1);
+        BlockLagSums(centred.data(), n, block, lag_sums.data());
+        lags_known = block;
       }
-      rho_k = rho[k];
+      rho_k = lag_sums[k] / lag_sums[0];
     }
     if (k == 1) r.rho1 = rho_k;
     // Bartlett's formula for the standard error of rho_k under "rho_j = 0 for j >= k".

@@ -1,5 +1,6 @@
 #include "metro/stats/type_a.hpp"
 
+#include <boost/math/distributions/students_t.hpp>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
@@ -76,6 +77,56 @@ TEST_CASE("FFT autocorrelation equals the direct sums", "[stats][type_a]") {
     double ck = 0.0;
     for (size_t i = 0; i + k < x.size(); ++i) ck += (x[i] - mean) * (x[i + k] - mean);
     CHECK(rho[k] == Approx(ck / c0).margin(1e-12));
+  }
+}
+
+// Zhang's variance factor computed by definition: direct lag sums, Bartlett band, no FFT.
+double DirectVarianceFactor(const std::vector<double>& x, double confidence, size_t* cutoff) {
+  const double n = static_cast<double>(x.size());
+  double mean = 0.0;
+  for (double v : x) mean += v;
+  mean /= n;
+  double c0 = 0.0;
+  for (double v : x) c0 += (v - mean) * (v - mean);
+  const boost::math::students_t t_dist(n - 1.0);
+  const double t_q = boost::math::quantile(boost::math::complement(t_dist, (1 - confidence) / 2));
+  double factor = 1.0, sum_rho2 = 0.0;
+  for (size_t k = 1; k <= x.size() / 4; ++k) {
+    double ck = 0.0;
+    for (size_t i = 0; i + k < x.size(); ++i) ck += (x[i] - mean) * (x[i + k] - mean);
+    const double rho = ck / c0;
+    if (std::abs(rho) <= t_q * std::sqrt((1.0 + 2.0 * sum_rho2) / n)) {
+      *cutoff = k - 1;
+      return factor;
+    }
+    factor += 2.0 * (1.0 - static_cast<double>(k) / n) * rho;
+    sum_rho2 += rho * rho;
+  }
+  *cutoff = x.size() / 4;
+  return factor;
+}
+
+TEST_CASE("Blocked FFT lags give the n_eff of the direct definition", "[stats][type_a]") {
+  // Slowly decaying AR(1) series: cut-offs below and above the first FFT block (2048 lags),
+  // so both the first block and the longer retry are exercised against direct sums.
+  for (const double phi : {0.99, 0.99999}) {
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> normal;
+    std::vector<double> x(30011);
+    double prev = 0.0;
+    for (double& v : x) v = prev = phi * prev + normal(rng);
+    // phi near 1: add a slow drift so the correlation outlasts the first block.
+    if (phi > 0.999) {
+      for (size_t i = 0; i < x.size(); ++i) x[i] += 0.01 * static_cast<double>(i);
+    }
+    size_t cutoff = 0;
+    const double factor = DirectVarianceFactor(x, 0.95, &cutoff);
+    auto r = EvaluateTypeA(x.data(), x.size(), TypeAOptions{});
+    REQUIRE(r.ok());
+    CHECK(r.value().cutoff_lag == static_cast<int64_t>(cutoff));
+    CHECK(r.value().variance_factor == Approx(factor).epsilon(1e-9));
+    if (phi > 0.999) CHECK(cutoff > 2048);
+    if (phi < 0.999) CHECK((cutoff > 8 && cutoff < 2048));
   }
 }
 
