@@ -18,3 +18,6 @@ here=datasets
 # Raw IMU columns at 100 Hz (accelerometer, gyroscope, temperature), 60 s.
 "$characterize" simulate --seed 3 --sensor 1 --columns imu --rate-hz 100 --duration-s 60 \
   --packet-loss 0   -o "$here/static_imu_100hz.csv"
+# Rotation-table sweep (accuracy, docs/accuracy.md): yaw 0..315 deg by 45, two sweeps.
+"$characterize" simulate --kind table --seed 8 --sensor 2 --table-step-deg 45 --table-end-deg 315 \
+  -o "$here/table_sweep.csv"

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <optional>
 
+#include "accuracy_command.hpp"
 #include "commands.hpp"
 #include "metro/core/file.hpp"
 #include "metro/noise/allan.hpp"
@@ -34,9 +35,14 @@ struct AnalyzeOptions {
   std::string estimator = "oadev";
   std::string allan_csv;
   std::string budget;
+  AccuracyCliOptions accuracy;  // --accuracy and its options (accuracy_command.hpp).
 };
 
 int RunAnalyze(const AnalyzeOptions& o) {
+  if (o.accuracy.enabled) {
+    return RunAccuracy(o.accuracy, {o.session, o.format, o.frame_period_s, o.lenient, o.sensors,
+                                    o.output, o.settle, o.threads, o.type_a});
+  }
   SessionAnalysisOptions options;
   LoadOptions& load = options.load;
   load.format = o.format == "csv"        ? SessionFormat::kCsv
@@ -162,6 +168,7 @@ void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
                  "evaluate this uncertainty budget (docs/budget-format.md); its session inputs "
                  "refer to SESSION")
       ->check(CLI::ExistingFile);
+  AddAccuracyOptions(app, &o->accuracy);
   app.add_option("--threads", o->threads, "worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
   app.callback([&app, o, exit_code] {

@@ -1,0 +1,154 @@
+// characterize SESSION --accuracy ...: accuracy of a tag against a rotation table.
+#include "accuracy_command.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+
+#include "exit_codes.hpp"
+#include "metro/accuracy/accuracy.hpp"
+#include "metro/accuracy/accuracy_report.hpp"
+#include "metro/core/file.hpp"
+#include "metro/io/session_io.hpp"
+#include "output.hpp"
+
+namespace metro::apps {
+namespace {
+
+// --reference-u: a number is a standard uncertainty in deg; anything else a budget file.
+Result<ReferenceUncertainty> ParseReferenceU(const std::string& text) {
+  ReferenceUncertainty r;
+  if (text.empty()) return r;
+  char* end = nullptr;
+  const double u = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() && *end == '\0') {
+    if (!(u >= 0.0) || !std::isfinite(u)) {
+      return MakeError("--reference-u must be a standard uncertainty >= 0 deg, got " + text);
+    }
+    r.u_deg = u;
+    r.source = "--reference-u";
+    return r;
+  }
+  return ReferenceUncertaintyFromBudget(text);
+}
+
+}  // namespace
+
+void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
+  app.add_flag("--accuracy", o->enabled,
+               "accuracy against a rotation table: plateaus, error curve, hysteresis, budget "
+               "(docs/accuracy.md)");
+  app.add_option("--table-axis", o->table_axis, "the tag axis the table turns: yaw, pitch, roll")
+      ->capture_default_str();
+  app.add_option("--reference", o->reference,
+                 "separate reference log (t_s, table_angle_deg), aligned on t_s")
+      ->check(CLI::ExistingFile);
+  app.add_option("--reference-u", o->reference_u,
+                 "the table's standard uncertainty in deg, or a budget file for it "
+                 "(docs/budget-format.md)");
+  app.add_option("--reference-offset-s", o->reference_offset_s,
+                 "reference clock minus tag clock in s (default: estimated)");
+  app.add_option("--error-model", o->model, "auto, linear, harmonic1, harmonic2")
+      ->capture_default_str();
+  app.add_option("--min-dwell-s", o->min_dwell_s, "shortest table rest that is a plateau")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--settle-s", o->settle_s, "seconds dropped after the table stops")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--plateau-tolerance-deg", o->plateau_tolerance_deg,
+                 "largest reference change within a plateau")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
+int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
+  if (in.type_a) {
+    PrintError(MakeError("--accuracy and --type-a are separate analyses: give one"));
+    return kExitUsage;
+  }
+  AccuracyOptions options;
+  auto axis = ParseTableAxis(a.table_axis);
+  if (!axis.ok()) {
+    PrintError(axis.error());
+    return kExitUsage;
+  }
+  options.axis = axis.value();
+  auto model = ParseErrorModel(a.model);
+  if (!model.ok()) {
+    PrintError(model.error());
+    return kExitUsage;
+  }
+  options.model = model.value();
+  if (in.sensors.size() > 1) {
+    PrintError(MakeError("--accuracy evaluates one tag: give at most one --sensor"));
+    return kExitUsage;
+  }
+  options.sensor = in.sensors.empty() ? 0 : in.sensors.front();
+  options.plateaus.min_dwell_s = a.min_dwell_s;
+  options.plateaus.settle_s = a.settle_s;
+  options.plateaus.tolerance_deg = a.plateau_tolerance_deg;
+  options.plateaus.settle_auto = in.settle == "auto";
+  options.alignment.offset_s = a.reference_offset_s;
+  auto reference_u = ParseReferenceU(a.reference_u);
+  if (!reference_u.ok()) {
+    PrintError(reference_u.error());
+    return kExitUsage;
+  }
+  options.reference = reference_u.value();
+  std::string why;
+  if (!options.IsValid(&why)) {
+    PrintError(MakeError(why));
+    return kExitUsage;
+  }
+  if (!in.output.empty()) {
+    if (Status s = CheckOutputPath(in.output, {in.session, a.reference}); !s.ok()) {
+      PrintError(s.error());
+      return kExitUsage;
+    }
+  }
+  LoadOptions load;
+  load.format = in.format == "csv"        ? SessionFormat::kCsv
+                : in.format == "receiver" ? SessionFormat::kReceiver
+                                          : SessionFormat::kAuto;
+  load.lenient = in.lenient;
+  if (in.frame_period_s > 0.0) load.frame_period_s = in.frame_period_s;
+  load.threads = in.threads;
+  auto session = LoadSession(in.session, load);
+  if (!session.ok()) {
+    PrintError(session.error());
+    return kExitUsage;
+  }
+  std::optional<Session> reference;
+  if (!a.reference.empty()) {
+    LoadOptions ref_load;
+    ref_load.format = SessionFormat::kCsv;
+    ref_load.threads = in.threads;
+    auto loaded = LoadSession(a.reference, ref_load);
+    if (!loaded.ok()) {
+      PrintError(loaded.error());
+      return kExitUsage;
+    }
+    reference = std::move(loaded).value();
+  }
+  const Session* ref = reference ? &*reference : nullptr;
+  auto result = EvaluateAccuracy(session.value(), ref, options);
+  if (!result.ok()) {
+    PrintError(result.error());
+    return kExitUsage;
+  }
+  const std::string json = AccuracyReportJson(result.value(), session.value(), ref).dump(2) + "\n";
+  if (in.output.empty()) {
+    std::fwrite(json.data(), 1, json.size(), stdout);
+    return kExitOk;
+  }
+  if (Status s = WriteFileAtomically(in.output, json); !s.ok()) {
+    PrintError(s.error());
+    return kExitFailed;
+  }
+  const std::string table = AccuracyReportTable(result.value());
+  std::fwrite(table.data(), 1, table.size(), stdout);
+  return kExitOk;
+}
+
+}  // namespace metro::apps

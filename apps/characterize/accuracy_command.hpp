@@ -1,0 +1,42 @@
+// characterize SESSION --accuracy [--table-axis yaw|pitch|roll] [--reference LOG]
+//   [--reference-u DEG|BUDGET.json] [-o REPORT.json]: accuracy against a rotation table
+// (docs/accuracy.md). The options live on the top-level app next to the main job's; the
+// analyze path calls RunAccuracy when --accuracy is given.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace metro::apps {
+
+struct AccuracyCliOptions {
+  bool enabled = false;
+  std::string table_axis = "yaw";
+  std::string reference;    // Separate reference log (t_s, table_angle_deg).
+  std::string reference_u;  // Standard uncertainty in deg, or a budget file.
+  std::optional<double> reference_offset_s;
+  std::string model = "auto";
+  double min_dwell_s = 3.0;
+  double settle_s = 2.0;
+  double plateau_tolerance_deg = 0.005;
+};
+
+// What the accuracy run shares with the main job's options.
+struct AccuracyRunInputs {
+  std::string session;
+  std::string format = "auto";
+  double frame_period_s = 0.0;
+  bool lenient = false;
+  std::vector<int> sensors;
+  std::string output;
+  std::string settle = "none";  // "auto": MSER-5 within each plateau too.
+  int threads = 0;
+  bool type_a = false;  // --type-a given as well: a usage error.
+};
+
+void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* options);
+int RunAccuracy(const AccuracyCliOptions& options, const AccuracyRunInputs& inputs);
+
+}  // namespace metro::apps

@@ -1,0 +1,18 @@
+// The accuracy report: "metro.accuracy-report/1" JSON (every key and its unit in
+// docs/accuracy.md) and a readable table for people.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "metro/accuracy/accuracy.hpp"
+#include "metro/io/session.hpp"
+
+namespace metro {
+
+// `session` and `reference` (may be null) name the inputs in the report's `input` section.
+nlohmann::ordered_json AccuracyReportJson(const AccuracyResult& result, const Session& session,
+                                          const Session* reference);
+std::string AccuracyReportTable(const AccuracyResult& result);
+
+}  // namespace metro

@@ -1,0 +1,76 @@
+// Dwell plateaus of a rotation-table reference (docs/accuracy.md, "Segmentation").
+//
+// A plateau is a run of observations whose reference angle stays within tolerance_deg of the
+// run's first value (compared with the first value, not the neighbour, so a slow creep is
+// not taken for rest), lasting at least min_dwell_s with at least min_samples observations.
+// Observations with an unknown reference (NaN) end a run. Everything else is motion and is
+// excluded (counted and reported). Within a plateau the first settle_s seconds after the
+// table stopped are dropped, then, with settle_auto, the tag's own settling found by MSER-5
+// (stats/settle.hpp) on its error series; a plateau with fewer than min_samples left is
+// excluded ("too short after settling").
+//
+// Angle differences are wrap-safe: |WrapDeg180(ref_i - ref_first)|.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "metro/core/status.hpp"
+
+namespace metro {
+
+struct PlateauOptions {
+  double tolerance_deg = 0.005;  // Largest reference change within a plateau.
+  double min_dwell_s = 3.0;      // Shortest rest that counts as a plateau.
+  size_t min_samples = 10;       // Fewest observations left after settling.
+  double settle_s = 2.0;         // Always dropped after the table stops.
+  // Then MSER-5 on the tag's error series. Off by default: on a short plateau of strongly
+  // correlated DMP output without a transient, MSER-5 truncates noise excursions and leaves
+  // an optimistic u of the mean (docs/accuracy.md, "Settling").
+  bool settle_auto = false;
+
+  bool IsValid(std::string* why) const;
+};
+
+struct Plateau {
+  size_t rest_begin = 0;      // First observation at rest (index into the series).
+  size_t begin = 0;           // First observation used (after settling).
+  size_t end = 0;             // One past the last observation used (= end of the rest).
+  size_t settle_samples = 0;  // begin - rest_begin.
+  bool settle_at_limit = false;
+  double t_rest_s = 0.0;       // Time the table stopped (first observation at rest).
+  double t_start_s = 0.0;      // First used observation.
+  double t_end_s = 0.0;        // Last used observation.
+  double reference_deg = 0.0;  // Mean reference angle over the used observations (unwrapped
+                               // about the run's first value, so 359.99/0.01 average to 0).
+  size_t n() const { return end - begin; }
+};
+
+// A stretch of observations left out, with the reason.
+struct ExcludedSpan {
+  size_t begin = 0;
+  size_t end = 0;
+  double t_start_s = 0.0;
+  double t_end_s = 0.0;
+  std::string reason;  // "motion", "rest shorter than min_dwell_s", "reference unknown",
+                       // "too short after settling"
+};
+
+struct Segmentation {
+  std::vector<Plateau> plateaus;
+  std::vector<ExcludedSpan> excluded;
+  size_t motion_samples = 0;  // Observations in excluded spans of every reason.
+  double motion_s = 0.0;      // Their total time span.
+  size_t settle_samples = 0;  // Dropped by settling within plateaus.
+};
+
+// `t_s` strictly increasing; `reference_deg` (NaN = unknown) and `tag_error_deg` (the tag's
+// error against the reference, used for MSER-5) of the same length. Errors: mismatched
+// lengths, invalid options, and no plateau found (the message says what to collect).
+Result<Segmentation> FindPlateaus(const std::vector<double>& t_s,
+                                  const std::vector<double>& reference_deg,
+                                  const std::vector<double>& tag_error_deg,
+                                  const PlateauOptions& options = {});
+
+}  // namespace metro

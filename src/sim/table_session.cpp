@@ -1,0 +1,290 @@
+#include "metro/sim/table_session.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <pcg_random.hpp>
+#include <random>
+
+namespace metro {
+namespace {
+
+constexpr double kRadPerDeg = M_PI / 180.0;
+constexpr size_t kFlushBytes = size_t{8} << 20;
+
+double Quantize(double v, double step) { return step > 0 ? std::round(v / step) * step : v; }
+
+// One plateau of the schedule: the table moves from the previous angle during
+// [t_move_s, t_arrive_s), then dwells until t_leave_s.
+struct Stop {
+  double angle_deg = 0.0;
+  int direction = 0;
+  double t_move_s = 0.0;
+  double t_arrive_s = 0.0;
+  double t_leave_s = 0.0;
+};
+
+std::vector<double> PlateauAngles(const TableSimulationOptions& o) {
+  std::vector<double> up;
+  const int steps = static_cast<int>(std::floor((o.end_deg - o.start_deg) / o.step_deg + 1e-9));
+  for (int i = 0; i <= steps; ++i) up.push_back(o.start_deg + i * o.step_deg);
+  std::vector<double> all;
+  for (int s = 0; s < o.sweeps; ++s) {
+    // Up pass (the start is not repeated after the first sweep's down pass), then down.
+    for (size_t i = (s == 0 ? 0 : 1); i < up.size(); ++i) all.push_back(up[i]);
+    for (size_t i = up.size() - 1; i-- > 0;) all.push_back(up[i]);
+  }
+  return all;
+}
+
+std::vector<Stop> Schedule(const TableSimulationOptions& o) {
+  std::vector<Stop> stops;
+  double t = 0.0;
+  double previous = 0.0;
+  for (double angle : PlateauAngles(o)) {
+    Stop s;
+    s.angle_deg = angle;
+    s.t_move_s = t;
+    if (!stops.empty()) {
+      s.direction = angle > previous ? 1 : -1;
+      t += std::fabs(angle - previous) / o.move_rate_dps;
+    }
+    s.t_arrive_s = t;
+    t += o.dwell_s;
+    s.t_leave_s = t;
+    stops.push_back(s);
+    previous = angle;
+  }
+  return stops;
+}
+
+// Table angle and the direction of its last move at time t_s (`hint` speeds up the search).
+double TableAngle(const std::vector<Stop>& stops, double t_s, size_t* hint, int* direction) {
+  size_t& i = *hint;
+  while (i + 1 < stops.size() && t_s >= stops[i + 1].t_move_s) ++i;
+  if (i + 1 < stops.size() && t_s >= stops[i].t_leave_s) {
+    // Moving towards stop i + 1.
+    const Stop& next = stops[i + 1];
+    *direction = next.direction;
+    const double frac = (t_s - next.t_move_s) / (next.t_arrive_s - next.t_move_s);
+    return stops[i].angle_deg + frac * (next.angle_deg - stops[i].angle_deg);
+  }
+  *direction = stops[i].direction;
+  return stops[i].angle_deg;
+}
+
+}  // namespace
+
+const char* TableAxisName(TableAxis axis) {
+  switch (axis) {
+    case TableAxis::kYaw:
+      return "yaw";
+    case TableAxis::kPitch:
+      return "pitch";
+    case TableAxis::kRoll:
+      return "roll";
+  }
+  return "?";
+}
+
+const char* TableAxisQuantity(TableAxis axis) {
+  switch (axis) {
+    case TableAxis::kYaw:
+      return "yaw_deg";
+    case TableAxis::kPitch:
+      return "pitch_deg";
+    case TableAxis::kRoll:
+      return "roll_deg";
+  }
+  return "?";
+}
+
+Result<TableAxis> ParseTableAxis(const std::string& name) {
+  if (name == "yaw") return TableAxis::kYaw;
+  if (name == "pitch") return TableAxis::kPitch;
+  if (name == "roll") return TableAxis::kRoll;
+  return MakeError("unknown table axis '" + name + "' (expected yaw, pitch or roll)");
+}
+
+bool TableSimulationOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (sensor < 1 || sensor > 255) return fail(fmt::format("sensor {} is not in 1..255", sensor));
+  if (!(step_deg > 0.0) || !std::isfinite(step_deg)) return fail("step_deg must be > 0");
+  if (!(end_deg > start_deg) || !std::isfinite(start_deg) || !std::isfinite(end_deg)) {
+    return fail("end_deg must be greater than start_deg");
+  }
+  if (end_deg - start_deg > 360.0) return fail("the sweep may span at most 360 deg");
+  if (sweeps < 1 || sweeps > 100) return fail("sweeps must be in 1..100");
+  if (!(dwell_s > 0.0) || !std::isfinite(dwell_s)) return fail("dwell_s must be > 0");
+  if (!(move_rate_dps > 0.0) || !std::isfinite(move_rate_dps)) {
+    return fail("move_rate_dps must be > 0");
+  }
+  if (!(rate_hz >= 0.0) || !std::isfinite(rate_hz)) return fail("rate_hz must be >= 0");
+  if (!(frame_period_s > 0.0)) return fail("frame_period_s must be > 0");
+  if (!(noise_std_deg >= 0.0)) return fail("noise_std_deg must be >= 0");
+  if (!(noise_ar1 >= 0.0 && noise_ar1 < 1.0)) return fail("noise_ar1 must be in [0, 1)");
+  if (!(lag_tau_s >= 0.0)) return fail("lag_tau_s must be >= 0");
+  if (!(quantization_deg >= 0.0)) return fail("quantization_deg must be >= 0");
+  if (!(reference_resolution_deg >= 0.0)) return fail("reference_resolution_deg must be >= 0");
+  if (!(packet_loss >= 0.0 && packet_loss < 1.0)) return fail("packet_loss must be in [0, 1)");
+  if (!(reference_rate_hz > 0.0)) return fail("reference_rate_hz must be > 0");
+  if (!std::isfinite(reference_clock_offset_s)) return fail("reference_clock_offset_s");
+  for (double v : {offset_deg, scale_error, cos1_deg, sin1_deg, hysteresis_deg, tilt_deg,
+                   base_deg[0], base_deg[1]}) {
+    if (!std::isfinite(v)) return fail("the error model's parameters must be finite");
+  }
+  if (axis == TableAxis::kPitch) {
+    // Pitch is an Euler angle in [-90, 90]: the sweep must stay clear of gimbal lock.
+    const double margin = std::fabs(offset_deg) + std::fabs(scale_error) * 90.0 +
+                          std::hypot(cos1_deg, sin1_deg) + std::fabs(hysteresis_deg);
+    if (std::fabs(start_deg) + margin > kGimbalLockWarnPitchDeg ||
+        std::fabs(end_deg) + margin > kGimbalLockWarnPitchDeg) {
+      return fail(fmt::format("a pitch table must stay within +-{} deg", kGimbalLockWarnPitchDeg));
+    }
+  } else {
+    const double pitch_base = axis == TableAxis::kYaw ? base_deg[0] : base_deg[1];
+    if (std::fabs(pitch_base) + std::fabs(tilt_deg) > kGimbalLockWarnPitchDeg) {
+      return fail("the tag's pitch must stay clear of +-90 deg");
+    }
+  }
+  return true;
+}
+
+double TableErrorModelDeg(const TableSimulationOptions& o, double theta_deg, int direction) {
+  const double th = theta_deg * kRadPerDeg;
+  return o.offset_deg + o.scale_error * theta_deg + o.cos1_deg * std::cos(th) +
+         o.sin1_deg * std::sin(th) + 0.5 * direction * o.hysteresis_deg;
+}
+
+Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat format,
+                            const TextSink& sink, const TextSink& reference_sink,
+                            TableTruth* truth) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("invalid table simulation options: " + why);
+  if (format != SessionFormat::kCsv && format != SessionFormat::kReceiver) {
+    return MakeError("the simulator writes session.csv or receiver captures");
+  }
+  const bool receiver = format == SessionFormat::kReceiver;
+  if (receiver && !reference_sink) {
+    return MakeError("a receiver capture has no table column: give a reference log to write");
+  }
+  const std::vector<Stop> stops = Schedule(options);
+  const double duration_s = stops.back().t_leave_s;
+  if (truth != nullptr) {
+    truth->plateaus.clear();
+    for (const Stop& s : stops) {
+      truth->plateaus.push_back({s.angle_deg, s.direction,
+                                 TableErrorModelDeg(options, s.angle_deg, s.direction),
+                                 s.t_arrive_s, s.t_leave_s});
+    }
+    truth->duration_s = duration_s;
+  }
+
+  const double dt_s =
+      receiver || options.rate_hz == 0.0 ? options.frame_period_s : 1.0 / options.rate_hz;
+  const double phi = std::pow(options.noise_ar1, dt_s / options.frame_period_s);
+  const double innovation = std::sqrt(1.0 - phi * phi);
+  const double lag_gain = options.lag_tau_s > 0.0 ? 1.0 - std::exp(-dt_s / options.lag_tau_s) : 1.0;
+  const int turned = static_cast<int>(options.axis);
+  int others[2];
+  for (int a = 0, j = 0; a < 3; ++a) {
+    if (a != turned) others[j++] = a;
+  }
+
+  pcg64 rng(options.seed);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform;
+  double noise[3];
+  for (double& e : noise) e = options.noise_std_deg * normal(rng);  // Stationary start.
+
+  std::string out;
+  out.reserve(kFlushBytes + 4096);
+  auto it = std::back_inserter(out);
+  const bool table_column = !receiver && !reference_sink;
+  if (!receiver) {
+    fmt::format_to(it,
+                   "# metro simulate --kind table: {} axis, seed {}, {} sweep(s) {}..{} deg by "
+                   "{} deg, {:.6g} s at {:.6g} Hz\n",
+                   TableAxisName(options.axis), options.seed, options.sweeps, options.start_deg,
+                   options.end_deg, options.step_deg, duration_s, 1.0 / dt_s);
+    out += "t_s,sensor,qw,qx,qy,qz";
+    if (table_column) out += ",table_angle_deg";
+    out += '\n';
+  }
+  bool have_packet = false;
+  ReceiverPayload last_payload{};
+  size_t hint = 0;
+  double lagged = 0.0;
+  const int64_t steps = static_cast<int64_t>(std::floor(duration_s / dt_s)) + 1;
+  for (int64_t k = 0; k < steps; ++k) {
+    const double t = static_cast<double>(k) * dt_s;
+    int direction = 0;
+    const double theta = TableAngle(stops, t, &hint, &direction);
+    const double target = theta + TableErrorModelDeg(options, theta, direction);
+    lagged = k == 0 ? target : lagged + lag_gain * (target - lagged);
+    for (double& e : noise) e = phi * e + innovation * options.noise_std_deg * normal(rng);
+    double angles[3];
+    angles[turned] = lagged + noise[turned];
+    const double th = theta * kRadPerDeg;
+    angles[others[0]] = options.base_deg[0] + options.tilt_deg * std::sin(th) + noise[others[0]];
+    angles[others[1]] = options.base_deg[1] + options.tilt_deg * std::cos(th) + noise[others[1]];
+    for (double& a : angles) a = Quantize(WrapDeg180(a), options.quantization_deg);
+    const bool lost = uniform(rng) < options.packet_loss;
+    const Quaternion q = QuaternionFromEuler({angles[0], angles[1], angles[2]});
+    if (receiver) {
+      if (lost) {
+        out += FormatReceiverLine(
+            options.sensor, have_packet ? NewDataFlag::kStale : NewDataFlag::kNever, last_payload);
+      } else {
+        ReceiverPayload p{};
+        EncodeQuaternion(q, &p);
+        p[23] = static_cast<uint8_t>(k & 0xFF);
+        p[24] = static_cast<uint8_t>((k >> 8) & 0xFF);
+        last_payload = p;
+        have_packet = true;
+        out += FormatReceiverLine(options.sensor, NewDataFlag::kFresh, p);
+      }
+      out += '\n';
+    } else if (!lost) {
+      fmt::format_to(it, "{:.6f},{},{:.8f},{:.8f},{:.8f},{:.8f}", t, options.sensor, q.w, q.x, q.y,
+                     q.z);
+      if (table_column) {
+        fmt::format_to(it, ",{:.6f}", Quantize(theta, options.reference_resolution_deg));
+      }
+      out += '\n';
+    }
+    if (out.size() >= kFlushBytes) {
+      if (Status st = sink(out); !st.ok()) return st;
+      out.clear();
+    }
+  }
+  if (!out.empty()) {
+    if (Status st = sink(out); !st.ok()) return st;
+  }
+  if (!reference_sink) return Status::Ok();
+
+  std::string ref;
+  auto rit = std::back_inserter(ref);
+  fmt::format_to(rit,
+                 "# metro simulate --kind table: reference log, {:.6g} Hz, clock offset {} s\n"
+                 "t_s,table_angle_deg\n",
+                 options.reference_rate_hz, options.reference_clock_offset_s);
+  hint = 0;
+  const int64_t ref_steps =
+      static_cast<int64_t>(std::floor(duration_s * options.reference_rate_hz)) + 1;
+  for (int64_t k = 0; k < ref_steps; ++k) {
+    const double t = static_cast<double>(k) / options.reference_rate_hz;
+    int direction = 0;
+    const double theta = TableAngle(stops, t, &hint, &direction);
+    fmt::format_to(rit, "{:.6f},{:.6f}\n", t + options.reference_clock_offset_s,
+                   Quantize(theta, options.reference_resolution_deg));
+  }
+  return reference_sink(ref);
+}
+
+}  // namespace metro

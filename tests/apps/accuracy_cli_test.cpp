@@ -1,0 +1,96 @@
+// End-to-end tests of characterize SESSION --accuracy and simulate --kind table.
+#include <sys/wait.h>
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace metro {
+namespace {
+
+struct Run {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+Run Characterize(const std::string& args) {
+  static int counter = 0;
+  const std::string err_path = "metro_acc_cli_err_" + std::to_string(++counter) + ".txt";
+  const std::string cmd = std::string(METRO_CHARACTERIZE_EXE) + " " + args + " 2>" + err_path;
+  Run r{};
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  char buffer[4096];
+  size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream err(err_path);
+  std::stringstream ss;
+  ss << err.rdbuf();
+  r.err = ss.str();
+  std::remove(err_path.c_str());
+  return r;
+}
+
+const std::string kSweep = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
+
+TEST_CASE("characterize --accuracy on the bundled table sweep", "[apps][accuracy]") {
+  const std::string out = "metro_acc_report.json";
+  std::remove(out.c_str());
+  Run r = Characterize(kSweep + " --accuracy --reference-u 0.01 -o " + out);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.out.find("hysteresis (up - down)") != std::string::npos);
+  std::ifstream in(out);
+  const auto j = nlohmann::json::parse(in);
+  CHECK(j["schema"] == "metro.accuracy-report/1");
+  CHECK(j["points"].size() == 29);
+  // datasets/regenerate.sh: hysteresis 0.15 deg and tilt 0.4 deg by default.
+  CHECK(j["hysteresis"]["mean_deg"].get<double>() == Approx(0.15).margin(0.03));
+  CHECK(j["options"]["reference_u_deg"] == 0.01);
+  std::remove(out.c_str());
+  // Without -o: JSON on stdout.
+  Run stdout_run = Characterize(kSweep + " --accuracy --table-axis yaw");
+  REQUIRE(stdout_run.exit_code == 0);
+  CHECK(nlohmann::json::parse(stdout_run.out)["input"]["table_axis"] == "yaw");
+}
+
+TEST_CASE("characterize --accuracy with a receiver capture and a reference log",
+          "[apps][accuracy]") {
+  const std::string cap = "metro_acc_cap.txt", ref = "metro_acc_ref.csv";
+  Run sim = Characterize("simulate --kind table --sweeps 1 --format receiver --reference-output " +
+                         ref + " --reference-offset-s 1 -o " + cap);
+  REQUIRE(sim.exit_code == 0);
+  Run r = Characterize(cap + " --accuracy --reference " + ref);
+  REQUIRE(r.exit_code == 0);
+  const auto j = nlohmann::json::parse(r.out);
+  const auto& a = j["input"]["reference"]["alignment"];
+  CHECK(a["estimated"] == true);
+  CHECK(a["offset_s"].get<double>() == Approx(1.0).margin(0.4));
+  CHECK(a.contains("residual_std_deg"));
+  std::remove(cap.c_str());
+  std::remove(ref.c_str());
+}
+
+TEST_CASE("characterize --accuracy bad input exits 2 with the message", "[apps][accuracy]") {
+  Run axis = Characterize(kSweep + " --accuracy --table-axis heading");
+  CHECK(axis.exit_code == 2);
+  CHECK(axis.err == "error: unknown table axis 'heading' (expected yaw, pitch or roll)\n");
+  Run both = Characterize(kSweep + " --accuracy --type-a");
+  CHECK(both.exit_code == 2);
+  CHECK(both.err.find("--accuracy and --type-a are separate analyses") != std::string::npos);
+  Run few = Characterize(kSweep + " --accuracy --min-dwell-s 100");
+  CHECK(few.exit_code == 2);
+  CHECK(few.err.find("no plateau found") != std::string::npos);
+  Run no_table =
+      Characterize(std::string(METRO_SOURCE_DIR) + "/datasets/static_chest.csv --accuracy");
+  CHECK(no_table.exit_code == 2);
+  CHECK(no_table.err.find("has no table_angle_deg column") != std::string::npos);
+}
+
+}  // namespace
+}  // namespace metro
