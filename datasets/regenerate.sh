@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates the bundled sample sessions from the simulator (docs/simulator.md).
-# Usage: datasets/regenerate.sh [path/to/characterize]
+# Usage: datasets/regenerate.sh [path/to/characterize] [path/to/calibrate]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 characterize="${1:-build/apps/characterize/characterize}"
@@ -18,6 +18,13 @@ here=datasets
 # Raw IMU columns at 100 Hz (accelerometer, gyroscope, temperature), 60 s.
 "$characterize" simulate --seed 3 --sensor 1 --columns imu --rate-hz 100 --duration-s 60 \
   --packet-loss 0   -o "$here/static_imu_100hz.csv"
+# Golden calibration blob of sensor 2 (docs/calibration-blob.md): the C++ writer's output that the
+# firmware host tests parse with the tag's C code. calibration_sensor2.json was fitted once by
+# `calibrate fit` on a simulated session (datasets/golden/SOURCE.md) and is kept as is.
+calibrate="${2:-build/apps/calibrate/calibrate}"
+"$calibrate" blob "$here/golden/calibration_sensor2.json" --sensor 2 \
+  --device-id 9ABCDEF012345678 --seq 3 \
+  -o "$here/golden/tag_sensor2.bin" --hex "$here/golden/tag_sensor2.hex"
 # Rotation-table sweep (accuracy, docs/accuracy.md): yaw 0..315 deg by 45, two sweeps.
 "$characterize" simulate --kind table --seed 8 --sensor 2 --table-step-deg 45 --table-end-deg 315 \
   -o "$here/table_sweep.csv"

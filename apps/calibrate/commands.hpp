@@ -15,5 +15,8 @@ using apps::kExitUsage;
 void AddFitCommand(CLI::App& app, int* exit_code);
 void AddApplyCommand(CLI::App& app, int* exit_code);
 void AddReportCommand(CLI::App& app, int* exit_code);
+void AddBlobCommand(CLI::App& app, int* exit_code);
+void AddInspectCommand(CLI::App& app, int* exit_code);
+void AddPushCommand(CLI::App& app, int* exit_code);
 
 }  // namespace metro::calibrate_app

@@ -12,6 +12,9 @@ int main(int argc, char** argv) {
   app_ns::AddFitCommand(app, &exit_code);
   app_ns::AddApplyCommand(app, &exit_code);
   app_ns::AddReportCommand(app, &exit_code);
+  app_ns::AddBlobCommand(app, &exit_code);
+  app_ns::AddInspectCommand(app, &exit_code);
+  app_ns::AddPushCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

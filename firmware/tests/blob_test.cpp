@@ -250,7 +250,7 @@ TEST_CASE("Bytes after the last section that cannot hold a section are rejected"
   CHECK(Validate(grown) == METRO_FW_E_SECTION);
 }
 
-TEST_CASE("A newer section major sends that sensor to defaults, the other stays",
+TEST_CASE("A newer section major sends that sensor to defaults and the other stays",
           "[fw][blob][walker]") {
   Blob b = StandardBlob(3);
   b.sections[1].version = 0x0200;

@@ -147,7 +147,7 @@ class Link {
 
 }  // namespace
 
-TEST_CASE("GET_INFO reports the format, device id and active slot", "[fw][push]") {
+TEST_CASE("GET_INFO reports the format and device id and active slot", "[fw][push]") {
   Link link;
   link.flash.Program(METRO_FW_SLOT_B_ADDR, Build(StandardBlob(12)));
   const auto r = link.Call(METRO_FW_OP_GET_INFO, {});

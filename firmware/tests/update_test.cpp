@@ -35,7 +35,7 @@ int OpsOfCleanUpdate() {
 
 }  // namespace
 
-TEST_CASE("An update into empty flash writes slot A, the next one slot B", "[fw][update]") {
+TEST_CASE("An update into empty flash writes slot A and the next one slot B", "[fw][update]") {
   FakeFlash flash;
   int slot = -5;
   REQUIRE(Update(flash, Build(StandardBlob(1)), &slot) == METRO_FW_OK);

@@ -113,7 +113,7 @@ TEST_CASE("The golden blob written by C++ is loaded by the firmware with the sam
   CHECK(cal.accel.t_valid_max_c == 45.0f);
 }
 
-TEST_CASE("Decode returns what was written, rounded to binary32", "[blob]") {
+TEST_CASE("Decode returns what was written and rounded to binary32", "[blob]") {
   const auto c = Contents();
   auto written = WriteBlob(c);
   REQUIRE(written.ok());

@@ -120,7 +120,7 @@ TEST_CASE("Inspect reports a sensor the firmware would not use", "[blob][inspect
   CHECK(r.value().slots[0].sensors[1].status_name == "NONFINITE");
 }
 
-TEST_CASE("Inspect refuses unreadable files, bad HEX and bad options", "[blob][inspect]") {
+TEST_CASE("Inspect refuses unreadable files and bad HEX and bad options", "[blob][inspect]") {
   auto missing = InspectFile("/nonexistent/tag.bin", InspectOptions{});
   REQUIRE(!missing.ok());
   CHECK_THAT(missing.error().ToString(), Catch::Contains("/nonexistent/tag.bin"));

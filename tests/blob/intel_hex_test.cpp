@@ -32,7 +32,8 @@ std::filesystem::path TempDir(const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("HEX records: 04 first, 16-byte 00 records with checksums, 01 last", "[blob][hex]") {
+TEST_CASE("HEX records: 04 first and 16-byte 00 records with checksums and 01 last",
+          "[blob][hex]") {
   // The published example record ":10010000214601360121470136007EFE09D2190140" (checksum 0x40).
   std::vector<uint8_t> example = {0x21, 0x46, 0x01, 0x36, 0x01, 0x21, 0x47, 0x01,
                                   0x36, 0x00, 0x7E, 0xFE, 0x09, 0xD2, 0x19, 0x01};

@@ -1,0 +1,139 @@
+// calibrate blob calibration.json --sensor N --device-id HEX16 [--seq N] -o tag.bin
+//   [--hex tag.hex] [--slot-address ADDR] [--dlpf-cfg N]
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "metro/blob/from_calibration.hpp"
+#include "metro/blob/intel_hex.hpp"
+#include "metro/calibration/calibration_io.hpp"
+#include "metro/core/file.hpp"
+
+namespace metro::calibrate_app {
+namespace {
+
+struct BlobOptions {
+  std::string calibration;
+  int sensor = 0;
+  std::string device_id;
+  uint32_t seq = 1;
+  std::string output;
+  std::string hex;
+  std::string slot_address = "0x3B000";
+  int dlpf_cfg = 3;
+};
+
+// "0x3B000" or "241664" -> address; a page-aligned slot A whose slot B (the next page) lies
+// in the nRF51's 256 KiB of flash.
+Result<uint32_t> ParseSlotAddress(const std::string& text) {
+  size_t used = 0;
+  unsigned long long v = 0;
+  try {
+    v = std::stoull(text, &used, 0);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || text.empty() || v % blob::kPageSize != 0 ||
+      v + 2 * blob::kPageSize > 0x40000) {
+    return MakeError(fmt::format(
+        "--slot-address '{}': expected a multiple of 0x400 below 0x3F800 (slot B is the next "
+        "page)",
+        text));
+  }
+  return static_cast<uint32_t>(v);
+}
+
+int RunBlob(const BlobOptions& b) {
+  Result<uint64_t> id = blob::ParseDeviceId(b.device_id);
+  if (!id.ok()) {
+    fmt::print(stderr, "error: --device-id: {}\n", id.error().message);
+    return kExitUsage;
+  }
+  Result<uint32_t> slot_a = ParseSlotAddress(b.slot_address);
+  if (!slot_a.ok()) {
+    fmt::print(stderr, "error: {}\n", slot_a.error().message);
+    return kExitUsage;
+  }
+  for (const std::string& out : {b.output, b.hex}) {
+    if (!out.empty() && IsSameFile(b.calibration, out)) {
+      fmt::print(stderr, "error: the output {} is the input\n", out);
+      return kExitUsage;
+    }
+  }
+  if (!b.hex.empty() && IsSameFile(b.output, b.hex)) {
+    fmt::print(stderr, "error: -o and --hex name the same file\n");
+    return kExitUsage;
+  }
+  Result<Calibration> cal = LoadCalibration(b.calibration);
+  if (!cal.ok()) {
+    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    return kExitUsage;
+  }
+  blob::BlobFromCalibrationOptions o;
+  o.sensor = b.sensor;
+  o.device_id = id.value();
+  o.seq = b.seq;
+  o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
+  Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal.value(), o);
+  if (!contents.ok()) {
+    fmt::print(stderr, "error: {}: {}\n", b.calibration, contents.error().ToString());
+    return kExitUsage;
+  }
+  Result<std::vector<uint8_t>> bytes = blob::WriteBlob(contents.value());
+  if (!bytes.ok()) {
+    fmt::print(stderr, "error: {}: {}\n", b.calibration, bytes.error().ToString());
+    return kExitUsage;
+  }
+  const std::vector<uint8_t>& v = bytes.value();
+  if (Status w = WriteFileAtomically(
+          b.output, std::string_view(reinterpret_cast<const char*>(v.data()), v.size()));
+      !w.ok()) {
+    fmt::print(stderr, "error: {}\n", w.error().ToString());
+    return kExitFailed;
+  }
+  const uint32_t crc = blob::Crc32(v.data(), v.size() - 4);
+  fmt::print(stderr, "wrote {}: {} bytes, sensor {}, device {}, seq {}, CRC-32 0x{:08X}\n",
+             b.output, v.size(), b.sensor, blob::FormatDeviceId(id.value()), b.seq, crc);
+  if (!b.hex.empty()) {
+    Result<std::string> hex = blob::WriteIntelHex(
+        blob::FactoryImage(v, slot_a.value(), slot_a.value() + blob::kPageSize));
+    METRO_CHECK(hex.ok());  // two sorted, disjoint pages
+    if (Status w = WriteFileAtomically(b.hex, hex.value()); !w.ok()) {
+      fmt::print(stderr, "error: {}\n", w.error().ToString());
+      return kExitFailed;
+    }
+    fmt::print(stderr, "wrote {}: blob at 0x{:05X} (slot A), tombstone at 0x{:05X} (slot B)\n",
+               b.hex, slot_a.value(), slot_a.value() + blob::kPageSize);
+    fmt::print(stderr, "program with: {}\n", blob::NrfjprogCommand(b.hex));
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddBlobCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<BlobOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "blob",
+      "write a tag's calibration blob (docs/calibration-blob.md) and, with --hex, the Intel "
+      "HEX for nrfjprog");
+  sub->add_option("calibration", o->calibration, "calibration.json")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("--sensor", o->sensor, "the tag in calibration.json")->required();
+  sub->add_option("--device-id", o->device_id,
+                  "the tag's FICR DEVICEID, 16 hex digits: DEVICEID[1] then DEVICEID[0]")
+      ->required();
+  sub->add_option("--seq", o->seq, "blob sequence number, 1..4294967294 (default 1)")
+      ->check(CLI::Range(1u, 0xFFFFFFFEu));
+  sub->add_option("-o,--output", o->output, "tag.bin to write")->required();
+  sub->add_option("--hex", o->hex, "also write this Intel HEX: blob at slot A, tombstone at B");
+  sub->add_option("--slot-address", o->slot_address,
+                  "slot A address in the HEX (default 0x3B000); slot B is the next page");
+  sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")
+      ->check(CLI::Range(0, 6));
+  sub->callback([o, exit_code] { *exit_code = RunBlob(*o); });
+}
+
+}  // namespace metro::calibrate_app

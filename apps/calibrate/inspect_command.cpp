@@ -1,0 +1,75 @@
+// calibrate inspect tag.bin|tag.hex [--device-id HEX16] [--slot-address ADDR] [--json]
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "metro/blob/inspect.hpp"
+
+namespace metro::calibrate_app {
+namespace {
+
+struct InspectCliOptions {
+  std::string input;
+  std::string device_id;
+  std::string slot_address = "0x3B000";
+  bool json = false;
+};
+
+// Exit codes: 0 a valid calibration (the .bin validates; in a .hex a slot is active), 1 none,
+// 2 unreadable file, HEX syntax or bad options.
+int RunInspect(const InspectCliOptions& c) {
+  blob::InspectOptions o;
+  if (!c.device_id.empty()) {
+    Result<uint64_t> id = blob::ParseDeviceId(c.device_id);
+    if (!id.ok()) {
+      fmt::print(stderr, "error: --device-id: {}\n", id.error().message);
+      return kExitUsage;
+    }
+    o.device_id = id.value();
+  }
+  size_t used = 0;
+  unsigned long long a = 0;
+  try {
+    a = std::stoull(c.slot_address, &used, 0);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != c.slot_address.size() || a + 2 * blob::kPageSize > 0x40000) {
+    fmt::print(stderr, "error: --slot-address '{}': expected an address below 0x3F800\n",
+               c.slot_address);
+    return kExitUsage;
+  }
+  o.slot_a_address = static_cast<uint32_t>(a);
+  o.slot_b_address = static_cast<uint32_t>(a) + blob::kPageSize;
+  Result<blob::InspectReport> r = blob::InspectFile(c.input, o);
+  if (!r.ok()) {
+    fmt::print(stderr, "error: {}\n", r.error().ToString());
+    return kExitUsage;
+  }
+  if (c.json) {
+    fmt::print("{}\n", blob::InspectToJson(r.value()).dump(2));
+  } else {
+    fmt::print("{}", blob::FormatInspect(r.value()));
+  }
+  return r.value().ok() ? kExitOk : kExitFailed;
+}
+
+}  // namespace
+
+void AddInspectCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<InspectCliOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "inspect",
+      "decode and validate a calibration blob (.bin) or programmer image (.hex) with the tag "
+      "firmware's rules; exit 0 valid, 1 no valid calibration, 2 unreadable");
+  sub->add_option("file", o->input, "tag.bin or tag.hex")->required()->check(CLI::ExistingFile);
+  sub->add_option("--device-id", o->device_id,
+                  "check against this tag (16 hex digits); default: each blob's own id");
+  sub->add_option("--slot-address", o->slot_address,
+                  "slot A address in a .hex (default 0x3B000); slot B is the next page");
+  sub->add_flag("--json", o->json, "print JSON instead of text");
+  sub->callback([o, exit_code] { *exit_code = RunInspect(*o); });
+}
+
+}  // namespace metro::calibrate_app

@@ -1,0 +1,127 @@
+// calibrate push --port /dev/ttyX calibration.json --sensor N [--device-id HEX16] [--seq N]
+//   [--timeout-ms MS] [--retries N]
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "metro/blob/intel_hex.hpp"
+#include "metro/blob/push_client.hpp"
+#include "metro/blob/serial_port.hpp"
+#include "metro/calibration/calibration_io.hpp"
+
+namespace metro::calibrate_app {
+namespace {
+
+struct PushCliOptions {
+  std::string port;
+  std::string calibration;
+  int sensor = 0;
+  std::string device_id;
+  uint32_t seq = 0;
+  int dlpf_cfg = 3;
+  int timeout_ms = 1000;
+  int retries = 5;
+};
+
+// "[#########...........]  320/540 B write" on one line of a terminal.
+void DrawProgress(const char* phase, size_t done, size_t total) {
+  constexpr int kWidth = 30;
+  const int filled = total == 0 ? kWidth : static_cast<int>(kWidth * done / total);
+  fmt::print(stderr, "\r[{:#<{}}{:.<{}}] {:4}/{} B {:6}", "", filled, "", kWidth - filled, done,
+             total, phase);
+  std::fflush(stderr);
+}
+
+int RunPush(const PushCliOptions& c) {
+  std::optional<uint64_t> expect;
+  if (!c.device_id.empty()) {
+    Result<uint64_t> id = blob::ParseDeviceId(c.device_id);
+    if (!id.ok()) {
+      fmt::print(stderr, "error: --device-id: {}\n", id.error().message);
+      return kExitUsage;
+    }
+    expect = id.value();
+  }
+  Result<Calibration> cal = LoadCalibration(c.calibration);
+  if (!cal.ok()) {
+    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    return kExitUsage;
+  }
+  if (cal.value().FindTag(c.sensor) == nullptr) {
+    fmt::print(stderr, "error: {}: calibration has no sensor {}\n", c.calibration, c.sensor);
+    return kExitUsage;
+  }
+  Result<std::unique_ptr<blob::SerialPort>> port = blob::SerialPort::Open(c.port);
+  if (!port.ok()) {
+    fmt::print(stderr, "error: {}\n", port.error().ToString());
+    return kExitFailed;
+  }
+  blob::BlobFromCalibrationOptions bo;
+  bo.sensor = c.sensor;
+  bo.seq = c.seq;
+  bo.dlpf_cfg = static_cast<uint8_t>(c.dlpf_cfg);
+  blob::PushOptions po;
+  po.timeout_ms = c.timeout_ms;
+  po.execute_timeout_ms = 3 * c.timeout_ms;  // CAL_EXECUTE erases and programs a page
+  po.max_retries = c.retries;
+  const bool tty = ::isatty(STDERR_FILENO) != 0;
+  blob::PushProgress progress;
+  if (tty) progress = DrawProgress;
+  blob::PushSummary s =
+      blob::PushCalibration(port.value().get(), cal.value(), bo, expect, po, progress);
+  if (tty) fmt::print(stderr, "\n");
+  if (s.tag_answered) {
+    fmt::print(stderr, "tag {}: format {}.{}, active slot {}, seq {}\n",
+               blob::FormatDeviceId(s.tag.device_id), s.tag.fmt_major, s.tag.fmt_minor,
+               s.tag.active_slot < 0 ? "none" : (s.tag.active_slot == 0 ? "A" : "B"),
+               s.tag.active_seq);
+  }
+  fmt::print(stderr, "link: {} requests, {} frames sent, {} retries, {} NAKs, {} timeouts\n",
+             s.stats.requests, s.stats.frames_sent, s.stats.retries, s.stats.naks,
+             s.stats.timeouts);
+  if (s.ok) {
+    fmt::print(stderr, "OK: {}\n", s.message);
+    return kExitOk;
+  }
+  fmt::print(stderr, "FAILED: {}\n", s.message);
+  if (s.tag_answered && !s.input_error) {
+    // The wired path: the same constants through the programmer, other pages kept.
+    fmt::print(stderr,
+               "to program over SWD instead: calibrate blob {} --sensor {} --device-id {} "
+               "--seq {} -o tag.bin --hex tag.hex && {}\n",
+               c.calibration, c.sensor, blob::FormatDeviceId(s.tag.device_id),
+               s.seq != 0 ? s.seq : s.tag.active_seq + 1, blob::NrfjprogCommand("tag.hex"));
+  }
+  return s.input_error ? kExitUsage : kExitFailed;
+}
+
+}  // namespace
+
+void AddPushCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<PushCliOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "push",
+      "send a tag's calibration over the central's serial link (230400 8N1) with the push "
+      "protocol, then read it back");
+  sub->add_option("--port", o->port, "serial device of the BLE central, e.g. /dev/ttyACM0")
+      ->required();
+  sub->add_option("calibration", o->calibration, "calibration.json")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("--sensor", o->sensor, "the tag in calibration.json")->required();
+  sub->add_option("--device-id", o->device_id,
+                  "refuse a tag with another FICR DEVICEID (16 hex digits)");
+  sub->add_option("--seq", o->seq, "blob seq (default: the tag's active seq + 1)")
+      ->check(CLI::Range(1u, 0xFFFFFFFEu));
+  sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")
+      ->check(CLI::Range(0, 6));
+  sub->add_option("--timeout-ms", o->timeout_ms, "wait for each answer (default 1000)")
+      ->check(CLI::Range(1, 60000));
+  sub->add_option("--retries", o->retries, "resends of one request (default 5)")
+      ->check(CLI::Range(0, 100));
+  sub->callback([o, exit_code] { *exit_code = RunPush(*o); });
+}
+
+}  // namespace metro::calibrate_app

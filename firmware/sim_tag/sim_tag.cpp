@@ -1,0 +1,251 @@
+// metro_sim_tag: the tag's push receiver and power-fail-safe update (firmware/src, the C code
+// the tag runs) on a RAM flash, talking on a pseudo-terminal as the BLE central's serial port
+// would, so `calibrate push --port <pty>` is tested end to end over a real tty.
+//
+//   metro_sim_tag [--device-id HEX16] [--flash FILE] [--drop-frame K] [--dup-frame K]
+//                 [--corrupt-frame K] [--drop-response K] [--hangup-after N]
+//                 [--flash-write-error N]
+//
+// Prints "pty: /dev/pts/N" on stdout once the terminal (raw, 230400 baud) is ready, then
+// serves until SIGTERM/SIGINT or the hang-up fault. Frame numbers count the SLIP frames
+// received from the PC (1-based); every fault option may be repeated.
+//   --drop-frame K        frame K is lost (never reaches the receiver)
+//   --dup-frame K         frame K arrives twice
+//   --corrupt-frame K     one byte of frame K is changed (the receiver answers NAK)
+//   --drop-response K     the tag's K-th answer is lost on the way back
+//   --hangup-after N      after answering frame N the tag closes the link and exits
+//   --flash-write-error N the N-th flash write fails (CAL_EXECUTE answers FLASH_ERROR)
+//   --flash FILE          the two 1024-byte slot pages (A then B): loaded when the file exists,
+//                         saved after each committed update and at exit.
+// Exit status: 0 after a signal or the hang-up, 2 for bad arguments, 1 for a system error.
+#include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <string>
+#include <vector>
+
+extern "C" {
+#include "metro_fw/blob.h"
+#include "metro_fw/push.h"
+}
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void OnSignal(int) { g_stop = 1; }
+
+struct Options {
+  uint32_t device_id[2] = {0x12345678u, 0x9ABCDEF0u};
+  std::string flash_file;
+  std::set<long> drop_frames, dup_frames, corrupt_frames, drop_responses;
+  long hangup_after = -1;
+  long flash_write_error = -1;
+};
+
+struct Sim {
+  Options opt;
+  std::vector<uint8_t> mem = std::vector<uint8_t>(2 * METRO_FW_PAGE_SIZE, 0xFF);
+  long writes = 0;
+  long responses = 0;
+  int master = -1;
+};
+
+bool InRange(uint32_t addr, uint32_t len) {
+  return addr >= METRO_FW_SLOT_A_ADDR &&
+         addr - METRO_FW_SLOT_A_ADDR + len <= 2 * METRO_FW_PAGE_SIZE;
+}
+
+int FlashRead(void* ctx, uint32_t addr, uint8_t* dst, uint32_t len) {
+  auto* s = static_cast<Sim*>(ctx);
+  if (!InRange(addr, len)) return -1;
+  std::memcpy(dst, s->mem.data() + (addr - METRO_FW_SLOT_A_ADDR), len);
+  return 0;
+}
+
+int FlashErase(void* ctx, uint32_t addr) {
+  auto* s = static_cast<Sim*>(ctx);
+  if (addr % METRO_FW_PAGE_SIZE != 0 || !InRange(addr, METRO_FW_PAGE_SIZE)) return -1;
+  std::memset(s->mem.data() + (addr - METRO_FW_SLOT_A_ADDR), 0xFF, METRO_FW_PAGE_SIZE);
+  return 0;
+}
+
+int FlashWrite(void* ctx, uint32_t addr, const uint8_t* src, uint32_t len) {
+  auto* s = static_cast<Sim*>(ctx);
+  if (++s->writes == s->opt.flash_write_error) return -1;
+  if (addr % 4 != 0 || len % 4 != 0 || !InRange(addr, len)) return -1;
+  for (uint32_t i = 0; i < len; ++i) s->mem[addr - METRO_FW_SLOT_A_ADDR + i] &= src[i];
+  return 0;
+}
+
+int Send(void* ctx, const uint8_t* data, uint32_t len) {
+  auto* s = static_cast<Sim*>(ctx);
+  if (s->opt.drop_responses.count(++s->responses) != 0) return 0;
+  uint32_t done = 0;
+  while (done < len) {
+    const ssize_t n = ::write(s->master, data + done, len - done);
+    if (n < 0) {
+      if (errno == EINTR || errno == EAGAIN) continue;
+      return -1;
+    }
+    done += static_cast<uint32_t>(n);
+  }
+  return 0;
+}
+
+bool SaveFlash(const Sim& s) {
+  if (s.opt.flash_file.empty()) return true;
+  const std::string tmp = s.opt.flash_file + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(s.mem.data()),
+              static_cast<std::streamsize>(s.mem.size()));
+    if (!out.good()) return false;
+  }
+  return std::rename(tmp.c_str(), s.opt.flash_file.c_str()) == 0;
+}
+
+bool ParseLong(const char* text, long* out) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  if (errno != 0 || end == text || *end != '\0' || v < 1) return false;
+  *out = v;
+  return true;
+}
+
+int Usage(const char* why) {
+  std::fprintf(stderr, "metro_sim_tag: %s\n", why);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Sim sim;
+  Options& o = sim.opt;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (i + 1 >= argc) return Usage(("missing value after " + a).c_str());
+    const char* v = argv[++i];
+    long n = 0;
+    if (a == "--device-id") {
+      if (std::strlen(v) != 16 || std::strspn(v, "0123456789abcdefABCDEF") != 16) {
+        return Usage("--device-id takes 16 hex digits");
+      }
+      const unsigned long long id = std::strtoull(v, nullptr, 16);
+      o.device_id[0] = static_cast<uint32_t>(id & 0xFFFFFFFFu);
+      o.device_id[1] = static_cast<uint32_t>(id >> 32);
+    } else if (a == "--flash") {
+      o.flash_file = v;
+    } else if (!ParseLong(v, &n)) {
+      return Usage((a + " takes a positive integer").c_str());
+    } else if (a == "--drop-frame") {
+      o.drop_frames.insert(n);
+    } else if (a == "--dup-frame") {
+      o.dup_frames.insert(n);
+    } else if (a == "--corrupt-frame") {
+      o.corrupt_frames.insert(n);
+    } else if (a == "--drop-response") {
+      o.drop_responses.insert(n);
+    } else if (a == "--hangup-after") {
+      o.hangup_after = n;
+    } else if (a == "--flash-write-error") {
+      o.flash_write_error = n;
+    } else {
+      return Usage(("unknown option " + a).c_str());
+    }
+  }
+  if (!o.flash_file.empty()) {
+    std::ifstream in(o.flash_file, std::ios::binary);
+    if (in.good()) {
+      std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
+      if (bytes.size() != sim.mem.size()) return Usage("--flash file is not 2048 bytes");
+      sim.mem = bytes;
+    }
+  }
+
+  int slave = -1;
+  termios tio{};
+  ::cfmakeraw(&tio);
+  tio.c_cflag |= CLOCAL | CREAD;
+  ::cfsetispeed(&tio, B230400);
+  ::cfsetospeed(&tio, B230400);
+  if (::openpty(&sim.master, &slave, nullptr, &tio, nullptr) != 0) {
+    std::perror("metro_sim_tag: openpty");
+    return 1;
+  }
+  // Holding the slave open keeps the master readable when the PC closes its end.
+  std::signal(SIGTERM, OnSignal);
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  metro_fw_flash flash{};
+  flash.read = FlashRead;
+  flash.erase_page = FlashErase;
+  flash.write = FlashWrite;
+  flash.ctx = &sim;
+  flash.slot_addr[0] = METRO_FW_SLOT_A_ADDR;
+  flash.slot_addr[1] = METRO_FW_SLOT_B_ADDR;
+  static metro_fw_push push;  // 1.2 KiB, as on the tag: static storage
+  if (metro_fw_push_init(&push, &flash, o.device_id, Send, &sim) != METRO_FW_OK) return 1;
+
+  std::printf("pty: %s\n", ::ttyname(slave));
+  std::fflush(stdout);
+
+  std::vector<uint8_t> frame;
+  long frames = 0;
+  bool hangup = false;
+  while (!g_stop && !hangup) {
+    pollfd p{sim.master, POLLIN, 0};
+    const int r = ::poll(&p, 1, 100);
+    if (r <= 0 || (p.revents & POLLIN) == 0) continue;
+    uint8_t buf[256];
+    const ssize_t n = ::read(sim.master, buf, sizeof buf);
+    if (n <= 0) continue;
+    for (ssize_t i = 0; i < n && !hangup; ++i) {
+      if (buf[i] != METRO_FW_SLIP_END) {
+        frame.push_back(buf[i]);
+        continue;
+      }
+      if (frame.empty()) continue;
+      ++frames;
+      std::vector<uint8_t> wire;
+      wire.push_back(METRO_FW_SLIP_END);
+      wire.insert(wire.end(), frame.begin(), frame.end());
+      wire.push_back(METRO_FW_SLIP_END);
+      frame.clear();
+      if (o.corrupt_frames.count(frames) != 0) {
+        uint8_t& b = wire[wire.size() / 2];
+        uint8_t c = static_cast<uint8_t>(b ^ 0x55);
+        if (c == METRO_FW_SLIP_END || c == METRO_FW_SLIP_ESC) c = static_cast<uint8_t>(b ^ 0x11);
+        b = c;
+      }
+      const int copies = o.drop_frames.count(frames) != 0  ? 0
+                         : o.dup_frames.count(frames) != 0 ? 2
+                                                           : 1;
+      for (int k = 0; k < copies; ++k) {
+        (void)metro_fw_push_rx(&push, wire.data(), static_cast<uint32_t>(wire.size()));
+      }
+      if (push.updated) {
+        push.updated = 0;
+        if (!SaveFlash(sim))
+          std::fprintf(stderr, "metro_sim_tag: cannot save %s\n", o.flash_file.c_str());
+      }
+      if (frames == o.hangup_after) hangup = true;
+    }
+  }
+  ::close(sim.master);
+  ::close(slave);
+  return SaveFlash(sim) ? 0 : 1;
+}

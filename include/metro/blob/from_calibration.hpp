@@ -1,0 +1,82 @@
+// calibration.json (metro::Calibration, docs/calibration-format.md) -> blob constants
+// (docs/calibration-blob.md section 10).
+//
+// The calibrator's model, raw input in `input_unit`, output in g (accelerometer) or deg/s
+// (gyroscope):
+//
+//   y_cal = M_c * (r - b0_c - b1_c * (T - t_ref_c)),   M_c = T K   (imu_model.hpp)
+//
+// The firmware's model, raw int16 counts in, SI out (m/s^2, rad/s):
+//
+//   y_si = M * (r - b0 - b1*dT - b2*dT^2),   dT = clamp(T, t_valid_min_c, t_valid_max_c) - t_ref_c
+//
+// Both remove the bias before scaling, so with raw counts as the calibrator's input (input_unit
+// "LSB") the mapping is exact apart from the output unit:
+//
+//   M = c * M_c,  c = 9.80665 m/s^2 per g (the unit g, CGPM 1901) or pi/180 rad per deg
+//   b0 = b0_c [LSB],  b1 = b1_c [LSB/degC],  b2 = 0,  t_ref_c = t_ref_c
+//   u(M_ij) = c * u(M_c,ij),  u(b0) = u(b0_c),  u(b1) = u(b1_c)       (k = 1)
+//
+// c is a defined constant, so the uncertainties scale exactly (JCGM 100:2008 5.1.2 with a
+// sensitivity coefficient c and no uncertainty of its own). fs_sel is the full-scale setting
+// whose nominal sensitivity the mean row norm of M_c matches within 10 % (settings are a factor
+// 2 apart, so at most one can match).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+
+#include "metro/blob/blob.hpp"
+#include "metro/calibration/calibrate.hpp"
+#include "metro/core/status.hpp"
+
+namespace metro::blob {
+
+struct BlobFromCalibrationOptions {
+  int sensor = 0;          // The tag in calibration.json (`tags[].sensor`), >= 1.
+  uint64_t device_id = 0;  // (FICR DEVICEID[1] << 32) | DEVICEID[0].
+  uint32_t seq = 1;        // 1 .. kSeqMax.
+  uint8_t dlpf_cfg = 3;    // The tag firmware's MPU6050 DLPF_CFG (0..6); the tag refuses a
+                           // section whose value differs from its own configuration.
+  // Temperature validity range: the firmware clamps T to it before the temperature terms.
+  // Default: the MPU6050 operating range (calibration.json does not record the temperature
+  // span of the calibration data).
+  double t_valid_min_c = -40.0;
+  double t_valid_max_c = 85.0;
+  uint32_t due_after_s = 365u * 86400u;  // due_time_utc = cal_time_utc + due_after_s.
+  std::string reference_id;              // ASCII, at most 16 characters.
+  bool provisional = false;              // Header flag b3.
+
+  // sensor >= 1, seq in 1..kSeqMax, dlpf_cfg <= 6, -40 <= t_valid_min_c < t_valid_max_c <= 85,
+  // reference_id printable ASCII of at most 16 characters.
+  bool IsValid(std::string* why) const;
+};
+
+// fs_sel (0..3) of the MPU6050 full-scale setting whose nominal sensitivity, in the
+// calibrator's output unit per LSB (accelerometer (1 << fs_sel) / 16384 g, gyroscope
+// (250 << fs_sel) / 32768 deg/s), is within 10 % of the mean row norm of `m_out_per_lsb`.
+// Error when none is.
+Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m_out_per_lsb);
+
+// The blob section of one sensor calibration (mapping above). Errors: an input unit other than
+// "LSB" (the tag applies the constants to raw counts), no matching full-scale setting, a
+// model with free scale terms but no `matrix_u`.
+Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& calibration,
+                                                       const BlobFromCalibrationOptions& options);
+
+// Everything the blob of options.sensor holds: both sensor sections and META
+// (cal_time_utc from date_utc, tool_version from "metro X.Y.Z", raw_data_sha256 = the input's
+// SHA-256, or the SHA-256 of the inputs' hex digests joined by '\n' for several inputs,
+// session_uuid = RFC 9562 version-8 UUID from SHA-256(date_utc '\n' sensor '\n'
+// raw_data_sha256 hex), g_local_mps2 = gravity_mps2, temp_mean/min/max_c = t_ref_c of the
+// temperature model (0 without one), procedure_id 1 (calibrate fit), unc_k_x10 =
+// round(10 * coverage_factor_95), tag_label "tag<N>"). Errors name the file's key; WriteBlob
+// then checks the firmware's limits.
+Result<BlobContents> BlobContentsFromCalibration(const Calibration& calibration,
+                                                 const BlobFromCalibrationOptions& options);
+
+// The procedure_id META carries for `calibrate fit` (multi-pose static + rotations).
+inline constexpr uint16_t kProcedureCalibrateFit = 1;
+
+}  // namespace metro::blob

@@ -1,0 +1,142 @@
+// The PC side of the calibration push protocol (docs/calibration-blob.md section 7): SLIP
+// framing, CRC-16 frames, the transfer in 16-byte CAL_WRITE chunks, ACK/NAK with retries and
+// timeouts, and the read-back comparison after CAL_EXECUTE.
+//
+// The client talks through a ByteStream (a serial port to the BLE central, a pseudo-terminal
+// to the simulated tag, or a test fake), so it is tested without a tty. Frames are built and
+// checked by the firmware's own C functions (metro_fw_frame_build / _parse /
+// metro_fw_slip_encode), so both ends share one definition of the wire format.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "metro/blob/from_calibration.hpp"
+#include "metro/core/status.hpp"
+
+namespace metro::blob {
+
+// A bidirectional byte link.
+class ByteStream {
+ public:
+  virtual ~ByteStream() = default;
+  // Writes every byte (blocking). Error when the link is gone.
+  virtual Status Write(const uint8_t* data, size_t size) = 0;
+  // Reads at most `capacity` bytes, waiting up to timeout_ms for the first one; 0 bytes means
+  // the timeout passed. Error when the link hung up or failed.
+  virtual Result<size_t> Read(uint8_t* data, size_t capacity, int timeout_ms) = 0;
+};
+
+// SLIP (RFC 1055) decoder, one byte at a time. Frames longer than max_frame bytes, or with an
+// ESC not followed by ESC_END/ESC_ESC, are reported as bad (empty vector plus bad = true).
+class SlipDecoder {
+ public:
+  explicit SlipDecoder(size_t max_frame) : max_frame_(max_frame) {}
+  struct Frame {
+    std::vector<uint8_t> bytes;
+    bool bad = false;
+  };
+  // Returns a frame when `byte` is the END that closes a non-empty (or bad) frame.
+  std::optional<Frame> Feed(uint8_t byte);
+
+ private:
+  size_t max_frame_;
+  std::vector<uint8_t> buf_;
+  bool escape_ = false;
+  bool bad_ = false;
+};
+
+struct PushOptions {
+  int timeout_ms = 1000;          // Wait for each response (BLE round trip and flash work).
+  int execute_timeout_ms = 3000;  // CAL_EXECUTE erases and programs a page first.
+  int max_retries = 5;            // Resends of one request after a timeout or NAK.
+  size_t chunk_bytes = 16;        // CAL_WRITE / CAL_READ data bytes per frame, 1..16.
+  size_t link_write_bytes = 20;   // Encoded bytes per write: one BLE NUS payload (ATT MTU 23).
+
+  bool IsValid(std::string* why) const;
+};
+
+// GET_INFO.
+struct TagInfo {
+  uint8_t fmt_major = 0;
+  uint8_t fmt_minor = 0;
+  int active_slot = -1;  // 0 A, 1 B, -1 none
+  uint16_t max_len = 0;
+  uint64_t device_id = 0;  // (DEVICEID[1] << 32) | DEVICEID[0]
+  uint32_t active_seq = 0;
+  uint32_t active_crc32 = 0;
+};
+
+struct PushStats {
+  int requests = 0;        // Distinct requests.
+  int frames_sent = 0;     // Including resends.
+  int retries = 0;         // Resends after a timeout or NAK.
+  int naks = 0;            // NAK frames received.
+  int timeouts = 0;        // Waits that expired.
+  int ignored_frames = 0;  // Stale, duplicate or corrupted responses skipped.
+};
+
+// Name of a push result code, e.g. "STALE_SEQ" (0x05).
+std::string PushResultName(uint8_t result);
+
+// bytes_done of bytes_total have been acknowledged (CAL_WRITE, then read back).
+using PushProgress = std::function<void(const char* phase, size_t bytes_done, size_t bytes_total)>;
+
+class PushClient {
+ public:
+  // `stream` must outlive the client.
+  PushClient(ByteStream* stream, PushOptions options);
+
+  Result<TagInfo> GetInfo();
+  // CAL_CREATE, CAL_WRITE (resuming at the tag's received_len on INVALID_OFFSET), CAL_GET_CRC
+  // (one full resend on a mismatch), CAL_EXECUTE, then CAL_READ of every byte compared with
+  // `blob`. Returns the slot written. Errors name the step and the tag's result, e.g.
+  // "CAL_CREATE: the tag answered STALE_SEQ".
+  Result<int> Push(const std::vector<uint8_t>& blob, const PushProgress& progress = {});
+  Status Abort();
+
+  const PushStats& stats() const { return stats_; }
+
+ private:
+  struct Response {
+    uint8_t result = 0;
+    std::vector<uint8_t> payload;  // After the result byte.
+  };
+  Result<Response> Transact(uint8_t op, const std::vector<uint8_t>& payload, int timeout_ms);
+  Status SendFrame(const std::vector<uint8_t>& frame);
+
+  ByteStream* stream_;
+  PushOptions options_;
+  uint8_t txn_;
+  PushStats stats_;
+  SlipDecoder decoder_;
+  std::vector<uint8_t> rx_;  // Bytes read but not yet decoded.
+  size_t rx_pos_ = 0;
+};
+
+// What `calibrate push` reports.  Defaults read as failure.
+struct PushSummary {
+  bool ok = false;
+  bool input_error = false;  // The calibration could not become a blob (exit 2, not 1).
+  std::string message;       // Final status, one line.
+  TagInfo tag;               // From GET_INFO (valid once the tag answered).
+  bool tag_answered = false;
+  uint32_t seq = 0;  // Of the pushed blob.
+  int slot = -1;     // Written by the tag.
+  std::vector<uint8_t> blob;
+  PushStats stats;
+};
+
+// calibrate push: GET_INFO, then the blob of blob_options.sensor built for the tag's device id
+// with seq = blob_options.seq if not 0, else the tag's active seq + 1, then Push. When
+// expect_device_id is set, a tag with another id is refused before anything is written.
+PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
+                            BlobFromCalibrationOptions blob_options,
+                            std::optional<uint64_t> expect_device_id, const PushOptions& options,
+                            const PushProgress& progress = {});
+
+}  // namespace metro::blob

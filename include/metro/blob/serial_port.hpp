@@ -1,0 +1,35 @@
+// A serial port (or pseudo-terminal) as a ByteStream: termios raw 8N1 at the push protocol's
+// 230400 baud, no flow control, reads with poll() timeouts. POSIX only.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "metro/blob/push_client.hpp"
+#include "metro/core/status.hpp"
+
+namespace metro::blob {
+
+inline constexpr int kPushBaud = 230400;
+
+class SerialPort : public ByteStream {
+ public:
+  // Opens `path` (O_NOCTTY), takes an exclusive flock (another program on the same port is an
+  // error), sets raw 8N1 at `baud` (9600, 19200, 38400, 57600, 115200, 230400, 460800 or
+  // 921600) and flushes stale input. Errors name the path and the system's reason.
+  static Result<std::unique_ptr<SerialPort>> Open(const std::string& path, int baud = kPushBaud);
+  ~SerialPort() override;
+  SerialPort(const SerialPort&) = delete;
+  SerialPort& operator=(const SerialPort&) = delete;
+
+  Status Write(const uint8_t* data, size_t size) override;
+  // 0 bytes after timeout_ms; error "hung up" when the other end closed (POLLHUP, EIO).
+  Result<size_t> Read(uint8_t* data, size_t capacity, int timeout_ms) override;
+
+ private:
+  SerialPort(int fd, std::string path) : fd_(fd), path_(std::move(path)) {}
+  int fd_;
+  std::string path_;
+};
+
+}  // namespace metro::blob

@@ -1,0 +1,235 @@
+#include "metro/blob/from_calibration.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+
+#include "metro/core/file.hpp"
+
+namespace metro::blob {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kSensitivityTolerance = 0.10;  // Same margin as the firmware's row-norm check.
+
+// Output unit of the calibrator -> SI: the unit g is 9.80665 m/s^2 by definition (CGPM 1901).
+double SiPerOutputUnit(ImuSensor sensor) {
+  return sensor == ImuSensor::kAccel ? kStandardGravityMps2 : kPi / 180.0;
+}
+
+// Nominal sensitivity in the calibrator's output unit per LSB (the firmware's s_nom / c).
+double NominalOutPerLsb(ImuSensor sensor, int fs_sel) {
+  return sensor == ImuSensor::kAccel ? static_cast<double>(1 << fs_sel) / 16384.0
+                                     : static_cast<double>(250 << fs_sel) / 32768.0;
+}
+
+bool PrintableAscii(const std::string& s) {
+  return std::all_of(s.begin(), s.end(), [](char ch) { return ch >= 0x20 && ch <= 0x7E; });
+}
+
+template <size_t N>
+std::array<uint8_t, N> HexBytes(const std::string& hex) {
+  std::array<uint8_t, N> out{};
+  for (size_t i = 0; i < N && 2 * i + 1 < hex.size(); ++i) {
+    out[i] = static_cast<uint8_t>(std::stoul(hex.substr(2 * i, 2), nullptr, 16));
+  }
+  return out;
+}
+
+bool IsHex64(const std::string& s) {
+  return s.size() == 64 && std::all_of(s.begin(), s.end(), [](char ch) {
+           return (ch >= '0' && ch <= '9') || (ch >= 'a' && ch <= 'f') || (ch >= 'A' && ch <= 'F');
+         });
+}
+
+// "2024-05-01T12:00:00Z" -> seconds since 1970-01-01 UTC.
+Result<uint32_t> ParseDateUtc(const std::string& text) {
+  std::tm tm{};
+  int y = 0, mo = 0, d = 0, h = 0, mi = 0, s = 0;
+  char z = 0;
+  if (std::sscanf(text.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%c", &y, &mo, &d, &h, &mi, &s, &z) != 7 ||
+      z != 'Z' || mo < 1 || mo > 12 || d < 1 || d > 31 || h > 23 || mi > 59 || s > 60) {
+    return MakeError(
+        fmt::format("'date_utc' is '{}'; expected ISO 8601 UTC like 2024-05-01T12:00:00Z", text));
+  }
+  tm.tm_year = y - 1900;
+  tm.tm_mon = mo - 1;
+  tm.tm_mday = d;
+  tm.tm_hour = h;
+  tm.tm_min = mi;
+  tm.tm_sec = s;
+  const std::time_t t = timegm(&tm);
+  if (t < 0 || t > 0xFFFFFFFF) {
+    return MakeError(fmt::format("'date_utc' '{}' is outside 1970..2106 (u32 seconds)", text));
+  }
+  return static_cast<uint32_t>(t);
+}
+
+// "metro 0.1.0" -> 0x000100 (major << 16 | minor << 8 | patch); 0 when not of that form.
+uint32_t ParseToolVersion(const std::string& text) {
+  const size_t space = text.rfind(' ');
+  const std::string v = space == std::string::npos ? text : text.substr(space + 1);
+  unsigned major = 0, minor = 0, patch = 0;
+  if (std::sscanf(v.c_str(), "%u.%u.%u", &major, &minor, &patch) != 3 || major > 255 ||
+      minor > 255 || patch > 255) {
+    return 0;
+  }
+  return major << 16 | minor << 8 | patch;
+}
+
+}  // namespace
+
+bool BlobFromCalibrationOptions::IsValid(std::string* why) const {
+  auto fail = [&](std::string msg) {
+    if (why) *why = std::move(msg);
+    return false;
+  };
+  if (sensor < 1) return fail(fmt::format("sensor {} must be >= 1", sensor));
+  if (seq < 1 || seq > kSeqMax) return fail(fmt::format("seq {} is outside 1..{}", seq, kSeqMax));
+  if (dlpf_cfg > 6) return fail(fmt::format("dlpf_cfg {} is not 0..6", dlpf_cfg));
+  if (!(t_valid_min_c >= -40.0 && t_valid_min_c < t_valid_max_c && t_valid_max_c <= 85.0)) {
+    return fail(
+        fmt::format("the temperature validity range {} .. {} degC must satisfy -40 <= "
+                    "min < max <= 85",
+                    t_valid_min_c, t_valid_max_c));
+  }
+  if (reference_id.size() > 16 || !PrintableAscii(reference_id)) {
+    return fail(fmt::format("reference_id '{}' must be printable ASCII of at most 16 characters",
+                            reference_id));
+  }
+  return true;
+}
+
+Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m) {
+  const double row_norm = m.rowwise().norm().mean();
+  for (int fs = 0; fs < 4; ++fs) {
+    const double ratio = row_norm / NominalOutPerLsb(sensor, fs);
+    if (std::fabs(ratio - 1.0) <= kSensitivityTolerance) return static_cast<uint8_t>(fs);
+  }
+  const bool accel = sensor == ImuSensor::kAccel;
+  return MakeError(fmt::format(
+      "the {} sensitivity {:.6g} {} matches no MPU6050 full-scale setting within 10 % ({})",
+      ImuSensorName(sensor), 1.0 / row_norm, accel ? "LSB/g" : "LSB/(deg/s)",
+      accel ? "16384, 8192, 4096 or 2048 LSB/g" : "131, 65.5, 32.8 or 16.4 LSB/(deg/s)"));
+}
+
+Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& c,
+                                                       const BlobFromCalibrationOptions& options) {
+  const SensorModel& model = c.model;
+  const char* name = ImuSensorName(model.sensor);
+  if (model.input_unit != "LSB") {
+    return MakeError(
+        fmt::format("{}: input_unit is '{}'; the tag applies the constants to raw counts, so the "
+                    "calibration must be fitted on LSB data",
+                    name, model.input_unit));
+  }
+  const Eigen::Matrix3d m_c = model.Matrix();
+  Result<uint8_t> fs = InferFsSel(model.sensor, m_c);
+  if (!fs.ok()) return MakeError(fmt::format("{}: {}", name, fs.error().message));
+  if (model.kind != ModelKind::kBias && c.matrix_u.isZero(0.0)) {
+    return MakeError(fmt::format(
+        "{}: 'matrix_u' is missing or zero; the blob stores the uncertainty of every element of M",
+        name));
+  }
+  const double si = SiPerOutputUnit(model.sensor);
+  SensorConstants s;
+  s.fs_sel = fs.value();
+  s.dlpf_cfg = options.dlpf_cfg;
+  s.model_bits = kModelBias;
+  if (model.kind == ModelKind::kFull) s.model_bits |= kModelFullMatrix;
+  if (model.has_temperature) s.model_bits |= kModelLinearT;
+  s.t_ref_c = model.has_temperature ? model.t_ref_c : 25.0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      // JCGM 100:2008 5.1.2: u(c x) = c u(x) for an exact c.
+      s.m[static_cast<size_t>(3 * i + j)] = si * m_c(i, j);
+      s.u_m[static_cast<size_t>(3 * i + j)] = si * c.matrix_u(i, j);
+    }
+    const size_t a = static_cast<size_t>(i);
+    s.b0_lsb[a] = model.bias[i];
+    s.u_b0_lsb[a] = c.bias_u[i];
+    if (model.has_temperature) {
+      s.b1_lsb_per_c[a] = model.bias_per_c[i];
+      s.u_b1_lsb_per_c[a] = c.bias_per_c_u[i];
+    }
+  }
+  // The fit residual in SI: accel per-pose gravity norm (g), gyro static rate (deg/s).
+  const std::string group = model.sensor == ImuSensor::kAccel ? "static_pose_norm" : "static_rate";
+  const std::string unit = model.sensor == ImuSensor::kAccel ? "g" : "deg/s";
+  s.resid_rms_si = 0.0;
+  for (const ResidualGroup& g : c.groups) {
+    if (g.kind == group && g.unit == unit) s.resid_rms_si = si * g.rms;
+  }
+  if (s.resid_rms_si == 0.0 && c.residual_unit == unit) s.resid_rms_si = si * c.residual_rms;
+  s.t_valid_min_c = options.t_valid_min_c;
+  s.t_valid_max_c = options.t_valid_max_c;
+  std::string why;
+  if (!s.IsValid(&why)) return MakeError(fmt::format("{}: {}", name, why));
+  return s;
+}
+
+Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
+                                                 const BlobFromCalibrationOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) return MakeError("blob options: " + why);
+  const TagCalibration* tag = cal.FindTag(o.sensor);
+  if (tag == nullptr) {
+    std::string have;
+    for (const TagCalibration& t : cal.tags)
+      have += (have.empty() ? "" : ", ") + std::to_string(t.sensor);
+    return MakeError(fmt::format("calibration has no sensor {} (it has: {})", o.sensor, have));
+  }
+  if (!tag->accel && !tag->gyro) {
+    return MakeError(
+        fmt::format("sensor {} has neither an accel nor a gyro calibration", o.sensor));
+  }
+  BlobContents b;
+  b.seq = o.seq;
+  b.device_id = o.device_id;
+  b.provisional = o.provisional;
+  for (const auto& [src, dst] :
+       {std::pair{&tag->accel, &b.accel}, std::pair{&tag->gyro, &b.gyro}}) {
+    if (!*src) continue;
+    Result<SensorConstants> s = SensorConstantsFromCalibration(**src, o);
+    if (!s.ok()) return MakeError(fmt::format("sensor {} {}", o.sensor, s.error().message));
+    *dst = s.value();
+  }
+
+  MetaConstants& m = b.meta;
+  Result<uint32_t> t = ParseDateUtc(cal.date_utc);
+  if (!t.ok()) return t.error();
+  m.cal_time_utc_s = t.value();
+  const uint64_t due = uint64_t{t.value()} + o.due_after_s;
+  m.due_time_utc_s = static_cast<uint32_t>(std::min<uint64_t>(due, 0xFFFFFFFFu));
+  m.tool_version = ParseToolVersion(cal.tool_version);
+  std::string raw_sha;
+  if (cal.inputs.size() == 1 && IsHex64(cal.inputs.front().sha256)) {
+    raw_sha = cal.inputs.front().sha256;
+  } else if (!cal.inputs.empty()) {
+    std::string joined;
+    for (const InputFile& f : cal.inputs) joined += (joined.empty() ? "" : "\n") + f.sha256;
+    raw_sha = Sha256Hex(joined);
+  }
+  if (!raw_sha.empty()) m.raw_data_sha256 = HexBytes<32>(raw_sha);
+  const std::string uuid_hex =
+      Sha256Hex(fmt::format("{}\n{}\n{}", cal.date_utc, o.sensor, raw_sha));
+  m.session_uuid = HexBytes<16>(uuid_hex);
+  m.session_uuid[6] = static_cast<uint8_t>((m.session_uuid[6] & 0x0F) | 0x80);  // version 8
+  m.session_uuid[8] = static_cast<uint8_t>((m.session_uuid[8] & 0x3F) | 0x80);  // RFC variant
+  m.reference_id = o.reference_id;
+  m.g_local_mps2 = cal.gravity_mps2;
+  const SensorCalibration& first = tag->accel ? *tag->accel : *tag->gyro;
+  const double t_mean = first.model.has_temperature ? first.model.t_ref_c : 0.0;
+  m.temp_mean_c = m.temp_min_c = m.temp_max_c = t_mean;
+  m.procedure_id = kProcedureCalibrateFit;
+  const double k95 = first.coverage_factor_95 > 0 ? first.coverage_factor_95 : 2.0;
+  m.unc_k_x10 = static_cast<uint8_t>(std::clamp(std::lround(10.0 * k95), 1L, 255L));
+  m.tag_label = fmt::format("tag{}", o.sensor).substr(0, 8);
+  if (!b.IsValid(&why)) return MakeError("calibration blob: " + why);
+  return b;
+}
+
+}  // namespace metro::blob

@@ -1,0 +1,286 @@
+// End to end over a real tty: the simulated tag (firmware/sim_tag, the tag's C receiver and
+// update code on a RAM flash behind a pseudo-terminal) and the push client through SerialPort,
+// then the `calibrate push` program, with injected link and flash faults.
+#ifdef METRO_SIM_TAG_EXE
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "metro/blob/push_client.hpp"
+#include "metro/blob/serial_port.hpp"
+#include "metro/core/file.hpp"
+
+extern char** environ;
+
+namespace metro::blob {
+namespace {
+
+const std::string kGolden = std::string(METRO_SOURCE_DIR) + "/datasets/golden/";
+
+// A running metro_sim_tag; SIGTERM and wait on destruction.
+class SimTag {
+ public:
+  SimTag(const std::string& flash_file, const std::vector<std::string>& faults) {
+    std::vector<std::string> args = {METRO_SIM_TAG_EXE, "--flash", flash_file};
+    args.insert(args.end(), faults.begin(), faults.end());
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    int fds[2];
+    REQUIRE(::pipe(fds) == 0);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, fds[1], STDOUT_FILENO);
+    posix_spawn_file_actions_addclose(&fa, fds[0]);
+    REQUIRE(::posix_spawn(&pid_, METRO_SIM_TAG_EXE, &fa, nullptr, argv.data(), environ) == 0);
+    posix_spawn_file_actions_destroy(&fa);
+    ::close(fds[1]);
+    std::string line;
+    char c;
+    while (::read(fds[0], &c, 1) == 1 && c != '\n') line += c;
+    ::close(fds[0]);
+    REQUIRE(line.rfind("pty: ", 0) == 0);
+    pty_ = line.substr(5);
+  }
+  ~SimTag() { Stop(); }
+  // Ends the simulator (it saves its flash) and returns its exit status.
+  int Stop() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGTERM);
+      ::waitpid(pid_, &status_, 0);
+      pid_ = -1;
+    }
+    return WIFEXITED(status_) ? WEXITSTATUS(status_) : -1;
+  }
+  const std::string& pty() const { return pty_; }
+
+ private:
+  pid_t pid_ = -1;
+  int status_ = 0;
+  std::string pty_;
+};
+
+std::vector<uint8_t> Bytes(const std::string& path) {
+  Result<std::string> s = ReadFile(path);
+  REQUIRE(s.ok());
+  return std::vector<uint8_t>(s.value().begin(), s.value().end());
+}
+
+std::vector<uint8_t> Slot(const std::vector<uint8_t>& flash, int slot, size_t n) {
+  REQUIRE(flash.size() == 2 * kPageSize);
+  auto begin = flash.begin() + slot * static_cast<std::ptrdiff_t>(kPageSize);
+  return std::vector<uint8_t>(begin, begin + static_cast<std::ptrdiff_t>(n));
+}
+
+}  // namespace
+
+TEST_CASE("pty: the push client over SerialPort updates the simulated tag", "[blob][push]") {
+  const std::string flash = "metro_pty_lib_flash.bin";
+  std::remove(flash.c_str());
+  const std::vector<uint8_t> golden = Bytes(kGolden + "tag_sensor2.bin");
+  {
+    SimTag sim(flash, {"--drop-frame", "7", "--corrupt-frame", "20", "--drop-response", "40"});
+    Result<std::unique_ptr<SerialPort>> port = SerialPort::Open(sim.pty());
+    REQUIRE(port.ok());
+    // Another program cannot take the port while it is open.
+    Result<std::unique_ptr<SerialPort>> second = SerialPort::Open(sim.pty());
+    REQUIRE_FALSE(second.ok());
+    CHECK(second.error().message.find("in use by another program") != std::string::npos);
+    PushOptions o;
+    o.timeout_ms = 200;
+    PushClient client(port.value().get(), o);
+    Result<TagInfo> info = client.GetInfo();
+    REQUIRE(info.ok());
+    CHECK(info.value().device_id == 0x9ABCDEF012345678ull);
+    Result<int> slot = client.Push(golden);
+    REQUIRE(slot.ok());
+    CHECK(slot.value() == 0);
+    CHECK(client.stats().retries == 3);
+    CHECK(client.stats().naks == 1);
+    CHECK(sim.Stop() == 0);
+  }
+  CHECK(Slot(Bytes(flash), 0, golden.size()) == golden);
+  std::remove(flash.c_str());
+}
+
+TEST_CASE("pty: SerialPort errors name the path", "[blob][push]") {
+  Result<std::unique_ptr<SerialPort>> p = SerialPort::Open("/nonexistent/ttyX");
+  REQUIRE_FALSE(p.ok());
+  CHECK(p.error().ToString() == "/nonexistent/ttyX: cannot open: No such file or directory");
+  const std::string plain = "metro_pty_plain.txt";
+  REQUIRE(WriteFileAtomically(plain, "x").ok());
+  p = SerialPort::Open(plain);
+  REQUIRE_FALSE(p.ok());
+  CHECK(p.error().message.rfind("not a serial port (tcgetattr)", 0) == 0);
+  std::remove(plain.c_str());
+  p = SerialPort::Open("/dev/null", 12345);
+  REQUIRE_FALSE(p.ok());
+  CHECK(p.error().message == "unsupported baud rate 12345");
+}
+
+#ifdef METRO_CALIBRATE_EXE
+namespace {
+
+struct Run {
+  int exit_code;
+  std::string err;
+};
+
+Run Push(const std::string& pty, const std::string& extra = "") {
+  static int counter = 0;
+  const std::string err_path =
+      "metro_pty_err_" + std::to_string(::getpid()) + "_" + std::to_string(++counter) + ".txt";
+  const std::string cmd = std::string(METRO_CALIBRATE_EXE) + " push --port " + pty + " " + kGolden +
+                          "calibration_sensor2.json --sensor 2 " + extra + " 2>" + err_path;
+  const int status = std::system(cmd.c_str());
+  Run r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, ""};
+  std::ifstream err(err_path);
+  std::stringstream ss;
+  ss << err.rdbuf();
+  r.err = ss.str();
+  std::remove(err_path.c_str());
+  return r;
+}
+
+// A flash image with `blob` in slot A and slot B erased.
+std::string FlashWith(const std::string& name, const std::vector<uint8_t>& blob) {
+  std::vector<uint8_t> img(2 * kPageSize, 0xFF);
+  std::copy(blob.begin(), blob.end(), img.begin());
+  REQUIRE(WriteFileAtomically(name, std::string(img.begin(), img.end())).ok());
+  return name;
+}
+
+bool Has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+}  // namespace
+
+TEST_CASE("pty: calibrate push writes the golden blob despite link faults", "[blob][push][apps]") {
+  const std::vector<uint8_t> golden = Bytes(kGolden + "tag_sensor2.bin");
+  struct Case {
+    const char* name;
+    std::vector<std::string> faults;
+    const char* link_line;
+  };
+  const std::vector<Case> cases = {
+      {"clean", {}, "link: 72 requests, 72 frames sent, 0 retries, 0 NAKs, 0 timeouts"},
+      {"lost frame",
+       {"--drop-frame", "9"},
+       "link: 72 requests, 73 frames sent, 1 retries, 0 NAKs, 1 timeouts"},
+      {"duplicated frame",
+       {"--dup-frame", "38"},
+       "link: 72 requests, 72 frames sent, 0 retries, 0 NAKs, 0 timeouts"},
+      {"corrupted frame",
+       {"--corrupt-frame", "3"},
+       "link: 72 requests, 73 frames sent, 1 retries, 1 NAKs, 0 timeouts"},
+      {"lost answer",
+       {"--drop-response", "38"},
+       "link: 72 requests, 73 frames sent, 1 retries, 0 NAKs, 1 timeouts"},
+  };
+  for (const Case& c : cases) {
+    SECTION(c.name) {
+      const std::string flash = "metro_pty_flash.bin";
+      std::remove(flash.c_str());
+      SimTag sim(flash, c.faults);
+      // seq 3 and this tag's id: the pushed blob is the golden file, byte for byte.
+      Run r = Push(sim.pty(), "--seq 3 --timeout-ms 200");
+      INFO(r.err);
+      CHECK(r.exit_code == 0);
+      CHECK(Has(r.err, "tag 9ABCDEF012345678: format 1.0, active slot none, seq 0"));
+      CHECK(Has(r.err, c.link_line));
+      CHECK(Has(r.err,
+                "OK: tag 9ABCDEF012345678 calibrated: seq 3 in slot A, 540 bytes read "
+                "back identical"));
+      CHECK(sim.Stop() == 0);
+      const std::vector<uint8_t> img = Bytes(flash);
+      CHECK(Slot(img, 0, golden.size()) == golden);
+      CHECK(Slot(img, 1, kPageSize) == std::vector<uint8_t>(kPageSize, 0xFF));
+      std::remove(flash.c_str());
+    }
+  }
+}
+
+TEST_CASE("pty: calibrate push reports a stale seq and a disconnect and a flash error and no tag",
+          "[blob][push][apps]") {
+  const std::vector<uint8_t> golden = Bytes(kGolden + "tag_sensor2.bin");  // seq 3
+  const std::string flash = "metro_pty_fault_flash.bin";
+
+  SECTION("stale seq") {
+    SimTag sim(FlashWith(flash, golden), {});
+    Run r = Push(sim.pty(), "--seq 2");
+    CHECK(r.exit_code == 1);
+    CHECK(Has(r.err, "tag 9ABCDEF012345678: format 1.0, active slot A, seq 3"));
+    CHECK(Has(r.err,
+              "FAILED: CAL_CREATE: the tag answered STALE_SEQ (seq 2 is not above the "
+              "tag's active seq)"));
+    CHECK(Has(r.err, "to program over SWD instead: calibrate blob "));
+    CHECK(Has(r.err, "nrfjprog -f NRF51 --program tag.hex --sectorerase --verify --reset"));
+    sim.Stop();
+    CHECK(Bytes(flash) == Bytes(FlashWith(flash + ".ref", golden)));
+  }
+  SECTION("disconnect mid-transfer, then a new session") {
+    {
+      SimTag sim(FlashWith(flash, golden), {"--hangup-after", "12"});
+      Run r = Push(sim.pty(), "--timeout-ms 200");
+      CHECK(r.exit_code == 1);
+      CHECK(Has(r.err, "FAILED: CAL_WRITE: link lost: "));
+      CHECK(Has(r.err, "the link hung up"));
+      CHECK(sim.Stop() == 0);
+    }
+    CHECK(Slot(Bytes(flash), 0, golden.size()) == golden);  // the old calibration stays
+    SimTag sim(flash, {});
+    Run r = Push(sim.pty());
+    CHECK(r.exit_code == 0);
+    CHECK(Has(r.err, "OK: tag 9ABCDEF012345678 calibrated: seq 4 in slot B"));
+    sim.Stop();
+    CHECK(Slot(Bytes(flash), 0, golden.size()) == golden);
+  }
+  SECTION("flash write error") {
+    SimTag sim(FlashWith(flash, golden), {"--flash-write-error", "1"});
+    Run r = Push(sim.pty());
+    CHECK(r.exit_code == 1);
+    CHECK(Has(r.err, "FAILED: CAL_EXECUTE: the tag answered FLASH_ERROR"));
+    sim.Stop();
+    CHECK(Slot(Bytes(flash), 0, golden.size()) == golden);
+  }
+  SECTION("no answer") {
+    SimTag sim(FlashWith(flash, golden),
+               {"--drop-frame", "1", "--drop-frame", "2", "--drop-frame", "3"});
+    Run r = Push(sim.pty(), "--timeout-ms 50 --retries 2");
+    CHECK(r.exit_code == 1);
+    CHECK(Has(r.err,
+              "FAILED: no tag: GET_INFO: no valid answer after 3 attempts (no answer "
+              "within 50 ms)"));
+    CHECK(Has(r.err, "link: 1 requests, 3 frames sent, 2 retries, 0 NAKs, 3 timeouts"));
+  }
+  SECTION("another tag") {
+    SimTag sim(FlashWith(flash, golden), {});
+    Run r = Push(sim.pty(), "--device-id 0000000000000001");
+    CHECK(r.exit_code == 2);
+    CHECK(Has(r.err,
+              "FAILED: the tag on the link is 9ABCDEF012345678, not 0000000000000001: "
+              "nothing was written"));
+  }
+  SECTION("no port") {
+    Run r = Push("/nonexistent/ttyX");
+    CHECK(r.exit_code == 1);
+    CHECK(r.err == "error: /nonexistent/ttyX: cannot open: No such file or directory\n");
+  }
+  std::remove(flash.c_str());
+  std::remove((flash + ".ref").c_str());
+}
+#endif  // METRO_CALIBRATE_EXE
+
+}  // namespace metro::blob
+
+#endif  // METRO_SIM_TAG_EXE
