@@ -7,6 +7,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/report/certificate.hpp"
 
 namespace metro::calibrate_app {
 namespace {
@@ -26,6 +27,7 @@ struct FitOptions {
   std::string loss = "none";
   double loss_scale = 3.0;
   bool accel_only = false;
+  std::string html;  // Calibration certificate (docs/reports.md).
 };
 
 int RunFit(const FitOptions& f) {
@@ -61,9 +63,11 @@ int RunFit(const FitOptions& f) {
     return kExitUsage;
   }
   for (const std::string& in : f.inputs) {
-    if (IsSameFile(in, f.output)) {
-      fmt::print(stderr, "error: the output {} is one of the inputs\n", f.output);
-      return kExitUsage;
+    for (const std::string* out : {&f.output, &f.html}) {
+      if (!out->empty() && IsSameFile(in, *out)) {
+        fmt::print(stderr, "error: the output {} is one of the inputs\n", *out);
+        return kExitUsage;
+      }
     }
   }
   std::vector<Session> sessions;
@@ -104,6 +108,20 @@ int RunFit(const FitOptions& f) {
     for (const std::string& w : t.warnings) fmt::print(stderr, "  warning: {}\n", w);
   }
   fmt::print(stderr, "wrote {}\n", f.output);
+  if (!f.html.empty()) {
+    CertificateOptions certificate;
+    certificate.accel_fs_g = f.accel_fs_g;
+    certificate.gyro_fs_dps = f.gyro_fs_dps;
+    Result<std::string> html = RenderCalibrationCertificate(
+        cal.value(), ptrs, "Conditions and residual plots from the input records as fitted.",
+        certificate);
+    Status s = html.ok() ? WriteFileAtomically(f.html, html.value()) : Status(html.error());
+    if (!s.ok()) {
+      fmt::print(stderr, "error: {}\n", s.error().ToString());
+      return kExitFailed;
+    }
+    fmt::print(stderr, "wrote {}\n", f.html);
+  }
   return kExitOk;
 }
 
@@ -137,6 +155,7 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::IsMember({"none", "huber", "cauchy"}));
   sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, in standard deviations");
   sub->add_flag("--accel-only", o->accel_only, "calibrate the accelerometer only");
+  sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
   sub->callback([o, exit_code] { *exit_code = RunFit(*o); });
 }
 

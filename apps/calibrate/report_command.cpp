@@ -5,12 +5,15 @@
 
 #include "commands.hpp"
 #include "metro/calibration/calibration_io.hpp"
+#include "metro/core/file.hpp"
+#include "metro/report/html_report.hpp"
 
 namespace metro::calibrate_app {
 namespace {
 
 struct ReportOptions {
   std::string calibration;
+  std::string html;  // Calibration certificate (docs/reports.md).
 };
 
 int RunReport(const ReportOptions& r) {
@@ -20,6 +23,20 @@ int RunReport(const ReportOptions& r) {
     return kExitUsage;
   }
   fmt::print("{}", FormatCalibrationReport(cal.value()));
+  if (!r.html.empty()) {
+    if (IsSameFile(r.html, r.calibration)) {
+      fmt::print(stderr, "error: the output {} is the input\n", r.html);
+      return kExitUsage;
+    }
+    // The certificate reloads the recorded inputs when their SHA-256 still matches.
+    Result<std::string> html = RenderJsonFileHtml(r.calibration);
+    Status s = html.ok() ? WriteFileAtomically(r.html, html.value()) : Status(html.error());
+    if (!s.ok()) {
+      fmt::print(stderr, "error: {}\n", s.error().ToString());
+      return kExitFailed;
+    }
+    fmt::print(stderr, "wrote {}\n", r.html);
+  }
   return kExitOk;
 }
 
@@ -31,6 +48,7 @@ void AddReportCommand(CLI::App& app, int* exit_code) {
   sub->add_option("calibration", o->calibration, "calibration.json")
       ->required()
       ->check(CLI::ExistingFile);
+  sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
   sub->callback([o, exit_code] { *exit_code = RunReport(*o); });
 }
 

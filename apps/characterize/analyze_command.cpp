@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "metro/core/file.hpp"
 #include "metro/noise/allan.hpp"
+#include "metro/report/html_report.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "output.hpp"
 
@@ -36,6 +37,7 @@ struct AnalyzeOptions {
   std::string allan_csv;
   std::string budget;
   AccuracyCliOptions accuracy;  // --accuracy and its options (accuracy_command.hpp).
+  std::string html;
 };
 
 int RunAnalyze(const AnalyzeOptions& o) {
@@ -73,7 +75,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
     }
     options.registry = loaded.value();
   }
-  for (const std::string* out : {&o.output, &o.allan_csv}) {
+  for (const std::string* out : {&o.output, &o.allan_csv, &o.html}) {
     if (out->empty()) continue;
     if (Status s = CheckOutputPath(*out, {o.session, o.budget}); !s.ok()) {
       PrintError(s.error());
@@ -112,16 +114,28 @@ int RunAnalyze(const AnalyzeOptions& o) {
       return kExitFailed;
     }
   }
+  // The HTML report, after the JSON: a failed render never costs the JSON.
+  auto write_html = [&o, &analysis]() -> int {
+    if (o.html.empty()) return kExitOk;
+    Result<std::string> html = RenderSessionAnalysisHtml(analysis);
+    Status s = html.ok() ? WriteFileAtomically(o.html, html.value()) : Status(html.error());
+    if (!s.ok()) {
+      PrintError(s.error());
+      return kExitFailed;
+    }
+    return kExitOk;
+  };
   if (o.output.empty()) {
     std::fwrite(json.data(), 1, json.size(), stdout);
-    return kExitOk;
+    std::fflush(stdout);
+    return write_html();
   }
   if (Status s = WriteFileAtomically(o.output, json); !s.ok()) {
     PrintError(s.error());
     return kExitFailed;
   }
   std::fwrite(analysis.table.data(), 1, analysis.table.size(), stdout);
-  return kExitOk;
+  return write_html();
 }
 
 }  // namespace
@@ -168,6 +182,8 @@ void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
                  "evaluate this uncertainty budget (docs/budget-format.md); its session inputs "
                  "refer to SESSION")
       ->check(CLI::ExistingFile);
+  app.add_option("--html", o->html,
+                 "also write a self-contained HTML report with plots here (docs/reports.md)");
   AddAccuracyOptions(app, &o->accuracy);
   app.add_option("--threads", o->threads, "worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);

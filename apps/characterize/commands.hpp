@@ -12,5 +12,8 @@ namespace metro::apps {
 void AddAnalyzeOptions(CLI::App& app, int* exit_code);
 void AddConvertCommand(CLI::App& app, int* exit_code);
 void AddSimulateCommand(CLI::App& app, int* exit_code);
+// `characterize batch` and `characterize report REPORT.json --html FILE` (docs/reports.md).
+void AddBatchCommand(CLI::App& app, int* exit_code);
+void AddReportCommand(CLI::App& app, int* exit_code);
 
 }  // namespace metro::apps

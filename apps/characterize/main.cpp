@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   metro::apps::AddConvertCommand(app, &exit_code);
   metro::apps::AddSimulateCommand(app, &exit_code);
   metro::apps::AddBudgetCommand(app, &exit_code);
+  metro::apps::AddBatchCommand(app, &exit_code);
+  metro::apps::AddReportCommand(app, &exit_code);
   // Budget files may name sessions; they are evaluated in full (no window).
   metro::SetBudgetSessionResolver(metro::MakeSessionQuantityResolver("", {}, {}));
   try {

@@ -1,0 +1,64 @@
+// Calibration certificate: the HTML view of a calibration ("metro.calibration/1") with the
+// content ISO/IEC 17025:2017 7.8.2 and 7.8.4 ask of a calibration report: identification
+// of the tag(s) and of every input session (SHA-256), method and model, results with
+// expanded uncertainties U = k u and the coverage factor k (JCGM 100:2008 6.2, 6.3, 7.2.6
+// rounding), the conditions (temperature range of the records), the residuals before and
+// after calibration, and the validity of the results.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "metro/calibration/calibrate.hpp"
+#include "metro/core/status.hpp"
+#include "metro/io/session.hpp"
+
+namespace metro {
+
+struct CertificateOptions {
+  // k of the stated expanded uncertainties (2: about 95 % for a normal distribution and
+  // many degrees of freedom, JCGM 100:2008 6.3.3).
+  double coverage_factor = 2.0;
+  // Full-scale settings used for the "before calibration" residuals of raw (LSB) input:
+  // the nominal MPU6050 sensitivity at these ranges (imu_model.hpp NominalScale).
+  double accel_fs_g = 2.0;
+  double gyro_fs_dps = 250.0;
+
+  bool IsValid(std::string* why) const;
+};
+
+// The certificate page. `sessions` are the calibration's inputs in the order of
+// calibration.inputs (as fitted), or empty when they are not available: the conditions
+// then come from the file alone and the residual plots are omitted; `sessions_note` says
+// which. Errors: invalid options, `sessions` not matching calibration.inputs.
+Result<std::string> RenderCalibrationCertificate(const Calibration& calibration,
+                                                 const std::vector<const Session*>& sessions,
+                                                 const std::string& sessions_note,
+                                                 const CertificateOptions& options = {});
+
+// Residuals of every static segment a sensor's fit used, before calibration (the raw
+// segment mean at the nominal sensitivity, NominalScale) and after (SensorModel::Apply at
+// the segment's mean temperature): accelerometer |a| - gravity_mps2/g_n [g], gyroscope |w|
+// [deg/s]. Errors: no nominal scale for the input unit, no static segment found in
+// `sessions` (the inputs in calibration.inputs order).
+struct StaticResiduals {
+  std::vector<double> before;
+  std::vector<double> after;
+  std::string unit;  // "g" or "deg/s".
+};
+Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& calibration, int sensor,
+                                               const std::vector<const Session*>& sessions,
+                                               double gravity_mps2,
+                                               const CertificateOptions& options = {});
+
+// The inputs of a calibration reloaded from disk (paths as recorded, then relative to the
+// directory of `calibration_path`), each only when its SHA-256 matches the recorded one.
+struct ReloadedInputs {
+  std::vector<Session> sessions;  // In calibration.inputs order when `complete`.
+  bool complete = false;          // Every input was found and matched.
+  std::string note;               // What was reloaded, or why not.
+};
+ReloadedInputs ReloadCalibrationInputs(const Calibration& calibration,
+                                       const std::string& calibration_path);
+
+}  // namespace metro

@@ -1,0 +1,67 @@
+// Self-contained HTML reports (issue #7): one file with inline CSS and inline SVG plots
+// (PLplot), no network reference, rendered from the mustache templates in
+// reports/templates/ (compiled into the library). docs/reports.md shows what each view
+// holds.
+//
+// The view is chosen by the JSON "schema" key:
+//   "metro.report/1"       session view: per tag and quantity the time series with the
+//                          excluded (skip/settle) part shaded, the histogram with the normal
+//                          density of the Type A result, the autocorrelation with the
+//                          white-noise band, the Allan deviation with confidence bars and the
+//                          fitted IEEE 952 terms, and the budget as sorted bars;
+//   "metro.calibration/1"  the calibration certificate (certificate.hpp);
+//   anything else          a generic view: the JSON as tables (a "budget" key gets bars).
+// Numbers in tables are rounded per JCGM 100:2008 7.2.6; the JSON keeps full precision.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "metro/core/status.hpp"
+#include "metro/io/session.hpp"
+#include "metro/report/session_analysis.hpp"
+
+namespace metro {
+
+struct HtmlReportOptions {
+  // Quantities that get plots; empty: every evaluated quantity except the quaternion
+  // components qw qx qy qz (their Euler angles are plotted instead).
+  std::vector<std::string> plot_quantities;
+  int max_plotted_quantities = 48;  // Over all tags; the rest are listed in the tables only.
+  int max_series_points = 2000;     // Longer time series are drawn as min/max per bucket.
+  int histogram_bins = 0;           // 0: sqrt(n), clamped to 10..60.
+  int max_autocorr_lag = 200;       // Also at most n/4.
+
+  bool IsValid(std::string* why) const;
+};
+
+// The session view of a "metro.report/1" report. `session` holds the raw series the
+// report was made from (nullptr when not available: the time series, histogram and
+// autocorrelation plots are then listed as unavailable with `session_note` as reason);
+// `session_note` is shown either way (e.g. where the data came from).
+// Errors: invalid options, a report that is not "metro.report/1" or lacks required keys.
+Result<std::string> RenderSessionReportHtml(const nlohmann::ordered_json& report,
+                                            const Session* session, const std::string& session_note,
+                                            const HtmlReportOptions& options = {});
+
+// The session view of a finished AnalyzeSession (everything in memory).
+Result<std::string> RenderSessionAnalysisHtml(const SessionAnalysis& analysis,
+                                              const HtmlReportOptions& options = {});
+
+// Any saved JSON document, dispatched on its "schema" key (see above). `json_path` is
+// where it was read from: a report's input session (input.path, tried as given and
+// relative to the JSON's directory) is reloaded when its SHA-256 matches input.sha256,
+// unless `session_path` names the session explicitly (its SHA-256 must match too);
+// likewise the inputs of a calibration. The page says which data it used.
+Result<std::string> RenderJsonHtml(const nlohmann::ordered_json& document,
+                                   const std::string& json_path,
+                                   const std::string& session_path = "",
+                                   const HtmlReportOptions& options = {});
+
+// Reads a JSON file and renders it with RenderJsonHtml. Errors name the file.
+Result<std::string> RenderJsonFileHtml(const std::string& json_path,
+                                       const std::string& session_path = "",
+                                       const HtmlReportOptions& options = {});
+
+}  // namespace metro

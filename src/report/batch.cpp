@@ -1,0 +1,295 @@
+#include "metro/report/batch.hpp"
+
+#include <fmt/format.h>
+#include <glob.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "metro/core/file.hpp"
+#include "metro/core/rounding.hpp"
+#include "metro/core/version.hpp"
+
+namespace metro {
+
+using nlohmann::ordered_json;
+namespace fs = std::filesystem;
+
+namespace {
+
+bool IsPattern(const std::string& s) { return s.find_first_of("*?[") != std::string::npos; }
+
+// One tag's quantity in one session, kept for the summary.
+struct QuantityResult {
+  int sensor = 0;
+  std::string tag_name;
+  std::string quantity;
+  std::string unit;
+  double mean = 0.0;
+  double u_mean = 0.0;
+  double n = 0.0;
+  double n_eff = 0.0;
+};
+
+double Number(const ordered_json& j, const char* key) {
+  if (!j.contains(key) || !j[key].is_number()) return std::nan("");
+  return j[key].get<double>();
+}
+
+std::vector<QuantityResult> ExtractResults(const ordered_json& report) {
+  std::vector<QuantityResult> out;
+  for (const auto& s : report["sensors"]) {
+    if (!s.contains("quantities")) continue;
+    for (const auto& [name, q] : s["quantities"].items()) {
+      if (!q.contains("type_a") || !q["type_a"].is_object()) continue;
+      const auto& a = q["type_a"];
+      QuantityResult r;
+      r.sensor = s["sensor"].get<int>();
+      r.tag_name = s.value("name", "");
+      r.quantity = name;
+      r.unit = q.value("unit", "");
+      r.mean = Number(a, "mean");
+      r.u_mean = Number(a, "std_of_mean_autocorr");
+      r.n = Number(a, "n");
+      r.n_eff = Number(a, "n_eff");
+      out.push_back(std::move(r));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+bool BatchOptions::IsValid(std::string* why) const {
+  if (output_dir.empty()) {
+    *why = "batch: no output directory (-o DIR)";
+    return false;
+  }
+  if (jobs < 0) {
+    *why = fmt::format("batch: --jobs {} must be >= 0 (0: all cores)", jobs);
+    return false;
+  }
+  return analysis.IsValid(why);
+}
+
+Result<std::vector<std::string>> ExpandBatchInputs(const std::vector<std::string>& arguments) {
+  if (arguments.empty()) return MakeError("batch: no session files, directories or patterns");
+  std::set<std::string> files;
+  for (const std::string& arg : arguments) {
+    std::error_code ec;
+    size_t found = 0;
+    if (fs::is_directory(arg, ec)) {
+      for (const fs::directory_entry& e : fs::directory_iterator(arg, ec)) {
+        const std::string ext = e.path().extension().string();
+        if (e.is_regular_file(ec) && (ext == ".csv" || ext == ".txt")) {
+          files.insert(e.path().string());
+          ++found;
+        }
+      }
+      if (ec) return MakeError(arg, 0, fmt::format("cannot list the directory: {}", ec.message()));
+      if (found == 0) return MakeError(arg, 0, "directory has no *.csv or *.txt session files");
+    } else if (IsPattern(arg) && !fs::exists(arg, ec)) {
+      glob_t g{};
+      const int rc = ::glob(arg.c_str(), 0, nullptr, &g);
+      if (rc == 0) {
+        for (size_t i = 0; i < g.gl_pathc; ++i) {
+          if (fs::is_regular_file(g.gl_pathv[i], ec)) {
+            files.insert(g.gl_pathv[i]);
+            ++found;
+          }
+        }
+      }
+      ::globfree(&g);
+      if (found == 0) return MakeError(arg, 0, "pattern matches no file");
+    } else {
+      if (!fs::is_regular_file(arg, ec)) return MakeError(arg, 0, "no such file");
+      files.insert(arg);
+    }
+  }
+  return std::vector<std::string>(files.begin(), files.end());
+}
+
+std::vector<std::string> BatchReportNames(const std::vector<std::string>& inputs) {
+  std::map<std::string, int> stem_count;
+  for (const std::string& in : inputs) ++stem_count[fs::path(in).stem().string()];
+  std::vector<std::string> names;
+  for (const std::string& in : inputs) {
+    const std::string stem = fs::path(in).stem().string();
+    if (stem_count[stem] > 1) {
+      std::error_code ec;
+      const fs::path absolute = fs::absolute(in, ec);
+      const std::string key = ec ? in : absolute.lexically_normal().string();
+      names.push_back(fmt::format("{}-{}.report.json", stem, Sha256Hex(key).substr(0, 8)));
+    } else {
+      names.push_back(stem + ".report.json");
+    }
+  }
+  return names;
+}
+
+BatchSummary RunBatch(const std::vector<std::string>& inputs, const BatchOptions& options) {
+  BatchSummary out;
+  std::string why;
+  if (!options.IsValid(&why)) {
+    out.error = MakeError(why);
+    return out;
+  }
+  std::error_code ec;
+  fs::create_directories(options.output_dir, ec);
+  if (ec || !fs::is_directory(options.output_dir)) {
+    out.error = MakeError(options.output_dir, 0,
+                          fmt::format("cannot create the output directory: {}", ec.message()));
+    return out;
+  }
+  SessionAnalysisOptions analysis = options.analysis;
+  analysis.load.threads = 1;
+  analysis.type_a.threads = 1;
+  analysis.allan_options.allan.threads = 1;
+  analysis.allan_csv = false;
+
+  const std::vector<std::string> names = BatchReportNames(inputs);
+  out.items.resize(inputs.size());
+  std::vector<std::vector<QuantityResult>> results(inputs.size());
+  std::vector<std::string> hashes(inputs.size());
+  std::atomic<size_t> next{0};
+  std::mutex progress_mutex;
+  size_t done = 0;
+  auto worker = [&] {
+    for (size_t i = next.fetch_add(1); i < inputs.size(); i = next.fetch_add(1)) {
+      BatchItem& item = out.items[i];
+      item.input = inputs[i];
+      const SessionAnalysis a = AnalyzeSession(inputs[i], analysis);
+      if (!a.ok) {
+        item.error = a.error;
+        item.input_error = a.input_error;
+      } else {
+        item.report_path = (fs::path(options.output_dir) / names[i]).string();
+        if (Status s = WriteFileAtomically(item.report_path, a.report.dump(2) + "\n"); !s.ok()) {
+          item.error = s.error();
+          item.input_error = false;
+          item.report_path.clear();
+        } else {
+          item.ok = true;
+          hashes[i] = a.session.sha256;
+          results[i] = ExtractResults(a.report);
+        }
+      }
+      if (options.on_progress) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        options.on_progress(++done, inputs.size());
+      }
+    }
+  };
+  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  const size_t jobs =
+      std::min<size_t>(inputs.size(), options.jobs > 0 ? static_cast<size_t>(options.jobs)
+                                                       : static_cast<size_t>(hardware));
+  std::vector<std::thread> threads;
+  for (size_t j = 1; j < jobs; ++j) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+
+  // Summary per tag and quantity across sessions, in (sensor, quantity) order.
+  struct Accumulated {
+    std::string tag_name, unit;
+    std::vector<double> means;
+    double worst_ratio = std::numeric_limits<double>::infinity();
+    std::string worst_session;
+    std::set<std::string> units;
+  };
+  std::map<std::pair<int, std::string>, Accumulated> by_quantity;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    for (const QuantityResult& r : results[i]) {
+      Accumulated& acc = by_quantity[{r.sensor, r.quantity}];
+      if (acc.tag_name.empty()) acc.tag_name = r.tag_name;
+      acc.unit = r.unit;
+      acc.units.insert(r.unit);
+      acc.means.push_back(r.mean);
+      const double ratio = r.n > 0 ? r.n_eff / r.n : std::nan("");
+      if (ratio < acc.worst_ratio) {
+        acc.worst_ratio = ratio;
+        acc.worst_session = inputs[i];
+      }
+    }
+  }
+  ordered_json summary;
+  summary["schema"] = kBatchSummarySchema;
+  summary["tool"] = {{"name", kToolName}, {"version", kVersion}};
+  summary["output_dir"] = options.output_dir;
+  summary["sessions_total"] = inputs.size();
+  ordered_json sessions = ordered_json::array();
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    const BatchItem& item = out.items[i];
+    ordered_json s;
+    s["input"] = item.input;
+    s["ok"] = item.ok;
+    if (item.ok) {
+      s["sha256"] = hashes[i];
+      s["report"] = names[i];
+    } else {
+      ++out.failed;
+      s["error"] = item.error.ToString();
+      s["input_error"] = item.input_error;
+    }
+    sessions.push_back(s);
+  }
+  summary["sessions_failed"] = out.failed;
+  summary["sessions"] = sessions;
+  ordered_json quantities = ordered_json::array();
+  std::string table = fmt::format("{} sessions, {} failed\n", inputs.size(), out.failed);
+  table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10}\n", "sensor", "tag",
+                       "quantity", "unit", "n", "mean of means", "std of means", "worst n_eff/n");
+  for (const auto& [key, acc] : by_quantity) {
+    const size_t n = acc.means.size();
+    double sum = 0.0;
+    for (double m : acc.means) sum += m;
+    const double mean = sum / static_cast<double>(n);
+    double ss = 0.0;
+    for (double m : acc.means) ss += (m - mean) * (m - mean);
+    // JCGM 100:2008 4.2.2: experimental standard deviation of the session means.
+    const double std_of_means = n >= 2 ? std::sqrt(ss / static_cast<double>(n - 1)) : std::nan("");
+    ordered_json q;
+    q["sensor"] = key.first;
+    q["name"] = acc.tag_name;
+    q["quantity"] = key.second;
+    q["unit"] = acc.unit;
+    q["sessions"] = n;
+    q["mean_of_means"] = mean;
+    q["std_of_means"] = n >= 2 ? ordered_json(std_of_means) : ordered_json(nullptr);
+    q["worst_n_eff_ratio"] =
+        std::isfinite(acc.worst_ratio) ? ordered_json(acc.worst_ratio) : ordered_json(nullptr);
+    q["worst_n_eff_session"] = acc.worst_session;
+    if (acc.units.size() > 1) q["warning"] = "sessions disagree on the unit of this quantity";
+    quantities.push_back(q);
+    const RoundedResult r = RoundForStatement(mean, n >= 2 ? std_of_means : 0.0);
+    table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10.3f}\n", key.first,
+                         acc.tag_name, key.second, acc.unit, n, r.value,
+                         n >= 2 ? r.uncertainty : "-", acc.worst_ratio);
+  }
+  summary["quantities"] = quantities;
+  for (const BatchItem& item : out.items) {
+    if (!item.ok) table += fmt::format("FAILED {}: {}\n", item.input, item.error.ToString());
+  }
+  out.summary = summary;
+  out.table = table;
+  const fs::path dir(options.output_dir);
+  if (Status s = WriteFileAtomically((dir / "summary.json").string(), summary.dump(2) + "\n");
+      !s.ok()) {
+    out.error = s.error();
+    return out;
+  }
+  if (Status s = WriteFileAtomically((dir / "summary.txt").string(), table); !s.ok()) {
+    out.error = s.error();
+    return out;
+  }
+  out.ok = out.failed == 0;
+  return out;
+}
+
+}  // namespace metro

@@ -1,0 +1,407 @@
+#include "metro/report/certificate.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "html_templates.hpp"
+#include "metro/calibration/calibration_io.hpp"
+#include "metro/core/file.hpp"
+#include "metro/core/rounding.hpp"
+#include "metro/io/session_io.hpp"
+#include "metro/report/svg_plot.hpp"
+
+namespace metro {
+
+namespace mustache = kainjow::mustache;
+
+namespace {
+
+std::string Short(double x, int digits) { return fmt::format("{:.{}g}", x, digits); }
+
+// One row of the results table: value, u and U = k u, rounded per JCGM 100:2008 7.2.6.
+mustache::data ResultRow(const std::string& constant, const std::string& unit, double value,
+                         double u, double k) {
+  mustache::data row;
+  row.set("constant", constant);
+  row.set("unit", unit);
+  if (u > 0.0 && std::isfinite(u)) {
+    const RoundedResult expanded = RoundForStatement(value, k * u);  // JCGM 100:2008 6.2.1
+    row.set("value", expanded.value);
+    row.set("u", RoundForStatement(value, u).uncertainty);
+    row.set("U", expanded.uncertainty);
+  } else {
+    row.set("value", Short(value, 8));
+    row.set("u", "held");
+    row.set("U", "held");
+  }
+  return row;
+}
+
+const char* kAxes[3] = {"x", "y", "z"};
+
+const Quantity* FindColumn(const Tag& tag, const std::string& name) { return tag.Find(name); }
+
+std::string ColumnSuffix(ImuSensor sensor, const std::string& unit) {
+  if (unit == "LSB") return "_lsb";
+  if (sensor == ImuSensor::kAccel) return unit == "g" ? "_g" : "_mps2";
+  return unit == "deg/s" ? "_dps" : "_rads";
+}
+
+Result<std::string> ResidualPlot(const SensorCalibration& c, int sensor,
+                                 const std::vector<const Session*>& sessions, double gravity_mps2,
+                                 const CertificateOptions& options) {
+  Result<StaticResiduals> r = ComputeStaticResiduals(c, sensor, sessions, gravity_mps2, options);
+  if (!r.ok()) return r.error();
+  const bool accel = c.model.sensor == ImuSensor::kAccel;
+  PlotSeries before, after;
+  before.label = "before (nominal sensitivity)";
+  before.style = SeriesStyle::kPoints;
+  before.color = PlotColor::kOrange;
+  after.label = "after calibration";
+  after.style = SeriesStyle::kPoints;
+  after.color = PlotColor::kBlue;
+  for (size_t i = 0; i < r.value().before.size(); ++i) {
+    before.x.push_back(static_cast<double>(i + 1));
+    before.y.push_back(r.value().before[i]);
+    after.x.push_back(static_cast<double>(i + 1));
+    after.y.push_back(r.value().after[i]);
+  }
+  XyPlot plot;
+  plot.title = accel ? "Accelerometer: gravity-norm error per static pose"
+                     : "Gyroscope: rate magnitude per static interval";
+  plot.x_label = "static pose";
+  plot.y_label = accel ? "|a| - g_local/g_n [g]" : "|w| [deg/s]";
+  plot.hlines.push_back({"", 0.0, PlotColor::kGrey, true});
+  plot.series = {std::move(before), std::move(after)};
+  return RenderXyPlot(plot);
+}
+
+mustache::data SensorData(const SensorCalibration& c, int sensor,
+                          const std::vector<const Session*>& sessions, double gravity_mps2,
+                          const CertificateOptions& options) {
+  const SensorModel& m = c.model;
+  const double k = options.coverage_factor;
+  const bool accel = m.sensor == ImuSensor::kAccel;
+  mustache::data d;
+  d.set("sensor", std::to_string(sensor));
+  d.set("title", accel ? "accelerometer" : "gyroscope");
+  d.set("model", ModelKindName(m.kind));
+  d.set("input_unit", m.input_unit);
+  d.set("output_unit", m.output_unit);
+  d.set("dof", std::to_string(c.dof));
+  d.set("chi2", Short(c.reduced_chi2, 4));
+  d.set("t95", Short(c.coverage_factor_95, 4));
+  d.set("k", Short(k, 3));
+  mustache::data rows{mustache::data::type::list};
+  for (int a = 0; a < 3; ++a) {
+    rows.push_back(
+        ResultRow(fmt::format("bias b0_{}", kAxes[a]), m.input_unit, m.bias[a], c.bias_u[a], k));
+  }
+  const std::string scale_unit = fmt::format("{}/{}", m.output_unit, m.input_unit);
+  for (int a = 0; a < 3; ++a) {
+    rows.push_back(
+        ResultRow(fmt::format("scale k_{}", kAxes[a]), scale_unit, m.scale[a], c.scale_u[a], k));
+  }
+  static const char* kAccelTerms[3] = {"a_yz", "a_zy", "a_zx"};
+  static const char* kGyroTerms[6] = {"g_yz", "g_zy", "g_xz", "g_zx", "g_xy", "g_yx"};
+  for (int i = 0; i < MisalignmentCount(m.sensor); ++i) {
+    const double v = static_cast<size_t>(i) < m.misalignment.size() ? m.misalignment[i] : 0.0;
+    const double u = static_cast<size_t>(i) < c.misalignment_u.size() ? c.misalignment_u[i] : 0.0;
+    rows.push_back(ResultRow(fmt::format("misalignment {}", accel ? kAccelTerms[i] : kGyroTerms[i]),
+                             "rad", v, u, k));
+  }
+  if (m.has_temperature) {
+    for (int a = 0; a < 3; ++a) {
+      rows.push_back(ResultRow(
+          fmt::format("bias temperature b1_{} (t_ref = {:.2f} degC)", kAxes[a], m.t_ref_c),
+          m.input_unit + "/degC", m.bias_per_c[a], c.bias_per_c_u[a], k));
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    rows.push_back(ResultRow(fmt::format("sensitivity 1/k_{}", kAxes[a]),
+                             fmt::format("{}/{}", m.input_unit, m.output_unit), c.sensitivity[a],
+                             c.sensitivity_u[a], k));
+  }
+  d.set("rows", rows);
+  mustache::data groups{mustache::data::type::list};
+  for (const ResidualGroup& g : c.groups) {
+    mustache::data row;
+    row.set("kind", g.kind);
+    row.set("count", std::to_string(g.count));
+    row.set("rms", Short(g.rms, 3));
+    row.set("unit", g.unit);
+    groups.push_back(row);
+  }
+  d.set("groups", groups);
+  mustache::data plots{mustache::data::type::list};
+  if (!sessions.empty()) {
+    Result<std::string> svg = ResidualPlot(c, sensor, sessions, gravity_mps2, options);
+    mustache::data f;
+    if (svg.ok()) {
+      f.set("svg", svg.value());
+      f.set("caption",
+            fmt::format("Residual of each static segment the fit used, before calibration (raw "
+                        "means at the nominal sensitivity{}) and after (the calibrated model).",
+                        m.input_unit == "LSB"
+                            ? fmt::format(", +-{} {} range",
+                                          accel ? options.accel_fs_g : options.gyro_fs_dps,
+                                          accel ? "g" : "deg/s")
+                            : ""));
+    } else {
+      f.set("svg", "");
+      f.set("caption", "Residuals before/after: not drawn (" + svg.error().message + ").");
+    }
+    plots.push_back(f);
+  }
+  d.set("plots", plots);
+  return d;
+}
+
+}  // namespace
+
+Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& c, int sensor,
+                                               const std::vector<const Session*>& sessions,
+                                               double gravity_mps2,
+                                               const CertificateOptions& options) {
+  const SensorModel& m = c.model;
+  const bool accel = m.sensor == ImuSensor::kAccel;
+  const std::optional<double> nominal =
+      NominalScale(m.sensor, m.input_unit, accel ? options.accel_fs_g : options.gyro_fs_dps);
+  if (!nominal) return MakeError(fmt::format("no nominal scale for input unit {}", m.input_unit));
+  const double target = accel ? gravity_mps2 / kStandardGravityMps2 : 0.0;
+  const std::string suffix = ColumnSuffix(m.sensor, m.input_unit);
+  StaticResiduals out;
+  out.unit = accel ? "g" : "deg/s";
+  for (const Segment& seg : c.segments) {
+    if (seg.kind != SegmentKind::kStatic || !seg.used) continue;
+    if (seg.piece < 0 || static_cast<size_t>(seg.piece) >= sessions.size()) continue;
+    const Tag* tag = sessions[static_cast<size_t>(seg.piece)]->FindTag(sensor);
+    if (tag == nullptr) continue;
+    const Quantity* col[3];
+    bool have = true;
+    for (int a = 0; a < 3; ++a) {
+      col[a] = FindColumn(*tag, std::string(1, accel ? 'a' : 'g') + kAxes[a] + suffix);
+      have = have && col[a] != nullptr;
+    }
+    if (!have || seg.end > tag->size() || seg.begin >= seg.end) continue;
+    const Quantity* temp = FindColumn(*tag, "temp_c");
+    Eigen::Vector3d raw = Eigen::Vector3d::Zero();
+    double temp_c = 0.0;
+    for (size_t i = seg.begin; i < seg.end; ++i) {
+      for (int a = 0; a < 3; ++a) raw[a] += col[a]->values[i];
+      if (temp != nullptr) temp_c += temp->values[i];
+    }
+    const double n = static_cast<double>(seg.end - seg.begin);
+    raw /= n;
+    temp_c /= n;
+    out.before.push_back((*nominal * raw).norm() - target);
+    out.after.push_back(m.Apply(raw, temp_c).norm() - target);
+  }
+  if (out.before.empty()) {
+    return MakeError("no static segment of the fit found in the input records");
+  }
+  return out;
+}
+
+bool CertificateOptions::IsValid(std::string* why) const {
+  if (!(coverage_factor >= 1.0 && coverage_factor <= 10.0)) {
+    *why = fmt::format("certificate: coverage factor k = {} is outside [1, 10]", coverage_factor);
+    return false;
+  }
+  if (!(accel_fs_g > 0.0) || !(gyro_fs_dps > 0.0)) {
+    *why = "certificate: full-scale settings must be > 0";
+    return false;
+  }
+  return true;
+}
+
+Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
+                                                 const std::vector<const Session*>& sessions,
+                                                 const std::string& sessions_note,
+                                                 const CertificateOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(why);
+  if (!sessions.empty() && sessions.size() != cal.inputs.size()) {
+    return MakeError(fmt::format("certificate: {} sessions given for {} calibration inputs",
+                                 sessions.size(), cal.inputs.size()));
+  }
+  const std::string json = FormatCalibrationJson(cal);
+  const std::string certificate_id = Sha256Hex(json).substr(0, 16);
+  mustache::data data;
+  data.set("certificate_id",
+           fmt::format("{} (first 16 hex digits of the SHA-256 of the calibration JSON)",
+                       certificate_id));
+  std::string items;
+  for (const TagCalibration& t : cal.tags) {
+    items += fmt::format("{}tag sensor {} ({}{})", items.empty() ? "" : ", ", t.sensor,
+                         t.accel ? "accelerometer" : "", t.gyro ? " and gyroscope" : "");
+  }
+  data.set("items", items.empty() ? "(no tag)" : items + ": MPU6050 on an nRF51802 BLE tag");
+  data.set("date_utc", cal.date_utc);
+  data.set("tool_version", cal.tool_version);
+  data.set("gravity", fmt::format("{} m/s^2", Short(cal.gravity_mps2, 8)));
+  mustache::data inputs{mustache::data::type::list};
+  for (size_t i = 0; i < cal.inputs.size(); ++i) {
+    mustache::data row;
+    row.set("index", std::to_string(i));
+    row.set("path", cal.inputs[i].path);
+    row.set("sha256", cal.inputs[i].sha256);
+    inputs.push_back(row);
+  }
+  data.set("inputs", inputs);
+  data.set("sessions_ok", !sessions.empty());
+  data.set("sessions_note", sessions_note);
+  data.set("k", Short(options.coverage_factor, 3));
+  data.set("coverage_text", options.coverage_factor == 2.0
+                                ? "about 95 % coverage for a normal distribution"
+                                : "coverage probability as for a normal distribution");
+
+  mustache::data tags{mustache::data::type::list};
+  mustache::data conditions{mustache::data::type::list};
+  mustache::data condition_notes{mustache::data::type::list};
+  mustache::data warnings{mustache::data::type::list};
+  int min_dof = std::numeric_limits<int>::max();
+  double min_t95 = 0.0;
+  for (const TagCalibration& t : cal.tags) {
+    mustache::data td;
+    td.set("sensor", std::to_string(t.sensor));
+    mustache::data sensors{mustache::data::type::list};
+    for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
+      if (!c->has_value()) continue;
+      sensors.push_back(SensorData(**c, t.sensor, sessions, cal.gravity_mps2, options));
+      if ((*c)->dof < min_dof) {
+        min_dof = (*c)->dof;
+        min_t95 = (*c)->coverage_factor_95;
+      }
+    }
+    td.set("sensors", sensors);
+    tags.push_back(td);
+    for (const std::string& w : t.warnings) {
+      warnings.push_back(mustache::data(fmt::format("sensor {}: {}", t.sensor, w)));
+    }
+    // Conditions of each record of this tag.
+    for (size_t i = 0; i < sessions.size(); ++i) {
+      const Tag* tag = sessions[i]->FindTag(t.sensor);
+      if (tag == nullptr || tag->size() == 0) continue;
+      mustache::data row;
+      row.set("sensor", std::to_string(t.sensor));
+      row.set("record", cal.inputs[i].path);
+      row.set("samples", std::to_string(tag->size()));
+      row.set("duration", fmt::format("{:.1f} s", tag->t_s.back() - tag->t_s.front()));
+      const Quantity* temp = tag->Find("temp_c");
+      if (temp != nullptr && !temp->values.empty()) {
+        const auto [lo, hi] = std::minmax_element(temp->values.begin(), temp->values.end());
+        row.set("temperature", fmt::format("{:.2f} .. {:.2f} degC", *lo, *hi));
+      } else {
+        row.set("temperature", "not recorded (no temp_c column)");
+      }
+      conditions.push_back(row);
+    }
+    for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
+      if (c->has_value() && (*c)->model.has_temperature) {
+        condition_notes.push_back(mustache::data(
+            fmt::format("sensor {} {}: linear temperature term fitted about t_ref = {:.2f} degC",
+                        t.sensor, ImuSensorName((*c)->model.sensor), (*c)->model.t_ref_c)));
+      }
+    }
+  }
+  if (sessions.empty()) {
+    condition_notes.push_back(mustache::data(
+        "The temperature range of the records is not stated: the input records are not "
+        "available (" +
+        sessions_note + ")."));
+  }
+  data.set("tags", tags);
+  data.set("conditions", conditions);
+  data.set("condition_notes", condition_notes);
+  data.set("warnings", warnings);
+
+  mustache::data validity{mustache::data::type::list};
+  validity.push_back(mustache::data(
+      "The results relate only to the tag(s) identified above, with the input units and "
+      "full-scale settings of the records, and apply through the model of section 2."));
+  validity.push_back(mustache::data(
+      "They are valid within the temperature range of section 4; outside it (or away from "
+      "t_ref without a temperature term) the biases may differ by more than U."));
+  if (min_dof != std::numeric_limits<int>::max()) {
+    validity.push_back(mustache::data(fmt::format(
+        "Smallest degrees of freedom of a fit: {}; k = {} gives about 95 % coverage only for "
+        "large dof, t_0.975({}) = {} (JCGM 100:2008 G.3.2).",
+        min_dof, Short(options.coverage_factor, 3), min_dof, Short(min_t95, 4))));
+  }
+  validity.push_back(mustache::data(
+      "Uncertainties are Type A from the fit residuals; they do not include the reference "
+      "(local gravity, table rate) uncertainty or long-term drift of the tag."));
+  data.set("validity", validity);
+
+  Result<std::string> body = report_internal::RenderTemplate("certificate", std::move(data));
+  if (!body.ok()) return body;
+  return report_internal::RenderPage(
+      "Calibration certificate",
+      fmt::format("{} - {} - certificate {}", kCalibrationSchema, items, certificate_id),
+      body.value());
+}
+
+ReloadedInputs ReloadCalibrationInputs(const Calibration& cal,
+                                       const std::string& calibration_path) {
+  ReloadedInputs out;
+  const std::filesystem::path dir = std::filesystem::path(calibration_path).parent_path();
+  auto candidates = [&dir](const std::string& p) {
+    std::vector<std::string> c = {p};
+    if (std::filesystem::path(p).is_relative() && !dir.empty()) c.push_back((dir / p).string());
+    return c;
+  };
+  std::vector<std::string> problems;
+  for (const InputFile& in : cal.inputs) {
+    bool found = false;
+    const size_t plus_hash = in.sha256.find('+');
+    if (plus_hash == std::string::npos) {
+      for (const std::string& p : candidates(in.path)) {
+        Result<std::string> hash = Sha256File(p);
+        if (!hash.ok() || hash.value() != in.sha256) continue;
+        LoadOptions load;
+        load.threads = 1;
+        Result<Session> s = LoadSession(p, load);
+        if (!s.ok()) continue;
+        out.sessions.push_back(std::move(s).value());
+        found = true;
+        break;
+      }
+    } else {
+      // imu_tk pair "acc+gyro": try every '+' of the path as the separator.
+      const std::string hash_a = in.sha256.substr(0, plus_hash);
+      const std::string hash_b = in.sha256.substr(plus_hash + 1);
+      for (size_t at = in.path.find('+'); at != std::string::npos && !found;
+           at = in.path.find('+', at + 1)) {
+        const std::string acc = in.path.substr(0, at), gyro = in.path.substr(at + 1);
+        const auto ca = candidates(acc), cg = candidates(gyro);
+        for (size_t i = 0; i < std::min(ca.size(), cg.size()) && !found; ++i) {
+          Result<std::string> ha = Sha256File(ca[i]), hb = Sha256File(cg[i]);
+          if (!ha.ok() || !hb.ok() || ha.value() != hash_a || hb.value() != hash_b) continue;
+          Result<Session> s = LoadImuTk(ca[i], cg[i]);
+          if (!s.ok()) continue;
+          out.sessions.push_back(std::move(s).value());
+          found = true;
+        }
+      }
+    }
+    if (!found) problems.push_back(in.path);
+  }
+  out.complete = problems.empty() && !cal.inputs.empty();
+  if (out.complete) {
+    out.note = "Conditions and residual plots from the input records, reloaded (SHA-256 match).";
+  } else {
+    std::string list;
+    for (const std::string& p : problems) list += (list.empty() ? "" : ", ") + p;
+    out.note = fmt::format("input record(s) not found or changed since the fit: {}",
+                           list.empty() ? "(none recorded)" : list);
+    out.sessions.clear();
+  }
+  return out;
+}
+
+}  // namespace metro

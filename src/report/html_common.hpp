@@ -1,0 +1,33 @@
+// Helpers shared by the HTML views (private to src/report/).
+#pragma once
+
+#include <kainjow/mustache.hpp>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "metro/core/status.hpp"
+
+namespace metro::report_internal {
+
+// j[key] as a number; NaN when missing, null or not a number (the JSON writers store
+// non-finite numbers as null or as strings "nan"/"inf").
+double JsonNumber(const nlohmann::ordered_json& j, const char* key);
+// a[i] as a number; NaN as above.
+double NumberAt(const nlohmann::ordered_json& a, size_t i);
+// j[key] as text: strings as is, other values dumped, "" when missing.
+std::string JsonString(const nlohmann::ordered_json& j, const char* key);
+// `significant` digits (fmt "{:.Ng}"), "-" for NaN.
+std::string ShortNumber(double x, int significant);
+
+// True when any quantity of the report has an "allan" object.
+bool AnyAllan(const nlohmann::ordered_json& report);
+
+// Data for budget.mustache from a "metro.budget-report/1" object: the statement, the lines
+// rounded per GUM 7.2.6 and the sorted contribution bars.
+Result<kainjow::mustache::data> BudgetViewData(const nlohmann::ordered_json& budget);
+
+// The generic view (generic.mustache): the JSON as nested tables.
+Result<std::string> RenderGenericHtml(const nlohmann::ordered_json& document,
+                                      const std::string& json_path, const std::string& schema);
+
+}  // namespace metro::report_internal

@@ -1,0 +1,87 @@
+// The progress bar: its line format, and silence when stderr is not a terminal.
+#include "metro/core/progress.hpp"
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace metro {
+namespace {
+
+std::string ReadAll(std::FILE* f) {
+  std::rewind(f);
+  std::string out;
+  char buf[256];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
+  return out;
+}
+
+TEST_CASE("Progress line shows the bar the count and the percentage", "[report][progress]") {
+  CHECK(FormatProgressLine("batch", 2, 4, 1.25, 10) == "batch [#####.....] 2/4  50 %  1.2 s");
+  CHECK(FormatProgressLine("batch", 4, 4, 3.0, 4) == "batch [####] 4/4 100 %  3.0 s");
+  CHECK(FormatProgressLine("batch", 0, 3, 0.0, 3) == "batch [...] 0/3   0 %  0.0 s");
+  // More than the total is drawn as full; an unknown total has no bar.
+  CHECK(FormatProgressLine("x", 9, 3, 0.0, 3) == "x [###] 9/3 100 %  0.0 s");
+  CHECK(FormatProgressLine("rows", 17, 0, 2.0, 10) == "rows 17  2.0 s");
+}
+
+TEST_CASE("Progress bar is quiet when the stream is not a terminal", "[report][progress]") {
+  std::FILE* f = std::tmpfile();
+  REQUIRE(f != nullptr);
+  CHECK_FALSE(IsTerminal(f));
+  {
+    ProgressBar bar("batch", 3, f);
+    CHECK_FALSE(bar.enabled());
+    bar.Advance();
+    bar.Advance(2);
+    CHECK(bar.done() == 3);
+  }
+  CHECK(ReadAll(f).empty());
+  std::fclose(f);
+}
+
+TEST_CASE("Progress bar forced on ends with the final count", "[report][progress]") {
+  std::FILE* f = std::tmpfile();
+  REQUIRE(f != nullptr);
+  ProgressOptions o;
+  o.mode = ProgressMode::kAlways;
+  o.min_redraw_s = 0.0;
+  {
+    ProgressBar bar("work", 40, f, o);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t) {
+      threads.emplace_back([&bar] {
+        for (int i = 0; i < 10; ++i) bar.Advance();
+      });
+    }
+    for (auto& t : threads) t.join();
+    bar.Finish();
+    bar.Finish();  // Once only.
+  }
+  const std::string text = ReadAll(f);
+  std::fclose(f);
+  CHECK(text.find("work [") == 1);  // After the first "\r".
+  CHECK(text.find("40/40 100 %") != std::string::npos);
+  CHECK(text.back() == '\n');
+  CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+}
+
+TEST_CASE("Progress options are validated", "[report][progress]") {
+  std::string why;
+  ProgressOptions o;
+  CHECK(o.IsValid(&why));
+  o.bar_width = 0;
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK(why == "progress: bar_width must be in [1, 200]");
+  o = {};
+  o.min_redraw_s = -1.0;
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK(why == "progress: min_redraw_s must be >= 0");
+}
+
+}  // namespace
+}  // namespace metro

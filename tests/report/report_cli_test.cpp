@@ -1,0 +1,145 @@
+// End-to-end: characterize --html, characterize report, characterize batch, calibrate --html.
+#ifdef METRO_CHARACTERIZE_EXE
+#include <sys/wait.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace metro {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Run {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+Run Exec(const std::string& exe, const std::string& args) {
+  static int counter = 0;
+  const std::string err_path = "metro_report_cli_err_" + std::to_string(++counter) + ".txt";
+  const std::string cmd = exe + " " + args + " 2>" + err_path;
+  Run r{};
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  char buffer[4096];
+  size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream err(err_path);
+  std::stringstream ss;
+  ss << err.rdbuf();
+  r.err = ss.str();
+  std::remove(err_path.c_str());
+  return r;
+}
+
+Run Characterize(const std::string& args) { return Exec(METRO_CHARACTERIZE_EXE, args); }
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+size_t Count(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+const std::string kDatasets = std::string(METRO_SOURCE_DIR) + "/datasets/";
+
+struct Dir {
+  explicit Dir(const std::string& name) : path(name) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~Dir() { fs::remove_all(path); }
+  fs::path path;
+};
+
+TEST_CASE("characterize --html writes the JSON and the HTML report", "[apps][report]") {
+  Dir d("metro_cli_html");
+  const std::string json = (d.path / "r.json").string(), html = (d.path / "r.html").string();
+  Run r = Characterize(kDatasets + "static_chest.csv --type-a --settle auto -o " + json +
+                       " --html " + html);
+  REQUIRE(r.exit_code == 0);
+  const std::string h = Slurp(html);
+  CHECK(h.find("<title>Session report: static_chest.csv</title>") != std::string::npos);
+  CHECK(Count(h, "<svg") >= 3);
+  // From the saved JSON: the session is reloaded (same file, same hash).
+  const std::string html2 = (d.path / "r2.html").string();
+  r = Characterize("report " + json + " --html " + html2);
+  REQUIRE(r.exit_code == 0);
+  const std::string h2 = Slurp(html2);
+  CHECK(h2.find("SHA-256 matches the report") != std::string::npos);
+  CHECK(Count(h2, "<svg") == Count(h, "<svg"));
+  // Refuses to write over its input; a file that is not JSON is an input error.
+  r = Characterize("report " + json + " --html " + json);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("refusing to overwrite") != std::string::npos);
+  r = Characterize("report " + kDatasets + "static_chest.csv --html " + html2);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("not valid JSON") != std::string::npos);
+}
+
+TEST_CASE("characterize batch exits 1 and names the broken session", "[apps][report]") {
+  Dir in("metro_cli_batch_in"), out("metro_cli_batch_out");
+  fs::copy_file(kDatasets + "static_chest.csv", in.path / "chest.csv");
+  fs::copy_file(kDatasets + "capture_15tags.csv", in.path / "capture.csv");
+  { std::ofstream(in.path / "broken.csv") << "t_s,sensor,pitch_deg\n0.0,1,0.5\n0.1,1,zzz\n"; }
+  Run r =
+      Characterize("batch " + in.path.string() + " --type-a -o " + out.path.string() + " --jobs 2");
+  CHECK(r.exit_code == 1);
+  CHECK(r.err.find("broken.csv:3") != std::string::npos);
+  CHECK(r.err.find("2 of 3 sessions analysed") != std::string::npos);
+  CHECK(r.out.find("3 sessions, 1 failed") != std::string::npos);
+  CHECK(r.err.find("batch [") == std::string::npos);  // No progress bar: stderr is a file.
+  const auto summary = nlohmann::json::parse(Slurp(out.path / "summary.json"));
+  CHECK(summary["sessions_failed"] == 1);
+  CHECK(fs::exists(out.path / "chest.report.json"));
+  CHECK(fs::exists(out.path / "capture.report.json"));
+  // Without the broken file: exit 0.
+  fs::remove(in.path / "broken.csv");
+  r = Characterize("batch " + (in.path / "*.csv").string() + " -o " + out.path.string());
+  CHECK(r.exit_code == 0);
+  // Nothing to do is a usage error.
+  r = Characterize("batch " + (in.path / "*.nothing").string() + " -o " + out.path.string());
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("pattern matches no file") != std::string::npos);
+}
+
+#ifdef METRO_CALIBRATE_EXE
+TEST_CASE("calibrate fit and report write the certificate", "[apps][report][slow]") {
+  Dir d("metro_cli_certificate");
+  // imu_tk's public Xsens record (an accelerometer and a gyroscope file).
+  const std::string dir = std::string(METRO_SHARED_DIR) + "/datasets/external/imu_tk_xsens/";
+  const std::string session = "--imutk " + dir + "xsens_acc.mat " + dir + "xsens_gyro.mat";
+  const std::string cal = (d.path / "calibration.json").string();
+  const std::string html = (d.path / "certificate.html").string();
+  Run r = Exec(METRO_CALIBRATE_EXE,
+               "fit " + session + " --gravity-mps2 9.81744 -o " + cal + " --html " + html);
+  REQUIRE(r.exit_code == 0);
+  const std::string h = Slurp(html);
+  CHECK(h.find("<title>Calibration certificate</title>") != std::string::npos);
+  CHECK(Count(h, "<svg") == 2);
+  const std::string html2 = (d.path / "certificate2.html").string();
+  r = Exec(METRO_CALIBRATE_EXE, "report " + cal + " --html " + html2);
+  REQUIRE(r.exit_code == 0);
+  // The imu_tk pair is found again from the "acc+gyro" path of calibration.json.
+  CHECK(Slurp(html2).find("reloaded (SHA-256 match)") != std::string::npos);
+  CHECK(Count(Slurp(html2), "<svg") == 2);
+}
+#endif
+
+}  // namespace
+}  // namespace metro
+#endif
