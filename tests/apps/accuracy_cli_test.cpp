@@ -8,33 +8,15 @@
 #include <sstream>
 #include <string>
 
+#include "support/run_program.hpp"
+
 namespace metro {
 namespace {
 
-struct Run {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using Run = testing::ProgramRun;
 
 Run Characterize(const std::string& args) {
-  static int counter = 0;
-  const std::string err_path = "metro_acc_cli_err_" + std::to_string(++counter) + ".txt";
-  const std::string cmd = std::string(METRO_CHARACTERIZE_EXE) + " " + args + " 2>" + err_path;
-  Run r{};
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream err(err_path);
-  std::stringstream ss;
-  ss << err.rdbuf();
-  r.err = ss.str();
-  std::remove(err_path.c_str());
-  return r;
+  return testing::RunProgram(METRO_CHARACTERIZE_EXE, args);
 }
 
 const std::string kSweep = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";

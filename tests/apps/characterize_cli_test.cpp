@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
@@ -17,30 +18,10 @@ namespace {
 
 using testing::TempFile;
 
-struct Run {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using Run = testing::ProgramRun;
 
 Run Characterize(const std::string& args) {
-  static int counter = 0;
-  const std::string err_path = "metro_cli_err_" + std::to_string(++counter) + ".txt";
-  const std::string cmd = std::string(METRO_CHARACTERIZE_EXE) + " " + args + " 2>" + err_path;
-  Run r{};
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream err(err_path);
-  std::stringstream ss;
-  ss << err.rdbuf();
-  r.err = ss.str();
-  std::remove(err_path.c_str());
-  return r;
+  return testing::RunProgram(METRO_CHARACTERIZE_EXE, args);
 }
 
 bool Exists(const std::string& path) {

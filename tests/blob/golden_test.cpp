@@ -13,6 +13,7 @@
 #include "metro/blob/intel_hex.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
+#include "support/run_program.hpp"
 
 namespace metro::blob {
 namespace {
@@ -60,32 +61,9 @@ TEST_CASE("The golden blob and HEX regenerate byte for byte from calibration.jso
 #ifdef METRO_CALIBRATE_EXE
 namespace {
 
-struct Run {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using Run = testing::ProgramRun;
 
-Run Calibrate(const std::string& args) {
-  static int counter = 0;
-  const std::string err_path =
-      "metro_blob_cli_err_" + std::to_string(::getpid()) + "_" + std::to_string(++counter) + ".txt";
-  const std::string cmd = std::string(METRO_CALIBRATE_EXE) + " " + args + " 2>" + err_path;
-  Run r{};
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream err(err_path);
-  std::stringstream ss;
-  ss << err.rdbuf();
-  r.err = ss.str();
-  std::remove(err_path.c_str());
-  return r;
-}
+Run Calibrate(const std::string& args) { return testing::RunProgram(METRO_CALIBRATE_EXE, args); }
 
 }  // namespace
 
