@@ -1,4 +1,4 @@
-/* libFuzzer target: the blob validator, the sensor decoder and apply on arbitrary bytes.
+/* libFuzzer target: the blob validator, the sensor decoder and both applies on arbitrary bytes.
  * The validator is given the device id found in the input itself, so the fuzzer can reach
  * the section walker and the decoder. Run by fuzz/run.sh under ASan and UBSan. */
 #include <stddef.h>
@@ -7,6 +7,7 @@
 
 #include "metro_fw/blob.h"
 #include "metro_fw/crc.h"
+#include "metro_fw/fixed.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 
@@ -60,7 +61,15 @@ static void Check(const uint8_t* data, size_t size) {
                              info.accel_version, METRO_FW_ACCEL, &cfg, &cal) == METRO_FW_OK) {
     const int16_t raw[3] = {32767, -32768, 1};
     float y[3];
+    metro_fw_sensor_fixed fx;
+    int32_t y_q20[3];
     (void)metro_fw_apply(&cal, raw, 30.0f, y);
+    /* Sections that pass 3.1 must convert or be refused cleanly, and apply without UB at the
+     * int16 corners and beyond the validity range. */
+    if (metro_fw_fixed_from_cal(&cal, &fx) == METRO_FW_OK) {
+      (void)metro_fw_apply_fixed(&fx, raw, 200 * 4096, y_q20);
+      (void)metro_fw_apply_fixed(&fx, raw, -100 * 4096, y_q20);
+    }
   }
   (void)metro_fw_sensor_decode(metro_fw_buffer_read, &buf, info.gyro_off, info.gyro_len,
                                info.gyro_version, METRO_FW_GYRO, &cfg, &cal);

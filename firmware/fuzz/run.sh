@@ -13,7 +13,7 @@ out=${2:-$(mktemp -d)}
 mkdir -p "$out"
 cc=${CLANG:-/usr/bin/clang-14}
 flags="-std=c99 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined"
-srcs="$fw/src/le.c $fw/src/crc.c $fw/src/blob.c $fw/src/update.c $fw/src/push.c"
+srcs="$fw/src/le.c $fw/src/crc.c $fw/src/blob.c $fw/src/update.c $fw/src/push.c $fw/src/fixed.c"
 
 for target in fuzz_blob fuzz_frame; do
   $cc $flags -I"$fw/include" "$here/$target.c" $srcs -o "$out/$target"

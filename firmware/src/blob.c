@@ -228,8 +228,8 @@ static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind,
   d_hi = AbsF(c->t_valid_max_c - c->t_ref_c);
   if (d_hi > d_max) d_max = d_hi;
   for (i = 0; i < 3; ++i) {
-    const int k1 = (i + 1) % 3;
-    const int k2 = (i + 2) % 3;
+    const int k1 = i == 2 ? 0 : i + 1; /* (i + 1) mod 3 without a libgcc division */
+    const int k2 = i == 0 ? 2 : i - 1; /* (i + 2) mod 3 */
     float n2 = 0.0f;
     for (j = 0; j < 3; ++j) n2 += m[3 * i + j] * m[3 * i + j];
     /* Row norm within +-10 % of s_nom: (1 - 0.1)^2 = 0.81, (1 + 0.1)^2 = 1.21. */
@@ -251,7 +251,6 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, 
   uint8_t fs_sel, bits;
   uint32_t i;
   int rc;
-  metro_fw_sensor_cal c;
   if (read == 0 || cfg == 0 || out == 0) return METRO_FW_E_ARG;
   fs_sel = kind == METRO_FW_ACCEL ? cfg->accel_fs_sel : cfg->gyro_fs_sel;
   rc = metro_fw_sensor_defaults(kind, fs_sel, out);
@@ -287,27 +286,29 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, 
     out->status = METRO_FW_SENSOR_CONFIG_MISMATCH;
     return METRO_FW_OK;
   }
-  c = *out;
-  c.model_bits = bits;
-  c.t_ref_c = metro_fw_get_f32(b + 4);
+  /* Decoded in place (no struct copy: on the M0 that links memcpy); a LIMITS failure
+   * restores the defaults. */
+  out->model_bits = bits;
+  out->t_ref_c = metro_fw_get_f32(b + 4);
   for (i = 0; i < 9; ++i) {
     const int diagonal = (i % 4u) == 0u;
-    c.m[i] = (diagonal || (bits & METRO_FW_MODEL_FULL_M)) ? metro_fw_get_f32(b + 8 + 4 * i) : 0.0f;
+    out->m[i] =
+        (diagonal || (bits & METRO_FW_MODEL_FULL_M)) ? metro_fw_get_f32(b + 8 + 4 * i) : 0.0f;
   }
   for (i = 0; i < 3; ++i) {
-    c.b0[i] = (bits & METRO_FW_MODEL_BIAS) ? metro_fw_get_f32(b + 44 + 4 * i) : 0.0f;
-    c.b1[i] = (bits & METRO_FW_MODEL_LINEAR_T) ? metro_fw_get_f32(b + 56 + 4 * i) : 0.0f;
-    c.b2[i] = (bits & METRO_FW_MODEL_QUADRATIC_T) ? metro_fw_get_f32(b + 68 + 4 * i) : 0.0f;
-    c.hw_offs[i] = metro_fw_get_i16(b + 164 + 2 * i);
+    out->b0[i] = (bits & METRO_FW_MODEL_BIAS) ? metro_fw_get_f32(b + 44 + 4 * i) : 0.0f;
+    out->b1[i] = (bits & METRO_FW_MODEL_LINEAR_T) ? metro_fw_get_f32(b + 56 + 4 * i) : 0.0f;
+    out->b2[i] = (bits & METRO_FW_MODEL_QUADRATIC_T) ? metro_fw_get_f32(b + 68 + 4 * i) : 0.0f;
+    out->hw_offs[i] = metro_fw_get_i16(b + 164 + 2 * i);
   }
-  c.t_valid_min_c = metro_fw_get_f32(b + 156);
-  c.t_valid_max_c = metro_fw_get_f32(b + 160);
-  if (!WithinLimits(&c, kind, fs_sel)) {
+  out->t_valid_min_c = metro_fw_get_f32(b + 156);
+  out->t_valid_max_c = metro_fw_get_f32(b + 160);
+  if (!WithinLimits(out, kind, fs_sel)) {
+    (void)metro_fw_sensor_defaults(kind, fs_sel, out);
     out->status = METRO_FW_SENSOR_LIMITS;
     return METRO_FW_OK;
   }
-  c.status = METRO_FW_SENSOR_OK;
-  *out = c;
+  out->status = METRO_FW_SENSOR_OK;
   return METRO_FW_OK;
 }
 

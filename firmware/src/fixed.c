@@ -1,0 +1,85 @@
+#include "metro_fw/fixed.h"
+
+/* round(x * 2^frac) for a binary32 x, from its bits: x = (-1)^s * 1.f * 2^(e - 127), so
+ * x * 2^frac = (2^23 + f) * 2^(e - 150 + frac). Rounds to nearest (half away from zero).
+ * Returns 0, or -1 when the result does not fit in 31 bits or x is NaN/Inf. */
+static int F32ToQ(float x, int frac, int32_t* out) {
+  union {
+    float f;
+    uint32_t u;
+  } v;
+  uint32_t e, mant, q;
+  int shift;
+  v.f = x;
+  e = (v.u >> 23) & 0xFFu;
+  if (e == 0xFFu) return -1;
+  if (e == 0u) { /* zero or subnormal: |x| < 2^-126 rounds to 0 for frac <= 36 */
+    *out = 0;
+    return 0;
+  }
+  mant = (v.u & 0x7FFFFFu) | 0x800000u;
+  shift = (int)e - 150 + frac;
+  if (shift > 7) return -1; /* (2^24 - 1) << 7 < 2^31 */
+  if (shift >= 0) {
+    q = mant << shift;
+  } else if (shift < -24) {
+    q = 0u; /* mant * 2^shift < 1/2 */
+  } else {
+    q = (mant + (1u << (-shift - 1))) >> -shift;
+  }
+  *out = (v.u & 0x80000000u) ? -(int32_t)q : (int32_t)q;
+  return 0;
+}
+
+int metro_fw_fixed_from_cal(const metro_fw_sensor_cal* cal, metro_fw_sensor_fixed* out) {
+  int i, bad = 0;
+  if (cal == 0 || out == 0) return METRO_FW_E_ARG;
+  for (i = 0; i < 9; ++i) bad |= F32ToQ(cal->m[i], 36, &out->m_q36[i]);
+  for (i = 0; i < 3; ++i) {
+    bad |= F32ToQ(cal->b0[i], 16, &out->b0_q16[i]);
+    bad |= F32ToQ(cal->b1[i], 16, &out->b1_q16[i]);
+    bad |= F32ToQ(cal->b2[i], 24, &out->b2_q24[i]);
+  }
+  bad |= F32ToQ(cal->t_ref_c, 12, &out->t_ref_q12);
+  bad |= F32ToQ(cal->t_valid_min_c, 12, &out->t_valid_min_q12);
+  bad |= F32ToQ(cal->t_valid_max_c, 12, &out->t_valid_max_q12);
+  if (bad != 0) {
+    int32_t* z = out->m_q36;
+    for (i = 0; i < (int)(sizeof(*out) / sizeof(int32_t)); ++i) z[i] = 0;
+    return METRO_FW_E_ARG;
+  }
+  return METRO_FW_OK;
+}
+
+int metro_fw_apply_fixed(const metro_fw_sensor_fixed* fx, const int16_t raw_lsb[3],
+                         int32_t temp_q12, int32_t out_q20[3]) {
+  int32_t e_q10[3];
+  int32_t t = temp_q12;
+  int32_t dt_q12;
+  int i;
+  if (fx == 0 || raw_lsb == 0 || out_q20 == 0) return METRO_FW_E_ARG;
+  if (t < fx->t_valid_min_q12) t = fx->t_valid_min_q12;
+  if (t > fx->t_valid_max_q12) t = fx->t_valid_max_q12;
+  dt_q12 = t - fx->t_ref_q12;
+  for (i = 0; i < 3; ++i) {
+    /* bias = b0 + (b1 + b2*dT)*dT (Horner), each product rounded to Q16 LSB. */
+    const int64_t c_q16 =
+        (int64_t)fx->b1_q16[i] + (((int64_t)fx->b2_q24[i] * dt_q12 + 0x80000) >> 20);
+    const int64_t bias_q16 = (int64_t)fx->b0_q16[i] + ((c_q16 * dt_q12 + 0x800) >> 12);
+    e_q10[i] = (int32_t)((((int64_t)raw_lsb[i] * 65536) - bias_q16 + 0x20) >> 6);
+  }
+  for (i = 0; i < 3; ++i) {
+    const int32_t* m = fx->m_q36 + 3 * i;
+    const int64_t acc_q46 =
+        (int64_t)m[0] * e_q10[0] + (int64_t)m[1] * e_q10[1] + (int64_t)m[2] * e_q10[2];
+    out_q20[i] = (int32_t)((acc_q46 + 0x2000000) >> 26);
+  }
+  return METRO_FW_OK;
+}
+
+int32_t metro_fw_mpu6050_temp_q12(int16_t raw_lsb) {
+  /* 4096 / 340 = 1024 / 85 = 49345 / 2^12 - 0.25 / 2^12: at most 2 units off at |raw| =
+   * 32768, plus 1/2 for the rounding; 36.53 * 4096 = 149626.88 -> 149627.
+   * |raw| * 49345 <= 1.62e9 < 2^31. */
+  return ((raw_lsb * (int32_t)49345 + 0x800) >> 12) + 149627;
+}
