@@ -12,10 +12,12 @@
 #   own       the library's code + data;
 #   runtime   libgcc integer helpers (__aeabi_lmul for the fixed-point apply, switch helpers)
 #             and newlib-nano routines it pulls in;
-#   softfloat libgcc's binary32 routines (float apply, float limit checks at load).
+#   softfloat libgcc's binary32 routines (only the float apply and float temperature use them;
+#             the limit checks at load work on the bit patterns).
 # Gates: (1) the boot/update core (le + crc + blob + update objects) < 4096 bytes;
-#        (2) the whole library, own + runtime (soft-float printed, not counted), may not grow
-#            past METRO_FW_WHOLE_LIMIT. The issue #6 target for (2) is 4096; see the doc.
+#        (2) the integer-only library (every public function but the float apply and float
+#            temperature), own + runtime + soft-float (0), may not grow past
+#            METRO_FW_WHOLE_LIMIT (a ratchet). The issue #6 target for (2) is 4096; see the doc.
 set -eu
 
 here=$(cd "$(dirname "$0")" && pwd)
@@ -24,7 +26,7 @@ mkdir -p "$out"
 cc=${CC_ARM:-arm-none-eabi-gcc}
 arch="-mcpu=cortex-m0 -mthumb -Os -ffunction-sections -fdata-sections -fno-tree-loop-distribute-patterns"
 flags="-std=c99 $arch -Wall -Wextra -pedantic -Werror"
-whole_limit=${METRO_FW_WHOLE_LIMIT:-5400}
+whole_limit=${METRO_FW_WHOLE_LIMIT:-5617}
 
 objs=""
 for src in le crc blob update push fixed; do
@@ -79,9 +81,11 @@ echo "== linked, every public function:              $whole"
 echo "== linked, without the float apply/temperature: $nofloat"
 get() { echo "$1" | tr ' ' '\n' | sed -n "s/^$2=//p"; }
 whole_fig=$(($(get "$whole" own) + $(get "$whole" runtime)))
-echo "whole library own + runtime = $whole_fig bytes (ratchet $whole_limit, issue #6 target 4096);" \
-  "soft-float routines add $(get "$whole" softfloat) bytes" \
-  "($(get "$nofloat" softfloat) of them still needed by the float limit checks at load)"
+int_fig=$(($(get "$nofloat" own) + $(get "$nofloat" runtime) + $(get "$nofloat" softfloat)))
+echo "whole library own + runtime = $whole_fig bytes;" \
+  "the float apply/temperature add $(get "$whole" softfloat) bytes of soft-float"
+echo "integer-only library own + runtime + soft-float = $int_fig bytes" \
+  "(ratchet $whole_limit, issue #6 target 4096)"
 
 core=$(arm-none-eabi-size -t "$out/le.o" "$out/crc.o" "$out/blob.o" "$out/update.o" |
   awk 'END { print $1 + $2 }')
@@ -91,8 +95,8 @@ if [ "$core" -ge 4096 ]; then
   echo "FAIL: metro_fw core code + data is $core bytes, must stay below 4096" >&2
   status=1
 fi
-if [ "$whole_fig" -gt "$whole_limit" ]; then
-  echo "FAIL: whole metro_fw own + runtime is $whole_fig bytes, ratchet is $whole_limit" >&2
+if [ "$int_fig" -gt "$whole_limit" ]; then
+  echo "FAIL: integer-only metro_fw is $int_fig bytes, ratchet is $whole_limit" >&2
   status=1
 fi
 [ "$status" -eq 0 ] && echo "OK"

@@ -169,9 +169,29 @@ int metro_fw_choose_active(const metro_fw_flash* flash, const uint32_t device_id
   return METRO_FW_OK;
 }
 
+/* Float <-> bit pattern (C99 6.5.2.3 footnote 82): loads and stores only, no soft-float. */
+static uint32_t F32Bits(float x) {
+  union {
+    float f;
+    uint32_t u;
+  } v;
+  v.f = x;
+  return v.u;
+}
+
+static float BitsF32(uint32_t u) {
+  union {
+    uint32_t u;
+    float f;
+  } v;
+  v.u = u;
+  return v.f;
+}
+
 float metro_fw_nominal_sensitivity(metro_fw_sensor_kind kind, uint8_t fs_sel) {
-  const float scale = (float)(int32_t)(1 << (fs_sel & 3u));
-  return (kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_SENS_FS0 : METRO_FW_GYRO_SENS_FS0) * scale;
+  /* s_nom(fs0) * 2^fs_sel: exact, by adding fs_sel to the (normal) exponent. */
+  const float s0 = kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_SENS_FS0 : METRO_FW_GYRO_SENS_FS0;
+  return BitsF32(F32Bits(s0) + ((uint32_t)(fs_sel & 3u) << 23));
 }
 
 int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw_sensor_cal* out) {
@@ -194,54 +214,161 @@ int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw
   return METRO_FW_OK;
 }
 
-/* |x| by clearing the sign bit: no soft-float compare on the M0. */
-static float AbsF(float x) {
-  union {
-    float f;
-    uint32_t u;
-  } v;
-  v.f = x;
-  v.u &= 0x7FFFFFFFu;
-  return v.f;
+/* Section 3.1 limit checks without soft-float. Each float operation of the reference
+ * evaluation (binary32, FLT_EVAL_METHOD 0) is done on the bit patterns, rounded to nearest,
+ * ties to even (IEEE 754-2019 4.3.1), so the decisions are those of the float evaluation bit
+ * for bit. Operands are finite (NONFINITE is checked first); an overflow rounds to Inf, which
+ * absorbs. Inf - Inf, 0 * Inf (the NaN cases) cannot decide anything here: overflow only
+ * happens in sums of non-negative terms, in products with a positive finite factor (D > 0
+ * because t_valid_min_c < t_valid_max_c) and in det(M) from a row that then fails its norm. */
+#define F32_SIGN 0x80000000u
+#define F32_INF 0x7F800000u
+
+/* sign | (sig * 2^exp rounded to binary32), sig != 0. */
+static uint32_t F32Round(uint32_t sign, int32_t exp, uint64_t sig) {
+  uint32_t s, m, rem, half;
+  int32_t e;
+  int32_t shift = 8;
+  while ((sig >> 32) != 0u) { /* to 32 bits; the lowest bit keeps a sticky OR */
+    sig = (sig >> 1) | (sig & 1u);
+    ++exp;
+  }
+  s = (uint32_t)sig;
+  while ((s & F32_SIGN) == 0u) {
+    s <<= 1;
+    --exp;
+  }
+  e = exp + 158; /* biased exponent of s * 2^exp, s in [2^31, 2^32) */
+  if (e < 1) {   /* subnormal: fewer fraction bits */
+    shift += 1 - e;
+    e = 1;
+  }
+  if (shift > 32) return sign; /* below half the smallest subnormal */
+  if (shift == 32) {
+    m = 0;
+    rem = s;
+    half = F32_SIGN;
+  } else {
+    m = s >> shift;
+    rem = s & ((1u << shift) - 1u);
+    half = 1u << (shift - 1);
+  }
+  if (rem > half || (rem == half && (m & 1u) != 0u)) ++m;
+  /* m carries the implicit bit, so a rounding carry moves up into the exponent. */
+  m += (uint32_t)(e - 1) << 23;
+  return sign | (m >= F32_INF ? F32_INF : m);
 }
 
-/* lo <= x <= hi; false for NaN. */
-static int InRange(float x, float lo, float hi) { return x >= lo && x <= hi; }
+/* |x| = sig * 2^exp for a finite binary32 x (bits u). */
+static uint32_t F32Unpack(uint32_t u, int32_t* exp) {
+  uint32_t e = (u >> 23) & 0xFFu;
+  uint32_t m = u & 0x7FFFFFu;
+  if (e == 0u) {
+    e = 1u;
+  } else {
+    m |= 0x800000u;
+  }
+  *exp = (int32_t)e - 150;
+  return m;
+}
+
+static uint32_t F32Mul(uint32_t a, uint32_t b) {
+  const uint32_t sign = (a ^ b) & F32_SIGN;
+  int32_t ea, eb;
+  uint32_t ma, mb;
+  if ((a & F32_INF) == F32_INF || (b & F32_INF) == F32_INF) return sign | F32_INF;
+  ma = F32Unpack(a, &ea);
+  mb = F32Unpack(b, &eb);
+  if (ma == 0u || mb == 0u) return sign;
+  return F32Round(sign, ea + eb, (uint64_t)ma * mb);
+}
+
+static uint32_t F32Add(uint32_t a, uint32_t b) {
+  int32_t ea, eb, d;
+  uint32_t ma, mb, t, r;
+  if ((a & F32_INF) == F32_INF) return a;
+  if ((b & F32_INF) == F32_INF) return b;
+  ma = F32Unpack(a, &ea);
+  mb = F32Unpack(b, &eb);
+  if (ma == 0u) return mb == 0u ? (a & b) : b; /* -0 only for (-0) + (-0) */
+  if (mb == 0u) return a;
+  if (ea < eb) { /* a has the larger exponent */
+    t = a, a = b, b = t;
+    t = ma, ma = mb, mb = t;
+    d = ea, ea = eb, eb = d;
+  }
+  d = ea - eb;
+  ma <<= 6; /* 6 guard bits; the smaller operand is shifted with a sticky bit */
+  mb <<= 6;
+  if (d > 31) {
+    mb = 1u;
+  } else if (d > 0) {
+    mb = (mb >> d) | ((mb & ((1u << d) - 1u)) != 0u ? 1u : 0u);
+  }
+  if (((a ^ b) & F32_SIGN) == 0u) return F32Round(a & F32_SIGN, ea - 6, (uint64_t)ma + mb);
+  if (ma == mb) return 0u; /* x - x = +0 when rounding to nearest */
+  if (ma > mb) {
+    r = ma - mb;
+  } else {
+    r = mb - ma;
+    a = b;
+  }
+  return F32Round(a & F32_SIGN, ea - 6, r);
+}
+
+/* Orders binary32 bit patterns (finite) as the values: -0 and +0 are equal. */
+static int32_t F32Key(uint32_t u) {
+  return (u & F32_SIGN) != 0u ? -(int32_t)(u & ~F32_SIGN) : (int32_t)u;
+}
 
 /* Section 3.1 physical limits on decoded constants (model bits already applied). */
 static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind, uint8_t fs_sel) {
-  const float s = metro_fw_nominal_sensitivity(kind, fs_sel);
-  const float* m = c->m;
+  const uint32_t s = F32Bits(metro_fw_nominal_sensitivity(kind, fs_sel));
+  /* Row norm within +-10 % of s_nom: (1 - 0.1)^2 = 0.81, (1 + 0.1)^2 = 1.21. */
+  const uint32_t n2_lo = F32Mul(F32Mul(F32Bits(0.81f), s), s);
+  const uint32_t n2_hi = F32Mul(F32Mul(F32Bits(1.21f), s), s);
   const int32_t limit_fs0 =
       kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_BIAS_LIMIT_LSB : METRO_FW_GYRO_BIAS_LIMIT_LSB;
-  const float bias_limit = (float)(limit_fs0 >> fs_sel);
-  float det = 0.0f;
-  float d_max, d_hi;
+  const uint32_t bias_limit = F32Round(0u, 0, (uint32_t)(limit_fs0 >> fs_sel)); /* exact */
+  const int32_t t_lo = F32Key(F32Bits(METRO_FW_TEMP_MIN_C));
+  const int32_t t_hi = F32Key(F32Bits(METRO_FW_TEMP_MAX_C));
+  const uint32_t t_ref = F32Bits(c->t_ref_c);
+  const int32_t k_ref = F32Key(t_ref);
+  const int32_t k_min = F32Key(F32Bits(c->t_valid_min_c));
+  const int32_t k_max = F32Key(F32Bits(c->t_valid_max_c));
+  uint32_t det = 0u;
+  uint32_t d_max, d_hi;
   int i, j;
-  if (!InRange(c->t_ref_c, METRO_FW_TEMP_MIN_C, METRO_FW_TEMP_MAX_C) ||
-      !InRange(c->t_valid_min_c, METRO_FW_TEMP_MIN_C, METRO_FW_TEMP_MAX_C) ||
-      !InRange(c->t_valid_max_c, METRO_FW_TEMP_MIN_C, METRO_FW_TEMP_MAX_C) ||
-      !(c->t_valid_min_c < c->t_valid_max_c)) {
+  if (k_ref < t_lo || k_ref > t_hi || k_min < t_lo || k_min > t_hi || k_max < t_lo ||
+      k_max > t_hi || !(k_min < k_max)) {
     return 0;
   }
-  d_max = AbsF(c->t_valid_min_c - c->t_ref_c);
-  d_hi = AbsF(c->t_valid_max_c - c->t_ref_c);
+  /* D = max(|t_valid_min_c - t_ref_c|, |t_valid_max_c - t_ref_c|); non-negative patterns
+   * order as unsigned integers. */
+  d_max = F32Add(F32Bits(c->t_valid_min_c), t_ref ^ F32_SIGN) & ~F32_SIGN;
+  d_hi = F32Add(F32Bits(c->t_valid_max_c), t_ref ^ F32_SIGN) & ~F32_SIGN;
   if (d_hi > d_max) d_max = d_hi;
   for (i = 0; i < 3; ++i) {
     const int k1 = i == 2 ? 0 : i + 1; /* (i + 1) mod 3 without a libgcc division */
     const int k2 = i == 0 ? 2 : i - 1; /* (i + 2) mod 3 */
-    float n2 = 0.0f;
-    for (j = 0; j < 3; ++j) n2 += m[3 * i + j] * m[3 * i + j];
-    /* Row norm within +-10 % of s_nom: (1 - 0.1)^2 = 0.81, (1 + 0.1)^2 = 1.21. */
-    if (!InRange(n2, 0.81f * s * s, 1.21f * s * s)) return 0;
-    /* det(M) = row0 . (row1 x row2) */
-    det += m[i] * (m[3 + k1] * m[6 + k2] - m[3 + k2] * m[6 + k1]);
-    /* |b0| + |b1|*D + |b2|*D^2 bounds the bias over the validity range, D = max |dT|. */
-    if (!(AbsF(c->b0[i]) + (AbsF(c->b1[i]) + AbsF(c->b2[i]) * d_max) * d_max <= bias_limit)) {
-      return 0;
+    uint32_t n2 = 0u, minor, bias;
+    for (j = 0; j < 3; ++j) {
+      const uint32_t mij = F32Bits(c->m[3 * i + j]);
+      n2 = F32Add(n2, F32Mul(mij, mij));
     }
+    if (n2 < n2_lo || n2 > n2_hi) return 0;
+    /* det(M) = row0 . (row1 x row2) */
+    minor = F32Add(F32Mul(F32Bits(c->m[3 + k1]), F32Bits(c->m[6 + k2])),
+                   F32Mul(F32Bits(c->m[3 + k2]), F32Bits(c->m[6 + k1])) ^ F32_SIGN);
+    det = F32Add(det, F32Mul(F32Bits(c->m[i]), minor));
+    /* |b0| + |b1|*D + |b2|*D^2 bounds the bias over the validity range, D = max |dT|,
+     * evaluated as |b0| + (|b1| + |b2| D) D. */
+    bias = F32Mul(F32Bits(c->b2[i]) & ~F32_SIGN, d_max);
+    bias = F32Mul(F32Add(F32Bits(c->b1[i]) & ~F32_SIGN, bias), d_max);
+    bias = F32Add(F32Bits(c->b0[i]) & ~F32_SIGN, bias);
+    if (bias > bias_limit) return 0;
   }
-  return det > 0.0f;
+  return (det & F32_SIGN) == 0u && det != 0u; /* det > 0 */
 }
 
 int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, uint32_t body_len,
