@@ -83,6 +83,11 @@ int RunFit(const FitOptions& f) {
   }
   std::vector<const Session*> ptrs;
   for (const Session& s : sessions) ptrs.push_back(&s);
+  // Missing columns are bad input (exit 2), named with the file before any fitting.
+  if (Status c = CheckCalibrationColumns(ptrs, o); !c.ok()) {
+    fmt::print(stderr, "error: {}\n", c.error().ToString());
+    return kExitUsage;
+  }
   Result<Calibration> cal = CalibrateSessions(ptrs, o);
   if (!cal.ok()) {
     fmt::print(stderr, "error: {}\n", cal.error().ToString());

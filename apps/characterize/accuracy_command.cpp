@@ -9,7 +9,9 @@
 #include "metro/accuracy/accuracy.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/progress.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/report/html_report.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -101,11 +103,16 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     PrintError(MakeError(why));
     return kExitUsage;
   }
-  if (!in.output.empty()) {
-    if (Status s = CheckOutputPath(in.output, {in.session, a.reference}); !s.ok()) {
+  for (const std::string* out : {&in.output, &in.html}) {
+    if (out->empty()) continue;
+    if (Status s = CheckOutputPath(*out, {in.session, a.reference}); !s.ok()) {
       PrintError(s.error());
       return kExitUsage;
     }
+  }
+  if (!in.html.empty() && in.html == in.output) {
+    PrintError(MakeError(in.html, 0, "--html and -o name the same file"));
+    return kExitUsage;
   }
   LoadOptions load;
   load.format = in.format == "csv"        ? SessionFormat::kCsv
@@ -114,6 +121,9 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   load.lenient = in.lenient;
   if (in.frame_period_s > 0.0) load.frame_period_s = in.frame_period_s;
   load.threads = in.threads;
+  // Per phase on a terminal for big inputs (progress.hpp).
+  ElapsedTicker ticker(fmt::format("accuracy: load {}", in.session), stderr,
+                       {IsBigInput(in.session) ? ProgressMode::kAuto : ProgressMode::kNever});
   auto session = LoadSession(in.session, load);
   if (!session.ok()) {
     PrintError(session.error());
@@ -132,15 +142,30 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     reference = std::move(loaded).value();
   }
   const Session* ref = reference ? &*reference : nullptr;
+  ticker.SetLabel("accuracy: plateaus, error curve, budget");
   auto result = EvaluateAccuracy(session.value(), ref, options);
+  ticker.Finish();
   if (!result.ok()) {
     PrintError(result.error());
     return kExitUsage;
   }
-  const std::string json = AccuracyReportJson(result.value(), session.value(), ref).dump(2) + "\n";
+  const nlohmann::ordered_json report = AccuracyReportJson(result.value(), session.value(), ref);
+  const std::string json = report.dump(2) + "\n";
+  // The HTML view, after the JSON: a failed render never costs the JSON (exit 1).
+  auto write_html = [&in, &report]() -> int {
+    if (in.html.empty()) return kExitOk;
+    Result<std::string> html = RenderJsonHtml(report, in.output);
+    Status s = html.ok() ? WriteFileAtomically(in.html, html.value()) : Status(html.error());
+    if (!s.ok()) {
+      PrintError(s.error());
+      return kExitFailed;
+    }
+    return kExitOk;
+  };
   if (in.output.empty()) {
     std::fwrite(json.data(), 1, json.size(), stdout);
-    return kExitOk;
+    std::fflush(stdout);
+    return write_html();
   }
   if (Status s = WriteFileAtomically(in.output, json); !s.ok()) {
     PrintError(s.error());
@@ -148,7 +173,8 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   }
   const std::string table = AccuracyReportTable(result.value());
   std::fwrite(table.data(), 1, table.size(), stdout);
-  return kExitOk;
+  std::fflush(stdout);
+  return write_html();
 }
 
 }  // namespace metro::apps

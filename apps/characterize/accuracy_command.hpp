@@ -34,6 +34,7 @@ struct AccuracyRunInputs {
   std::string settle = "none";  // "auto": MSER-5 within each plateau too.
   int threads = 0;
   bool type_a = false;  // --type-a given as well: a usage error.
+  std::string html;     // Also write the HTML view here (docs/reports.md).
 };
 
 void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* options);

@@ -7,6 +7,7 @@
 #include "accuracy_command.hpp"
 #include "commands.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/progress.hpp"
 #include "metro/noise/allan.hpp"
 #include "metro/report/html_report.hpp"
 #include "metro/report/session_analysis.hpp"
@@ -43,7 +44,7 @@ struct AnalyzeOptions {
 int RunAnalyze(const AnalyzeOptions& o) {
   if (o.accuracy.enabled) {
     return RunAccuracy(o.accuracy, {o.session, o.format, o.frame_period_s, o.lenient, o.sensors,
-                                    o.output, o.settle, o.threads, o.type_a});
+                                    o.output, o.settle, o.threads, o.type_a, o.html});
   }
   SessionAnalysisOptions options;
   LoadOptions& load = options.load;
@@ -98,7 +99,11 @@ int RunAnalyze(const AnalyzeOptions& o) {
   }
   options.budget_path = o.budget;
 
+  // A running line on a terminal for big inputs (AnalyzeSession has no progress hook).
+  ElapsedTicker ticker(fmt::format("analyse {}", o.session), stderr,
+                       {IsBigInput(o.session) ? ProgressMode::kAuto : ProgressMode::kNever});
   const SessionAnalysis analysis = AnalyzeSession(o.session, options);
+  ticker.Finish();
   if (!analysis.ok) {
     PrintError(analysis.error);
     return analysis.input_error ? kExitUsage : kExitFailed;

@@ -41,7 +41,8 @@ void AddReportCommand(CLI::App& app, int* exit_code) {
   auto o = std::make_shared<ReportCommandOptions>();
   CLI::App* sub = app.add_subcommand(
       "report",
-      "render a saved JSON (metro.report/1, metro.calibration/1, any other schema as tables) "
+      "render a saved JSON (metro.report/1, metro.calibration/1, metro.accuracy-report/1, any "
+      "other schema as tables) "
       "as a self-contained HTML page");
   sub->add_option("json", o->json, "REPORT.json")->required()->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "HTML file to write")->required();

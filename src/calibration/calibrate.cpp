@@ -1260,6 +1260,81 @@ Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,
   }
 }
 
+namespace {
+
+// Which axis family of `prefix` a tag has: its index, -1 for none; `missing` lists the
+// absent columns of the first incomplete family.
+int FindFamily(const Tag& tag, char prefix, const Family* families, size_t count,
+               std::vector<std::string>* missing) {
+  for (size_t f = 0; f < count; ++f) {
+    std::vector<std::string> absent;
+    for (char axis : {'x', 'y', 'z'}) {
+      const std::string name = std::string(1, prefix) + axis + families[f].suffix;
+      if (FindQuantity(tag, name) == nullptr) absent.push_back(name);
+    }
+    if (absent.empty()) return static_cast<int>(f);
+    if (absent.size() < 3 && missing->empty()) *missing = absent;
+  }
+  return -1;
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : " ") + n;
+  return out;
+}
+
+}  // namespace
+
+Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
+                               const CalibrationOptions& options) {
+  // Sensors with a gyroscope family in some session.
+  std::map<int, std::string> gyro_seen;  // sensor -> a session that has it
+  for (const Session* s : sessions) {
+    for (const Tag& t : s->tags) {
+      if (options.sensor != 0 && t.sensor != options.sensor) continue;
+      std::vector<std::string> missing;
+      if (FindFamily(t, 'a', kAccelFamilies, 3, &missing) < 0) {
+        return MakeError(
+            s->path, 0,
+            missing.empty()
+                ? fmt::format("sensor {}: no accelerometer columns: the calibrator needs ax_lsb "
+                              "ay_lsb az_lsb (or ax_g ay_g az_g, or ax_mps2 ay_mps2 az_mps2) "
+                              "in static poses",
+                              t.sensor)
+                : fmt::format("sensor {}: missing accelerometer column(s) {}: the calibrator "
+                              "needs all three axes",
+                              t.sensor, JoinNames(missing)));
+      }
+      missing.clear();
+      const int gyro = FindFamily(t, 'g', kGyroFamilies, 3, &missing);
+      if (gyro < 0 && !missing.empty() && options.fit_gyro) {
+        return MakeError(s->path, 0,
+                         fmt::format("sensor {}: missing gyroscope column(s) {}: the calibrator "
+                                     "needs all three axes (or --accel-only)",
+                                     t.sensor, JoinNames(missing)));
+      }
+      if (gyro >= 0 && gyro_seen.count(t.sensor) == 0) gyro_seen[t.sensor] = s->path;
+    }
+  }
+  if (!options.fit_gyro) return Status::Ok();
+  for (const Session* s : sessions) {
+    for (const Tag& t : s->tags) {
+      if (options.sensor != 0 && t.sensor != options.sensor) continue;
+      std::vector<std::string> missing;
+      if (gyro_seen.count(t.sensor) != 0 && FindFamily(t, 'g', kGyroFamilies, 3, &missing) < 0) {
+        return MakeError(
+            s->path, 0,
+            fmt::format("sensor {}: no gyroscope columns (gx_lsb gy_lsb gz_lsb, gx_dps.. or "
+                        "gx_rads..) while {} has them: records of one tag are fitted together; "
+                        "log the gyroscope in every record or give --accel-only",
+                        t.sensor, gyro_seen[t.sensor]));
+      }
+    }
+  }
+  return Status::Ok();
+}
+
 Result<Calibration> CalibrateSessions(const std::vector<const Session*>& sessions,
                                       const CalibrationOptions& options) {
   std::string why;

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <system_error>
 
 #include "metro/core/check.hpp"
 
@@ -77,6 +79,69 @@ void ProgressBar::Draw(bool force) {
   // "\r" returns to the line start; the trailing blanks clear a longer previous line.
   fmt::print(stream_, "\r{}  ",
              FormatProgressLine(label_, done_.load(), total_, elapsed_s, options_.bar_width));
+  std::fflush(stream_);
+}
+
+bool IsBigInput(const std::string& path, int64_t threshold_bytes) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  return !ec && static_cast<int64_t>(size) >= threshold_bytes;
+}
+
+std::string FormatElapsedLine(const std::string& label, double elapsed_s) {
+  return fmt::format("{} ...  {:.1f} s", label, elapsed_s);
+}
+
+ElapsedTicker::ElapsedTicker(std::string label, std::FILE* stream, const ProgressOptions& options)
+    : label_(std::move(label)), stream_(stream), options_(options) {
+  std::string why;
+  METRO_CHECK(options_.IsValid(&why));
+  enabled_ = stream_ != nullptr && (options_.mode == ProgressMode::kAlways ||
+                                    (options_.mode == ProgressMode::kAuto && IsTerminal(stream_)));
+  start_ = std::chrono::steady_clock::now();
+  if (!enabled_) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    DrawLocked();
+  }
+  const auto period = std::chrono::duration<double>(std::max(0.05, options_.min_redraw_s));
+  thread_ = std::thread([this, period] {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!finished_) {
+      wake_.wait_for(lock, period);
+      if (!finished_) DrawLocked();
+    }
+  });
+}
+
+ElapsedTicker::~ElapsedTicker() { Finish(); }
+
+void ElapsedTicker::SetLabel(std::string label) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  label_ = std::move(label);
+  if (enabled_ && !finished_) DrawLocked();
+}
+
+void ElapsedTicker::Finish() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (finished_) return;
+    finished_ = true;
+    if (enabled_) {
+      DrawLocked();
+      fmt::print(stream_, "\n");
+      std::fflush(stream_);
+    }
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void ElapsedTicker::DrawLocked() {
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  // "\r" returns to the line start; the trailing blanks clear a longer previous line.
+  fmt::print(stream_, "\r{}  ", FormatElapsedLine(label_, elapsed_s));
   std::fflush(stream_);
 }
 

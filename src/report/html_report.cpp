@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "accuracy_view.hpp"
 #include "html_common.hpp"
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"
@@ -606,6 +607,15 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
     return RenderCalibrationCertificate(cal.value(),
                                         inputs.complete ? ptrs : std::vector<const Session*>{},
                                         inputs.note, CertificateOptions{});
+  }
+  if (schema == report_internal::kAccuracyReportSchema) {
+    Result<std::string> html = report_internal::RenderAccuracyHtml(document, json_path);
+    if (!html.ok() && html.error().file.empty()) {
+      Error e = html.error();
+      e.file = json_path;
+      return e;
+    }
+    return html;
   }
   return report_internal::RenderGenericHtml(document, json_path, schema);
 }

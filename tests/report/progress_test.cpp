@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cstdio>
 #include <string>
 #include <thread>
@@ -68,6 +69,53 @@ TEST_CASE("Progress bar forced on ends with the final count", "[report][progress
   CHECK(text.find("40/40 100 %") != std::string::npos);
   CHECK(text.back() == '\n');
   CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+}
+
+TEST_CASE("Elapsed ticker is quiet when the stream is not a terminal", "[report][progress]") {
+  std::FILE* f = std::tmpfile();
+  REQUIRE(f != nullptr);
+  ProgressOptions o;
+  o.min_redraw_s = 0.0;
+  {
+    ElapsedTicker ticker("analyse big.csv", f, o);
+    CHECK_FALSE(ticker.enabled());
+    ticker.SetLabel("budget");
+    std::this_thread::sleep_for(std::chrono::milliseconds(120));
+  }
+  CHECK(ReadAll(f).empty());
+  std::fclose(f);
+}
+
+TEST_CASE("Elapsed ticker forced on redraws until finished", "[report][progress]") {
+  CHECK(FormatElapsedLine("load", 2.25) == "load ...  2.2 s");
+  std::FILE* f = std::tmpfile();
+  REQUIRE(f != nullptr);
+  ProgressOptions o;
+  o.mode = ProgressMode::kAlways;
+  o.min_redraw_s = 0.05;
+  {
+    ElapsedTicker ticker("load", f, o);
+    CHECK(ticker.enabled());
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    ticker.SetLabel("evaluate");
+    ticker.Finish();
+    ticker.Finish();  // Once only.
+  }
+  const std::string text = ReadAll(f);
+  std::fclose(f);
+  CHECK(text.find("\rload ...  0.") == 0);
+  // Redrawn by the thread while running: several "\r" lines before the last one.
+  CHECK(std::count(text.begin(), text.end(), '\r') >= 4);
+  CHECK(text.find("\revaluate ...  0.") != std::string::npos);
+  CHECK(text.back() == '\n');
+  CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+}
+
+TEST_CASE("Big inputs are told by their size", "[report][progress]") {
+  const std::string path = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
+  CHECK_FALSE(IsBigInput(path));
+  CHECK(IsBigInput(path, 1000));
+  CHECK_FALSE(IsBigInput("no_such_file.csv", 0));
 }
 
 TEST_CASE("Progress options are validated", "[report][progress]") {

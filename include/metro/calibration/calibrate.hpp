@@ -116,6 +116,16 @@ struct Calibration {
   const TagCalibration* FindTag(int sensor) const;
 };
 
+// The columns the fit needs, checked before fitting so that a session without them is an
+// input error (`calibrate fit` exits 2): for every tag to be calibrated (options.sensor) in
+// every session, a complete accelerometer family (ax ay az with _lsb, _g or _mps2); no
+// incomplete gyroscope family; and, with fit_gyro, gyroscope columns in every session when
+// any session of that tag has them (a tag's records are fitted together). A tag without any
+// gyroscope column anywhere stays an accelerometer-only fit with a warning. The error's file
+// is the session; its message names the sensor and the missing columns.
+Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
+                               const CalibrationOptions& options);
+
 // Calibrates one tag from one or more records of it (e.g. a static multi-pose session and a
 // rotation-table session). Errors say what to collect.
 Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,

@@ -8,10 +8,12 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
 #include <mutex>
 #include <string>
+#include <thread>
 
 namespace metro {
 
@@ -63,6 +65,48 @@ class ProgressBar {
   std::mutex mutex_;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;
+};
+
+// Inputs at least this large (bytes) get a progress line around their analysis.
+constexpr int64_t kBigInputBytes = int64_t{50} * 1000 * 1000;
+
+// True when `path` is a regular file of at least `threshold_bytes` (false if unreadable).
+bool IsBigInput(const std::string& path, int64_t threshold_bytes = kBigInputBytes);
+
+// "label ...  12.3 s": work whose progress cannot be observed shows only that it runs and
+// for how long (no invented fraction). Exposed for tests.
+std::string FormatElapsedLine(const std::string& label, double elapsed_s);
+
+// A line with the elapsed time, redrawn every `min_redraw_s` (at least 0.05 s) by a
+// background thread until Finish(); drawn only under the same rule as ProgressBar (a
+// terminal, or kAlways). `SetLabel` names the current phase (e.g. "load", "budget").
+class ElapsedTicker {
+ public:
+  // `stream` is not owned. Options must be valid (METRO_CHECK).
+  explicit ElapsedTicker(std::string label, std::FILE* stream = stderr,
+                         const ProgressOptions& options = {});
+  ElapsedTicker(const ElapsedTicker&) = delete;
+  ElapsedTicker& operator=(const ElapsedTicker&) = delete;
+  ~ElapsedTicker();  // Finish()es.
+
+  bool enabled() const { return enabled_; }
+  // Thread-safe.
+  void SetLabel(std::string label);
+  // Stops the thread, draws the final line and ends it (once; later calls do nothing).
+  void Finish();
+
+ private:
+  void DrawLocked();
+
+  std::string label_;
+  std::FILE* stream_ = nullptr;
+  ProgressOptions options_;
+  bool enabled_ = false;
+  bool finished_ = false;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::chrono::steady_clock::time_point start_;
+  std::thread thread_;
 };
 
 }  // namespace metro

@@ -10,6 +10,9 @@
 //                          white-noise band, the Allan deviation with confidence bars and the
 //                          fitted IEEE 952 terms, and the budget as sorted bars;
 //   "metro.calibration/1"  the calibration certificate (certificate.hpp);
+//   "metro.accuracy-report/1" the accuracy view: error vs reference angle with U bars, the
+//                          fitted error curve and its band, hysteresis, cross-axis errors,
+//                          the budgets as sorted bars (docs/reports.md);
 //   anything else          a generic view: the JSON as tables (a "budget" key gets bars).
 // Numbers in tables are rounded per JCGM 100:2008 7.2.6; the JSON keeps full precision.
 #pragma once

@@ -1,0 +1,254 @@
+// The HTML view of "metro.accuracy-report/1": plots present and counted from the JSON,
+// nothing external, numbers rounded per JCGM 100:2008 7.2.6 with k = t_{(1+p)/2}(nu) from
+// published t tables, bad input named; and the programs end to end.
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "metro/accuracy/accuracy.hpp"
+#include "metro/accuracy/accuracy_report.hpp"
+#include "metro/core/rounding.hpp"
+#include "metro/io/session_io.hpp"
+#include "metro/report/html_report.hpp"
+#include "support/run_program.hpp"
+#include "support/temp_file.hpp"
+
+namespace metro {
+namespace {
+
+using nlohmann::ordered_json;
+
+const std::string kSweep = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
+
+size_t Count(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// PLplot writes the characters of SVG text as "&#xNN;" references; decoded for searching.
+std::string DecodeCharRefs(const std::string& html) {
+  std::string out;
+  for (size_t i = 0; i < html.size(); ++i) {
+    if (html.compare(i, 3, "&#x") == 0) {
+      const size_t end = html.find(';', i);
+      if (end != std::string::npos && end - i <= 8) {
+        out += static_cast<char>(std::stoi(html.substr(i + 3, end - i - 3), nullptr, 16));
+        i = end;
+        continue;
+      }
+    }
+    out += html[i];
+  }
+  return out;
+}
+
+void CheckSelfContained(const std::string& html) {
+  CHECK(html.rfind("<!DOCTYPE html>", 0) == 0);
+  CHECK(html.find("</html>") != std::string::npos);
+  for (size_t at = html.find("url("); at != std::string::npos; at = html.find("url(", at + 1)) {
+    CHECK(html.compare(at, 5, "url(#") == 0);
+  }
+  for (const char* bad :
+       {"http://", "https://", "src=", "href=", "@import", "<script", "<link", "<iframe", "<img"}) {
+    INFO(bad);
+    CHECK(html.find(bad) == std::string::npos);
+  }
+}
+
+const ordered_json& SweepReport() {
+  static const ordered_json report = [] {
+    Result<Session> session = LoadSession(kSweep);
+    REQUIRE(session.ok());
+    AccuracyOptions options;
+    options.reference.u_deg = 0.01;
+    Result<AccuracyResult> result = EvaluateAccuracy(session.value(), nullptr, options);
+    REQUIRE(result.ok());
+    return AccuracyReportJson(result.value(), session.value(), nullptr);
+  }();
+  return report;
+}
+
+// Plots the view calls for, counted from the JSON: the error plot, one hysteresis plot when
+// there are pairs, one plot per cross-axis quantity, one bar plot per budget.
+size_t ExpectedPlots(const ordered_json& report) {
+  size_t n = 1;
+  if (report["hysteresis"]["available"].get<bool>() && !report["hysteresis"]["pairs"].empty()) {
+    ++n;
+  }
+  n += report["cross_axis"].size();
+  n += report["budget"].size();
+  return n;
+}
+
+TEST_CASE("Accuracy HTML has every plot and no external reference", "[report][html][accuracy]") {
+  const ordered_json& report = SweepReport();
+  REQUIRE(report["cross_axis"].size() == 2);
+  REQUIRE(report["budget"].size() == 2);
+  Result<std::string> html = RenderJsonHtml(report, "acc.json");
+  REQUIRE(html.ok());
+  const std::string h = DecodeCharRefs(html.value());
+  CheckSelfContained(html.value());
+  CHECK(h.find("<title>Accuracy report: table_sweep.csv</title>") != std::string::npos);
+  CHECK(h.find("No dedicated view") == std::string::npos);
+  CHECK(Count(h, "<svg") == ExpectedPlots(report));
+  CHECK(Count(h, "<figure>") == ExpectedPlots(report));
+  // Both sweep directions are drawn (their legend entries) and the fitted curve and band.
+  CHECK(h.find("turning up (+-U_i)") != std::string::npos);
+  CHECK(h.find("turning down (+-U_i)") != std::string::npos);
+  CHECK(h.find("fitted error curve e(theta)") != std::string::npos);
+  CHECK(h.find("band e +- ") != std::string::npos);
+  // One row per plateau in the plateau table and one per hysteresis pair.
+  CHECK(Count(h, "<td>up</td>") + Count(h, "<td>down</td>") + Count(h, "<td>first</td>") ==
+        report["points"].size());
+  // Each plateau's error rounded per GUM 7.2.6 to its u.
+  for (const auto& p : report["points"]) {
+    const RoundedResult r =
+        RoundForStatement(p["error_deg"].get<double>(), p["type_a"]["u_deg"].get<double>());
+    INFO(p.dump());
+    CHECK(h.find("<td class=\"num\">" + r.value + "</td><td class=\"num\">" + r.uncertainty +
+                 "</td>") != std::string::npos);
+  }
+  CHECK(h.find("a single yaw_deg reading corrected by the fitted curve") != std::string::npos);
+  CHECK(h.find("Hysteresis and repeatability") != std::string::npos);
+  CHECK(h.find("Cross-axis: pitch_deg against the reference angle") != std::string::npos);
+  CHECK(h.find("Cross-axis: roll_deg against the reference angle") != std::string::npos);
+}
+
+// A hand-made report whose numbers are checked against published Student t quantiles:
+// t_0.975(4) = 2.776, t_0.975(9) = 2.262, z_0.975 = 1.960 (e.g. JCGM 100:2008 Table G.2).
+const char* const kHandReport = R"({
+  "schema": "metro.accuracy-report/1",
+  "input": {"session": "hand.csv", "sha256": "abcdef", "format": "csv", "sensor": 3,
+            "table_axis": "yaw", "quantity": "yaw_deg",
+            "reference": {"file": null, "column": "table_angle_deg"}},
+  "points": [
+    {"reference_deg": 0, "mean_deg": 0.1234567, "error_deg": 0.1234567, "direction": "first",
+     "type_a": {"n": 50, "std_deg": 0.05, "u_deg": 0.0123, "n_eff": 5, "dof": 4}},
+    {"reference_deg": 90, "mean_deg": 90.2, "error_deg": 0.2, "direction": "up",
+     "type_a": {"n": 50, "std_deg": 0.05, "u_deg": 0.01, "n_eff": 1e9, "dof": null}},
+    {"reference_deg": 45, "mean_deg": 44.95, "error_deg": -0.05, "direction": "down",
+     "type_a": {"n": 50, "std_deg": 0.05, "u_deg": 0.02, "n_eff": 10, "dof": 9}}],
+  "fit": {"model": "linear", "dof": 1, "chi2": 1.0, "reduced_chi2": 1.0,
+          "params": [{"name": "c0_deg", "value": 0.1, "u": 0.01, "unit": "deg"},
+                     {"name": "scale", "value": 0.001, "u": 0.0001, "unit": "deg/deg"}],
+          "covariance": [[1e-4, 0], [0, 1e-8]]},
+  "budget": {"corrected": {"u_deg": 0.02, "dof_eff": 30, "k": 2.04, "U_deg": 0.0408,
+                           "coverage": 0.95,
+                           "inputs": [{"name": "small_input", "u_deg": 0.001, "percent": 0.25},
+                                      {"name": "big_input", "u_deg": 0.0199, "percent": 99.75}]}},
+  "result": {"ok": true, "coverage": 0.95, "statement_corrected": "STATEMENT-C",
+             "statement_uncorrected": "STATEMENT-U"}
+})";
+
+TEST_CASE("Accuracy HTML rounds per GUM 7.2.6 with k from the t distribution",
+          "[report][html][accuracy]") {
+  const ordered_json doc = ordered_json::parse(kHandReport);
+  Result<std::string> html = RenderJsonHtml(doc, "hand.json");
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  CheckSelfContained(h);
+  CHECK(Count(h, "<svg") == 2);  // The error plot and the one budget's bars.
+  // Point 1: e = 0.1234567, u = 0.0123 -> 0.123, 0.012; U = 2.776 * 0.0123 = 0.03415 -> 0.034.
+  CHECK(h.find("<td class=\"num\">0.123</td><td class=\"num\">0.012</td><td class=\"num\">5</td>"
+               "<td class=\"num\">2.78</td><td class=\"num\">0.034</td>") != std::string::npos);
+  // Point 2: infinite dof -> k = 1.96, U = 0.0196 -> 0.020.
+  CHECK(h.find("<td class=\"num\">1.96</td><td class=\"num\">0.020</td>") != std::string::npos);
+  // Point 3: dof 9 -> k = 2.262, U = 0.04524 -> 0.045; e = -0.05 with u = 0.02 -> -0.050.
+  CHECK(h.find("<td class=\"num\">-0.050</td><td class=\"num\">0.020</td>") != std::string::npos);
+  CHECK(h.find("<td class=\"num\">2.26</td><td class=\"num\">0.045</td>") != std::string::npos);
+  // Fit parameters rounded to their u: 0.100 +- 0.010, 0.00100 +- 0.00010.
+  CHECK(h.find("<td>c0_deg</td><td class=\"num\">0.100</td><td class=\"num\">0.010</td>") !=
+        std::string::npos);
+  CHECK(h.find("<td>scale</td><td class=\"num\">0.00100</td><td class=\"num\">0.00010</td>") !=
+        std::string::npos);
+  // Budget lines sorted by share, largest first.
+  const size_t big = h.find("<td>big_input</td>");
+  const size_t small = h.find("<td>small_input</td>");
+  REQUIRE(big != std::string::npos);
+  REQUIRE(small != std::string::npos);
+  CHECK(big < small);
+  CHECK(h.find("STATEMENT-C") != std::string::npos);
+  CHECK(h.find("STATEMENT-U") != std::string::npos);
+  CHECK(h.find("Hysteresis not available") != std::string::npos);
+  CHECK(h.find("<title>Accuracy report: hand.csv</title>") != std::string::npos);
+}
+
+TEST_CASE("Bad accuracy report input is refused with a message", "[report][html][accuracy]") {
+  ordered_json doc = ordered_json::parse(kHandReport);
+  doc.erase("points");
+  Result<std::string> r = RenderJsonHtml(doc, "bad.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().file == "bad.json");
+  CHECK(r.error().message == "metro.accuracy-report/1 report: missing key 'points'");
+
+  doc = ordered_json::parse(kHandReport);
+  doc["points"] = ordered_json::array();
+  r = RenderJsonHtml(doc, "bad.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message == "metro.accuracy-report/1 report: 'points' is not a non-empty array");
+
+  doc = ordered_json::parse(kHandReport);
+  doc["points"][1]["type_a"].erase("u_deg");
+  r = RenderJsonHtml(doc, "bad.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message ==
+        "metro.accuracy-report/1 report: point 1 lacks a finite reference_deg, error_deg or "
+        "type_a.u_deg");
+
+  doc = ordered_json::parse(kHandReport);
+  doc["budget"] = "none";
+  r = RenderJsonHtml(doc, "bad.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message == "metro.accuracy-report/1 report: 'budget' is not an object");
+}
+
+#ifdef METRO_CHARACTERIZE_EXE
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+TEST_CASE("characterize --accuracy --html and characterize report render the accuracy view",
+          "[report][html][accuracy][apps]") {
+  const std::string json = "metro_acc_view.json";
+  const std::string html = "metro_acc_view.html";
+  const std::string html2 = "metro_acc_view2.html";
+  for (const std::string& f : {json, html, html2}) std::remove(f.c_str());
+  testing::ProgramRun r =
+      testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                          kSweep + " --accuracy --reference-u 0.01 -o " + json + " --html " + html);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const std::string page = Slurp(html);
+  CheckSelfContained(page);
+  const ordered_json report = ordered_json::parse(Slurp(json));
+  CHECK(Count(page, "<svg") == ExpectedPlots(report));
+  CHECK(page.find("<title>Accuracy report: table_sweep.csv</title>") != std::string::npos);
+
+  r = testing::RunProgram(METRO_CHARACTERIZE_EXE, "report " + json + " --html " + html2);
+  REQUIRE(r.exit_code == 0);
+  const std::string page2 = Slurp(html2);
+  CheckSelfContained(page2);
+  CHECK(Count(page2, "<svg") == ExpectedPlots(report));
+  CHECK(page2.find("No dedicated view") == std::string::npos);
+
+  // The HTML may not overwrite the session nor the JSON (exit 2).
+  r = testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                          kSweep + " --accuracy -o " + json + " --html " + kSweep);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("is the input file: refusing to overwrite it") != std::string::npos);
+  r = testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                          kSweep + " --accuracy -o " + json + " --html " + json);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("--html and -o name the same file") != std::string::npos);
+  for (const std::string& f : {json, html, html2}) std::remove(f.c_str());
+}
+#endif
+
+}  // namespace
+}  // namespace metro
