@@ -28,7 +28,20 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
   if (!type_a.ok()) return fail(type_a.error(), true);
   out.type_a = std::move(type_a).value();
   out.report = TypeAReportJson(out.session, out.type_a, options.type_a, options.registry);
-  if (options.allan) {
+  bool run_allan = options.allan;
+  if (run_allan && options.allan_skip_without_rates && options.allan_options.quantities.empty()) {
+    bool any_rate = false;
+    for (const TagTypeA& tag : out.type_a.tags) {
+      for (const QuantityTypeA& q : tag.quantities) any_rate = any_rate || IsRateQuantity(q.name);
+    }
+    if (!any_rate) {
+      run_allan = false;
+      out.report["allan_skipped"] =
+          "no rate quantity (gyroscope or accelerometer column) in the window: no Allan "
+          "deviation for this session";
+    }
+  }
+  if (run_allan) {
     if (Status s = AddAllanToReport(out.session, out.type_a, options.allan_options, &out.report,
                                     options.allan_csv ? &out.allan_csv : nullptr);
         !s.ok()) {

@@ -23,6 +23,11 @@ struct SessionAnalysisOptions {
   bool allan = false;
   SessionAllanOptions allan_options;  // Used when `allan`.
   bool allan_csv = false;             // Also render the Allan curves as CSV.
+  // With `allan` and no quantities named: a session without any rate quantity (gyroscope
+  // or accelerometer column) is still reported, with "allan_skipped" saying why, instead
+  // of failing. `characterize batch` sets this: one angle-only session in a fleet
+  // directory must not cost its Type A report.
+  bool allan_skip_without_rates = false;
   // Uncertainty budget file (docs/budget-format.md); empty: none. Inputs without a
   // "session" refer to the analysed session, in the same window.
   std::string budget_path;

@@ -1,0 +1,78 @@
+#include "analysis_options.hpp"
+
+#include "metro/noise/allan.hpp"
+
+namespace metro::apps {
+
+void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o) {
+  app->add_option("--format", o->format, "input format")
+      ->check(CLI::IsMember({"auto", "csv", "receiver"}))
+      ->capture_default_str();
+  app->add_option("--frame-period-s", o->frame_period_s,
+                  "receiver frame period in seconds (default 3281/32768 = 0.10013)")
+      ->check(CLI::PositiveNumber);
+  app->add_flag("--lenient", o->lenient,
+                "skip malformed rows (counted in input.rejected_rows) instead of stopping");
+  app->add_option("--skip-samples", o->skip_samples, "drop the first N observations of each tag")
+      ->check(CLI::NonNegativeNumber);
+  app->add_option("--skip-seconds", o->skip_seconds,
+                  "drop each tag's observations in its first S seconds")
+      ->check(CLI::NonNegativeNumber);
+  app->add_option("--from-s", o->from_s, "keep observations with t_s >= this");
+  app->add_option("--to-s", o->to_s, "keep observations with t_s <= this");
+  app->add_option("--settle", o->settle,
+                  "auto: drop each tag's start-up transient (MSER-5, docs/type-a.md)")
+      ->check(CLI::IsMember({"none", "auto"}))
+      ->capture_default_str();
+  app->add_option("--sensor", o->sensors, "only this tag (repeatable)");
+  app->add_option("--quantity", o->quantities, "only this quantity, e.g. pitch_deg (repeatable)");
+  app->add_option("--tag-registry", o->tag_registry,
+                  R"(JSON {"1": "Forehead", ...} naming the tags (default: thesis Table 5.2))")
+      ->check(CLI::ExistingFile);
+  app->add_flag("--allan", o->allan,
+                "Allan deviation and IEEE 952 noise terms of the rate quantities (docs/noise.md)");
+  app->add_option("--taus", o->taus, "Allan taus: octave, decade:N, all")->capture_default_str();
+  app->add_option("--estimator", o->estimator, "Allan estimator: oadev, mdev, ohdev")
+      ->capture_default_str();
+}
+
+Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
+                                  SessionAnalysisOptions* out) {
+  LoadOptions& load = out->load;
+  load.format = o.format == "csv"        ? SessionFormat::kCsv
+                : o.format == "receiver" ? SessionFormat::kReceiver
+                                         : SessionFormat::kAuto;
+  load.lenient = o.lenient;
+  load.frame_period_s = o.frame_period_s;
+  load.threads = threads;
+  SessionTypeAOptions& type_a = out->type_a;
+  type_a.window.skip_samples = o.skip_samples;
+  type_a.window.skip_seconds = o.skip_seconds;
+  type_a.window.from_s = o.from_s;
+  type_a.window.to_s = o.to_s;
+  type_a.window.settle_auto = o.settle == "auto";
+  type_a.sensors = o.sensors;
+  type_a.quantities = o.quantities;
+  type_a.threads = threads;
+  std::string why;
+  if (!out->IsValid(&why)) return MakeError(why);
+  if (!o.tag_registry.empty()) {
+    auto loaded = TagRegistry::Load(o.tag_registry);
+    if (!loaded.ok()) return loaded.error();
+    out->registry = loaded.value();
+  }
+  if (o.allan) {
+    auto taus = ParseTauSpacing(o.taus);
+    if (!taus.ok()) return taus.error();
+    auto estimator = ParseAllanEstimator(o.estimator);
+    if (!estimator.ok()) return estimator.error();
+    out->allan = true;
+    out->allan_options.allan.taus = taus.value();
+    out->allan_options.allan.estimator = estimator.value();
+    out->allan_options.allan.threads = threads;
+    out->allan_options.quantities = o.quantities;
+  }
+  return Status::Ok();
+}
+
+}  // namespace metro::apps
