@@ -58,9 +58,12 @@ struct FftPlans {
 };
 
 const FftPlans& PlansForSize(size_t size) {
-  static std::map<size_t, FftPlans> cache;
+  // Deliberately never destroyed: the plans live as long as the process (and stay
+  // reachable, so leak checkers do not report them), and no thread can find a destroyed
+  // plan during static destruction.
+  static auto* cache = new std::map<size_t, FftPlans>();
   std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-  FftPlans& plans = cache[size];
+  FftPlans& plans = (*cache)[size];
   if (plans.forward == nullptr) {
     double* real = fftw_alloc_real(size);
     fftw_complex* spectrum = fftw_alloc_complex(size / 2 + 1);
