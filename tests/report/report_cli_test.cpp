@@ -9,36 +9,16 @@
 #include <sstream>
 #include <string>
 
+#include "support/run_program.hpp"
+
 namespace metro {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using Run = testing::ProgramRun;
 
-Run Exec(const std::string& exe, const std::string& args) {
-  static int counter = 0;
-  const std::string err_path = "metro_report_cli_err_" + std::to_string(++counter) + ".txt";
-  const std::string cmd = exe + " " + args + " 2>" + err_path;
-  Run r{};
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream err(err_path);
-  std::stringstream ss;
-  ss << err.rdbuf();
-  r.err = ss.str();
-  std::remove(err_path.c_str());
-  return r;
-}
+Run Exec(const std::string& exe, const std::string& args) { return testing::RunProgram(exe, args); }
 
 Run Characterize(const std::string& args) { return Exec(METRO_CHARACTERIZE_EXE, args); }
 
