@@ -1,10 +1,13 @@
 #!/bin/bash
-# Side-by-side: metro (whole process, CSV -> octave OADEV with EDF/CI) vs numpy (in-memory
-# octave OADEV after loading), plus metro's all-tau (Stable32-thinned) sweep at N = 1e6.
-#   bench/noise/run_bench.sh BUILD_DIR [WORK_DIR=/tmp/metro_bench_noise]
+# Side-by-side: metro (whole process, CSV -> octave OADEV with noise id, EDF and CI) vs numpy
+# (in-memory octave OADEV after a pandas read), each run RUNS times alternately; prints
+# median, min and max of each and the ratio of the medians, with the load average. Then
+# metro's all-tau (Stable32-thinned) sweep at N = 1e6 and the agreement of the curves.
+#   bench/noise/run_bench.sh BUILD_DIR [WORK_DIR=/tmp/metro_bench_noise] [RUNS=5]
 set -euo pipefail
-build=${1:?usage: run_bench.sh BUILD_DIR [WORK_DIR]}
+build=${1:?usage: run_bench.sh BUILD_DIR [WORK_DIR] [RUNS]}
 work=${2:-/tmp/metro_bench_noise}
+runs=${3:-5}
 here=$(cd "$(dirname "$0")" && pwd)
 bench=$(find "$build" -name metro_bench_noise_oadev -type f | head -1)
 gen=$(find "$build" -name metro_bench_noise_gen -type f | head -1)
@@ -12,14 +15,30 @@ mkdir -p "$work"
 csv="$work/rate_1e7.csv"
 [ -s "$csv" ] || "$gen" "$csv" 10000000 1
 cat "$csv" > /dev/null  # page cache warm for both contenders
-echo "== metro, whole process (3 runs; wall clock from the shell)"
-for i in 1 2 3; do
-  /usr/bin/time -f "metro wall %e s, max RSS %M kB" "$bench" "$csv" > "$work/metro_octave.csv"
+now() { date +%s.%N; }
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
+metro_times=()
+numpy_times=()
+for ((i = 1; i <= runs; i++)); do
+  t0=$(now)
+  "$bench" "$csv" > "$work/metro_octave.csv"
+  t1=$(now)
+  metro_times+=("$(echo "$t1 - $t0" | bc)")
+  /usr/bin/python3 "$here/numpy_oadev.py" "$csv" > "$work/numpy_octave.csv" 2> "$work/numpy.err"
+  cat "$work/numpy.err"
+  line=$(cat "$work/numpy.err")
+  numpy_times+=("$(echo "$line" | sed -n 's/.*in-memory OADEV \([0-9.]*\) s.*/\1/p')")
 done
-echo "== numpy cumulative-sum baseline (3 runs)"
-for i in 1 2 3; do
-  /usr/bin/python3 "$here/numpy_oadev.py" "$csv" > "$work/numpy_octave.csv"
-done
+echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
+/usr/bin/python3 - "${metro_times[*]}" "${numpy_times[*]}" <<'PY'
+import statistics, sys
+metro = [float(v) for v in sys.argv[1].split()]
+numpy = [float(v) for v in sys.argv[2].split()]
+for name, v in (("metro whole process wall", metro), ("numpy in-memory OADEV", numpy)):
+    print(f"{name}: median {statistics.median(v):.3f} s, min {min(v):.3f}, max {max(v):.3f} "
+          f"({len(v)} runs)")
+print(f"ratio of medians (numpy / metro): {statistics.median(numpy) / statistics.median(metro):.1f}x")
+PY
 echo "== metro all-tau (Stable32 thinning) at N = 1e6, whole process"
 /usr/bin/time -f "metro wall %e s" "$bench" "$csv" --taus all --limit 1000000 > "$work/metro_all.csv"
 echo "== agreement of the octave curves (max relative difference)"

@@ -1,17 +1,35 @@
-#!/bin/sh
+#!/bin/bash
 # Side-by-side timing of the JCGM 101 9.5 gauge-block Monte Carlo: metro (whole process,
-# wall clock) and numpy (in-process time printed by the script, plus its whole process).
-# Usage: bench/uncertainty/run.sh BENCH_EXE [TRIALS]
+# wall clock from the shell) and numpy (its in-process time, generator to interval), each
+# run RUNS times alternately; prints every run, then median, min and max of each, the ratio
+# of the medians and the load average before and after.
+# Usage: bench/uncertainty/run.sh BENCH_EXE [TRIALS=1e7] [RUNS=5]
 # BENCH_EXE: the built bench_uncertainty_mc (e.g. build/bench/uncertainty/bench_uncertainty_mc).
-set -eu
-exe=${1:?usage: run.sh BENCH_EXE [TRIALS]}
+set -euo pipefail
+exe=${1:?usage: run.sh BENCH_EXE [TRIALS] [RUNS]}
 trials=${2:-1e7}
+runs=${3:-5}
 here=$(cd "$(dirname "$0")" && pwd)
 now() { date +%s.%N; }
-t0=$(now)
-"$exe" "$trials"
-t1=$(now)
-/usr/bin/python3 "$here/numpy_gauge_block.py" "$trials"
-t2=$(now)
-echo "metro whole process wall: $(echo "$t1 - $t0" | bc) s"
-echo "numpy whole process wall: $(echo "$t2 - $t1" | bc) s (in-process time: numpy line above)"
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
+metro_times=()
+numpy_times=()
+for ((i = 1; i <= runs; i++)); do
+  t0=$(now)
+  "$exe" "$trials"
+  t1=$(now)
+  metro_times+=("$(echo "$t1 - $t0" | bc)")
+  line=$(/usr/bin/python3 "$here/numpy_gauge_block.py" "$trials")
+  echo "$line"
+  numpy_times+=("${line##*time_s=}")
+done
+echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
+/usr/bin/python3 - "${metro_times[*]}" "${numpy_times[*]}" <<'PY'
+import statistics, sys
+metro = [float(v) for v in sys.argv[1].split()]
+numpy = [float(v) for v in sys.argv[2].split()]
+for name, v in (("metro whole process wall", metro), ("numpy in-process", numpy)):
+    print(f"{name}: median {statistics.median(v):.3f} s, min {min(v):.3f}, max {max(v):.3f} "
+          f"({len(v)} runs)")
+print(f"ratio of medians (numpy / metro): {statistics.median(numpy) / statistics.median(metro):.1f}x")
+PY

@@ -3,12 +3,19 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <thread>
 #include <utility>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 #include "metro/noise/edf.hpp"
 #include "metro/noise/noise_id.hpp"
+#include "noise/allan_internal.hpp"
 
 namespace metro {
 namespace {
@@ -106,38 +113,73 @@ double SumThirdDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) {
   return (s0 + s1) + (s2 + s3);
 }
 
-// Overlapping Allan / Hadamard sums for all m in one blocked pass per thread.
-std::vector<double> OverlappingSums(const std::vector<double>& x, const std::vector<int64_t>& m,
-                                    AllanEstimator estimator, int threads) {
-  const int64_t n_phase = static_cast<int64_t>(x.size());
-  const bool hadamard = estimator == AllanEstimator::kOhdev;
-  std::vector<int64_t> limit(m.size());
-  int64_t max_limit = 0;
-  for (size_t k = 0; k < m.size(); ++k) {
-    limit[k] = AllanTermCount(estimator, n_phase, m[k]);
-    max_limit = std::max(max_limit, limit[k]);
+// Runs task(0), ..., task(count - 1) on up to `threads` threads, each task once; free
+// threads take the next task in increasing order.
+template <typename Task>
+void RunTasks(int threads, int64_t count, Task task) {
+  std::atomic<int64_t> next{0};
+  const auto worker = [&] {
+    for (int64_t t = next++; t < count; t = next++) task(t);
+  };
+  const int64_t helpers = std::min<int64_t>(threads, count) - 1;
+  std::vector<std::thread> pool;
+  for (int64_t h = 0; h < helpers; ++h) pool.emplace_back(worker);
+  worker();
+  for (std::thread& th : pool) th.join();
+}
+
+// Overlapping Allan / Hadamard sums for all m. The index range is cut into a fixed number
+// of slices (whatever the thread count); a slice is one blocked pass over its part of the
+// data for every m, and may run on any thread. Sums() adds the slices' partial sums in
+// slice order, so the result does not depend on the thread count.
+class OverlappingSums {
+ public:
+  OverlappingSums(const std::vector<double>& x, const std::vector<int64_t>& m,
+                  AllanEstimator estimator)
+      : x_(x), m_(m), hadamard_(estimator == AllanEstimator::kOhdev), limit_(m.size()) {
+    const int64_t n_phase = static_cast<int64_t>(x.size());
+    for (size_t k = 0; k < m.size(); ++k) {
+      limit_[k] = AllanTermCount(estimator, n_phase, m[k]);
+      max_limit_ = std::max(max_limit_, limit_[k]);
+    }
+    slices_ = std::clamp<int64_t>(max_limit_ / kMinPointsPerThread, 1, kMaxSlices);
+    partial_.assign(static_cast<size_t>(slices_), std::vector<double>(m.size(), 0.0));
   }
-  const int n_threads = ResolveThreads(threads, max_limit);
-  std::vector<std::vector<double>> partial(static_cast<size_t>(n_threads),
-                                           std::vector<double>(m.size(), 0.0));
-  ParallelSlices(n_threads, max_limit, [&](int64_t lo, int64_t hi, int t) {
-    std::vector<double>& sums = partial[static_cast<size_t>(t)];
+  int64_t slices() const { return slices_; }
+
+  void RunSlice(int64_t s) {
+    const int64_t lo = max_limit_ * s / slices_;
+    const int64_t hi = max_limit_ * (s + 1) / slices_;
+    std::vector<double>& sums = partial_[static_cast<size_t>(s)];
     for (int64_t b = lo; b < hi; b += kBlock) {
       const int64_t block_end = std::min(b + kBlock, hi);
-      for (size_t k = 0; k < m.size(); ++k) {
-        const int64_t end = std::min(block_end, limit[k]);
+      for (size_t k = 0; k < m_.size(); ++k) {
+        const int64_t end = std::min(block_end, limit_[k]);
         if (end <= b) continue;
-        sums[k] += hadamard ? SumThirdDifferences(x.data(), m[k], b, end)
-                            : SumSecondDifferences(x.data(), m[k], b, end);
+        sums[k] += hadamard_ ? SumThirdDifferences(x_.data(), m_[k], b, end)
+                             : SumSecondDifferences(x_.data(), m_[k], b, end);
       }
     }
-  });
-  std::vector<double> sums(m.size(), 0.0);
-  for (const std::vector<double>& p : partial) {
-    for (size_t k = 0; k < m.size(); ++k) sums[k] += p[k];
   }
-  return sums;
-}
+
+  std::vector<double> Sums() const {
+    std::vector<double> sums(m_.size(), 0.0);
+    for (const std::vector<double>& p : partial_) {
+      for (size_t k = 0; k < m_.size(); ++k) sums[k] += p[k];
+    }
+    return sums;
+  }
+
+ private:
+  static constexpr int64_t kMaxSlices = 32;
+  const std::vector<double>& x_;
+  const std::vector<int64_t>& m_;
+  bool hadamard_;
+  std::vector<int64_t> limit_;
+  int64_t max_limit_ = 0;
+  int64_t slices_ = 1;
+  std::vector<std::vector<double>> partial_;
+};
 
 // Modified Allan sum for one m: sum_{j=0}^{N-3m} (sum_{i=j}^{j+m-1} d_i)^2, d_i the second
 // difference at lag m. The inner sum slides in O(1) per j and is recomputed from scratch
@@ -182,6 +224,168 @@ double NonOverlappingSum(const std::vector<double>& x, int64_t m, bool hadamard)
     sum += v * v;
   }
   return sum;
+}
+
+// Variances from the sums of squared differences (NIST SP 1065 5.2.2-5.2.9).
+std::vector<double> VariancesFromSums(const std::vector<double>& sums, int64_t n_phase,
+                                      double tau0_s, const std::vector<int64_t>& m,
+                                      AllanEstimator estimator);
+
+// Rate samples per block of the phase integration. Blocks are fixed, whatever the thread
+// count, so the phase does not depend on it.
+constexpr int64_t kPhaseBlock = int64_t{1} << 14;
+// Blocks whose running sums advance together: four independent dependency chains.
+constexpr int64_t kPhaseLanes = 4;
+
+// sum += v with Neumaier's compensation in *carry.
+inline void CompensatedAdd(double v, double* sum, double* carry) {
+  const double t = *sum + v;
+  *carry += std::fabs(*sum) >= std::fabs(v) ? (*sum - t) + v : (v - t) + *sum;
+  *sum = t;
+}
+
+// Asks for transparent huge pages on the whole 2 MiB pages inside [p, p + bytes) (Linux with
+// THP in "madvise" mode; elsewhere nothing): an 80 MB phase vector then costs ~40 page
+// faults instead of ~20 000, which on the project's VM took longer than the integration.
+void AdviseHugePages(const void* p, size_t bytes) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
+  const uintptr_t begin = reinterpret_cast<uintptr_t>(p);
+  const uintptr_t lo = (begin + kHuge - 1) & ~(kHuge - 1);
+  const uintptr_t hi = (begin + bytes) & ~(kHuge - 1);
+  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);  // Advice only.
+#else
+  (void)p;
+  (void)bytes;
+#endif
+}
+
+struct PhaseResult {
+  double mean = 0.0;
+  int64_t first_bad = -1;  // First non-finite rate sample, -1 if none.
+};
+
+// Sizes *phase to n values (zeros), with huge pages asked for first.
+double* NewPhase(size_t n, std::vector<double>* phase) {
+  phase->reserve(n);  // Allocated, not yet touched.
+  AdviseHugePages(phase->data(), n * sizeof(double));
+  phase->resize(n);
+  return phase->data();
+}
+
+// Compensated running sums of the centred steps (y_k - mean) tau0 over the blocks
+// [b0, b1) (block b covers samples [b kPhaseBlock, min(n, (b + 1) kPhaseBlock))), each
+// from its start (x[b], carry[b]) on entry; on return x[b], carry[b] hold its end. With a
+// phase array, phase[k + 1] = x + carry after each step. kPhaseLanes full blocks advance
+// together (independent dependency chains); every block sees its samples in order, so the
+// result does not depend on how blocks are grouped.
+void RunBlocks(const double* y, int64_t n, double mean, double tau0_s, int64_t b0, int64_t b1,
+               double* x, double* carry, double* phase) {
+  int64_t b = b0;
+  for (; b + kPhaseLanes <= b1 && (b + kPhaseLanes) * kPhaseBlock <= n; b += kPhaseLanes) {
+    double xl[kPhaseLanes], cl[kPhaseLanes];
+    for (int64_t j = 0; j < kPhaseLanes; ++j) {
+      xl[j] = x[b + j];
+      cl[j] = carry[b + j];
+    }
+    const int64_t lo = b * kPhaseBlock;
+    for (int64_t k = 0; k < kPhaseBlock; ++k) {
+      for (int64_t j = 0; j < kPhaseLanes; ++j) {
+        const int64_t i = lo + j * kPhaseBlock + k;
+        CompensatedAdd((y[i] - mean) * tau0_s, &xl[j], &cl[j]);
+        if (phase != nullptr) phase[i + 1] = xl[j] + cl[j];
+      }
+    }
+    for (int64_t j = 0; j < kPhaseLanes; ++j) {
+      x[b + j] = xl[j];
+      carry[b + j] = cl[j];
+    }
+  }
+  for (; b < b1; ++b) {
+    double xb = x[b], cb = carry[b];
+    const int64_t hi = std::min(n, (b + 1) * kPhaseBlock);
+    for (int64_t i = b * kPhaseBlock; i < hi; ++i) {
+      CompensatedAdd((y[i] - mean) * tau0_s, &xb, &cb);
+      if (phase != nullptr) phase[i + 1] = xb + cb;
+    }
+    x[b] = xb;
+    carry[b] = cb;
+  }
+}
+
+// PhaseFromRate on `threads` threads, in three passes over fixed blocks of kPhaseBlock
+// samples (each pass splits the blocks between the threads):
+//   1. per-block sums of y (four interleaved sums) -> mean; a non-finite block sum sends
+//      the block to a scan for its first non-finite sample;
+//   2. per-block compensated sums of (y_k - mean) tau0 -> block totals; their compensated
+//      running sum gives each block's starting phase;
+//   3. per block, the compensated running sum from that start:
+//      x_0 = 0, x_{k+1} = x_k + (y_k - mean) tau0.
+// y holds n rate samples, phase receives n + 1 phase points; phase may be y - 1 (the phase
+// then replaces the samples in place: step k reads y[k] before it writes phase[k + 1], the
+// same element). `phase` is allocated by the caller, `get_phase` returns it once passes 1
+// and 2 are done (so that a fresh array is touched only after them). With
+// `stop_at_non_finite`, passes 2 and 3 are skipped when a sample is not finite.
+template <typename GetPhase>
+PhaseResult IntegratePhase(const double* y, int64_t n, double tau0_s, int threads,
+                           bool stop_at_non_finite, GetPhase get_phase) {
+  const int64_t blocks = (n + kPhaseBlock - 1) / kPhaseBlock;
+  const int n_threads = ResolveThreads(threads, n);
+  PhaseResult out;
+  std::vector<double> block_sum(static_cast<size_t>(blocks), 0.0);
+  std::vector<int64_t> block_bad(static_cast<size_t>(blocks), -1);
+  ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
+    for (int64_t b = b0; b < b1; ++b) {
+      const int64_t lo = b * kPhaseBlock;
+      const int64_t hi = std::min(n, lo + kPhaseBlock);
+      double s4[4] = {0.0, 0.0, 0.0, 0.0};
+      int64_t k = lo;
+      for (; k + 4 <= hi; k += 4) {
+        for (int64_t j = 0; j < 4; ++j) s4[j] += y[k + j];
+      }
+      for (; k < hi; ++k) s4[0] += y[k];
+      const double sum = (s4[0] + s4[1]) + (s4[2] + s4[3]);
+      block_sum[static_cast<size_t>(b)] = sum;
+      if (!std::isfinite(sum)) {
+        for (k = lo; k < hi; ++k) {
+          if (!std::isfinite(y[k])) {
+            block_bad[static_cast<size_t>(b)] = k;
+            break;
+          }
+        }
+      }
+    }
+  });
+  double total = 0.0, total_carry = 0.0;
+  for (int64_t b = 0; b < blocks; ++b) {
+    if (out.first_bad < 0) out.first_bad = block_bad[static_cast<size_t>(b)];
+    CompensatedAdd(block_sum[static_cast<size_t>(b)], &total, &total_carry);
+  }
+  if (stop_at_non_finite && out.first_bad >= 0) return out;
+  const double mean = n == 0 ? 0.0 : (total + total_carry) / static_cast<double>(n);
+  out.mean = mean;
+  // Pass 2: block totals of the centred steps (sum and its compensation).
+  std::vector<double> step_sum(static_cast<size_t>(blocks), 0.0);
+  std::vector<double> step_carry(static_cast<size_t>(blocks), 0.0);
+  ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
+    RunBlocks(y, n, mean, tau0_s, b0, b1, step_sum.data(), step_carry.data(), nullptr);
+  });
+  // Starting phase of each block (x and its compensation).
+  std::vector<double> start_x(static_cast<size_t>(blocks), 0.0);
+  std::vector<double> start_carry(static_cast<size_t>(blocks), 0.0);
+  double x = 0.0, carry = 0.0;
+  for (int64_t b = 0; b < blocks; ++b) {
+    start_x[static_cast<size_t>(b)] = x;
+    start_carry[static_cast<size_t>(b)] = carry;
+    CompensatedAdd(step_sum[static_cast<size_t>(b)], &x, &carry);
+    carry += step_carry[static_cast<size_t>(b)];
+  }
+  double* phase = get_phase();
+  phase[0] = 0.0;
+  ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
+    RunBlocks(y, n, mean, tau0_s, b0, b1, start_x.data(), start_carry.data(), phase);
+  });
+  return out;
 }
 
 }  // namespace
@@ -315,27 +519,10 @@ bool AllanOptions::IsValid(std::string* why) const {
 std::vector<double> PhaseFromRate(const std::vector<double>& rate, double tau0_s,
                                   double* mean_out) {
   METRO_CHECK(tau0_s > 0.0);
-  // Mean by four interleaved sums, then a Neumaier-compensated running sum: exact to a few
-  // ulp of |x| without the cost of long double.
-  double s4[4] = {0.0, 0.0, 0.0, 0.0};
-  const size_t n = rate.size();
-  size_t k = 0;
-  for (; k + 4 <= n; k += 4) {
-    for (size_t j = 0; j < 4; ++j) s4[j] += rate[k + j];
-  }
-  for (; k < n; ++k) s4[0] += rate[k];
-  const double mean = n == 0 ? 0.0 : ((s4[0] + s4[1]) + (s4[2] + s4[3])) / static_cast<double>(n);
-  std::vector<double> phase(n + 1);
-  double x = 0.0, carry = 0.0;
-  phase[0] = 0.0;
-  for (k = 0; k < n; ++k) {
-    const double step = (rate[k] - mean) * tau0_s;
-    const double t = x + step;
-    carry += std::fabs(x) >= std::fabs(step) ? (x - t) + step : (step - t) + x;
-    x = t;
-    phase[k + 1] = x + carry;
-  }
-  if (mean_out != nullptr) *mean_out = mean;
+  std::vector<double> phase;
+  const PhaseResult r = IntegratePhase(rate.data(), static_cast<int64_t>(rate.size()), tau0_s, 0,
+                                       false, [&] { return NewPhase(rate.size() + 1, &phase); });
+  if (mean_out != nullptr) *mean_out = r.mean;
   return phase;
 }
 
@@ -410,9 +597,13 @@ std::vector<double> AllanVariances(const std::vector<double>& phase, double tau0
   std::vector<double> sums(m.size(), 0.0);
   switch (estimator) {
     case AllanEstimator::kOadev:
-    case AllanEstimator::kOhdev:
-      sums = OverlappingSums(phase, m, estimator, threads);
+    case AllanEstimator::kOhdev: {
+      OverlappingSums overlapping(phase, m, estimator);
+      RunTasks(ResolveThreads(threads, n_phase), overlapping.slices(),
+               [&](int64_t slice) { overlapping.RunSlice(slice); });
+      sums = overlapping.Sums();
       break;
+    }
     case AllanEstimator::kMdev:
       for (size_t k = 0; k < m.size(); ++k) sums[k] = ModifiedSum(phase, m[k], threads);
       break;
@@ -423,6 +614,14 @@ std::vector<double> AllanVariances(const std::vector<double>& phase, double tau0
       }
       break;
   }
+  return VariancesFromSums(sums, n_phase, tau0_s, m, estimator);
+}
+
+namespace {
+
+std::vector<double> VariancesFromSums(const std::vector<double>& sums, int64_t n_phase,
+                                      double tau0_s, const std::vector<int64_t>& m,
+                                      AllanEstimator estimator) {
   std::vector<double> variance(m.size());
   for (size_t k = 0; k < m.size(); ++k) {
     const double tau = static_cast<double>(m[k]) * tau0_s;
@@ -445,6 +644,16 @@ std::vector<double> AllanVariances(const std::vector<double>& phase, double tau0
   return variance;
 }
 
+}  // namespace
+
+namespace {
+
+// ComputeAllan after the integration: phase (N = n_rate + 1 points) and the removed mean.
+Result<AllanCurve> AllanFromPhase(const std::vector<double>& phase, int64_t n_rate,
+                                  double rate_mean, double tau0_s, const AllanOptions& options);
+
+}  // namespace
+
 Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
                                 const AllanOptions& options) {
   std::string why;
@@ -452,12 +661,44 @@ Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
   if (!(std::isfinite(tau0_s) && tau0_s > 0.0)) {
     return MakeError(fmt::format("sample period tau0 = {} s is not a positive number", tau0_s));
   }
-  for (size_t i = 0; i < rate.size(); ++i) {
-    if (!std::isfinite(rate[i])) {
-      return MakeError(fmt::format("rate sample {} (0-based) is not finite ({})", i, rate[i]));
-    }
+  std::vector<double> phase;
+  const PhaseResult integrated =
+      IntegratePhase(rate.data(), static_cast<int64_t>(rate.size()), tau0_s, options.threads, true,
+                     [&] { return NewPhase(rate.size() + 1, &phase); });
+  if (integrated.first_bad >= 0) {
+    const size_t i = static_cast<size_t>(integrated.first_bad);
+    return MakeError(fmt::format("rate sample {} (0-based) is not finite ({})", i, rate[i]));
   }
-  const int64_t n_rate = static_cast<int64_t>(rate.size());
+  return AllanFromPhase(phase, static_cast<int64_t>(rate.size()), integrated.mean, tau0_s, options);
+}
+
+namespace internal {
+
+Result<AllanCurve> ComputeAllanInPlace(std::vector<double>* buffer, double tau0_s,
+                                       const AllanOptions& options) {
+  METRO_CHECK(buffer != nullptr && !buffer->empty());
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("Allan options: " + why);
+  if (!(std::isfinite(tau0_s) && tau0_s > 0.0)) {
+    return MakeError(fmt::format("sample period tau0 = {} s is not a positive number", tau0_s));
+  }
+  const int64_t n_rate = static_cast<int64_t>(buffer->size()) - 1;
+  double* data = buffer->data();
+  const PhaseResult integrated =
+      IntegratePhase(data + 1, n_rate, tau0_s, options.threads, true, [data] { return data; });
+  if (integrated.first_bad >= 0) {
+    const size_t i = static_cast<size_t>(integrated.first_bad);
+    return MakeError(fmt::format("rate sample {} (0-based) is not finite ({})", i, data[i + 1]));
+  }
+  return AllanFromPhase(*buffer, n_rate, integrated.mean, tau0_s, options);
+}
+
+}  // namespace internal
+
+namespace {
+
+Result<AllanCurve> AllanFromPhase(const std::vector<double>& phase, int64_t n_rate,
+                                  double rate_mean, double tau0_s, const AllanOptions& options) {
   const int64_t n_phase = n_rate + 1;
   std::vector<int64_t> m;
   if (!options.m_list.empty()) {
@@ -482,12 +723,48 @@ Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
   curve.tau0_s = tau0_s;
   curve.n_rate_samples = n_rate;
   curve.confidence = options.confidence;
-  const std::vector<double> phase = PhaseFromRate(rate, tau0_s, &curve.rate_mean);
-  const std::vector<double> variance =
-      AllanVariances(phase, tau0_s, m, options.estimator, options.threads);
-
+  curve.rate_mean = rate_mean;
   const EstimatorShape shape = ShapeOf(options.estimator);
   const size_t n = m.size();
+
+  // Lag-1 noise identification at every tau with enough points (each reads only the phase).
+  std::vector<char> identified(n, 0);
+  std::vector<int> identified_alpha(n, 0);
+  std::vector<size_t> todo;
+  if (options.noise_id != NoiseIdMethod::kFixed) {
+    for (size_t k = 0; k < n; ++k) {
+      if ((n_phase - 1) / m[k] + 1 >= options.min_points_noise_id) todo.push_back(k);
+    }
+  }
+  const auto identify = [&](size_t j) {
+    const size_t k = todo[j];
+    const Result<NoiseIdentification> id =
+        IdentifyNoiseLag1(phase, m[k], shape.d, options.min_points_noise_id);
+    if (id.ok()) {
+      identified[k] = 1;
+      identified_alpha[k] = id.value().alpha;
+    }
+  };
+  const int threads = ResolveThreads(options.threads, n_phase);
+  const int64_t n_id = static_cast<int64_t>(todo.size());
+  std::vector<double> variance;
+  if (options.estimator == AllanEstimator::kOadev || options.estimator == AllanEstimator::kOhdev) {
+    // One pool of tasks: the identifications (smallest m, the costliest, first), then the
+    // slices of the variance sums.
+    OverlappingSums overlapping(phase, m, options.estimator);
+    RunTasks(threads, n_id + overlapping.slices(), [&](int64_t t) {
+      if (t < n_id) {
+        identify(static_cast<size_t>(t));
+      } else {
+        overlapping.RunSlice(t - n_id);
+      }
+    });
+    variance = VariancesFromSums(overlapping.Sums(), n_phase, tau0_s, m, options.estimator);
+  } else {
+    variance = AllanVariances(phase, tau0_s, m, options.estimator, threads);
+    RunTasks(threads, n_id, [&](int64_t t) { identify(static_cast<size_t>(t)); });
+  }
+
   curve.m = m;
   curve.tau_s.resize(n);
   curve.dev.resize(n);
@@ -507,14 +784,10 @@ Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
       curve.alpha[k] = options.fixed_alpha;
       curve.alpha_source[k] = AlphaSource::kFixed;
     } else {
-      Result<NoiseIdentification> id =
-          (n_phase - 1) / m[k] + 1 >= options.min_points_noise_id
-              ? IdentifyNoiseLag1(phase, m[k], shape.d, options.min_points_noise_id)
-              : Result<NoiseIdentification>(MakeError("too few points"));
-      if (id.ok()) {
-        curve.alpha[k] = id.value().alpha;
+      if (identified[k]) {
+        curve.alpha[k] = identified_alpha[k];
         curve.alpha_source[k] = AlphaSource::kLag1Acf;
-        last_alpha = id.value().alpha;
+        last_alpha = identified_alpha[k];
         have_identified = true;
       } else if (have_identified) {
         curve.alpha[k] = last_alpha;
@@ -541,5 +814,7 @@ Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
   }
   return curve;
 }
+
+}  // namespace
 
 }  // namespace metro

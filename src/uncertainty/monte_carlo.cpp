@@ -6,29 +6,27 @@
 #include <boost/math/distributions/students_t.hpp>
 #include <boost/random/normal_distribution.hpp>
 #include <cmath>
+#include <cstdint>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <pcg_random.hpp>
 #include <thread>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
+#include "uncertainty/mc_sampling.hpp"
 #include "uncertainty/model.hpp"
 
 namespace metro {
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586476925286766559;
+using internal::WordSource;
 
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-// Uniform on [0, 1) with 53 random bits (JCGM 101 C.3).
-inline double Uniform(pcg64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 // Uniform on (0, 1).
-inline double UniformOpen(pcg64& rng) {
+inline double UniformOpen(WordSource& rng) {
   return (static_cast<double>(rng() >> 11) + 0.5) * 0x1.0p-53;
 }
 
@@ -39,7 +37,7 @@ struct GammaSampler {
       : alpha(alpha_in), d((alpha_in < 1.0 ? alpha_in + 1.0 : alpha_in) - 1.0 / 3.0) {
     c = 1.0 / std::sqrt(9.0 * d);
   }
-  double operator()(pcg64& rng, boost::random::normal_distribution<double>& normal) const {
+  double operator()(WordSource& rng, boost::random::normal_distribution<double>& normal) const {
     double g;
     for (;;) {
       const double z = normal(rng);
@@ -218,7 +216,8 @@ Result<Plan> MakePlan(const Budget& budget) {
 }
 
 // Fills columns[i][0..n) for every input, JCGM 101 6.4.
-void SampleChunk(const Plan& plan, pcg64& rng, size_t n, std::vector<std::vector<double>>* cols) {
+void SampleChunk(const Plan& plan, WordSource& rng, size_t n, internal::SamplerScratch* scratch,
+                 std::vector<std::vector<double>>* cols) {
   boost::random::normal_distribution<double> normal;
   for (size_t i = 0; i < plan.inputs.size(); ++i) {
     const InputPlan& p = plan.inputs[i];
@@ -230,57 +229,56 @@ void SampleChunk(const Plan& plan, pcg64& rng, size_t n, std::vector<std::vector
       case InputPlan::Kind::kNormal:  // 6.4.7.4
         for (size_t k = 0; k < n; ++k) x[k] = p.value + p.scale * normal(rng);
         break;
-      case InputPlan::Kind::kT: {  // 6.4.9.5: x + s t_nu, t_nu = z / sqrt(chi2_nu / nu)
-        const double half_dof = 0.5 * p.dof;
-        for (size_t k = 0; k < n; ++k) {
-          const double z = normal(rng);
-          const double g = p.gamma(rng, normal);  // chi2_nu / 2
-          x[k] = p.value + p.scale * z * std::sqrt(half_dof / g);
-        }
+      case InputPlan::Kind::kT:  // 6.4.9.5: x + s t_nu (Bailey's polar method)
+        internal::StudentTBlock(rng, p.dof, p.value, p.scale, n, scratch, x);
         break;
-      }
       case InputPlan::Kind::kRectangular: {  // 6.4.2.4: a + (b - a) r
         const double lo = p.value - p.a;
         const double width = 2.0 * p.a;
-        for (size_t k = 0; k < n; ++k) x[k] = lo + width * Uniform(rng);
+        internal::UniformBlock(rng, n, x);
+        for (size_t k = 0; k < n; ++k) x[k] = lo + width * x[k];
         break;
       }
       case InputPlan::Kind::kTriangular: {  // 6.4.5.4: a + (b - a)(r1 + r2)/2
         const double lo = p.value - p.a;
-        for (size_t k = 0; k < n; ++k) x[k] = lo + p.a * (Uniform(rng) + Uniform(rng));
+        const double* r1 = scratch->a();
+        const double* r2 = scratch->b();
+        internal::UniformBlock(rng, n, scratch->a());
+        internal::UniformBlock(rng, n, scratch->b());
+        for (size_t k = 0; k < n; ++k) x[k] = lo + p.a * (r1[k] + r2[k]);
         break;
       }
-      case InputPlan::Kind::kArcsine: {
+      case InputPlan::Kind::kArcsine:
         // 6.4.6.4 draws (a + b)/2 + (b - a)/2 sin(2 pi r). Same law, no sine: for a point
         // uniform in the unit disc, cos(2 phi) = (s^2 - t^2)/(s^2 + t^2) with phi uniform.
-        for (size_t k = 0; k < n; ++k) {
-          double s, t, w;
-          do {
-            s = 2.0 * Uniform(rng) - 1.0;
-            t = 2.0 * Uniform(rng) - 1.0;
-            w = s * s + t * t;
-          } while (w > 1.0 || w == 0.0);
-          x[k] = p.value + p.a * (s * s - t * t) / w;
-        }
+        internal::ArcsineBlock(rng, p.value, p.a, n, scratch, x);
         break;
-      }
       case InputPlan::Kind::kTrapezoidal: {  // 6.4.4.4: a + (b-a)/2 [(1+beta) r1 + (1-beta) r2]
         const double lo = p.value - p.a;
-        for (size_t k = 0; k < n; ++k) {
-          const double r1 = Uniform(rng);
-          const double r2 = Uniform(rng);
-          x[k] = lo + p.a * ((1.0 + p.beta) * r1 + (1.0 - p.beta) * r2);
-        }
+        const double w1 = p.a * (1.0 + p.beta);
+        const double w2 = p.a * (1.0 - p.beta);
+        const double* r1 = scratch->a();
+        const double* r2 = scratch->b();
+        internal::UniformBlock(rng, n, scratch->a());
+        internal::UniformBlock(rng, n, scratch->b());
+        for (size_t k = 0; k < n; ++k) x[k] = lo + (w1 * r1[k] + w2 * r2[k]);
         break;
       }
       case InputPlan::Kind::kCtrap: {
         // 6.4.3.4: a_s = (a - d) + 2 d r1, b_s = (a + b) - a_s, x = a_s + (b_s - a_s) r2.
         const double lo = p.value - p.a;
         const double hi = p.value + p.a;
+        const double a_s0 = lo - p.d;
+        const double two_d = 2.0 * p.d;
+        const double a_plus_b = lo + hi;
+        const double* r1 = scratch->a();
+        const double* r2 = scratch->b();
+        internal::UniformBlock(rng, n, scratch->a());
+        internal::UniformBlock(rng, n, scratch->b());
         for (size_t k = 0; k < n; ++k) {
-          const double as = (lo - p.d) + 2.0 * p.d * Uniform(rng);
-          const double bs = (lo + hi) - as;
-          x[k] = as + (bs - as) * Uniform(rng);
+          const double as = a_s0 + two_d * r1[k];
+          const double bs = a_plus_b - as;
+          x[k] = as + (bs - as) * r2[k];
         }
         break;
       }
@@ -308,22 +306,74 @@ void SampleChunk(const Plan& plan, pcg64& rng, size_t n, std::vector<std::vector
   }
 }
 
+// Asks for transparent huge pages on the whole 2 MiB pages inside [p, p + bytes) (Linux with
+// THP in "madvise" mode; elsewhere nothing): 1e7 model values then cost ~40 page faults
+// instead of ~20 000.
+void AdviseHugePages(const void* p, size_t bytes) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
+  const uintptr_t begin = reinterpret_cast<uintptr_t>(p);
+  const uintptr_t lo = (begin + kHuge - 1) & ~(kHuge - 1);
+  const uintptr_t hi = (begin + bytes) & ~(kHuge - 1);
+  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);  // Advice only.
+#else
+  (void)p;
+  (void)bytes;
+#endif
+}
+
 struct NanReport {
   int64_t trial = -1;
   std::vector<double> inputs;
   int64_t count = 0;
 };
 
+struct Moments {
+  double mean = 0.0;
+  double u = 0.0;
+};
+
+// Mean and sum of squared deviations of one chunk, combined over chunks in chunk order.
+struct ChunkMoments {
+  double n = 0.0;
+  double mean = 0.0;
+  double m2 = 0.0;
+};
+
+// JCGM 101 7.6 over all chunks: each chunk by two passes, chunks merged in order by the
+// pairwise update of Chan, Golub and LeVeque (1979):
+//   n = n_a + n_b, delta = mean_b - mean_a, mean = mean_a + delta n_b / n,
+//   m2 = m2_a + m2_b + delta^2 n_a n_b / n.
+// The order is fixed, so the result does not depend on the thread count.
+Moments MergeChunkMoments(const std::vector<ChunkMoments>& chunks) {
+  ChunkMoments total;
+  for (const ChunkMoments& c : chunks) {
+    const double n = total.n + c.n;
+    const double delta = c.mean - total.mean;
+    total.mean += delta * c.n / n;
+    total.m2 += c.m2 + delta * delta * total.n * c.n / n;
+    total.n = n;
+  }
+  Moments r;
+  r.mean = total.mean;
+  r.u = total.n > 1.0 ? std::sqrt(total.m2 / (total.n - 1.0)) : 0.0;
+  return r;
+}
+
 // Simulates trials [first, first + count) into out; first is a multiple of kChunkTrials.
-NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, int threads) {
+// chunk_moments (optional) receives one entry per chunk.
+NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, int threads,
+                   std::vector<ChunkMoments>* chunk_moments = nullptr) {
   const int64_t first_chunk = first / kChunkTrials;
   const int64_t chunks = (count + kChunkTrials - 1) / kChunkTrials;
+  if (chunk_moments != nullptr) chunk_moments->assign(static_cast<size_t>(chunks), {});
   const int workers = static_cast<int>(std::max<int64_t>(1, std::min<int64_t>(threads, chunks)));
   std::vector<NanReport> reports(static_cast<size_t>(workers));
   const auto work = [&](int w) {
     auto evaluator = plan.model->MakeEvaluator();
     const size_t n_in = plan.inputs.size();
     std::vector<std::vector<double>> cols(n_in, std::vector<double>(kChunkTrials));
+    internal::SamplerScratch scratch(kChunkTrials);
     std::vector<const double*> ptrs(n_in);
     for (size_t i = 0; i < n_in; ++i) ptrs[i] = cols[i].data();
     NanReport& report = reports[static_cast<size_t>(w)];
@@ -332,21 +382,32 @@ NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, 
     const int64_t end = chunks * (w + 1) / workers;
     for (int64_t c = begin; c < end; ++c) {
       const int64_t global = first_chunk + c;
-      pcg64 rng(SplitMix64(plan.seed + static_cast<uint64_t>(global)),
-                static_cast<uint64_t>(global));
+      WordSource rng(plan.seed, static_cast<uint64_t>(global));
       const int64_t offset = c * kChunkTrials;
       const size_t n = static_cast<size_t>(std::min<int64_t>(kChunkTrials, count - offset));
-      SampleChunk(plan, rng, n, &cols);
+      SampleChunk(plan, rng, n, &scratch, &cols);
       double* y = out + offset;
       evaluator->EvaluateBlock(ptrs.data(), n, y);
-      for (size_t k = 0; k < n; ++k) {
-        if (!std::isfinite(y[k])) {
-          if (report.count == 0) {
-            report.trial = first + offset + static_cast<int64_t>(k);
-            for (size_t i = 0; i < n_in; ++i) report.inputs.push_back(cols[i][k]);
+      double sum = 0.0;
+      for (size_t k = 0; k < n; ++k) sum += y[k];
+      if (!std::isfinite(sum)) {
+        for (size_t k = 0; k < n; ++k) {
+          if (!std::isfinite(y[k])) {
+            if (report.count == 0) {
+              report.trial = first + offset + static_cast<int64_t>(k);
+              for (size_t i = 0; i < n_in; ++i) report.inputs.push_back(cols[i][k]);
+            }
+            ++report.count;
           }
-          ++report.count;
         }
+      }
+      if (chunk_moments != nullptr && report.count == 0) {
+        ChunkMoments& cm = (*chunk_moments)[static_cast<size_t>(c)];
+        cm.n = static_cast<double>(n);
+        cm.mean = sum / cm.n;
+        double m2 = 0.0;
+        for (size_t k = 0; k < n; ++k) m2 += (y[k] - cm.mean) * (y[k] - cm.mean);
+        cm.m2 = m2;
       }
     }
   };
@@ -368,11 +429,6 @@ NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, 
   return total;
 }
 
-struct Moments {
-  double mean = 0.0;
-  double u = 0.0;
-};
-
 // JCGM 101 7.6 (two passes).
 Moments MeanAndU(const double* y, size_t m) {
   double sum = 0.0;
@@ -390,36 +446,141 @@ struct Intervals {
   CoverageInterval shortest;
 };
 
+// Runs fn(lo, hi, worker) on `threads` contiguous slices of [0, n).
+template <typename Fn>
+void ParallelSlices(int threads, size_t n, Fn fn) {
+  if (threads <= 1) {
+    fn(size_t{0}, n, 0);
+    return;
+  }
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) {
+    const size_t lo = n * static_cast<size_t>(t) / static_cast<size_t>(threads);
+    const size_t hi = n * static_cast<size_t>(t + 1) / static_cast<size_t>(threads);
+    pool.emplace_back([=, &fn] { fn(lo, hi, t); });
+  }
+  for (auto& th : pool) th.join();
+}
+
+// The `tail` lowest values of v[0, m) in increasing order into *low and the `tail` highest
+// into *high, without reordering v. Thresholds come from a pilot of kPilotRun consecutive
+// values every kPilotStride values (few cache lines, spread over the whole sample): the
+// pilot order statistic of rank P f + 4 sqrt(P f) + 16 (f = tail / m, P pilot values) lies
+// above the tail-th lowest value unless the pilot is far from representative; every value
+// strictly beyond the thresholds is then copied (about 1.15 tail values each side at
+// M = 1e7, p = 0.99) and only those are put in order, the low and the high side on two
+// threads. Returns false (nothing usable) when fewer than `tail` values lie beyond a
+// threshold, e.g. with many ties or a periodic input; the caller then selects on the whole
+// sample.
+bool TailsByThreshold(const double* v, size_t m, size_t tail, int threads, std::vector<double>* low,
+                      std::vector<double>* high) {
+  constexpr size_t kPilotRun = 8;
+  constexpr size_t kPilotStride = 1024;
+  std::vector<double> pilot;
+  pilot.reserve(m / kPilotStride * kPilotRun + kPilotRun);
+  for (size_t k = 0; k + kPilotRun <= m; k += kPilotStride) {
+    pilot.insert(pilot.end(), v + k, v + k + kPilotRun);
+  }
+  const size_t pilot_size = pilot.size();
+  const double pf =
+      static_cast<double>(pilot_size) * static_cast<double>(tail) / static_cast<double>(m);
+  const size_t rank =
+      std::min(pilot_size / 2 - 1, static_cast<size_t>(std::ceil(pf + 4.0 * std::sqrt(pf) + 16.0)));
+  std::nth_element(pilot.begin(), pilot.begin() + static_cast<std::ptrdiff_t>(rank), pilot.end());
+  const double low_threshold = pilot[rank];
+  const size_t high_rank = pilot_size - 1 - rank;
+  std::nth_element(pilot.begin(), pilot.begin() + static_cast<std::ptrdiff_t>(high_rank),
+                   pilot.end());
+  const double high_threshold = pilot[high_rank];
+  const int workers = std::max(1, threads);
+  std::vector<std::vector<double>> lows(static_cast<size_t>(workers));
+  std::vector<std::vector<double>> highs(static_cast<size_t>(workers));
+  ParallelSlices(workers, m, [&](size_t lo, size_t hi, int w) {
+    std::vector<double>& l = lows[static_cast<size_t>(w)];
+    std::vector<double>& h = highs[static_cast<size_t>(w)];
+    const size_t expect = (hi - lo) * tail / m * 9 / 8 + 64;
+    l.reserve(expect);
+    h.reserve(expect);
+    for (size_t k = lo; k < hi; ++k) {
+      const double x = v[k];
+      if (x < low_threshold) l.push_back(x);
+      if (x > high_threshold) h.push_back(x);
+    }
+  });
+  const auto gather = [](std::vector<std::vector<double>>* parts, std::vector<double>* out) {
+    size_t total = 0;
+    for (const auto& part : *parts) total += part.size();
+    out->clear();
+    out->reserve(total);
+    for (const auto& part : *parts) out->insert(out->end(), part.begin(), part.end());
+  };
+  gather(&lows, low);
+  gather(&highs, high);
+  if (low->size() < tail || high->size() < tail) return false;
+  const auto order_low = [&] {
+    std::nth_element(low->begin(), low->begin() + static_cast<std::ptrdiff_t>(tail - 1),
+                     low->end());
+    low->resize(tail);
+    std::sort(low->begin(), low->end());
+  };
+  const auto order_high = [&] {
+    const auto cut = high->end() - static_cast<std::ptrdiff_t>(tail);
+    std::nth_element(high->begin(), cut, high->end());
+    high->erase(high->begin(), cut);
+    std::sort(high->begin(), high->end());
+  };
+  if (threads > 1) {
+    std::thread other(order_high);
+    order_low();
+    other.join();
+  } else {
+    order_low();
+    order_high();
+  }
+  return true;
+}
+
 // JCGM 101 7.7 by partial selection: only the L = M - q lowest and highest order
-// statistics are put in order.
-Intervals CoverageIntervals(double* v, size_t m, double p) {
+// statistics are put in order. Large samples with L <= M/8 take them by threshold
+// (TailsByThreshold, on `threads` threads) and leave v as it is; otherwise v is reordered.
+Intervals CoverageIntervals(double* v, size_t m, double p, int threads = 1) {
   METRO_CHECK(m >= 2 && p > 0.0 && p < 1.0);
   const double pm = p * static_cast<double>(m);
   size_t q = pm == std::floor(pm) ? static_cast<size_t>(pm) : static_cast<size_t>(pm + 0.5);
   q = std::min(std::max<size_t>(q, 1), m - 1);
   const size_t tail = m - q;  // L
-  if (2 * tail >= m) {
-    std::sort(v, v + m);
-  } else {
-    std::nth_element(v, v + tail, v + m);
-    std::sort(v, v + tail);
-    std::nth_element(v + tail, v + q, v + m);
-    std::sort(v + q, v + m);
+  std::vector<double> low, high;
+  const bool by_threshold =
+      m >= (size_t{1} << 18) && 8 * tail <= m && TailsByThreshold(v, m, tail, threads, &low, &high);
+  if (!by_threshold) {
+    if (2 * tail >= m) {
+      std::sort(v, v + m);
+    } else {
+      std::nth_element(v, v + tail, v + m);
+      std::sort(v, v + tail);
+      std::nth_element(v + tail, v + q, v + m);
+      std::sort(v + q, v + m);
+    }
   }
+  // y_(i + 1) = order statistic i (0-based); only i < L and i >= q are asked for.
+  const auto y = [&](size_t i) {
+    if (!by_threshold) return v[i];
+    return i < tail ? low[i] : high[i - q];
+  };
   Intervals out;
-  // 1-based r; y_(r) = v[r - 1].
+  // 1-based r; y_(r) = y(r - 1).
   const size_t r = (tail % 2 == 0) ? tail / 2 : (tail + 1) / 2;
-  out.symmetric = {v[r - 1], v[r + q - 1]};
+  out.symmetric = {y(r - 1), y(r + q - 1)};
   size_t best = 1;
-  double width = v[q] - v[0];
+  double width = y(q) - y(0);
   for (size_t s = 2; s <= tail; ++s) {
-    const double w = v[s + q - 1] - v[s - 1];
+    const double w = y(s + q - 1) - y(s - 1);
     if (w < width) {
       width = w;
       best = s;
     }
   }
-  out.shortest = {v[best - 1], v[best + q - 1]};
+  out.shortest = {y(best - 1), y(best + q - 1)};
   return out;
 }
 
@@ -495,17 +656,32 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
                        ? options.threads
                        : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   result.generator =
-      "pcg64 (pcg-cpp PCG XSL RR 128/64); chunk c of 1000 trials uses state "
-      "splitmix64(seed + c) on stream c";
+      "pcg64 (pcg-cpp PCG XSL RR 128/64) x 4 interleaved; chunk c of 1000 trials: engine j "
+      "starts at splitmix64(splitmix64(seed) + 4c + j) on stream 4c + j";
   std::vector<double> y;
 
   if (!options.adaptive) {
-    y.resize(static_cast<size_t>(options.trials));
-    const NanReport nan = Simulate(plan, 0, options.trials, y.data(), result.threads);
+    // Left uninitialised: the workers write (and first touch) every value.
+    const size_t m = static_cast<size_t>(options.trials);
+    std::unique_ptr<double[]> values(new double[m]);
+    AdviseHugePages(values.get(), m * sizeof(double));
+    std::vector<ChunkMoments> chunk_moments;
+    const NanReport nan =
+        Simulate(plan, 0, options.trials, values.get(), result.threads, &chunk_moments);
     if (nan.count > 0) return NanError(budget, nan, options.trials);
     result.trials = options.trials;
     result.blocks = 1;
     result.converged = true;
+    const Moments moments = MergeChunkMoments(chunk_moments);
+    result.value = moments.mean;
+    result.u = moments.u;
+    result.delta = NumericalTolerance(moments.u, options.ndig);
+    if (keep_samples) result.samples.assign(values.get(), values.get() + m);
+    const Intervals iv = CoverageIntervals(values.get(), m, options.coverage, result.threads);
+    result.symmetric = iv.symmetric;
+    result.shortest = iv.shortest;
+    result.ok = true;
+    return result;
   } else {
     // JCGM 101 7.9 with the robust rule (docs/uncertainty.md).
     const double j = std::ceil(100.0 / (1.0 - options.coverage));
@@ -563,12 +739,13 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
   result.delta = NumericalTolerance(m.u, options.ndig);
   if (keep_samples) {
     std::vector<double> copy = y;
-    const Intervals iv = CoverageIntervals(copy.data(), copy.size(), options.coverage);
+    const Intervals iv =
+        CoverageIntervals(copy.data(), copy.size(), options.coverage, result.threads);
     result.symmetric = iv.symmetric;
     result.shortest = iv.shortest;
     result.samples = std::move(y);
   } else {
-    const Intervals iv = CoverageIntervals(y.data(), y.size(), options.coverage);
+    const Intervals iv = CoverageIntervals(y.data(), y.size(), options.coverage, result.threads);
     result.symmetric = iv.symmetric;
     result.shortest = iv.shortest;
   }

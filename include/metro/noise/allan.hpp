@@ -129,8 +129,9 @@ int64_t AllanTermCount(AllanEstimator estimator, int64_t n_phase, int64_t m);
 Result<std::vector<int64_t>> AveragingFactors(AllanEstimator estimator, const TauSpacing& taus,
                                               int64_t n_rate, int64_t max_m);
 
-// Variances (not deviations) for each m, from phase data, in one blocked pass over the data
-// per thread. Preconditions: every m has AllanTermCount() >= 1; tau0_s > 0.
+// Variances (not deviations) for each m, from phase data, over fixed slices of the data
+// shared between threads; the result does not depend on the thread count. Preconditions: every m
+// has AllanTermCount() >= 1; tau0_s > 0.
 std::vector<double> AllanVariances(const std::vector<double>& phase, double tau0_s,
                                    const std::vector<int64_t>& m, AllanEstimator estimator,
                                    int threads = 1);

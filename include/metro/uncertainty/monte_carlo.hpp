@@ -1,15 +1,22 @@
 // Monte Carlo propagation of distributions (JCGM 101:2008).
 //
 // Each trial draws every input from its distribution (6.4) and evaluates the model. Trials
-// are grouped in chunks of kChunkTrials; chunk c draws from pcg64 (pcg-cpp, PCG XSL RR
-// 128/64) seeded with state splitmix64(seed + c) on stream c, so the values depend on the
-// seed only, never on the number of threads or on how chunks are shared between them.
-// Chunks are spread over std::thread workers (McOptions::threads, default: all cores).
+// are grouped in chunks of kChunkTrials; chunk c draws its words from four interleaved pcg64
+// engines (pcg-cpp, PCG XSL RR 128/64), engine j starting at state
+// splitmix64(splitmix64(seed) + 4c + j) on stream 4c + j, so the values depend on the seed
+// only, never on the number of threads or on how chunks are shared between them. Each chunk
+// draws input by input, in blocks (samplers and their accuracy: src/uncertainty/
+// mc_sampling.hpp; t inputs by Bailey's polar method). Chunks are spread over std::thread
+// workers (McOptions::threads, default: all cores).
 //
 //   estimate y = mean of the M model values, u(y) their standard deviation      (7.6)
+//   (two passes per chunk, chunks merged in chunk order by the pairwise update of
+//   Chan, Golub and LeVeque, so the result does not depend on the thread count)
 //   q = round(p M); probabilistically symmetric interval [y_(r), y_(r+q)],
 //   r = (M - q)/2 rounded up; shortest interval: the r minimising y_(r+q) - y_(r)  (7.7)
-//   Order statistics by partial selection (std::nth_element), never a full sort.
+//   Only the L = M - q lowest and highest order statistics are put in order: for
+//   M >= 2^18 and L <= M/8 they are copied out by thresholds taken from a pilot subsample
+//   (on all threads), otherwise by partial selection (std::nth_element); never a full sort.
 //
 // Adaptive run (7.9) with the robust stopping rule of docs/uncertainty.md: blocks of
 // M_b = max(100/(1-p), 1e4) trials (rounded up to whole chunks); after h >= 10 blocks stop
@@ -61,8 +68,8 @@ Result<McResult> RunMonteCarlo(const Budget& budget);
 Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options,
                                bool keep_samples = false);
 
-// Coverage intervals of a sample (reordered in place). Precondition: 0 < p < 1, at least
-// one value, no NaN.
+// Coverage intervals of a sample (may be reordered in place). Precondition: 0 < p < 1, at
+// least two values, no NaN.
 CoverageInterval SymmetricInterval(std::vector<double>* values, double coverage);
 CoverageInterval ShortestInterval(std::vector<double>* values, double coverage);
 

@@ -1,0 +1,24 @@
+// Private entry point of the Allan computation for readers that own their sample buffer.
+//
+// ComputeAllanInPlace takes a buffer laid out as [unused, y_0, ..., y_{M-1}] (M + 1 values)
+// and turns it into the phase x_0 .. x_M in place (allan.hpp: x_0 = 0,
+// x_{k+1} = x_k + (y_k - mean) tau0), so a reader that parses straight into the buffer needs
+// one 8 M-byte array instead of two. The curve is bit-identical to
+// ComputeAllan({y_0, ..., y_{M-1}}, tau0_s, options), errors included (the message names the
+// 0-based sample index). On an error the buffer may hold samples or phase.
+#pragma once
+
+#include <vector>
+
+#include "metro/core/status.hpp"
+#include "metro/noise/allan.hpp"
+
+namespace metro {
+namespace internal {
+
+// Precondition: buffer is not null and holds at least one value (slot 0).
+Result<AllanCurve> ComputeAllanInPlace(std::vector<double>* buffer, double tau0_s,
+                                       const AllanOptions& options = AllanOptions());
+
+}  // namespace internal
+}  // namespace metro
