@@ -26,6 +26,7 @@
 #include <optional>
 #include <thread>
 
+#include "core/parallel.hpp"
 #include "io/columns.hpp"
 #include "io/session_internal.hpp"
 #include "metro/core/file.hpp"
@@ -82,15 +83,6 @@ class MappedFile {
   const char* data_ = nullptr;
   size_t size_ = 0;
 };
-
-// Asks for transparent huge pages on the page-aligned interior of [p, p + bytes): large
-// buffers that are written once then fault in 2 MiB at a time instead of 4 KiB.
-void AdviseHugePages(void* p, size_t bytes) {
-  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
-  const uintptr_t begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
-  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
-}
 
 // Allocator for the parser's temporary row buffers: straight from mmap, so freeing a
 // block's buffers returns the memory to the system at once (malloc would keep it in its
@@ -506,20 +498,6 @@ std::vector<Block> CutBlocks(const MappedFile& file, size_t data_begin, int thre
   return blocks;
 }
 
-// Runs fn(i) for i in [0, n) on up to `threads` threads (the caller is one of them).
-template <typename Fn>
-void ParallelFor(size_t n, int threads, Fn fn) {
-  std::atomic<size_t> next{0};
-  auto worker = [&] {
-    for (size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i);
-  };
-  std::vector<std::thread> pool;
-  const int workers = std::min<int>(threads, static_cast<int>(n));
-  for (int k = 1; k < workers; ++k) pool.emplace_back(worker);
-  worker();
-  for (auto& th : pool) th.join();
-}
-
 // ---- The clean-file path -------------------------------------------------------------
 // Most session files have no malformed row, no text column and time increasing per tag.
 // For those, two parallel passes put every number straight into its tag column: pass 1
@@ -817,29 +795,17 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   std::vector<Block> blocks = CutBlocks(file, header.data_begin, threads);
 
   // Parse blocks in parallel. In strict mode, blocks after the first one with an error
-  // are not needed.
-  std::atomic<size_t> next{0};
+  // are never reached by the sequential pass, so they need not be parsed.
   std::atomic<size_t> first_bad_block{blocks.size()};
-  auto worker = [&] {
-    for (;;) {
-      const size_t i = next.fetch_add(1);
-      if (i >= blocks.size()) return;
-      // Strict mode: blocks after the first one with an error are never reached by the
-      // sequential pass, so they need not be parsed.
-      if (!options.lenient && i > first_bad_block.load()) continue;
-      ParseBlock(file, plan, options.lenient, &blocks[i]);
-      if (!options.lenient && !blocks[i].bad.empty()) {
-        size_t cur = first_bad_block.load();
-        while (i < cur && !first_bad_block.compare_exchange_weak(cur, i)) {
-        }
+  ParallelFor(blocks.size(), threads, [&](size_t i) {
+    if (!options.lenient && i > first_bad_block.load()) return;
+    ParseBlock(file, plan, options.lenient, &blocks[i]);
+    if (!options.lenient && !blocks[i].bad.empty()) {
+      size_t cur = first_bad_block.load();
+      while (i < cur && !first_bad_block.compare_exchange_weak(cur, i)) {
       }
     }
-  };
-  std::vector<std::thread> pool;
-  const int workers = std::min<int>(threads, static_cast<int>(blocks.size()));
-  for (int k = 1; k < workers; ++k) pool.emplace_back(worker);
-  worker();
-  for (auto& th : pool) th.join();
+  });
 
   // Count rows per sensor to size the tag columns exactly.
   std::vector<int64_t> per_sensor(256, 0);

@@ -9,10 +9,7 @@
 #include <thread>
 #include <utility>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
+#include "core/parallel.hpp"
 #include "metro/noise/edf.hpp"
 #include "metro/noise/noise_id.hpp"
 #include "noise/allan_internal.hpp"
@@ -244,22 +241,6 @@ inline void CompensatedAdd(double v, double* sum, double* carry) {
   *sum = t;
 }
 
-// Asks for transparent huge pages on the whole 2 MiB pages inside [p, p + bytes) (Linux with
-// THP in "madvise" mode; elsewhere nothing): an 80 MB phase vector then costs ~40 page
-// faults instead of ~20 000, which on the project's VM took longer than the integration.
-void AdviseHugePages(const void* p, size_t bytes) {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
-  const uintptr_t begin = reinterpret_cast<uintptr_t>(p);
-  const uintptr_t lo = (begin + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t hi = (begin + bytes) & ~(kHuge - 1);
-  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);  // Advice only.
-#else
-  (void)p;
-  (void)bytes;
-#endif
-}
-
 struct PhaseResult {
   double mean = 0.0;
   int64_t first_bad = -1;  // First non-finite rate sample, -1 if none.
@@ -268,7 +249,7 @@ struct PhaseResult {
 // Sizes *phase to n values (zeros), with huge pages asked for first.
 double* NewPhase(size_t n, std::vector<double>* phase) {
   phase->reserve(n);  // Allocated, not yet touched.
-  AdviseHugePages(phase->data(), n * sizeof(double));
+  internal::AdviseHugePages(phase->data(), n * sizeof(double));
   phase->resize(n);
   return phase->data();
 }

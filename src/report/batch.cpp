@@ -4,14 +4,13 @@
 #include <glob.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <mutex>
 #include <set>
-#include <thread>
 
+#include "core/parallel.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/core/version.hpp"
@@ -157,43 +156,32 @@ BatchSummary RunBatch(const std::vector<std::string>& inputs, const BatchOptions
   out.items.resize(inputs.size());
   std::vector<std::vector<QuantityResult>> results(inputs.size());
   std::vector<std::string> hashes(inputs.size());
-  std::atomic<size_t> next{0};
   std::mutex progress_mutex;
   size_t done = 0;
-  auto worker = [&] {
-    for (size_t i = next.fetch_add(1); i < inputs.size(); i = next.fetch_add(1)) {
-      BatchItem& item = out.items[i];
-      item.input = inputs[i];
-      const SessionAnalysis a = AnalyzeSession(inputs[i], analysis);
-      if (!a.ok) {
-        item.error = a.error;
-        item.input_error = a.input_error;
+  internal::ParallelFor(inputs.size(), options.jobs, [&](size_t i) {
+    BatchItem& item = out.items[i];
+    item.input = inputs[i];
+    const SessionAnalysis a = AnalyzeSession(inputs[i], analysis);
+    if (!a.ok) {
+      item.error = a.error;
+      item.input_error = a.input_error;
+    } else {
+      item.report_path = (fs::path(options.output_dir) / names[i]).string();
+      if (Status s = WriteFileAtomically(item.report_path, a.report.dump(2) + "\n"); !s.ok()) {
+        item.error = s.error();
+        item.input_error = false;
+        item.report_path.clear();
       } else {
-        item.report_path = (fs::path(options.output_dir) / names[i]).string();
-        if (Status s = WriteFileAtomically(item.report_path, a.report.dump(2) + "\n"); !s.ok()) {
-          item.error = s.error();
-          item.input_error = false;
-          item.report_path.clear();
-        } else {
-          item.ok = true;
-          hashes[i] = a.session.sha256;
-          results[i] = ExtractResults(a.report);
-        }
-      }
-      if (options.on_progress) {
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        options.on_progress(++done, inputs.size());
+        item.ok = true;
+        hashes[i] = a.session.sha256;
+        results[i] = ExtractResults(a.report);
       }
     }
-  };
-  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
-  const size_t jobs =
-      std::min<size_t>(inputs.size(), options.jobs > 0 ? static_cast<size_t>(options.jobs)
-                                                       : static_cast<size_t>(hardware));
-  std::vector<std::thread> threads;
-  for (size_t j = 1; j < jobs; ++j) threads.emplace_back(worker);
-  worker();
-  for (std::thread& t : threads) t.join();
+    if (options.on_progress) {
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      options.on_progress(++done, inputs.size());
+    }
+  });
 
   // Summary per tag and quantity across sessions, in (sensor, quantity) order.
   struct Accumulated {

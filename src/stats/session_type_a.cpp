@@ -3,10 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <thread>
 
+#include "core/parallel.hpp"
 #include "metro/core/angles.hpp"
 
 namespace metro {
@@ -208,60 +207,48 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
       jobs.push_back({k, static_cast<size_t>(it - tags[k]->quantities.begin()), slot});
     }
   }
-  std::atomic<size_t> next{0};
-  auto worker = [&] {
-    for (;;) {
-      const size_t j = next.fetch_add(1);
-      if (j >= jobs.size()) return;
-      const Job& job = jobs[j];
-      const Tag& tag = *tags[job.tag];
-      TagTypeA& t = out.tags[job.tag];
-      const Quantity& q = tag.quantities[job.quantity];
-      QuantityTypeA& r = t.quantities[job.slot];
-      size_t dropped = 0;
-      std::vector<double> x =
-          Finite(WindowValues(q, t.window.begin, t.window.end, &r.unwrap_jumps), &dropped);
-      auto a = EvaluateTypeA(x.data(), x.size(), options.type_a);
-      if (!a.ok()) {
-        r.error = a.error().message;
-        continue;
-      }
-      r.ok = true;
-      r.type_a = a.value();
-      if (r.angle_handling == "unwrapped") r.type_a.mean = WrapDeg180(r.type_a.mean);
-      if (dropped > 0) {
-        r.warnings.push_back(fmt::format("{} empty (unknown) values left out", dropped));
-      }
-      const TypeAResult& ta = r.type_a;
-      if (ta.n_eff < 0.5 * static_cast<double>(ta.n)) {
+  internal::ParallelFor(jobs.size(), options.threads, [&](size_t j) {
+    const Job& job = jobs[j];
+    const Tag& tag = *tags[job.tag];
+    TagTypeA& t = out.tags[job.tag];
+    const Quantity& q = tag.quantities[job.quantity];
+    QuantityTypeA& r = t.quantities[job.slot];
+    size_t dropped = 0;
+    std::vector<double> x =
+        Finite(WindowValues(q, t.window.begin, t.window.end, &r.unwrap_jumps), &dropped);
+    auto a = EvaluateTypeA(x.data(), x.size(), options.type_a);
+    if (!a.ok()) {
+      r.error = a.error().message;
+      return;
+    }
+    r.ok = true;
+    r.type_a = a.value();
+    if (r.angle_handling == "unwrapped") r.type_a.mean = WrapDeg180(r.type_a.mean);
+    if (dropped > 0) {
+      r.warnings.push_back(fmt::format("{} empty (unknown) values left out", dropped));
+    }
+    const TypeAResult& ta = r.type_a;
+    if (ta.n_eff < 0.5 * static_cast<double>(ta.n)) {
+      r.warnings.push_back(fmt::format(
+          "n_eff = {:.1f} < n/2 = {:.1f}: the observations are autocorrelated; "
+          "std_of_mean ({:.3g}) understates the uncertainty of the mean, use "
+          "std_of_mean_autocorr ({:.3g})",
+          ta.n_eff, 0.5 * static_cast<double>(ta.n), ta.std_of_mean, ta.std_of_mean_autocorr));
+    }
+    if (ta.cutoff_reached_limit) {
+      r.warnings.push_back(
+          "the autocorrelation did not decay within n/4 lags (drift or a trend): even "
+          "std_of_mean_autocorr is optimistic; see the Allan deviation");
+    }
+    if (q.name == "pitch_deg") {
+      double worst = 0.0;
+      for (double v : x) worst = std::max(worst, std::abs(v));
+      if (worst >= kGimbalLockWarnPitchDeg) {
         r.warnings.push_back(fmt::format(
-            "n_eff = {:.1f} < n/2 = {:.1f}: the observations are autocorrelated; "
-            "std_of_mean ({:.3g}) understates the uncertainty of the mean, use "
-            "std_of_mean_autocorr ({:.3g})",
-            ta.n_eff, 0.5 * static_cast<double>(ta.n), ta.std_of_mean, ta.std_of_mean_autocorr));
-      }
-      if (ta.cutoff_reached_limit) {
-        r.warnings.push_back(
-            "the autocorrelation did not decay within n/4 lags (drift or a trend): even "
-            "std_of_mean_autocorr is optimistic; see the Allan deviation");
-      }
-      if (q.name == "pitch_deg") {
-        double worst = 0.0;
-        for (double v : x) worst = std::max(worst, std::abs(v));
-        if (worst >= kGimbalLockWarnPitchDeg) {
-          r.warnings.push_back(fmt::format(
-              "|pitch| reaches {:.2f} deg: near gimbal lock yaw and roll are ill-defined", worst));
-        }
+            "|pitch| reaches {:.2f} deg: near gimbal lock yaw and roll are ill-defined", worst));
       }
     }
-  };
-  int threads =
-      options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::clamp(threads, 1, std::max(1, static_cast<int>(jobs.size())));
-  std::vector<std::thread> pool;
-  for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
-  worker();
-  for (auto& th : pool) th.join();
+  });
   return out;
 }
 

@@ -13,10 +13,7 @@
 #include <pcg_random.hpp>
 #include <thread>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
+#include "core/parallel.hpp"
 #include "uncertainty/mc_sampling.hpp"
 #include "uncertainty/model.hpp"
 
@@ -304,22 +301,6 @@ void SampleChunk(const Plan& plan, WordSource& rng, size_t n, internal::SamplerS
       }
     }
   }
-}
-
-// Asks for transparent huge pages on the whole 2 MiB pages inside [p, p + bytes) (Linux with
-// THP in "madvise" mode; elsewhere nothing): 1e7 model values then cost ~40 page faults
-// instead of ~20 000.
-void AdviseHugePages(const void* p, size_t bytes) {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
-  const uintptr_t begin = reinterpret_cast<uintptr_t>(p);
-  const uintptr_t lo = (begin + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t hi = (begin + bytes) & ~(kHuge - 1);
-  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);  // Advice only.
-#else
-  (void)p;
-  (void)bytes;
-#endif
 }
 
 struct NanReport {
@@ -664,7 +645,7 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
     // Left uninitialised: the workers write (and first touch) every value.
     const size_t m = static_cast<size_t>(options.trials);
     std::unique_ptr<double[]> values(new double[m]);
-    AdviseHugePages(values.get(), m * sizeof(double));
+    internal::AdviseHugePages(values.get(), m * sizeof(double));
     std::vector<ChunkMoments> chunk_moments;
     const NanReport nan =
         Simulate(plan, 0, options.trials, values.get(), result.threads, &chunk_moments);
