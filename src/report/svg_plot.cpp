@@ -44,12 +44,18 @@ std::string PlText(const std::string& s) {
   return out;
 }
 
+// $TMPDIR, or /tmp when it is unset or empty.
+std::string TempDirectory() {
+  const char* dir = std::getenv("TMPDIR");
+  return dir != nullptr && *dir != '\0' ? dir : "/tmp";
+}
+
 // A PLplot stream writing SVG to a temporary file; the text is read back by Finish().
 class SvgStream {
  public:
   SvgStream(int width_px, int height_px) {
-    char name[] = "/tmp/metro_plot_XXXXXX";
-    const int fd = ::mkstemp(name);
+    std::string name = TempDirectory() + "/metro_plot_XXXXXX";
+    const int fd = ::mkstemp(name.data());
     if (fd < 0) return;
     ::close(fd);
     path_ = name;
@@ -335,7 +341,9 @@ Result<std::string> RenderXyPlot(const XyPlot& plot) {
 
   std::lock_guard<std::mutex> lock(PlplotMutex());
   SvgStream stream(plot.width_px, plot.height_px);
-  if (!stream.ok()) return MakeError("cannot create a temporary file for a plot in /tmp");
+  if (!stream.ok())
+    return MakeError("cannot create a temporary file for a plot in " + TempDirectory() +
+                     " (set TMPDIR to a writable directory)");
   pladv(0);
   plvpor(0.1, 0.96, 0.14, 0.9);
   plwind(xr.lo, xr.hi, yr.lo, yr.hi);
@@ -381,7 +389,9 @@ Result<std::string> RenderBarPlot(const BarPlot& plot) {
 
   std::lock_guard<std::mutex> lock(PlplotMutex());
   SvgStream stream(plot.width_px, std::min(height_px, 4000));
-  if (!stream.ok()) return MakeError("cannot create a temporary file for a plot in /tmp");
+  if (!stream.ok())
+    return MakeError("cannot create a temporary file for a plot in " + TempDirectory() +
+                     " (set TMPDIR to a writable directory)");
   pladv(0);
   const double bottom = std::min(0.5, 45.0 / height_px);
   const double top = 1.0 - std::min(0.3, 30.0 / height_px);
