@@ -12,21 +12,19 @@
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
+#include "support/html_checks.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
 
+using testing::CheckSelfContained;
+using testing::Count;
+
 using nlohmann::ordered_json;
 
 const std::string kSweep = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
-
-size_t Count(const std::string& text, const std::string& what) {
-  size_t n = 0;
-  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
 
 // PLplot writes the characters of SVG text as "&#xNN;" references; decoded for searching.
 std::string DecodeCharRefs(const std::string& html) {
@@ -43,19 +41,6 @@ std::string DecodeCharRefs(const std::string& html) {
     out += html[i];
   }
   return out;
-}
-
-void CheckSelfContained(const std::string& html) {
-  CHECK(html.rfind("<!DOCTYPE html>", 0) == 0);
-  CHECK(html.find("</html>") != std::string::npos);
-  for (size_t at = html.find("url("); at != std::string::npos; at = html.find("url(", at + 1)) {
-    CHECK(html.compare(at, 5, "url(#") == 0);
-  }
-  for (const char* bad :
-       {"http://", "https://", "src=", "href=", "@import", "<script", "<link", "<iframe", "<img"}) {
-    INFO(bad);
-    CHECK(html.find(bad) == std::string::npos);
-  }
 }
 
 const ordered_json& SweepReport() {

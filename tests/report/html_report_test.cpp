@@ -12,35 +12,18 @@
 #include "metro/noise/allan.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
+#include "support/html_checks.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
 
+using testing::CheckSelfContained;
+using testing::Count;
+
 using nlohmann::ordered_json;
 
 const std::string kDatasets = std::string(METRO_SOURCE_DIR) + "/datasets/";
-
-size_t Count(const std::string& text, const std::string& what) {
-  size_t n = 0;
-  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
-
-// Nothing a browser would fetch: no URL, no src/href, no CSS import or url().
-void CheckSelfContained(const std::string& html) {
-  CHECK(html.rfind("<!DOCTYPE html>", 0) == 0);
-  CHECK(html.find("</html>") != std::string::npos);
-  // url() only to fragments of the page itself (PLplot's clip paths: url(#...)).
-  for (size_t at = html.find("url("); at != std::string::npos; at = html.find("url(", at + 1)) {
-    CHECK(html.compare(at, 5, "url(#") == 0);
-  }
-  for (const char* bad :
-       {"http://", "https://", "src=", "href=", "@import", "<script", "<link", "<iframe", "<img"}) {
-    INFO(bad);
-    CHECK(html.find(bad) == std::string::npos);
-  }
-}
 
 const SessionAnalysis& ImuAnalysis() {
   static const SessionAnalysis analysis = [] {
