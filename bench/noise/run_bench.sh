@@ -30,15 +30,8 @@ for ((i = 1; i <= runs; i++)); do
   numpy_times+=("$(echo "$line" | sed -n 's/.*in-memory OADEV \([0-9.]*\) s.*/\1/p')")
 done
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
-/usr/bin/python3 - "${metro_times[*]}" "${numpy_times[*]}" <<'PY'
-import statistics, sys
-metro = [float(v) for v in sys.argv[1].split()]
-numpy = [float(v) for v in sys.argv[2].split()]
-for name, v in (("metro whole process wall", metro), ("numpy in-memory OADEV", numpy)):
-    print(f"{name}: median {statistics.median(v):.3f} s, min {min(v):.3f}, max {max(v):.3f} "
-          f"({len(v)} runs)")
-print(f"ratio of medians (numpy / metro): {statistics.median(numpy) / statistics.median(metro):.1f}x")
-PY
+/usr/bin/python3 "$here/../compare_times.py" "metro whole process wall" "${metro_times[*]}" \
+  "numpy in-memory OADEV" "${numpy_times[*]}"
 echo "== metro all-tau (Stable32 thinning) at N = 1e6, whole process"
 /usr/bin/time -f "metro wall %e s" "$bench" "$csv" --taus all --limit 1000000 > "$work/metro_all.csv"
 echo "== agreement of the octave curves (max relative difference)"

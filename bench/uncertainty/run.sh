@@ -24,12 +24,5 @@ for ((i = 1; i <= runs; i++)); do
   numpy_times+=("${line##*time_s=}")
 done
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
-/usr/bin/python3 - "${metro_times[*]}" "${numpy_times[*]}" <<'PY'
-import statistics, sys
-metro = [float(v) for v in sys.argv[1].split()]
-numpy = [float(v) for v in sys.argv[2].split()]
-for name, v in (("metro whole process wall", metro), ("numpy in-process", numpy)):
-    print(f"{name}: median {statistics.median(v):.3f} s, min {min(v):.3f}, max {max(v):.3f} "
-          f"({len(v)} runs)")
-print(f"ratio of medians (numpy / metro): {statistics.median(numpy) / statistics.median(metro):.1f}x")
-PY
+/usr/bin/python3 "$here/../compare_times.py" "metro whole process wall" "${metro_times[*]}" \
+  "numpy in-process" "${numpy_times[*]}"
