@@ -26,7 +26,7 @@ mkdir -p "$out"
 cc=${CC_ARM:-arm-none-eabi-gcc}
 arch="-mcpu=cortex-m0 -mthumb -Os -ffunction-sections -fdata-sections -fno-tree-loop-distribute-patterns"
 flags="-std=c99 $arch -Wall -Wextra -pedantic -Werror"
-whole_limit=${METRO_FW_WHOLE_LIMIT:-5617}
+whole_limit=${METRO_FW_WHOLE_LIMIT:-5172}
 
 objs=""
 for src in le crc blob update push fixed; do

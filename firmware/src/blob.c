@@ -1,5 +1,7 @@
 #include "metro_fw/blob.h"
 
+#include <stddef.h>
+
 #include "le.h"
 #include "metro_fw/crc.h"
 
@@ -27,17 +29,22 @@ int metro_fw_buffer_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len)
   return METRO_FW_OK;
 }
 
+/* The body offset, length and version of META, ACCEL and GYRO follow each other in
+ * metro_fw_blob_info (three uint16_t each): the walker indexes them. Fails to compile if the
+ * layout changes. */
+typedef char metro_fw_info_layout_check[(offsetof(metro_fw_blob_info, gyro_version) -
+                                             offsetof(metro_fw_blob_info, meta_off) ==
+                                         16)
+                                            ? 1
+                                            : -1];
+
 /* Section walk (section 2.2). Fills the section fields of info. */
 static int WalkSections(metro_fw_read_fn read, void* ctx, metro_fw_blob_info* info) {
   const uint32_t end = (uint32_t)info->total_len - 4u;
   uint32_t off = info->header_len;
   uint8_t h[METRO_FW_SECTION_HEADER_LEN];
   while (off < end) {
-    uint16_t type, version, body_len;
-    uint16_t* body_off_field = 0;
-    uint16_t* body_len_field = 0;
-    uint16_t* version_field = 0;
-    uint32_t min_len = 0;
+    uint32_t type, version, body_len, known;
     int rc;
     if (end - off < METRO_FW_SECTION_HEADER_LEN) return METRO_FW_E_SECTION;
     rc = read(ctx, off, h, METRO_FW_SECTION_HEADER_LEN);
@@ -48,31 +55,20 @@ static int WalkSections(metro_fw_read_fn read, void* ctx, metro_fw_blob_info* in
     off += METRO_FW_SECTION_HEADER_LEN;
     if (type == 0x0000u || type == 0xFFFFu) return METRO_FW_E_SECTION;
     if ((body_len & 3u) != 0u || body_len > end - off) return METRO_FW_E_SECTION;
-    if (type == METRO_FW_SEC_META) {
-      body_off_field = &info->meta_off;
-      body_len_field = &info->meta_len;
-      version_field = &info->meta_version;
-      min_len = METRO_FW_META_BODY_LEN;
-    } else if (type == METRO_FW_SEC_ACCEL) {
-      body_off_field = &info->accel_off;
-      body_len_field = &info->accel_len;
-      version_field = &info->accel_version;
-      min_len = METRO_FW_SENSOR_BODY_LEN;
-    } else if (type == METRO_FW_SEC_GYRO) {
-      body_off_field = &info->gyro_off;
-      body_len_field = &info->gyro_len;
-      version_field = &info->gyro_version;
-      min_len = METRO_FW_SENSOR_BODY_LEN;
-    }
-    if (body_off_field != 0) {
-      if (*body_off_field != 0u) return METRO_FW_E_SECTION; /* duplicate */
+    /* 0 META, 1 ACCEL, 2 GYRO, anything else unknown (skipped) */
+    known = type == METRO_FW_SEC_META ? 0u : type - (METRO_FW_SEC_ACCEL - 1u);
+    if (known < 3u) {
+      uint16_t* f = (uint16_t*)(void*)((char*)info + offsetof(metro_fw_blob_info, meta_off)) +
+                    3u * known;                  /* off, len, version */
+      if (f[0] != 0u) return METRO_FW_E_SECTION; /* duplicate */
       /* A major this firmware knows must carry at least the v1.0 body. */
-      if ((version >> 8) == (METRO_FW_SEC_VERSION_1_0 >> 8) && body_len < min_len) {
+      if ((version >> 8) == (METRO_FW_SEC_VERSION_1_0 >> 8) &&
+          body_len < (known == 0u ? METRO_FW_META_BODY_LEN : METRO_FW_SENSOR_BODY_LEN)) {
         return METRO_FW_E_SECTION;
       }
-      *body_off_field = (uint16_t)off;
-      *body_len_field = body_len;
-      *version_field = version;
+      f[0] = (uint16_t)off;
+      f[1] = (uint16_t)body_len;
+      f[2] = (uint16_t)version;
     }
     off += body_len;
   }
@@ -322,7 +318,8 @@ static int32_t F32Key(uint32_t u) {
 }
 
 /* Section 3.1 physical limits on decoded constants (model bits already applied). */
-static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind, uint8_t fs_sel) {
+METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind,
+                                          uint8_t fs_sel) {
   const uint32_t s = F32Bits(metro_fw_nominal_sensitivity(kind, fs_sel));
   /* Row norm within +-10 % of s_nom: (1 - 0.1)^2 = 0.81, (1 + 0.1)^2 = 1.21. */
   const uint32_t n2_lo = F32Mul(F32Mul(F32Bits(0.81f), s), s);
@@ -371,6 +368,33 @@ static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind,
   return (det & F32_SIGN) == 0u && det != 0u; /* det > 0 */
 }
 
+/* Model bits a term of m[9], b0[3], b1[3], b2[3] needs (section 3): the diagonal of M none. */
+#define FM METRO_FW_MODEL_FULL_M
+static const uint8_t kTermBits[18] = {0,
+                                      FM,
+                                      FM,
+                                      FM,
+                                      0,
+                                      FM,
+                                      FM,
+                                      FM,
+                                      0,
+                                      METRO_FW_MODEL_BIAS,
+                                      METRO_FW_MODEL_BIAS,
+                                      METRO_FW_MODEL_BIAS,
+                                      METRO_FW_MODEL_LINEAR_T,
+                                      METRO_FW_MODEL_LINEAR_T,
+                                      METRO_FW_MODEL_LINEAR_T,
+                                      METRO_FW_MODEL_QUADRATIC_T,
+                                      METRO_FW_MODEL_QUADRATIC_T,
+                                      METRO_FW_MODEL_QUADRATIC_T};
+#undef FM
+typedef char metro_fw_cal_terms_check[(offsetof(metro_fw_sensor_cal, b2) -
+                                           offsetof(metro_fw_sensor_cal, m) ==
+                                       15 * sizeof(float))
+                                          ? 1
+                                          : -1];
+
 int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, uint32_t body_len,
                            uint16_t version, metro_fw_sensor_kind kind, const metro_fw_config* cfg,
                            metro_fw_sensor_cal* out) {
@@ -391,14 +415,11 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, 
   rc = read(ctx, body_off, b, METRO_FW_SENSOR_BODY_LEN);
   if (rc != METRO_FW_OK) return rc;
   /* Every f32 from t_ref_c (4) to t_valid_max_c (160) finite; from u_M (80) to resid_rms
-   * (152) also not negative. Checked on the bits: exponent 0xFF is Inf or NaN. */
+   * (152) also not negative. Checked on the bits: exponent 0xFF is Inf or NaN; a pattern
+   * above 0x80000000 is negative and not -0. */
   for (i = 4; i < 164; i += 4) {
     const uint32_t u = metro_fw_get_u32(b + i);
-    if ((u & 0x7F800000u) == 0x7F800000u) {
-      out->status = METRO_FW_SENSOR_NONFINITE;
-      return METRO_FW_OK;
-    }
-    if (i >= 80u && i < 156u && (u & 0x80000000u) != 0u && (u & 0x7FFFFFFFu) != 0u) {
+    if ((u & 0x7F800000u) == 0x7F800000u || (i - 80u < 76u && u > 0x80000000u)) {
       out->status = METRO_FW_SENSOR_NONFINITE;
       return METRO_FW_OK;
     }
@@ -414,20 +435,15 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, 
     return METRO_FW_OK;
   }
   /* Decoded in place (no struct copy: on the M0 that links memcpy); a LIMITS failure
-   * restores the defaults. */
+   * restores the defaults. m, b0, b1, b2 are body bytes 8 ... 79 and 18 consecutive floats of
+   * out; a term is read only if its model bits are set (the diagonal of M always). */
   out->model_bits = bits;
+  for (i = 0; i < 18; ++i) {
+    float* f = (float*)(void*)((char*)out + offsetof(metro_fw_sensor_cal, m)) + i;
+    *f = (bits & kTermBits[i]) == kTermBits[i] ? metro_fw_get_f32(b + 8 + 4 * i) : 0.0f;
+  }
+  for (i = 0; i < 3; ++i) out->hw_offs[i] = metro_fw_get_i16(b + 164 + 2 * i);
   out->t_ref_c = metro_fw_get_f32(b + 4);
-  for (i = 0; i < 9; ++i) {
-    const int diagonal = (i % 4u) == 0u;
-    out->m[i] =
-        (diagonal || (bits & METRO_FW_MODEL_FULL_M)) ? metro_fw_get_f32(b + 8 + 4 * i) : 0.0f;
-  }
-  for (i = 0; i < 3; ++i) {
-    out->b0[i] = (bits & METRO_FW_MODEL_BIAS) ? metro_fw_get_f32(b + 44 + 4 * i) : 0.0f;
-    out->b1[i] = (bits & METRO_FW_MODEL_LINEAR_T) ? metro_fw_get_f32(b + 56 + 4 * i) : 0.0f;
-    out->b2[i] = (bits & METRO_FW_MODEL_QUADRATIC_T) ? metro_fw_get_f32(b + 68 + 4 * i) : 0.0f;
-    out->hw_offs[i] = metro_fw_get_i16(b + 164 + 2 * i);
-  }
   out->t_valid_min_c = metro_fw_get_f32(b + 156);
   out->t_valid_max_c = metro_fw_get_f32(b + 160);
   if (!WithinLimits(out, kind, fs_sel)) {

@@ -1,5 +1,7 @@
 #include "metro_fw/fixed.h"
 
+#include <stddef.h>
+
 /* round(x * 2^frac) for a binary32 x, from its bits: x = (-1)^s * 1.f * 2^(e - 127), so
  * x * 2^frac = (2^23 + f) * 2^(e - 150 + frac). Rounds to nearest (half away from zero).
  * Returns 0, or -1 when the result does not fit in 31 bits or x is NaN/Inf. */
@@ -31,24 +33,38 @@ static int F32ToQ(float x, int frac, int32_t* out) {
   return 0;
 }
 
+/* Both structs hold 21 four-byte values in the same order: m[9], b0[3], b1[3], b2[3], t_ref,
+ * t_valid_min, t_valid_max. The conversion walks them as one table; these typedefs fail to
+ * compile if either layout changes. */
+typedef char metro_fw_cal_layout_check[(sizeof(((metro_fw_sensor_cal*)0)->m) == 36 &&
+                                        offsetof(metro_fw_sensor_cal, m) == 0 &&
+                                        offsetof(metro_fw_sensor_cal, t_valid_max_c) == 80)
+                                           ? 1
+                                           : -1];
+typedef char metro_fw_fixed_layout_check[(sizeof(metro_fw_sensor_fixed) == 84 &&
+                                          offsetof(metro_fw_sensor_fixed, t_valid_max_q12) == 80)
+                                             ? 1
+                                             : -1];
+
 int metro_fw_fixed_from_cal(const metro_fw_sensor_cal* cal, metro_fw_sensor_fixed* out) {
+  int32_t* q = (int32_t*)(void*)out;
   int i, bad = 0;
   if (cal == 0 || out == 0) return METRO_FW_E_ARG;
-  for (i = 0; i < 9; ++i) bad |= F32ToQ(cal->m[i], 36, &out->m_q36[i]);
-  for (i = 0; i < 3; ++i) {
-    bad |= F32ToQ(cal->b0[i], 16, &out->b0_q16[i]);
-    bad |= F32ToQ(cal->b1[i], 16, &out->b1_q16[i]);
-    bad |= F32ToQ(cal->b2[i], 24, &out->b2_q24[i]);
+  for (i = 0; i < 21; ++i) {
+    /* M Q36, b0 and b1 Q16, b2 Q24, temperatures Q12 */
+    const int frac = i < 9 ? 36 : i < 15 ? 16 : i < 18 ? 24 : 12;
+    bad |= F32ToQ(*(const float*)(const void*)((const char*)cal + 4 * i), frac, &q[i]);
   }
-  bad |= F32ToQ(cal->t_ref_c, 12, &out->t_ref_q12);
-  bad |= F32ToQ(cal->t_valid_min_c, 12, &out->t_valid_min_q12);
-  bad |= F32ToQ(cal->t_valid_max_c, 12, &out->t_valid_max_q12);
   if (bad != 0) {
-    int32_t* z = out->m_q36;
-    for (i = 0; i < (int)(sizeof(*out) / sizeof(int32_t)); ++i) z[i] = 0;
+    for (i = 0; i < 21; ++i) q[i] = 0;
     return METRO_FW_E_ARG;
   }
   return METRO_FW_OK;
+}
+
+/* round(a * b / 2^shift), shift >= 1 */
+static int64_t MulRound(int64_t a, int32_t b, int shift) {
+  return (a * b + ((int64_t)1 << (shift - 1))) >> shift;
 }
 
 int metro_fw_apply_fixed(const metro_fw_sensor_fixed* fx, const int16_t raw_lsb[3],
@@ -56,23 +72,21 @@ int metro_fw_apply_fixed(const metro_fw_sensor_fixed* fx, const int16_t raw_lsb[
   int32_t e_q10[3];
   int32_t t = temp_q12;
   int32_t dt_q12;
-  int i;
+  int i, j;
   if (fx == 0 || raw_lsb == 0 || out_q20 == 0) return METRO_FW_E_ARG;
   if (t < fx->t_valid_min_q12) t = fx->t_valid_min_q12;
   if (t > fx->t_valid_max_q12) t = fx->t_valid_max_q12;
   dt_q12 = t - fx->t_ref_q12;
   for (i = 0; i < 3; ++i) {
     /* bias = b0 + (b1 + b2*dT)*dT (Horner), each product rounded to Q16 LSB. */
-    const int64_t c_q16 =
-        (int64_t)fx->b1_q16[i] + (((int64_t)fx->b2_q24[i] * dt_q12 + 0x80000) >> 20);
-    const int64_t bias_q16 = (int64_t)fx->b0_q16[i] + ((c_q16 * dt_q12 + 0x800) >> 12);
+    const int64_t c_q16 = fx->b1_q16[i] + MulRound(fx->b2_q24[i], dt_q12, 20);
+    const int64_t bias_q16 = fx->b0_q16[i] + MulRound(c_q16, dt_q12, 12);
     e_q10[i] = (int32_t)((((int64_t)raw_lsb[i] * 65536) - bias_q16 + 0x20) >> 6);
   }
   for (i = 0; i < 3; ++i) {
-    const int32_t* m = fx->m_q36 + 3 * i;
-    const int64_t acc_q46 =
-        (int64_t)m[0] * e_q10[0] + (int64_t)m[1] * e_q10[1] + (int64_t)m[2] * e_q10[2];
-    out_q20[i] = (int32_t)((acc_q46 + 0x2000000) >> 26);
+    int64_t acc_q46 = 0x2000000; /* rounds the shift below to nearest */
+    for (j = 0; j < 3; ++j) acc_q46 += (int64_t)fx->m_q36[3 * i + j] * e_q10[j];
+    out_q20[i] = (int32_t)(acc_q46 >> 26);
   }
   return METRO_FW_OK;
 }

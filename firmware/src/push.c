@@ -10,15 +10,12 @@ int metro_fw_slip_encode(const uint8_t* frame, uint32_t len, uint8_t* out, uint3
   if (frame == 0 || out == 0 || out_len == 0 || out_cap < 2u * len + 2u) return METRO_FW_E_ARG;
   out[n++] = METRO_FW_SLIP_END;
   for (i = 0; i < len; ++i) {
-    if (frame[i] == METRO_FW_SLIP_END) {
+    uint8_t c = frame[i];
+    if (c == METRO_FW_SLIP_END || c == METRO_FW_SLIP_ESC) {
       out[n++] = METRO_FW_SLIP_ESC;
-      out[n++] = METRO_FW_SLIP_ESC_END;
-    } else if (frame[i] == METRO_FW_SLIP_ESC) {
-      out[n++] = METRO_FW_SLIP_ESC;
-      out[n++] = METRO_FW_SLIP_ESC_ESC;
-    } else {
-      out[n++] = frame[i];
+      c = c == METRO_FW_SLIP_END ? METRO_FW_SLIP_ESC_END : METRO_FW_SLIP_ESC_ESC;
     }
+    out[n++] = c;
   }
   out[n++] = METRO_FW_SLIP_END;
   *out_len = n;
@@ -86,170 +83,143 @@ static int SendFrame(metro_fw_push* p, const uint8_t* frame, uint32_t len) {
   return p->send(p->send_ctx, enc, n) == 0 ? METRO_FW_OK : METRO_FW_E_FLASH;
 }
 
-static uint8_t ResultFromError(int rc) {
-  switch (rc) {
-    case METRO_FW_E_FOREIGN:
-      return METRO_FW_RES_FOREIGN_DEVICE;
-    case METRO_FW_E_UNSUPPORTED:
-      return METRO_FW_RES_UNSUPPORTED_FORMAT;
-    case METRO_FW_E_STALE_SEQ:
-      return METRO_FW_RES_STALE_SEQ;
-    case METRO_FW_E_FLASH:
-    case METRO_FW_E_VERIFY:
-      return METRO_FW_RES_FLASH_ERROR;
-    case METRO_FW_E_CRC:
-      return METRO_FW_RES_CRC_MISMATCH;
-    default:
-      return METRO_FW_RES_INVALID_BLOB;
+/* Little-endian store of the low n bytes of v at w; returns the next free byte. */
+static uint8_t* PutLe(uint8_t* w, uint32_t v, uint32_t n) {
+  for (; n != 0u; --n) {
+    *w++ = (uint8_t)v;
+    v >>= 8;
   }
+  return w;
 }
 
-/* Executes one request; writes the response payload into r (capacity 32) and its length. */
-static void Execute(metro_fw_push* p, uint8_t op, const uint8_t* in, uint32_t n, uint8_t* r,
-                    uint32_t* rn) {
+/* Push result for a failed metro_fw_update, indexed by -code (codes -1 ... -13). */
+static const uint8_t kResultOfError[14] = {
+    0,
+    METRO_FW_RES_INVALID_BLOB,       /* E_ARG */
+    METRO_FW_RES_INVALID_BLOB,       /* E_EMPTY */
+    METRO_FW_RES_INVALID_BLOB,       /* E_MAGIC */
+    METRO_FW_RES_UNSUPPORTED_FORMAT, /* E_UNSUPPORTED */
+    METRO_FW_RES_INVALID_BLOB,       /* E_BOUNDS */
+    METRO_FW_RES_CRC_MISMATCH,       /* E_CRC */
+    METRO_FW_RES_FOREIGN_DEVICE,     /* E_FOREIGN */
+    METRO_FW_RES_INVALID_BLOB,       /* E_SEQ */
+    METRO_FW_RES_INVALID_BLOB,       /* E_SECTION */
+    METRO_FW_RES_FLASH_ERROR,        /* E_FLASH */
+    METRO_FW_RES_FLASH_ERROR,        /* E_VERIFY */
+    METRO_FW_RES_STALE_SEQ,          /* E_STALE_SEQ */
+    METRO_FW_RES_INVALID_BLOB        /* E_FRAME */
+};
+
+/* Request payload length of ops 0x01 ... 0x07 (section 7): at least kRequestMin[op] bytes and
+ * at most kRequestExtra[op] more (CAL_WRITE: offset u16 and 1 ... 16 data bytes). */
+static const uint8_t kRequestMin[8] = {0, 0, 10, 3, 0, 0, 3, 0};
+static const uint8_t kRequestExtra[8] = {0, 0, 0, METRO_FW_PUSH_MAX_CHUNK - 1u, 0, 0, 0, 0};
+
+/* Executes one request (payload in, n bytes; in is followed by the frame's CRC, so in[0] and
+ * in[1] are readable). Appends the response fields after the result byte at *w and returns
+ * the result; a request it refuses as malformed (INVALID_PARAM) appends nothing. */
+METRO_FW_NOINLINE static uint8_t Execute(metro_fw_push* p, uint32_t op, const uint8_t* in,
+                                         uint32_t n, uint8_t** w) {
   metro_fw_blob_info info[2];
   int result[2];
   int active = METRO_FW_SLOT_NONE;
-  int have_active =
-      metro_fw_choose_active(p->flash, p->device_id, info, result, &active) == METRO_FW_OK &&
-      active != METRO_FW_SLOT_NONE;
-  r[0] = METRO_FW_RES_SUCCESS;
-  *rn = 1;
-  switch (op) {
-    case METRO_FW_OP_GET_INFO:
-      if (n != 0u) break;
-      r[1] = (uint8_t)METRO_FW_FMT_MAJOR;
-      r[2] = (uint8_t)METRO_FW_FMT_MINOR;
-      r[3] = have_active ? (uint8_t)active : 0xFFu;
-      metro_fw_put_u16(r + 4, (uint16_t)METRO_FW_MAX_LEN);
-      metro_fw_put_u32(r + 6, p->device_id[0]);
-      metro_fw_put_u32(r + 10, p->device_id[1]);
-      metro_fw_put_u32(r + 14, have_active ? info[active].seq : 0u);
-      metro_fw_put_u32(r + 18, have_active ? info[active].crc32 : 0u);
-      *rn = 22;
-      return;
-    case METRO_FW_OP_CAL_CREATE: {
-      uint16_t total;
-      uint32_t seq, i;
-      if (n != 10u) break;
-      total = metro_fw_get_u16(in);
-      seq = metro_fw_get_u32(in + 6);
-      p->receiving = 0;
-      if ((total & 3u) != 0u || total < METRO_FW_HEADER_LEN + 4u || total > METRO_FW_MAX_LEN) {
-        break;
-      }
-      if (seq < METRO_FW_SEQ_MIN || seq > METRO_FW_SEQ_MAX ||
-          (have_active && seq <= info[active].seq)) {
-        r[0] = METRO_FW_RES_STALE_SEQ;
-        return;
-      }
-      for (i = 0; i < METRO_FW_MAX_LEN; ++i) p->blob[i] = 0xFFu;
-      p->total_len = total;
-      p->received_len = 0;
-      p->expect_crc32 = metro_fw_get_u32(in + 2);
-      p->expect_seq = seq;
-      p->receiving = 1;
-      return;
+  const uint32_t off = metro_fw_get_u16(in);
+  const metro_fw_blob_info* act = 0;
+  if (metro_fw_choose_active(p->flash, p->device_id, info, result, &active) == METRO_FW_OK &&
+      active != METRO_FW_SLOT_NONE) {
+    act = &info[active];
+  }
+  if (op - 1u > 6u) return METRO_FW_RES_UNKNOWN_OP;
+  if (op == METRO_FW_OP_CAL_WRITE && !p->receiving) return METRO_FW_RES_BAD_STATE;
+  if (n - kRequestMin[op] > kRequestExtra[op]) return METRO_FW_RES_INVALID_PARAM;
+  if (op == METRO_FW_OP_GET_INFO) {
+    /* fmt_major, fmt_minor, active_slot, max_len u16, device_id u32[2], seq, crc32 */
+    *w = PutLe(*w,
+               METRO_FW_FMT_MAJOR | METRO_FW_FMT_MINOR << 8 | (uint32_t)(uint8_t)active << 16 |
+                   (METRO_FW_MAX_LEN & 0xFFu) << 24,
+               4);
+    *w = PutLe(*w, METRO_FW_MAX_LEN >> 8, 1);
+    *w = PutLe(*w, p->device_id[0], 4);
+    *w = PutLe(*w, p->device_id[1], 4);
+    *w = PutLe(*w, act != 0 ? act->seq : 0u, 4);
+    *w = PutLe(*w, act != 0 ? act->crc32 : 0u, 4);
+  } else if (op == METRO_FW_OP_CAL_CREATE) {
+    const uint32_t seq = metro_fw_get_u32(in + 6);
+    uint32_t i;
+    p->receiving = 0;
+    if ((off & 3u) != 0u || off < METRO_FW_HEADER_LEN + 4u || off > METRO_FW_MAX_LEN) {
+      return METRO_FW_RES_INVALID_PARAM;
     }
-    case METRO_FW_OP_CAL_WRITE: {
-      uint32_t off, len, i;
-      if (!p->receiving) {
-        r[0] = METRO_FW_RES_BAD_STATE;
-        return;
-      }
-      if (n < 3u || n > 2u + METRO_FW_PUSH_MAX_CHUNK) break;
-      off = metro_fw_get_u16(in);
-      len = n - 2u;
-      if (off + len > p->total_len) break;
-      metro_fw_put_u16(r + 1, p->received_len);
-      *rn = 3;
-      if (off > p->received_len) {
-        r[0] = METRO_FW_RES_INVALID_OFFSET;
-        return;
-      }
+    if (seq < METRO_FW_SEQ_MIN || seq > METRO_FW_SEQ_MAX || (act != 0 && seq <= act->seq)) {
+      return METRO_FW_RES_STALE_SEQ;
+    }
+    for (i = 0; i < METRO_FW_MAX_LEN; ++i) p->blob[i] = 0xFFu;
+    p->total_len = (uint16_t)off;
+    p->received_len = 0;
+    p->expect_crc32 = metro_fw_get_u32(in + 2);
+    p->expect_seq = seq;
+    p->receiving = 1;
+  } else if (op == METRO_FW_OP_CAL_WRITE) {
+    const uint32_t len = n - 2u;
+    uint8_t res = METRO_FW_RES_INVALID_OFFSET;
+    uint32_t i;
+    if (off + len > p->total_len) return METRO_FW_RES_INVALID_PARAM;
+    if (off <= p->received_len) { /* contiguous; rewriting a received range is allowed */
       for (i = 0; i < len; ++i) p->blob[off + i] = in[2 + i];
       if (off + len > p->received_len) p->received_len = (uint16_t)(off + len);
-      metro_fw_put_u16(r + 1, p->received_len);
-      return;
+      res = METRO_FW_RES_SUCCESS;
     }
-    case METRO_FW_OP_CAL_GET_CRC:
-      if (n != 0u) break;
-      if (!p->receiving) {
-        r[0] = METRO_FW_RES_BAD_STATE;
-        return;
-      }
-      metro_fw_put_u16(r + 1, p->received_len);
-      metro_fw_put_u32(r + 3, metro_fw_crc32(0, p->blob, p->received_len));
-      *rn = 7;
-      return;
-    case METRO_FW_OP_CAL_EXECUTE: {
-      int slot = METRO_FW_SLOT_NONE;
-      int rc;
-      if (n != 0u) break;
-      r[1] = 0xFFu;
-      metro_fw_put_u32(r + 2, 0u);
-      *rn = 6;
-      if (!p->receiving || p->received_len != p->total_len) {
-        r[0] = METRO_FW_RES_BAD_STATE;
-        return;
-      }
+    *w = PutLe(*w, p->received_len, 2);
+    return res;
+  } else if (op == METRO_FW_OP_CAL_GET_CRC) {
+    if (!p->receiving) return METRO_FW_RES_BAD_STATE;
+    *w = PutLe(*w, p->received_len, 2);
+    *w = PutLe(*w, metro_fw_crc32(0, p->blob, p->received_len), 4);
+  } else if (op == METRO_FW_OP_CAL_EXECUTE) {
+    int slot = METRO_FW_SLOT_NONE;
+    uint8_t res = METRO_FW_RES_BAD_STATE;
+    if (p->receiving && p->received_len == p->total_len) {
       p->receiving = 0;
-      if (metro_fw_crc32(0, p->blob, p->total_len) != p->expect_crc32) {
-        r[0] = METRO_FW_RES_CRC_MISMATCH;
-        return;
+      res = METRO_FW_RES_CRC_MISMATCH;
+      if (metro_fw_crc32(0, p->blob, p->total_len) == p->expect_crc32) {
+        res = METRO_FW_RES_INVALID_PARAM; /* the blob's seq is not CREATE's */
+        if (metro_fw_get_u32(p->blob + 12) == p->expect_seq) {
+          const int rc = metro_fw_update(p->flash, p->device_id, p->blob, p->total_len, &slot);
+          res = rc == METRO_FW_OK     ? METRO_FW_RES_SUCCESS
+                : (uint32_t)-rc < 14u ? kResultOfError[-rc]
+                                      : METRO_FW_RES_INVALID_BLOB;
+        }
       }
-      if (metro_fw_get_u32(p->blob + 12) != p->expect_seq) {
-        r[0] = METRO_FW_RES_INVALID_PARAM;
-        return;
-      }
-      rc = metro_fw_update(p->flash, p->device_id, p->blob, p->total_len, &slot);
-      if (rc != METRO_FW_OK) {
-        r[0] = ResultFromError(rc);
-        return;
-      }
-      p->updated = 1;
-      r[1] = (uint8_t)slot;
-      metro_fw_put_u32(r + 2, p->expect_seq);
-      return;
     }
-    case METRO_FW_OP_CAL_READ: {
-      uint32_t off, len;
-      metro_fw_slot s;
-      if (n != 3u) break;
-      off = metro_fw_get_u16(in);
-      len = in[2];
-      if (!have_active) {
-        r[0] = METRO_FW_RES_NO_CALIBRATION;
-        return;
-      }
-      if (len == 0u || len > METRO_FW_PUSH_MAX_CHUNK || off + len > info[active].total_len) break;
-      s.flash = p->flash;
-      s.base = p->flash->slot_addr[active];
-      if (metro_fw_slot_read(&s, off, r + 1, len) != METRO_FW_OK) {
-        r[0] = METRO_FW_RES_FLASH_ERROR;
-        return;
-      }
-      *rn = 1u + len;
-      return;
+    /* slot u8 (0xFF unless written: metro_fw_update sets it), seq u32 (0 unless done) */
+    *w = PutLe(*w, (uint32_t)slot, 1);
+    *w = PutLe(*w, res == METRO_FW_RES_SUCCESS ? p->expect_seq : 0u, 4);
+    if (res == METRO_FW_RES_SUCCESS) p->updated = 1;
+    return res;
+  } else if (op == METRO_FW_OP_CAL_READ) {
+    const uint32_t len = in[2];
+    metro_fw_slot s;
+    if (act == 0) return METRO_FW_RES_NO_CALIBRATION;
+    if (len - 1u >= METRO_FW_PUSH_MAX_CHUNK || off + len > act->total_len) {
+      return METRO_FW_RES_INVALID_PARAM;
     }
-    case METRO_FW_OP_ABORT:
-      if (n != 0u) break;
-      p->receiving = 0;
-      return;
-    default:
-      r[0] = METRO_FW_RES_UNKNOWN_OP;
-      return;
+    s.flash = p->flash;
+    s.base = p->flash->slot_addr[active];
+    if (metro_fw_slot_read(&s, off, *w, len) != METRO_FW_OK) return METRO_FW_RES_FLASH_ERROR;
+    *w += len;
+  } else { /* ABORT */
+    p->receiving = 0;
   }
-  r[0] = METRO_FW_RES_INVALID_PARAM; /* every `break` above: malformed request */
-  *rn = 1;
+  return METRO_FW_RES_SUCCESS;
 }
 
-static int HandleFrame(metro_fw_push* p) {
+METRO_FW_NOINLINE static int HandleFrame(metro_fw_push* p) {
   uint8_t op, txn;
   const uint8_t* payload;
   uint32_t n, rn, flen;
   uint16_t req_crc;
   uint8_t r[METRO_FW_PUSH_MAX_PAYLOAD];
+  uint8_t* w;
   int rc;
   if (p->rx_bad || metro_fw_frame_parse(p->rx, p->rx_len, &op, &txn, &payload, &n) != METRO_FW_OK) {
     uint8_t nak[METRO_FW_PUSH_FRAME_OVERHEAD + 1u];
@@ -262,7 +232,9 @@ static int HandleFrame(metro_fw_push* p) {
   if (p->have_last && op == p->last_op && txn == p->last_txn && req_crc == p->last_req_crc) {
     return SendFrame(p, p->last_resp, p->last_resp_len); /* a retry: answer, do not redo */
   }
-  Execute(p, op, payload, n, r, &rn);
+  w = r + 1;
+  r[0] = Execute(p, op, payload, n, &w);
+  rn = (uint32_t)(w - r);
   rc = metro_fw_frame_build((uint8_t)(op | METRO_FW_PUSH_RESPONSE_BIT), txn, r, rn, p->last_resp,
                             sizeof(p->last_resp), &flen);
   if (rc != METRO_FW_OK) return rc;

@@ -67,21 +67,22 @@ typedef struct {
   /* Set to 1 when CAL_EXECUTE committed a new calibration: the application reloads it
    * (metro_fw_load) and clears the flag. */
   uint8_t updated;
-  /* Private state below. */
-  uint8_t rx[METRO_FW_PUSH_MAX_FRAME];
-  uint16_t rx_len;
+  /* Private state below; the scalars come first so the M0's short load/store offsets reach
+   * them. */
   uint8_t rx_escape;
   uint8_t rx_bad;
   uint8_t receiving;
-  uint16_t total_len;
-  uint16_t received_len;
-  uint32_t expect_crc32;
-  uint32_t expect_seq;
   uint8_t have_last;
   uint8_t last_op;
   uint8_t last_txn;
-  uint16_t last_req_crc;
   uint8_t last_resp_len;
+  uint16_t rx_len;
+  uint16_t total_len;
+  uint16_t received_len;
+  uint16_t last_req_crc;
+  uint32_t expect_crc32;
+  uint32_t expect_seq;
+  uint8_t rx[METRO_FW_PUSH_MAX_FRAME];
   uint8_t last_resp[METRO_FW_PUSH_MAX_FRAME];
   uint8_t blob[METRO_FW_MAX_LEN];
 } metro_fw_push;
