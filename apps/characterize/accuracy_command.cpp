@@ -4,6 +4,8 @@
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <system_error>
 
 #include "exit_codes.hpp"
 #include "metro/accuracy/accuracy.hpp"
@@ -121,10 +123,15 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   load.lenient = in.lenient;
   if (in.frame_period_s > 0.0) load.frame_period_s = in.frame_period_s;
   load.threads = in.threads;
-  // Per phase on a terminal for big inputs (progress.hpp).
-  ElapsedTicker ticker(fmt::format("accuracy: load {}", in.session), stderr,
-                       {IsBigInput(in.session) ? ProgressMode::kAuto : ProgressMode::kNever});
+  // One line per phase on a terminal: the load in bytes, then the evaluation.
+  TerminalProgress progress(stderr, CliProgressOptions());
+  std::error_code size_error;
+  const auto bytes = std::filesystem::file_size(in.session, size_error);
+  progress.BeginPhase("load " + std::filesystem::path(in.session).filename().string(),
+                      size_error ? 0 : static_cast<int64_t>(bytes), "MB", 1e6);
+  load.on_bytes_parsed = [&progress](int64_t n) { progress.Advance(n); };
   auto session = LoadSession(in.session, load);
+  progress.Finish();
   if (!session.ok()) {
     PrintError(session.error());
     return kExitUsage;
@@ -142,9 +149,9 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     reference = std::move(loaded).value();
   }
   const Session* ref = reference ? &*reference : nullptr;
-  ticker.SetLabel("accuracy: plateaus, error curve, budget");
+  progress.BeginPhase("accuracy: plateaus, error curve, budget", kUncountedWork);
   auto result = EvaluateAccuracy(session.value(), ref, options);
-  ticker.Finish();
+  progress.Finish();
   if (!result.ok()) {
     PrintError(result.error());
     return kExitUsage;

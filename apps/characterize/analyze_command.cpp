@@ -49,11 +49,11 @@ int RunAnalyze(const AnalyzeOptions& o) {
   options.allan_csv = options.allan && !o.allan_csv.empty();
   options.budget_path = o.budget;
 
-  // A running line on a terminal for big inputs (AnalyzeSession has no progress hook).
-  ElapsedTicker ticker(fmt::format("analyse {}", o.session), stderr,
-                       {IsBigInput(o.session) ? ProgressMode::kAuto : ProgressMode::kNever});
+  // Load (bytes), Type A, Allan, Monte Carlo (trials): one line each on a terminal.
+  TerminalProgress progress(stderr, CliProgressOptions());
+  options.progress = &progress;
   const SessionAnalysis analysis = AnalyzeSession(o.session, options);
-  ticker.Finish();
+  progress.Finish();
   if (!analysis.ok) {
     PrintError(analysis.error);
     return analysis.input_error ? kExitUsage : kExitFailed;

@@ -5,7 +5,9 @@
 #include <utility>
 
 #include "metro/core/file.hpp"
+#include "metro/core/progress.hpp"
 #include "metro/uncertainty/budget_report.hpp"
+#include "output.hpp"
 
 namespace metro {
 namespace {
@@ -53,7 +55,9 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
     std::fprintf(stderr, "error: %s\n", budget.error().ToString().c_str());
     return 2;
   }
-  auto evaluation = EvaluateBudget(budget.value());
+  TerminalProgress progress(stderr, apps::CliProgressOptions());  // The Monte Carlo trials.
+  auto evaluation = EvaluateBudget(budget.value(), &progress);
+  progress.Finish();
   if (!evaluation.ok()) {
     // Bad models (NaN, undefined) and impossible joint distributions are input errors.
     std::fprintf(stderr, "error: %s\n", evaluation.error().ToString().c_str());

@@ -4,7 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <filesystem>
+#include <cmath>
 #include <system_error>
 
 #include "metro/core/check.hpp"
@@ -20,17 +20,31 @@ bool ProgressOptions::IsValid(std::string* why) const {
     *why = "progress: bar_width must be in [1, 200]";
     return false;
   }
+  if (!(unit_divisor > 0.0) || !std::isfinite(unit_divisor)) {
+    *why = "progress: unit_divisor must be finite and > 0";
+    return false;
+  }
+  if (!(delay_s >= 0.0)) {
+    *why = "progress: delay_s must be >= 0";
+    return false;
+  }
   return true;
 }
 
 std::string FormatProgressLine(const std::string& label, int64_t done, int64_t total,
-                               double elapsed_s, int bar_width) {
-  if (total <= 0) return fmt::format("{} {}  {:.1f} s", label, done, elapsed_s);
+                               double elapsed_s, int bar_width, const std::string& unit,
+                               double unit_divisor) {
+  const auto count = [unit_divisor](int64_t n) {
+    return unit_divisor == 1.0 ? fmt::format("{}", n)
+                               : fmt::format("{:.1f}", static_cast<double>(n) / unit_divisor);
+  };
+  const std::string suffix = unit.empty() ? std::string() : " " + unit;
+  if (total <= 0) return fmt::format("{} {}{}  {:.1f} s", label, count(done), suffix, elapsed_s);
   const int64_t clamped = std::clamp<int64_t>(done, 0, total);
   const double fraction = static_cast<double>(clamped) / static_cast<double>(total);
   const int filled = static_cast<int>(fraction * bar_width);
-  return fmt::format("{} [{}{}] {}/{} {:3d} %  {:.1f} s", label, std::string(filled, '#'),
-                     std::string(bar_width - filled, '.'), done, total,
+  return fmt::format("{} [{}{}] {}/{}{} {:3d} %  {:.1f} s", label, std::string(filled, '#'),
+                     std::string(bar_width - filled, '.'), count(done), count(total), suffix,
                      static_cast<int>(fraction * 100.0), elapsed_s);
 }
 
@@ -45,7 +59,7 @@ ProgressBar::ProgressBar(std::string label, int64_t total, std::FILE* stream,
                                     (options_.mode == ProgressMode::kAuto && IsTerminal(stream_)));
   start_ = std::chrono::steady_clock::now();
   last_draw_ = start_;
-  if (enabled_) Draw(true);
+  if (enabled_ && options_.delay_s == 0.0) Draw(true);
 }
 
 ProgressBar::~ProgressBar() { Finish(); }
@@ -62,8 +76,11 @@ void ProgressBar::Finish() {
   if (!enabled_) return;
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  // Work that ended within delay_s and was never drawn leaves no line.
+  if (!drawn_ && elapsed_s < options_.delay_s) return;
   fmt::print(stream_, "\r{}\n",
-             FormatProgressLine(label_, done_.load(), total_, elapsed_s, options_.bar_width));
+             FormatProgressLine(label_, done_.load(), total_, elapsed_s, options_.bar_width,
+                                options_.unit, options_.unit_divisor));
   std::fflush(stream_);
 }
 
@@ -74,18 +91,15 @@ void ProgressBar::Draw(bool force) {
   if (!force && std::chrono::duration<double>(now - last_draw_).count() < options_.min_redraw_s) {
     return;
   }
-  last_draw_ = now;
   const double elapsed_s = std::chrono::duration<double>(now - start_).count();
+  if (elapsed_s < options_.delay_s) return;
+  last_draw_ = now;
+  drawn_ = true;
   // "\r" returns to the line start; the trailing blanks clear a longer previous line.
   fmt::print(stream_, "\r{}  ",
-             FormatProgressLine(label_, done_.load(), total_, elapsed_s, options_.bar_width));
+             FormatProgressLine(label_, done_.load(), total_, elapsed_s, options_.bar_width,
+                                options_.unit, options_.unit_divisor));
   std::fflush(stream_);
-}
-
-bool IsBigInput(const std::string& path, int64_t threshold_bytes) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  return !ec && static_cast<int64_t>(size) >= threshold_bytes;
 }
 
 std::string FormatElapsedLine(const std::string& label, double elapsed_s) {
@@ -102,14 +116,14 @@ ElapsedTicker::ElapsedTicker(std::string label, std::FILE* stream, const Progres
   if (!enabled_) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    DrawLocked();
+    if (Due()) DrawLocked();
   }
   const auto period = std::chrono::duration<double>(std::max(0.05, options_.min_redraw_s));
   thread_ = std::thread([this, period] {
     std::unique_lock<std::mutex> lock(mutex_);
     while (!finished_) {
       wake_.wait_for(lock, period);
-      if (!finished_) DrawLocked();
+      if (!finished_ && Due()) DrawLocked();
     }
   });
 }
@@ -119,7 +133,7 @@ ElapsedTicker::~ElapsedTicker() { Finish(); }
 void ElapsedTicker::SetLabel(std::string label) {
   std::lock_guard<std::mutex> lock(mutex_);
   label_ = std::move(label);
-  if (enabled_ && !finished_) DrawLocked();
+  if (enabled_ && !finished_ && Due()) DrawLocked();
 }
 
 void ElapsedTicker::Finish() {
@@ -127,7 +141,7 @@ void ElapsedTicker::Finish() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (finished_) return;
     finished_ = true;
-    if (enabled_) {
+    if (enabled_ && (drawn_ || Due())) {
       DrawLocked();
       fmt::print(stream_, "\n");
       std::fflush(stream_);
@@ -137,12 +151,50 @@ void ElapsedTicker::Finish() {
   if (thread_.joinable()) thread_.join();
 }
 
+bool ElapsedTicker::Due() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count() >=
+         options_.delay_s;
+}
+
 void ElapsedTicker::DrawLocked() {
+  drawn_ = true;
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   // "\r" returns to the line start; the trailing blanks clear a longer previous line.
   fmt::print(stream_, "\r{}  ", FormatElapsedLine(label_, elapsed_s));
   std::fflush(stream_);
+}
+
+TerminalProgress::TerminalProgress(std::FILE* stream, const ProgressOptions& options)
+    : stream_(stream), options_(options) {
+  std::string why;
+  METRO_CHECK(options_.IsValid(&why));
+}
+
+TerminalProgress::~TerminalProgress() { Finish(); }
+
+void TerminalProgress::BeginPhase(const std::string& label, int64_t total, const std::string& unit,
+                                  double unit_divisor) {
+  Finish();
+  ProgressOptions o = options_;
+  o.unit = unit;
+  o.unit_divisor = unit_divisor;
+  if (total == kUncountedWork) {
+    ticker_ = std::make_unique<ElapsedTicker>(label, stream_, o);
+  } else {
+    bar_ = std::make_unique<ProgressBar>(label, total, stream_, o);
+  }
+}
+
+void TerminalProgress::Advance(int64_t n) {
+  if (bar_) bar_->Advance(n);
+}
+
+void TerminalProgress::Finish() {
+  if (bar_) bar_->Finish();
+  if (ticker_) ticker_->Finish();
+  bar_.reset();
+  ticker_.reset();
 }
 
 }  // namespace metro

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -87,11 +88,18 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
     return Status::Ok();
   };
 
+  size_t reported = 0;  // Bytes told to options.on_bytes_parsed.
+  constexpr size_t kReportBytes = size_t{1} << 20;
   while (pos < text.size()) {
     size_t nl = text.find('\n', pos);
     if (nl == std::string::npos) nl = text.size();
     std::string_view line(text.data() + pos, nl - pos);
     pos = nl + 1;
+    if (options.on_bytes_parsed && pos - reported >= kReportBytes) {
+      const size_t upto = std::min(pos, text.size());
+      options.on_bytes_parsed(static_cast<int64_t>(upto - reported));
+      reported = upto;
+    }
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.empty() || line.front() == '#') continue;
@@ -186,6 +194,9 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
     std::string extra(line.substr(4 + 2 * 16));
     for (char& c : extra) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     b.payload_hex.push_back(std::move(extra));
+  }
+  if (options.on_bytes_parsed && reported < text.size()) {
+    options.on_bytes_parsed(static_cast<int64_t>(text.size() - reported));
   }
   if (session.rows == session.rejected_rows) {
     if (session.rejected_rows > 0) {

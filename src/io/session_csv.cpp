@@ -20,6 +20,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <map>
 #include <new>
@@ -167,6 +168,23 @@ struct Block {
   std::vector<std::string> text;  // Row-major, plan.text_fields.size() per row.
   std::vector<BadRow> bad;
   bool parsed = false;
+};
+
+// Reports each block's bytes to LoadOptions::on_bytes_parsed once: the clean path and the
+// general loader cut the file into the same blocks, so a block parsed by both (the clean
+// path gave up on the file) is counted by whichever parses it first.
+class BlockProgress {
+ public:
+  BlockProgress(const std::function<void(int64_t)>& callback, size_t blocks)
+      : callback_(callback), reported_(callback ? blocks : 0) {}
+  void Parsed(size_t block, size_t begin, size_t end) {
+    if (!callback_ || reported_[block].exchange(true)) return;
+    callback_(static_cast<int64_t>(end - begin));
+  }
+
+ private:
+  const std::function<void(int64_t)>& callback_;
+  std::vector<std::atomic<bool>> reported_;
 };
 
 std::string Printable(const char* b, const char* e) {
@@ -661,7 +679,8 @@ std::atomic<int64_t> clean_path_loads{0};
 
 // The clean-file path. Returns no value when the file needs the general loader.
 std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& file,
-                                    const HeaderLine& header, const ColumnPlan& plan, int threads) {
+                                    const HeaderLine& header, const ColumnPlan& plan, int threads,
+                                    BlockProgress* progress) {
   if (!plan.text_fields.empty()) return std::nullopt;
   std::vector<CleanBlock> blocks;
   for (const Block& b : CutBlocks(file, header.data_begin, threads)) {
@@ -734,8 +753,10 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
   }
   std::atomic<bool> clean{true};
   ParallelFor(blocks.size(), threads, [&](size_t i) {
-    if (clean.load(std::memory_order_relaxed) &&
-        !ParseCleanBlock(file, plan, first_line[i], columns, &blocks[i])) {
+    if (!clean.load(std::memory_order_relaxed)) return;
+    if (ParseCleanBlock(file, plan, first_line[i], columns, &blocks[i])) {
+      progress->Parsed(i, blocks[i].begin, blocks[i].end);
+    } else {
       clean.store(false);
     }
   });
@@ -789,8 +810,14 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   int threads =
       options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
   threads = std::max(1, threads);
+  BlockProgress progress(options.on_bytes_parsed,
+                         CutBlocks(file, header.data_begin, threads).size());
+  // The comments and the header line before the first block.
+  if (options.on_bytes_parsed) options.on_bytes_parsed(static_cast<int64_t>(header.data_begin));
   if (allow_clean_path) {
-    if (auto session = LoadCleanCsv(path, file, header, plan, threads)) return *std::move(session);
+    if (auto session = LoadCleanCsv(path, file, header, plan, threads, &progress)) {
+      return *std::move(session);
+    }
   }
   std::vector<Block> blocks = CutBlocks(file, header.data_begin, threads);
 
@@ -800,6 +827,7 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   ParallelFor(blocks.size(), threads, [&](size_t i) {
     if (!options.lenient && i > first_bad_block.load()) return;
     ParseBlock(file, plan, options.lenient, &blocks[i]);
+    progress.Parsed(i, blocks[i].begin, blocks[i].end);
     if (!options.lenient && !blocks[i].bad.empty()) {
       size_t cur = first_bad_block.load();
       while (i < cur && !first_bad_block.compare_exchange_weak(cur, i)) {

@@ -1,5 +1,8 @@
 #include "metro/report/session_analysis.hpp"
 
+#include <filesystem>
+#include <system_error>
+
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
@@ -21,9 +24,19 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
   };
   std::string why;
   if (!options.IsValid(&why)) return fail(MakeError(why), true);
-  auto session = LoadSession(path, options.load);
+  ProgressSink* progress = options.progress;
+  LoadOptions load = options.load;
+  if (progress != nullptr) {
+    std::error_code ec;
+    const auto bytes = std::filesystem::file_size(path, ec);
+    progress->BeginPhase("load " + std::filesystem::path(path).filename().string(),
+                         ec ? 0 : static_cast<int64_t>(bytes), "MB", 1e6);
+    load.on_bytes_parsed = [progress](int64_t n) { progress->Advance(n); };
+  }
+  auto session = LoadSession(path, load);
   if (!session.ok()) return fail(session.error(), true);
   out.session = std::move(session).value();
+  if (progress != nullptr) progress->BeginPhase("Type A", kUncountedWork);
   auto type_a = EvaluateSessionTypeA(out.session, options.type_a);
   if (!type_a.ok()) return fail(type_a.error(), true);
   out.type_a = std::move(type_a).value();
@@ -42,6 +55,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
     }
   }
   if (run_allan) {
+    if (progress != nullptr) progress->BeginPhase("Allan deviation", kUncountedWork);
     if (Status s = AddAllanToReport(out.session, out.type_a, options.allan_options, &out.report,
                                     options.allan_csv ? &out.allan_csv : nullptr);
         !s.ok()) {
@@ -54,11 +68,12 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
         LoadBudget(options.budget_path,
                    MakeSessionQuantityResolver(out.session, out.type_a, options.type_a.window));
     if (!budget.ok()) return fail(budget.error(), true);
-    auto evaluation = EvaluateBudget(budget.value());
+    auto evaluation = EvaluateBudget(budget.value(), progress);
     if (!evaluation.ok()) return fail(evaluation.error(), false);
     out.report["budget"] = BudgetReportJson(evaluation.value());
     out.table += BudgetReportTable(evaluation.value());
   }
+  if (progress != nullptr) progress->Finish();
   out.ok = true;
   return out;
 }

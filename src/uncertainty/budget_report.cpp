@@ -30,7 +30,7 @@ std::string Percent(double p) { return fmt::format("{:g} %", std::round(p * 1e6)
 
 }  // namespace
 
-Result<BudgetEvaluation> EvaluateBudget(const Budget& budget) {
+Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* progress) {
   BudgetEvaluation e;
   e.budget = budget;
   auto gum = EvaluateGum(budget);
@@ -38,7 +38,13 @@ Result<BudgetEvaluation> EvaluateBudget(const Budget& budget) {
   e.gum = std::move(gum).value();
   e.ok = true;
   if (budget.monte_carlo.enabled) {
-    auto mc = RunMonteCarlo(budget);
+    McOptions options = budget.monte_carlo;
+    if (progress != nullptr) {
+      // Adaptive runs stop by their rule (JCGM 101 7.9): the total is not known ahead.
+      progress->BeginPhase("Monte Carlo", options.adaptive ? 0 : options.trials, "trials");
+      options.on_trials_done = [progress](int64_t n) { progress->Advance(n); };
+    }
+    auto mc = RunMonteCarlo(budget, options);
     if (!mc.ok()) return mc.error();
     e.monte_carlo = std::move(mc).value();
     e.validation = ValidateGuf(e.gum, *e.monte_carlo, budget.monte_carlo.ndig);

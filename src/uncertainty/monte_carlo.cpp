@@ -343,7 +343,11 @@ Moments MergeChunkMoments(const std::vector<ChunkMoments>& chunks) {
 
 // Simulates trials [first, first + count) into out; first is a multiple of kChunkTrials.
 // chunk_moments (optional) receives one entry per chunk.
+// on_trials_done (may be empty) hears of the trials done, every kProgressChunks chunks.
+constexpr int64_t kProgressChunks = 64;
+
 NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, int threads,
+                   const std::function<void(int64_t)>& on_trials_done,
                    std::vector<ChunkMoments>* chunk_moments = nullptr) {
   const int64_t first_chunk = first / kChunkTrials;
   const int64_t chunks = (count + kChunkTrials - 1) / kChunkTrials;
@@ -361,6 +365,7 @@ NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, 
     // Contiguous share of the chunks for each worker.
     const int64_t begin = chunks * w / workers;
     const int64_t end = chunks * (w + 1) / workers;
+    int64_t unreported = 0;
     for (int64_t c = begin; c < end; ++c) {
       const int64_t global = first_chunk + c;
       WordSource rng(plan.seed, static_cast<uint64_t>(global));
@@ -389,6 +394,11 @@ NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, 
         double m2 = 0.0;
         for (size_t k = 0; k < n; ++k) m2 += (y[k] - cm.mean) * (y[k] - cm.mean);
         cm.m2 = m2;
+      }
+      unreported += static_cast<int64_t>(n);
+      if (on_trials_done && ((c - begin + 1) % kProgressChunks == 0 || c + 1 == end)) {
+        on_trials_done(unreported);
+        unreported = 0;
       }
     }
   };
@@ -647,8 +657,8 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
     std::unique_ptr<double[]> values(new double[m]);
     internal::AdviseHugePages(values.get(), m * sizeof(double));
     std::vector<ChunkMoments> chunk_moments;
-    const NanReport nan =
-        Simulate(plan, 0, options.trials, values.get(), result.threads, &chunk_moments);
+    const NanReport nan = Simulate(plan, 0, options.trials, values.get(), result.threads,
+                                   options.on_trials_done, &chunk_moments);
     if (nan.count > 0) return NanError(budget, nan, options.trials);
     result.trials = options.trials;
     result.blocks = 1;
@@ -676,7 +686,8 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
     for (int64_t h = 1; h * block <= options.max_trials; ++h) {
       const int64_t first = (h - 1) * block;
       y.resize(static_cast<size_t>(h * block));
-      const NanReport nan = Simulate(plan, first, block, y.data() + first, result.threads);
+      const NanReport nan =
+          Simulate(plan, first, block, y.data() + first, result.threads, options.on_trials_done);
       if (nan.count > 0) return NanError(budget, nan, h * block);
       const Moments m = MeanAndU(y.data() + first, static_cast<size_t>(block));
       std::copy(y.begin() + first, y.begin() + first + block, scratch.begin());

@@ -72,6 +72,24 @@ TEST_CASE("Receiver capture: frames, stale and never rows", "[io][receiver]") {
   CHECK(t1.text_columns.at(0).values[0] == "ababababababababab");
 }
 
+TEST_CASE("Receiver load progress adds up to the file size", "[io][receiver]") {
+  std::string text = "# capture\n";
+  for (int i = 0; i < 30000; ++i) text += Line(1 + i % 3, NewDataFlag::kFresh, kQ1) + "\r\n";
+  text += Line(1, NewDataFlag::kFresh, kQ2);  // No newline at the end.
+  TempFile file(text, ".txt");
+  LoadOptions options;
+  int64_t bytes = 0;
+  int calls = 0;
+  options.on_bytes_parsed = [&](int64_t n) {
+    bytes += n;
+    ++calls;
+  };
+  auto r = LoadSession(file.path(), options);
+  REQUIRE(r.ok());
+  CHECK(bytes == static_cast<int64_t>(text.size()));
+  CHECK(calls == 2);  // ~1.7 MB: one report per MiB of lines, then the rest.
+}
+
 TEST_CASE("Receiver frame period is an option", "[io][receiver]") {
   const std::string text =
       Line(1, NewDataFlag::kFresh, kQ1) + "\n" + Line(1, NewDataFlag::kFresh, kQ1) + "\n";

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
@@ -274,6 +275,41 @@ TEST_CASE("Time out of order late in a clean file is reported at its line", "[io
   const int64_t last_line = std::count(text.begin(), text.end(), '\n');
   CHECK(r.error().line == last_line);
   CHECK_THAT(r.error().message, Catch::Contains("not after"));
+}
+
+TEST_CASE("Load progress reports every data byte once", "[io][csv]") {
+  // The counts add up to the file size, header and comments included.
+  const std::string clean = CleanMultiBlockText(90000);  // ~3 MB: several blocks.
+  const int64_t data_bytes = static_cast<int64_t>(clean.size());
+  auto load = [](const std::string& text, bool lenient, int threads, int64_t* calls) {
+    TempFile file(text);
+    LoadOptions options;
+    options.lenient = lenient;
+    options.threads = threads;
+    std::atomic<int64_t> bytes{0};
+    std::atomic<int64_t> n{0};
+    options.on_bytes_parsed = [&](int64_t b) {
+      bytes += b;
+      ++n;
+    };
+    auto r = LoadSession(file.path(), options);
+    REQUIRE(r.ok());
+    *calls = n.load();
+    return bytes.load();
+  };
+  for (const int threads : {1, 2}) {
+    int64_t calls = 0;
+    const int64_t clean_before = internal::CleanPathLoads();
+    CHECK(load(clean, false, threads, &calls) == data_bytes);
+    CHECK(internal::CleanPathLoads() == clean_before + 1);
+    CHECK(calls >= 4);  // A bar that moves: header, then one report per block (>= 3).
+    // Time going back on the last line: the clean path parses every block, gives up, and
+    // the general loader parses them again; the bytes still count once.
+    const std::string back = "0.000500,1,0.0,\r\n";
+    CHECK(load(clean + back, true, threads, &calls) ==
+          data_bytes + static_cast<int64_t>(back.size()));
+    CHECK(internal::CleanPathLoads() == clean_before + 1);
+  }
 }
 
 TEST_CASE("Decimals are parsed bit for bit as fast_float parses them", "[io][csv]") {

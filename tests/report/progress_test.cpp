@@ -111,11 +111,59 @@ TEST_CASE("Elapsed ticker forced on redraws until finished", "[report][progress]
   CHECK(std::count(text.begin(), text.end(), '\n') == 1);
 }
 
-TEST_CASE("Big inputs are told by their size", "[report][progress]") {
-  const std::string path = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
-  CHECK_FALSE(IsBigInput(path));
-  CHECK(IsBigInput(path, 1000));
-  CHECK_FALSE(IsBigInput("no_such_file.csv", 0));
+TEST_CASE("Progress line shows counts in units", "[report][progress]") {
+  CHECK(FormatProgressLine("load a.csv", 12345678, 388672119, 0.5, 4, "MB", 1e6) ==
+        "load a.csv [....] 12.3/388.7 MB   3 %  0.5 s");
+  CHECK(FormatProgressLine("Monte Carlo", 500000, 1000000, 1.0, 2, "trials") ==
+        "Monte Carlo [#.] 500000/1000000 trials  50 %  1.0 s");
+  CHECK(FormatProgressLine("Monte Carlo", 70000, 0, 2.0, 2, "trials") ==
+        "Monte Carlo 70000 trials  2.0 s");
+}
+
+TEST_CASE("Quick work under the delay leaves no line", "[report][progress]") {
+  std::FILE* f = std::tmpfile();
+  REQUIRE(f != nullptr);
+  ProgressOptions o;
+  o.mode = ProgressMode::kAlways;
+  o.min_redraw_s = 0.0;
+  o.delay_s = 60.0;
+  {
+    ProgressBar bar("quick", 10, f, o);
+    bar.Advance(10);
+    ElapsedTicker ticker("quick too", f, o);
+  }
+  CHECK(ReadAll(f).empty());
+  std::fclose(f);
+}
+
+TEST_CASE("Terminal progress draws one line per phase", "[report][progress]") {
+  std::FILE* f = std::tmpfile();
+  REQUIRE(f != nullptr);
+  ProgressOptions o;
+  o.mode = ProgressMode::kAlways;
+  o.min_redraw_s = 0.0;
+  {
+    TerminalProgress progress(f, o);
+    progress.BeginPhase("load x.csv", 2000000, "MB", 1e6);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 2; ++t) {
+      threads.emplace_back([&progress] {
+        for (int i = 0; i < 10; ++i) progress.Advance(100000);
+      });
+    }
+    for (std::thread& t : threads) t.join();
+    progress.BeginPhase("Type A", kUncountedWork);
+    progress.BeginPhase("Monte Carlo", 0, "trials");
+    progress.Advance(70000);
+  }  // The destructor ends the last line.
+  const std::string text = ReadAll(f);
+  std::fclose(f);
+  CHECK(std::count(text.begin(), text.end(), '\n') == 3);
+  CHECK(text.find("\rload x.csv [##############################] 2.0/2.0 MB 100 %") !=
+        std::string::npos);
+  CHECK(text.find("\rType A ...") != std::string::npos);
+  CHECK(text.find("\rMonte Carlo 70000 trials") != std::string::npos);
+  CHECK(text.back() == '\n');
 }
 
 TEST_CASE("Progress options are validated", "[report][progress]") {
@@ -129,6 +177,14 @@ TEST_CASE("Progress options are validated", "[report][progress]") {
   o.min_redraw_s = -1.0;
   CHECK_FALSE(o.IsValid(&why));
   CHECK(why == "progress: min_redraw_s must be >= 0");
+  o = {};
+  o.unit_divisor = 0.0;
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK(why == "progress: unit_divisor must be finite and > 0");
+  o = {};
+  o.delay_s = -0.1;
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK(why == "progress: delay_s must be >= 0");
 }
 
 }  // namespace

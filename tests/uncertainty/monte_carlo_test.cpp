@@ -9,6 +9,7 @@
 #include "metro/uncertainty/monte_carlo.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 #include <catch2/catch.hpp>
@@ -414,6 +415,30 @@ TEST_CASE("Monte Carlo is deterministic for a seed whatever the thread count",
   CHECK(one.value().samples != other.value().samples);
   CHECK(one.value().generator.find("pcg64") != std::string::npos);
   CHECK(one.value().seed == 1);
+}
+
+TEST_CASE("Monte Carlo progress counts every trial once and changes nothing", "[uncertainty][mc]") {
+  const Budget b = Load("jcgm101_9_5_gauge_block.json");
+  for (const bool adaptive : {false, true}) {
+    McOptions options = b.monte_carlo;
+    options.adaptive = adaptive;
+    options.trials = 654321;  // Fixed run: ~10 reports per worker, the last one short.
+    options.threads = 2;
+    auto quiet = RunMonteCarlo(b, options, true);
+    std::atomic<int64_t> trials{0};
+    std::atomic<int64_t> calls{0};
+    options.on_trials_done = [&](int64_t n) {
+      trials += n;
+      ++calls;
+    };
+    auto heard = RunMonteCarlo(b, options, true);
+    REQUIRE(quiet.ok());
+    REQUIRE(heard.ok());
+    CHECK(trials.load() == heard.value().trials);
+    CHECK(calls.load() >= 2);
+    CHECK(quiet.value().samples == heard.value().samples);
+    if (!adaptive) CHECK(heard.value().trials == 654321);
+  }
 }
 
 TEST_CASE("Monte Carlo reports a model that is NaN for some trials", "[uncertainty][mc]") {

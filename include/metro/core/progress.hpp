@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -23,6 +24,12 @@ struct ProgressOptions {
   ProgressMode mode = ProgressMode::kAuto;
   double min_redraw_s = 0.1;  // Redraw at most this often.
   int bar_width = 30;         // Characters of the bar itself.
+  // Counts are shown as count / unit_divisor followed by `unit` ("12.3/388.7 MB" with
+  // unit "MB" and divisor 1e6; whole counts when the divisor is 1).
+  std::string unit;
+  double unit_divisor = 1.0;
+  // Nothing is drawn until the work has run this long, so quick work leaves no line.
+  double delay_s = 0.0;
 
   bool IsValid(std::string* why) const;
 };
@@ -30,7 +37,8 @@ struct ProgressOptions {
 // One progress line: "label [#####.....] done/total  40 %  12.3 s". `total` 0 gives no bar
 // and no percentage. Exposed for tests.
 std::string FormatProgressLine(const std::string& label, int64_t done, int64_t total,
-                               double elapsed_s, int bar_width);
+                               double elapsed_s, int bar_width, const std::string& unit = "",
+                               double unit_divisor = 1.0);
 
 // True when `stream` is a terminal.
 bool IsTerminal(std::FILE* stream);
@@ -62,16 +70,11 @@ class ProgressBar {
   bool enabled_ = false;
   bool finished_ = false;
   std::atomic<int64_t> done_{0};
+  bool drawn_ = false;
   std::mutex mutex_;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;
 };
-
-// Inputs at least this large (bytes) get a progress line around their analysis.
-constexpr int64_t kBigInputBytes = int64_t{50} * 1000 * 1000;
-
-// True when `path` is a regular file of at least `threshold_bytes` (false if unreadable).
-bool IsBigInput(const std::string& path, int64_t threshold_bytes = kBigInputBytes);
 
 // "label ...  12.3 s": work whose progress cannot be observed shows only that it runs and
 // for how long (no invented fraction). Exposed for tests.
@@ -97,16 +100,54 @@ class ElapsedTicker {
 
  private:
   void DrawLocked();
+  bool Due() const;  // Past options_.delay_s.
 
   std::string label_;
   std::FILE* stream_ = nullptr;
   ProgressOptions options_;
   bool enabled_ = false;
   bool finished_ = false;
+  bool drawn_ = false;
   std::mutex mutex_;
   std::condition_variable wake_;
   std::chrono::steady_clock::time_point start_;
   std::thread thread_;
+};
+
+// Where long library calls report how far they are: a sequence of phases ("load", "Monte
+// Carlo"), each with its planned amount of work in counts (kUncountedWork when the work
+// cannot be counted; 0 when the total is unknown but counts are), then increments. A phase
+// begins only after every Advance of the previous one has returned; Advance may be called
+// from any thread and must be cheap.
+constexpr int64_t kUncountedWork = -1;
+
+class ProgressSink {
+ public:
+  virtual ~ProgressSink() = default;
+  virtual void BeginPhase(const std::string& label, int64_t total, const std::string& unit = "",
+                          double unit_divisor = 1.0) = 0;
+  virtual void Advance(int64_t n) = 0;
+  // The work is over: the last phase's line is ended.
+  virtual void Finish() = 0;
+};
+
+// Draws each phase on its own line of `stream`: a ProgressBar for counted work, an
+// ElapsedTicker for uncounted work, each under `options` (mode, delay_s, redraw period).
+class TerminalProgress : public ProgressSink {
+ public:
+  // `stream` is not owned. Options must be valid (METRO_CHECK).
+  explicit TerminalProgress(std::FILE* stream = stderr, const ProgressOptions& options = {});
+  ~TerminalProgress() override;  // Finish()es.
+  void BeginPhase(const std::string& label, int64_t total, const std::string& unit = "",
+                  double unit_divisor = 1.0) override;
+  void Advance(int64_t n) override;
+  void Finish() override;
+
+ private:
+  std::FILE* stream_ = nullptr;
+  ProgressOptions options_;
+  std::unique_ptr<ProgressBar> bar_;
+  std::unique_ptr<ElapsedTicker> ticker_;
 };
 
 }  // namespace metro

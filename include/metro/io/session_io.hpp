@@ -8,6 +8,8 @@
 // incomplete axis family) are errors in both modes.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <string>
 
 #include "metro/core/status.hpp"
@@ -25,6 +27,11 @@ struct LoadOptions {
   bool derive_euler = true;       // Add yaw/pitch/roll_deg from qw..qz when absent.
   int threads = 0;                // Parser threads; 0 = all cores.
   size_t max_rejected_kept = 10;  // How many rejected line numbers to keep.
+  // Progress of a load: called with the byte count of each stretch of the file once it is
+  // parsed (each byte counted once, even when the CSV loader reads the file a second
+  // time), from any parser thread, so it must be thread-safe. The counts add up to the
+  // file size when the load succeeds. Unset: no calls. imu_tk files do not report.
+  std::function<void(int64_t bytes)> on_bytes_parsed;
 
   bool IsValid(std::string* why) const;
 };

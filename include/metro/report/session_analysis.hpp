@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "metro/core/progress.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/session.hpp"
 #include "metro/io/session_io.hpp"
@@ -31,6 +32,9 @@ struct SessionAnalysisOptions {
   // Uncertainty budget file (docs/budget-format.md); empty: none. Inputs without a
   // "session" refer to the analysed session, in the same window.
   std::string budget_path;
+  // Optional, not owned: hears of each phase (load with its bytes, Type A, Allan, the
+  // budget's Monte Carlo trials) as it runs. Results never depend on it.
+  ProgressSink* progress = nullptr;
 
   bool IsValid(std::string* why) const;
 };

@@ -123,6 +123,10 @@ struct McOptions {
   int ndig = 2;                   // Significant digits of u(y) to stabilise (adaptive, clause 8).
   int64_t max_trials = 20000000;  // Cap for the adaptive run (memory: 8 bytes per trial).
   int threads = 0;                // 0: std::thread::hardware_concurrency(), at most 2.
+  // Progress: called with the number of trials just simulated (in steps of about 2^16
+  // per worker thread), from the worker threads, so it must be thread-safe. The counts add
+  // up to the trials run (McResult::trials). Unset: no calls. Results never depend on it.
+  std::function<void(int64_t trials)> on_trials_done;
   bool IsValid(std::string* why) const;
 };
 

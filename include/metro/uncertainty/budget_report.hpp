@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 
+#include "metro/core/progress.hpp"
 #include "metro/core/status.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/gum.hpp"
@@ -33,7 +34,8 @@ struct BudgetEvaluation {
 
 // GUM evaluation, then (if enabled) the Monte Carlo run and the GUF validation, each with
 // the options stored in the budget.
-Result<BudgetEvaluation> EvaluateBudget(const Budget& budget);
+// `progress` (optional, not owned) hears of the Monte Carlo trials as a phase.
+Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* progress = nullptr);
 
 nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& evaluation);
 std::string BudgetReportTable(const BudgetEvaluation& evaluation);
