@@ -22,6 +22,8 @@ struct BlobOptions {
   std::string hex;
   std::string slot_address = "0x3B000";
   int dlpf_cfg = 3;
+  std::optional<double> t_valid_min_c;
+  std::optional<double> t_valid_max_c;
 };
 
 // "0x3B000" or "241664" -> address; a page-aligned slot A whose slot B (the next page) lies
@@ -73,6 +75,8 @@ int RunBlob(const BlobOptions& b) {
   blob::BlobFromCalibrationOptions o;
   o.sensor = b.sensor;
   o.device_id = id.value();
+  o.t_valid_min_c = b.t_valid_min_c;
+  o.t_valid_max_c = b.t_valid_max_c;
   o.seq = b.seq;
   o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
   Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal.value(), o);
@@ -133,6 +137,10 @@ void AddBlobCommand(CLI::App& app, int* exit_code) {
                   "slot A address in the HEX (default 0x3B000); slot B is the next page");
   sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")
       ->check(CLI::Range(0, 6));
+  sub->add_option("--t-valid-min-c", o->t_valid_min_c,
+                  "lower end of the temperature validity range the tag clamps to (default -40)");
+  sub->add_option("--t-valid-max-c", o->t_valid_max_c,
+                  "upper end of the temperature validity range (default 85)");
   sub->callback([o, exit_code] { *exit_code = RunBlob(*o); });
 }
 

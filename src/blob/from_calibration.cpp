@@ -90,11 +90,13 @@ bool BlobFromCalibrationOptions::IsValid(std::string* why) const {
   if (sensor < 1) return fail(fmt::format("sensor {} must be >= 1", sensor));
   if (seq < 1 || seq > kSeqMax) return fail(fmt::format("seq {} is outside 1..{}", seq, kSeqMax));
   if (dlpf_cfg > 6) return fail(fmt::format("dlpf_cfg {} is not 0..6", dlpf_cfg));
-  if (!(t_valid_min_c >= -40.0 && t_valid_min_c < t_valid_max_c && t_valid_max_c <= 85.0)) {
+  const double lo = t_valid_min_c.value_or(-40.0);
+  const double hi = t_valid_max_c.value_or(85.0);
+  if (!(lo >= -40.0 && lo < hi && hi <= 85.0)) {
     return fail(
         fmt::format("the temperature validity range {} .. {} degC must satisfy -40 <= "
                     "min < max <= 85",
-                    t_valid_min_c, t_valid_max_c));
+                    lo, hi));
   }
   if (reference_id.size() > 16 || !PrintableAscii(reference_id)) {
     return fail(fmt::format("reference_id '{}' must be printable ASCII of at most 16 characters",
@@ -164,8 +166,8 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
     if (g.kind == group && g.unit == unit) s.resid_rms_si = si * g.rms;
   }
   if (s.resid_rms_si == 0.0 && c.residual_unit == unit) s.resid_rms_si = si * c.residual_rms;
-  s.t_valid_min_c = options.t_valid_min_c;
-  s.t_valid_max_c = options.t_valid_max_c;
+  s.t_valid_min_c = options.t_valid_min_c.value_or(-40.0);
+  s.t_valid_max_c = options.t_valid_max_c.value_or(85.0);
   std::string why;
   if (!s.IsValid(&why)) return MakeError(fmt::format("{}: {}", name, why));
   return s;
@@ -222,8 +224,15 @@ Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
   m.reference_id = o.reference_id;
   m.g_local_mps2 = cal.gravity_mps2;
   const SensorCalibration& first = tag->accel ? *tag->accel : *tag->gyro;
-  const double t_mean = first.model.has_temperature ? first.model.t_ref_c : 0.0;
-  m.temp_mean_c = m.temp_min_c = m.temp_max_c = t_mean;
+  if (first.static_pose_temperature) {
+    m.temp_mean_c = first.static_pose_temperature->mean_c;
+    m.temp_min_c = first.static_pose_temperature->min_c;
+    m.temp_max_c = first.static_pose_temperature->max_c;
+  } else {
+    // No temp_c in the data: t_ref_c of a temperature model (never without temp_c), else 0.
+    const double t_mean = first.model.has_temperature ? first.model.t_ref_c : 0.0;
+    m.temp_mean_c = m.temp_min_c = m.temp_max_c = t_mean;
+  }
   m.procedure_id = kProcedureCalibrateFit;
   const double k95 = first.coverage_factor_95 > 0 ? first.coverage_factor_95 : 2.0;
   m.unc_k_x10 = static_cast<uint8_t>(std::clamp(std::lround(10.0 * k95), 1L, 255L));

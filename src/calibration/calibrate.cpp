@@ -827,6 +827,11 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
     }
     if (d.temperature) d.t_ref_c = tsum / static_cast<double>(d.statics.size());
   }
+  std::optional<PoseTemperatureRange> pose_temperature;
+  if (all_temp && !d.statics.empty()) {
+    pose_temperature = PoseTemperatureRange{tmin, tsum / static_cast<double>(d.statics.size()),
+                                            tmax, static_cast<int>(d.statics.size())};
+  }
 
   // Too few poses for the accelerometer model.
   const int pa = FreeCount(ImuSensor::kAccel, o.accel_model, d.temperature);
@@ -1195,6 +1200,7 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
     Status det = CheckDetermined(accel, out.sensor);
     if (!det.ok()) return det.error();
   }
+  accel.static_pose_temperature = pose_temperature;
   out.accel = std::move(accel);
 
   if (d.has_gyro) {
@@ -1239,6 +1245,7 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
     });
     Status det = CheckDetermined(gyro, out.sensor);
     if (!det.ok()) return det.error();
+    gyro.static_pose_temperature = pose_temperature;
     out.gyro = std::move(gyro);
   }
   if (!fit.converged) {

@@ -63,6 +63,11 @@ json SensorJson(const SensorCalibration& c) {
                         {"bias_per_c", Vec(m.bias_per_c)},
                         {"bias_per_c_u", Vec(c.bias_per_c_u)}};
   }
+  if (c.static_pose_temperature) {
+    const PoseTemperatureRange& t = *c.static_pose_temperature;
+    j["static_pose_temperature"] = {
+        {"min_c", t.min_c}, {"mean_c", t.mean_c}, {"max_c", t.max_c}, {"poses", t.poses}};
+  }
   j["parameters"] = c.parameter_names;
   j["covariance"] = Mat(c.covariance);
   j["correlation"] = Mat(c.Correlation());
@@ -208,6 +213,23 @@ std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const st
     m.t_ref_c = rd->Number(t, tp, "t_ref_c");
     m.bias_per_c = rd->Vec3(t, tp, "bias_per_c");
     c.bias_per_c_u = rd->Vec3(t, tp, "bias_per_c_u");
+  }
+  if (j.contains("static_pose_temperature")) {
+    const json& t = j.at("static_pose_temperature");
+    const std::string tp = path + "static_pose_temperature.";
+    PoseTemperatureRange r;
+    r.min_c = rd->Number(t, tp, "min_c");
+    r.mean_c = rd->Number(t, tp, "mean_c");
+    r.max_c = rd->Number(t, tp, "max_c");
+    r.poses = static_cast<int>(rd->Number(t, tp, "poses"));
+    if (!rd->failed() && !(std::isfinite(r.min_c) && r.min_c <= r.mean_c && r.mean_c <= r.max_c &&
+                           std::isfinite(r.max_c) && r.poses >= 1)) {
+      rd->Fail(
+          fmt::format("'{}static_pose_temperature' must have finite min_c <= mean_c <= "
+                      "max_c and poses >= 1",
+                      path));
+    }
+    c.static_pose_temperature = r;
   }
   c.covariance = rd->Matrix(j, path, "covariance");
   const json* names = rd->Get(j, path, "parameters");

@@ -301,6 +301,14 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       }
       conditions.push_back(row);
     }
+    // The static poses' temperatures, from calibration.json (also without the records).
+    const std::optional<SensorCalibration>& first = t.accel ? t.accel : t.gyro;
+    if (first && first->static_pose_temperature) {
+      const PoseTemperatureRange& r = *first->static_pose_temperature;
+      condition_notes.push_back(mustache::data(fmt::format(
+          "sensor {}: the {} static poses were at {:.2f} .. {:.2f} degC (mean {:.2f} degC)",
+          t.sensor, r.poses, r.min_c, r.max_c, r.mean_c)));
+    }
     for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
       if (c->has_value() && (*c)->model.has_temperature) {
         condition_notes.push_back(mustache::data(

@@ -245,6 +245,43 @@ TEST_CASE("Mapping: META carries time and version and inputs and coverage factor
   CHECK(WriteBlob(r.value()).ok());
 }
 
+TEST_CASE("Mapping: META temperatures are the static poses' and the validity range an option",
+          "[blob]") {
+  // The fitted ramp tag: its calibration.json records the temperatures of its poses.
+  const Fitted& f = FitOnce();
+  const SensorCalibration& accel = *f.cal.FindTag(2)->accel;
+  REQUIRE(accel.static_pose_temperature.has_value());
+  const PoseTemperatureRange& range = *accel.static_pose_temperature;
+  // The ramp runs 22 -> 34 degC; pose means lie inside it, and t_ref is their mean.
+  CHECK(range.min_c > 22.0);
+  CHECK(range.max_c < 34.0);
+  CHECK(range.max_c - range.min_c > 8.0);
+  CHECK(range.poses == static_cast<int>(accel.segments.size()));
+  CHECK(range.mean_c == Approx(accel.model.t_ref_c).epsilon(1e-12));
+  Result<BlobContents> r = BlobContentsFromCalibration(f.cal, Options());
+  REQUIRE(r.ok());
+  CHECK(r.value().meta.temp_min_c == range.min_c);
+  CHECK(r.value().meta.temp_mean_c == range.mean_c);
+  CHECK(r.value().meta.temp_max_c == range.max_c);
+  CHECK(r.value().accel->t_valid_min_c == -40.0);  // The default: the operating range.
+  CHECK(r.value().accel->t_valid_max_c == 85.0);
+  BlobFromCalibrationOptions o = Options();
+  o.t_valid_min_c = 20.0;
+  o.t_valid_max_c = 36.0;
+  r = BlobContentsFromCalibration(f.cal, o);
+  REQUIRE(r.ok());
+  CHECK(r.value().accel->t_valid_min_c == 20.0);
+  CHECK(r.value().gyro->t_valid_max_c == 36.0);
+  // And the range survives the calibration.json round trip.
+  Result<Calibration> back = CalibrationFromJson(CalibrationToJson(f.cal), "cal.json");
+  REQUIRE(back.ok());
+  const auto& again = back.value().FindTag(2)->gyro->static_pose_temperature;
+  REQUIRE(again.has_value());
+  CHECK(again->min_c == range.min_c);
+  CHECK(again->max_c == range.max_c);
+  CHECK(again->poses == range.poses);
+}
+
 TEST_CASE("Blob from a fitted calibration and applied by the firmware and recovers the truth",
           "[blob][slow]") {
   const Fitted& f = FitOnce();

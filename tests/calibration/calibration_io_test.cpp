@@ -71,6 +71,15 @@ TEST_CASE("calibration.json errors name the key", "[calibration]") {
   CHECK(CalibrationFromJson(bad, "c.json").error().message ==
         "'tags[0].accel.input_unit' 'deg/s' is not a unit of the accel");
   bad = j;
+  bad["tags"][0]["accel"]["static_pose_temperature"] = {
+      {"min_c", 30.0}, {"mean_c", 25.0}, {"max_c", 35.0}, {"poses", 4}};
+  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
+        "'tags[0].accel.static_pose_temperature' must have finite min_c <= mean_c <= max_c and "
+        "poses >= 1");
+  bad["tags"][0]["accel"]["static_pose_temperature"] = {{"min_c", 30.0}};
+  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
+        "missing key 'tags[0].accel.static_pose_temperature.mean_c'");
+  bad = j;
   bad["tags"] = nlohmann::json::array();
   CHECK(CalibrationFromJson(bad, "c.json").error().message == "'tags' must be a non-empty array");
 }

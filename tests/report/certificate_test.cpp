@@ -2,6 +2,8 @@
 // ISO/IEC 17025 7.8 asks for, the reload of inputs and bad input.
 #include "metro/report/certificate.hpp"
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
@@ -131,6 +133,12 @@ TEST_CASE("Certificate from calibration.json reloads matching inputs", "[report]
   CHECK(html.value().find("not found or changed since the fit: " + session_file.path()) !=
         std::string::npos);
   CHECK(html.value().find("<svg") == std::string::npos);
+  // The static poses' temperatures still come from calibration.json itself.
+  const PoseTemperatureRange& poses = *f.cal.tags.front().accel->static_pose_temperature;
+  CHECK(poses.min_c > 22.0);
+  CHECK(poses.max_c < 31.0);
+  CHECK(html.value().find(fmt::format("sensor 1: the {} static poses were at {:.2f} .. {:.2f} degC",
+                                      poses.poses, poses.min_c, poses.max_c)) != std::string::npos);
 }
 
 TEST_CASE("Certificate bad input is refused with a message", "[report][certificate]") {

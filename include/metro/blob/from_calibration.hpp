@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "metro/blob/blob.hpp"
@@ -40,15 +41,17 @@ struct BlobFromCalibrationOptions {
   uint8_t dlpf_cfg = 3;    // The tag firmware's MPU6050 DLPF_CFG (0..6); the tag refuses a
                            // section whose value differs from its own configuration.
   // Temperature validity range: the firmware clamps T to it before the temperature terms.
-  // Default: the MPU6050 operating range (calibration.json does not record the temperature
-  // span of the calibration data).
-  double t_valid_min_c = -40.0;
-  double t_valid_max_c = 85.0;
+  // Unset: the MPU6050 operating range, -40 .. 85 degC, which is also what `calibrate apply`
+  // uses (it does not clamp). The span the temperature term was fitted on is in
+  // calibration.json `static_pose_temperature` and in the blob's META temp_min/max_c.
+  std::optional<double> t_valid_min_c;
+  std::optional<double> t_valid_max_c;
   uint32_t due_after_s = 365u * 86400u;  // due_time_utc = cal_time_utc + due_after_s.
   std::string reference_id;              // ASCII, at most 16 characters.
   bool provisional = false;              // Header flag b3.
 
-  // sensor >= 1, seq in 1..kSeqMax, dlpf_cfg <= 6, -40 <= t_valid_min_c < t_valid_max_c <= 85,
+  // sensor >= 1, seq in 1..kSeqMax, dlpf_cfg <= 6, -40 <= t_valid_min_c < t_valid_max_c <= 85
+  // (each when set),
   // reference_id printable ASCII of at most 16 characters.
   bool IsValid(std::string* why) const;
 };

@@ -64,6 +64,15 @@ struct ResidualGroup {
   std::string unit;  // e.g. "g", "LSB", "deg/s", "rad".
 };
 
+// Temperature of the static poses a fit used (each pose's mean temp_c): the conditions
+// of the calibration (ISO/IEC 17025 7.8.4.1) and where a temperature term is supported.
+struct PoseTemperatureRange {
+  double min_c = 0;
+  double mean_c = 0;
+  double max_c = 0;
+  int poses = 0;
+};
+
 struct SensorCalibration {
   SensorModel model;
   // Standard uncertainties (k = 1) of the constants, in the units of the constants;
@@ -87,6 +96,8 @@ struct SensorCalibration {
   int dof = 0;                    // Residual degrees of freedom minus free parameters.
   double reduced_chi2 = 0;        // Of the whitened fit (about 1 when consistent).
   double coverage_factor_95 = 0;  // Student t_0.975(dof) (JCGM 100:2008 G.3.2).
+  // When every input has a temp_c column.
+  std::optional<PoseTemperatureRange> static_pose_temperature;
 };
 
 struct TagCalibration {
