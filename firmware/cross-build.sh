@@ -10,10 +10,10 @@
 # Figures (docs/calibration-blob.md section 3.3), from the link map of a probe whose table
 # references every public function, linked with --gc-sections, no startup files:
 #   own       the library's code + data;
-#   runtime   libgcc integer helpers (__aeabi_lmul for the fixed-point apply, switch helpers)
-#             and newlib-nano routines it pulls in;
+#   runtime   libgcc integer helpers (__aeabi_lmul for the fixed-point apply and the limit
+#             checks, switch helpers) and newlib-nano routines it pulls in;
 #   softfloat libgcc's binary32 routines (only the float apply and float temperature use them;
-#             the limit checks at load work on the bit patterns).
+#             the limit checks at load work on fixed-point integers converted from the bits).
 # Gates: (1) the boot/update core (le + crc + blob + update objects) < 4096 bytes;
 #        (2) the integer-only library (every public function but the float apply and float
 #            temperature), own + runtime + soft-float (0), may not grow past
@@ -26,7 +26,7 @@ mkdir -p "$out"
 cc=${CC_ARM:-arm-none-eabi-gcc}
 arch="-mcpu=cortex-m0 -mthumb -Os -ffunction-sections -fdata-sections -fno-tree-loop-distribute-patterns"
 flags="-std=c99 $arch -Wall -Wextra -pedantic -Werror"
-whole_limit=${METRO_FW_WHOLE_LIMIT:-5172}
+whole_limit=${METRO_FW_WHOLE_LIMIT:-4617}
 
 objs=""
 for src in le crc blob update push fixed; do

@@ -3,6 +3,7 @@
  * the section walker and the decoder. Run by fuzz/run.sh under ASan and UBSan. */
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "metro_fw/blob.h"
@@ -64,12 +65,12 @@ static void Check(const uint8_t* data, size_t size) {
     metro_fw_sensor_fixed fx;
     int32_t y_q20[3];
     (void)metro_fw_apply(&cal, raw, 30.0f, y);
-    /* Sections that pass 3.1 must convert or be refused cleanly, and apply without UB at the
-     * int16 corners and beyond the validity range. */
-    if (metro_fw_fixed_from_cal(&cal, &fx) == METRO_FW_OK) {
-      (void)metro_fw_apply_fixed(&fx, raw, 200 * 4096, y_q20);
-      (void)metro_fw_apply_fixed(&fx, raw, -100 * 4096, y_q20);
-    }
+    /* Every section that passes 3.1 (and the defaults) converts to the fixed-point formats
+     * (3.1 bounds |b1| < 2^15 and |b2| < 2^7), and applies without UB at the int16 corners and
+     * beyond the validity range. */
+    if (metro_fw_fixed_from_cal(&cal, &fx) != METRO_FW_OK) abort();
+    (void)metro_fw_apply_fixed(&fx, raw, 200 * 4096, y_q20);
+    (void)metro_fw_apply_fixed(&fx, raw, -100 * 4096, y_q20);
   }
   (void)metro_fw_sensor_decode(metro_fw_buffer_read, &buf, info.gyro_off, info.gyro_len,
                                info.gyro_version, METRO_FW_GYRO, &cfg, &cal);

@@ -38,6 +38,15 @@ typedef char metro_fw_info_layout_check[(offsetof(metro_fw_blob_info, gyro_versi
                                             ? 1
                                             : -1];
 
+/* The header's u16 fields fmt_major ... header_len and u32 fields seq ... flags are consecutive
+ * in metro_fw_blob_info, in header order; the validator reads them in two loops. */
+typedef char metro_fw_info_header_check[(offsetof(metro_fw_blob_info, header_len) == 6 &&
+                                         offsetof(metro_fw_blob_info, flags) -
+                                                 offsetof(metro_fw_blob_info, seq) ==
+                                             12)
+                                            ? 1
+                                            : -1];
+
 /* Section walk (section 2.2). Fills the section fields of info. */
 static int WalkSections(metro_fw_read_fn read, void* ctx, metro_fw_blob_info* info) {
   const uint32_t end = (uint32_t)info->total_len - 4u;
@@ -80,14 +89,10 @@ int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
   metro_fw_blob_info local;
   metro_fw_blob_info* in = info != 0 ? info : &local;
   uint8_t buf[METRO_FW_CHUNK];
-  uint32_t magic, crc, off, crc_off;
+  uint32_t magic, crc, off, crc_off, i;
   int rc;
   if (read == 0 || device_id == 0) return METRO_FW_E_ARG;
-  {
-    uint8_t* z = (uint8_t*)in;
-    uint32_t i;
-    for (i = 0; i < sizeof(*in); ++i) z[i] = 0;
-  }
+  for (i = 0; i < sizeof(*in); ++i) ((uint8_t*)in)[i] = 0;
   if (avail_len < 4u) return METRO_FW_E_BOUNDS;
   rc = read(ctx, 0, buf, 4);
   if (rc != METRO_FW_OK) return rc;
@@ -97,19 +102,15 @@ int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
   if (avail_len < METRO_FW_HEADER_LEN) return METRO_FW_E_BOUNDS;
   rc = read(ctx, 0, buf, METRO_FW_HEADER_LEN);
   if (rc != METRO_FW_OK) return rc;
-  in->fmt_major = metro_fw_get_u16(buf + 4);
-  in->fmt_minor = metro_fw_get_u16(buf + 6);
-  in->total_len = metro_fw_get_u16(buf + 8);
-  in->header_len = metro_fw_get_u16(buf + 10);
-  in->seq = metro_fw_get_u32(buf + 12);
-  in->device_id[0] = metro_fw_get_u32(buf + 16);
-  in->device_id[1] = metro_fw_get_u32(buf + 20);
-  in->flags = metro_fw_get_u32(buf + 24);
-  if (in->fmt_major != METRO_FW_FMT_MAJOR) return METRO_FW_E_UNSUPPORTED;
-  if ((in->header_len & 3u) != 0u || in->header_len < METRO_FW_HEADER_LEN) {
-    return METRO_FW_E_BOUNDS;
+  /* fmt_major, fmt_minor, total_len, header_len (u16) and seq, device_id[2], flags (u32)
+   * follow each other in metro_fw_blob_info as in the header (layout checked above). */
+  for (i = 0; i < 4; ++i) {
+    (&in->fmt_major)[i] = metro_fw_get_u16(buf + 4 + 2 * i);
+    (&in->seq)[i] = metro_fw_get_u32(buf + 12 + 4 * i);
   }
-  if ((in->total_len & 3u) != 0u || in->total_len > METRO_FW_MAX_LEN || in->total_len > avail_len ||
+  if (in->fmt_major != METRO_FW_FMT_MAJOR) return METRO_FW_E_UNSUPPORTED;
+  if (((in->header_len | in->total_len) & 3u) != 0u || in->header_len < METRO_FW_HEADER_LEN ||
+      in->total_len > METRO_FW_MAX_LEN || in->total_len > avail_len ||
       (uint32_t)in->header_len + 4u > in->total_len) {
     return METRO_FW_E_BOUNDS;
   }
@@ -146,21 +147,17 @@ int metro_fw_choose_active(const metro_fw_flash* flash, const uint32_t device_id
   if (flash == 0 || flash->read == 0 || device_id == 0 || info == 0 || result == 0 || active == 0) {
     return METRO_FW_E_ARG;
   }
+  *active = METRO_FW_SLOT_NONE;
   for (i = 0; i < 2; ++i) {
     metro_fw_slot s;
     s.flash = flash;
     s.base = flash->slot_addr[i];
     result[i] =
         metro_fw_blob_validate(metro_fw_slot_read, &s, METRO_FW_PAGE_SIZE, device_id, &info[i]);
-  }
-  if (result[0] == METRO_FW_OK && result[1] == METRO_FW_OK) {
-    *active = info[1].seq > info[0].seq ? 1 : 0;
-  } else if (result[0] == METRO_FW_OK) {
-    *active = 0;
-  } else if (result[1] == METRO_FW_OK) {
-    *active = 1;
-  } else {
-    *active = METRO_FW_SLOT_NONE;
+    /* the larger seq; slot A on a tie */
+    if (result[i] == METRO_FW_OK && (*active == METRO_FW_SLOT_NONE || info[i].seq > info[0].seq)) {
+      *active = i;
+    }
   }
   return METRO_FW_OK;
 }
@@ -210,167 +207,114 @@ int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw
   return METRO_FW_OK;
 }
 
-/* Section 3.1 limit checks without soft-float. Each float operation of the reference
- * evaluation (binary32, FLT_EVAL_METHOD 0) is done on the bit patterns, rounded to nearest,
- * ties to even (IEEE 754-2019 4.3.1), so the decisions are those of the float evaluation bit
- * for bit. Operands are finite (NONFINITE is checked first); an overflow rounds to Inf, which
- * absorbs. Inf - Inf, 0 * Inf (the NaN cases) cannot decide anything here: overflow only
- * happens in sums of non-negative terms, in products with a positive finite factor (D > 0
- * because t_valid_min_c < t_valid_max_c) and in det(M) from a row that then fails its norm. */
-#define F32_SIGN 0x80000000u
-#define F32_INF 0x7F800000u
-
-/* sign | (sig * 2^exp rounded to binary32), sig != 0. */
-static uint32_t F32Round(uint32_t sign, int32_t exp, uint64_t sig) {
-  uint32_t s, m, rem, half;
-  int32_t e;
-  int32_t shift = 8;
-  while ((sig >> 32) != 0u) { /* to 32 bits; the lowest bit keeps a sticky OR */
-    sig = (sig >> 1) | (sig & 1u);
-    ++exp;
-  }
-  s = (uint32_t)sig;
-  while ((s & F32_SIGN) == 0u) {
-    s <<= 1;
-    --exp;
-  }
-  e = exp + 158; /* biased exponent of s * 2^exp, s in [2^31, 2^32) */
-  if (e < 1) {   /* subnormal: fewer fraction bits */
-    shift += 1 - e;
-    e = 1;
-  }
-  if (shift > 32) return sign; /* below half the smallest subnormal */
-  if (shift == 32) {
-    m = 0;
-    rem = s;
-    half = F32_SIGN;
+/* round(x 2^frac) for the binary32 x at p, to nearest, half away from zero, from the bit
+ * pattern: x = (-1)^s (2^23 + f) 2^(e - 150), so x 2^frac is the 24-bit significand shifted by
+ * e - 150 + frac. Fails (-1, *out untouched) when |x| 2^frac >= 2^cap_bits before rounding;
+ * NaN and Inf (e = 255) always fail for frac >= 0, zero and subnormals give 0 (frac <= 100). */
+static int F32ToQ(const float* p, int frac, int cap_bits, int32_t* out) {
+  const uint32_t u = F32Bits(*p);
+  const int shift = (int)((u >> 23) & 0xFFu) - 150 + frac;
+  /* The implicit bit is set for zero and subnormals too: their shift is below -24, so they
+   * round to 0 either way. */
+  const uint32_t mant = (u & 0x7FFFFFu) | 0x800000u;
+  uint32_t q;
+  if (shift > cap_bits - 24) return -1; /* mant 2^shift >= 2^(23 + shift) >= 2^cap_bits */
+  if (shift >= 0) {
+    q = mant << shift;
+  } else if (shift < -24) {
+    q = 0u; /* mant 2^shift < 1/2 */
   } else {
-    m = s >> shift;
-    rem = s & ((1u << shift) - 1u);
-    half = 1u << (shift - 1);
+    q = (mant + (1u << (-shift - 1))) >> -shift;
   }
-  if (rem > half || (rem == half && (m & 1u) != 0u)) ++m;
-  /* m carries the implicit bit, so a rounding carry moves up into the exponent. */
-  m += (uint32_t)(e - 1) << 23;
-  return sign | (m >= F32_INF ? F32_INF : m);
+  *out = (u & 0x80000000u) != 0u ? -(int32_t)q : (int32_t)q;
+  return 0;
 }
 
-/* |x| = sig * 2^exp for a finite binary32 x (bits u). */
-static uint32_t F32Unpack(uint32_t u, int32_t* exp) {
-  uint32_t e = (u >> 23) & 0xFFu;
-  uint32_t m = u & 0x7FFFFFu;
-  if (e == 0u) {
-    e = 1u;
-  } else {
-    m |= 0x800000u;
+/* The 21 floats of metro_fw_sensor_cal from m[0] to t_valid_max_c are consecutive. */
+typedef char metro_fw_cal_q_layout_check[(offsetof(metro_fw_sensor_cal, m) == 0 &&
+                                          offsetof(metro_fw_sensor_cal, t_valid_max_c) == 80)
+                                             ? 1
+                                             : -1];
+
+int metro_fw_cal_to_q(const void* cal, int m_frac, int m_cap_bits, int32_t q[21]) {
+  int i;
+  for (i = 0; i < 21; ++i) {
+    /* M Q(m_frac), b0 and b1 Q16, b2 Q24, temperatures Q12 */
+    const int frac = i < 9 ? m_frac : i < 15 ? 16 : i < 18 ? 24 : 12;
+    if (F32ToQ((const float*)cal + i, frac, i < 9 ? m_cap_bits : 31, &q[i]) != 0) return -1;
   }
-  *exp = (int32_t)e - 150;
-  return m;
+  return 0;
 }
 
-static uint32_t F32Mul(uint32_t a, uint32_t b) {
-  const uint32_t sign = (a ^ b) & F32_SIGN;
-  int32_t ea, eb;
-  uint32_t ma, mb;
-  if ((a & F32_INF) == F32_INF || (b & F32_INF) == F32_INF) return sign | F32_INF;
-  ma = F32Unpack(a, &ea);
-  mb = F32Unpack(b, &eb);
-  if (ma == 0u || mb == 0u) return sign;
-  return F32Round(sign, ea + eb, (uint64_t)ma * mb);
-}
+/* Section 3.1 limit checks in exact integer arithmetic on fixed-point forms of the binary32
+ * constants (no soft-float), each rounded once by metro_fw_cal_to_q:
+ *   M        Q(k - fs_sel) SI/LSB, k = 25 (accel) or 27 (gyro): s_nom becomes the fs_sel-free
+ *            S = s_nom(fs 0) 2^k (20084.0192 / 17872.17); |M_ij| < 2^15 (> 1.63 S: a larger
+ *            entry fails its row norm anyway), so a squared row norm fits uint32;
+ *   b0, b1   Q16 LSB, LSB/degC, below 2^31 (|b1| < 2^15 LSB/degC: the fixed apply's range);
+ *   b2       Q24 LSB/degC^2, below 2^31 (|b2| < 2^7 LSB/degC^2: the fixed apply's range);
+ *   T        Q12 degC (t_ref_c, t_valid_min_c, t_valid_max_c).
+ * Every step below is exact except |b2| D, truncated from Q36 to Q28 (by less than 2^-28).
+ * The decision band (where it can differ from the real-number rule) is in 3.1. */
+#define METRO_FW_ACCEL_S_Q 20084.0192 /* 9.80665 / 16384 * 2^25 */
+#define METRO_FW_GYRO_S_Q (250.0 * 4096.0 * 3.14159265358979323846 / 180.0) /* 2^27 */
+/* Squared row-norm bounds (1 -+ 0.1)^2 S^2 as integers: n2 >= 0.81 S^2 is n2 >= floor + 1
+ * (0.81 S^2 is not an integer for either S), n2 <= 1.21 S^2 is n2 <= floor. */
+static const uint32_t kNorm2Bounds[4] = {
+    (uint32_t)(0.81 * METRO_FW_ACCEL_S_Q * METRO_FW_ACCEL_S_Q) + 1u,
+    (uint32_t)(1.21 * METRO_FW_ACCEL_S_Q * METRO_FW_ACCEL_S_Q),
+    (uint32_t)(0.81 * METRO_FW_GYRO_S_Q * METRO_FW_GYRO_S_Q) + 1u,
+    (uint32_t)(1.21 * METRO_FW_GYRO_S_Q * METRO_FW_GYRO_S_Q)};
+#define METRO_FW_TEMP_MIN_Q12 (-40 * 4096)
+#define METRO_FW_TEMP_MAX_Q12 (85 * 4096)
 
-static uint32_t F32Add(uint32_t a, uint32_t b) {
-  int32_t ea, eb, d;
-  uint32_t ma, mb, t, r;
-  if ((a & F32_INF) == F32_INF) return a;
-  if ((b & F32_INF) == F32_INF) return b;
-  ma = F32Unpack(a, &ea);
-  mb = F32Unpack(b, &eb);
-  if (ma == 0u) return mb == 0u ? (a & b) : b; /* -0 only for (-0) + (-0) */
-  if (mb == 0u) return a;
-  if (ea < eb) { /* a has the larger exponent */
-    t = a, a = b, b = t;
-    t = ma, ma = mb, mb = t;
-    d = ea, ea = eb, eb = d;
-  }
-  d = ea - eb;
-  ma <<= 6; /* 6 guard bits; the smaller operand is shifted with a sticky bit */
-  mb <<= 6;
-  if (d > 31) {
-    mb = 1u;
-  } else if (d > 0) {
-    mb = (mb >> d) | ((mb & ((1u << d) - 1u)) != 0u ? 1u : 0u);
-  }
-  if (((a ^ b) & F32_SIGN) == 0u) return F32Round(a & F32_SIGN, ea - 6, (uint64_t)ma + mb);
-  if (ma == mb) return 0u; /* x - x = +0 when rounding to nearest */
-  if (ma > mb) {
-    r = ma - mb;
-  } else {
-    r = mb - ma;
-    a = b;
-  }
-  return F32Round(a & F32_SIGN, ea - 6, r);
-}
-
-/* Orders binary32 bit patterns (finite) as the values: -0 and +0 are equal. */
-static int32_t F32Key(uint32_t u) {
-  return (u & F32_SIGN) != 0u ? -(int32_t)(u & ~F32_SIGN) : (int32_t)u;
-}
+static int64_t Abs64(int32_t x) { return x < 0 ? -(int64_t)x : (int64_t)x; }
 
 /* Section 3.1 physical limits on decoded constants (model bits already applied). */
 METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind,
                                           uint8_t fs_sel) {
-  const uint32_t s = F32Bits(metro_fw_nominal_sensitivity(kind, fs_sel));
-  /* Row norm within +-10 % of s_nom: (1 - 0.1)^2 = 0.81, (1 + 0.1)^2 = 1.21. */
-  const uint32_t n2_lo = F32Mul(F32Mul(F32Bits(0.81f), s), s);
-  const uint32_t n2_hi = F32Mul(F32Mul(F32Bits(1.21f), s), s);
+  int32_t q[21]; /* m[9], b0[3], b1[3], b2[3], t_ref, t_valid_min, t_valid_max */
+  const uint32_t* n2_bounds = kNorm2Bounds + 2 * kind;
   const int32_t limit_fs0 =
       kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_BIAS_LIMIT_LSB : METRO_FW_GYRO_BIAS_LIMIT_LSB;
-  const uint32_t bias_limit = F32Round(0u, 0, (uint32_t)(limit_fs0 >> fs_sel)); /* exact */
-  const int32_t t_lo = F32Key(F32Bits(METRO_FW_TEMP_MIN_C));
-  const int32_t t_hi = F32Key(F32Bits(METRO_FW_TEMP_MAX_C));
-  const uint32_t t_ref = F32Bits(c->t_ref_c);
-  const int32_t k_ref = F32Key(t_ref);
-  const int32_t k_min = F32Key(F32Bits(c->t_valid_min_c));
-  const int32_t k_max = F32Key(F32Bits(c->t_valid_max_c));
-  uint32_t det = 0u;
-  uint32_t d_max, d_hi;
+  int64_t det = 0;
+  int32_t d;
   int i, j;
-  if (k_ref < t_lo || k_ref > t_hi || k_min < t_lo || k_min > t_hi || k_max < t_lo ||
-      k_max > t_hi || !(k_min < k_max)) {
+  if (metro_fw_cal_to_q(c, (kind == METRO_FW_ACCEL ? 25 : 27) - fs_sel, 15, q) != 0) return 0;
+  if (q[18] < METRO_FW_TEMP_MIN_Q12 || q[18] > METRO_FW_TEMP_MAX_Q12 ||
+      q[19] < METRO_FW_TEMP_MIN_Q12 || q[20] > METRO_FW_TEMP_MAX_Q12 || q[19] >= q[20]) {
     return 0;
   }
-  /* D = max(|t_valid_min_c - t_ref_c|, |t_valid_max_c - t_ref_c|); non-negative patterns
-   * order as unsigned integers. */
-  d_max = F32Add(F32Bits(c->t_valid_min_c), t_ref ^ F32_SIGN) & ~F32_SIGN;
-  d_hi = F32Add(F32Bits(c->t_valid_max_c), t_ref ^ F32_SIGN) & ~F32_SIGN;
-  if (d_hi > d_max) d_max = d_hi;
+  /* D = max(|t_valid_min - t_ref|, |t_valid_max - t_ref|) = max(t_max - t_ref, t_ref - t_min)
+   * since t_min < t_max; Q12, 0 < D <= 125 * 4096 < 2^19. */
+  d = q[20] - q[18];
+  if (q[18] - q[19] > d) d = q[18] - q[19];
   for (i = 0; i < 3; ++i) {
     const int k1 = i == 2 ? 0 : i + 1; /* (i + 1) mod 3 without a libgcc division */
     const int k2 = i == 0 ? 2 : i - 1; /* (i + 2) mod 3 */
-    uint32_t n2 = 0u, minor, bias;
-    for (j = 0; j < 3; ++j) {
-      const uint32_t mij = F32Bits(c->m[3 * i + j]);
-      n2 = F32Add(n2, F32Mul(mij, mij));
+    uint32_t n2 = 0u, minor;
+    int64_t c_q28;
+    for (j = 0; j < 3; ++j) n2 += (uint32_t)(q[3 * i + j] * q[3 * i + j]); /* <= 3 * 2^30 */
+    if (n2 < n2_bounds[0] || n2 > n2_bounds[1]) return 0;
+    /* det(M) = row0 . (row1 x row2). The minor fits int32 once rows 1 and 2 pass their norms
+     * (|minor| <= 1.21 S^2 < 2^29); before that it may wrap (unsigned, no overflow) but then
+     * a later row fails and det is not used. */
+    minor = (uint32_t)q[3 + k1] * (uint32_t)q[6 + k2] - (uint32_t)q[3 + k2] * (uint32_t)q[6 + k1];
+    det += (int64_t)q[i] * (int32_t)minor;
+    /* |b0| + (|b1| + |b2| D) D <= limit: c = |b1| + |b2| D in Q28 (< 2^44), the sum in Q40
+     * (< 2^63). */
+    c_q28 = Abs64(q[12 + i]) * 4096 + ((Abs64(q[15 + i]) * d) >> 8);
+    if (Abs64(q[9 + i]) * ((int64_t)1 << 24) + c_q28 * d > ((int64_t)(limit_fs0 >> fs_sel) << 40)) {
+      return 0;
     }
-    if (n2 < n2_lo || n2 > n2_hi) return 0;
-    /* det(M) = row0 . (row1 x row2) */
-    minor = F32Add(F32Mul(F32Bits(c->m[3 + k1]), F32Bits(c->m[6 + k2])),
-                   F32Mul(F32Bits(c->m[3 + k2]), F32Bits(c->m[6 + k1])) ^ F32_SIGN);
-    det = F32Add(det, F32Mul(F32Bits(c->m[i]), minor));
-    /* |b0| + |b1|*D + |b2|*D^2 bounds the bias over the validity range, D = max |dT|,
-     * evaluated as |b0| + (|b1| + |b2| D) D. */
-    bias = F32Mul(F32Bits(c->b2[i]) & ~F32_SIGN, d_max);
-    bias = F32Mul(F32Add(F32Bits(c->b1[i]) & ~F32_SIGN, bias), d_max);
-    bias = F32Add(F32Bits(c->b0[i]) & ~F32_SIGN, bias);
-    if (bias > bias_limit) return 0;
   }
-  return (det & F32_SIGN) == 0u && det != 0u; /* det > 0 */
+  return det > 0;
 }
 
-/* Model bits a term of m[9], b0[3], b1[3], b2[3] needs (section 3): the diagonal of M none. */
+/* Model bits a term of m[9], b0[3], b1[3], b2[3], t_ref_c, t_valid_min_c, t_valid_max_c needs
+ * (section 3): the diagonal of M and the temperatures none. */
 #define FM METRO_FW_MODEL_FULL_M
-static const uint8_t kTermBits[18] = {0,
+static const uint8_t kTermBits[21] = {0,
                                       FM,
                                       FM,
                                       FM,
@@ -387,7 +331,10 @@ static const uint8_t kTermBits[18] = {0,
                                       METRO_FW_MODEL_LINEAR_T,
                                       METRO_FW_MODEL_QUADRATIC_T,
                                       METRO_FW_MODEL_QUADRATIC_T,
-                                      METRO_FW_MODEL_QUADRATIC_T};
+                                      METRO_FW_MODEL_QUADRATIC_T,
+                                      0,
+                                      0,
+                                      0};
 #undef FM
 typedef char metro_fw_cal_terms_check[(offsetof(metro_fw_sensor_cal, b2) -
                                            offsetof(metro_fw_sensor_cal, m) ==
@@ -399,7 +346,7 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, 
                            uint16_t version, metro_fw_sensor_kind kind, const metro_fw_config* cfg,
                            metro_fw_sensor_cal* out) {
   uint8_t b[METRO_FW_SENSOR_BODY_LEN];
-  uint8_t fs_sel, bits;
+  uint8_t fs_sel, bits, status;
   uint32_t i;
   int rc;
   if (read == 0 || cfg == 0 || out == 0) return METRO_FW_E_ARG;
@@ -407,57 +354,52 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, 
   rc = metro_fw_sensor_defaults(kind, fs_sel, out);
   if (rc != METRO_FW_OK) return rc;
   if (body_off == 0u) return METRO_FW_OK; /* ABSENT */
-  if ((version >> 8) != (METRO_FW_SEC_VERSION_1_0 >> 8)) {
-    out->status = METRO_FW_SENSOR_UNSUPPORTED;
-    return METRO_FW_OK;
-  }
+  status = METRO_FW_SENSOR_UNSUPPORTED;
+  if ((version >> 8) != (METRO_FW_SEC_VERSION_1_0 >> 8)) goto done;
   if (body_len < METRO_FW_SENSOR_BODY_LEN) return METRO_FW_E_ARG; /* validator forbids */
   rc = read(ctx, body_off, b, METRO_FW_SENSOR_BODY_LEN);
   if (rc != METRO_FW_OK) return rc;
   /* Every f32 from t_ref_c (4) to t_valid_max_c (160) finite; from u_M (80) to resid_rms
    * (152) also not negative. Checked on the bits: exponent 0xFF is Inf or NaN; a pattern
    * above 0x80000000 is negative and not -0. */
+  status = METRO_FW_SENSOR_NONFINITE;
   for (i = 4; i < 164; i += 4) {
     const uint32_t u = metro_fw_get_u32(b + i);
-    if ((u & 0x7F800000u) == 0x7F800000u || (i - 80u < 76u && u > 0x80000000u)) {
-      out->status = METRO_FW_SENSOR_NONFINITE;
-      return METRO_FW_OK;
-    }
+    if ((u & 0x7F800000u) == 0x7F800000u || (i - 80u < 76u && u > 0x80000000u)) goto done;
   }
   bits = b[2];
+  status = METRO_FW_SENSOR_BAD_MODEL;
   if ((bits & (uint8_t) ~(METRO_FW_MODEL_BIAS | METRO_FW_MODEL_FULL_M | METRO_FW_MODEL_LINEAR_T |
                           METRO_FW_MODEL_QUADRATIC_T | METRO_FW_MODEL_HW_OFFSETS)) != 0u) {
-    out->status = METRO_FW_SENSOR_BAD_MODEL;
-    return METRO_FW_OK;
+    goto done;
   }
-  if (b[0] != fs_sel || b[1] != cfg->dlpf_cfg) {
-    out->status = METRO_FW_SENSOR_CONFIG_MISMATCH;
-    return METRO_FW_OK;
-  }
+  status = METRO_FW_SENSOR_CONFIG_MISMATCH;
+  if (b[0] != fs_sel || b[1] != cfg->dlpf_cfg) goto done;
   /* Decoded in place (no struct copy: on the M0 that links memcpy); a LIMITS failure
-   * restores the defaults. m, b0, b1, b2 are body bytes 8 ... 79 and 18 consecutive floats of
-   * out; a term is read only if its model bits are set (the diagonal of M always). */
+   * restores the defaults. m, b0, b1, b2 (body bytes 8 ... 79), t_ref_c (4), t_valid_min_c
+   * and t_valid_max_c (156, 160) are 21 consecutive floats of out; a term is read only if its
+   * model bits are set (the diagonal of M and the temperatures always). */
   out->model_bits = bits;
-  for (i = 0; i < 18; ++i) {
-    float* f = (float*)(void*)((char*)out + offsetof(metro_fw_sensor_cal, m)) + i;
-    *f = (bits & kTermBits[i]) == kTermBits[i] ? metro_fw_get_f32(b + 8 + 4 * i) : 0.0f;
+  for (i = 0; i < 21; ++i) {
+    const uint32_t at = i < 18 ? 8u + 4u * i : i == 18 ? 4u : 80u + 4u * i;
+    ((float*)(void*)out)[i] =
+        (bits & kTermBits[i]) == kTermBits[i] ? metro_fw_get_f32(b + at) : 0.0f;
   }
   for (i = 0; i < 3; ++i) out->hw_offs[i] = metro_fw_get_i16(b + 164 + 2 * i);
-  out->t_ref_c = metro_fw_get_f32(b + 4);
-  out->t_valid_min_c = metro_fw_get_f32(b + 156);
-  out->t_valid_max_c = metro_fw_get_f32(b + 160);
+  status = METRO_FW_SENSOR_OK;
   if (!WithinLimits(out, kind, fs_sel)) {
     (void)metro_fw_sensor_defaults(kind, fs_sel, out);
-    out->status = METRO_FW_SENSOR_LIMITS;
-    return METRO_FW_OK;
+    status = METRO_FW_SENSOR_LIMITS;
   }
-  out->status = METRO_FW_SENSOR_OK;
+done:
+  out->status = status;
   return METRO_FW_OK;
 }
 
 int metro_fw_load(const metro_fw_flash* flash, const metro_fw_config* cfg,
                   metro_fw_calibration* out) {
   metro_fw_blob_info info[2];
+  metro_fw_blob_info* a = &info[0];
   int active, rc;
   metro_fw_slot s;
   if (flash == 0 || cfg == 0 || out == 0 || cfg->accel_fs_sel > 3u || cfg->gyro_fs_sel > 3u) {
@@ -465,24 +407,28 @@ int metro_fw_load(const metro_fw_flash* flash, const metro_fw_config* cfg,
   }
   rc = metro_fw_choose_active(flash, cfg->device_id, info, out->slot_result, &active);
   if (rc != METRO_FW_OK) return rc;
-  metro_fw_sensor_defaults(METRO_FW_ACCEL, cfg->accel_fs_sel, &out->accel);
-  metro_fw_sensor_defaults(METRO_FW_GYRO, cfg->gyro_fs_sel, &out->gyro);
   out->slot = active;
-  out->seq = 0;
-  out->crc32 = 0;
-  out->flags = 0;
-  if (active == METRO_FW_SLOT_NONE) return METRO_FW_OK;
-  out->seq = info[active].seq;
-  out->crc32 = info[active].crc32;
-  out->flags = info[active].flags;
   s.flash = flash;
-  s.base = flash->slot_addr[active];
-  /* A read failing here leaves that sensor at its defaults; the other is still decoded. */
-  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, info[active].accel_off,
-                               info[active].accel_len, info[active].accel_version, METRO_FW_ACCEL,
-                               cfg, &out->accel);
-  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, info[active].gyro_off, info[active].gyro_len,
-                               info[active].gyro_version, METRO_FW_GYRO, cfg, &out->gyro);
+  s.base = 0;
+  if (active == METRO_FW_SLOT_NONE) {
+    a->seq = 0; /* nothing active: zeros out, and both sensors absent (defaults) */
+    a->crc32 = 0;
+    a->flags = 0;
+    a->accel_off = 0;
+    a->gyro_off = 0;
+  } else {
+    a = &info[active];
+    s.base = flash->slot_addr[active];
+  }
+  out->seq = a->seq;
+  out->crc32 = a->crc32;
+  out->flags = a->flags;
+  /* The decoder sets the defaults first: a body offset of 0 leaves them with status ABSENT,
+   * and a read failing here leaves that sensor at its defaults (the other is still decoded). */
+  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, a->accel_off, a->accel_len, a->accel_version,
+                               METRO_FW_ACCEL, cfg, &out->accel);
+  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, a->gyro_off, a->gyro_len, a->gyro_version,
+                               METRO_FW_GYRO, cfg, &out->gyro);
   return METRO_FW_OK;
 }
 

@@ -2,36 +2,7 @@
 
 #include <stddef.h>
 
-/* round(x * 2^frac) for a binary32 x, from its bits: x = (-1)^s * 1.f * 2^(e - 127), so
- * x * 2^frac = (2^23 + f) * 2^(e - 150 + frac). Rounds to nearest (half away from zero).
- * Returns 0, or -1 when the result does not fit in 31 bits or x is NaN/Inf. */
-static int F32ToQ(float x, int frac, int32_t* out) {
-  union {
-    float f;
-    uint32_t u;
-  } v;
-  uint32_t e, mant, q;
-  int shift;
-  v.f = x;
-  e = (v.u >> 23) & 0xFFu;
-  if (e == 0xFFu) return -1;
-  if (e == 0u) { /* zero or subnormal: |x| < 2^-126 rounds to 0 for frac <= 36 */
-    *out = 0;
-    return 0;
-  }
-  mant = (v.u & 0x7FFFFFu) | 0x800000u;
-  shift = (int)e - 150 + frac;
-  if (shift > 7) return -1; /* (2^24 - 1) << 7 < 2^31 */
-  if (shift >= 0) {
-    q = mant << shift;
-  } else if (shift < -24) {
-    q = 0u; /* mant * 2^shift < 1/2 */
-  } else {
-    q = (mant + (1u << (-shift - 1))) >> -shift;
-  }
-  *out = (v.u & 0x80000000u) ? -(int32_t)q : (int32_t)q;
-  return 0;
-}
+#include "le.h"
 
 /* Both structs hold 21 four-byte values in the same order: m[9], b0[3], b1[3], b2[3], t_ref,
  * t_valid_min, t_valid_max. The conversion walks them as one table; these typedefs fail to
@@ -48,14 +19,10 @@ typedef char metro_fw_fixed_layout_check[(sizeof(metro_fw_sensor_fixed) == 84 &&
 
 int metro_fw_fixed_from_cal(const metro_fw_sensor_cal* cal, metro_fw_sensor_fixed* out) {
   int32_t* q = (int32_t*)(void*)out;
-  int i, bad = 0;
+  int i;
   if (cal == 0 || out == 0) return METRO_FW_E_ARG;
-  for (i = 0; i < 21; ++i) {
-    /* M Q36, b0 and b1 Q16, b2 Q24, temperatures Q12 */
-    const int frac = i < 9 ? 36 : i < 15 ? 16 : i < 18 ? 24 : 12;
-    bad |= F32ToQ(*(const float*)(const void*)((const char*)cal + 4 * i), frac, &q[i]);
-  }
-  if (bad != 0) {
+  /* M Q36, b0 and b1 Q16, b2 Q24, temperatures Q12, each below 2^31 */
+  if (metro_fw_cal_to_q(cal, 36, 31, q) != 0) {
     for (i = 0; i < 21; ++i) q[i] = 0;
     return METRO_FW_E_ARG;
   }

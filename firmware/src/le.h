@@ -22,4 +22,13 @@ float metro_fw_get_f32(const uint8_t* p);
 void metro_fw_put_u16(uint8_t* p, uint16_t v);
 void metro_fw_put_u32(uint8_t* p, uint32_t v);
 
+/* The 21 constants of a metro_fw_sensor_cal (m[9], b0[3], b1[3], b2[3], t_ref_c,
+ * t_valid_min_c, t_valid_max_c; a const metro_fw_sensor_cal* passed as cal) as fixed-point
+ * integers q[i] = round(x_i 2^frac_i), to nearest, half away from zero, from the bit patterns
+ * (no soft-float): M in Q(m_frac), b0 and b1 Q16, b2 Q24, temperatures Q12. Returns 0, or -1 at
+ * the first constant with |x| 2^frac >= 2^cap (before rounding; cap = m_cap_bits for M, 31 for
+ * the rest; NaN and Inf always fail). Then |q[i]| <= 2^cap. Defined in blob.c; used by the
+ * limit checks (docs/calibration-blob.md 3.1) and the fixed-point apply (3.2). */
+int metro_fw_cal_to_q(const void* cal, int m_frac, int m_cap_bits, int32_t q[21]);
+
 #endif /* METRO_FW_LE_H_ */

@@ -115,6 +115,22 @@ static const uint8_t kResultOfError[14] = {
 static const uint8_t kRequestMin[8] = {0, 0, 10, 3, 0, 0, 3, 0};
 static const uint8_t kRequestExtra[8] = {0, 0, 0, METRO_FW_PUSH_MAX_CHUNK - 1u, 0, 0, 0, 0};
 
+/* CAL_EXECUTE's checks and the update (section 7); returns the result. */
+METRO_FW_NOINLINE static uint8_t Commit(metro_fw_push* p, int* slot) {
+  int rc;
+  if (!p->receiving || p->received_len != p->total_len) return METRO_FW_RES_BAD_STATE;
+  p->receiving = 0;
+  if (metro_fw_crc32(0, p->blob, p->total_len) != p->expect_crc32) {
+    return METRO_FW_RES_CRC_MISMATCH;
+  }
+  /* the blob's seq is not CREATE's */
+  if (metro_fw_get_u32(p->blob + 12) != p->expect_seq) return METRO_FW_RES_INVALID_PARAM;
+  rc = metro_fw_update(p->flash, p->device_id, p->blob, p->total_len, slot);
+  return rc == METRO_FW_OK     ? METRO_FW_RES_SUCCESS
+         : (uint32_t)-rc < 14u ? kResultOfError[-rc]
+                               : METRO_FW_RES_INVALID_BLOB;
+}
+
 /* Executes one request (payload in, n bytes; in is followed by the frame's CRC, so in[0] and
  * in[1] are readable). Appends the response fields after the result byte at *w and returns
  * the result; a request it refuses as malformed (INVALID_PARAM) appends nothing. */
@@ -177,20 +193,7 @@ METRO_FW_NOINLINE static uint8_t Execute(metro_fw_push* p, uint32_t op, const ui
     *w = PutLe(*w, metro_fw_crc32(0, p->blob, p->received_len), 4);
   } else if (op == METRO_FW_OP_CAL_EXECUTE) {
     int slot = METRO_FW_SLOT_NONE;
-    uint8_t res = METRO_FW_RES_BAD_STATE;
-    if (p->receiving && p->received_len == p->total_len) {
-      p->receiving = 0;
-      res = METRO_FW_RES_CRC_MISMATCH;
-      if (metro_fw_crc32(0, p->blob, p->total_len) == p->expect_crc32) {
-        res = METRO_FW_RES_INVALID_PARAM; /* the blob's seq is not CREATE's */
-        if (metro_fw_get_u32(p->blob + 12) == p->expect_seq) {
-          const int rc = metro_fw_update(p->flash, p->device_id, p->blob, p->total_len, &slot);
-          res = rc == METRO_FW_OK     ? METRO_FW_RES_SUCCESS
-                : (uint32_t)-rc < 14u ? kResultOfError[-rc]
-                                      : METRO_FW_RES_INVALID_BLOB;
-        }
-      }
-    }
+    const uint8_t res = Commit(p, &slot);
     /* slot u8 (0xFF unless written: metro_fw_update sets it), seq u32 (0 unless done) */
     *w = PutLe(*w, (uint32_t)slot, 1);
     *w = PutLe(*w, res == METRO_FW_RES_SUCCESS ? p->expect_seq : 0u, 4);

@@ -1,53 +1,110 @@
-// The integer-only section 3.1 limit checks (metro_fw_sensor_decode) against the float
-// evaluation they replace: the same accept/reject decision on constructed values (NaN, +-Inf,
-// +-0, subnormals, FLT_MAX, every limit +-1 and a few ulp) and random sections.
+// The section 3.1 limit checks of metro_fw_sensor_decode (exact integer arithmetic on
+// fixed-point forms of the binary32 constants) against the real-number rule evaluated in double
+// precision on the same constants. docs/calibration-blob.md 3.1 states the decision band: the
+// two may differ only for a quantity within its band of a limit. Every constructed section
+// farther than that from every limit must get the real-number decision; sections at the limits
+// +-2 bands check that "outside by more than the band" is rejected and "inside by more than the
+// band" accepted.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
 
 #include "metro_fw/blob.h"
+#include "metro_fw/fixed.h"
 #include "test_support.hpp"
 
 namespace {
 
-// The float decision as metro_fw_sensor_decode computed it before issue #6 (binary32 steps).
-bool FloatWithinLimits(const fwtest::Sensor& in, metro_fw_sensor_kind kind, int fs_sel) {
-  const uint8_t bits = in.model_bits;
-  float m[9], b0[3], b1[3], b2[3];
-  for (int i = 0; i < 9; ++i) m[i] = (i % 4 == 0 || (bits & 0x02)) ? in.m[i] : 0.0f;
-  for (int i = 0; i < 3; ++i) {
-    b0[i] = (bits & 0x01) ? in.b0[i] : 0.0f;
-    b1[i] = (bits & 0x04) ? in.b1[i] : 0.0f;
-    b2[i] = (bits & 0x08) ? in.b2[i] : 0.0f;
-  }
-  const float s =
-      (kind == METRO_FW_ACCEL ? 5.98550415e-4f : 1.33158055e-4f) * static_cast<float>(1 << fs_sel);
-  const float bias_limit = static_cast<float>((kind == METRO_FW_ACCEL ? 4096 : 7864) >> fs_sel);
-  auto in_range = [](float x, float lo, float hi) { return x >= lo && x <= hi; };
-  if (!in_range(in.t_ref_c, -40.0f, 85.0f) || !in_range(in.t_valid_min_c, -40.0f, 85.0f) ||
-      !in_range(in.t_valid_max_c, -40.0f, 85.0f) || !(in.t_valid_min_c < in.t_valid_max_c)) {
-    return false;
-  }
-  float d_max = std::fabs(in.t_valid_min_c - in.t_ref_c);
-  const float d_hi = std::fabs(in.t_valid_max_c - in.t_ref_c);
-  if (d_hi > d_max) d_max = d_hi;
-  float det = 0.0f;
-  for (int i = 0; i < 3; ++i) {
-    const int k1 = (i + 1) % 3, k2 = (i + 2) % 3;
-    float n2 = 0.0f;
-    for (int j = 0; j < 3; ++j) n2 += m[3 * i + j] * m[3 * i + j];
-    const float lo = 0.81f * s * s, hi = 1.21f * s * s;
-    if (!in_range(n2, lo, hi)) return false;
-    det += m[i] * (m[3 + k1] * m[6 + k2] - m[3 + k2] * m[6 + k1]);
-    if (!(std::fabs(b0[i]) + (std::fabs(b1[i]) + std::fabs(b2[i]) * d_max) * d_max <= bias_limit)) {
-      return false;
+// Real nominal sensitivity, SI per LSB (MPU6050 PS-MPU-6000A rev 3.4 tables 6.1, 6.2).
+double NominalSensitivity(metro_fw_sensor_kind kind, int fs_sel) {
+  return kind == METRO_FW_ACCEL ? fwtest::kStandardGravity_mps2 / (16384 >> fs_sel)
+                                : (250 << fs_sel) / 32768.0 * fwtest::kPi / 180.0;
+}
+
+double BiasLimit(metro_fw_sensor_kind kind, int fs_sel) {
+  return (kind == METRO_FW_ACCEL ? 4096 : 7864) >> fs_sel;  // 0.25 g, 60 deg/s in counts
+}
+
+// Half-units of the formats of 3.1: M in Q(k - fs_sel), k = 25 / 27; b0, b1 in Q16, b2 in
+// Q24; T in Q12.
+double RowNormBand(metro_fw_sensor_kind kind, int fs_sel) {
+  return std::sqrt(3.0) / 2.0 * std::ldexp(1.0, -((kind == METRO_FW_ACCEL ? 25 : 27) - fs_sel));
+}
+constexpr double kTempBand_c = 1.0 / 8192.0;  // 2^-13
+constexpr double kTempStep_c = 1.0 / 4096.0;  // 2^-12
+
+// The bias-bound band of 3.1: delta = 2^-17 (1 + D' + D'^2) + 2^-12 (|b1| + 2 |b2| D'),
+// D' = D + 2^-12.
+double BiasBand(double d, double b1, double b2) {
+  const double dp = d + kTempStep_c;
+  return std::ldexp(1.0 + dp + dp * dp, -17) +
+         std::ldexp(std::fabs(b1) + 2 * std::fabs(b2) * dp, -12);
+}
+
+enum class Real { kAccept, kReject, kNear };
+
+// Outcome of one check: clearly passes, clearly fails, or within its band of the limit.
+struct Tally {
+  bool fail = false;
+  bool near = false;
+  // x must be <= limit; band is where the integer decision may differ.
+  void AtMost(double x, double limit, double band) {
+    if (x > limit + band) {
+      fail = true;
+    } else if (x >= limit - band) {
+      near = true;
     }
   }
-  return det > 0.0f;
+  void Exact(bool ok) { fail = fail || !ok; }
+  Real Result() const { return fail ? Real::kReject : near ? Real::kNear : Real::kAccept; }
+};
+
+// The 3.1 rule on the real values of the (finite) binary32 constants, model bits applied.
+Real RealRule(const fwtest::Sensor& in, metro_fw_sensor_kind kind, int fs_sel) {
+  const uint8_t bits = in.model_bits;
+  double m[9], b0[3], b1[3], b2[3];
+  for (int i = 0; i < 9; ++i) m[i] = (i % 4 == 0 || (bits & 0x02)) ? in.m[i] : 0.0;
+  for (int i = 0; i < 3; ++i) {
+    b0[i] = (bits & 0x01) ? in.b0[i] : 0.0;
+    b1[i] = (bits & 0x04) ? in.b1[i] : 0.0;
+    b2[i] = (bits & 0x08) ? in.b2[i] : 0.0;
+  }
+  const double s = NominalSensitivity(kind, fs_sel);
+  const double t_ref = in.t_ref_c, t_min = in.t_valid_min_c, t_max = in.t_valid_max_c;
+  Tally t;
+  for (double x : {t_ref, t_min, t_max}) {
+    t.AtMost(x, 85.0, kTempBand_c);
+    t.AtMost(-x, 40.0, kTempBand_c);
+  }
+  // t_min < t_max: exact when they differ by more than 2^-12 (and t_min >= t_max always fails).
+  if (t_min >= t_max) {
+    t.fail = true;
+  } else if (t_max - t_min <= kTempStep_c) {
+    t.near = true;
+  }
+  const double d = std::max(std::fabs(t_min - t_ref), std::fabs(t_max - t_ref));
+  const double band_n = RowNormBand(kind, fs_sel);
+  double r_max = 1.1 * s;
+  for (int i = 0; i < 3; ++i) {
+    const double n =
+        std::sqrt(m[3 * i] * m[3 * i] + m[3 * i + 1] * m[3 * i + 1] + m[3 * i + 2] * m[3 * i + 2]);
+    r_max = std::max(r_max, n);
+    t.AtMost(n, 1.1 * s, band_n);
+    t.AtMost(-n, -0.9 * s, band_n);
+    t.Exact(std::fabs(b1[i]) < 32768.0 && std::fabs(b2[i]) < 128.0);  // fixed-apply ranges
+    t.AtMost(std::fabs(b0[i]) + std::fabs(b1[i]) * d + std::fabs(b2[i]) * d * d,
+             BiasLimit(kind, fs_sel), BiasBand(d, b1[i], b2[i]));
+  }
+  const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
+                     m[2] * (m[3] * m[7] - m[4] * m[6]);
+  // Hadamard: rows moved by at most band_n change det by at most (R + band)^3 - R^3.
+  const double band_det = std::pow(r_max + band_n, 3) - std::pow(r_max, 3);
+  t.AtMost(-det, 0.0, band_det);  // det > 0; det = 0 lies within the band
+  return t.Result();
 }
 
 bool Finite(const fwtest::Sensor& s) {
@@ -70,22 +127,30 @@ int Decode(const fwtest::Sensor& s, metro_fw_sensor_kind kind, int fs_sel) {
   metro_fw_sensor_cal out{};
   REQUIRE(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, 4, 176, METRO_FW_SEC_VERSION_1_0, kind,
                                  &cfg, &out) == METRO_FW_OK);
+  // Whatever the status, the constants loaded (the section's or the defaults) convert to the
+  // fixed-point formats of 3.2: 3.1 bounds |b1| < 2^15 and |b2| < 2^7.
+  metro_fw_sensor_fixed fx;
+  if (metro_fw_fixed_from_cal(&out, &fx) != METRO_FW_OK) {
+    FAIL_CHECK("a loaded section does not convert to fixed point");
+  }
   return out.status;
 }
 
-float Ulps(float x, int n) {
-  const float dir =
-      n > 0 ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
-  for (int k = 0; k < std::abs(n); ++k) x = std::nextafter(x, dir);
-  return x;
+fwtest::Sensor Base(metro_fw_sensor_kind kind, int fs_sel) {
+  fwtest::Sensor s = kind == METRO_FW_ACCEL ? fwtest::GoodAccel() : fwtest::GoodGyro();
+  s.fs_sel = static_cast<uint8_t>(fs_sel);
+  for (float& v : s.m) v *= static_cast<float>(1 << fs_sel);
+  return s;
 }
 
 }  // namespace
 
-TEST_CASE("Integer limit checks decide as the float evaluation did", "[fw][blob][limits]") {
+TEST_CASE("Integer limit checks decide as the real-number rule outside the band",
+          "[fw][blob][limits]") {
   std::mt19937 rng(20240611u);
   auto pick = [&](int n) { return static_cast<int>(rng() % static_cast<uint32_t>(n)); };
-  auto ulp = [&]() { return pick(9) - 4; };
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  auto bands = [&]() { return 2.0 * unit(rng); };  // a position within +-2 bands of a limit
   const float inf = std::numeric_limits<float>::infinity();
   const std::vector<float> special = {std::numeric_limits<float>::quiet_NaN(),
                                       inf,
@@ -94,28 +159,28 @@ TEST_CASE("Integer limit checks decide as the float evaluation did", "[fw][blob]
                                       -0.0f,
                                       std::numeric_limits<float>::denorm_min(),
                                       -std::numeric_limits<float>::denorm_min(),
-                                      Ulps(std::numeric_limits<float>::min(), -1),
+                                      std::nextafter(std::numeric_limits<float>::min(), 0.0f),
                                       std::numeric_limits<float>::min(),
                                       1e-30f,
                                       std::numeric_limits<float>::max(),
                                       -std::numeric_limits<float>::max(),
                                       3e19f,
-                                      1e10f};
-  int accepted = 0, limits = 0, nonfinite = 0, near_accept = 0, near_reject = 0;
+                                      -1e10f,
+                                      32768.0f,
+                                      128.0f};
+  int accepted = 0, rejected = 0, nonfinite = 0, skipped = 0;
+  int outside_rejected[5] = {}, inside_accepted[5] = {};
   for (int iter = 0; iter < 60000; ++iter) {
     const metro_fw_sensor_kind kind = pick(2) == 0 ? METRO_FW_ACCEL : METRO_FW_GYRO;
     const int fs_sel = pick(4);
-    fwtest::Sensor s = kind == METRO_FW_ACCEL ? fwtest::GoodAccel() : fwtest::GoodGyro();
-    s.fs_sel = static_cast<uint8_t>(fs_sel);
+    fwtest::Sensor s = Base(kind, fs_sel);
     const uint8_t model[] = {0x0F, 0x01, 0x03, 0x07, 0x0D, 0x8F, 0x00};
     s.model_bits = model[pick(7)];
-    const float sn = (kind == METRO_FW_ACCEL ? 5.98550415e-4f : 1.33158055e-4f) *
-                     static_cast<float>(1 << fs_sel);
-    for (float& v : s.m) v *= static_cast<float>(1 << fs_sel);
-    const float limit = static_cast<float>((kind == METRO_FW_ACCEL ? 4096 : 7864) >> fs_sel);
+    const double sn = NominalSensitivity(kind, fs_sel);
+    const double limit = BiasLimit(kind, fs_sel);
     const int row = pick(3);
-    bool near = false;
-    switch (pick(9)) {
+    int family = -1;  // which limit the +-2 band construction targets
+    switch (pick(10)) {
       case 0:  // a special value anywhere
         switch (pick(6)) {
           case 0:
@@ -138,87 +203,209 @@ TEST_CASE("Integer limit checks decide as the float evaluation did", "[fw][blob]
             break;
         }
         break;
-      case 1: {  // temperatures at the limits +- ulps
-        const float ends[] = {-40.0f, 85.0f};
+      case 1: {  // a temperature limit +- 2 bands
+        family = 0;
+        const double ends[] = {-40.0, 85.0};
         float* t[] = {&s.t_ref_c, &s.t_valid_min_c, &s.t_valid_max_c};
-        *t[pick(3)] = Ulps(ends[pick(2)], ulp());
-        if (pick(2) == 0) s.t_valid_max_c = Ulps(s.t_valid_min_c, pick(3) - 1);
-        near = true;
+        if (pick(3) == 0) {
+          s.t_valid_min_c = static_cast<float>(10.0 + 40.0 * unit(rng));
+          s.t_valid_max_c = static_cast<float>(s.t_valid_min_c + 2.0 * kTempStep_c * unit(rng));
+        } else {
+          const int e = pick(2);
+          *t[pick(3)] = static_cast<float>(ends[e] + (e == 0 ? -1 : 1) * bands() * kTempBand_c);
+        }
         break;
       }
-      case 2:    // a diagonal row at 0.9 or 1.1 s_nom +- ulps
-      case 3: {  // or a rotated row with the same norm
-        const float k = pick(2) == 0 ? std::sqrt(0.81f) : std::sqrt(1.21f);
-        for (int j = 0; j < 3; ++j) s.m[3 * row + j] = 0.0f;
+      case 2:    // a row norm at 0.9 or 1.1 s_nom +- 2 bands, along an axis,
+      case 3: {  // or in a random direction
+        family = 1;
+        const double n = (pick(2) == 0 ? 0.9 : 1.1) * sn + bands() * RowNormBand(kind, fs_sel);
+        double v[3] = {0.0, 0.0, 0.0};
+        v[row] = 1.0;
         if (pick(2) == 0) {
-          s.m[4 * row] = Ulps(k * sn, ulp());
+          for (double& x : v) x += 0.4 * unit(rng);
+        }
+        const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        for (int j = 0; j < 3; ++j) s.m[3 * row + j] = static_cast<float>(n * v[j] / len);
+        s.model_bits |= 0x02;
+        break;
+      }
+      case 4: {  // bias bound at the limit +- 2 bands
+        family = 2;
+        s.t_ref_c = static_cast<float>(25.0 + 20.0 * unit(rng));
+        s.t_valid_min_c = static_cast<float>(-40.0 + 60.0 * std::fabs(unit(rng)));
+        s.t_valid_max_c = static_cast<float>(85.0 - 60.0 * std::fabs(unit(rng)));
+        const double d = std::max(std::fabs(double{s.t_valid_min_c} - s.t_ref_c),
+                                  std::fabs(double{s.t_valid_max_c} - s.t_ref_c));
+        s.b0 = {0.0f, 0.0f, 0.0f};
+        s.b1 = {0.0f, 0.0f, 0.0f};
+        s.b2 = {0.0f, 0.0f, 0.0f};
+        s.b1[row] = static_cast<float>(unit(rng) * 0.5 * limit / d);
+        s.b2[row] = static_cast<float>(unit(rng) * 0.4 * limit / (d * d));
+        const double rest = (std::fabs(s.b1[row]) + std::fabs(s.b2[row]) * d) * d;
+        const double b0 = limit - rest + bands() * BiasBand(d, s.b1[row], s.b2[row]);
+        s.b0[row] = static_cast<float>(pick(2) ? -b0 : b0);
+        s.model_bits = 0x0F;
+        break;
+      }
+      case 5: {  // det(M) near 0 with every row norm s_nom: rows x, y and (0, cos a, sin a)
+        family = 3;
+        const double r = 1.1 * sn + RowNormBand(kind, fs_sel);
+        const double band_det = std::pow(r + RowNormBand(kind, fs_sel), 3) - std::pow(r, 3);
+        const double z = bands() * band_det / (sn * sn * sn);
+        s.m = {
+            static_cast<float>(sn),    0.0f, 0.0f, 0.0f,
+            static_cast<float>(sn),    0.0f, 0.0f, static_cast<float>(sn * std::sqrt(1.0 - z * z)),
+            static_cast<float>(sn * z)};
+        s.model_bits |= 0x02;
+        break;
+      }
+      case 6: {  // fixed-apply ranges |b1| < 2^15, |b2| < 2^7 with a narrow validity range
+        family = 4;
+        s.t_ref_c = 25.0f;
+        s.t_valid_min_c = 25.0f;
+        s.t_valid_max_c = 25.0f + 1.0f / 1024.0f;
+        const int ulps = pick(5) - 2;
+        float v = pick(2) == 0 ? 32768.0f : 128.0f;
+        for (int k = 0; k < std::abs(ulps); ++k) v = std::nextafter(v, ulps > 0 ? inf : 0.0f);
+        if (v > 200.0f) {
+          s.b1[row] = pick(2) ? -v : v;
         } else {
-          s.m[3 * row + (row + 1) % 3] = Ulps(k * sn * 0.6f, ulp());
-          s.m[4 * row] = Ulps(k * sn * 0.8f, ulp());
+          s.b2[row] = pick(2) ? -v : v;
+        }
+        s.b0[row] = 0.0f;
+        s.model_bits = 0x0F;
+        break;
+      }
+      case 7: {  // subnormal, tiny or huge entries of M; negative scale; reflections
+        switch (pick(4)) {
+          case 0:
+            s.m[pick(9)] = special[3 + pick(special.size() - 3)];
+            break;
+          case 1:
+            for (float& v : s.m) v = -v;  // negative scale: det < 0
+            break;
+          case 2:
+            for (int j = 0; j < 3; ++j) s.m[3 * row + j] = -s.m[3 * row + j];  // reflection
+            break;
+          default:  // two flipped rows: a rotation by pi, det > 0
+            for (int j = 0; j < 6; ++j) s.m[(3 * row + j) % 9] = -s.m[(3 * row + j) % 9];
+            break;
         }
         s.model_bits |= 0x02;
-        near = true;
         break;
       }
-      case 4: {  // bias bound at the limit +- ulps
-        const float d = std::max(std::fabs(s.t_valid_min_c - s.t_ref_c),
-                                 std::fabs(s.t_valid_max_c - s.t_ref_c));
-        s.b1[row] = (pick(2) ? -1.0f : 1.0f) * static_cast<float>(pick(40)) / 8.0f;
-        s.b2[row] = (pick(2) ? -1.0f : 1.0f) * static_cast<float>(pick(5)) / 64.0f;
-        const float rest = (std::fabs(s.b1[row]) + std::fabs(s.b2[row]) * d) * d;
-        s.b0[row] = (pick(2) ? -1.0f : 1.0f) * Ulps(limit - rest, ulp());
-        s.model_bits = 0x0F;
-        near = true;
-        break;
-      }
-      case 5:  // subnormal and tiny entries of M, reflections
-        s.m[pick(9)] = special[5 + pick(5)];
-        if (pick(2) == 0)
-          for (int j = 0; j < 3; ++j) s.m[3 * row + j] = -s.m[3 * row + j];
-        break;
-      case 6: {  // random temperatures
+      case 8: {  // random temperatures
         std::uniform_real_distribution<float> t(-45.0f, 90.0f);
         s.t_ref_c = t(rng);
         s.t_valid_min_c = t(rng);
         s.t_valid_max_c = t(rng);
         break;
       }
-      default: {  // random scale and bias
-        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-        for (float& v : s.m) v *= 1.0f + 0.12f * u(rng);
+      default: {  // random sections: a random rotation, scale within +-12 %, random biases
+        const double a = fwtest::kPi * unit(rng), b = fwtest::kPi * unit(rng);
+        const double rot[9] = {std::cos(a),
+                               -std::sin(a) * std::cos(b),
+                               std::sin(a) * std::sin(b),
+                               std::sin(a),
+                               std::cos(a) * std::cos(b),
+                               -std::cos(a) * std::sin(b),
+                               0.0,
+                               std::sin(b),
+                               std::cos(b)};
         for (int i = 0; i < 3; ++i) {
-          s.b0[i] = limit * u(rng);
-          s.b1[i] = 50.0f * u(rng);
-          s.b2[i] = u(rng);
+          const double k = sn * (1.0 + 0.12 * unit(rng));
+          for (int j = 0; j < 3; ++j) s.m[3 * i + j] = static_cast<float>(k * rot[3 * i + j]);
+          s.b0[i] = static_cast<float>(limit * unit(rng));
+          s.b1[i] = static_cast<float>(40.0 * unit(rng) / (1 << fs_sel));
+          s.b2[i] = static_cast<float>(0.5 * unit(rng) / (1 << fs_sel));
         }
+        s.model_bits |= 0x02;
         break;
       }
     }
-    int expected;
-    if (!Finite(s)) {
-      expected = METRO_FW_SENSOR_NONFINITE;
-      ++nonfinite;
-    } else if (FloatWithinLimits(s, kind, fs_sel)) {
-      expected = METRO_FW_SENSOR_OK;
-      ++accepted;
-      near_accept += near ? 1 : 0;
-    } else {
-      expected = METRO_FW_SENSOR_LIMITS;
-      ++limits;
-      near_reject += near ? 1 : 0;
-    }
     const int got = Decode(s, kind, fs_sel);
+    if (!Finite(s)) {
+      ++nonfinite;
+      CHECK(got == METRO_FW_SENSOR_NONFINITE);
+      continue;
+    }
+    const Real want = RealRule(s, kind, fs_sel);
+    if (want == Real::kNear) {
+      ++skipped;
+      CHECK((got == METRO_FW_SENSOR_OK || got == METRO_FW_SENSOR_LIMITS));
+      continue;
+    }
+    const int expected = want == Real::kAccept ? METRO_FW_SENSOR_OK : METRO_FW_SENSOR_LIMITS;
+    if (want == Real::kAccept) ++accepted;
+    if (want == Real::kReject) ++rejected;
+    if (family >= 0 && got == expected) {
+      (want == Real::kAccept ? inside_accepted : outside_rejected)[family] += 1;
+    }
     if (got != expected) {
-      INFO("iteration " << iter << " kind " << kind << " fs_sel " << fs_sel);
+      INFO("iteration " << iter << " kind " << kind << " fs_sel " << fs_sel << " family "
+                        << family);
       CHECK(got == expected);
     }
   }
-  // Both decisions occur, also among the values within a few ulp of a limit.
-  CHECK(accepted > 5000);
-  CHECK(limits > 5000);
+  CHECK(accepted > 10000);
+  CHECK(rejected > 10000);
   CHECK(nonfinite > 500);
-  CHECK(near_accept > 2000);
-  CHECK(near_reject > 2000);
+  // Between 1 and 2 bands from each limit, both sides are decided as the real-number rule
+  // (the loop checked each one), and each side occurs often.
+  for (int f = 0; f < 5; ++f) {
+    INFO("family " << f);
+    CHECK(inside_accepted[f] > 300);
+    CHECK(outside_rejected[f] > 300);
+  }
+  // The band is not vacuous: a few sections were within it.
+  CHECK(skipped > 100);
+}
+
+TEST_CASE("Limit checks accept and reject just beyond the stated band", "[fw][blob][limits]") {
+  for (int k = 0; k < 2; ++k) {
+    const metro_fw_sensor_kind kind = k == 0 ? METRO_FW_ACCEL : METRO_FW_GYRO;
+    for (int fs_sel = 0; fs_sel < 4; ++fs_sel) {
+      const double sn = NominalSensitivity(kind, fs_sel);
+      const double band_n = RowNormBand(kind, fs_sel);
+      for (double side : {-1.0, 1.0}) {
+        // Row 1 along y at 0.9 s_nom / 1.1 s_nom, moved 1.05 bands inwards or outwards.
+        for (double end : {0.9, 1.1}) {
+          fwtest::Sensor s = Base(kind, fs_sel);
+          s.m = {static_cast<float>(sn), 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+                 static_cast<float>(sn)};
+          const double out_dir = end > 1.0 ? 1.0 : -1.0;
+          s.m[4] = static_cast<float>(end * sn + side * out_dir * 1.05 * band_n);
+          s.model_bits = 0x0F;
+          INFO("kind " << k << " fs_sel " << fs_sel << " row norm end " << end << " side " << side);
+          CHECK(Decode(s, kind, fs_sel) ==
+                (side > 0 ? METRO_FW_SENSOR_LIMITS : METRO_FW_SENSOR_OK));
+        }
+        // Bias bound: b0 = limit - (|b1| + |b2| D) D -+ 1.05 bands.
+        {
+          fwtest::Sensor s = Base(kind, fs_sel);
+          const double d = 25.0;  // t_ref 25, valid 0 ... 50
+          const double band = BiasBand(d, s.b1[2], s.b2[2]);
+          const double rest = (std::fabs(s.b1[2]) + std::fabs(s.b2[2]) * d) * d;
+          s.b0[2] = static_cast<float>(BiasLimit(kind, fs_sel) - rest + side * 1.05 * band);
+          INFO("kind " << k << " fs_sel " << fs_sel << " bias side " << side);
+          CHECK(Decode(s, kind, fs_sel) ==
+                (side > 0 ? METRO_FW_SENSOR_LIMITS : METRO_FW_SENSOR_OK));
+        }
+        // Temperatures: t_valid_max_c at 85 +- 1.05 bands, t_valid_min_c at -40 -+ 1.05 bands.
+        {
+          fwtest::Sensor s = Base(kind, fs_sel);
+          s.t_valid_max_c = static_cast<float>(85.0 + side * 1.05 * kTempBand_c);
+          s.t_valid_min_c = static_cast<float>(-40.0 - side * 1.05 * kTempBand_c);
+          s.b1 = {0.0f, 0.0f, 0.0f};
+          s.b2 = {0.0f, 0.0f, 0.0f};
+          INFO("kind " << k << " fs_sel " << fs_sel << " temperature side " << side);
+          CHECK(Decode(s, kind, fs_sel) ==
+                (side > 0 ? METRO_FW_SENSOR_LIMITS : METRO_FW_SENSOR_OK));
+        }
+      }
+    }
+  }
 }
 
 TEST_CASE("Nominal sensitivity doubles exactly per fs_sel", "[fw][blob]") {

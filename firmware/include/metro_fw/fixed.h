@@ -45,7 +45,8 @@ typedef struct {
 /* Converts cal's constants to the formats above. Returns METRO_FW_OK, or METRO_FW_E_ARG for
  * NULL pointers or a constant outside its format (|M_ij| >= 2^-5 SI/LSB, |b0| or |b1| >=
  * 2^15, |b2| >= 2^7, |T| >= 2^19 degC, NaN or Inf); out is then all zero. Every section that
- * passes section 3.1 converts unless |b1| >= 32768 LSB/degC or |b2| >= 128 LSB/degC^2. */
+ * passes section 3.1 converts (3.1 bounds |b1| < 2^15 LSB/degC and |b2| < 2^7 LSB/degC^2), and
+ * so do the defaults. */
 int metro_fw_fixed_from_cal(const metro_fw_sensor_cal* cal, metro_fw_sensor_fixed* out);
 
 /* out_q20[i] = y_i * 2^20 for raw counts raw_lsb and die temperature temp_q12 (degC * 4096,
