@@ -3,6 +3,7 @@
 
 #include <memory>
 
+#include "cli_progress.hpp"
 #include "commands.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
@@ -72,9 +73,16 @@ int RunFit(const FitOptions& f) {
   }
   std::vector<Session> sessions;
   const size_t step = f.imutk ? 2 : 1;
+  TerminalProgress progress(stderr, apps::CliProgressOptions());  // Loads (bytes), then the fit.
   for (size_t i = 0; i < f.inputs.size(); i += step) {
+    LoadOptions load;
+    if (!f.imutk) {
+      apps::BeginLoadPhase(&progress, f.inputs[i]);
+      load.on_bytes_parsed = [&progress](int64_t n) { progress.Advance(n); };
+    }
     Result<Session> s =
-        f.imutk ? LoadImuTk(f.inputs[i], f.inputs[i + 1]) : LoadSession(f.inputs[i]);
+        f.imutk ? LoadImuTk(f.inputs[i], f.inputs[i + 1]) : LoadSession(f.inputs[i], load);
+    progress.Finish();
     if (!s.ok()) {
       fmt::print(stderr, "error: {}\n", s.error().ToString());
       return kExitUsage;
@@ -88,7 +96,9 @@ int RunFit(const FitOptions& f) {
     fmt::print(stderr, "error: {}\n", c.error().ToString());
     return kExitUsage;
   }
+  progress.BeginPhase("fit (Ceres)", kUncountedWork);
   Result<Calibration> cal = CalibrateSessions(ptrs, o);
+  progress.Finish();
   if (!cal.ok()) {
     fmt::print(stderr, "error: {}\n", cal.error().ToString());
     return kExitFailed;

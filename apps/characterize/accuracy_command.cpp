@@ -4,9 +4,8 @@
 #include <fmt/format.h>
 
 #include <cstdio>
-#include <filesystem>
-#include <system_error>
 
+#include "cli_progress.hpp"
 #include "exit_codes.hpp"
 #include "metro/accuracy/accuracy.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
@@ -125,10 +124,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   load.threads = in.threads;
   // One line per phase on a terminal: the load in bytes, then the evaluation.
   TerminalProgress progress(stderr, CliProgressOptions());
-  std::error_code size_error;
-  const auto bytes = std::filesystem::file_size(in.session, size_error);
-  progress.BeginPhase("load " + std::filesystem::path(in.session).filename().string(),
-                      size_error ? 0 : static_cast<int64_t>(bytes), "MB", 1e6);
+  BeginLoadPhase(&progress, in.session);
   load.on_bytes_parsed = [&progress](int64_t n) { progress.Advance(n); };
   auto session = LoadSession(in.session, load);
   progress.Finish();

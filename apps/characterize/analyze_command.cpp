@@ -6,6 +6,7 @@
 
 #include "accuracy_command.hpp"
 #include "analysis_options.hpp"
+#include "cli_progress.hpp"
 #include "commands.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/progress.hpp"

@@ -4,6 +4,7 @@
 #include <memory>
 #include <utility>
 
+#include "cli_progress.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/uncertainty/budget_report.hpp"

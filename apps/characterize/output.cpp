@@ -26,10 +26,4 @@ Status CheckOutputPath(const std::string& output, const std::vector<std::string>
 
 void PrintError(const Error& error) { fmt::print(stderr, "error: {}\n", error.ToString()); }
 
-ProgressOptions CliProgressOptions() {
-  ProgressOptions options;
-  options.delay_s = 0.5;
-  return options;
-}
-
 }  // namespace metro::apps

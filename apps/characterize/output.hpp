@@ -5,7 +5,6 @@
 #include <string>
 #include <vector>
 
-#include "metro/core/progress.hpp"
 #include "metro/core/status.hpp"
 
 namespace metro::apps {
@@ -15,9 +14,5 @@ Status CheckOutputPath(const std::string& output, const std::vector<std::string>
 
 // Prints "error: <message>" to stderr.
 void PrintError(const Error& error);
-
-// Progress lines on stderr: on a terminal only, and only for work that runs longer than
-// half a second, so quick runs stay quiet.
-ProgressOptions CliProgressOptions();
 
 }  // namespace metro::apps
