@@ -1,12 +1,15 @@
 // session.csv loader.
 //
-// The file is memory-mapped and cut into line-aligned blocks that worker threads parse
-// independently into row-major buffers (numbers with fast_float). A single sequential pass
-// then moves the rows, in file order, into per-tag columns, checking time order per tag.
-// Because errors and rejections are resolved in that sequential pass, strict and lenient
-// loads behave exactly as a one-thread reader would, whatever the thread count. Pages of
-// the mapping are released behind the parser, so peak memory is about the size of the
-// parsed numbers, not file + numbers.
+// The file is memory-mapped and cut into line-aligned blocks. Clean files (the usual case:
+// no malformed row, no text column, time increasing per tag) take two parallel passes that
+// put every number straight into its tag column: pass 1 counts each block's rows per
+// sensor, which fixes where each row goes; pass 2 parses every block into those places.
+// Anything irregular sends the file to the general loader: worker threads parse blocks
+// into row-major buffers, then one sequential pass moves the rows, in file order, into the
+// per-tag columns, checking time order per tag, so strict and lenient loads behave exactly
+// as a one-thread reader would, whatever the thread count, and every error names its line.
+// Pages of the mapping are released behind the parser, so peak memory is about the size of
+// the parsed numbers, not file + numbers.
 #include <fast_float/fast_float.h>
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -23,6 +26,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <new>
 #include <optional>
 #include <thread>
@@ -30,6 +34,7 @@
 #include "core/parallel.hpp"
 #include "io/columns.hpp"
 #include "io/session_internal.hpp"
+#include "metro/core/check.hpp"
 #include "metro/core/file.hpp"
 
 namespace metro::internal {
@@ -227,7 +232,12 @@ inline const char* PlainDecimal(const char* p, const char* e, double* out) {
   if (digits == 0 || digits > 15) return nullptr;
   if (q < e && (*q == 'e' || *q == 'E' || static_cast<unsigned>(*q - '0') < 10)) return nullptr;
   const double v = static_cast<double>(m) / kPow10[fraction];
-  *out = negative ? -v : v;
+  // -v without a branch (signs in a data file are as good as random): v >= +0, so setting
+  // the sign bit is exact negation.
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  bits |= static_cast<uint64_t>(negative) << 63;
+  std::memcpy(out, &bits, sizeof bits);
   return q;
 }
 
@@ -719,9 +729,8 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
     Tag tag;
     tag.sensor = s;
     auto size_column = [rows](auto& v) {
-      v.reserve(rows);
+      v.reserve(rows);  // Sized block by block in pass 2.
       AdviseHugePages(v.data(), rows * sizeof(v[0]));
-      v.resize(rows);
     };
     size_column(tag.t_s);
     size_column(tag.line);
@@ -751,9 +760,28 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
     first_line[i] = line;
     line += blocks[i].lines;
   }
+  // The tag columns are only reserved so far. Just before a block is parsed, every column
+  // is sized (zero-filled) up to the end of the block's rows: the zeroed lines are still in
+  // cache when the parser writes them (sizing all columns first zero-fills all of them,
+  // hundreds of MB, which the parser then fetches again from memory), and the page faults
+  // are taken by both threads. Sizes only grow and a block writes only below its limits, so a
+  // zero-fill never reaches rows already parsed. Elements are written through pointers taken above,
+  // which a resize within the reserved capacity leaves valid.
+  std::mutex size_mutex;
+  auto size_columns = [&](const CleanBlock& block) {
+    std::lock_guard<std::mutex> lock(size_mutex);
+    for (Tag& tag : session.tags) {
+      const size_t rows = block.limit[static_cast<size_t>(tag.sensor)];
+      if (tag.t_s.size() >= rows) continue;
+      tag.t_s.resize(rows);
+      tag.line.resize(rows);
+      for (Quantity& q : tag.quantities) q.values.resize(rows);
+    }
+  };
   std::atomic<bool> clean{true};
   ParallelFor(blocks.size(), threads, [&](size_t i) {
     if (!clean.load(std::memory_order_relaxed)) return;
+    size_columns(blocks[i]);
     if (ParseCleanBlock(file, plan, first_line[i], columns, &blocks[i])) {
       progress->Parsed(i, blocks[i].begin, blocks[i].end);
     } else {
@@ -761,6 +789,9 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
     }
   });
   if (!clean.load()) return std::nullopt;
+  for (const Tag& tag : session.tags) {
+    METRO_CHECK(tag.t_s.size() == static_cast<size_t>(tag.counts.fresh));  // Last block's limits.
+  }
   // Time must increase strictly per tag; if it does not, the general loader reports (or,
   // with --lenient, rejects) the rows in file order.
   ParallelFor(session.tags.size(), threads, [&](size_t i) {

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "io/session_internal.hpp"
+#include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
 #include "support/temp_file.hpp"
 
@@ -345,6 +346,23 @@ TEST_CASE("Decimals are parsed bit for bit as fast_float parses them", "[io][csv
     if (std::memcmp(&expected, &values[i], sizeof(double)) != 0) ++mismatches;
   }
   CHECK(mismatches == 0);
+}
+
+TEST_CASE("Sha256File hashes a mapped file in chunks as one digest", "[io][sha256]") {
+  // FIPS 180-2 Appendix B.3: SHA-256 of one million 'a'.
+  TempFile million(std::string(1000000, 'a'));
+  auto digest = Sha256File(million.path());
+  REQUIRE(digest.ok());
+  CHECK(digest.value() == "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  // Several 4 MiB chunks and a tail that is not a whole page: the same digest as the
+  // one-shot hash of the bytes in memory.
+  std::mt19937_64 rng(7);
+  std::string bytes((size_t{9} << 20) + 123, '\0');
+  for (char& c : bytes) c = static_cast<char>(rng() & 0xFF);
+  TempFile large(bytes);
+  digest = Sha256File(large.path());
+  REQUIRE(digest.ok());
+  CHECK(digest.value() == Sha256Hex(bytes));
 }
 
 TEST_CASE("FormatSessionCsv round-trips a session", "[io][csv]") {
