@@ -4,8 +4,10 @@
 # Usage: firmware/cross-build.sh [out_dir]     (default: a temporary directory)
 #
 # Flags: -mcpu=cortex-m0 -mthumb -Os plus -ffunction-sections -fdata-sections (so the
-# link drops what the tag does not call) and -fno-tree-loop-distribute-patterns (byte loops
-# stay loops instead of calls to newlib's memcpy/memset: 300 bytes on the M0).
+# link drops what the tag does not call), -fno-tree-loop-distribute-patterns (byte loops
+# stay loops instead of calls to newlib's memcpy/memset: 300 bytes on the M0) and
+# -fno-jump-tables (the push request dispatch as compares instead of a byte table and
+# libgcc's __gnu_thumb1_case_uqi: 28 bytes). The tag's firmware build uses the same flags.
 #
 # Figures (docs/calibration-blob.md section 3.3), from the link map of a probe whose table
 # references every public function, linked with --gc-sections, no startup files:
@@ -24,9 +26,10 @@ here=$(cd "$(dirname "$0")" && pwd)
 out=${1:-$(mktemp -d)}
 mkdir -p "$out"
 cc=${CC_ARM:-arm-none-eabi-gcc}
-arch="-mcpu=cortex-m0 -mthumb -Os -ffunction-sections -fdata-sections -fno-tree-loop-distribute-patterns"
+arch="-mcpu=cortex-m0 -mthumb -Os -ffunction-sections -fdata-sections"
+arch="$arch -fno-tree-loop-distribute-patterns -fno-jump-tables"
 flags="-std=c99 $arch -Wall -Wextra -pedantic -Werror"
-whole_limit=${METRO_FW_WHOLE_LIMIT:-4617}
+whole_limit=${METRO_FW_WHOLE_LIMIT:-4430}
 
 objs=""
 for src in le crc blob update push fixed; do

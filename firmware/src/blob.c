@@ -5,8 +5,11 @@
 #include "le.h"
 #include "metro_fw/crc.h"
 
-/* Bytes read per call while computing the CRC: small enough for the boot stack. */
+/* Bytes read per call while computing the CRC: small enough for the boot stack; a multiple
+ * of 4 (the stored CRC is never split between two chunks). */
 #define METRO_FW_CHUNK 32u
+/* CRC-32/ISO-HDLC of any byte string followed by its own CRC, little-endian. */
+#define METRO_FW_CRC32_RESIDUE 0x2144DF1Cu
 
 /* Physical limits of section 3.1. */
 #define METRO_FW_TEMP_MIN_C (-40.0f)
@@ -89,19 +92,19 @@ int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
   metro_fw_blob_info local;
   metro_fw_blob_info* in = info != 0 ? info : &local;
   uint8_t buf[METRO_FW_CHUNK];
-  uint32_t magic, crc, off, crc_off, i;
+  uint32_t magic, crc, off, n, i;
   int rc;
   if (read == 0 || device_id == 0) return METRO_FW_E_ARG;
   for (i = 0; i < sizeof(*in); ++i) ((uint8_t*)in)[i] = 0;
   if (avail_len < 4u) return METRO_FW_E_BOUNDS;
-  rc = read(ctx, 0, buf, 4);
+  /* One read of the header, or of all there is when avail_len is shorter: EMPTY and MAGIC
+   * still come before BOUNDS (section 4). */
+  rc = read(ctx, 0, buf, avail_len < METRO_FW_HEADER_LEN ? avail_len : METRO_FW_HEADER_LEN);
   if (rc != METRO_FW_OK) return rc;
   magic = metro_fw_get_u32(buf);
   if (magic == METRO_FW_ERASED_WORD) return METRO_FW_E_EMPTY;
   if (magic != METRO_FW_MAGIC) return METRO_FW_E_MAGIC;
   if (avail_len < METRO_FW_HEADER_LEN) return METRO_FW_E_BOUNDS;
-  rc = read(ctx, 0, buf, METRO_FW_HEADER_LEN);
-  if (rc != METRO_FW_OK) return rc;
   /* fmt_major, fmt_minor, total_len, header_len (u16) and seq, device_id[2], flags (u32)
    * follow each other in metro_fw_blob_info as in the header (layout checked above). */
   for (i = 0; i < 4; ++i) {
@@ -114,18 +117,23 @@ int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
       (uint32_t)in->header_len + 4u > in->total_len) {
     return METRO_FW_E_BOUNDS;
   }
-  crc_off = (uint32_t)in->total_len - 4u;
+  /* The CRC-32 runs over the whole blob, stored CRC included: the CRC of bytes followed by
+   * their own CRC (little-endian) is the constant 0x2144DF1C (the catalogue residue 0xDEBB20E3
+   * of CRC-32/ISO-HDLC, before the final XOR), and only the right CRC gives it (the last four
+   * bytes enter the register bijectively). total_len is a multiple of 4, so the stored CRC lies
+   * in the last chunk read. */
   crc = 0;
-  for (off = 0; off < crc_off; off += METRO_FW_CHUNK) {
-    uint32_t n = crc_off - off < METRO_FW_CHUNK ? crc_off - off : METRO_FW_CHUNK;
+  off = 0;
+  do { /* total_len >= 36 */
+    n = in->total_len - off;
+    if (n > METRO_FW_CHUNK) n = METRO_FW_CHUNK;
     rc = read(ctx, off, buf, n);
     if (rc != METRO_FW_OK) return rc;
     crc = metro_fw_crc32(crc, buf, n);
-  }
-  rc = read(ctx, crc_off, buf, 4);
-  if (rc != METRO_FW_OK) return rc;
-  in->crc32 = metro_fw_get_u32(buf);
-  if (crc != in->crc32) return METRO_FW_E_CRC;
+    off += n;
+  } while (off < in->total_len);
+  in->crc32 = metro_fw_get_u32(buf + n - 4u);
+  if (crc != METRO_FW_CRC32_RESIDUE) return METRO_FW_E_CRC;
   if (in->device_id[0] != device_id[0] || in->device_id[1] != device_id[1]) {
     return METRO_FW_E_FOREIGN;
   }
@@ -268,7 +276,8 @@ static const uint32_t kNorm2Bounds[4] = {
 #define METRO_FW_TEMP_MIN_Q12 (-40 * 4096)
 #define METRO_FW_TEMP_MAX_Q12 (85 * 4096)
 
-static int64_t Abs64(int32_t x) { return x < 0 ? -(int64_t)x : (int64_t)x; }
+/* |x| for |x| < 2^31 (what metro_fw_cal_to_q gives with cap 31). */
+static uint32_t AbsU32(int32_t x) { return x < 0 ? 0u - (uint32_t)x : (uint32_t)x; }
 
 /* Section 3.1 physical limits on decoded constants (model bits already applied). */
 METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind,
@@ -293,7 +302,7 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
     const int k1 = i == 2 ? 0 : i + 1; /* (i + 1) mod 3 without a libgcc division */
     const int k2 = i == 0 ? 2 : i - 1; /* (i + 2) mod 3 */
     uint32_t n2 = 0u, minor;
-    int64_t c_q28;
+    uint64_t c_q28;
     for (j = 0; j < 3; ++j) n2 += (uint32_t)(q[3 * i + j] * q[3 * i + j]); /* <= 3 * 2^30 */
     if (n2 < n2_bounds[0] || n2 > n2_bounds[1]) return 0;
     /* det(M) = row0 . (row1 x row2). The minor fits int32 once rows 1 and 2 pass their norms
@@ -302,9 +311,11 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
     minor = (uint32_t)q[3 + k1] * (uint32_t)q[6 + k2] - (uint32_t)q[3 + k2] * (uint32_t)q[6 + k1];
     det += (int64_t)q[i] * (int32_t)minor;
     /* |b0| + (|b1| + |b2| D) D <= limit: c = |b1| + |b2| D in Q28 (< 2^44), the sum in Q40
-     * (< 2^63). */
-    c_q28 = Abs64(q[12 + i]) * 4096 + ((Abs64(q[15 + i]) * d) >> 8);
-    if (Abs64(q[9 + i]) * ((int64_t)1 << 24) + c_q28 * d > ((int64_t)(limit_fs0 >> fs_sel) << 40)) {
+     * (< 2^63); all terms are not negative, so unsigned 64-bit. */
+    c_q28 =
+        (uint64_t)AbsU32(q[12 + i]) * 4096u + (((uint64_t)AbsU32(q[15 + i]) * (uint32_t)d) >> 8);
+    if (((uint64_t)AbsU32(q[9 + i]) << 24) + c_q28 * (uint32_t)d >
+        ((uint64_t)(uint32_t)(limit_fs0 >> fs_sel) << 40)) {
       return 0;
     }
   }
@@ -385,6 +396,7 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, 
     ((float*)(void*)out)[i] =
         (bits & kTermBits[i]) == kTermBits[i] ? metro_fw_get_f32(b + at) : 0.0f;
   }
+  METRO_FW_NO_UNROLL
   for (i = 0; i < 3; ++i) out->hw_offs[i] = metro_fw_get_i16(b + 164 + 2 * i);
   status = METRO_FW_SENSOR_OK;
   if (!WithinLimits(out, kind, fs_sel)) {
@@ -411,11 +423,9 @@ int metro_fw_load(const metro_fw_flash* flash, const metro_fw_config* cfg,
   s.flash = flash;
   s.base = 0;
   if (active == METRO_FW_SLOT_NONE) {
-    a->seq = 0; /* nothing active: zeros out, and both sensors absent (defaults) */
-    a->crc32 = 0;
-    a->flags = 0;
-    a->accel_off = 0;
-    a->gyro_off = 0;
+    /* nothing active: zeros out, and both sensors absent (defaults) */
+    uint32_t i;
+    for (i = 0; i < sizeof(*a); ++i) ((uint8_t*)a)[i] = 0;
   } else {
     a = &info[active];
     s.base = flash->slot_addr[active];

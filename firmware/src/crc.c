@@ -19,14 +19,13 @@ uint32_t metro_fw_crc32(uint32_t crc, const uint8_t* data, uint32_t len) {
 }
 
 uint16_t metro_fw_crc16(uint16_t crc, const uint8_t* data, uint32_t len) {
-  uint32_t c = crc;
+  /* The 16-bit register in the top half of a word: the bit shifted out is the sign bit. */
+  uint32_t c = (uint32_t)crc << 16;
   uint32_t i;
   int bit;
   for (i = 0; i < len; ++i) {
-    c ^= (uint32_t)data[i] << 8;
-    for (bit = 0; bit < 8; ++bit) {
-      c = (c & 0x8000u) ? ((c << 1) ^ 0x1021u) : (c << 1);
-    }
+    c ^= (uint32_t)data[i] << 24;
+    for (bit = 0; bit < 8; ++bit) c = (c & 0x80000000u) != 0u ? (c << 1) ^ 0x10210000u : c << 1;
   }
-  return (uint16_t)(c & 0xFFFFu);
+  return (uint16_t)(c >> 16);
 }

@@ -45,10 +45,14 @@ int metro_fw_apply_fixed(const metro_fw_sensor_fixed* fx, const int16_t raw_lsb[
   if (t > fx->t_valid_max_q12) t = fx->t_valid_max_q12;
   dt_q12 = t - fx->t_ref_q12;
   for (i = 0; i < 3; ++i) {
-    /* bias = b0 + (b1 + b2*dT)*dT (Horner), each product rounded to Q16 LSB. */
+    /* bias = b0 + (b1 + b2*dT)*dT (Horner), each product rounded to Q16 LSB, and
+     * e = round((r 2^16 - bias) / 2^6) in Q10. Since r 2^16 is a multiple of 2^6,
+     * e = r 2^10 - floor((bias + 31) / 2^6), and with bias = b0 + floor((c dT + 2^11) / 2^12)
+     * the two floors of integers nest: floor((bias + 31) / 2^6) =
+     * floor(((b0 + 31) 2^12 + 2^11 + c dT) / 2^18). Same integers, one 64-bit shift less. */
     const int64_t c_q16 = fx->b1_q16[i] + MulRound(fx->b2_q24[i], dt_q12, 20);
-    const int64_t bias_q16 = fx->b0_q16[i] + MulRound(c_q16, dt_q12, 12);
-    e_q10[i] = (int32_t)((((int64_t)raw_lsb[i] * 65536) - bias_q16 + 0x20) >> 6);
+    const int64_t s_q28 = c_q16 * dt_q12 + ((int64_t)fx->b0_q16[i] + 31) * 4096 + 2048;
+    e_q10[i] = raw_lsb[i] * 1024 - (int32_t)(s_q28 >> 18);
   }
   for (i = 0; i < 3; ++i) {
     int64_t acc_q46 = 0x2000000; /* rounds the shift below to nearest */

@@ -15,6 +15,14 @@
 #define METRO_FW_NOINLINE
 #endif
 
+/* Keeps the next loop a loop: GCC -Os peels short constant-count loops completely, which on
+ * the M0 costs more than the loop (measured with firmware/cross-build.sh). */
+#if defined(__GNUC__) && (__GNUC__ >= 8 || defined(__clang__))
+#define METRO_FW_NO_UNROLL _Pragma("GCC unroll 1")
+#else
+#define METRO_FW_NO_UNROLL
+#endif
+
 uint16_t metro_fw_get_u16(const uint8_t* p);
 uint32_t metro_fw_get_u32(const uint8_t* p);
 int16_t metro_fw_get_i16(const uint8_t* p);

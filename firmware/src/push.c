@@ -75,14 +75,6 @@ int metro_fw_push_init(metro_fw_push* p, const metro_fw_flash* flash, const uint
   return METRO_FW_OK;
 }
 
-static int SendFrame(metro_fw_push* p, const uint8_t* frame, uint32_t len) {
-  uint8_t enc[2u * METRO_FW_PUSH_MAX_FRAME + 2u];
-  uint32_t n;
-  int rc = metro_fw_slip_encode(frame, len, enc, sizeof(enc), &n);
-  if (rc != METRO_FW_OK) return rc;
-  return p->send(p->send_ctx, enc, n) == 0 ? METRO_FW_OK : METRO_FW_E_FLASH;
-}
-
 /* Little-endian store of the low n bytes of v at w; returns the next free byte. */
 static uint8_t* PutLe(uint8_t* w, uint32_t v, uint32_t n) {
   for (; n != 0u; --n) {
@@ -91,6 +83,11 @@ static uint8_t* PutLe(uint8_t* w, uint32_t v, uint32_t n) {
   }
   return w;
 }
+
+/* The NAK (section 7): op 0xFF, txn 0, len 1, FRAME_ERROR, CRC-16/CCITT-FALSE of the first five
+ * bytes (0xBD1F; push_test checks it against metro_fw_frame_build). */
+static const uint8_t kNak[METRO_FW_PUSH_FRAME_OVERHEAD + 1u] = {
+    METRO_FW_OP_NAK, 0x00, 0x01, 0x00, METRO_FW_RES_FRAME_ERROR, 0x1F, 0xBD};
 
 /* Push result for a failed metro_fw_update, indexed by -code (codes -1 ... -13). */
 static const uint8_t kResultOfError[14] = {
@@ -110,10 +107,20 @@ static const uint8_t kResultOfError[14] = {
     METRO_FW_RES_INVALID_BLOB        /* E_FRAME */
 };
 
-/* Request payload length of ops 0x01 ... 0x07 (section 7): at least kRequestMin[op] bytes and
- * at most kRequestExtra[op] more (CAL_WRITE: offset u16 and 1 ... 16 data bytes). */
-static const uint8_t kRequestMin[8] = {0, 0, 10, 3, 0, 0, 3, 0};
-static const uint8_t kRequestExtra[8] = {0, 0, 0, METRO_FW_PUSH_MAX_CHUNK - 1u, 0, 0, 0, 0};
+/* Request payload length of ops 0x01 ... 0x07 (section 7): at least the low nibble of
+ * kRequestLen[op] bytes and at most the high nibble more (CAL_WRITE: offset u16 and 1 ... 16
+ * data bytes). */
+#define METRO_FW_REQ_LEN(min, extra) (uint8_t)((min) | (extra) << 4)
+static const uint8_t kRequestLen[8] = {
+    0,
+    METRO_FW_REQ_LEN(0u, 0u),                           /* GET_INFO */
+    METRO_FW_REQ_LEN(10u, 0u),                          /* CAL_CREATE */
+    METRO_FW_REQ_LEN(3u, METRO_FW_PUSH_MAX_CHUNK - 1u), /* CAL_WRITE */
+    METRO_FW_REQ_LEN(0u, 0u),                           /* CAL_GET_CRC */
+    METRO_FW_REQ_LEN(0u, 0u),                           /* CAL_EXECUTE */
+    METRO_FW_REQ_LEN(3u, 0u),                           /* CAL_READ */
+    METRO_FW_REQ_LEN(0u, 0u)};                          /* ABORT */
+#undef METRO_FW_REQ_LEN
 
 /* CAL_EXECUTE's checks and the update (section 7); returns the result. */
 METRO_FW_NOINLINE static uint8_t Commit(metro_fw_push* p, int* slot) {
@@ -132,133 +139,148 @@ METRO_FW_NOINLINE static uint8_t Commit(metro_fw_push* p, int* slot) {
 }
 
 /* Executes one request (payload in, n bytes; in is followed by the frame's CRC, so in[0] and
- * in[1] are readable). Appends the response fields after the result byte at *w and returns
- * the result; a request it refuses as malformed (INVALID_PARAM) appends nothing. */
-METRO_FW_NOINLINE static uint8_t Execute(metro_fw_push* p, uint32_t op, const uint8_t* in,
-                                         uint32_t n, uint8_t** w) {
+ * in[1] are readable) and writes the response payload (result byte, then the op's fields) at
+ * p->last_resp + 4, where the response frame is built in place; returns its length. A request
+ * it refuses as malformed (INVALID_PARAM) gets the result byte only. */
+METRO_FW_NOINLINE static uint32_t Execute(metro_fw_push* p, uint32_t op, const uint8_t* in,
+                                          uint32_t n) {
+  uint8_t* const r = p->last_resp + 4;
+  uint8_t* w = r + 1;
   metro_fw_blob_info info[2];
   int result[2];
   int active = METRO_FW_SLOT_NONE;
   const uint32_t off = metro_fw_get_u16(in);
-  const metro_fw_blob_info* act = 0;
-  if (metro_fw_choose_active(p->flash, p->device_id, info, result, &active) == METRO_FW_OK &&
-      active != METRO_FW_SLOT_NONE) {
+  const metro_fw_blob_info* act = info;
+  uint32_t res = METRO_FW_RES_UNKNOWN_OP;
+  /* p's arguments are not NULL: active is 0, 1 or NONE afterwards. Without an active slot,
+   * act points at info[0] with seq and crc32 0 (what GET_INFO reports then). */
+  (void)metro_fw_choose_active(p->flash, p->device_id, info, result, &active);
+  if (active == METRO_FW_SLOT_NONE) {
+    info[0].seq = 0;
+    info[0].crc32 = 0;
+  } else {
     act = &info[active];
   }
-  if (op - 1u > 6u) return METRO_FW_RES_UNKNOWN_OP;
-  if (op == METRO_FW_OP_CAL_WRITE && !p->receiving) return METRO_FW_RES_BAD_STATE;
-  if (n - kRequestMin[op] > kRequestExtra[op]) return METRO_FW_RES_INVALID_PARAM;
+  if (op - 1u > 6u) goto done;
+  res = METRO_FW_RES_BAD_STATE;
+  if (op == METRO_FW_OP_CAL_WRITE && !p->receiving) goto done;
+  res = METRO_FW_RES_INVALID_PARAM;
+  if (n - (kRequestLen[op] & 15u) > (uint32_t)(kRequestLen[op] >> 4)) goto done;
+  res = METRO_FW_RES_SUCCESS;
   if (op == METRO_FW_OP_GET_INFO) {
     /* fmt_major, fmt_minor, active_slot, max_len u16, device_id u32[2], seq, crc32 */
-    *w = PutLe(*w,
-               METRO_FW_FMT_MAJOR | METRO_FW_FMT_MINOR << 8 | (uint32_t)(uint8_t)active << 16 |
-                   (METRO_FW_MAX_LEN & 0xFFu) << 24,
-               4);
-    *w = PutLe(*w, METRO_FW_MAX_LEN >> 8, 1);
-    *w = PutLe(*w, p->device_id[0], 4);
-    *w = PutLe(*w, p->device_id[1], 4);
-    *w = PutLe(*w, act != 0 ? act->seq : 0u, 4);
-    *w = PutLe(*w, act != 0 ? act->crc32 : 0u, 4);
+    w = PutLe(w,
+              METRO_FW_FMT_MAJOR | METRO_FW_FMT_MINOR << 8 | (uint32_t)(uint8_t)active << 16 |
+                  (METRO_FW_MAX_LEN & 0xFFu) << 24,
+              4);
+    w = PutLe(w, METRO_FW_MAX_LEN >> 8, 1);
+    w = PutLe(w, p->device_id[0], 4);
+    w = PutLe(w, p->device_id[1], 4);
+    w = PutLe(w, act->seq, 4);
+    w = PutLe(w, act->crc32, 4);
   } else if (op == METRO_FW_OP_CAL_CREATE) {
     const uint32_t seq = metro_fw_get_u32(in + 6);
     uint32_t i;
     p->receiving = 0;
-    if ((off & 3u) != 0u || off < METRO_FW_HEADER_LEN + 4u || off > METRO_FW_MAX_LEN) {
-      return METRO_FW_RES_INVALID_PARAM;
-    }
-    if (seq < METRO_FW_SEQ_MIN || seq > METRO_FW_SEQ_MAX || (act != 0 && seq <= act->seq)) {
-      return METRO_FW_RES_STALE_SEQ;
-    }
+    res = METRO_FW_RES_INVALID_PARAM;
+    if ((off & 3u) != 0u || off < METRO_FW_HEADER_LEN + 4u || off > METRO_FW_MAX_LEN) goto done;
+    res = METRO_FW_RES_STALE_SEQ;
+    /* without an active slot act->seq is 0 < METRO_FW_SEQ_MIN */
+    if (seq < METRO_FW_SEQ_MIN || seq > METRO_FW_SEQ_MAX || seq <= act->seq) goto done;
     for (i = 0; i < METRO_FW_MAX_LEN; ++i) p->blob[i] = 0xFFu;
     p->total_len = (uint16_t)off;
     p->received_len = 0;
     p->expect_crc32 = metro_fw_get_u32(in + 2);
     p->expect_seq = seq;
     p->receiving = 1;
+    res = METRO_FW_RES_SUCCESS;
   } else if (op == METRO_FW_OP_CAL_WRITE) {
     const uint32_t len = n - 2u;
-    uint8_t res = METRO_FW_RES_INVALID_OFFSET;
     uint32_t i;
-    if (off + len > p->total_len) return METRO_FW_RES_INVALID_PARAM;
+    res = METRO_FW_RES_INVALID_PARAM;
+    if (off + len > p->total_len) goto done;
+    res = METRO_FW_RES_INVALID_OFFSET;
     if (off <= p->received_len) { /* contiguous; rewriting a received range is allowed */
       for (i = 0; i < len; ++i) p->blob[off + i] = in[2 + i];
       if (off + len > p->received_len) p->received_len = (uint16_t)(off + len);
       res = METRO_FW_RES_SUCCESS;
     }
-    *w = PutLe(*w, p->received_len, 2);
-    return res;
+    w = PutLe(w, p->received_len, 2);
   } else if (op == METRO_FW_OP_CAL_GET_CRC) {
-    if (!p->receiving) return METRO_FW_RES_BAD_STATE;
-    *w = PutLe(*w, p->received_len, 2);
-    *w = PutLe(*w, metro_fw_crc32(0, p->blob, p->received_len), 4);
+    res = METRO_FW_RES_BAD_STATE;
+    if (!p->receiving) goto done;
+    w = PutLe(w, p->received_len, 2);
+    w = PutLe(w, metro_fw_crc32(0, p->blob, p->received_len), 4);
+    res = METRO_FW_RES_SUCCESS;
   } else if (op == METRO_FW_OP_CAL_EXECUTE) {
     int slot = METRO_FW_SLOT_NONE;
-    const uint8_t res = Commit(p, &slot);
+    res = Commit(p, &slot);
     /* slot u8 (0xFF unless written: metro_fw_update sets it), seq u32 (0 unless done) */
-    *w = PutLe(*w, (uint32_t)slot, 1);
-    *w = PutLe(*w, res == METRO_FW_RES_SUCCESS ? p->expect_seq : 0u, 4);
+    w = PutLe(w, (uint32_t)slot, 1);
+    w = PutLe(w, res == METRO_FW_RES_SUCCESS ? p->expect_seq : 0u, 4);
     if (res == METRO_FW_RES_SUCCESS) p->updated = 1;
-    return res;
   } else if (op == METRO_FW_OP_CAL_READ) {
     const uint32_t len = in[2];
     metro_fw_slot s;
-    if (act == 0) return METRO_FW_RES_NO_CALIBRATION;
-    if (len - 1u >= METRO_FW_PUSH_MAX_CHUNK || off + len > act->total_len) {
-      return METRO_FW_RES_INVALID_PARAM;
-    }
+    res = METRO_FW_RES_NO_CALIBRATION;
+    if (active == METRO_FW_SLOT_NONE) goto done;
+    res = METRO_FW_RES_INVALID_PARAM;
+    if (len - 1u >= METRO_FW_PUSH_MAX_CHUNK || off + len > act->total_len) goto done;
     s.flash = p->flash;
     s.base = p->flash->slot_addr[active];
-    if (metro_fw_slot_read(&s, off, *w, len) != METRO_FW_OK) return METRO_FW_RES_FLASH_ERROR;
-    *w += len;
+    res = METRO_FW_RES_FLASH_ERROR;
+    if (metro_fw_slot_read(&s, off, w, len) != METRO_FW_OK) goto done;
+    w += len;
+    res = METRO_FW_RES_SUCCESS;
   } else { /* ABORT */
     p->receiving = 0;
   }
-  return METRO_FW_RES_SUCCESS;
+done:
+  r[0] = (uint8_t)res;
+  return (uint32_t)(w - r);
 }
 
-METRO_FW_NOINLINE static int HandleFrame(metro_fw_push* p) {
+/* Handles the frame in p->rx: a NAK for a bad one, else the response (from the cache for a
+ * retry), SLIP-encoded and sent. Returns METRO_FW_OK, METRO_FW_E_FRAME (NAK sent) or
+ * METRO_FW_E_FLASH (the send callback failed). */
+static int HandleFrame(metro_fw_push* p) {
   uint8_t op, txn;
   const uint8_t* payload;
-  uint32_t n, rn, flen;
-  uint16_t req_crc;
-  uint8_t r[METRO_FW_PUSH_MAX_PAYLOAD];
-  uint8_t* w;
-  int rc;
-  if (p->rx_bad || metro_fw_frame_parse(p->rx, p->rx_len, &op, &txn, &payload, &n) != METRO_FW_OK) {
-    uint8_t nak[METRO_FW_PUSH_FRAME_OVERHEAD + 1u];
-    r[0] = METRO_FW_RES_FRAME_ERROR;
-    (void)metro_fw_frame_build(METRO_FW_OP_NAK, 0, r, 1, nak, sizeof(nak), &flen);
-    rc = SendFrame(p, nak, flen);
-    return rc != METRO_FW_OK ? rc : METRO_FW_E_FRAME;
+  const uint8_t* frame = kNak;
+  uint32_t n, len = sizeof(kNak), key;
+  int status = METRO_FW_E_FRAME;
+  uint8_t enc[2u * METRO_FW_PUSH_MAX_FRAME + 2u];
+  if (!p->rx_bad &&
+      metro_fw_frame_parse(p->rx, p->rx_len, &op, &txn, &payload, &n) == METRO_FW_OK) {
+    /* A retry repeats op, txn and the request's CRC-16: answered from the cache, not redone. */
+    key = metro_fw_get_u16(p->rx) | (uint32_t)metro_fw_get_u16(p->rx + p->rx_len - 2u) << 16;
+    if (!p->have_last || key != p->last_key) {
+      /* the payload is built in place: frame_build's copy is from and to the same bytes */
+      (void)metro_fw_frame_build((uint8_t)(op | METRO_FW_PUSH_RESPONSE_BIT), txn, p->last_resp + 4,
+                                 Execute(p, op, payload, n), p->last_resp, sizeof(p->last_resp),
+                                 &len);
+      p->have_last = 1;
+      p->last_key = key;
+      p->last_resp_len = (uint8_t)len;
+    }
+    frame = p->last_resp;
+    len = p->last_resp_len;
+    status = METRO_FW_OK;
   }
-  req_crc = metro_fw_get_u16(p->rx + p->rx_len - 2u);
-  if (p->have_last && op == p->last_op && txn == p->last_txn && req_crc == p->last_req_crc) {
-    return SendFrame(p, p->last_resp, p->last_resp_len); /* a retry: answer, do not redo */
-  }
-  w = r + 1;
-  r[0] = Execute(p, op, payload, n, &w);
-  rn = (uint32_t)(w - r);
-  rc = metro_fw_frame_build((uint8_t)(op | METRO_FW_PUSH_RESPONSE_BIT), txn, r, rn, p->last_resp,
-                            sizeof(p->last_resp), &flen);
-  if (rc != METRO_FW_OK) return rc;
-  p->have_last = 1;
-  p->last_op = op;
-  p->last_txn = txn;
-  p->last_req_crc = req_crc;
-  p->last_resp_len = (uint8_t)flen;
-  return SendFrame(p, p->last_resp, flen);
+  /* enc holds any frame of at most METRO_FW_PUSH_MAX_FRAME bytes: the encoding succeeds */
+  (void)metro_fw_slip_encode(frame, len, enc, sizeof(enc), &n);
+  return p->send(p->send_ctx, enc, n) != 0 ? METRO_FW_E_FLASH : status;
 }
 
 int metro_fw_push_rx(metro_fw_push* p, const uint8_t* data, uint32_t len) {
-  uint32_t i;
   int status = METRO_FW_OK;
   if (p == 0 || (data == 0 && len != 0u)) return METRO_FW_E_ARG;
-  for (i = 0; i < len; ++i) {
-    uint8_t c = data[i];
+  for (; len != 0u; --len) {
+    uint32_t c = *data++;
     if (c == METRO_FW_SLIP_END) {
       if (p->rx_len != 0u || p->rx_bad) {
         int rc = HandleFrame(p);
-        if (rc != METRO_FW_OK && status == METRO_FW_OK) status = rc;
+        if (status == METRO_FW_OK) status = rc; /* the first failure */
       }
       p->rx_len = 0;
       p->rx_escape = 0;
@@ -267,20 +289,17 @@ int metro_fw_push_rx(metro_fw_push* p, const uint8_t* data, uint32_t len) {
     }
     if (p->rx_escape) {
       p->rx_escape = 0;
-      if (c == METRO_FW_SLIP_ESC_END) {
-        c = METRO_FW_SLIP_END;
-      } else if (c == METRO_FW_SLIP_ESC_ESC) {
-        c = METRO_FW_SLIP_ESC;
-      } else {
+      if (c - METRO_FW_SLIP_ESC_END > 1u) { /* neither ESC_END nor ESC_ESC */
         p->rx_bad = 1;
         continue;
       }
+      c = c == METRO_FW_SLIP_ESC_END ? METRO_FW_SLIP_END : METRO_FW_SLIP_ESC;
     } else if (c == METRO_FW_SLIP_ESC) {
       p->rx_escape = 1;
       continue;
     }
     if (p->rx_len < sizeof(p->rx)) {
-      p->rx[p->rx_len++] = c;
+      p->rx[p->rx_len++] = (uint8_t)c;
     } else {
       p->rx_bad = 1;
     }

@@ -410,3 +410,44 @@ TEST_CASE("Bad arguments are refused", "[fw][blob]") {
   metro_fw_calibration out{};
   CHECK(metro_fw_load(&f, &cfg, &out) == METRO_FW_E_ARG);
 }
+
+TEST_CASE("Buffers shorter than a header give EMPTY or MAGIC before BOUNDS", "[fw][blob]") {
+  // Section 4's order: the magic is judged on the bytes that exist, BOUNDS only after it.
+  const auto good = Build(StandardBlob(3));
+  for (uint32_t n = 4; n < METRO_FW_HEADER_LEN; ++n) {
+    INFO("avail_len " << n);
+    std::vector<uint8_t> erased(n, 0xFF);
+    CHECK(Validate(erased) == METRO_FW_E_EMPTY);
+    std::vector<uint8_t> tomb(n, 0x00);
+    CHECK(Validate(tomb) == METRO_FW_E_MAGIC);
+    std::vector<uint8_t> head(good.begin(), good.begin() + n);
+    metro_fw_blob_info info;
+    CHECK(Validate(head, &info) == METRO_FW_E_BOUNDS);
+  }
+  for (uint32_t n = 0; n < 4; ++n) {
+    std::vector<uint8_t> erased(n, 0xFF);
+    CHECK(Validate(erased) == METRO_FW_E_BOUNDS);
+  }
+}
+
+TEST_CASE("info.crc32 is the stored CRC word and any other word fails", "[fw][blob]") {
+  // The validator checks the CRC-32 residue over the blob including its CRC word; the stored
+  // word is still reported, and other values of it are rejected (all 32 single-bit changes and
+  // random words).
+  auto bytes = Build(StandardBlob(3));
+  const uint32_t stored = fwtest::Get32(bytes, 536);
+  REQUIRE(stored == fwtest::BitwiseCrc32(bytes.data(), 536));
+  metro_fw_blob_info info;
+  REQUIRE(Validate(bytes, &info) == METRO_FW_OK);
+  CHECK(info.crc32 == stored);
+  std::mt19937 rng(5);
+  for (int k = 0; k < 2000; ++k) {
+    const uint32_t other = k < 32 ? stored ^ (1u << k) : static_cast<uint32_t>(rng());
+    if (other == stored) continue;
+    fwtest::Put32(bytes, 536, other);
+    metro_fw_blob_info bad;
+    INFO("stored word " << other);
+    CHECK(Validate(bytes, &bad) == METRO_FW_E_CRC);
+    CHECK(bad.crc32 == other);
+  }
+}

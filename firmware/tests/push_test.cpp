@@ -367,3 +367,71 @@ TEST_CASE("SLIP escapes END and ESC bytes", "[fw][push]") {
   CHECK(std::vector<uint8_t>(out, out + n) == expected);
   CHECK(metro_fw_slip_encode(in, 4, out, 9, &n) == METRO_FW_E_ARG);
 }
+
+namespace {
+
+struct RawSink {
+  std::vector<uint8_t> bytes;
+  int fail = 0;  // the send callback reports an error
+  static int Send(void* ctx, const uint8_t* data, uint32_t len) {
+    auto* self = static_cast<RawSink*>(ctx);
+    if (self->fail) return -1;
+    self->bytes.insert(self->bytes.end(), data, data + len);
+    return 0;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("The NAK is the frame of section 7 byte for byte", "[fw][push]") {
+  // op 0xFF, txn 0, len 1, FRAME_ERROR, CRC-16/CCITT-FALSE 0xBD1F of FF 00 01 00 0C (computed
+  // bit by bit outside the library), SLIP END before and after.
+  FakeFlash flash;
+  const metro_fw_flash f = flash.Interface();
+  auto p = std::make_unique<metro_fw_push>();
+  RawSink sink;
+  REQUIRE(metro_fw_push_init(p.get(), &f, fwtest::kDeviceId, &RawSink::Send, &sink) == METRO_FW_OK);
+  const std::vector<uint8_t> garbage = {0xC0, 0x01, 0x02, 0x03, 0xC0};
+  CHECK(metro_fw_push_rx(p.get(), garbage.data(), 5) == METRO_FW_E_FRAME);
+  const std::vector<uint8_t> nak = {0xC0, 0xFF, 0x00, 0x01, 0x00, 0x0C, 0x1F, 0xBD, 0xC0};
+  CHECK(sink.bytes == nak);
+  // A failing send is reported as METRO_FW_E_FLASH, for a NAK and for a response.
+  sink.fail = 1;
+  CHECK(metro_fw_push_rx(p.get(), garbage.data(), 5) == METRO_FW_E_FLASH);
+  uint8_t frame[16], enc[40];
+  uint32_t n = 0, m = 0;
+  REQUIRE(metro_fw_frame_build(METRO_FW_OP_ABORT, 1, nullptr, 0, frame, sizeof(frame), &n) ==
+          METRO_FW_OK);
+  REQUIRE(metro_fw_slip_encode(frame, n, enc, sizeof(enc), &m) == METRO_FW_OK);
+  CHECK(metro_fw_push_rx(p.get(), enc, m) == METRO_FW_E_FLASH);
+  // The response was cached all the same: the retry is answered without a new execution.
+  sink.fail = 0;
+  CHECK(metro_fw_push_rx(p.get(), enc, m) == METRO_FW_OK);
+  const std::vector<uint8_t> abort_ok = {0xC0, 0x87, 0x01, 0x01, 0x00, 0x01};
+  REQUIRE(sink.bytes.size() == nak.size() + abort_ok.size() + 3u);
+  CHECK(std::vector<uint8_t>(sink.bytes.begin() + 9, sink.bytes.begin() + 15) == abort_ok);
+}
+
+TEST_CASE("A NAK between a request and its retry keeps the cached response", "[fw][push]") {
+  Link link;
+  const auto blob = Build(StandardBlob(1));
+  const uint32_t crc = metro_fw_crc32(0, blob.data(), 540);
+  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, crc, 1)).result() ==
+          METRO_FW_RES_SUCCESS);
+  for (size_t off = 0; off < 540; off += 16) {
+    REQUIRE(link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, off)).result() ==
+            METRO_FW_RES_SUCCESS);
+  }
+  const auto exec = link.Encode(METRO_FW_OP_CAL_EXECUTE, 77, {});
+  auto bytes = exec;
+  const std::vector<uint8_t> noise = {0xC0, 0x05, 0xDB, 0x00, 0xC0};
+  bytes.insert(bytes.end(), noise.begin(), noise.end());
+  bytes.insert(bytes.end(), exec.begin(), exec.end());
+  const auto r = link.SendBytes(bytes);
+  REQUIRE(r.size() == 3);
+  CHECK(r[0].result() == METRO_FW_RES_SUCCESS);
+  CHECK(r[1].op == METRO_FW_OP_NAK);
+  CHECK(r[2].op == (METRO_FW_OP_CAL_EXECUTE | 0x80));
+  CHECK(r[2].payload == r[0].payload);
+  CHECK(link.flash.ops == 3);  // erase, write, commit: one update only
+}

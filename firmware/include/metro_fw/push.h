@@ -73,13 +73,11 @@ typedef struct {
   uint8_t rx_bad;
   uint8_t receiving;
   uint8_t have_last;
-  uint8_t last_op;
-  uint8_t last_txn;
   uint8_t last_resp_len;
   uint16_t rx_len;
   uint16_t total_len;
   uint16_t received_len;
-  uint16_t last_req_crc;
+  uint32_t last_key; /* op | txn << 8 | CRC-16 << 16 of the last request answered */
   uint32_t expect_crc32;
   uint32_t expect_seq;
   uint8_t rx[METRO_FW_PUSH_MAX_FRAME];
