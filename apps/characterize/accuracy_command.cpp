@@ -92,6 +92,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   options.plateaus.settle_s = a.settle_s;
   options.plateaus.tolerance_deg = a.plateau_tolerance_deg;
   options.plateaus.settle_auto = in.settle == "auto";
+  options.window = in.window;
   options.alignment.offset_s = a.reference_offset_s;
   auto reference_u = ParseReferenceU(a.reference_u);
   if (!reference_u.ok()) {

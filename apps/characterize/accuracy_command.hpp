@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "metro/stats/session_type_a.hpp"
+
 namespace metro::apps {
 
 struct AccuracyCliOptions {
@@ -33,8 +35,9 @@ struct AccuracyRunInputs {
   std::string output;
   std::string settle = "none";  // "auto": MSER-5 within each plateau too.
   int threads = 0;
-  bool type_a = false;  // --type-a given as well: a usage error.
-  std::string html;     // Also write the HTML view here (docs/reports.md).
+  bool type_a = false;   // --type-a given as well: a usage error.
+  std::string html;      // Also write the HTML view here (docs/reports.md).
+  WindowOptions window;  // --skip-samples, --skip-seconds, --from-s, --to-s.
 };
 
 void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* options);

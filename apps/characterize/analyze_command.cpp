@@ -32,8 +32,13 @@ struct AnalyzeOptions {
 int RunAnalyze(const AnalyzeOptions& o) {
   if (o.accuracy.enabled) {
     const AnalysisCliOptions& a = o.analysis;
+    WindowOptions window;
+    window.skip_samples = a.skip_samples;
+    window.skip_seconds = a.skip_seconds;
+    window.from_s = a.from_s;
+    window.to_s = a.to_s;
     return RunAccuracy(o.accuracy, {o.session, a.format, a.frame_period_s, a.lenient, a.sensors,
-                                    o.output, a.settle, o.threads, o.type_a, o.html});
+                                    o.output, a.settle, o.threads, o.type_a, o.html, window});
   }
   SessionAnalysisOptions options;
   if (Status s = MakeSessionAnalysisOptions(o.analysis, o.threads, &options); !s.ok()) {

@@ -144,6 +144,7 @@ bool AccuracyOptions::IsValid(std::string* why) const {
   if (!plateaus.IsValid(why)) return false;
   if (!type_a.IsValid(why)) return false;
   if (!alignment.IsValid(why)) return false;
+  if (!window.IsValid(why)) return false;
   if (!(angle_match_deg > 0.0) || !std::isfinite(angle_match_deg)) {
     return fail("angle_match_deg must be > 0");
   }
@@ -187,6 +188,22 @@ Result<AccuracyResult> EvaluateAccuracy(const Session& session, const Session* r
     }
   }
   result.sensor = tag->sensor;
+  // The window: a copy of the tag holding only the kept observations.
+  result.window = ExplicitWindow(*tag, options.window);
+  Tag windowed;
+  if (result.window.begin > 0 || result.window.end < result.window.n_total) {
+    windowed = *tag;
+    windowed.KeepRows(result.window.begin, result.window.end);
+    tag = &windowed;
+  }
+  if (tag->size() == 0) {
+    return MakeError(session.path, 0,
+                     fmt::format("the window (--skip-samples, --skip-seconds, --from-s, --to-s) "
+                                 "keeps no observation of tag {}",
+                                 result.sensor));
+  }
+  result.window.t_first_s = tag->t_s.front();
+  result.window.t_last_s = tag->t_s.back();
   const char* const kAxes[3] = {"yaw_deg", "pitch_deg", "roll_deg"};
   const Quantity* angle[3];
   for (int a = 0; a < 3; ++a) {

@@ -95,6 +95,15 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
   }
   j["input"] = input;
   const AccuracyOptions& o = r.options;
+  const WindowOptions& w = o.window;
+  j["window"] = {{"skip_samples", w.skip_samples},
+                 {"skip_seconds", w.skip_seconds},
+                 {"from_s", w.from_s ? Json(*w.from_s) : Json()},
+                 {"to_s", w.to_s ? Json(*w.to_s) : Json()},
+                 {"n_total", r.window.n_total},
+                 {"n", r.window.n()},
+                 {"t_first_s", r.window.t_first_s},
+                 {"t_last_s", r.window.t_last_s}};
   j["options"] = {{"plateau_tolerance_deg", o.plateaus.tolerance_deg},
                   {"min_dwell_s", o.plateaus.min_dwell_s},
                   {"min_samples", o.plateaus.min_samples},

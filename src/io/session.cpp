@@ -41,6 +41,20 @@ const Quantity* Tag::Find(std::string_view name) const {
   return nullptr;
 }
 
+void Tag::KeepRows(size_t begin, size_t end) {
+  end = std::min(end, size());
+  begin = std::min(begin, end);
+  const auto keep = [begin, end](auto& v) {
+    if (v.empty()) return;  // A column without values (none in the file).
+    v.erase(v.begin() + static_cast<std::ptrdiff_t>(end), v.end());
+    v.erase(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(begin));
+  };
+  keep(t_s);
+  keep(line);
+  for (Quantity& q : quantities) keep(q.values);
+  for (TextColumn& c : text_columns) keep(c.values);
+}
+
 Quantity* Tag::Find(std::string_view name) {
   for (Quantity& q : quantities) {
     if (q.name == name) return &q;

@@ -37,6 +37,8 @@ std::vector<double> Finite(std::vector<double> x, size_t* dropped) {
   return x;
 }
 
+}  // namespace
+
 AppliedWindow ExplicitWindow(const Tag& tag, const WindowOptions& w) {
   AppliedWindow a;
   a.n_total = tag.size();
@@ -62,6 +64,8 @@ AppliedWindow ExplicitWindow(const Tag& tag, const WindowOptions& w) {
   a.end = end;
   return a;
 }
+
+namespace {
 
 void FillWindowTimes(const Tag& tag, AppliedWindow* a) {
   if (a->n() == 0) return;

@@ -1,12 +1,14 @@
 // End-to-end tests of characterize SESSION --accuracy and simulate --kind table.
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "support/run_program.hpp"
 
@@ -56,6 +58,43 @@ TEST_CASE("characterize --accuracy with a receiver capture and a reference log",
   CHECK(a.contains("residual_std_deg"));
   std::remove(cap.c_str());
   std::remove(ref.c_str());
+}
+
+TEST_CASE("characterize --accuracy honours the window options", "[apps][accuracy]") {
+  // The rows of the bundled sweep, counted here from the file.
+  std::ifstream file(kSweep);
+  std::string line;
+  std::vector<double> t_s;
+  while (std::getline(file, line)) {
+    if (line.empty() || line[0] == '#' || line.rfind("t_s", 0) == 0) continue;
+    t_s.push_back(std::stod(line.substr(0, line.find(','))));
+  }
+  REQUIRE(t_s.size() > 1000);
+  Run all = Characterize(kSweep + " --accuracy");
+  REQUIRE(all.exit_code == 0);
+  const auto full = nlohmann::json::parse(all.out);
+  CHECK(full["window"]["n"] == t_s.size());
+
+  Run late = Characterize(kSweep + " --accuracy --from-s 100 --to-s 500");
+  REQUIRE(late.exit_code == 0);
+  const auto j = nlohmann::json::parse(late.out);
+  const size_t kept = static_cast<size_t>(
+      std::count_if(t_s.begin(), t_s.end(), [](double t) { return t >= 100 && t <= 500; }));
+  CHECK(j["window"]["n_total"] == t_s.size());
+  CHECK(j["window"]["n"] == kept);
+  CHECK(j["window"]["from_s"] == 100.0);
+  CHECK(j["points"].size() < full["points"].size());
+  for (const auto& p : j["points"]) {
+    CHECK(p["t_start_s"].get<double>() >= 100.0);
+    CHECK(p["t_end_s"].get<double>() <= 500.0);
+  }
+  Run skip = Characterize(kSweep + " --accuracy --skip-samples 1000");
+  REQUIRE(skip.exit_code == 0);
+  CHECK(nlohmann::json::parse(skip.out)["window"]["n"] == t_s.size() - 1000);
+
+  Run none = Characterize(kSweep + " --accuracy --from-s 1e6");
+  CHECK(none.exit_code == 2);
+  CHECK(none.err.find("keeps no observation of tag") != std::string::npos);
 }
 
 TEST_CASE("characterize --accuracy bad input exits 2 with the message", "[apps][accuracy]") {

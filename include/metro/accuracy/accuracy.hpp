@@ -34,6 +34,7 @@
 #include "metro/core/status.hpp"
 #include "metro/io/session.hpp"
 #include "metro/sim/table_session.hpp"
+#include "metro/stats/session_type_a.hpp"
 #include "metro/stats/type_a.hpp"
 #include "metro/uncertainty/gum.hpp"
 
@@ -61,6 +62,9 @@ struct AccuracyOptions {
   double resolution_deg = 0.01;  // The packets' quantisation step.
   double coverage = 0.95;
   AlignmentOptions alignment;  // With a separate reference log.
+  // The part of the tag's record evaluated (--skip-samples, --skip-seconds, --from-s,
+  // --to-s); settle_auto is not used here: plateaus settle by PlateauOptions.
+  WindowOptions window;
 
   bool IsValid(std::string* why) const;
 };
@@ -155,6 +159,7 @@ struct AccuracyResult {
   int sensor = 0;
   std::string quantity;  // e.g. "yaw_deg"
   bool separate_reference = false;
+  AppliedWindow window;  // n_total, begin, end, t_first_s, t_last_s of the tag's record.
   std::optional<Alignment> alignment;
   Segmentation segmentation;
   std::vector<AccuracyPoint> points;

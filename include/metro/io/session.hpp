@@ -72,6 +72,9 @@ struct Tag {
   // The quantity with this column name, or nullptr.
   const Quantity* Find(std::string_view name) const;
   Quantity* Find(std::string_view name);
+  // Keeps observations [begin, end) of every column (clamped to the size); `counts` are
+  // the file's and stay as they are.
+  void KeepRows(size_t begin, size_t end);
 };
 
 struct Session {

@@ -54,6 +54,11 @@ struct AppliedWindow {
   size_t n() const { return end - begin; }
 };
 
+// The observations of `tag` that the explicit window options keep (skip_samples,
+// skip_seconds, from_s, to_s; settle_auto is not applied here). Only n_total, begin and
+// end are set.
+AppliedWindow ExplicitWindow(const Tag& tag, const WindowOptions& window);
+
 struct QuantityTypeA {
   std::string name;
   std::string unit;
