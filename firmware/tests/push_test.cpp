@@ -76,14 +76,19 @@ class Link {
     return p;
   }
 
-  // The whole transfer, as calibrate push does it; returns EXECUTE's response.
-  Response Push(const std::vector<uint8_t>& blob, uint32_t seq) {
+  // CAL_CREATE for the whole of `blob`, then every CAL_WRITE chunk of it, each succeeding.
+  void Upload(const std::vector<uint8_t>& blob, uint32_t seq = 1) {
     const uint32_t crc = metro_fw_crc32(0, blob.data(), static_cast<uint32_t>(blob.size()));
     REQUIRE(Call(METRO_FW_OP_CAL_CREATE, Create(static_cast<uint16_t>(blob.size()), crc, seq))
                 .result() == METRO_FW_RES_SUCCESS);
     for (size_t off = 0; off < blob.size(); off += 16) {
       REQUIRE(Call(METRO_FW_OP_CAL_WRITE, Write(blob, off)).result() == METRO_FW_RES_SUCCESS);
     }
+  }
+
+  // The whole transfer, as calibrate push does it; returns EXECUTE's response.
+  Response Push(const std::vector<uint8_t>& blob, uint32_t seq) {
+    Upload(blob, seq);
     return Call(METRO_FW_OP_CAL_EXECUTE, {});
   }
 
@@ -198,12 +203,7 @@ TEST_CASE("A duplicated request is answered again without being executed again",
   Link link;
   const auto blob = Build(StandardBlob(1));
   const uint32_t crc = metro_fw_crc32(0, blob.data(), 540);
-  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, crc, 1)).result() ==
-          METRO_FW_RES_SUCCESS);
-  for (size_t off = 0; off < 540; off += 16) {
-    REQUIRE(link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, off)).result() ==
-            METRO_FW_RES_SUCCESS);
-  }
+  link.Upload(blob);
   const auto exec = link.Encode(METRO_FW_OP_CAL_EXECUTE, 200, {});
   auto twice = exec;
   twice.insert(twice.end(), exec.begin(), exec.end());
@@ -414,14 +414,7 @@ TEST_CASE("The NAK is the frame of section 7 byte for byte", "[fw][push]") {
 
 TEST_CASE("A NAK between a request and its retry keeps the cached response", "[fw][push]") {
   Link link;
-  const auto blob = Build(StandardBlob(1));
-  const uint32_t crc = metro_fw_crc32(0, blob.data(), 540);
-  REQUIRE(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(540, crc, 1)).result() ==
-          METRO_FW_RES_SUCCESS);
-  for (size_t off = 0; off < 540; off += 16) {
-    REQUIRE(link.Call(METRO_FW_OP_CAL_WRITE, Link::Write(blob, off)).result() ==
-            METRO_FW_RES_SUCCESS);
-  }
+  link.Upload(Build(StandardBlob(1)));
   const auto exec = link.Encode(METRO_FW_OP_CAL_EXECUTE, 77, {});
   auto bytes = exec;
   const std::vector<uint8_t> noise = {0xC0, 0x05, 0xDB, 0x00, 0xC0};
