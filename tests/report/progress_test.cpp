@@ -12,6 +12,14 @@
 namespace metro {
 namespace {
 
+// Drawn whatever the stream, every time it is asked.
+ProgressOptions AlwaysDrawn(double min_redraw_s = 0.0) {
+  ProgressOptions o;
+  o.mode = ProgressMode::kAlways;
+  o.min_redraw_s = min_redraw_s;
+  return o;
+}
+
 std::string ReadAll(std::FILE* f) {
   std::rewind(f);
   std::string out;
@@ -48,9 +56,7 @@ TEST_CASE("Progress bar is quiet when the stream is not a terminal", "[report][p
 TEST_CASE("Progress bar forced on ends with the final count", "[report][progress]") {
   std::FILE* f = std::tmpfile();
   REQUIRE(f != nullptr);
-  ProgressOptions o;
-  o.mode = ProgressMode::kAlways;
-  o.min_redraw_s = 0.0;
+  const ProgressOptions o = AlwaysDrawn();
   {
     ProgressBar bar("work", 40, f, o);
     std::vector<std::thread> threads;
@@ -90,9 +96,7 @@ TEST_CASE("Elapsed ticker forced on redraws until finished", "[report][progress]
   CHECK(FormatElapsedLine("load", 2.25) == "load ...  2.2 s");
   std::FILE* f = std::tmpfile();
   REQUIRE(f != nullptr);
-  ProgressOptions o;
-  o.mode = ProgressMode::kAlways;
-  o.min_redraw_s = 0.05;
+  const ProgressOptions o = AlwaysDrawn(0.05);
   {
     ElapsedTicker ticker("load", f, o);
     CHECK(ticker.enabled());
@@ -123,9 +127,7 @@ TEST_CASE("Progress line shows counts in units", "[report][progress]") {
 TEST_CASE("Quick work under the delay leaves no line", "[report][progress]") {
   std::FILE* f = std::tmpfile();
   REQUIRE(f != nullptr);
-  ProgressOptions o;
-  o.mode = ProgressMode::kAlways;
-  o.min_redraw_s = 0.0;
+  ProgressOptions o = AlwaysDrawn();
   o.delay_s = 60.0;
   {
     ProgressBar bar("quick", 10, f, o);
@@ -139,9 +141,7 @@ TEST_CASE("Quick work under the delay leaves no line", "[report][progress]") {
 TEST_CASE("Terminal progress draws one line per phase", "[report][progress]") {
   std::FILE* f = std::tmpfile();
   REQUIRE(f != nullptr);
-  ProgressOptions o;
-  o.mode = ProgressMode::kAlways;
-  o.min_redraw_s = 0.0;
+  const ProgressOptions o = AlwaysDrawn();
   {
     TerminalProgress progress(f, o);
     progress.BeginPhase("load x.csv", 2000000, "MB", 1e6);
