@@ -9,21 +9,6 @@
 
 namespace {
 
-metro_fw_sensor_cal FromSensor(const fwtest::Sensor& s) {
-  metro_fw_sensor_cal c{};
-  for (int i = 0; i < 9; ++i) c.m[i] = s.m[i];
-  for (int i = 0; i < 3; ++i) {
-    c.b0[i] = s.b0[i];
-    c.b1[i] = s.b1[i];
-    c.b2[i] = s.b2[i];
-  }
-  c.t_ref_c = s.t_ref_c;
-  c.t_valid_min_c = s.t_valid_min_c;
-  c.t_valid_max_c = s.t_valid_max_c;
-  c.model_bits = s.model_bits;
-  return c;
-}
-
 // y = M * (r - b0 - b1*dT - b2*dT^2), dT = clamp(T) - t_ref, in double.
 std::array<double, 3> Reference(const fwtest::Sensor& s, const int16_t r[3], double t_c) {
   const double t = std::min<double>(std::max<double>(t_c, s.t_valid_min_c), s.t_valid_max_c);
@@ -59,7 +44,7 @@ TEST_CASE("Apply equals the double-precision model within float32", "[fw][apply]
   std::uniform_int_distribution<int> raw(-32768, 32767);
   std::uniform_real_distribution<double> temp(-20.0, 70.0);
   for (const auto& s : {fwtest::GoodAccel(), fwtest::GoodGyro()}) {
-    const auto cal = FromSensor(s);
+    const auto cal = fwtest::CalOf(s);
     for (int n = 0; n < 2000; ++n) {
       const int16_t r[3] = {static_cast<int16_t>(raw(rng)), static_cast<int16_t>(raw(rng)),
                             static_cast<int16_t>(raw(rng))};
@@ -78,7 +63,7 @@ TEST_CASE("Apply equals the double-precision model within float32", "[fw][apply]
 
 TEST_CASE("Temperature is clamped to the validity range and NaN means t_ref", "[fw][apply]") {
   const auto s = fwtest::GoodAccel();  // valid 0..50 degC, t_ref 25
-  const auto cal = FromSensor(s);
+  const auto cal = fwtest::CalOf(s);
   const int16_t r[3] = {1000, -2000, 16000};
   float at_max[3], beyond[3], at_ref[3], nan_t[3];
   metro_fw_apply(&cal, r, 50.0f, at_max);

@@ -13,20 +13,6 @@
 
 namespace {
 
-metro_fw_sensor_cal FromSensor(const fwtest::Sensor& s) {
-  metro_fw_sensor_cal c{};
-  for (int i = 0; i < 9; ++i) c.m[i] = s.m[i];
-  for (int i = 0; i < 3; ++i) {
-    c.b0[i] = s.b0[i];
-    c.b1[i] = s.b1[i];
-    c.b2[i] = s.b2[i];
-  }
-  c.t_ref_c = s.t_ref_c;
-  c.t_valid_min_c = s.t_valid_min_c;
-  c.t_valid_max_c = s.t_valid_max_c;
-  return c;
-}
-
 // Checks one sample: |fixed - exact| <= the section 3.2 bound, and the bound is small
 // (below 2 % of an LSB-equivalent, so the check means something).
 void CheckSample(const metro_fw_sensor_cal& c, const metro_fw_sensor_fixed& fx, const int16_t r[3],
@@ -66,8 +52,8 @@ void CheckSample(const metro_fw_sensor_cal& c, const metro_fw_sensor_fixed& fx, 
 }
 
 std::vector<metro_fw_sensor_cal> Sensors() {
-  std::vector<metro_fw_sensor_cal> out = {FromSensor(fwtest::GoodAccel()),
-                                          FromSensor(fwtest::GoodGyro())};
+  std::vector<metro_fw_sensor_cal> out = {fwtest::CalOf(fwtest::GoodAccel()),
+                                          fwtest::CalOf(fwtest::GoodGyro())};
   for (uint8_t fs = 0; fs < 4; ++fs) {
     metro_fw_sensor_cal d;
     REQUIRE(metro_fw_sensor_defaults(METRO_FW_ACCEL, fs, &d) == METRO_FW_OK);

@@ -88,6 +88,23 @@ inline Sensor GoodGyro() {
   return s;
 }
 
+// The loaded form of a test section, as metro_fw_sensor_decode would fill it for a section
+// that passes (no limit checks here: apply tests use it directly).
+inline metro_fw_sensor_cal CalOf(const Sensor& s) {
+  metro_fw_sensor_cal c{};
+  for (int i = 0; i < 9; ++i) c.m[i] = s.m[i];
+  for (int i = 0; i < 3; ++i) {
+    c.b0[i] = s.b0[i];
+    c.b1[i] = s.b1[i];
+    c.b2[i] = s.b2[i];
+  }
+  c.t_ref_c = s.t_ref_c;
+  c.t_valid_min_c = s.t_valid_min_c;
+  c.t_valid_max_c = s.t_valid_max_c;
+  c.model_bits = s.model_bits;
+  return c;
+}
+
 inline std::vector<uint8_t> SensorBody(const Sensor& s) {
   std::vector<uint8_t> b(176, 0);
   b[0] = s.fs_sel;
@@ -204,6 +221,7 @@ class FakeFlash {
   }
   uint8_t* Slot(int i) { return mem_.data() + i * METRO_FW_PAGE_SIZE; }
   std::vector<uint8_t>& Memory() { return mem_; }
+  const std::vector<uint8_t>& Memory() const { return mem_; }
 
   int ops = 0;       // erase and write calls seen so far
   int fail_at = -1;  // this operation returns an error and changes nothing

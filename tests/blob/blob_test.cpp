@@ -9,6 +9,7 @@
 #include "blob/blob_test_support.hpp"
 #include "metro_fw/blob.h"
 #include "metro_fw/crc.h"
+#include "tests/test_support.hpp"
 
 using namespace metro::blob;
 using metro::blob::testing::Contents;
@@ -26,25 +27,6 @@ float LeF32(const std::vector<uint8_t>& b, size_t off) {
   std::memcpy(&f, &u, 4);
   return f;
 }
-
-// A RAM flash holding the two slots, for the firmware's loader.
-struct RamFlash {
-  std::vector<uint8_t> mem = std::vector<uint8_t>(2048, 0xFF);
-  static int Read(void* ctx, uint32_t addr, uint8_t* dst, uint32_t len) {
-    auto* self = static_cast<RamFlash*>(ctx);
-    if (addr < kSlotAAddress || addr - kSlotAAddress + len > self->mem.size()) return -1;
-    std::memcpy(dst, self->mem.data() + (addr - kSlotAAddress), len);
-    return 0;
-  }
-  metro_fw_flash Interface() {
-    metro_fw_flash f{};
-    f.read = &RamFlash::Read;
-    f.ctx = this;
-    f.slot_addr[0] = kSlotAAddress;
-    f.slot_addr[1] = kSlotBAddress;
-    return f;
-  }
-};
 
 }  // namespace
 
@@ -88,8 +70,8 @@ TEST_CASE("The golden blob written by C++ is loaded by the firmware with the sam
   const auto contents = Contents();
   auto written = WriteBlob(contents);
   REQUIRE(written.ok());
-  RamFlash flash;
-  std::copy(written.value().begin(), written.value().end(), flash.mem.begin());
+  fwtest::FakeFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, written.value());
   metro_fw_flash f = flash.Interface();
   metro_fw_config cfg{};
   cfg.device_id[0] = 0x12345678u;
@@ -237,8 +219,8 @@ TEST_CASE("Apply on the firmware equals ApplyConstants on the PC within float32"
   REQUIRE(written.ok());
   auto decoded = DecodeBlob(written.value());
   REQUIRE(decoded.ok());
-  RamFlash flash;
-  std::copy(written.value().begin(), written.value().end(), flash.mem.begin());
+  fwtest::FakeFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, written.value());
   metro_fw_flash f = flash.Interface();
   metro_fw_config cfg{};
   cfg.device_id[0] = 0x12345678u;

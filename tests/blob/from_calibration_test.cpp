@@ -6,15 +6,15 @@
 #include <cmath>
 #include <tuple>
 
-#include "blob/ram_flash.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/simulate.hpp"
 #include "metro_fw/blob.h"
+#include "tests/test_support.hpp"
 
 namespace metro::blob {
 namespace {
 
-using testing::RamFlash2;
+using RamFlash = fwtest::FakeFlash;  // The firmware tests' RAM flash (nRF51 semantics).
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr uint64_t kId = 0x0011223344556677ull;
@@ -53,8 +53,8 @@ BlobFromCalibrationOptions Options() {
 // The blob loaded by the firmware from slot A of a RAM flash, on a tag configured as the blob.
 metro_fw_calibration LoadOnTag(const std::vector<uint8_t>& blob, uint8_t accel_fs, uint8_t gyro_fs,
                                uint8_t dlpf) {
-  RamFlash2 flash;
-  flash.Program(0, blob);
+  RamFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, blob);
   const metro_fw_flash f = flash.Interface();
   metro_fw_config cfg{};
   cfg.device_id[0] = static_cast<uint32_t>(kId & 0xFFFFFFFFu);

@@ -9,14 +9,14 @@
 #include <set>
 
 #include "blob/blob_test_support.hpp"
-#include "blob/ram_flash.hpp"
 #include "metro_fw/crc.h"
 #include "metro_fw/push.h"
+#include "tests/test_support.hpp"
 
 namespace metro::blob {
 namespace {
 
-using testing::RamFlash2;
+using RamFlash = fwtest::FakeFlash;  // The firmware tests' RAM flash (nRF51 semantics).
 
 constexpr uint32_t kIdWords[2] = {0x12345678u, 0x9ABCDEF0u};  // testing::kDeviceId
 
@@ -24,7 +24,7 @@ constexpr uint32_t kIdWords[2] = {0x12345678u, 0x9ABCDEF0u};  // testing::kDevic
 // Read never waits: an empty queue is an immediate timeout, so retries cost no time.
 class LossyTag : public ByteStream {
  public:
-  explicit LossyTag(RamFlash2* flash) : flash_if_(flash->Interface()) {
+  explicit LossyTag(RamFlash* flash) : flash_if_(flash->Interface()) {
     REQUIRE(metro_fw_push_init(&push_, &flash_if_, kIdWords, &LossyTag::Send, this) == METRO_FW_OK);
   }
   std::set<int> drop_frames, dup_frames, corrupt_frames, drop_answers;
@@ -93,12 +93,12 @@ PushOptions Fast() {
 
 std::vector<uint8_t> Blob(uint32_t seq) { return WriteBlob(testing::Contents(seq)).value(); }
 
-std::vector<uint8_t> SlotBytes(const RamFlash2& f, int slot, size_t n) {
-  auto begin = f.mem.begin() + slot * static_cast<std::ptrdiff_t>(kPageSize);
+std::vector<uint8_t> SlotBytes(const RamFlash& f, int slot, size_t n) {
+  auto begin = f.Memory().begin() + slot * static_cast<std::ptrdiff_t>(kPageSize);
   return std::vector<uint8_t>(begin, begin + static_cast<std::ptrdiff_t>(n));
 }
 
-bool SlotErased(const RamFlash2& f, int slot) {
+bool SlotErased(const RamFlash& f, int slot) {
   const std::vector<uint8_t> s = SlotBytes(f, slot, kPageSize);
   return std::all_of(s.begin(), s.end(), [](uint8_t b) { return b == 0xFF; });
 }
@@ -109,7 +109,7 @@ int CleanRequests(size_t n) { return 3 + 2 * static_cast<int>((n + 15) / 16); }
 }  // namespace
 
 TEST_CASE("Push: a clean transfer writes slot A and reads it back", "[blob][push]") {
-  RamFlash2 flash;
+  RamFlash flash;
   LossyTag tag(&flash);
   PushClient client(&tag, Fast());
   Result<TagInfo> info = client.GetInfo();
@@ -176,7 +176,7 @@ TEST_CASE("Push: lost and duplicated and corrupted frames and lost answers are r
   };
   for (const Case& c : cases) {
     SECTION(c.name) {
-      RamFlash2 flash;
+      RamFlash flash;
       LossyTag tag(&flash);
       c.fault(tag);
       PushClient client(&tag, Fast());
@@ -196,9 +196,9 @@ TEST_CASE("Push: lost and duplicated and corrupted frames and lost answers are r
 }
 
 TEST_CASE("Push: a stale seq is refused and nothing is written", "[blob][push]") {
-  RamFlash2 flash;
+  RamFlash flash;
   const std::vector<uint8_t> old_blob = Blob(7);
-  flash.Program(0, old_blob);
+  flash.Program(METRO_FW_SLOT_A_ADDR, old_blob);
   LossyTag tag(&flash);
   PushClient client(&tag, Fast());
   Result<int> r = client.Push(Blob(7));
@@ -211,9 +211,9 @@ TEST_CASE("Push: a stale seq is refused and nothing is written", "[blob][push]")
 
 TEST_CASE("Push: a disconnect mid-transfer keeps the old calibration - a new session succeeds",
           "[blob][push]") {
-  RamFlash2 flash;
+  RamFlash flash;
   const std::vector<uint8_t> old_blob = Blob(7);
-  flash.Program(0, old_blob);
+  flash.Program(METRO_FW_SLOT_A_ADDR, old_blob);
   {
     LossyTag tag(&flash);
     tag.hangup_after = 12;
@@ -233,10 +233,10 @@ TEST_CASE("Push: a disconnect mid-transfer keeps the old calibration - a new ses
 TEST_CASE("Push: a flash error and a read-back difference are reported", "[blob][push]") {
   SECTION("flash error") {
     // Slot B does not exist in this flash: the update's erase of the target page fails.
-    RamFlash2 flash;
-    flash.mem.resize(kPageSize);
+    RamFlash flash;
+    flash.Memory().resize(kPageSize);
     const std::vector<uint8_t> old_blob = Blob(7);
-    flash.Program(0, old_blob);
+    flash.Program(METRO_FW_SLOT_A_ADDR, old_blob);
     LossyTag tag(&flash);
     PushClient client(&tag, Fast());
     Result<int> r = client.Push(Blob(8));
@@ -245,7 +245,7 @@ TEST_CASE("Push: a flash error and a read-back difference are reported", "[blob]
     CHECK(SlotBytes(flash, 0, old_blob.size()) == old_blob);
   }
   SECTION("read-back difference") {
-    RamFlash2 flash;
+    RamFlash flash;
     LossyTag tag(&flash);
     const std::vector<uint8_t> blob = Blob(3);
     // After the update, something else rewrites slot A with a valid blob of the same seq
@@ -253,7 +253,7 @@ TEST_CASE("Push: a flash error and a read-back difference are reported", "[blob]
     tag.after_execute = [&] {
       BlobContents c = testing::Contents(3);
       c.meta.tag_label = "OTHER";
-      flash.Program(0, WriteBlob(c).value());
+      flash.Program(METRO_FW_SLOT_A_ADDR, WriteBlob(c).value());
     };
     PushClient client(&tag, Fast());
     Result<int> r = client.Push(blob);
@@ -264,7 +264,7 @@ TEST_CASE("Push: a flash error and a read-back difference are reported", "[blob]
 }
 
 TEST_CASE("Push: a silent tag exhausts the retries - options are checked", "[blob][push]") {
-  RamFlash2 flash;
+  RamFlash flash;
   LossyTag tag(&flash);
   for (int k = 1; k <= 10; ++k) tag.drop_frames.insert(k);
   PushOptions o;
@@ -310,8 +310,8 @@ TEST_CASE("Push: PushCalibration builds the blob for the tag on the link", "[blo
   bo.sensor = 2;
   bo.seq = 0;  // the tag's active seq + 1
 
-  RamFlash2 flash;
-  flash.Program(0, Blob(41));
+  RamFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, Blob(41));
   LossyTag tag(&flash);
   PushSummary s = PushCalibration(&tag, cal, bo, std::nullopt, Fast());
   REQUIRE(s.ok);
