@@ -91,6 +91,9 @@ Status SerialPort::Write(const uint8_t* data, size_t size) {
       }
       continue;
     }
+    // A serial device (or pty) whose other end went away fails writes with EIO, as Read
+    // sees it: the same words either way, whichever call meets the hang-up first.
+    if (errno == EIO) return MakeError(path_, 0, "write: the link hung up");
     return MakeError(path_, 0, fmt::format("write: {}", std::strerror(errno)));
   }
   return Status::Ok();

@@ -232,6 +232,7 @@ TEST_CASE("pty: calibrate push reports a stale seq and a disconnect and a flash 
     {
       SimTag sim(FlashWith(flash, golden), {"--hangup-after", "12"});
       Run r = Push(sim.pty(), "--timeout-ms 2000");  // The hang-up is seen at once.
+      INFO(r.err);
       CHECK(r.exit_code == 1);
       CHECK(Has(r.err, "FAILED: CAL_WRITE: link lost: "));
       CHECK(Has(r.err, "the link hung up"));
