@@ -1,10 +1,12 @@
 // calibrate push --port /dev/ttyX calibration.json --sensor N [--device-id HEX16] [--seq N]
 //   [--timeout-ms MS] [--retries N]
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <memory>
+#include <optional>
+#include <string>
 
+#include "cli_progress.hpp"
 #include "commands.hpp"
 #include "metro/blob/intel_hex.hpp"
 #include "metro/blob/push_client.hpp"
@@ -21,18 +23,11 @@ struct PushCliOptions {
   std::string device_id;
   uint32_t seq = 0;
   int dlpf_cfg = 3;
+  std::optional<double> t_valid_min_c;
+  std::optional<double> t_valid_max_c;
   int timeout_ms = 1000;
   int retries = 5;
 };
-
-// "[#########...........]  320/540 B write" on one line of a terminal.
-void DrawProgress(const char* phase, size_t done, size_t total) {
-  constexpr int kWidth = 30;
-  const int filled = total == 0 ? kWidth : static_cast<int>(kWidth * done / total);
-  fmt::print(stderr, "\r[{:#<{}}{:.<{}}] {:4}/{} B {:6}", "", filled, "", kWidth - filled, done,
-             total, phase);
-  std::fflush(stderr);
-}
 
 int RunPush(const PushCliOptions& c) {
   std::optional<uint64_t> expect;
@@ -62,16 +57,30 @@ int RunPush(const PushCliOptions& c) {
   bo.sensor = c.sensor;
   bo.seq = c.seq;
   bo.dlpf_cfg = static_cast<uint8_t>(c.dlpf_cfg);
+  bo.t_valid_min_c = c.t_valid_min_c;
+  bo.t_valid_max_c = c.t_valid_max_c;
   blob::PushOptions po;
   po.timeout_ms = c.timeout_ms;
   po.execute_timeout_ms = 3 * c.timeout_ms;  // CAL_EXECUTE erases and programs a page
   po.max_retries = c.retries;
-  const bool tty = ::isatty(STDERR_FILENO) != 0;
-  blob::PushProgress progress;
-  if (tty) progress = DrawProgress;
+  // One bar per phase ("write 320/540 B"), on a terminal only.
+  TerminalProgress bar(stderr, apps::CliProgressOptions());
+  std::string phase_shown;
+  size_t done_shown = 0;
+  const blob::PushProgress progress = [&](const char* phase, size_t done, size_t total) {
+    if (phase_shown != phase) {
+      bar.BeginPhase(phase, static_cast<int64_t>(total), "B");
+      phase_shown = phase;
+      done_shown = 0;
+    }
+    if (done > done_shown) {
+      bar.Advance(static_cast<int64_t>(done - done_shown));
+      done_shown = done;
+    }
+  };
   blob::PushSummary s =
       blob::PushCalibration(port.value().get(), cal.value(), bo, expect, po, progress);
-  if (tty) fmt::print(stderr, "\n");
+  bar.Finish();
   if (s.tag_answered) {
     fmt::print(stderr, "tag {}: format {}.{}, active slot {}, seq {}\n",
                blob::FormatDeviceId(s.tag.device_id), s.tag.fmt_major, s.tag.fmt_minor,
@@ -117,6 +126,10 @@ void AddPushCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(1u, 0xFFFFFFFEu));
   sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")
       ->check(CLI::Range(0, 6));
+  sub->add_option("--t-valid-min-c", o->t_valid_min_c,
+                  "lower end of the temperature validity range the tag clamps to (default -40)");
+  sub->add_option("--t-valid-max-c", o->t_valid_max_c,
+                  "upper end of the temperature validity range (default 85)");
   sub->add_option("--timeout-ms", o->timeout_ms, "wait for each answer (default 1000)")
       ->check(CLI::Range(1, 60000));
   sub->add_option("--retries", o->retries, "resends of one request (default 5)")
