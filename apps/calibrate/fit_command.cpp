@@ -77,7 +77,7 @@ int RunFit(const FitOptions& f) {
   for (size_t i = 0; i < f.inputs.size(); i += step) {
     LoadOptions load;
     if (!f.imutk) {
-      apps::BeginLoadPhase(&progress, f.inputs[i]);
+      BeginLoadPhase(&progress, f.inputs[i]);
       load.on_bytes_parsed = [&progress](int64_t n) { progress.Advance(n); };
     }
     Result<Session> s =

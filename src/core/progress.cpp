@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <system_error>
 
 #include "metro/core/check.hpp"
@@ -163,6 +164,13 @@ void ElapsedTicker::DrawLocked() {
   // "\r" returns to the line start; the trailing blanks clear a longer previous line.
   fmt::print(stream_, "\r{}  ", FormatElapsedLine(label_, elapsed_s));
   std::fflush(stream_);
+}
+
+void BeginLoadPhase(ProgressSink* progress, const std::string& path) {
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  progress->BeginPhase("load " + std::filesystem::path(path).filename().string(),
+                       ec ? 0 : static_cast<int64_t>(bytes), "MB", 1e6);
 }
 
 TerminalProgress::TerminalProgress(std::FILE* stream, const ProgressOptions& options)

@@ -177,8 +177,8 @@ struct Block {
 };
 
 // Reports each block's bytes to LoadOptions::on_bytes_parsed once: the clean path and the
-// general loader cut the file into the same blocks, so a block parsed by both (the clean
-// path gave up on the file) is counted by whichever parses it first.
+// general loader parse the same blocks (one cut), so a block parsed by both (the clean path
+// gave up on the file) is counted by whichever parses it first.
 class BlockProgress {
  public:
   BlockProgress(const std::function<void(int64_t)>& callback, size_t blocks)
@@ -649,12 +649,13 @@ bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t fir
 std::atomic<int64_t> clean_path_loads{0};
 
 // The clean-file path. Returns no value when the file needs the general loader.
+// `cut` is the file's blocks (CutBlocks), the same the general loader parses.
 std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& file,
                                     const HeaderLine& header, const ColumnPlan& plan, int threads,
-                                    BlockProgress* progress) {
+                                    const std::vector<Block>& cut, BlockProgress* progress) {
   if (!plan.text_fields.empty()) return std::nullopt;
   std::vector<CleanBlock> blocks;
-  for (const Block& b : CutBlocks(file, header.data_begin, threads)) {
+  for (const Block& b : cut) {
     CleanBlock c;
     c.begin = b.begin;
     c.end = b.end;
@@ -802,16 +803,17 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   int threads =
       options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
   threads = std::max(1, threads);
-  BlockProgress progress(options.on_bytes_parsed,
-                         CutBlocks(file, header.data_begin, threads).size());
+  // One cut of the file, shared by the clean path and the general loader (so a block is
+  // the same block for both, which BlockProgress relies on).
+  std::vector<Block> blocks = CutBlocks(file, header.data_begin, threads);
+  BlockProgress progress(options.on_bytes_parsed, blocks.size());
   // The comments and the header line before the first block.
   if (options.on_bytes_parsed) options.on_bytes_parsed(static_cast<int64_t>(header.data_begin));
   if (allow_clean_path) {
-    if (auto session = LoadCleanCsv(path, file, header, plan, threads, &progress)) {
+    if (auto session = LoadCleanCsv(path, file, header, plan, threads, blocks, &progress)) {
       return *std::move(session);
     }
   }
-  std::vector<Block> blocks = CutBlocks(file, header.data_begin, threads);
 
   // Parse blocks in parallel. In strict mode, blocks after the first one with an error
   // are never reached by the sequential pass, so they need not be parsed.

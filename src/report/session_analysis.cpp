@@ -1,8 +1,5 @@
 #include "metro/report/session_analysis.hpp"
 
-#include <filesystem>
-#include <system_error>
-
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
@@ -27,10 +24,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
   ProgressSink* progress = options.progress;
   LoadOptions load = options.load;
   if (progress != nullptr) {
-    std::error_code ec;
-    const auto bytes = std::filesystem::file_size(path, ec);
-    progress->BeginPhase("load " + std::filesystem::path(path).filename().string(),
-                         ec ? 0 : static_cast<int64_t>(bytes), "MB", 1e6);
+    BeginLoadPhase(progress, path);
     load.on_bytes_parsed = [progress](int64_t n) { progress->Advance(n); };
   }
   auto session = LoadSession(path, load);

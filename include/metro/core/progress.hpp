@@ -131,6 +131,11 @@ class ProgressSink {
   virtual void Finish() = 0;
 };
 
+// Begins the phase "load FILE" (the file name without its directories), counted in MB of
+// the file's size (0, no total, if the size cannot be read): the loaders' on_bytes_parsed
+// counts go to it.
+void BeginLoadPhase(ProgressSink* progress, const std::string& path);
+
 // Draws each phase on its own line of `stream`: a ProgressBar for counted work, an
 // ElapsedTicker for uncounted work, each under `options` (mode, delay_s, redraw period).
 class TerminalProgress : public ProgressSink {
