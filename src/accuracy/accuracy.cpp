@@ -145,6 +145,9 @@ bool AccuracyOptions::IsValid(std::string* why) const {
   if (!type_a.IsValid(why)) return false;
   if (!alignment.IsValid(why)) return false;
   if (!window.IsValid(why)) return false;
+  if (window.settle_auto) {
+    return fail("window.settle_auto does not apply here: plateaus settle by plateaus.settle_auto");
+  }
   if (!(angle_match_deg > 0.0) || !std::isfinite(angle_match_deg)) {
     return fail("angle_match_deg must be > 0");
   }

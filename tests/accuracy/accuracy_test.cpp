@@ -288,6 +288,23 @@ TEST_CASE("Accuracy bad input names what to collect", "[accuracy]") {
     REQUIRE(!r7.ok());
     CHECK(r7.error().message == "the session has no tag 7 (--sensor)");
   }
+  SECTION("a window that keeps nothing, and settle_auto in the window") {
+    AccuracyOptions opt;
+    opt.window.from_s = 1e6;
+    const Session session = Simulate(o).session;
+    auto r = EvaluateAccuracy(session, nullptr, opt);
+    REQUIRE(!r.ok());
+    CHECK(r.error().message ==
+          fmt::format("the window (--skip-samples, --skip-seconds, --from-s, --to-s) keeps no "
+                      "observation of tag {}",
+                      session.tags.front().sensor));
+    opt = {};
+    opt.window.settle_auto = true;
+    r = EvaluateAccuracy(session, nullptr, opt);
+    REQUIRE(!r.ok());
+    CHECK(r.error().message ==
+          "window.settle_auto does not apply here: plateaus settle by plateaus.settle_auto");
+  }
   SECTION("a reference log that does not overlap") {
     o.reference_clock_offset_s = 5000.0;
     std::string capture, ref_text;
