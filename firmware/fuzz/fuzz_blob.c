@@ -58,8 +58,8 @@ static void Check(const uint8_t* data, size_t size) {
   cfg.accel_fs_sel = 0;
   cfg.gyro_fs_sel = 0;
   cfg.dlpf_cfg = 3;
-  if (metro_fw_sensor_decode(metro_fw_buffer_read, &buf, info.accel_off, info.accel_len,
-                             info.accel_version, METRO_FW_ACCEL, &cfg, &cal) == METRO_FW_OK) {
+  if (metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, METRO_FW_ACCEL, &cfg, &cal) ==
+      METRO_FW_OK) {
     const int16_t raw[3] = {32767, -32768, 1};
     float y[3];
     metro_fw_sensor_fixed fx;
@@ -72,6 +72,5 @@ static void Check(const uint8_t* data, size_t size) {
     (void)metro_fw_apply_fixed(&fx, raw, 200 * 4096, y_q20);
     (void)metro_fw_apply_fixed(&fx, raw, -100 * 4096, y_q20);
   }
-  (void)metro_fw_sensor_decode(metro_fw_buffer_read, &buf, info.gyro_off, info.gyro_len,
-                               info.gyro_version, METRO_FW_GYRO, &cfg, &cal);
+  (void)metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, METRO_FW_GYRO, &cfg, &cal);
 }

@@ -61,13 +61,12 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   {
     size_t i = 1;
     while (i + 3 <= size) {
-      uint8_t frame[METRO_FW_PUSH_MAX_FRAME], enc[2 * METRO_FW_PUSH_MAX_FRAME + 2];
-      uint32_t n = data[i] % (METRO_FW_PUSH_MAX_PAYLOAD + 1u), flen, elen;
+      uint8_t enc[2 * METRO_FW_PUSH_MAX_FRAME + 2];
+      uint32_t n = data[i] % (METRO_FW_PUSH_MAX_PAYLOAD + 1u), elen;
       const uint8_t op = data[i + 1], txn = data[i + 2];
       i += 3;
       if (n > size - i) n = (uint32_t)(size - i);
-      if (metro_fw_frame_build(op, txn, data + i, n, frame, sizeof(frame), &flen) != 0) break;
-      if (metro_fw_slip_encode(frame, flen, enc, sizeof(enc), &elen) != 0) break;
+      if (metro_fw_frame_encode(op, txn, data + i, n, enc, sizeof(enc), &elen) != 0) break;
       (void)metro_fw_push_rx(&push, enc, elen);
       i += n;
     }

@@ -143,19 +143,14 @@ int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
 
 int metro_fw_slot_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len) {
   const metro_fw_slot* s = (const metro_fw_slot*)ctx;
-  if (s == 0 || s->flash == 0 || s->flash->read == 0 || dst == 0) return METRO_FW_E_ARG;
   if (offset > METRO_FW_PAGE_SIZE || len > METRO_FW_PAGE_SIZE - offset) return METRO_FW_E_BOUNDS;
   return s->flash->read(s->flash->ctx, s->base + offset, dst, len) == 0 ? METRO_FW_OK
                                                                         : METRO_FW_E_FLASH;
 }
 
 int metro_fw_choose_active(const metro_fw_flash* flash, const uint32_t device_id[2],
-                           metro_fw_blob_info info[2], int result[2], int* active) {
-  int i;
-  if (flash == 0 || flash->read == 0 || device_id == 0 || info == 0 || result == 0 || active == 0) {
-    return METRO_FW_E_ARG;
-  }
-  *active = METRO_FW_SLOT_NONE;
+                           metro_fw_blob_info info[2], int result[2]) {
+  int i, active = METRO_FW_SLOT_NONE;
   for (i = 0; i < 2; ++i) {
     metro_fw_slot s;
     s.flash = flash;
@@ -163,11 +158,11 @@ int metro_fw_choose_active(const metro_fw_flash* flash, const uint32_t device_id
     result[i] =
         metro_fw_blob_validate(metro_fw_slot_read, &s, METRO_FW_PAGE_SIZE, device_id, &info[i]);
     /* the larger seq; slot A on a tie */
-    if (result[i] == METRO_FW_OK && (*active == METRO_FW_SLOT_NONE || info[i].seq > info[0].seq)) {
-      *active = i;
+    if (result[i] == METRO_FW_OK && (active == METRO_FW_SLOT_NONE || info[i].seq > info[0].seq)) {
+      active = i;
     }
   }
-  return METRO_FW_OK;
+  return active;
 }
 
 /* Float <-> bit pattern (C99 6.5.2.3 footnote 82): loads and stores only, no soft-float. */
@@ -189,12 +184,6 @@ static float BitsF32(uint32_t u) {
   return v.f;
 }
 
-float metro_fw_nominal_sensitivity(metro_fw_sensor_kind kind, uint8_t fs_sel) {
-  /* s_nom(fs0) * 2^fs_sel: exact, by adding fs_sel to the (normal) exponent. */
-  const float s0 = kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_SENS_FS0 : METRO_FW_GYRO_SENS_FS0;
-  return BitsF32(F32Bits(s0) + ((uint32_t)(fs_sel & 3u) << 23));
-}
-
 int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw_sensor_cal* out) {
   uint8_t* z;
   uint32_t i;
@@ -204,7 +193,9 @@ int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw
   }
   z = (uint8_t*)out;
   for (i = 0; i < sizeof(*out); ++i) z[i] = 0;
-  s = metro_fw_nominal_sensitivity(kind, fs_sel);
+  /* s_nom(fs 0) * 2^fs_sel: exact, by adding fs_sel to the (normal) exponent */
+  s = BitsF32(F32Bits(kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_SENS_FS0 : METRO_FW_GYRO_SENS_FS0) +
+              ((uint32_t)fs_sel << 23));
   out->m[0] = s;
   out->m[4] = s;
   out->m[8] = s;
@@ -309,12 +300,12 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
      * (|minor| <= 1.21 S^2 < 2^29); before that it may wrap (unsigned, no overflow) but then
      * a later row fails and det is not used. */
     minor = (uint32_t)q[3 + k1] * (uint32_t)q[6 + k2] - (uint32_t)q[3 + k2] * (uint32_t)q[6 + k1];
-    det += (int64_t)q[i] * (int32_t)minor;
+    det += metro_fw_mul(q[i], (int32_t)minor);
     /* |b0| + (|b1| + |b2| D) D <= limit: c = |b1| + |b2| D in Q28 (< 2^44), the sum in Q40
      * (< 2^63); all terms are not negative, so unsigned 64-bit. */
     c_q28 =
-        (uint64_t)AbsU32(q[12 + i]) * 4096u + (((uint64_t)AbsU32(q[15 + i]) * (uint32_t)d) >> 8);
-    if (((uint64_t)AbsU32(q[9 + i]) << 24) + c_q28 * (uint32_t)d >
+        (uint64_t)AbsU32(q[12 + i]) * 4096u + ((uint64_t)metro_fw_mul(AbsU32(q[15 + i]), d) >> 8);
+    if (((uint64_t)AbsU32(q[9 + i]) << 24) + (uint64_t)metro_fw_mul((int64_t)c_q28, d) >
         ((uint64_t)(uint32_t)(limit_fs0 >> fs_sel) << 40)) {
       return 0;
     }
@@ -353,22 +344,28 @@ typedef char metro_fw_cal_terms_check[(offsetof(metro_fw_sensor_cal, b2) -
                                           ? 1
                                           : -1];
 
-int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, uint32_t body_len,
-                           uint16_t version, metro_fw_sensor_kind kind, const metro_fw_config* cfg,
+int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob_info* info,
+                           metro_fw_sensor_kind kind, const metro_fw_config* cfg,
                            metro_fw_sensor_cal* out) {
   uint8_t b[METRO_FW_SENSOR_BODY_LEN];
+  const uint16_t* sec;
   uint8_t fs_sel, bits, status;
   uint32_t i;
   int rc;
-  if (read == 0 || cfg == 0 || out == 0) return METRO_FW_E_ARG;
+  if (read == 0 || info == 0 || cfg == 0 || out == 0) return METRO_FW_E_ARG;
   fs_sel = kind == METRO_FW_ACCEL ? cfg->accel_fs_sel : cfg->gyro_fs_sel;
   rc = metro_fw_sensor_defaults(kind, fs_sel, out);
   if (rc != METRO_FW_OK) return rc;
-  if (body_off == 0u) return METRO_FW_OK; /* ABSENT */
+  /* off, len, version of ACCEL or GYRO (layout checked at the top; kind is 0 or 1, checked by
+   * the defaults) */
+  sec =
+      (const uint16_t*)(const void*)((const char*)info + offsetof(metro_fw_blob_info, accel_off)) +
+      3u * kind;
+  if (sec[0] == 0u) return METRO_FW_OK; /* ABSENT */
   status = METRO_FW_SENSOR_UNSUPPORTED;
-  if ((version >> 8) != (METRO_FW_SEC_VERSION_1_0 >> 8)) goto done;
-  if (body_len < METRO_FW_SENSOR_BODY_LEN) return METRO_FW_E_ARG; /* validator forbids */
-  rc = read(ctx, body_off, b, METRO_FW_SENSOR_BODY_LEN);
+  if ((sec[2] >> 8) != (METRO_FW_SEC_VERSION_1_0 >> 8)) goto done;
+  if (sec[1] < METRO_FW_SENSOR_BODY_LEN) return METRO_FW_E_ARG; /* validator forbids */
+  rc = read(ctx, sec[0], b, METRO_FW_SENSOR_BODY_LEN);
   if (rc != METRO_FW_OK) return rc;
   /* Every f32 from t_ref_c (4) to t_valid_max_c (160) finite; from u_M (80) to resid_rms
    * (152) also not negative. Checked on the bits: exponent 0xFF is Inf or NaN; a pattern
@@ -394,10 +391,13 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, 
   for (i = 0; i < 21; ++i) {
     const uint32_t at = i < 18 ? 8u + 4u * i : i == 18 ? 4u : 80u + 4u * i;
     ((float*)(void*)out)[i] =
-        (bits & kTermBits[i]) == kTermBits[i] ? metro_fw_get_f32(b + at) : 0.0f;
+        (bits & kTermBits[i]) == kTermBits[i] ? BitsF32(metro_fw_get_u32(b + at)) : 0.0f;
   }
   METRO_FW_NO_UNROLL
-  for (i = 0; i < 3; ++i) out->hw_offs[i] = metro_fw_get_i16(b + 164 + 2 * i);
+  for (i = 0; i < 3; ++i) {
+    const int32_t u = metro_fw_get_u16(b + 164 + 2 * i);
+    out->hw_offs[i] = (int16_t)(u - ((u & 0x8000) << 1)); /* two's complement */
+  }
   status = METRO_FW_SENSOR_OK;
   if (!WithinLimits(out, kind, fs_sel)) {
     (void)metro_fw_sensor_defaults(kind, fs_sel, out);
@@ -412,13 +412,13 @@ int metro_fw_load(const metro_fw_flash* flash, const metro_fw_config* cfg,
                   metro_fw_calibration* out) {
   metro_fw_blob_info info[2];
   metro_fw_blob_info* a = &info[0];
-  int active, rc;
+  int active;
   metro_fw_slot s;
-  if (flash == 0 || cfg == 0 || out == 0 || cfg->accel_fs_sel > 3u || cfg->gyro_fs_sel > 3u) {
+  if (flash == 0 || flash->read == 0 || cfg == 0 || out == 0 || cfg->accel_fs_sel > 3u ||
+      cfg->gyro_fs_sel > 3u) {
     return METRO_FW_E_ARG;
   }
-  rc = metro_fw_choose_active(flash, cfg->device_id, info, out->slot_result, &active);
-  if (rc != METRO_FW_OK) return rc;
+  active = metro_fw_choose_active(flash, cfg->device_id, info, out->slot_result);
   out->slot = active;
   s.flash = flash;
   s.base = 0;
@@ -435,10 +435,8 @@ int metro_fw_load(const metro_fw_flash* flash, const metro_fw_config* cfg,
   out->flags = a->flags;
   /* The decoder sets the defaults first: a body offset of 0 leaves them with status ABSENT,
    * and a read failing here leaves that sensor at its defaults (the other is still decoded). */
-  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, a->accel_off, a->accel_len, a->accel_version,
-                               METRO_FW_ACCEL, cfg, &out->accel);
-  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, a->gyro_off, a->gyro_len, a->gyro_version,
-                               METRO_FW_GYRO, cfg, &out->gyro);
+  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, a, METRO_FW_ACCEL, cfg, &out->accel);
+  (void)metro_fw_sensor_decode(metro_fw_slot_read, &s, a, METRO_FW_GYRO, cfg, &out->gyro);
   return METRO_FW_OK;
 }
 

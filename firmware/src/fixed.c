@@ -31,7 +31,7 @@ int metro_fw_fixed_from_cal(const metro_fw_sensor_cal* cal, metro_fw_sensor_fixe
 
 /* round(a * b / 2^shift), shift >= 1 */
 static int64_t MulRound(int64_t a, int32_t b, int shift) {
-  return (a * b + ((int64_t)1 << (shift - 1))) >> shift;
+  return (metro_fw_mul(a, b) + ((int64_t)1 << (shift - 1))) >> shift;
 }
 
 int metro_fw_apply_fixed(const metro_fw_sensor_fixed* fx, const int16_t raw_lsb[3],
@@ -46,17 +46,17 @@ int metro_fw_apply_fixed(const metro_fw_sensor_fixed* fx, const int16_t raw_lsb[
   dt_q12 = t - fx->t_ref_q12;
   for (i = 0; i < 3; ++i) {
     /* bias = b0 + (b1 + b2*dT)*dT (Horner), each product rounded to Q16 LSB, and
-     * e = round((r 2^16 - bias) / 2^6) in Q10. Since r 2^16 is a multiple of 2^6,
-     * e = r 2^10 - floor((bias + 31) / 2^6), and with bias = b0 + floor((c dT + 2^11) / 2^12)
-     * the two floors of integers nest: floor((bias + 31) / 2^6) =
-     * floor(((b0 + 31) 2^12 + 2^11 + c dT) / 2^18). Same integers, one 64-bit shift less. */
+     * e = round((r 2^16 - bias) / 2^6) in Q10 = r 2^10 - floor((bias + 31) / 2^6), since r 2^16
+     * is a multiple of 2^6. c = b1 + b2 dT may exceed 2^31 in Q16 and stays 64-bit; bias fits
+     * int32: section 3.1 bounds |b0| + |b1| D + |b2| D^2 by the bias limit (< 2^13 LSB) and
+     * |dT| <= D after the clamp, so |bias| < 2^30 in Q16 (docs/calibration-blob.md 3.2). */
     const int64_t c_q16 = fx->b1_q16[i] + MulRound(fx->b2_q24[i], dt_q12, 20);
-    const int64_t s_q28 = c_q16 * dt_q12 + ((int64_t)fx->b0_q16[i] + 31) * 4096 + 2048;
-    e_q10[i] = raw_lsb[i] * 1024 - (int32_t)(s_q28 >> 18);
+    const int32_t bias_q16 = fx->b0_q16[i] + (int32_t)MulRound(c_q16, dt_q12, 12);
+    e_q10[i] = raw_lsb[i] * 1024 - ((bias_q16 + 31) >> 6);
   }
   for (i = 0; i < 3; ++i) {
     int64_t acc_q46 = 0x2000000; /* rounds the shift below to nearest */
-    for (j = 0; j < 3; ++j) acc_q46 += (int64_t)fx->m_q36[3 * i + j] * e_q10[j];
+    for (j = 0; j < 3; ++j) acc_q46 += metro_fw_mul(fx->m_q36[3 * i + j], e_q10[j]);
     out_q20[i] = (int32_t)(acc_q46 >> 26);
   }
   return METRO_FW_OK;

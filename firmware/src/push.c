@@ -4,13 +4,33 @@
 #include "metro_fw/crc.h"
 #include "metro_fw/update.h"
 
-int metro_fw_slip_encode(const uint8_t* frame, uint32_t len, uint8_t* out, uint32_t out_cap,
-                         uint32_t* out_len) {
+/* Little-endian store of the low n bytes of v at w; returns the next free byte. */
+static uint8_t* PutLe(uint8_t* w, uint32_t v, uint32_t n) {
+  for (; n != 0u; --n) {
+    *w++ = (uint8_t)v;
+    v >>= 8;
+  }
+  return w;
+}
+
+int metro_fw_frame_encode(uint8_t op, uint8_t txn, const uint8_t* payload, uint32_t payload_len,
+                          uint8_t* out, uint32_t out_cap, uint32_t* out_len) {
+  uint8_t f[METRO_FW_PUSH_MAX_FRAME];
   uint32_t i, n = 0;
-  if (frame == 0 || out == 0 || out_len == 0 || out_cap < 2u * len + 2u) return METRO_FW_E_ARG;
+  if (out == 0 || out_len == 0 || (payload == 0 && payload_len != 0u) ||
+      payload_len > METRO_FW_PUSH_MAX_PAYLOAD ||
+      out_cap < 2u * (payload_len + METRO_FW_PUSH_FRAME_OVERHEAD) + 2u) {
+    return METRO_FW_E_ARG;
+  }
+  f[0] = op;
+  f[1] = txn;
+  f[2] = (uint8_t)payload_len;
+  f[3] = 0;
+  for (i = 0; i < payload_len; ++i) f[4 + i] = payload[i];
+  (void)PutLe(f + 4 + payload_len, metro_fw_crc16(METRO_FW_CRC16_INIT, f, 4u + payload_len), 2);
   out[n++] = METRO_FW_SLIP_END;
-  for (i = 0; i < len; ++i) {
-    uint8_t c = frame[i];
+  for (i = 0; i < payload_len + METRO_FW_PUSH_FRAME_OVERHEAD; ++i) {
+    uint8_t c = f[i];
     if (c == METRO_FW_SLIP_END || c == METRO_FW_SLIP_ESC) {
       out[n++] = METRO_FW_SLIP_ESC;
       c = c == METRO_FW_SLIP_END ? METRO_FW_SLIP_ESC_END : METRO_FW_SLIP_ESC_ESC;
@@ -22,49 +42,25 @@ int metro_fw_slip_encode(const uint8_t* frame, uint32_t len, uint8_t* out, uint3
   return METRO_FW_OK;
 }
 
-int metro_fw_frame_build(uint8_t op, uint8_t txn, const uint8_t* payload, uint32_t payload_len,
-                         uint8_t* out, uint32_t out_cap, uint32_t* out_len) {
-  uint32_t i;
-  uint16_t crc;
-  if (out == 0 || out_len == 0 || (payload == 0 && payload_len != 0u) ||
-      payload_len > METRO_FW_PUSH_MAX_PAYLOAD ||
-      out_cap < payload_len + METRO_FW_PUSH_FRAME_OVERHEAD) {
-    return METRO_FW_E_ARG;
-  }
-  out[0] = op;
-  out[1] = txn;
-  metro_fw_put_u16(out + 2, (uint16_t)payload_len);
-  for (i = 0; i < payload_len; ++i) out[4 + i] = payload[i];
-  crc = metro_fw_crc16(METRO_FW_CRC16_INIT, out, 4u + payload_len);
-  metro_fw_put_u16(out + 4 + payload_len, crc);
-  *out_len = payload_len + METRO_FW_PUSH_FRAME_OVERHEAD;
-  return METRO_FW_OK;
-}
-
-int metro_fw_frame_parse(const uint8_t* frame, uint32_t len, uint8_t* op, uint8_t* txn,
-                         const uint8_t** payload, uint32_t* payload_len) {
+int metro_fw_frame_parse(const uint8_t* frame, uint32_t len) {
   uint32_t n;
-  if (frame == 0 || op == 0 || txn == 0 || payload == 0 || payload_len == 0) {
-    return METRO_FW_E_ARG;
-  }
+  if (frame == 0) return METRO_FW_E_ARG;
   if (len < METRO_FW_PUSH_FRAME_OVERHEAD || len > METRO_FW_PUSH_MAX_FRAME) return METRO_FW_E_FRAME;
   n = metro_fw_get_u16(frame + 2);
-  if (n != len - METRO_FW_PUSH_FRAME_OVERHEAD) return METRO_FW_E_FRAME;
-  if (metro_fw_crc16(METRO_FW_CRC16_INIT, frame, 4u + n) != metro_fw_get_u16(frame + 4 + n)) {
+  if (n != len - METRO_FW_PUSH_FRAME_OVERHEAD ||
+      metro_fw_crc16(METRO_FW_CRC16_INIT, frame, 4u + n) != metro_fw_get_u16(frame + 4 + n)) {
     return METRO_FW_E_FRAME;
   }
-  *op = frame[0];
-  *txn = frame[1];
-  *payload = frame + 4;
-  *payload_len = n;
-  return METRO_FW_OK;
+  return (int)n;
 }
 
 int metro_fw_push_init(metro_fw_push* p, const metro_fw_flash* flash, const uint32_t device_id[2],
                        metro_fw_send_fn send, void* send_ctx) {
   uint8_t* z;
   uint32_t i;
-  if (p == 0 || flash == 0 || device_id == 0 || send == 0) return METRO_FW_E_ARG;
+  if (p == 0 || flash == 0 || flash->read == 0 || device_id == 0 || send == 0) {
+    return METRO_FW_E_ARG;
+  }
   z = (uint8_t*)p;
   for (i = 0; i < sizeof(*p); ++i) z[i] = 0;
   p->flash = flash;
@@ -75,23 +71,9 @@ int metro_fw_push_init(metro_fw_push* p, const metro_fw_flash* flash, const uint
   return METRO_FW_OK;
 }
 
-/* Little-endian store of the low n bytes of v at w; returns the next free byte. */
-static uint8_t* PutLe(uint8_t* w, uint32_t v, uint32_t n) {
-  for (; n != 0u; --n) {
-    *w++ = (uint8_t)v;
-    v >>= 8;
-  }
-  return w;
-}
-
-/* The NAK (section 7): op 0xFF, txn 0, len 1, FRAME_ERROR, CRC-16/CCITT-FALSE of the first five
- * bytes (0xBD1F; push_test checks it against metro_fw_frame_build). */
-static const uint8_t kNak[METRO_FW_PUSH_FRAME_OVERHEAD + 1u] = {
-    METRO_FW_OP_NAK, 0x00, 0x01, 0x00, METRO_FW_RES_FRAME_ERROR, 0x1F, 0xBD};
-
-/* Push result for a failed metro_fw_update, indexed by -code (codes -1 ... -13). */
+/* Push result of metro_fw_update's code, indexed by -code (codes 0 ... -13). */
 static const uint8_t kResultOfError[14] = {
-    0,
+    METRO_FW_RES_SUCCESS,            /* OK */
     METRO_FW_RES_INVALID_BLOB,       /* E_ARG */
     METRO_FW_RES_INVALID_BLOB,       /* E_EMPTY */
     METRO_FW_RES_INVALID_BLOB,       /* E_MAGIC */
@@ -133,28 +115,26 @@ METRO_FW_NOINLINE static uint8_t Commit(metro_fw_push* p, int* slot) {
   /* the blob's seq is not CREATE's */
   if (metro_fw_get_u32(p->blob + 12) != p->expect_seq) return METRO_FW_RES_INVALID_PARAM;
   rc = metro_fw_update(p->flash, p->device_id, p->blob, p->total_len, slot);
-  return rc == METRO_FW_OK     ? METRO_FW_RES_SUCCESS
-         : (uint32_t)-rc < 14u ? kResultOfError[-rc]
-                               : METRO_FW_RES_INVALID_BLOB;
+  return (uint32_t)-rc < 14u ? kResultOfError[-rc] : METRO_FW_RES_INVALID_BLOB;
 }
 
 /* Executes one request (payload in, n bytes; in is followed by the frame's CRC, so in[0] and
- * in[1] are readable) and writes the response payload (result byte, then the op's fields) at
- * p->last_resp + 4, where the response frame is built in place; returns its length. A request
+ * in[1] are readable) and writes the response payload (result byte, then the op's fields) into
+ * the response cache p->last_resp; returns its length. A request
  * it refuses as malformed (INVALID_PARAM) gets the result byte only. */
 METRO_FW_NOINLINE static uint32_t Execute(metro_fw_push* p, uint32_t op, const uint8_t* in,
                                           uint32_t n) {
-  uint8_t* const r = p->last_resp + 4;
+  uint8_t* const r = p->last_resp;
   uint8_t* w = r + 1;
   metro_fw_blob_info info[2];
   int result[2];
-  int active = METRO_FW_SLOT_NONE;
+  int active;
   const uint32_t off = metro_fw_get_u16(in);
   const metro_fw_blob_info* act = info;
   uint32_t res = METRO_FW_RES_UNKNOWN_OP;
-  /* p's arguments are not NULL: active is 0, 1 or NONE afterwards. Without an active slot,
-   * act points at info[0] with seq and crc32 0 (what GET_INFO reports then). */
-  (void)metro_fw_choose_active(p->flash, p->device_id, info, result, &active);
+  /* Without an active slot, act points at info[0] with seq and crc32 0 (what GET_INFO reports
+   * then). */
+  active = metro_fw_choose_active(p->flash, p->device_id, info, result);
   if (active == METRO_FW_SLOT_NONE) {
     info[0].seq = 0;
     info[0].crc32 = 0;
@@ -169,11 +149,8 @@ METRO_FW_NOINLINE static uint32_t Execute(metro_fw_push* p, uint32_t op, const u
   res = METRO_FW_RES_SUCCESS;
   if (op == METRO_FW_OP_GET_INFO) {
     /* fmt_major, fmt_minor, active_slot, max_len u16, device_id u32[2], seq, crc32 */
-    w = PutLe(w,
-              METRO_FW_FMT_MAJOR | METRO_FW_FMT_MINOR << 8 | (uint32_t)(uint8_t)active << 16 |
-                  (METRO_FW_MAX_LEN & 0xFFu) << 24,
-              4);
-    w = PutLe(w, METRO_FW_MAX_LEN >> 8, 1);
+    w = PutLe(w, METRO_FW_FMT_MAJOR | METRO_FW_FMT_MINOR << 8 | (uint32_t)(uint8_t)active << 16, 3);
+    w = PutLe(w, METRO_FW_MAX_LEN, 2);
     w = PutLe(w, p->device_id[0], 4);
     w = PutLe(w, p->device_id[1], 4);
     w = PutLe(w, act->seq, 4);
@@ -240,35 +217,35 @@ done:
   return (uint32_t)(w - r);
 }
 
-/* Handles the frame in p->rx: a NAK for a bad one, else the response (from the cache for a
- * retry), SLIP-encoded and sent. Returns METRO_FW_OK, METRO_FW_E_FRAME (NAK sent) or
- * METRO_FW_E_FLASH (the send callback failed). */
+/* Handles the frame in p->rx: a NAK for a bad one (section 7: op 0xFF, txn 0, payload
+ * FRAME_ERROR), else the response (from the cache for a retry), SLIP-encoded and sent. Returns
+ * METRO_FW_OK, METRO_FW_E_FRAME (NAK sent) or METRO_FW_E_FLASH (the send callback failed). */
 static int HandleFrame(metro_fw_push* p) {
-  uint8_t op, txn;
-  const uint8_t* payload;
-  const uint8_t* frame = kNak;
-  uint32_t n, len = sizeof(kNak), key;
+  static const uint8_t kFrameError = METRO_FW_RES_FRAME_ERROR;
+  const uint8_t* payload = &kFrameError;
+  uint8_t op = METRO_FW_OP_NAK, txn = 0;
+  uint32_t n = 1;
   int status = METRO_FW_E_FRAME;
+  /* a frame marked bad is parsed as an empty one, which fails */
+  const int len = metro_fw_frame_parse(p->rx, p->rx_bad ? 0u : p->rx_len);
   uint8_t enc[2u * METRO_FW_PUSH_MAX_FRAME + 2u];
-  if (!p->rx_bad &&
-      metro_fw_frame_parse(p->rx, p->rx_len, &op, &txn, &payload, &n) == METRO_FW_OK) {
+  if (len >= 0) {
     /* A retry repeats op, txn and the request's CRC-16: answered from the cache, not redone. */
-    key = metro_fw_get_u16(p->rx) | (uint32_t)metro_fw_get_u16(p->rx + p->rx_len - 2u) << 16;
+    const uint32_t key =
+        metro_fw_get_u16(p->rx) | (uint32_t)metro_fw_get_u16(p->rx + p->rx_len - 2u) << 16;
     if (!p->have_last || key != p->last_key) {
-      /* the payload is built in place: frame_build's copy is from and to the same bytes */
-      (void)metro_fw_frame_build((uint8_t)(op | METRO_FW_PUSH_RESPONSE_BIT), txn, p->last_resp + 4,
-                                 Execute(p, op, payload, n), p->last_resp, sizeof(p->last_resp),
-                                 &len);
+      p->last_resp_len = (uint8_t)Execute(p, p->rx[0], p->rx + 4, (uint32_t)len);
       p->have_last = 1;
       p->last_key = key;
-      p->last_resp_len = (uint8_t)len;
     }
-    frame = p->last_resp;
-    len = p->last_resp_len;
+    op = (uint8_t)(p->rx[0] | METRO_FW_PUSH_RESPONSE_BIT);
+    txn = p->rx[1];
+    payload = p->last_resp;
+    n = p->last_resp_len;
     status = METRO_FW_OK;
   }
-  /* enc holds any frame of at most METRO_FW_PUSH_MAX_FRAME bytes: the encoding succeeds */
-  (void)metro_fw_slip_encode(frame, len, enc, sizeof(enc), &n);
+  /* enc holds any frame of at most METRO_FW_PUSH_MAX_PAYLOAD bytes: the encoding succeeds */
+  (void)metro_fw_frame_encode(op, txn, payload, n, enc, sizeof(enc), &n);
   return p->send(p->send_ctx, enc, n) != 0 ? METRO_FW_E_FLASH : status;
 }
 

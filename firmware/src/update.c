@@ -1,5 +1,7 @@
 #include "metro_fw/update.h"
 
+#include "le.h"
+
 int metro_fw_update(const metro_fw_flash* flash, const uint32_t device_id[2], const uint8_t* blob,
                     uint32_t len, int* slot_written) {
   metro_fw_buffer in;
@@ -17,8 +19,7 @@ int metro_fw_update(const metro_fw_flash* flash, const uint32_t device_id[2], co
   in.len = len;
   rc = metro_fw_blob_validate(metro_fw_buffer_read, &in, len, device_id, &new_info);
   if (rc != METRO_FW_OK) return rc;
-  rc = metro_fw_choose_active(flash, device_id, slot_info, result, &active);
-  if (rc != METRO_FW_OK) return rc;
+  active = metro_fw_choose_active(flash, device_id, slot_info, result);
   if (active != METRO_FW_SLOT_NONE && new_info.seq <= slot_info[active].seq) {
     return METRO_FW_E_STALE_SEQ; /* also covers an active seq of METRO_FW_SEQ_MAX */
   }

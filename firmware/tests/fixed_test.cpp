@@ -1,6 +1,7 @@
 // metro_fw_apply_fixed against the model evaluated in double on the float32 constants, with
 // the worst-case bound of docs/calibration-blob.md section 3.2 (written out here, not taken
-// from the library), and against the float32 apply.
+// from the library), and against the float32 apply; the library's private 64 x 32 multiply
+// against the product taken modulo 2^64.
 #include "metro_fw/fixed.h"
 
 #include <catch2/catch.hpp>
@@ -10,6 +11,9 @@
 
 #include "metro_fw/blob.h"
 #include "test_support.hpp"
+extern "C" {
+#include "../src/le.h"  // metro_fw_mul, the library's private 64 x 32 multiply
+}
 
 namespace {
 
@@ -175,5 +179,43 @@ TEST_CASE("Fixed MPU6050 temperature is within three Q12 units for every raw val
     const double exact_q12 = 4096.0 * (raw / 340.0 + 36.53);  // PS-MPU-6000A rev 3.4 sec. 6.4
     const int32_t q12 = metro_fw_mpu6050_temp_q12(static_cast<int16_t>(raw));
     REQUIRE(std::fabs(q12 - exact_q12) <= 3.0);
+  }
+}
+
+TEST_CASE("The 64 x 32 multiply equals the product modulo 2^64", "[fw][fixed]") {
+  // The product taken in unsigned 64-bit arithmetic (defined wrap-around), as two's complement.
+  const auto expected = [](int64_t a, int32_t b) {
+    return static_cast<uint64_t>(a) * static_cast<uint64_t>(static_cast<int64_t>(b));
+  };
+  const int64_t edge_a[] = {0,
+                            1,
+                            -1,
+                            65535,
+                            65536,
+                            -65536,
+                            INT32_MAX,
+                            INT32_MIN,
+                            0xFFFFFFFFll,
+                            0x100000000ll,
+                            -(1ll << 44),
+                            (1ll << 44) - 1,
+                            INT64_MAX,
+                            INT64_MIN,
+                            0x7FFF0000FFFF0000ll};
+  const int32_t edge_b[] = {0, 1, -1, 65535, 65536, -65536, INT32_MAX, INT32_MIN, 512000, -512000};
+  for (int64_t a : edge_a) {
+    for (int32_t b : edge_b) {
+      INFO("a " << a << " b " << b);
+      CHECK(static_cast<uint64_t>(metro_fw_mul(a, b)) == expected(a, b));
+    }
+  }
+  std::mt19937_64 rng(6);
+  for (int i = 0; i < 1000000; ++i) {
+    // Random magnitudes: a of 0 ... 63 bits, b of 0 ... 31 bits, either sign.
+    const int64_t a = static_cast<int64_t>(rng() >> (rng() % 64));
+    const int32_t b = static_cast<int32_t>(static_cast<uint32_t>(rng() >> (32 + rng() % 32)));
+    const int64_t sa = (rng() & 1) ? -a : a;
+    const int32_t sb = (rng() & 1) && b != INT32_MIN ? -b : b;
+    REQUIRE(static_cast<uint64_t>(metro_fw_mul(sa, sb)) == expected(sa, sb));
   }
 }

@@ -125,8 +125,12 @@ int Decode(const fwtest::Sensor& s, metro_fw_sensor_kind kind, int fs_sel) {
   cfg.accel_fs_sel = static_cast<uint8_t>(fs_sel);
   cfg.gyro_fs_sel = static_cast<uint8_t>(fs_sel);
   metro_fw_sensor_cal out{};
-  REQUIRE(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, 4, 176, METRO_FW_SEC_VERSION_1_0, kind,
-                                 &cfg, &out) == METRO_FW_OK);
+  metro_fw_blob_info info{};  // the section at offset 4 for either kind
+  info.accel_off = info.gyro_off = 4;
+  info.accel_len = info.gyro_len = 176;
+  info.accel_version = info.gyro_version = METRO_FW_SEC_VERSION_1_0;
+  REQUIRE(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, kind, &cfg, &out) ==
+          METRO_FW_OK);
   // Whatever the status, the constants loaded (the section's or the defaults) convert to the
   // fixed-point formats of 3.2: 3.1 bounds |b1| < 2^15 and |b2| < 2^7.
   metro_fw_sensor_fixed fx;
@@ -408,11 +412,15 @@ TEST_CASE("Limit checks accept and reject just beyond the stated band", "[fw][bl
   }
 }
 
-TEST_CASE("Nominal sensitivity doubles exactly per fs_sel", "[fw][blob]") {
+TEST_CASE("The defaults' nominal sensitivity doubles exactly per fs_sel", "[fw][blob]") {
   for (int fs = 0; fs < 4; ++fs) {
-    CHECK(metro_fw_nominal_sensitivity(METRO_FW_ACCEL, static_cast<uint8_t>(fs)) ==
-          static_cast<float>(9.80665 / (16384 >> fs)));
-    CHECK(metro_fw_nominal_sensitivity(METRO_FW_GYRO, static_cast<uint8_t>(fs)) ==
-          static_cast<float>((250 << fs) / 32768.0 * 3.14159265358979323846 / 180.0));
+    const double s[2] = {9.80665 / (16384 >> fs),
+                         (250 << fs) / 32768.0 * 3.14159265358979323846 / 180.0};
+    for (int k = 0; k < 2; ++k) {
+      metro_fw_sensor_cal d{};
+      REQUIRE(metro_fw_sensor_defaults(static_cast<metro_fw_sensor_kind>(k),
+                                       static_cast<uint8_t>(fs), &d) == METRO_FW_OK);
+      for (int i = 0; i < 9; ++i) CHECK(d.m[i] == (i % 4 == 0 ? static_cast<float>(s[k]) : 0.0f));
+    }
   }
 }

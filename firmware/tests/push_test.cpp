@@ -39,13 +39,10 @@ class Link {
   }
 
   std::vector<uint8_t> Encode(uint8_t op, uint8_t txn, const std::vector<uint8_t>& payload) {
-    uint8_t frame[64];
-    uint32_t n = 0;
-    REQUIRE(metro_fw_frame_build(op, txn, payload.data(), static_cast<uint32_t>(payload.size()),
-                                 frame, sizeof(frame), &n) == METRO_FW_OK);
     uint8_t enc[160];
     uint32_t m = 0;
-    REQUIRE(metro_fw_slip_encode(frame, n, enc, sizeof(enc), &m) == METRO_FW_OK);
+    REQUIRE(metro_fw_frame_encode(op, txn, payload.data(), static_cast<uint32_t>(payload.size()),
+                                  enc, sizeof(enc), &m) == METRO_FW_OK);
     return std::vector<uint8_t>(enc, enc + m);
   }
 
@@ -339,33 +336,46 @@ TEST_CASE("A disconnect mid-transfer is recovered by a new CREATE", "[fw][push]"
   CHECK(link.ReadBack(540) == blob);
 }
 
-TEST_CASE("Frame parser checks length and CRC", "[fw][push]") {
-  uint8_t frame[64];
-  uint32_t n = 0;
+TEST_CASE("Frame encoder: header, CRC-16 and SLIP escapes; parser checks length and CRC",
+          "[fw][push]") {
+  // op 0xC0 and txn 0xDB need escapes; CRC-16/CCITT-FALSE of C0 DB 03 00 01 02 03 computed
+  // bit by bit here, independently of the library.
   const uint8_t payload[3] = {1, 2, 3};
-  REQUIRE(metro_fw_frame_build(0x02, 7, payload, 3, frame, sizeof(frame), &n) == METRO_FW_OK);
-  REQUIRE(n == 9u);
-  uint8_t op, txn;
-  const uint8_t* p;
-  uint32_t pn;
-  REQUIRE(metro_fw_frame_parse(frame, n, &op, &txn, &p, &pn) == METRO_FW_OK);
-  CHECK(op == 0x02);
-  CHECK(txn == 7);
-  CHECK(pn == 3u);
-  CHECK(metro_fw_frame_parse(frame, n - 1, &op, &txn, &p, &pn) == METRO_FW_E_FRAME);
-  frame[4] ^= 0x80;
-  CHECK(metro_fw_frame_parse(frame, n, &op, &txn, &p, &pn) == METRO_FW_E_FRAME);
-  CHECK(metro_fw_frame_build(0, 0, payload, 33, frame, sizeof(frame), &n) == METRO_FW_E_ARG);
-}
-
-TEST_CASE("SLIP escapes END and ESC bytes", "[fw][push]") {
-  const uint8_t in[4] = {0xC0, 0x01, 0xDB, 0x02};
-  uint8_t out[16];
+  const std::vector<uint8_t> raw = {0xC0, 0xDB, 0x03, 0x00, 0x01, 0x02, 0x03};
+  uint32_t crc = 0xFFFF;
+  for (uint8_t b : raw) {
+    crc ^= static_cast<uint32_t>(b) << 8;
+    for (int i = 0; i < 8; ++i) crc = (crc & 0x8000) ? ((crc << 1) ^ 0x1021) & 0xFFFF : crc << 1;
+  }
+  std::vector<uint8_t> frame = raw;
+  frame.push_back(static_cast<uint8_t>(crc));
+  frame.push_back(static_cast<uint8_t>(crc >> 8));
+  std::vector<uint8_t> expected = {0xC0};
+  for (uint8_t b : frame) {
+    if (b == 0xC0 || b == 0xDB) {
+      expected.push_back(0xDB);
+      expected.push_back(b == 0xC0 ? 0xDC : 0xDD);
+    } else {
+      expected.push_back(b);
+    }
+  }
+  expected.push_back(0xC0);
+  uint8_t enc[64];
   uint32_t n = 0;
-  REQUIRE(metro_fw_slip_encode(in, 4, out, sizeof(out), &n) == METRO_FW_OK);
-  const std::vector<uint8_t> expected = {0xC0, 0xDB, 0xDC, 0x01, 0xDB, 0xDD, 0x02, 0xC0};
-  CHECK(std::vector<uint8_t>(out, out + n) == expected);
-  CHECK(metro_fw_slip_encode(in, 4, out, 9, &n) == METRO_FW_E_ARG);
+  REQUIRE(metro_fw_frame_encode(0xC0, 0xDB, payload, 3, enc, sizeof(enc), &n) == METRO_FW_OK);
+  CHECK(std::vector<uint8_t>(enc, enc + n) == expected);
+  // out must hold the worst case, 2 * (3 + 6) + 2 bytes, whatever the content.
+  CHECK(metro_fw_frame_encode(0xC0, 0xDB, payload, 3, enc, 19, &n) == METRO_FW_E_ARG);
+  CHECK(metro_fw_frame_encode(0xC0, 0xDB, payload, 3, enc, 20, &n) == METRO_FW_OK);
+  CHECK(metro_fw_frame_encode(0, 0, payload, 33, enc, sizeof(enc), &n) == METRO_FW_E_ARG);
+  CHECK(metro_fw_frame_encode(0, 0, nullptr, 1, enc, sizeof(enc), &n) == METRO_FW_E_ARG);
+  CHECK(metro_fw_frame_encode(0, 0, nullptr, 0, enc, sizeof(enc), &n) == METRO_FW_OK);
+
+  CHECK(metro_fw_frame_parse(frame.data(), 9) == 3);
+  CHECK(metro_fw_frame_parse(frame.data(), 8) == METRO_FW_E_FRAME);
+  CHECK(metro_fw_frame_parse(nullptr, 9) == METRO_FW_E_ARG);
+  frame[4] ^= 0x80;
+  CHECK(metro_fw_frame_parse(frame.data(), 9) == METRO_FW_E_FRAME);
 }
 
 namespace {
@@ -398,11 +408,10 @@ TEST_CASE("The NAK is the frame of section 7 byte for byte", "[fw][push]") {
   // A failing send is reported as METRO_FW_E_FLASH, for a NAK and for a response.
   sink.fail = 1;
   CHECK(metro_fw_push_rx(p.get(), garbage.data(), 5) == METRO_FW_E_FLASH);
-  uint8_t frame[16], enc[40];
-  uint32_t n = 0, m = 0;
-  REQUIRE(metro_fw_frame_build(METRO_FW_OP_ABORT, 1, nullptr, 0, frame, sizeof(frame), &n) ==
+  uint8_t enc[40];
+  uint32_t m = 0;
+  REQUIRE(metro_fw_frame_encode(METRO_FW_OP_ABORT, 1, nullptr, 0, enc, sizeof(enc), &m) ==
           METRO_FW_OK);
-  REQUIRE(metro_fw_slip_encode(frame, n, enc, sizeof(enc), &m) == METRO_FW_OK);
   CHECK(metro_fw_push_rx(p.get(), enc, m) == METRO_FW_E_FLASH);
   // The response was cached all the same: the retry is answered without a new execution.
   sink.fail = 0;

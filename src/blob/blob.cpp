@@ -283,9 +283,8 @@ Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
                           static_cast<uint32_t>(c.device_id >> 32)};
   const int rc = metro_fw_blob_validate(metro_fw_buffer_read, &buf, buf.len, id, &info);
   METRO_CHECK(rc == METRO_FW_OK);  // the writer follows the layout the validator checks
-  for (const auto& [sensor, kind, name, body_off] :
-       {std::tuple{&c.accel, METRO_FW_ACCEL, "accel", info.accel_off},
-        std::tuple{&c.gyro, METRO_FW_GYRO, "gyro", info.gyro_off}}) {
+  for (const auto& [sensor, kind, name] : {std::tuple{&c.accel, METRO_FW_ACCEL, "accel"},
+                                           std::tuple{&c.gyro, METRO_FW_GYRO, "gyro"}}) {
     if (!*sensor) continue;
     metro_fw_config cfg{};
     cfg.device_id[0] = id[0];
@@ -294,8 +293,8 @@ Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
     cfg.gyro_fs_sel = kind == METRO_FW_GYRO ? (*sensor)->fs_sel : 0;
     cfg.dlpf_cfg = (*sensor)->dlpf_cfg;
     metro_fw_sensor_cal cal{};
-    METRO_CHECK(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, body_off, kSensorBodyLen,
-                                       METRO_FW_SEC_VERSION_1_0, kind, &cfg, &cal) == METRO_FW_OK);
+    METRO_CHECK(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, kind, &cfg, &cal) ==
+                METRO_FW_OK);
     if (cal.status != METRO_FW_SENSOR_OK) {
       return MakeError(fmt::format(
           "calibration blob: the tag firmware would not use the {} constants ({}): {}", name,

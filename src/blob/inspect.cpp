@@ -38,9 +38,8 @@ SlotReport InspectSlot(const std::vector<uint8_t>& bytes, const std::string& lab
   auto decoded = DecodeBlob(bytes, uint64_t{id[1]} << 32 | id[0]);
   METRO_CHECK(decoded.ok());  // the same validator accepted it a moment ago
   r.contents = std::move(decoded).value();
-  for (const auto& [name, kind, off, len, version] :
-       {std::tuple{"accel", METRO_FW_ACCEL, info.accel_off, info.accel_len, info.accel_version},
-        std::tuple{"gyro", METRO_FW_GYRO, info.gyro_off, info.gyro_len, info.gyro_version}}) {
+  for (const auto& [name, kind, off] : {std::tuple{"accel", METRO_FW_ACCEL, info.accel_off},
+                                        std::tuple{"gyro", METRO_FW_GYRO, info.gyro_off}}) {
     metro_fw_config cfg{};
     cfg.device_id[0] = id[0];
     cfg.device_id[1] = id[1];
@@ -51,8 +50,8 @@ SlotReport InspectSlot(const std::vector<uint8_t>& bytes, const std::string& lab
       cfg.dlpf_cfg = bytes[off + 1];
     }
     metro_fw_sensor_cal cal{};
-    METRO_CHECK(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, off, len, version, kind, &cfg,
-                                       &cal) == METRO_FW_OK);
+    METRO_CHECK(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, kind, &cfg, &cal) ==
+                METRO_FW_OK);
     // An fs_sel above 3 is a configuration no tag has: report it as a mismatch.
     int status = cal.status;
     if (off != 0 && bytes[off] > 3) status = METRO_FW_SENSOR_CONFIG_MISMATCH;

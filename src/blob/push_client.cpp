@@ -148,11 +148,8 @@ PushClient::PushClient(ByteStream* stream, PushOptions options)
   METRO_CHECK(options_.IsValid(&why));
 }
 
-Status PushClient::SendFrame(const std::vector<uint8_t>& frame) {
-  std::vector<uint8_t> enc(2 * frame.size() + 2);
-  uint32_t n = 0;
-  METRO_CHECK(metro_fw_slip_encode(frame.data(), static_cast<uint32_t>(frame.size()), enc.data(),
-                                   static_cast<uint32_t>(enc.size()), &n) == METRO_FW_OK);
+Status PushClient::SendFrame(const std::vector<uint8_t>& enc) {
+  const size_t n = enc.size();
   ++stats_.frames_sent;
   // The central forwards each write as one NUS payload of at most 20 bytes.
   for (size_t off = 0; off < n; off += options_.link_write_bytes) {
@@ -166,11 +163,11 @@ Result<PushClient::Response> PushClient::Transact(uint8_t op, const std::vector<
                                                   int timeout_ms) {
   const uint8_t txn = ++txn_;
   ++stats_.requests;
-  std::vector<uint8_t> frame(METRO_FW_PUSH_MAX_FRAME);
+  std::vector<uint8_t> frame(2 * METRO_FW_PUSH_MAX_FRAME + 2);  // SLIP-encoded
   uint32_t flen = 0;
-  METRO_CHECK(metro_fw_frame_build(op, txn, payload.data(), static_cast<uint32_t>(payload.size()),
-                                   frame.data(), static_cast<uint32_t>(frame.size()),
-                                   &flen) == METRO_FW_OK);
+  METRO_CHECK(metro_fw_frame_encode(op, txn, payload.data(), static_cast<uint32_t>(payload.size()),
+                                    frame.data(), static_cast<uint32_t>(frame.size()),
+                                    &flen) == METRO_FW_OK);
   frame.resize(flen);
   std::string last_problem;
   for (int attempt = 0; attempt <= options_.max_retries; ++attempt) {
@@ -185,14 +182,16 @@ Result<PushClient::Response> PushClient::Transact(uint8_t op, const std::vector<
       while (rx_pos_ < rx_.size() && !resend) {
         std::optional<SlipDecoder::Frame> f = decoder_.Feed(rx_[rx_pos_++]);
         if (!f) continue;
-        uint8_t rop = 0, rtxn = 0;
-        const uint8_t* rp = nullptr;
-        uint32_t rn = 0;
-        if (f->bad || metro_fw_frame_parse(f->bytes.data(), static_cast<uint32_t>(f->bytes.size()),
-                                           &rop, &rtxn, &rp, &rn) != METRO_FW_OK) {
+        const int parsed =
+            f->bad ? METRO_FW_E_FRAME
+                   : metro_fw_frame_parse(f->bytes.data(), static_cast<uint32_t>(f->bytes.size()));
+        if (parsed < 0) {
           ++stats_.ignored_frames;  // a corrupted answer: the timeout resends
           continue;
         }
+        const uint8_t rop = f->bytes[0], rtxn = f->bytes[1];
+        const uint8_t* rp = f->bytes.data() + 4;
+        const uint32_t rn = static_cast<uint32_t>(parsed);
         if (rop == METRO_FW_OP_NAK) {
           ++stats_.naks;
           last_problem = "the tag rejected the frame (NAK)";

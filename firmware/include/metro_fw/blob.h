@@ -68,16 +68,6 @@ typedef struct {
 /* metro_fw_read_fn over a metro_fw_buffer (ctx). Returns METRO_FW_E_BOUNDS past its end. */
 int metro_fw_buffer_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len);
 
-/* A flash slot seen as a blob: reads at slot offsets go to flash->read at base + offset. */
-typedef struct {
-  const metro_fw_flash* flash;
-  uint32_t base;
-} metro_fw_slot;
-
-/* metro_fw_read_fn over a metro_fw_slot (ctx). Returns METRO_FW_E_BOUNDS past the page end,
- * METRO_FW_E_FLASH when flash->read fails. */
-int metro_fw_slot_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len);
-
 /* What the validator learned about a valid blob. Body offsets are from the blob start; an
  * offset of 0 means the section is absent. */
 typedef struct {
@@ -102,12 +92,6 @@ typedef struct {
  * fields at least) whenever the header could be read. Never reads outside [0, avail_len). */
 int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
                            const uint32_t device_id[2], metro_fw_blob_info* info);
-
-/* Validates both slots of flash and picks the active one (larger seq, slot A on a tie).
- * result[i] receives slot i's validator code, info[i] its info, *active 0, 1 or
- * METRO_FW_SLOT_NONE. Returns METRO_FW_OK, or METRO_FW_E_ARG for NULL pointers. */
-int metro_fw_choose_active(const metro_fw_flash* flash, const uint32_t device_id[2],
-                           metro_fw_blob_info info[2], int result[2], int* active);
 
 /* Per-sensor status after loading (section 3.1). */
 enum metro_fw_sensor_status {
@@ -156,21 +140,22 @@ typedef struct {
   uint32_t flags;     /* header flags of the active slot, 0 if none */
 } metro_fw_calibration;
 
-/* Nominal sensitivity, SI per LSB: accel 9.80665 / (16384 >> fs_sel) m/s^2, gyro
- * (250 << fs_sel) / 32768 * pi / 180 rad/s (MPU6050 PS-MPU-6000A rev 3.4 tables 6.1, 6.2). */
-float metro_fw_nominal_sensitivity(metro_fw_sensor_kind kind, uint8_t fs_sel);
-
 /* Identity defaults for fs_sel: M = diag(s_nom), b = 0, t_ref 25 degC, valid -40..85 degC,
- * status METRO_FW_SENSOR_ABSENT. Returns METRO_FW_E_ARG for NULL or fs_sel > 3. */
+ * status METRO_FW_SENSOR_ABSENT. s_nom is the nominal sensitivity, SI per LSB: accel
+ * 9.80665 / (16384 >> fs_sel) m/s^2, gyro (250 << fs_sel) / 32768 * pi / 180 rad/s (MPU6050
+ * PS-MPU-6000A rev 3.4 tables 6.1, 6.2), each the binary32 nearest the fs_sel 0 value times
+ * 2^fs_sel. Returns METRO_FW_E_ARG for NULL, fs_sel > 3 or a bad kind. */
 int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw_sensor_cal* out);
 
-/* Decodes the sensor section body at body_off (body_len bytes, section version `version`)
- * of a blob the validator accepted, and checks it against cfg (section 3.1). On a usable
- * section *out holds its constants with status METRO_FW_SENSOR_OK; otherwise *out holds the
- * defaults and the status says why. Returns METRO_FW_OK (whatever the status), METRO_FW_E_ARG
- * for NULL pointers or a bad kind, or a failing read's code (out then holds the defaults). */
-int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, uint32_t body_off, uint32_t body_len,
-                           uint16_t version, metro_fw_sensor_kind kind, const metro_fw_config* cfg,
+/* Decodes the section of sensor `kind` (its body offset, length and version in info, as
+ * metro_fw_blob_validate found them) of a blob the validator accepted, and checks it against
+ * cfg (section 3.1). On a usable section *out holds its constants with status
+ * METRO_FW_SENSOR_OK; otherwise *out holds the defaults and the status says why (a body offset
+ * of 0: METRO_FW_SENSOR_ABSENT). Returns METRO_FW_OK (whatever the status), METRO_FW_E_ARG for
+ * NULL pointers, a bad kind or a body shorter than v1.0's, or a failing read's code (out then
+ * holds the defaults). */
+int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob_info* info,
+                           metro_fw_sensor_kind kind, const metro_fw_config* cfg,
                            metro_fw_sensor_cal* out);
 
 /* Boot: chooses the active slot and decodes both sensors (never writes flash). Without a

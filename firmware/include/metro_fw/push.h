@@ -81,11 +81,12 @@ typedef struct {
   uint32_t expect_crc32;
   uint32_t expect_seq;
   uint8_t rx[METRO_FW_PUSH_MAX_FRAME];
-  uint8_t last_resp[METRO_FW_PUSH_MAX_FRAME];
+  uint8_t last_resp[METRO_FW_PUSH_MAX_PAYLOAD]; /* payload of the last response */
   uint8_t blob[METRO_FW_MAX_LEN];
 } metro_fw_push;
 
-/* Initialises p (IDLE, empty buffers). Returns METRO_FW_OK or METRO_FW_E_ARG. */
+/* Initialises p (IDLE, empty buffers). Returns METRO_FW_OK, or METRO_FW_E_ARG when p, flash,
+ * flash->read, device_id or send is NULL (every request reads the slots). */
 int metro_fw_push_init(metro_fw_push* p, const metro_fw_flash* flash, const uint32_t device_id[2],
                        metro_fw_send_fn send, void* send_ctx);
 
@@ -95,21 +96,18 @@ int metro_fw_push_init(metro_fw_push* p, const metro_fw_flash* flash, const uint
  * reported to the PC in the response, not here. */
 int metro_fw_push_rx(metro_fw_push* p, const uint8_t* data, uint32_t len);
 
-/* SLIP-encodes frame (len bytes) with END before and after into out (capacity out_cap,
- * at least 2 * len + 2 suffices). *out_len receives the encoded length. Returns METRO_FW_OK
- * or METRO_FW_E_ARG (NULL, or out too small). Used by the tag and by the host tools. */
-int metro_fw_slip_encode(const uint8_t* frame, uint32_t len, uint8_t* out, uint32_t out_cap,
-                         uint32_t* out_len);
+/* Builds the frame op, txn, len u16, payload[payload_len], crc16 u16 (section 7) and writes it
+ * SLIP-encoded, with END before and after, into out (capacity out_cap, at least
+ * 2 * (payload_len + METRO_FW_PUSH_FRAME_OVERHEAD) + 2). *out_len receives the encoded length.
+ * Returns METRO_FW_OK or METRO_FW_E_ARG (NULL, payload longer than METRO_FW_PUSH_MAX_PAYLOAD,
+ * or out too small). Used by the tag and by the host tools. */
+int metro_fw_frame_encode(uint8_t op, uint8_t txn, const uint8_t* payload, uint32_t payload_len,
+                          uint8_t* out, uint32_t out_cap, uint32_t* out_len);
 
-/* Builds the unencoded frame op, txn, len, payload, crc16 into out (capacity out_cap).
- * Returns METRO_FW_OK or METRO_FW_E_ARG (payload too long or out too small). */
-int metro_fw_frame_build(uint8_t op, uint8_t txn, const uint8_t* payload, uint32_t payload_len,
-                         uint8_t* out, uint32_t out_cap, uint32_t* out_len);
-
-/* Checks an unencoded frame: length field and CRC-16. On success *payload points into
- * frame. Returns METRO_FW_OK, METRO_FW_E_ARG or METRO_FW_E_FRAME. */
-int metro_fw_frame_parse(const uint8_t* frame, uint32_t len, uint8_t* op, uint8_t* txn,
-                         const uint8_t** payload, uint32_t* payload_len);
+/* Checks an unencoded (SLIP-decoded) frame of len bytes: its length field and CRC-16. Returns
+ * the payload length (0 ... METRO_FW_PUSH_MAX_PAYLOAD; op is frame[0], txn frame[1], the
+ * payload starts at frame + 4), METRO_FW_E_ARG for NULL or METRO_FW_E_FRAME. */
+int metro_fw_frame_parse(const uint8_t* frame, uint32_t len);
 
 #ifdef __cplusplus
 }

@@ -4,8 +4,8 @@
 //
 // The client talks through a ByteStream (a serial port to the BLE central, a pseudo-terminal
 // to the simulated tag, or a test fake), so it is tested without a tty. Frames are built and
-// checked by the firmware's own C functions (metro_fw_frame_build / _parse /
-// metro_fw_slip_encode), so both ends share one definition of the wire format.
+// SLIP-encoded, and checked, by the firmware's own C functions (metro_fw_frame_encode /
+// metro_fw_frame_parse), so both ends share one definition of the wire format.
 #pragma once
 
 #include <cstddef>
@@ -107,7 +107,7 @@ class PushClient {
     std::vector<uint8_t> payload;  // After the result byte.
   };
   Result<Response> Transact(uint8_t op, const std::vector<uint8_t>& payload, int timeout_ms);
-  Status SendFrame(const std::vector<uint8_t>& frame);
+  Status SendFrame(const std::vector<uint8_t>& enc);  // SLIP-encoded, in NUS-sized writes
 
   ByteStream* stream_;
   PushOptions options_;
