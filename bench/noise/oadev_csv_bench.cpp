@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -123,7 +124,8 @@ int main(int argc, char** argv) {
   std::vector<int64_t> capacity(static_cast<size_t>(n_threads), 0);
   std::vector<int64_t> parsed(static_cast<size_t>(n_threads), 0);
   // buffer = [unused, y_0, ..., y_{M-1}]: the library turns it into the phase in place.
-  std::vector<double> buffer;
+  // Not zero-filled: each parse thread is the first to touch (and fault in) its part.
+  std::unique_ptr<double[]> buffer;
   {
     std::vector<std::thread> pool;
     for (int t = 0; t < n_threads; ++t) {
@@ -139,16 +141,17 @@ int main(int argc, char** argv) {
   std::vector<int64_t> offset(static_cast<size_t>(n_threads) + 1, 0);
   for (size_t k = 0; k < capacity.size(); ++k) offset[k + 1] = offset[k] + capacity[k];
   // Huge pages for the 80 MB of samples (THP "madvise" mode): far fewer page faults.
-  buffer.reserve(static_cast<size_t>(offset.back()) + 1);
+  const size_t capacity_total = static_cast<size_t>(offset.back()) + 1;
+  buffer.reset(new double[capacity_total]);
   {
     constexpr uintptr_t kHuge = uintptr_t{2} << 20;
-    const uintptr_t begin = reinterpret_cast<uintptr_t>(buffer.data());
+    const uintptr_t begin = reinterpret_cast<uintptr_t>(buffer.get());
     const uintptr_t lo = (begin + kHuge - 1) & ~(kHuge - 1);
-    const uintptr_t hi = (begin + buffer.capacity() * sizeof(double)) & ~(kHuge - 1);
+    const uintptr_t hi = (begin + capacity_total * sizeof(double)) & ~(kHuge - 1);
     if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
   }
-  buffer.resize(static_cast<size_t>(offset.back()) + 1);
-  double* const samples = buffer.data() + 1;
+  buffer[0] = 0.0;
+  double* const samples = buffer.get() + 1;
   const Clock::time_point t_allocated = Clock::now();
   {
     std::vector<std::thread> pool;
@@ -172,13 +175,9 @@ int main(int argc, char** argv) {
     }
     total += static_cast<size_t>(parsed[k]);
   }
-  buffer.resize(total + 1);
   munmap(map, size);
   close(fd);
-  if (limit > 0 && static_cast<size_t>(limit) < total) {
-    total = static_cast<size_t>(limit);
-    buffer.resize(total + 1);
-  }
+  if (limit > 0 && static_cast<size_t>(limit) < total) total = static_cast<size_t>(limit);
   const Clock::time_point t_parsed = Clock::now();
 
   metro::AllanOptions options;
@@ -189,8 +188,8 @@ int main(int argc, char** argv) {
   }
   options.taus = spacing.value();
   options.threads = threads;
-  const metro::Result<metro::AllanCurve> curve =
-      metro::internal::ComputeAllanInPlace(&buffer, tau0_s, options);
+  const metro::Result<metro::AllanCurve> curve = metro::internal::ComputeAllanInPlace(
+      buffer.get(), static_cast<int64_t>(total) + 1, tau0_s, options);
   const Clock::time_point t_done = Clock::now();
   if (!curve.ok()) {
     std::fprintf(stderr, "%s\n", curve.error().message.c_str());

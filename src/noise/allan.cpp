@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <thread>
 #include <utility>
 
@@ -59,55 +60,94 @@ void ParallelSlices(int threads, int64_t n, Fn fn) {
   for (std::thread& th : pool) th.join();
 }
 
-// sum_{i=i0}^{i1-1} (x[i+2m] - 2 x[i+m] + x[i])^2 with four independent accumulators.
+// Eight lanes of doubles as two 4-wide vectors (GCC/Clang vector extension): lane j of the
+// accumulators sums the terms i = j (mod 8) of a call, and the lanes are added in one fixed
+// order, so the result is the same whatever instructions carry the vectors (SSE2 pairs by
+// default, AVX2 where the CPU has it; no FMA is enabled, so nothing is contracted).
+using Lanes4 = double __attribute__((vector_size(32)));
+
+// Vectors go through pointers and references only: by value they would depend on the ISA's
+// ABI. *lo = p[0..3], *hi = p[4..7].
+inline void Load8(const double* p, Lanes4* lo, Lanes4* hi) {
+  std::memcpy(lo, p, sizeof(Lanes4));
+  std::memcpy(hi, p + 4, sizeof(Lanes4));
+}
+
+inline double AddLanes(const Lanes4& s0, const Lanes4& s1) {
+  return ((s0[0] + s0[1]) + (s0[2] + s0[3])) + ((s1[0] + s1[1]) + (s1[2] + s1[3]));
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    !defined(__SANITIZE_ADDRESS__)
+#define METRO_ALLAN_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define METRO_ALLAN_CLONES
+#endif
+
+// sum_{i=i0}^{i1-1} (x[i+2m] - 2 x[i+m] + x[i])^2 in eight lanes.
+METRO_ALLAN_CLONES
 double SumSecondDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) {
   const double* a = x + i0;
   const double* b = x + i0 + m;
   const double* c = x + i0 + 2 * m;
   const int64_t n = i1 - i0;
-  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  const Lanes4 two = {2.0, 2.0, 2.0, 2.0};
+  Lanes4 s0 = {0.0, 0.0, 0.0, 0.0};
+  Lanes4 s1 = s0;
   int64_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    const double d0 = (c[i] - 2.0 * b[i]) + a[i];
-    const double d1 = (c[i + 1] - 2.0 * b[i + 1]) + a[i + 1];
-    const double d2 = (c[i + 2] - 2.0 * b[i + 2]) + a[i + 2];
-    const double d3 = (c[i + 3] - 2.0 * b[i + 3]) + a[i + 3];
+  for (; i + 8 <= n; i += 8) {
+    Lanes4 a0, a1, b0, b1, c0, c1;
+    Load8(a + i, &a0, &a1);
+    Load8(b + i, &b0, &b1);
+    Load8(c + i, &c0, &c1);
+    const Lanes4 d0 = (c0 - two * b0) + a0;
+    const Lanes4 d1 = (c1 - two * b1) + a1;
     s0 += d0 * d0;
     s1 += d1 * d1;
-    s2 += d2 * d2;
-    s3 += d3 * d3;
   }
-  for (; i < n; ++i) {
+  for (int64_t j = 0; i < n; ++i, ++j) {
     const double d = (c[i] - 2.0 * b[i]) + a[i];
-    s0 += d * d;
+    if (j < 4) {
+      s0[j] += d * d;
+    } else {
+      s1[j - 4] += d * d;
+    }
   }
-  return (s0 + s1) + (s2 + s3);
+  return AddLanes(s0, s1);
 }
 
-// sum_{i=i0}^{i1-1} (x[i+3m] - 3 x[i+2m] + 3 x[i+m] - x[i])^2.
+// sum_{i=i0}^{i1-1} (x[i+3m] - 3 x[i+2m] + 3 x[i+m] - x[i])^2 in eight lanes.
+METRO_ALLAN_CLONES
 double SumThirdDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) {
   const double* a = x + i0;
   const double* b = x + i0 + m;
   const double* c = x + i0 + 2 * m;
   const double* e = x + i0 + 3 * m;
   const int64_t n = i1 - i0;
-  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  const Lanes4 three = {3.0, 3.0, 3.0, 3.0};
+  Lanes4 s0 = {0.0, 0.0, 0.0, 0.0};
+  Lanes4 s1 = s0;
   int64_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    const double d0 = (e[i] - a[i]) - 3.0 * (c[i] - b[i]);
-    const double d1 = (e[i + 1] - a[i + 1]) - 3.0 * (c[i + 1] - b[i + 1]);
-    const double d2 = (e[i + 2] - a[i + 2]) - 3.0 * (c[i + 2] - b[i + 2]);
-    const double d3 = (e[i + 3] - a[i + 3]) - 3.0 * (c[i + 3] - b[i + 3]);
+  for (; i + 8 <= n; i += 8) {
+    Lanes4 a0, a1, b0, b1, c0, c1, e0, e1;
+    Load8(a + i, &a0, &a1);
+    Load8(b + i, &b0, &b1);
+    Load8(c + i, &c0, &c1);
+    Load8(e + i, &e0, &e1);
+    const Lanes4 d0 = (e0 - a0) - three * (c0 - b0);
+    const Lanes4 d1 = (e1 - a1) - three * (c1 - b1);
     s0 += d0 * d0;
     s1 += d1 * d1;
-    s2 += d2 * d2;
-    s3 += d3 * d3;
   }
-  for (; i < n; ++i) {
+  for (int64_t j = 0; i < n; ++i, ++j) {
     const double d = (e[i] - a[i]) - 3.0 * (c[i] - b[i]);
-    s0 += d * d;
+    if (j < 4) {
+      s0[j] += d * d;
+    } else {
+      s1[j - 4] += d * d;
+    }
   }
-  return (s0 + s1) + (s2 + s3);
+  return AddLanes(s0, s1);
 }
 
 // Runs task(0), ..., task(count - 1) on up to `threads` threads, each task once; free
@@ -131,10 +171,9 @@ void RunTasks(int threads, int64_t count, Task task) {
 // slice order, so the result does not depend on the thread count.
 class OverlappingSums {
  public:
-  OverlappingSums(const std::vector<double>& x, const std::vector<int64_t>& m,
+  OverlappingSums(const double* x, int64_t n_phase, const std::vector<int64_t>& m,
                   AllanEstimator estimator)
       : x_(x), m_(m), hadamard_(estimator == AllanEstimator::kOhdev), limit_(m.size()) {
-    const int64_t n_phase = static_cast<int64_t>(x.size());
     for (size_t k = 0; k < m.size(); ++k) {
       limit_[k] = AllanTermCount(estimator, n_phase, m[k]);
       max_limit_ = std::max(max_limit_, limit_[k]);
@@ -153,8 +192,8 @@ class OverlappingSums {
       for (size_t k = 0; k < m_.size(); ++k) {
         const int64_t end = std::min(block_end, limit_[k]);
         if (end <= b) continue;
-        sums[k] += hadamard_ ? SumThirdDifferences(x_.data(), m_[k], b, end)
-                             : SumSecondDifferences(x_.data(), m_[k], b, end);
+        sums[k] += hadamard_ ? SumThirdDifferences(x_, m_[k], b, end)
+                             : SumSecondDifferences(x_, m_[k], b, end);
       }
     }
   }
@@ -169,7 +208,7 @@ class OverlappingSums {
 
  private:
   static constexpr int64_t kMaxSlices = 32;
-  const std::vector<double>& x_;
+  const double* x_;
   const std::vector<int64_t>& m_;
   bool hadamard_;
   std::vector<int64_t> limit_;
@@ -181,10 +220,8 @@ class OverlappingSums {
 // Modified Allan sum for one m: sum_{j=0}^{N-3m} (sum_{i=j}^{j+m-1} d_i)^2, d_i the second
 // difference at lag m. The inner sum slides in O(1) per j and is recomputed from scratch
 // every kResync steps so that rounding cannot accumulate.
-double ModifiedSum(const std::vector<double>& x, int64_t m, int threads) {
-  const int64_t n_phase = static_cast<int64_t>(x.size());
+double ModifiedSum(const double* p, int64_t n_phase, int64_t m, int threads) {
   const int64_t n_terms = AllanTermCount(AllanEstimator::kMdev, n_phase, m);
-  const double* p = x.data();
   auto d = [p, m](int64_t i) { return (p[i + 2 * m] - 2.0 * p[i + m]) + p[i]; };
   const int64_t resync = std::max<int64_t>(int64_t{1} << 16, 16 * m);
   const int n_threads = ResolveThreads(threads, n_terms);
@@ -209,8 +246,7 @@ double ModifiedSum(const std::vector<double>& x, int64_t m, int threads) {
 }
 
 // Non-overlapping Allan / Hadamard sum for one m (stride m): O(N / m).
-double NonOverlappingSum(const std::vector<double>& x, int64_t m, bool hadamard) {
-  const int64_t n_phase = static_cast<int64_t>(x.size());
+double NonOverlappingSum(const double* x, int64_t n_phase, int64_t m, bool hadamard) {
   const int64_t n_terms =
       AllanTermCount(hadamard ? AllanEstimator::kHdev : AllanEstimator::kAdev, n_phase, m);
   double sum = 0.0;
@@ -222,6 +258,11 @@ double NonOverlappingSum(const std::vector<double>& x, int64_t m, bool hadamard)
   }
   return sum;
 }
+
+// AllanVariances on the n_phase points at phase.
+std::vector<double> PhaseVariances(const double* phase, int64_t n_phase, double tau0_s,
+                                   const std::vector<int64_t>& m, AllanEstimator estimator,
+                                   int threads);
 
 // Variances from the sums of squared differences (NIST SP 1065 5.2.2-5.2.9).
 std::vector<double> VariancesFromSums(const std::vector<double>& sums, int64_t n_phase,
@@ -493,6 +534,9 @@ bool AllanOptions::IsValid(std::string* why) const {
     }
   }
   if (min_points_noise_id < 8) return fail("min_points_noise_id must be >= 8");
+  if (max_points_noise_id < min_points_noise_id) {
+    return fail("max_points_noise_id must be >= min_points_noise_id");
+  }
   if (threads < 0) return fail("threads must be >= 0 (0 = all hardware threads)");
   return true;
 }
@@ -572,33 +616,39 @@ Result<std::vector<int64_t>> AveragingFactors(AllanEstimator estimator, const Ta
 std::vector<double> AllanVariances(const std::vector<double>& phase, double tau0_s,
                                    const std::vector<int64_t>& m, AllanEstimator estimator,
                                    int threads) {
+  return PhaseVariances(phase.data(), static_cast<int64_t>(phase.size()), tau0_s, m, estimator,
+                        threads);
+}
+
+namespace {
+
+std::vector<double> PhaseVariances(const double* phase, int64_t n_phase, double tau0_s,
+                                   const std::vector<int64_t>& m, AllanEstimator estimator,
+                                   int threads) {
   METRO_CHECK(tau0_s > 0.0);
-  const int64_t n_phase = static_cast<int64_t>(phase.size());
   for (int64_t mk : m) METRO_CHECK(AllanTermCount(estimator, n_phase, mk) >= 1);
   std::vector<double> sums(m.size(), 0.0);
   switch (estimator) {
     case AllanEstimator::kOadev:
     case AllanEstimator::kOhdev: {
-      OverlappingSums overlapping(phase, m, estimator);
+      OverlappingSums overlapping(phase, n_phase, m, estimator);
       RunTasks(ResolveThreads(threads, n_phase), overlapping.slices(),
                [&](int64_t slice) { overlapping.RunSlice(slice); });
       sums = overlapping.Sums();
       break;
     }
     case AllanEstimator::kMdev:
-      for (size_t k = 0; k < m.size(); ++k) sums[k] = ModifiedSum(phase, m[k], threads);
+      for (size_t k = 0; k < m.size(); ++k) sums[k] = ModifiedSum(phase, n_phase, m[k], threads);
       break;
     case AllanEstimator::kAdev:
     case AllanEstimator::kHdev:
       for (size_t k = 0; k < m.size(); ++k) {
-        sums[k] = NonOverlappingSum(phase, m[k], estimator == AllanEstimator::kHdev);
+        sums[k] = NonOverlappingSum(phase, n_phase, m[k], estimator == AllanEstimator::kHdev);
       }
       break;
   }
   return VariancesFromSums(sums, n_phase, tau0_s, m, estimator);
 }
-
-namespace {
 
 std::vector<double> VariancesFromSums(const std::vector<double>& sums, int64_t n_phase,
                                       double tau0_s, const std::vector<int64_t>& m,
@@ -630,8 +680,8 @@ std::vector<double> VariancesFromSums(const std::vector<double>& sums, int64_t n
 namespace {
 
 // ComputeAllan after the integration: phase (N = n_rate + 1 points) and the removed mean.
-Result<AllanCurve> AllanFromPhase(const std::vector<double>& phase, int64_t n_rate,
-                                  double rate_mean, double tau0_s, const AllanOptions& options);
+Result<AllanCurve> AllanFromPhase(const double* phase, int64_t n_rate, double rate_mean,
+                                  double tau0_s, const AllanOptions& options);
 
 }  // namespace
 
@@ -650,7 +700,8 @@ Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
     const size_t i = static_cast<size_t>(integrated.first_bad);
     return MakeError(fmt::format("rate sample {} (0-based) is not finite ({})", i, rate[i]));
   }
-  return AllanFromPhase(phase, static_cast<int64_t>(rate.size()), integrated.mean, tau0_s, options);
+  return AllanFromPhase(phase.data(), static_cast<int64_t>(rate.size()), integrated.mean, tau0_s,
+                        options);
 }
 
 namespace internal {
@@ -658,28 +709,33 @@ namespace internal {
 Result<AllanCurve> ComputeAllanInPlace(std::vector<double>* buffer, double tau0_s,
                                        const AllanOptions& options) {
   METRO_CHECK(buffer != nullptr && !buffer->empty());
+  return ComputeAllanInPlace(buffer->data(), static_cast<int64_t>(buffer->size()), tau0_s, options);
+}
+
+Result<AllanCurve> ComputeAllanInPlace(double* data, int64_t size, double tau0_s,
+                                       const AllanOptions& options) {
+  METRO_CHECK(data != nullptr && size >= 1);
   std::string why;
   if (!options.IsValid(&why)) return MakeError("Allan options: " + why);
   if (!(std::isfinite(tau0_s) && tau0_s > 0.0)) {
     return MakeError(fmt::format("sample period tau0 = {} s is not a positive number", tau0_s));
   }
-  const int64_t n_rate = static_cast<int64_t>(buffer->size()) - 1;
-  double* data = buffer->data();
+  const int64_t n_rate = size - 1;
   const PhaseResult integrated =
       IntegratePhase(data + 1, n_rate, tau0_s, options.threads, true, [data] { return data; });
   if (integrated.first_bad >= 0) {
     const size_t i = static_cast<size_t>(integrated.first_bad);
     return MakeError(fmt::format("rate sample {} (0-based) is not finite ({})", i, data[i + 1]));
   }
-  return AllanFromPhase(*buffer, n_rate, integrated.mean, tau0_s, options);
+  return AllanFromPhase(data, n_rate, integrated.mean, tau0_s, options);
 }
 
 }  // namespace internal
 
 namespace {
 
-Result<AllanCurve> AllanFromPhase(const std::vector<double>& phase, int64_t n_rate,
-                                  double rate_mean, double tau0_s, const AllanOptions& options) {
+Result<AllanCurve> AllanFromPhase(const double* phase, int64_t n_rate, double rate_mean,
+                                  double tau0_s, const AllanOptions& options) {
   const int64_t n_phase = n_rate + 1;
   std::vector<int64_t> m;
   if (!options.m_list.empty()) {
@@ -719,8 +775,8 @@ Result<AllanCurve> AllanFromPhase(const std::vector<double>& phase, int64_t n_ra
   }
   const auto identify = [&](size_t j) {
     const size_t k = todo[j];
-    const Result<NoiseIdentification> id =
-        IdentifyNoiseLag1(phase, m[k], shape.d, options.min_points_noise_id);
+    const Result<NoiseIdentification> id = IdentifyNoiseLag1(
+        phase, n_phase, m[k], shape.d, options.min_points_noise_id, options.max_points_noise_id);
     if (id.ok()) {
       identified[k] = 1;
       identified_alpha[k] = id.value().alpha;
@@ -732,7 +788,7 @@ Result<AllanCurve> AllanFromPhase(const std::vector<double>& phase, int64_t n_ra
   if (options.estimator == AllanEstimator::kOadev || options.estimator == AllanEstimator::kOhdev) {
     // One pool of tasks: the identifications (smallest m, the costliest, first), then the
     // slices of the variance sums.
-    OverlappingSums overlapping(phase, m, options.estimator);
+    OverlappingSums overlapping(phase, n_phase, m, options.estimator);
     RunTasks(threads, n_id + overlapping.slices(), [&](int64_t t) {
       if (t < n_id) {
         identify(static_cast<size_t>(t));
@@ -742,7 +798,7 @@ Result<AllanCurve> AllanFromPhase(const std::vector<double>& phase, int64_t n_ra
     });
     variance = VariancesFromSums(overlapping.Sums(), n_phase, tau0_s, m, options.estimator);
   } else {
-    variance = AllanVariances(phase, tau0_s, m, options.estimator, threads);
+    variance = PhaseVariances(phase, n_phase, tau0_s, m, options.estimator, threads);
     RunTasks(threads, n_id, [&](int64_t t) { identify(static_cast<size_t>(t)); });
   }
 

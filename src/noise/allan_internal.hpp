@@ -20,5 +20,11 @@ namespace internal {
 Result<AllanCurve> ComputeAllanInPlace(std::vector<double>* buffer, double tau0_s,
                                        const AllanOptions& options = AllanOptions());
 
+// The same on the `size` values at data (data[0] unused, then the M = size - 1 samples), for
+// a reader that allocates its own buffer (e.g. without zero-filling it first).
+// Precondition: data is not null and size >= 1.
+Result<AllanCurve> ComputeAllanInPlace(double* data, int64_t size, double tau0_s,
+                                       const AllanOptions& options = AllanOptions());
+
 }  // namespace internal
 }  // namespace metro

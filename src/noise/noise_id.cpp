@@ -39,12 +39,17 @@ bool Lag1Autocorrelation(const std::vector<double>& z, double* r1) {
 
 Result<NoiseIdentification> IdentifyNoiseLag1(const std::vector<double>& phase, int64_t m,
                                               int d_max, int64_t min_points, int64_t max_points) {
+  return IdentifyNoiseLag1(phase.data(), static_cast<int64_t>(phase.size()), m, d_max, min_points,
+                           max_points);
+}
+
+Result<NoiseIdentification> IdentifyNoiseLag1(const double* phase, int64_t n_phase, int64_t m,
+                                              int d_max, int64_t min_points, int64_t max_points) {
   if (m < 1) return MakeError(fmt::format("noise id: averaging factor m = {} is below 1", m));
   if (d_max != 2 && d_max != 3) {
     return MakeError(fmt::format("noise id: d_max = {} is not 2 (Allan) or 3 (Hadamard)", d_max));
   }
   if (min_points < 8) return MakeError("noise id: min_points must be >= 8");
-  const int64_t n_phase = static_cast<int64_t>(phase.size());
   const int64_t n_points = n_phase < 1 ? 0 : (n_phase - 1) / m + 1;
   if (n_points < min_points) {
     return MakeError(
@@ -53,7 +58,7 @@ Result<NoiseIdentification> IdentifyNoiseLag1(const std::vector<double>& phase, 
   }
   const int64_t used = std::min(n_points, std::max(max_points, min_points));
   std::vector<double> z(static_cast<size_t>(used));
-  for (int64_t k = 0; k < used; ++k) z[static_cast<size_t>(k)] = phase[static_cast<size_t>(k * m)];
+  for (int64_t k = 0; k < used; ++k) z[static_cast<size_t>(k)] = phase[k * m];
 
   NoiseIdentification id;
   id.n_points = used;

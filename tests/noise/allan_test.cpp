@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "metro/noise/edf.hpp"
+#include "noise/noise_simulation.hpp"
 #include "noise/noise_test_data.hpp"
 
 namespace metro {
@@ -255,6 +256,10 @@ TEST_CASE("Bad Allan input is refused with a message", "[noise]") {
     CHECK(why == "fixed_alpha -3 is outside [-2, 2] for oadev");
     fixed.estimator = AllanEstimator::kOhdev;
     CHECK(fixed.IsValid(&why));
+    AllanOptions capped;
+    capped.max_points_noise_id = 29;
+    CHECK_FALSE(capped.IsValid(&why));
+    CHECK(why == "max_points_noise_id must be >= min_points_noise_id");
   }
   SECTION("unknown names") {
     CHECK(ParseAllanEstimator("allan").error().message ==
@@ -264,6 +269,26 @@ TEST_CASE("Bad Allan input is refused with a message", "[noise]") {
     CHECK(ParseTauSpacing("log").error().message ==
           "unknown tau spacing 'log': expected octave, decade:K, all or every");
   }
+}
+
+TEST_CASE("The noise identification reads the first max_points_noise_id averages", "[noise]") {
+  // White rate noise for the first 2000 samples, then a random walk of the rate 100 times
+  // as strong: the whole record identifies as random-walk FM at m = 1, its first 2000
+  // samples as white FM.
+  std::vector<double> y = testing::PowerLawRate(0, 2000, 3);
+  const std::vector<double> walk = testing::PowerLawRate(-2, 30000, 4);
+  for (double v : walk) y.push_back(100.0 * v);
+  AllanOptions options;
+  options.m_list = {1};
+  const Result<AllanCurve> all = ComputeAllan(y, 1.0, options);
+  options.max_points_noise_id = 2000;
+  const Result<AllanCurve> first = ComputeAllan(y, 1.0, options);
+  REQUIRE(all.ok());
+  REQUIRE(first.ok());
+  CHECK(all.value().alpha[0] == -2);
+  CHECK(first.value().alpha[0] == 0);
+  CHECK(first.value().alpha_source[0] == AlphaSource::kLag1Acf);
+  CHECK(first.value().dev[0] == all.value().dev[0]);
 }
 
 TEST_CASE("Threaded and single-threaded sums agree", "[noise]") {

@@ -91,6 +91,10 @@ struct AllanOptions {
   int fixed_alpha = 0;  // Used with kFixed; -2..2 (Allan), -4..2 (Hadamard).
   // Fewest averages (M / m) at which the lag-1 ACF identification is trusted (Riley: 30).
   int64_t min_points_noise_id = 30;
+  // Most averages the identification reads at one tau (the first ones): r1 then has a
+  // sampling standard deviation near 1/sqrt(65536) = 0.004, far below the 0.25 steps of the
+  // decision, and a long record costs no more per tau than 65536 points. >= min_points_noise_id.
+  int64_t max_points_noise_id = int64_t{1} << 16;
   // Worker threads for the variance sums; 0 = all hardware threads.
   int threads = 0;
 

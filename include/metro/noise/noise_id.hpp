@@ -36,4 +36,9 @@ Result<NoiseIdentification> IdentifyNoiseLag1(const std::vector<double>& phase, 
                                               int d_max, int64_t min_points = 30,
                                               int64_t max_points = int64_t{1} << 20);
 
+// The same on the n_phase phase points at phase (not null when n_phase > 0).
+Result<NoiseIdentification> IdentifyNoiseLag1(const double* phase, int64_t n_phase, int64_t m,
+                                              int d_max, int64_t min_points = 30,
+                                              int64_t max_points = int64_t{1} << 20);
+
 }  // namespace metro
