@@ -565,6 +565,64 @@ inline const char* EndOfLine(const char* q, const char* end) {
   return nullptr;
 }
 
+// Rows of one tag staged row by row, then written to the tag's columns kStagedRows at a
+// time: each column then receives a run of consecutive values instead of one value per
+// row interleaved with every other column of every tag (hundreds of write streams).
+constexpr uint32_t kStagedRows = 64;
+
+class RowStage {
+ public:
+  RowStage(size_t n_values, const std::vector<CleanColumns>& columns)
+      : n_values_(n_values), columns_(columns) {
+    slot_of_sensor_.fill(-1);
+  }
+  // Room for one row of `sensor` whose column index is `cursor`: n_values doubles; the
+  // caller fills them and the line number.
+  double* Add(int sensor, uint32_t cursor, uint32_t line) {
+    int slot = slot_of_sensor_[static_cast<size_t>(sensor)];
+    if (slot < 0) {
+      slot = static_cast<int>(stages_.size());
+      slot_of_sensor_[static_cast<size_t>(sensor)] = slot;
+      stages_.emplace_back();
+      stages_.back().sensor = sensor;
+      stages_.back().values.resize(kStagedRows * n_values_);
+    }
+    Stage& st = stages_[static_cast<size_t>(slot)];
+    if (st.count == kStagedRows) Flush(&st);
+    if (st.count == 0) st.first = cursor;
+    st.line[st.count] = line;
+    return st.values.data() + st.count++ * n_values_;
+  }
+  void FlushAll() {
+    for (Stage& st : stages_) Flush(&st);
+  }
+
+ private:
+  struct Stage {
+    int sensor = 0;
+    uint32_t first = 0;
+    uint32_t count = 0;
+    std::array<uint32_t, kStagedRows> line{};
+    std::vector<double> values;  // count rows of n_values: t_s, then the quantities.
+  };
+  void Flush(Stage* st) {
+    const CleanColumns& c = columns_[static_cast<size_t>(st->sensor)];
+    const uint32_t n = st->count;
+    std::copy(st->line.begin(), st->line.begin() + n, c.line + st->first);
+    const double* v = st->values.data();
+    for (uint32_t r = 0; r < n; ++r) c.t_s[st->first + r] = v[r * n_values_];
+    for (size_t k = 0; k + 1 < n_values_; ++k) {
+      double* out = c.values[k] + st->first;
+      for (uint32_t r = 0; r < n; ++r) out[r] = v[r * n_values_ + k + 1];
+    }
+    st->count = 0;
+  }
+  size_t n_values_;
+  const std::vector<CleanColumns>& columns_;
+  std::array<int, 256> slot_of_sensor_;
+  std::vector<Stage> stages_;
+};
+
 // Pass 2 for one block. Numbers are parsed straight from the block (no separate search
 // for the end of each line). Returns false at the first line the fast parser does not
 // accept.
@@ -574,6 +632,7 @@ bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t fir
   const char* end = file.data() + block->end;
   const int nf = static_cast<int>(plan.names.size());
   std::vector<double> row(plan.numeric_fields.size());
+  RowStage stage(row.size() + 1, columns);
   uint32_t line = 0;
   bool ok = true;
   while (p < end && ok) {
@@ -632,16 +691,16 @@ bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t fir
     if (!ok) break;
     p = q;
     uint32_t& cursor = block->rows[static_cast<size_t>(sensor)];
-    const CleanColumns& c = columns[static_cast<size_t>(sensor)];
     if (cursor >= block->limit[static_cast<size_t>(sensor)]) {
       ok = false;  // More rows of this sensor than pass 1 counted: the file changed.
       break;
     }
-    c.t_s[cursor] = t;
-    c.line[cursor] = static_cast<uint32_t>(first_line + this_line);
-    for (size_t k = 0; k < row.size(); ++k) c.values[k][cursor] = row[k];
+    double* staged = stage.Add(sensor, cursor, static_cast<uint32_t>(first_line + this_line));
+    staged[0] = t;
+    std::copy(row.begin(), row.end(), staged + 1);
     ++cursor;
   }
+  stage.FlushAll();
   file.Release(block->begin, block->end);
   return ok && block->rows == block->limit;
 }
