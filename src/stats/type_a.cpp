@@ -34,18 +34,21 @@ size_t NextFastFftSize(size_t n) {
 // Lags computed directly (in one fused pass) before switching to the FFT.
 constexpr size_t kDirectLags = 8;
 
-// Lag sums c_k = sum_i d_i d_{i+k} for k = 0..kDirectLags of the centred series d, in one
-// pass with independent accumulators (the loop over k vectorises; no reassociation of a
-// single running sum is needed).
-void DirectLagSums(const double* d, size_t n, double* c) {
+// Lag sums c_k = sum_i d_i d_{i+k} for k = 0..kDirectLags of the centred series
+// d_i = x_i - mean, in one pass with independent accumulators (the loop over k vectorises;
+// no reassociation of a single running sum is needed). d is formed on the fly, the same
+// doubles as a centred copy would hold, so no copy of the series is written.
+void DirectLagSums(const double* x, double mean, size_t n, double* c) {
   double acc[kDirectLags + 1] = {};
   const size_t body = n > kDirectLags ? n - kDirectLags : 0;
   for (size_t i = 0; i < body; ++i) {
-    const double di = d[i];
-    for (size_t k = 0; k <= kDirectLags; ++k) acc[k] += di * d[i + k];
+    const double di = x[i] - mean;
+    for (size_t k = 0; k <= kDirectLags; ++k) acc[k] += di * (x[i + k] - mean);
   }
   for (size_t i = body; i < n; ++i) {
-    for (size_t k = 0; i + k < n && k <= kDirectLags; ++k) acc[k] += d[i] * d[i + k];
+    for (size_t k = 0; i + k < n && k <= kDirectLags; ++k) {
+      acc[k] += (x[i] - mean) * (x[i + k] - mean);
+    }
   }
   for (size_t k = 0; k <= kDirectLags; ++k) c[k] = acc[k];
 }
@@ -200,15 +203,19 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
     return MakeError(fmt::format("{} observation{}: a Type A evaluation needs at least 2", n,
                                  n == 1 ? "" : "s"));
   }
-  for (size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(values[i])) {
-      return MakeError(fmt::format("observation {} is not finite", i + 1));
+  // A NaN or an infinity makes the sum non-finite, so the values are scanned only then.
+  const double total = Sum4(values, n);
+  if (!std::isfinite(total)) {
+    for (size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(values[i])) {
+        return MakeError(fmt::format("observation {} is not finite", i + 1));
+      }
     }
   }
   const double dn = static_cast<double>(n);
   // Corrected two-pass algorithm (Chan, Golub & LeVeque 1983): centre on a first mean,
   // then correct with the residual sum, so no large sums of squares cancel.
-  const double first = Sum4(values, n) / dn;
+  const double first = total / dn;
   double p1[4] = {0, 0, 0, 0}, p2[4] = {0, 0, 0, 0};
   size_t i4 = 0;
   for (; i4 + 4 <= n; i4 += 4) {
@@ -238,10 +245,9 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   if (!options.autocorrelation || n < 4 || r.variance == 0.0) return r;
 
   // Zhang (2006): variance factor from the autocorrelation up to the cut-off lag.
-  std::vector<double> centred(n);
-  for (size_t i = 0; i < n; ++i) centred[i] = values[i] - r.mean;
   double direct[kDirectLags + 1];
-  DirectLagSums(centred.data(), n, direct);
+  DirectLagSums(values, r.mean, n, direct);
+  std::vector<double> centred;  // Made only if lags beyond the direct ones are needed.
   const double c0 = direct[0];
   const size_t max_lag = std::max<size_t>(1, static_cast<size_t>(options.max_lag_fraction * dn));
   const boost::math::students_t t_dist(dn - 1.0);
@@ -267,6 +273,10 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
         while (max_block < max_lag) max_block *= 2;
         block = std::min(block, max_block);
         lag_sums.resize(block + 1);
+        if (centred.empty()) {
+          centred.resize(n);
+          for (size_t i = 0; i < n; ++i) centred[i] = values[i] - r.mean;
+        }
         BlockLagSums(centred.data(), n, block, lag_sums.data());
         lags_known = block;
       }

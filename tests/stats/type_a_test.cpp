@@ -174,6 +174,12 @@ TEST_CASE("Type A rejects too few or non-finite observations", "[stats][type_a]"
   auto r2 = EvaluateTypeA(bad.data(), bad.size());
   REQUIRE_FALSE(r2.ok());
   CHECK(r2.error().message == "observation 2 is not finite");
+  // The finiteness check goes through the sum: an infinity late in the series is still named.
+  std::vector<double> inf_late(1001, 1.0);
+  inf_late[997] = -INFINITY;
+  auto r3 = EvaluateTypeA(inf_late.data(), inf_late.size());
+  REQUIRE_FALSE(r3.ok());
+  CHECK(r3.error().message == "observation 998 is not finite");
 }
 
 }  // namespace
