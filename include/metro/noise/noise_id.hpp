@@ -30,6 +30,7 @@ struct NoiseIdentification {
 // d_max: 2 for Allan variances, 3 for Hadamard. At most `max_points` decimated points are used
 // (the first ones): r1 then has a sampling standard deviation near 1/sqrt(max_points) = 0.001,
 // far below the 0.25 decision steps, and the cost per tau stays bounded for long records.
+// (ComputeAllan passes AllanOptions::max_points_noise_id, 2^16 unless set: r1 scatter ~0.004.)
 // Errors: m < 1, d_max not 2 or 3, fewer than `min_points` decimated points (min_points >= 8),
 // or a constant series.
 Result<NoiseIdentification> IdentifyNoiseLag1(const std::vector<double>& phase, int64_t m,
