@@ -77,6 +77,8 @@ inline double AddLanes(const Lanes4& s0, const Lanes4& s1) {
   return ((s0[0] + s0[1]) + (s0[2] + s0[3])) + ((s1[0] + s1[1]) + (s1[2] + s1[3]));
 }
 
+// The sanitizer build keeps the default path only, so CI runs the tests on both paths (the
+// plain build takes AVX2 on a CPU that has it).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
     !defined(__SANITIZE_ADDRESS__)
 #define METRO_ALLAN_CLONES __attribute__((target_clones("avx2", "default")))

@@ -211,6 +211,8 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
         return MakeError(fmt::format("observation {} is not finite", i + 1));
       }
     }
+    // Every value is finite but their sum is not: the mean cannot be formed in double.
+    return MakeError(fmt::format("the sum of the {} observations overflows double precision", n));
   }
   const double dn = static_cast<double>(n);
   // Corrected two-pass algorithm (Chan, Golub & LeVeque 1983): centre on a first mean,

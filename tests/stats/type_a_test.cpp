@@ -180,6 +180,11 @@ TEST_CASE("Type A rejects too few or non-finite observations", "[stats][type_a]"
   auto r3 = EvaluateTypeA(inf_late.data(), inf_late.size());
   REQUIRE_FALSE(r3.ok());
   CHECK(r3.error().message == "observation 998 is not finite");
+  // Finite values whose sum overflows: an error, not an infinite mean.
+  const std::vector<double> huge = {1.5e308, 1.6e308, 1.0};
+  auto r4 = EvaluateTypeA(huge.data(), huge.size());
+  REQUIRE_FALSE(r4.ok());
+  CHECK(r4.error().message == "the sum of the 3 observations overflows double precision");
 }
 
 }  // namespace
