@@ -205,17 +205,20 @@ Result<Session> LoadSession(const std::string& path, const LoadOptions& options)
   if (format == SessionFormat::kImuTk) {
     return MakeError(path, 0, "imu_tk input is two files: use LoadImuTk(acc, gyro)");
   }
-  // Hash the bytes on a second thread while the parser works.
-  Result<std::string> digest = std::string();
-  std::thread hasher([&] { digest = Sha256File(path); });
-  Result<Session> session = format == SessionFormat::kCsv
-                                ? internal::LoadSessionCsv(path, options)
-                                : internal::LoadReceiverCapture(path, options);
-  hasher.join();
+  Result<Session> session = MakeError(path, 0, "not loaded");
+  if (format == SessionFormat::kCsv) {
+    session = internal::LoadSessionCsv(path, options, /*allow_clean_path=*/true, /*hash=*/true);
+  } else {
+    // Hash the bytes on a second thread while the parser works.
+    Result<std::string> digest = std::string();
+    std::thread hasher([&] { digest = Sha256File(path); });
+    session = internal::LoadReceiverCapture(path, options);
+    hasher.join();
+    if (session.ok() && !digest.ok()) return digest.error();
+    if (session.ok()) session.value().sha256 = digest.value();
+  }
   if (!session.ok()) return session;
-  if (!digest.ok()) return digest.error();
   Session out = std::move(session).value();
-  out.sha256 = digest.value();
   if (options.derive_euler) {
     for (Tag& tag : out.tags) internal::DeriveEulerIfAbsent(&tag);
   }

@@ -547,7 +547,8 @@ void CountBlock(const MappedFile& file, const ColumnPlan& plan, CleanBlock* bloc
     ++block->rows[static_cast<size_t>(sensor)];
   }
   block->lines = line;
-  file.Release(block->begin, block->end);
+  // The pages stay mapped: pass 2 reads them again at once (releasing them here made pass 2
+  // fault every page in a second time) and releases them behind it.
 }
 
 struct CleanColumns {
@@ -840,10 +841,10 @@ struct TagBuilder {
 
 int64_t CleanPathLoads() { return clean_path_loads.load(); }
 
-Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& options,
-                               bool allow_clean_path) {
-  MappedFile file;
-  if (Status s = file.Open(path); !s.ok()) return s.error();
+namespace {
+
+Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
+                              const LoadOptions& options, bool allow_clean_path) {
   if (file.size() == 0) {
     return MakeError(path, 0,
                      "empty file: expected a session.csv header line (t_s,...) "
@@ -1002,6 +1003,26 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
                      "header only: no data rows after the header; expected one row per "
                      "observation");
   }
+  return session;
+}
+
+}  // namespace
+
+Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& options,
+                               bool allow_clean_path, bool hash) {
+  MappedFile file;
+  if (Status s = file.Open(path); !s.ok()) return s.error();
+  // The SHA-256 of the bytes, on a second thread while the parser works, from the parser's
+  // own mapping: the file's pages are mapped once for both (a page the parser has already
+  // released behind it is mapped again from the page cache).
+  std::string digest;
+  std::thread hasher;
+  if (hash) {
+    hasher = std::thread([&] { digest = Sha256Hex(std::string_view(file.data(), file.size())); });
+  }
+  Result<Session> session = LoadMappedCsv(path, file, options, allow_clean_path);
+  if (hasher.joinable()) hasher.join();
+  if (session.ok() && hash) session.value().sha256 = std::move(digest);
   return session;
 }
 

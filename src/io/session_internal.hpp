@@ -11,9 +11,10 @@
 namespace metro::internal {
 
 // `allow_clean_path` = false forces the general (sequential-distribution) loader; the
-// result is the same either way (tests compare the two).
+// result is the same either way (tests compare the two). `hash`: also sets the session's
+// sha256 (hashed on a second thread from the parser's own mapping of the file).
 Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& options,
-                               bool allow_clean_path = true);
+                               bool allow_clean_path = true, bool hash = false);
 // How many loads the clean-file path has completed in this process (for tests).
 int64_t CleanPathLoads();
 Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& options);

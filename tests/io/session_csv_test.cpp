@@ -263,6 +263,26 @@ TEST_CASE("The clean-file path equals the general loader", "[io][csv]") {
   }
 }
 
+TEST_CASE("The session's SHA-256 is the file's, on either loader path", "[io][csv][sha256]") {
+  // The CSV loader hashes its own mapping of the file while it parses; the digest must be
+  // the file's whatever path the parse takes (the clean path, or the general loader after
+  // it gave up) and whatever pages the parser has released behind it.
+  const std::string clean = CleanMultiBlockText(90000);    // ~3 MB: several blocks.
+  const std::string back = clean + "0.000500,1,0.0,\r\n";  // Time going back: general loader.
+  for (const std::string* text : {&clean, &back}) {
+    TempFile file(*text);
+    for (const int threads : {1, 2}) {
+      LoadOptions options;
+      options.threads = threads;
+      options.lenient = true;
+      auto r = LoadSession(file.path(), options);
+      REQUIRE(r.ok());
+      CHECK(r.value().sha256 == Sha256Hex(*text));
+      CHECK(r.value().sha256 == Sha256File(file.path()).value());
+    }
+  }
+}
+
 TEST_CASE("Time out of order late in a clean file is reported at its line", "[io][csv]") {
   // The clean path finds the violation only after parsing everything; the general loader
   // must then name the first offending row in file order.
