@@ -6,9 +6,10 @@
 #include <algorithm>
 #include <boost/math/distributions/students_t.hpp>
 #include <cmath>
+#include <cstring>
 #include <map>
+#include <memory>
 #include <mutex>
-#include <vector>
 
 namespace metro {
 namespace {
@@ -31,26 +32,87 @@ size_t NextFastFftSize(size_t n) {
   }
 }
 
-// Lags computed directly (in one fused pass) before switching to the FFT.
+// Lags computed directly (in the fused pass) before switching to the FFT.
 constexpr size_t kDirectLags = 8;
 
-// Lag sums c_k = sum_i d_i d_{i+k} for k = 0..kDirectLags of the centred series
-// d_i = x_i - mean, in one pass with independent accumulators (the loop over k vectorises;
-// no reassociation of a single running sum is needed). d is formed on the fly, the same
-// doubles as a centred copy would hold, so no copy of the series is written.
-void DirectLagSums(const double* x, double mean, size_t n, double* c) {
-  double acc[kDirectLags + 1] = {};
-  const size_t body = n > kDirectLags ? n - kDirectLags : 0;
-  for (size_t i = 0; i < body; ++i) {
-    const double di = x[i] - mean;
-    for (size_t k = 0; k <= kDirectLags; ++k) acc[k] += di * (x[i + k] - mean);
+// Four lanes of doubles (GCC/Clang vector extension): lane j of an accumulator sums the
+// terms i = j (mod 4), and the lanes are added in one fixed order, so the result is the same
+// whatever instructions carry the vectors (SSE2 pairs by default, AVX2 where the CPU has it;
+// no FMA is enabled, so nothing is contracted).
+using Lanes4 = double __attribute__((vector_size(32)));
+
+// Vectors go through pointers and references only: by value they would depend on the ISA's
+// ABI.
+inline void Load4(const double* p, Lanes4* v) { std::memcpy(v, p, sizeof(Lanes4)); }
+
+inline double AddLanes(const Lanes4& s) { return (s[0] + s[1]) + (s[2] + s[3]); }
+
+// The sanitizer build keeps the default path only, so CI runs the tests on both paths (the
+// plain build takes AVX2 on a CPU that has it).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    !defined(__SANITIZE_ADDRESS__)
+#define METRO_TYPE_A_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define METRO_TYPE_A_CLONES
+#endif
+
+// The lane of term i of a sum over i = 0..n-1: i mod 4, except that the n mod 4 terms past
+// the last full group of four go to lane 0.
+inline size_t LaneOf(size_t i, size_t n) { return i < n - n % 4 ? i % 4 : 0; }
+
+// Sum of x in four lanes (pairwise-like accuracy).
+METRO_TYPE_A_CLONES
+double Sum4(const double* x, size_t n) {
+  Lanes4 s = {0.0, 0.0, 0.0, 0.0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    Lanes4 v;
+    Load4(x + i, &v);
+    s += v;
   }
-  for (size_t i = body; i < n; ++i) {
-    for (size_t k = 0; i + k < n && k <= kDirectLags; ++k) {
-      acc[k] += (x[i] - mean) * (x[i + k] - mean);
+  for (; i < n; ++i) s[0] += x[i];
+  return AddLanes(s);
+}
+
+// One pass over x for the corrected two-pass algorithm and the direct lags: with
+// e_i = x_i - centre,
+//   *s1 = sum_i e_i,   p[k] = sum_{i=0}^{n-1-k} e_i e_{i+k}   (k = 0..kDirectLags).
+// The series is centred chunk by chunk into a buffer that stays in L1, and every sum runs
+// in four lanes (LaneOf), so the nine products per i are independent of each other and of
+// the previous i. s1 and p[0] add the same terms in the same order as a plain four-lane
+// loop would.
+METRO_TYPE_A_CLONES
+void CentredLagSums(const double* x, size_t n, double centre, double* s1, double* p) {
+  constexpr size_t kChunk = 512;  // A multiple of 4.
+  alignas(32) double e[kChunk + kDirectLags];
+  Lanes4 sum = {0.0, 0.0, 0.0, 0.0};
+  Lanes4 acc[kDirectLags + 1];
+  for (Lanes4& a : acc) a = sum;
+  // Below `body` every lag k <= kDirectLags has its partner e_{i+k} (i + k < n), and
+  // `body` is a multiple of 4.
+  const size_t body = n > kDirectLags ? (n - kDirectLags) / 4 * 4 : 0;
+  for (size_t i0 = 0; i0 < body; i0 += kChunk) {
+    const size_t m = std::min(kChunk, body - i0);
+    for (size_t j = 0; j < m + kDirectLags; ++j) e[j] = x[i0 + j] - centre;
+    for (size_t j = 0; j < m; j += 4) {
+      Lanes4 e0;
+      Load4(e + j, &e0);
+      sum += e0;
+      for (size_t k = 0; k <= kDirectLags; ++k) {
+        Lanes4 ek;
+        Load4(e + j + k, &ek);
+        acc[k] += e0 * ek;
+      }
     }
   }
-  for (size_t k = 0; k <= kDirectLags; ++k) c[k] = acc[k];
+  for (size_t i = body; i < n; ++i) {
+    const size_t lane = LaneOf(i, n);
+    const double ei = x[i] - centre;
+    sum[lane] += ei;
+    for (size_t k = 0; k <= kDirectLags && i + k < n; ++k) acc[k][lane] += ei * (x[i + k] - centre);
+  }
+  *s1 = AddLanes(sum);
+  for (size_t k = 0; k <= kDirectLags; ++k) p[k] = AddLanes(acc[k]);
 }
 
 // Forward (r2c) and backward (c2r) plans of one transform size, made once per process
@@ -78,29 +140,107 @@ const FftPlans& PlansForSize(size_t size) {
   return plans;
 }
 
-// Lag sums c_k = sum_i d_i d_{i+k}, k = 0..block, of the centred series d (length n), by
-// block-wise FFT correlation (block a power of two). With x_b = d[b*L, (b+1)*L) and
+// sum[j] += conj(X[j]) * (X[j] + (-1)^j N[j]) for j = 0..bins-1 (bins odd), on interleaved
+// (re, im) arrays: re += Xr Yr + Xi Yi, im += Xr Yi - Xi Yr. Two bins per vector (j even,
+// then j odd); the same operations, in the same order, as the scalar form.
+METRO_TYPE_A_CLONES
+void AccumulateCrossSpectrum(const double* cur, const double* nxt, size_t bins, double* sum) {
+  const Lanes4 sign = {1.0, 1.0, -1.0, -1.0};
+  size_t j = 0;
+  for (; j + 2 <= bins; j += 2) {
+    Lanes4 c, x, s;
+    Load4(cur + 2 * j, &c);
+    Load4(nxt + 2 * j, &x);
+    Load4(sum + 2 * j, &s);
+    const Lanes4 y = c + sign * x;
+    const Lanes4 y_swapped = {y[1], y[0], y[3], y[2]};
+    const Lanes4 p = c * y;          // Xr Yr, Xi Yi (two bins)
+    const Lanes4 q = c * y_swapped;  // Xr Yi, Xi Yr
+    const Lanes4 first = {p[0], q[0], p[2], q[2]};
+    const Lanes4 second = {p[1], -q[1], p[3], -q[3]};
+    s += first + second;
+    std::memcpy(sum + 2 * j, &s, sizeof(Lanes4));
+  }
+  for (; j < bins; ++j) {
+    const double sgn = (j & 1) != 0 ? -1.0 : 1.0;
+    const double yr = cur[2 * j] + sgn * nxt[2 * j];
+    const double yi = cur[2 * j + 1] + sgn * nxt[2 * j + 1];
+    sum[2 * j] += cur[2 * j] * yr + cur[2 * j + 1] * yi;
+    sum[2 * j + 1] += cur[2 * j] * yi - cur[2 * j + 1] * yr;
+  }
+}
+
+// The buffers of BlockLagSums for one block length L (aligned by FFTW for its SIMD plans).
+struct FftWorkspace {
+  explicit FftWorkspace(size_t block_length)
+      : block(block_length),
+        real(fftw_alloc_real(2 * block_length)),
+        current(fftw_alloc_complex(block_length + 1)),
+        next(fftw_alloc_complex(block_length + 1)),
+        sum(fftw_alloc_complex(block_length + 1)) {}
+  ~FftWorkspace() {
+    fftw_free(real);
+    fftw_free(current);
+    fftw_free(next);
+    fftw_free(sum);
+  }
+  FftWorkspace(const FftWorkspace&) = delete;
+  FftWorkspace& operator=(const FftWorkspace&) = delete;
+
+  size_t block;
+  double* real;  // 2L values; on return from BlockLagSums, c_0..c_L.
+  fftw_complex* current;
+  fftw_complex* next;
+  fftw_complex* sum;
+};
+
+// Blocks up to this length keep their workspace per thread (at most 2 MB for L = 32768),
+// so the series of a session do not fault the same pages in again and again; longer blocks
+// (only for series longer than 2^17 samples with a cut-off beyond 32768 lags) get theirs
+// per call, where the transforms cost far more than the allocation.
+constexpr size_t kMaxCachedLagBlock = 32768;
+
+// The workspace for `block`: the thread's cached one, or a new one owned by *owned.
+FftWorkspace& WorkspaceFor(size_t block, std::unique_ptr<FftWorkspace>* owned) {
+  if (block <= kMaxCachedLagBlock) {
+    thread_local std::map<size_t, std::unique_ptr<FftWorkspace>> cache;
+    std::unique_ptr<FftWorkspace>& slot = cache[block];
+    if (slot == nullptr) slot = std::make_unique<FftWorkspace>(block);
+    return *slot;
+  }
+  *owned = std::make_unique<FftWorkspace>(block);
+  return **owned;
+}
+
+// Lag sums c_k = sum_i d_i d_{i+k}, k = 0..block, of the centred series d_i = x_i - mean
+// (length n), by block-wise FFT correlation (block a power of two). Each block is centred
+// while it is copied into the transform buffer (the same doubles as a centred copy of the
+// whole series would hold, without writing one). With x_b = d[b*L, (b+1)*L) and
 // y_b = d[b*L, (b+2)*L), both zero-padded to M = 2L, circular correlation of x_b with y_b
 // has no wrap-around for lags k <= L, so
 //   c_k = sum_b IDFT(conj(X_b) . Y_b)[k] = IDFT(sum_b conj(X_b) . Y_b)[k] / M,
 // and Y_b = X_b + (-1)^j X_{b+1} (x_{b+1} sits L = M/2 samples later). One forward
 // transform of size M per block of L samples plus one backward transform in all: about
 // 2n log2(2L) operations, in cache, instead of 3n log2(1.5n) for the whole-series padding.
-void BlockLagSums(const double* d, size_t n, size_t block, double* c) {
+// L = ws->block; returns c_0..c_L (in ws->real).
+const double* BlockLagSums(const double* x, double mean, size_t n, FftWorkspace* ws) {
+  const size_t block = ws->block;
   const size_t size = 2 * block;
   const size_t bins = block + 1;  // size / 2 + 1
   const FftPlans& plans = PlansForSize(size);
-  double* real = fftw_alloc_real(size);
-  fftw_complex* current = fftw_alloc_complex(bins);
-  fftw_complex* next = fftw_alloc_complex(bins);
-  fftw_complex* sum = fftw_alloc_complex(bins);
+  double* real = ws->real;
+  fftw_complex* current = ws->current;
+  fftw_complex* next = ws->next;
+  fftw_complex* sum = ws->sum;
   auto transform = [&](size_t b, fftw_complex* out) {
     const size_t begin = b * block;
     const size_t count = begin < n ? std::min(block, n - begin) : 0;
-    std::copy(d + begin, d + begin + count, real);
-    std::fill(real + count, real + size, 0.0);
+    for (size_t i = 0; i < count; ++i) real[i] = x[begin + i] - mean;
+    // [block, size) stays zero: the out-of-place r2c transform preserves its input.
+    std::fill(real + count, real + block, 0.0);
     fftw_execute_dft_r2c(plans.forward, real, out);
   };
+  std::fill(real + block, real + size, 0.0);
   std::fill(&sum[0][0], &sum[0][0] + 2 * bins, 0.0);
   const size_t blocks = (n + block - 1) / block;
   transform(0, current);
@@ -110,40 +250,21 @@ void BlockLagSums(const double* d, size_t n, size_t block, double* c) {
     } else {
       std::fill(&next[0][0], &next[0][0] + 2 * bins, 0.0);
     }
-    for (size_t j = 0; j < bins; ++j) {
-      const double sign = (j & 1) != 0 ? -1.0 : 1.0;
-      const double yr = current[j][0] + sign * next[j][0];
-      const double yi = current[j][1] + sign * next[j][1];
-      // conj(X) * Y
-      sum[j][0] += current[j][0] * yr + current[j][1] * yi;
-      sum[j][1] += current[j][0] * yi - current[j][1] * yr;
-    }
+    AccumulateCrossSpectrum(&current[0][0], &next[0][0], bins, &sum[0][0]);
     std::swap(current, next);
   }
   fftw_execute_dft_c2r(plans.backward, sum, real);
-  for (size_t k = 0; k <= block; ++k) c[k] = real[k] / static_cast<double>(size);
-  fftw_free(real);
-  fftw_free(current);
-  fftw_free(next);
-  fftw_free(sum);
+  for (size_t k = 0; k <= block; ++k) real[k] /= static_cast<double>(size);
+  return real;
 }
 
 // First block length tried for lags beyond the direct ones; each retry is 16 x longer.
 constexpr size_t kFirstLagBlock = 2048;
 
-// Sum of x with four interleaved partial sums (pairwise-like accuracy, vectorisable).
-double Sum4(const double* x, size_t n) {
-  double a[4] = {0, 0, 0, 0};
-  size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    a[0] += x[i];
-    a[1] += x[i + 1];
-    a[2] += x[i + 2];
-    a[3] += x[i + 3];
-  }
-  for (; i < n; ++i) a[0] += x[i];
-  return (a[0] + a[1]) + (a[2] + a[3]);
-}
+// rho at lag kDirectLags above which the first block is skipped: an AR(1) decay through it,
+// rho_k = rho_8^(k/8), would still be above 0.5 at lag kFirstLagBlock (0.5^(8/2048)),
+// far outside any Bartlett band.
+constexpr double kLongCorrelationRho = 0.99729605608547;
 
 }  // namespace
 
@@ -218,22 +339,12 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   // Corrected two-pass algorithm (Chan, Golub & LeVeque 1983): centre on a first mean,
   // then correct with the residual sum, so no large sums of squares cancel.
   const double first = total / dn;
-  double p1[4] = {0, 0, 0, 0}, p2[4] = {0, 0, 0, 0};
-  size_t i4 = 0;
-  for (; i4 + 4 <= n; i4 += 4) {
-    for (size_t j = 0; j < 4; ++j) {
-      const double d = values[i4 + j] - first;
-      p1[j] += d;
-      p2[j] += d * d;
-    }
-  }
-  for (; i4 < n; ++i4) {
-    const double d = values[i4] - first;
-    p1[0] += d;
-    p2[0] += d * d;
-  }
-  const double s1 = (p1[0] + p1[1]) + (p1[2] + p1[3]);
-  const double s2 = (p2[0] + p2[1]) + (p2[2] + p2[3]);
+  // The same pass forms the direct lag sums about `first` (used only if autocorrelation is
+  // on; they cost no extra read of the series).
+  double s1 = 0.0;
+  double p[kDirectLags + 1];
+  CentredLagSums(values, n, first, &s1, p);
+  const double s2 = p[0];
   TypeAResult r;
   r.n = static_cast<int64_t>(n);
   r.mean = first + s1 / dn;
@@ -247,9 +358,26 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   if (!options.autocorrelation || n < 4 || r.variance == 0.0) return r;
 
   // Zhang (2006): variance factor from the autocorrelation up to the cut-off lag.
+  // Direct lag sums about the mean from those about `first`: with e_i = x_i - first and
+  // delta = mean - first = s1/n,
+  //   c_k = sum_{i=0}^{n-1-k} (e_i - delta)(e_{i+k} - delta)
+  //       = p_k - delta (2 s1 - H_k - T_k) + (n - k) delta^2,
+  // H_k = sum_{i<k} e_i, T_k = sum_{i>=n-k} e_i. For k = 0 this is the corrected two-pass
+  // sum s2 - s1^2/n; delta is of the order of the rounding of `first`, so the correction
+  // is as small as the two-pass one.
+  const double delta = s1 / dn;
   double direct[kDirectLags + 1];
-  DirectLagSums(values, r.mean, n, direct);
-  std::vector<double> centred;  // Made only if lags beyond the direct ones are needed.
+  direct[0] = s2 - s1 * s1 / dn;
+  double head = 0.0, tail = 0.0;
+  for (size_t k = 1; k <= kDirectLags; ++k) {
+    const size_t kn = std::min(k, n);
+    if (k <= n) {
+      head += values[k - 1] - first;
+      tail += values[n - k] - first;
+    }
+    direct[k] =
+        p[k] - delta * (2.0 * s1 - head - tail) + static_cast<double>(n - kn) * delta * delta;
+  }
   const double c0 = direct[0];
   const size_t max_lag = std::max<size_t>(1, static_cast<size_t>(options.max_lag_fraction * dn));
   const boost::math::students_t t_dist(dn - 1.0);
@@ -258,7 +386,8 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
 
   // Lags beyond the direct ones come from BlockLagSums, first up to kFirstLagBlock, then
   // (only if the cut-off is not found there) up to 16 x further, and so on.
-  std::vector<double> lag_sums;
+  std::unique_ptr<FftWorkspace> owned_workspace;
+  const double* lag_sums = nullptr;
   size_t lags_known = 0;
   double factor = 1.0;
   double sum_rho2 = 0.0;
@@ -270,16 +399,17 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
       rho_k = direct[k] / c0;
     } else {
       if (k > lags_known) {
-        size_t block = lags_known == 0 ? kFirstLagBlock : 16 * lags_known;
+        // A correlation that has hardly decayed by lag kDirectLags (drift) will not end
+        // within the first block: start at the second size directly. The block size only
+        // changes the cost, never which lags are used or their values beyond rounding.
+        size_t block = lags_known == 0
+                           ? (direct[kDirectLags] / c0 > kLongCorrelationRho ? 16 * kFirstLagBlock
+                                                                             : kFirstLagBlock)
+                           : 16 * lags_known;
         size_t max_block = 1;
         while (max_block < max_lag) max_block *= 2;
         block = std::min(block, max_block);
-        lag_sums.resize(block + 1);
-        if (centred.empty()) {
-          centred.resize(n);
-          for (size_t i = 0; i < n; ++i) centred[i] = values[i] - r.mean;
-        }
-        BlockLagSums(centred.data(), n, block, lag_sums.data());
+        lag_sums = BlockLagSums(values, r.mean, n, &WorkspaceFor(block, &owned_workspace));
         lags_known = block;
       }
       rho_k = lag_sums[k] / lag_sums[0];

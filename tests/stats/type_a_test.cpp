@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace metro {
@@ -163,6 +164,109 @@ TEST_CASE("White noise keeps n_eff near n", "[stats][type_a]") {
   REQUIRE(r.ok());
   CHECK(r.value().n_eff > 0.9 * x.size());
   CHECK(r.value().cutoff_lag <= 2);
+}
+
+// Independent reference in long double: plain two-pass mean and variance, direct O(n K) lag
+// sums about the mean, and Zhang's Bartlett-band rule written out (no FFT, no shortcuts).
+struct Reference {
+  long double mean = 0, variance = 0, factor = 1, n_eff = 0, std_of_mean_autocorr = 0;
+  size_t cutoff = 0;
+  bool reached_limit = true;
+};
+
+Reference LongDoubleReference(const std::vector<double>& x) {
+  const size_t n = x.size();
+  const long double dn = static_cast<long double>(n);
+  Reference ref;
+  long double sum = 0;
+  for (double v : x) sum += v;
+  ref.mean = sum / dn;
+  // One refinement: at 1e6 the long double sum above is off by ~1e-12 in the mean, enough
+  // to move lag sums about it by ~1e-12 of themselves through the end terms. The
+  // differences x - mean are exact in long double, so their mean is the correction.
+  long double residual = 0;
+  for (double v : x) residual += static_cast<long double>(v) - ref.mean;
+  ref.mean += residual / dn;
+  std::vector<long double> d(n);
+  for (size_t i = 0; i < n; ++i) d[i] = static_cast<long double>(x[i]) - ref.mean;
+  long double c0 = 0;
+  for (long double v : d) c0 += v * v;
+  ref.variance = c0 / (dn - 1);  // JCGM 100:2008 4.2.2
+  // t quantile in double, as a user would take it from a table; the rule is what matters.
+  const boost::math::students_t t_dist(static_cast<double>(n) - 1.0);
+  const long double t_q = boost::math::quantile(boost::math::complement(t_dist, 0.025));
+  long double sum_rho2 = 0;
+  ref.cutoff = n / 4;
+  for (size_t k = 1; k <= n / 4; ++k) {
+    long double ck = 0;
+    for (size_t i = 0; i + k < n; ++i) ck += d[i] * d[i + k];
+    const long double rho = ck / c0;
+    if (std::fabs(rho) <= t_q * std::sqrt((1 + 2 * sum_rho2) / dn)) {
+      ref.cutoff = k - 1;
+      ref.reached_limit = false;
+      break;
+    }
+    ref.factor += 2 * (1 - static_cast<long double>(k) / dn) * rho;  // Zhang (2006)
+    sum_rho2 += rho * rho;
+  }
+  ref.n_eff = dn / ref.factor;
+  ref.std_of_mean_autocorr = std::sqrt(ref.factor * ref.variance / dn);
+  return ref;
+}
+
+double RelativeDifference(double value, long double reference) {
+  return static_cast<double>(std::fabs((value - reference) / reference));
+}
+
+TEST_CASE("Type A agrees with a long double reference to 1e-13", "[stats][type_a][slow]") {
+  // Kinds of series in a session: white (gyro), AR(1) 0.3 (az), AR(1) 0.9 (needs the FFT
+  // lags), a temp_c-like drift quantised to 0.001 (cut-off beyond the first FFT block, so
+  // the longer block is used from the start), and a large offset 1e6 + AR(1) noise.
+  const size_t n = 24001;
+  std::mt19937_64 rng(20240611);
+  std::normal_distribution<double> normal;
+  auto ar1 = [&](double phi, double offset, double scale) {
+    std::vector<double> x(n);
+    double prev = 0.0;
+    for (double& v : x) v = offset + scale * (prev = phi * prev + normal(rng));
+    return x;
+  };
+  struct Case {
+    std::string name;
+    std::vector<double> x;
+  };
+  std::vector<Case> cases = {{"white", ar1(0.0, 0.25, 1.0)},
+                             {"ar1_0.3", ar1(0.3, 0.98, 0.002)},
+                             {"ar1_0.9", ar1(0.9, -0.1, 0.01)},
+                             {"offset_1e6", ar1(0.5, 1e6, 1e-3)}};
+  std::vector<double> drift(n);
+  double walk = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    // Warm-up ramp plus a slow random walk, read out with 0.001 resolution.
+    walk += 0.002 * normal(rng);
+    const double t = static_cast<double>(i) / static_cast<double>(n);
+    drift[i] = std::round((25.0 + 2.0 * (1.0 - std::exp(-3.0 * t)) + walk) * 1000.0) / 1000.0;
+  }
+  cases.push_back({"drift", drift});
+
+  for (const Case& c : cases) {
+    INFO(c.name);
+    const Reference ref = LongDoubleReference(c.x);
+    auto r = EvaluateTypeA(c.x.data(), c.x.size());
+    REQUIRE(r.ok());
+    const TypeAResult& a = r.value();
+    // The mean's rounding scales with the data, not with the mean: compare on |mean| + s.
+    CHECK(std::fabs(a.mean - ref.mean) / (std::fabs(ref.mean) + std::sqrt(ref.variance)) < 2e-13);
+    CHECK(RelativeDifference(a.variance, ref.variance) < 2e-13);
+    CHECK(a.cutoff_lag == static_cast<int64_t>(ref.cutoff));
+    CHECK(a.cutoff_reached_limit == ref.reached_limit);
+    CHECK(RelativeDifference(a.variance_factor, ref.factor) < 2e-13);
+    CHECK(RelativeDifference(a.n_eff, ref.n_eff) < 2e-13);
+    CHECK(RelativeDifference(a.std_of_mean_autocorr, ref.std_of_mean_autocorr) < 2e-13);
+    if (c.name == "white") CHECK(a.cutoff_lag <= 2);
+    if (c.name == "ar1_0.9") CHECK((a.cutoff_lag > 8 && a.cutoff_lag < 2048));
+    if (c.name == "drift") CHECK(a.cutoff_lag > 2048);
+  }
 }
 
 TEST_CASE("Type A rejects too few or non-finite observations", "[stats][type_a]") {
