@@ -148,6 +148,22 @@ std::string Sha256Hex(std::string_view bytes) {
   return HexDigest(digest, length);
 }
 
+std::string Sha256Hex(std::string_view bytes, size_t chunk_bytes,
+                      const std::function<void(size_t)>& on_hashed) {
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
+  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
+  const size_t chunk = std::max<size_t>(chunk_bytes, 1);
+  for (size_t offset = 0; offset < bytes.size(); offset += chunk) {
+    const size_t n = std::min(chunk, bytes.size() - offset);
+    EVP_DigestUpdate(ctx.get(), bytes.data() + offset, n);
+    if (on_hashed) on_hashed(offset + n);
+  }
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int length = 0;
+  EVP_DigestFinal_ex(ctx.get(), digest, &length);
+  return HexDigest(digest, length);
+}
+
 Result<std::string> Sha256File(const std::string& path) {
   // Streamed in 1 MiB chunks: hashing a large session costs no memory.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);

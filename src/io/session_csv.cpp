@@ -8,9 +8,10 @@
 // into row-major buffers, then one sequential pass moves the rows, in file order, into the
 // per-tag columns, checking time order per tag, so strict and lenient loads behave exactly
 // as a one-thread reader would, whatever the thread count, and every error names its line.
-// Pass 2 and the general loader release the mapping's pages behind them, so the file's
-// pages give way to the parsed numbers and peak memory stays near the larger of the two
-// (about 1.2 x the file for a clean session), not file + numbers.
+// The mapping's pages are released behind pass 2 (or the general loader) and the SHA-256
+// hasher, whichever is slower (ReleaseBehind), so the file's pages give way to the parsed
+// numbers and peak memory stays near the larger of the two (about 1.2 x the file for a
+// clean session), not file + numbers, however fast the hasher runs.
 #include <fast_float/fast_float.h>
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -35,6 +36,7 @@
 #include "core/parallel.hpp"
 #include "core/plain_decimal.hpp"
 #include "io/columns.hpp"
+#include "io/release_behind.hpp"
 #include "io/session_internal.hpp"
 #include "metro/core/check.hpp"
 #include "metro/core/file.hpp"
@@ -76,10 +78,12 @@ class MappedFile {
     return Status::Ok();
   }
 
-  // Tells the kernel the bytes [begin, end) will not be read again.
-  void Release(size_t begin, size_t end) const {
+  // Drops the pages from the one holding `begin` to the last one wholly before `end`
+  // (ReleaseBehind's ranges follow each other, so no page is left behind; a page dropped
+  // early is mapped again from the page cache by whoever reads it).
+  void ReleaseBelow(size_t begin, size_t end) const {
     const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
-    const size_t first = (begin + page - 1) / page * page;
+    const size_t first = begin / page * page;
     const size_t last = end / page * page;
     if (last > first) ::madvise(const_cast<char*>(data_) + first, last - first, MADV_DONTNEED);
   }
@@ -353,8 +357,28 @@ void ParseBlock(const MappedFile& file, const ColumnPlan& plan, bool lenient, Bl
   }
   block->lines = line;
   block->parsed = true;
-  file.Release(block->begin, block->end);
 }
+
+template <typename B>
+std::vector<size_t> BlockBegins(const std::vector<B>& blocks) {
+  std::vector<size_t> begins;
+  for (const B& b : blocks) begins.push_back(b.begin);
+  return begins;
+}
+
+template <typename B>
+std::vector<size_t> BlockEnds(const std::vector<B>& blocks) {
+  std::vector<size_t> ends;
+  for (const B& b : blocks) ends.push_back(b.end);
+  return ends;
+}
+
+// The hasher reports its progress (and so lets pages go) this many bytes at a time.
+constexpr size_t kHashChunkBytes = size_t{4} << 20;
+// The file's pages kept mapped ahead of a hasher slower than the parser (ReleaseBehind): a
+// quarter of the file, so the peak stays near 1.25 x the file for a session's columns
+// however slow the hasher; at least 32 MB, so small files are read once.
+constexpr size_t kMinReleaseGapBytes = size_t{32} << 20;
 
 // Finds the header: the first line that is neither blank nor a comment.
 struct HeaderLine {
@@ -703,7 +727,6 @@ bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t fir
     ++cursor;
   }
   stage.FlushAll();
-  file.Release(block->begin, block->end);
   return ok && block->rows == block->limit;
 }
 
@@ -713,7 +736,8 @@ std::atomic<int64_t> clean_path_loads{0};
 // `cut` is the file's blocks (CutBlocks), the same the general loader parses.
 std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& file,
                                     const HeaderLine& header, const ColumnPlan& plan, int threads,
-                                    const std::vector<Block>& cut, BlockProgress* progress) {
+                                    const std::vector<Block>& cut, BlockProgress* progress,
+                                    ReleaseBehind* release) {
   if (!plan.text_fields.empty()) return std::nullopt;
   std::vector<CleanBlock> blocks;
   for (const Block& b : cut) {
@@ -802,11 +826,13 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
     }
   };
   std::atomic<bool> clean{true};
+  release->StartPass(BlockBegins(blocks), BlockEnds(blocks));
   ParallelFor(blocks.size(), threads, [&](size_t i) {
     if (!clean.load(std::memory_order_relaxed)) return;
     size_columns(blocks[i]);
     if (ParseCleanBlock(file, plan, first_line[i], columns, &blocks[i])) {
       progress->Parsed(i, blocks[i].begin, blocks[i].end);
+      release->BlockDone(i);
     } else {
       clean.store(false);
     }
@@ -845,7 +871,8 @@ int64_t CleanPathLoads() { return clean_path_loads.load(); }
 namespace {
 
 Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
-                              const LoadOptions& options, bool allow_clean_path) {
+                              const LoadOptions& options, bool allow_clean_path,
+                              ReleaseBehind* release) {
   if (file.size() == 0) {
     return MakeError(path, 0,
                      "empty file: expected a session.csv header line (t_s,...) "
@@ -871,7 +898,8 @@ Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
   // The comments and the header line before the first block.
   if (options.on_bytes_parsed) options.on_bytes_parsed(static_cast<int64_t>(header.data_begin));
   if (allow_clean_path) {
-    if (auto session = LoadCleanCsv(path, file, header, plan, threads, blocks, &progress)) {
+    if (auto session =
+            LoadCleanCsv(path, file, header, plan, threads, blocks, &progress, release)) {
       return *std::move(session);
     }
   }
@@ -879,9 +907,14 @@ Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
   // Parse blocks in parallel. In strict mode, blocks after the first one with an error
   // are never reached by the sequential pass, so they need not be parsed.
   std::atomic<size_t> first_bad_block{blocks.size()};
+  release->StartPass(BlockBegins(blocks), BlockEnds(blocks));
   ParallelFor(blocks.size(), threads, [&](size_t i) {
-    if (!options.lenient && i > first_bad_block.load()) return;
+    if (!options.lenient && i > first_bad_block.load()) {
+      release->BlockDone(i);  // Never read: the sequential pass stops before it.
+      return;
+    }
     ParseBlock(file, plan, options.lenient, &blocks[i]);
+    release->BlockDone(i);
     progress.Parsed(i, blocks[i].begin, blocks[i].end);
     if (!options.lenient && !blocks[i].bad.empty()) {
       size_t cur = first_bad_block.load();
@@ -1014,14 +1047,20 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   MappedFile file;
   if (Status s = file.Open(path); !s.ok()) return s.error();
   // The SHA-256 of the bytes, on a second thread while the parser works, from the parser's
-  // own mapping: the file's pages are mapped once for both (a page the parser has already
-  // released behind it is mapped again from the page cache).
+  // own mapping: the file's pages are mapped once for both and released once both are past
+  // them; a hasher slower than the parser (a CPU without SHA extensions) keeps at most a
+  // quarter of the file mapped behind the parser (ReleaseBehind).
+  ReleaseBehind release([&file](size_t begin, size_t end) { file.ReleaseBelow(begin, end); }, hash,
+                        std::max(file.size() / 4, kMinReleaseGapBytes));
   std::string digest;
   std::thread hasher;
   if (hash) {
-    hasher = std::thread([&] { digest = Sha256Hex(std::string_view(file.data(), file.size())); });
+    hasher = std::thread([&] {
+      digest = Sha256Hex(std::string_view(file.data(), file.size()), kHashChunkBytes,
+                         [&release](size_t hashed) { release.Hashed(hashed); });
+    });
   }
-  Result<Session> session = LoadMappedCsv(path, file, options, allow_clean_path);
+  Result<Session> session = LoadMappedCsv(path, file, options, allow_clean_path, &release);
   if (hasher.joinable()) hasher.join();
   if (session.ok() && hash) session.value().sha256 = std::move(digest);
   return session;

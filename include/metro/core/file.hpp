@@ -1,6 +1,8 @@
 // File helpers: atomic output, whole-file input and SHA-256 of inputs.
 #pragma once
 
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <string_view>
 
@@ -19,6 +21,13 @@ Result<std::string> ReadFile(const std::string& path);
 // Lower-case hex SHA-256 of a byte string and of a file's contents.
 std::string Sha256Hex(std::string_view bytes);
 Result<std::string> Sha256File(const std::string& path);
+
+// The same digest, hashed front to back `chunk_bytes` at a time (0 is taken as 1), calling
+// on_hashed(n) from the calling thread after each chunk, n being the bytes hashed so far
+// (the last has n == bytes.size(); empty bytes make no call). Lets a reader sharing the
+// bytes know which the hasher has finished with.
+std::string Sha256Hex(std::string_view bytes, size_t chunk_bytes,
+                      const std::function<void(size_t)>& on_hashed);
 
 // True if both paths name the same existing file (same device and inode). Used to refuse
 // writing an output over one of the inputs.
