@@ -168,8 +168,6 @@ Result<std::string> Sha256File(const std::string& path) {
   // Streamed in 1 MiB chunks: hashing a large session costs no memory.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return MakeError(OsError("cannot open", path));
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
-  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
   // A regular file is hashed from a read-only mapping of the page cache (no copy into a
   // buffer), 4 MiB at a time, each chunk's pages unmapped once hashed so the resident size
   // stays a few MB. Anything that cannot be mapped is read instead.
@@ -180,20 +178,19 @@ Result<std::string> Sha256File(const std::string& path) {
     if (map != MAP_FAILED) {
       ::close(fd);
       ::madvise(map, size, MADV_SEQUENTIAL);
-      constexpr size_t kChunk = size_t{4} << 20;  // A multiple of the page size.
-      const char* data = static_cast<const char*>(map);
-      for (size_t offset = 0; offset < size; offset += kChunk) {
-        const size_t n = std::min(kChunk, size - offset);
-        EVP_DigestUpdate(ctx.get(), data + offset, n);
-        ::madvise(const_cast<char*>(data) + offset, n, MADV_DONTNEED);
-      }
+      constexpr size_t kChunkBytes = size_t{4} << 20;  // A multiple of the page size.
+      char* data = static_cast<char*>(map);
+      size_t released = 0;
+      std::string digest = Sha256Hex(std::string_view(data, size), kChunkBytes, [&](size_t hashed) {
+        ::madvise(data + released, hashed - released, MADV_DONTNEED);
+        released = hashed;
+      });
       ::munmap(map, size);
-      unsigned char digest[EVP_MAX_MD_SIZE];
-      unsigned int length = 0;
-      EVP_DigestFinal_ex(ctx.get(), digest, &length);
-      return HexDigest(digest, length);
+      return digest;
     }
   }
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
+  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
   std::vector<char> buffer(size_t{1} << 20);
   for (;;) {
     const ssize_t n = ::read(fd, buffer.data(), buffer.size());
