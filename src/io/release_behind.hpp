@@ -16,9 +16,9 @@ namespace metro::internal {
 // once hashed. Pages (`release(begin, end)`) go
 //  - once both readers are past them (each page is then read once, by both), and
 //  - when the hasher trails the parser (a CPU without SHA extensions), once the parser is
-//    past them and they lie more than `max_gap` bytes ahead of the hasher: the hasher maps
+//    past them and they lie more than `max_gap_bytes` ahead of the hasher: the hasher maps
 //    them again when it gets there, and they go again once it is past.
-// So behind the parser, where the tag columns grow, at most max_gap bytes of the file stay
+// So behind the parser, where the tag columns grow, at most max_gap_bytes of the file stay
 // mapped for a slow hasher, instead of everything it has not hashed yet. A hasher ahead of
 // the parser releases nothing ahead of it: the parser's first pass has mapped those pages
 // already, and they go as the parser passes them. Releasing a page a reader still needs
@@ -28,8 +28,8 @@ class ReleaseBehind {
  public:
   // `release` drops [begin, end) (MappedFile::ReleaseBelow); without a hasher (`hashing`
   // false) the parser alone holds pages.
-  ReleaseBehind(std::function<void(size_t, size_t)> release, bool hashing, size_t max_gap)
-      : release_(std::move(release)), hashing_(hashing), max_gap_(max_gap) {}
+  ReleaseBehind(std::function<void(size_t, size_t)> release, bool hashing, size_t max_gap_bytes)
+      : release_(std::move(release)), hashing_(hashing), max_gap_bytes_(max_gap_bytes) {}
 
   // Starts a parse of blocks [begins[i], ends[i]) covering the file from begins[0] (the
   // bytes before it, the header, are read before any block) to the end. A new pass (the
@@ -72,7 +72,7 @@ class ReleaseBehind {
       released_ = trailing;
     }
     std::pair<size_t, size_t> ahead{0, 0};  // Behind the parser, far ahead of the hasher.
-    const size_t far = trailing + std::min(max_gap_, leading - trailing);
+    const size_t far = trailing + std::min(max_gap_bytes_, leading - trailing);
     if (hashing_ && parsed_ > hashed_ && leading > std::max(far, released_ahead_)) {
       ahead = {std::max(far, released_ahead_), leading};
       released_ahead_ = leading;
@@ -85,7 +85,7 @@ class ReleaseBehind {
   std::mutex mutex_;
   std::function<void(size_t, size_t)> release_;
   bool hashing_;
-  size_t max_gap_;
+  size_t max_gap_bytes_;
   std::vector<size_t> ends_;
   std::vector<bool> done_;
   size_t next_ = 0;            // First block not yet done.

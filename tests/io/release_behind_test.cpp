@@ -29,9 +29,9 @@ struct Recorder {
 
 // A ReleaseBehind recording its releases, with a pass started.
 struct Tracked {
-  Tracked(bool hashing, size_t max_gap, const std::vector<size_t>& begins,
+  Tracked(bool hashing, size_t max_gap_bytes, const std::vector<size_t>& begins,
           const std::vector<size_t>& ends)
-      : release(r.Callback(), hashing, max_gap) {
+      : release(r.Callback(), hashing, max_gap_bytes) {
     release.StartPass(begins, ends);
   }
   Recorder r;
