@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -20,13 +21,25 @@ ProgressOptions AlwaysDrawn(double min_redraw_s = 0.0) {
   return o;
 }
 
-std::string ReadAll(std::FILE* f) {
+// What `draw` writes to a temporary stream (its progress objects end inside it).
+std::string Drawn(const std::function<void(std::FILE*)>& draw) {
+  std::FILE* f = std::tmpfile();
+  REQUIRE(f != nullptr);
+  draw(f);
   std::rewind(f);
   std::string out;
   char buf[256];
   size_t n;
   while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
+  std::fclose(f);
   return out;
+}
+
+// Runs `work` on `threads` threads at once.
+void OnThreads(int threads, const std::function<void()>& work) {
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(work);
+  for (std::thread& t : pool) t.join();
 }
 
 TEST_CASE("Progress line shows the bar the count and the percentage", "[report][progress]") {
@@ -39,38 +52,26 @@ TEST_CASE("Progress line shows the bar the count and the percentage", "[report][
 }
 
 TEST_CASE("Progress bar is quiet when the stream is not a terminal", "[report][progress]") {
-  std::FILE* f = std::tmpfile();
-  REQUIRE(f != nullptr);
-  CHECK_FALSE(IsTerminal(f));
-  {
+  const std::string text = Drawn([](std::FILE* f) {
+    CHECK_FALSE(IsTerminal(f));
     ProgressBar bar("batch", 3, f);
     CHECK_FALSE(bar.enabled());
     bar.Advance();
     bar.Advance(2);
     CHECK(bar.done() == 3);
-  }
-  CHECK(ReadAll(f).empty());
-  std::fclose(f);
+  });
+  CHECK(text.empty());
 }
 
 TEST_CASE("Progress bar forced on ends with the final count", "[report][progress]") {
-  std::FILE* f = std::tmpfile();
-  REQUIRE(f != nullptr);
-  const ProgressOptions o = AlwaysDrawn();
-  {
-    ProgressBar bar("work", 40, f, o);
-    std::vector<std::thread> threads;
-    for (int t = 0; t < 4; ++t) {
-      threads.emplace_back([&bar] {
-        for (int i = 0; i < 10; ++i) bar.Advance();
-      });
-    }
-    for (auto& t : threads) t.join();
+  const std::string text = Drawn([](std::FILE* f) {
+    ProgressBar bar("work", 40, f, AlwaysDrawn());
+    OnThreads(4, [&bar] {
+      for (int i = 0; i < 10; ++i) bar.Advance();
+    });
     bar.Finish();
     bar.Finish();  // Once only.
-  }
-  const std::string text = ReadAll(f);
-  std::fclose(f);
+  });
   CHECK(text.find("work [") == 1);  // After the first "\r".
   CHECK(text.find("40/40 100 %") != std::string::npos);
   CHECK(text.back() == '\n');
@@ -78,35 +79,27 @@ TEST_CASE("Progress bar forced on ends with the final count", "[report][progress
 }
 
 TEST_CASE("Elapsed ticker is quiet when the stream is not a terminal", "[report][progress]") {
-  std::FILE* f = std::tmpfile();
-  REQUIRE(f != nullptr);
-  ProgressOptions o;
-  o.min_redraw_s = 0.0;
-  {
+  const std::string text = Drawn([](std::FILE* f) {
+    ProgressOptions o;
+    o.min_redraw_s = 0.0;
     ElapsedTicker ticker("analyse big.csv", f, o);
     CHECK_FALSE(ticker.enabled());
     ticker.SetLabel("budget");
     std::this_thread::sleep_for(std::chrono::milliseconds(120));
-  }
-  CHECK(ReadAll(f).empty());
-  std::fclose(f);
+  });
+  CHECK(text.empty());
 }
 
 TEST_CASE("Elapsed ticker forced on redraws until finished", "[report][progress]") {
   CHECK(FormatElapsedLine("load", 2.25) == "load ...  2.2 s");
-  std::FILE* f = std::tmpfile();
-  REQUIRE(f != nullptr);
-  const ProgressOptions o = AlwaysDrawn(0.05);
-  {
-    ElapsedTicker ticker("load", f, o);
+  const std::string text = Drawn([](std::FILE* f) {
+    ElapsedTicker ticker("load", f, AlwaysDrawn(0.05));
     CHECK(ticker.enabled());
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     ticker.SetLabel("evaluate");
     ticker.Finish();
     ticker.Finish();  // Once only.
-  }
-  const std::string text = ReadAll(f);
-  std::fclose(f);
+  });
   CHECK(text.find("\rload ...  0.") == 0);
   // Redrawn by the thread while running: several "\r" lines before the last one.
   CHECK(std::count(text.begin(), text.end(), '\r') >= 4);
@@ -125,39 +118,27 @@ TEST_CASE("Progress line shows counts in units", "[report][progress]") {
 }
 
 TEST_CASE("Quick work under the delay leaves no line", "[report][progress]") {
-  std::FILE* f = std::tmpfile();
-  REQUIRE(f != nullptr);
-  ProgressOptions o = AlwaysDrawn();
-  o.delay_s = 60.0;
-  {
+  const std::string text = Drawn([](std::FILE* f) {
+    ProgressOptions o = AlwaysDrawn();
+    o.delay_s = 60.0;
     ProgressBar bar("quick", 10, f, o);
     bar.Advance(10);
     ElapsedTicker ticker("quick too", f, o);
-  }
-  CHECK(ReadAll(f).empty());
-  std::fclose(f);
+  });
+  CHECK(text.empty());
 }
 
 TEST_CASE("Terminal progress draws one line per phase", "[report][progress]") {
-  std::FILE* f = std::tmpfile();
-  REQUIRE(f != nullptr);
-  const ProgressOptions o = AlwaysDrawn();
-  {
-    TerminalProgress progress(f, o);
+  const std::string text = Drawn([](std::FILE* f) {
+    TerminalProgress progress(f, AlwaysDrawn());
     progress.BeginPhase("load x.csv", 2000000, "MB", 1e6);
-    std::vector<std::thread> threads;
-    for (int t = 0; t < 2; ++t) {
-      threads.emplace_back([&progress] {
-        for (int i = 0; i < 10; ++i) progress.Advance(100000);
-      });
-    }
-    for (std::thread& t : threads) t.join();
+    OnThreads(2, [&progress] {
+      for (int i = 0; i < 10; ++i) progress.Advance(100000);
+    });
     progress.BeginPhase("Type A", kUncountedWork);
     progress.BeginPhase("Monte Carlo", 0, "trials");
     progress.Advance(70000);
-  }  // The destructor ends the last line.
-  const std::string text = ReadAll(f);
-  std::fclose(f);
+  });  // The destructor ends the last line.
   CHECK(std::count(text.begin(), text.end(), '\n') == 3);
   CHECK(text.find("\rload x.csv [##############################] 2.0/2.0 MB 100 %") !=
         std::string::npos);
