@@ -149,23 +149,22 @@ TEST_CASE("Terminal progress draws one line per phase", "[report][progress]") {
 
 TEST_CASE("Progress options are validated", "[report][progress]") {
   std::string why;
-  ProgressOptions o;
-  CHECK(o.IsValid(&why));
-  o.bar_width = 0;
-  CHECK_FALSE(o.IsValid(&why));
-  CHECK(why == "progress: bar_width must be in [1, 200]");
-  o = {};
-  o.min_redraw_s = -1.0;
-  CHECK_FALSE(o.IsValid(&why));
-  CHECK(why == "progress: min_redraw_s must be >= 0");
-  o = {};
-  o.unit_divisor = 0.0;
-  CHECK_FALSE(o.IsValid(&why));
-  CHECK(why == "progress: unit_divisor must be finite and > 0");
-  o = {};
-  o.delay_s = -0.1;
-  CHECK_FALSE(o.IsValid(&why));
-  CHECK(why == "progress: delay_s must be >= 0");
+  CHECK(ProgressOptions{}.IsValid(&why));
+  // Each bad value alone is refused with a message naming it.
+  auto refused = [](const std::function<void(ProgressOptions*)>& spoil) {
+    ProgressOptions o;
+    spoil(&o);
+    std::string message;
+    CHECK_FALSE(o.IsValid(&message));
+    return message;
+  };
+  CHECK(refused([](ProgressOptions* o) { o->bar_width = 0; }) ==
+        "progress: bar_width must be in [1, 200]");
+  CHECK(refused([](ProgressOptions* o) { o->min_redraw_s = -1.0; }) ==
+        "progress: min_redraw_s must be >= 0");
+  CHECK(refused([](ProgressOptions* o) { o->unit_divisor = 0.0; }) ==
+        "progress: unit_divisor must be finite and > 0");
+  CHECK(refused([](ProgressOptions* o) { o->delay_s = -0.1; }) == "progress: delay_s must be >= 0");
 }
 
 }  // namespace
