@@ -65,17 +65,19 @@ class ReleaseBehind {
  private:
   void ReleaseBehindBoth(std::unique_lock<std::mutex>* lock) {
     const size_t trailing = hashing_ ? std::min(parsed_, hashed_) : parsed_;
-    const size_t leading = hashing_ ? std::max(parsed_, hashed_) : parsed_;
     std::pair<size_t, size_t> both{0, 0};  // Behind both readers.
     if (trailing > released_) {
       both = {released_, trailing};
       released_ = trailing;
     }
     std::pair<size_t, size_t> ahead{0, 0};  // Behind the parser, far ahead of the hasher.
-    const size_t far = trailing + std::min(max_gap_bytes_, leading - trailing);
-    if (hashing_ && parsed_ > hashed_ && leading > std::max(far, released_ahead_)) {
-      ahead = {std::max(far, released_ahead_), leading};
-      released_ahead_ = leading;
+    if (hashing_ && parsed_ > hashed_) {
+      const size_t far = hashed_ + std::min(max_gap_bytes_, parsed_ - hashed_);
+      const size_t from = std::max(far, released_ahead_);
+      if (parsed_ > from) {
+        ahead = {from, parsed_};
+        released_ahead_ = parsed_;
+      }
     }
     lock->unlock();  // madvise outside the lock; each range is claimed by one caller.
     if (both.second > both.first) release_(both.first, both.second);
