@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cstring>
+#include <numeric>
 
 #include "core/plain_decimal.hpp"
 
@@ -94,14 +95,7 @@ bool LearnDecimals(const char* text, const uint32_t* sep, int fields, std::vecto
 
 std::vector<Group> MakeGroups(const std::vector<int>& decimals) {
   const int fields = static_cast<int>(decimals.size());
-  int a = fields;
-  int b = 4;
-  while (b != 0) {
-    const int t = a % b;
-    a = b;
-    b = t;
-  }
-  std::vector<Group> groups(static_cast<size_t>(fields / a));
+  std::vector<Group> groups(static_cast<size_t>(fields / std::gcd(fields, 4)));
   for (size_t g = 0; g < groups.size(); ++g) {
     uint8_t* shuffle = groups[g].shuffle;
     double* scale = groups[g].scale;

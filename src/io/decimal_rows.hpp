@@ -19,7 +19,7 @@
 
 namespace metro::internal {
 
-// True if this CPU can run DecimalRows (AVX-512 F/BW/VL/DQ and BMI2).
+// True if this CPU can run DecimalRows (AVX-512 F/BW/VL/DQ, BMI1/2 and POPCNT).
 bool DecimalRowsAvailable();
 
 // How many runs DecimalRows has read (not refused) in this process (for tests).

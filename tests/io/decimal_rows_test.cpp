@@ -67,14 +67,15 @@ TEST_CASE("DecimalRows reads logger rows bit for bit as fast_float does", "[io][
     for (int r = 0; r < n; ++r) {
       for (int c = 0; c < fields; ++c) {
         const int d = decimals[static_cast<size_t>(c)];
-        const int int_digits = 1 + static_cast<int>(rng() % (d < 0 ? 15 : 14 - d));
+        // At most 15 bytes with the sign and the dot: every field fits the vector reader.
+        const int most = d < 0 ? 14 : 13 - d;
+        const int int_digits = 1 + static_cast<int>(rng() % static_cast<unsigned>(most));
         std::string field = rng() % 2 == 0 ? "-" : "";
         for (int k = 0; k < int_digits; ++k) field += static_cast<char>('0' + rng() % 10);
         if (d > 0) {
           field += '.';
           for (int k = 0; k < d; ++k) field += static_cast<char>('0' + rng() % 10);
         }
-        if (field.size() > 15) field.erase(field.size() - (field.size() - 15));
         rows += field;
         rows += c + 1 == fields ? '\n' : ',';
       }
@@ -82,9 +83,6 @@ TEST_CASE("DecimalRows reads logger rows bit for bit as fast_float does", "[io][
     const std::vector<double> want = Reference(rows);
     const Run run = Read(rows, fields);
     INFO(fmt::format("{} fields, {} rows", fields, n));
-    // A field cut to 15 bytes may have lost digits after its dot: then the column's decimals
-    // change and the run is refused, which is the contract too.
-    if (run.rows < 0) continue;
     REQUIRE(run.rows == n);
     for (size_t i = 0; i < want.size(); ++i) {
       if (!SameBits(run.values[i], want[i])) {
