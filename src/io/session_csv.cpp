@@ -1,10 +1,10 @@
 // session.csv loader.
 //
 // The file is memory-mapped and cut into line-aligned blocks. Clean files (the usual case:
-// no malformed row, no text column, time increasing per tag) take two parallel passes that
-// put every number straight into its tag column: pass 1 counts each block's rows per
-// sensor, which fixes where each row goes; pass 2 parses every block into those places,
-// runs of machine-written rows four fields per instruction (DecimalRows, AVX-512).
+// no malformed row, no text column, time increasing per tag) take one parallel pass: each
+// block is parsed into a stage of per-tag columns in cache, runs of machine-written rows
+// four fields per instruction (DecimalRows, AVX-512), and the stages are appended to the
+// tag columns in file order as they complete.
 // Anything irregular sends the file to the general loader: worker threads parse blocks
 // into row-major buffers, then one sequential pass moves the rows, in file order, into the
 // per-tag columns, checking time order per tag, so strict and lenient loads behave exactly
@@ -25,10 +25,12 @@
 #include <atomic>
 #include <cerrno>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
 #include <functional>
 #include <limits>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <new>
 #include <optional>
@@ -516,21 +518,15 @@ std::vector<Block> CutBlocks(const MappedFile& file, size_t data_begin, int thre
 
 // ---- The clean-file path -------------------------------------------------------------
 // Most session files have no malformed row, no text column and time increasing per tag.
-// For those, two parallel passes put every number straight into its tag column: pass 1
-// counts each block's rows per sensor (only the sensor field is read), which fixes where
-// every row goes; pass 2 parses each block into those places. Nothing is copied twice and
-// no pass is sequential. Anything unusual (a field the fast parser does not accept, a
-// sensor that is not a plain 1..255 integer, time not increasing) abandons this path, and
-// the general loader below, which explains every error exactly, reads the file instead.
-
-struct CleanBlock {
-  size_t begin = 0;
-  size_t end = 0;
-  uint32_t lines = 0;
-  bool irregular = false;
-  std::array<uint32_t, 256> rows{};   // Rows per sensor (pass 1), then write cursors.
-  std::array<uint32_t, 256> limit{};  // End of the block's rows in each tag column.
-};
+// For those, one parallel pass parses each block (512 kB) into a stage, the block's rows
+// tag by tag and column by column, and the stages are appended to the tag columns in
+// block order, by whichever thread finds the next block parsed. No pass counts rows
+// first, and no column is zero-filled before it is written: each number is written to its
+// column once, in runs, from a stage still in cache, and the columns' pages are faulted
+// in ahead of the appends by the parse threads (PageQueue). Anything unusual (a field the
+// fast parser does not accept, a sensor that is not a plain 1..255 integer, time not
+// increasing) abandons this path, and the general loader below, which explains every
+// error exactly, reads the file instead.
 
 inline bool SkipBlankOrComment(const char* lb, const char* te) {
   const char* first = lb;
@@ -538,51 +534,15 @@ inline bool SkipBlankOrComment(const char* lb, const char* te) {
   return first == te || *first == '#';
 }
 
-// The sensor of a data line: the plain integer 1..255 in field `sensor_field`, or 0 if
-// the field is anything else.
-inline int SensorOfLine(const char* lb, const char* te, int sensor_field) {
-  const char* p = lb;
-  for (int f = 0; f < sensor_field; ++f) {
-    p = static_cast<const char*>(std::memchr(p, ',', static_cast<size_t>(te - p)));
-    if (p == nullptr) return 0;
-    ++p;
-  }
-  int v = 0;
-  const char* q = p;
-  while (q < te && q - p < 3 && *q >= '0' && *q <= '9') v = v * 10 + (*q++ - '0');
-  if (q == p || (q < te && *q != ',')) return 0;
-  return v >= 1 && v <= 255 ? v : 0;
-}
-
-void CountBlock(const MappedFile& file, const ColumnPlan& plan, CleanBlock* block) {
-  const char* p = file.data() + block->begin;
-  const char* end = file.data() + block->end;
-  uint32_t line = 0;
-  while (p < end) {
-    const char* nl = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p)));
-    const char* lb = p;
-    const char* te = nl != nullptr ? nl : end;
-    p = nl != nullptr ? nl + 1 : end;
-    ++line;
-    if (te > lb && te[-1] == '\r') --te;
-    if (SkipBlankOrComment(lb, te)) continue;
-    const int sensor = plan.sensor_field < 0 ? 1 : SensorOfLine(lb, te, plan.sensor_field);
-    if (sensor == 0) {
-      block->irregular = true;
-      break;
-    }
-    ++block->rows[static_cast<size_t>(sensor)];
-  }
-  block->lines = line;
-  // The pages stay mapped: pass 2 reads them again at once (releasing them here made pass 2
-  // fault every page in a second time) and releases them behind it.
-}
-
-struct CleanColumns {
-  double* t_s = nullptr;
-  uint32_t* line = nullptr;
-  std::vector<double*> values;  // One per numeric slot.
+struct CleanBlock {
+  size_t begin = 0;
+  size_t end = 0;
+  size_t cut = 0;  // The file's block (CutBlocks) this one is part of.
 };
+
+// Bytes per clean-path block: its stage (about as many bytes of numbers) stays in the
+// core's L2 cache until it is appended.
+constexpr size_t kCleanBlockBytes = size_t{512} << 10;
 
 // End of a line's last field at `q`: "\n", "\r\n" or the end of the block. Returns the
 // start of the next line, or nullptr if `q` is not at the end of the line.
@@ -593,80 +553,91 @@ inline const char* EndOfLine(const char* q, const char* end) {
   return nullptr;
 }
 
-// Rows of one tag staged row by row, then written to the tag's columns kStagedRows at a
-// time: each column then receives a run of consecutive values instead of one value per
-// row interleaved with every other column of every tag (hundreds of write streams).
-constexpr uint32_t kStagedRows = 64;
+// One block's rows of one tag: column k of the stage (t_s, then the quantities) at
+// values + k * room, and the block-relative line of each row. Its vectors keep their size
+// from block to block, so a reused stage allocates nothing.
+struct StagedTag {
+  int sensor = 0;
+  size_t rows = 0;
+  size_t room = 0;
+  std::vector<uint32_t> line;
+  std::vector<double> values;  // Column-major, `room` rows per column.
+};
 
-class RowStage {
+// A block's rows staged for their tag columns; reused from block to block.
+class BlockStage {
  public:
-  RowStage(size_t n_values, const std::vector<CleanColumns>& columns)
-      : n_values_(n_values), columns_(columns) {
+  // `fields`: the file field of each staged column (t_s, then the quantities).
+  explicit BlockStage(std::vector<int> fields) : fields_(std::move(fields)) {
     slot_of_sensor_.fill(-1);
   }
-  // Room for one row of `sensor` whose column index is `cursor`: n_values doubles; the
-  // caller fills them and the line number.
-  double* Add(int sensor, uint32_t cursor, uint32_t line) {
-    int slot = slot_of_sensor_[static_cast<size_t>(sensor)];
-    if (slot < 0) {
-      slot = static_cast<int>(stages_.size());
-      slot_of_sensor_[static_cast<size_t>(sensor)] = slot;
-      stages_.emplace_back();
-      stages_.back().sensor = sensor;
-      stages_.back().values.resize(kStagedRows * n_values_);
+
+  void Clear() {
+    for (size_t i = 0; i < used_; ++i) {
+      slot_of_sensor_[static_cast<size_t>(tags_[i].sensor)] = -1;
+      tags_[i].rows = 0;
     }
-    Stage& st = stages_[static_cast<size_t>(slot)];
-    if (st.count == kStagedRows) Flush(&st);
-    if (st.count == 0) st.first = cursor;
-    st.line[st.count] = line;
-    return st.values.data() + st.count++ * n_values_;
+    used_ = 0;
+    lines = 0;
   }
-  void FlushAll() {
-    for (Stage& st : stages_) Flush(&st);
+  // Stages one row of `sensor` (its fields in file order) and its block-relative line.
+  void Add(int sensor, const double* row, uint32_t line) {
+    int& slot = slot_of_sensor_[static_cast<size_t>(sensor)];
+    if (slot < 0) {
+      if (used_ == tags_.size()) tags_.emplace_back();
+      slot = static_cast<int>(used_++);
+      tags_[static_cast<size_t>(slot)].sensor = sensor;
+    }
+    StagedTag& tag = tags_[static_cast<size_t>(slot)];
+    if (tag.rows == tag.room) Grow(&tag);
+    tag.line[tag.rows] = line;
+    double* out = tag.values.data() + tag.rows;
+    const size_t room = tag.room;
+    for (size_t k = 0; k < fields_.size(); ++k) out[k * room] = row[fields_[k]];
+    ++tag.rows;
   }
+  const StagedTag* begin() const { return tags_.data(); }
+  const StagedTag* end() const { return tags_.data() + used_; }
+
+  uint32_t lines = 0;  // Lines in the block, blank and comment lines included.
 
  private:
-  struct Stage {
-    int sensor = 0;
-    uint32_t first = 0;
-    uint32_t count = 0;
-    std::array<uint32_t, kStagedRows> line{};
-    std::vector<double> values;  // count rows of n_values: t_s, then the quantities.
-  };
-  void Flush(Stage* st) {
-    const CleanColumns& c = columns_[static_cast<size_t>(st->sensor)];
-    const uint32_t n = st->count;
-    std::copy(st->line.begin(), st->line.begin() + n, c.line + st->first);
-    const double* v = st->values.data();
-    for (uint32_t r = 0; r < n; ++r) c.t_s[st->first + r] = v[r * n_values_];
-    for (size_t k = 0; k + 1 < n_values_; ++k) {
-      double* out = c.values[k] + st->first;
-      for (uint32_t r = 0; r < n; ++r) out[r] = v[r * n_values_ + k + 1];
+  void Grow(StagedTag* tag) const {
+    // Columns 8 doubles longer than a power of two: the rows being written in the
+    // columns then fall in different cache sets (at a power-of-two stride, the columns of
+    // all tags competed for the same few sets; measured 5% slower).
+    const size_t room = std::max<size_t>(1024, 2 * (tag->room & ~size_t{7})) + 8;
+    std::vector<double> values(room * fields_.size());
+    for (size_t k = 0; k < fields_.size(); ++k) {
+      std::copy_n(tag->values.data() + k * tag->room, tag->rows, values.data() + k * room);
     }
-    st->count = 0;
+    tag->values = std::move(values);
+    tag->line.resize(room);
+    tag->room = room;
   }
-  size_t n_values_;
-  const std::vector<CleanColumns>& columns_;
+
+  std::vector<int> fields_;
   std::array<int, 256> slot_of_sensor_;
-  std::vector<Stage> stages_;
+  std::vector<StagedTag> tags_;  // The first used_ are this block's.
+  size_t used_ = 0;
 };
 
 // Bytes per DecimalRows run: its separators and values stay in the core's cache.
 constexpr size_t kVectorRunBytes = size_t{64} << 10;
 
-// Pass 2 for one block. Runs of machine-written rows go through DecimalRows (four fields
-// per instruction); any run it refuses, and every block on a CPU without AVX-512, is read
-// by the scalar parser below, which parses numbers straight from the block (no separate
-// search for the end of each line). Returns false at the first line neither accepts.
-bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t first_line,
-                     const std::vector<CleanColumns>& columns, CleanBlock* block) {
-  const char* p = file.data() + block->begin;
-  const char* end = file.data() + block->end;
+// Parses one block into `stage`. Runs of machine-written rows go through DecimalRows (four
+// fields per instruction); any run it refuses, and every block on a CPU without AVX-512,
+// is read by the scalar parser below, which parses numbers straight from the block (no
+// separate search for the end of each line). Returns false at the first line neither
+// accepts.
+bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, const CleanBlock& block,
+                     BlockStage* stage) {
+  const char* p = file.data() + block.begin;
+  const char* end = file.data() + block.end;
   const int nf = static_cast<int>(plan.names.size());
-  RowStage stage(plan.numeric_fields.size() + 1, columns);
   uint32_t line = 0;
-  // One parsed row (its fields in file order) into its tag's columns. False if the sensor
-  // is not a plain integer 1..255 or the tag has more rows than pass 1 counted.
+  // One parsed row (its fields in file order) into its tag's stage. False if the sensor
+  // is not a plain integer 1..255.
   auto put = [&](const double* fields, uint32_t this_line) {
     int sensor = 1;
     if (plan.sensor_field >= 0) {
@@ -674,14 +645,7 @@ bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t fir
       if (!(v >= 1.0 && v <= 255.0 && v == std::floor(v))) return false;
       sensor = static_cast<int>(v);
     }
-    uint32_t& cursor = block->rows[static_cast<size_t>(sensor)];
-    if (cursor >= block->limit[static_cast<size_t>(sensor)]) return false;  // The file changed.
-    double* staged = stage.Add(sensor, cursor, static_cast<uint32_t>(first_line + this_line));
-    staged[0] = fields[plan.time_field];
-    for (size_t q = 0; q < plan.numeric_fields.size(); ++q) {
-      staged[q + 1] = fields[plan.numeric_fields[q]];
-    }
-    ++cursor;
+    stage->Add(sensor, fields, this_line);
     return true;
   };
   std::vector<double> fields(static_cast<size_t>(nf));
@@ -735,7 +699,7 @@ bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t fir
   };
   // DecimalRows loads the 16 bytes before each field's end: the run must not start at the
   // very beginning of the mapping (a block never does unless the header is tiny).
-  const bool vector = DecimalRowsAvailable() && block->begin >= 16;
+  const bool vector = DecimalRowsAvailable() && block.begin >= 16;
   std::vector<uint32_t> separators;
   std::vector<double> values;
   bool ok = true;
@@ -757,8 +721,105 @@ bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, int64_t fir
     }
     p = run_end;
   }
-  stage.FlushAll();
-  return ok && block->rows == block->limit;
+  stage->lines = line;
+  return ok;
+}
+
+// Stages for the parse threads. A thread takes a stage before it takes a block, so the
+// lowest block not yet appended always has one and the appending never waits for itself;
+// `threads` + 2 stages let threads go on parsing while a stage waits its turn.
+class StagePool {
+ public:
+  StagePool(size_t count, const std::vector<int>& fields) {
+    for (size_t i = 0; i < count; ++i) free_.push_back(std::make_unique<BlockStage>(fields));
+  }
+  // A cleared stage, or nullptr once the parse has failed.
+  std::unique_ptr<BlockStage> Take() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    ready_.wait(lock, [this] { return failed_ || !free_.empty(); });
+    if (failed_) return nullptr;
+    std::unique_ptr<BlockStage> stage = std::move(free_.back());
+    free_.pop_back();
+    stage->Clear();
+    return stage;
+  }
+  void Give(std::unique_ptr<BlockStage> stage) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      free_.push_back(std::move(stage));
+    }
+    ready_.notify_one();
+  }
+  void Fail() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      failed_ = true;
+    }
+    ready_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  std::vector<std::unique_ptr<BlockStage>> free_;
+  bool failed_ = false;
+};
+
+// Pages of the tag columns to fault in ahead of the appends, by the parse threads between
+// blocks (MADV_POPULATE_WRITE, 256 kB to 2 MB per call): the appends, one thread at a time,
+// then only copy, and the page faults (the larger part of the load's kernel time) are
+// taken by both threads. Advice only. A queued range whose column has been reallocated
+// meanwhile (a tag that outgrew its reservation) is freed memory or someone else's:
+// faulting it in writes no byte, so it costs time at worst.
+class PageQueue {
+ public:
+  // Queues [begin, end), whole pages only.
+  void Add(uintptr_t begin, uintptr_t end) {
+    constexpr uintptr_t kPage = 4096;
+    constexpr uintptr_t kChunk = uintptr_t{2} << 20;
+    begin = (begin + kPage - 1) & ~(kPage - 1);
+    end &= ~(kPage - 1);
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (; begin < end; begin += kChunk) ranges_.emplace_back(begin, std::min(end, begin + kChunk));
+  }
+  // Faults in one queued range; false if none is left.
+  bool FaultOne() {
+    std::pair<uintptr_t, uintptr_t> r;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (next_ == ranges_.size()) return false;
+      r = ranges_[next_++];
+    }
+#ifdef MADV_POPULATE_WRITE
+    ::madvise(reinterpret_cast<void*>(r.first), r.second - r.first, MADV_POPULATE_WRITE);
+#endif
+    return true;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::pair<uintptr_t, uintptr_t>> ranges_;
+  size_t next_ = 0;
+};
+
+// Rows of each column queued for faulting ahead of its end: enough for the parse threads
+// to fault them in well before the appends arrive, few enough that a tag which stops early
+// leaves little faulted in for nothing.
+constexpr size_t kRowsAhead = size_t{1} << 17;
+
+// Queues the pages of `column` from *queued (the end of what was queued for it before, or
+// 0) to kRowsAhead rows past its end, within its capacity, once that is 256 kB or more.
+template <typename T>
+void QueueColumnPages(const std::vector<T>& column, uintptr_t* queued, PageQueue* pages) {
+  const uintptr_t begin = reinterpret_cast<uintptr_t>(column.data());
+  const uintptr_t capacity_end = begin + column.capacity() * sizeof(T);
+  if (*queued < begin || *queued > capacity_end) *queued = begin;  // A new allocation.
+  const uintptr_t want =
+      begin + std::min(column.capacity(), column.size() + kRowsAhead) * sizeof(T);
+  if (want >= *queued + (uintptr_t{256} << 10) || (want == capacity_end && want > *queued)) {
+    pages->Add(*queued, want);
+    *queued = want;
+  }
 }
 
 std::atomic<int64_t> clean_path_loads{0};
@@ -769,109 +830,154 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
                                     const HeaderLine& header, const ColumnPlan& plan, int threads,
                                     const std::vector<Block>& cut, BlockProgress* progress,
                                     ReleaseBehind* release) {
-  if (!plan.text_fields.empty()) return std::nullopt;
+  if (!plan.text_fields.empty() || cut.empty()) return std::nullopt;
+  // The file's blocks cut again into clean-path blocks; a file block counts as parsed
+  // (progress) once all of its pieces are.
   std::vector<CleanBlock> blocks;
-  for (const Block& b : cut) {
-    CleanBlock c;
-    c.begin = b.begin;
-    c.end = b.end;
-    blocks.push_back(c);
-  }
-  // Pass 1.
-  ParallelFor(blocks.size(), threads, [&](size_t i) { CountBlock(file, plan, &blocks[i]); });
-  std::array<int64_t, 256> total{};
-  for (CleanBlock& b : blocks) {
-    if (b.irregular) return std::nullopt;
-    for (size_t s = 0; s < 256; ++s) {
-      const uint32_t n = b.rows[s];
-      b.rows[s] = static_cast<uint32_t>(total[s]);  // Now the block's first row index.
-      total[s] += n;
-      b.limit[s] = static_cast<uint32_t>(total[s]);
+  std::vector<std::atomic<uint32_t>> pieces_left(cut.size());
+  for (size_t c = 0; c < cut.size(); ++c) {
+    uint32_t pieces = 0;
+    for (size_t begin = cut[c].begin; begin < cut[c].end; ++pieces) {
+      size_t end = cut[c].end;
+      if (end - begin > 2 * kCleanBlockBytes) {
+        const char* from = file.data() + begin + kCleanBlockBytes;
+        const char* nl = static_cast<const char*>(
+            std::memchr(from, '\n', static_cast<size_t>(file.data() + end - from)));
+        if (nl != nullptr) end = static_cast<size_t>(nl - file.data()) + 1;
+      }
+      blocks.push_back(CleanBlock{begin, end, c});
+      begin = end;
     }
+    pieces_left[c].store(pieces);
   }
-  if (std::any_of(total.begin(), total.end(), [](int64_t n) { return n > UINT32_MAX; })) {
-    return std::nullopt;
-  }
-  if (std::all_of(total.begin(), total.end(), [](int64_t n) { return n == 0; })) {
-    return std::nullopt;  // Header only: the general loader words the error.
-  }
+  const size_t nq = plan.numeric_fields.size();
+  const size_t workers = std::min(static_cast<size_t>(ResolveThreads(threads)), blocks.size());
+  std::vector<int> staged_fields{plan.time_field};
+  staged_fields.insert(staged_fields.end(), plan.numeric_fields.begin(), plan.numeric_fields.end());
+  StagePool pool(workers + 2, staged_fields);
+
+  PageQueue pages;
+  // The tag columns, by sensor, appended to in block order by one thread at a time, and
+  // how far each column's pages are queued (t_s, line, then the quantities).
+  std::array<std::unique_ptr<Tag>, 256> tags;
+  std::array<std::vector<uintptr_t>, 256> queued_pages;
+  int64_t next_line = header.line_number + 1;  // First line of the next block to append.
+  // Appends block i's stage. A tag's columns are reserved, when the tag first appears,
+  // for the rows it would have if the rest of the file held them at this block's rate,
+  // 5% over (only the pages written are ever faulted in); a tag that outgrows that is
+  // reallocated (correct, only slower).
+  auto append = [&](size_t i, const BlockStage& stage) {
+    const CleanBlock& block = blocks[i];
+    for (const StagedTag& st : stage) {
+      std::unique_ptr<Tag>& slot = tags[static_cast<size_t>(st.sensor)];
+      if (slot == nullptr) {
+        slot = std::make_unique<Tag>();
+        Tag& tag = *slot;
+        tag.sensor = st.sensor;
+        const double rate =
+            static_cast<double>(st.rows) / static_cast<double>(block.end - block.begin);
+        const size_t expected =
+            static_cast<size_t>(rate * static_cast<double>(file.size() - block.begin));
+        const size_t rows = expected + expected / 20 + 64;
+        tag.t_s.reserve(rows);
+        tag.line.reserve(rows);
+        for (size_t q = 0; q < nq; ++q) {
+          Quantity quantity;
+          const int f = plan.numeric_fields[q];
+          quantity.name = plan.names[static_cast<size_t>(f)];
+          quantity.unit = plan.info[static_cast<size_t>(f)].unit;
+          quantity.origin = QuantityOrigin::kFile;
+          quantity.values.reserve(rows);
+          tag.quantities.push_back(std::move(quantity));
+        }
+      }
+      Tag& tag = *slot;
+      std::vector<uintptr_t>& queued = queued_pages[static_cast<size_t>(st.sensor)];
+      queued.resize(nq + 2);
+      QueueColumnPages(tag.t_s, &queued[0], &pages);
+      QueueColumnPages(tag.line, &queued[1], &pages);
+      for (size_t q = 0; q < nq; ++q) {
+        QueueColumnPages(tag.quantities[q].values, &queued[q + 2], &pages);
+      }
+      const size_t n = st.rows;
+      const double* t = st.values.data();
+      tag.t_s.insert(tag.t_s.end(), t, t + n);
+      for (size_t q = 0; q < nq; ++q) {
+        const double* v = st.values.data() + (q + 1) * st.room;
+        tag.quantities[q].values.insert(tag.quantities[q].values.end(), v, v + n);
+      }
+      const uint32_t first = static_cast<uint32_t>(next_line);
+      for (size_t r = 0; r < n; ++r) tag.line.push_back(first + st.line[r]);
+    }
+    next_line += stage.lines;
+  };
+
+  // Blocks parsed and waiting for their turn; the thread that finds block `next_append`
+  // parsed appends it and every parsed block after it, outside the lock.
+  std::mutex order_mutex;
+  std::vector<std::unique_ptr<BlockStage>> parsed(blocks.size());
+  size_t next_append = 0;
+  bool appending = false;
+  auto parsed_block = [&](size_t i, std::unique_ptr<BlockStage> stage) {
+    std::unique_lock<std::mutex> lock(order_mutex);
+    parsed[i] = std::move(stage);
+    if (appending) return;
+    appending = true;
+    while (next_append < blocks.size() && parsed[next_append] != nullptr) {
+      std::unique_ptr<BlockStage> next = std::move(parsed[next_append]);
+      lock.unlock();
+      append(next_append, *next);
+      pool.Give(std::move(next));
+      lock.lock();
+      ++next_append;
+    }
+    appending = false;
+  };
+
+  std::atomic<bool> clean{true};
+  std::atomic<size_t> next_block{0};
+  release->StartPass(BlockBegins(blocks), BlockEnds(blocks));
+  auto worker = [&] {
+    for (;;) {
+      while (pages.FaultOne()) {
+      }
+      std::unique_ptr<BlockStage> stage = pool.Take();
+      if (stage == nullptr) return;
+      const size_t i = next_block.fetch_add(1);
+      if (i >= blocks.size()) {
+        pool.Give(std::move(stage));
+        return;
+      }
+      if (!ParseCleanBlock(file, plan, blocks[i], stage.get())) {
+        clean.store(false);
+        pool.Fail();
+        return;
+      }
+      const size_t c = blocks[i].cut;
+      if (pieces_left[c].fetch_sub(1) == 1) progress->Parsed(c, cut[c].begin, cut[c].end);
+      release->BlockDone(i);
+      parsed_block(i, std::move(stage));
+    }
+  };
+  std::vector<std::thread> pool_threads;
+  for (size_t k = 1; k < workers; ++k) pool_threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool_threads) t.join();
+  if (!clean.load()) return std::nullopt;
+  METRO_CHECK(next_append == blocks.size());
+
   Session session;
   session.path = path;
   session.format = SessionFormat::kCsv;
   session.columns = plan.names;
-  std::vector<CleanColumns> columns(256);
-  const size_t nq = plan.numeric_fields.size();
-  for (int s = 1; s < 256; ++s) {
-    const size_t rows = static_cast<size_t>(total[static_cast<size_t>(s)]);
-    if (rows == 0) continue;
-    Tag tag;
-    tag.sensor = s;
-    auto size_column = [rows](auto& v) {
-      v.reserve(rows);  // Sized block by block in pass 2.
-      AdviseHugePages(v.data(), rows * sizeof(v[0]));
-    };
-    size_column(tag.t_s);
-    size_column(tag.line);
-    for (size_t q = 0; q < nq; ++q) {
-      Quantity quantity;
-      const int f = plan.numeric_fields[q];
-      quantity.name = plan.names[static_cast<size_t>(f)];
-      quantity.unit = plan.info[static_cast<size_t>(f)].unit;
-      quantity.origin = QuantityOrigin::kFile;
-      size_column(quantity.values);
-      tag.quantities.push_back(std::move(quantity));
-    }
-    tag.counts.frames = tag.counts.fresh = static_cast<int64_t>(rows);
-    session.rows += static_cast<int64_t>(rows);
-    session.tags.push_back(std::move(tag));
+  for (std::unique_ptr<Tag>& tag : tags) {
+    if (tag == nullptr) continue;
+    if (tag->t_s.size() > UINT32_MAX) return std::nullopt;
+    tag->counts.frames = tag->counts.fresh = static_cast<int64_t>(tag->t_s.size());
+    session.rows += tag->counts.fresh;
+    session.tags.push_back(std::move(*tag));
   }
-  for (Tag& tag : session.tags) {
-    CleanColumns& c = columns[static_cast<size_t>(tag.sensor)];
-    c.t_s = tag.t_s.data();
-    c.line = tag.line.data();
-    for (Quantity& q : tag.quantities) c.values.push_back(q.values.data());
-  }
-  // Pass 2.
-  std::vector<int64_t> first_line(blocks.size());
-  int64_t line = header.line_number + 1;
-  for (size_t i = 0; i < blocks.size(); ++i) {
-    first_line[i] = line;
-    line += blocks[i].lines;
-  }
-  // The tag columns are only reserved so far. Just before a block is parsed, every column
-  // is sized (zero-filled) up to the end of the block's rows: the zeroed lines are still in
-  // cache when the parser writes them (sizing all columns first zero-fills all of them,
-  // hundreds of MB, which the parser then fetches again from memory), and the page faults
-  // are taken by both threads. Sizes only grow and a block writes only below its limits, so a
-  // zero-fill never reaches rows already parsed. Elements are written through pointers taken above,
-  // which a resize within the reserved capacity leaves valid.
-  std::mutex size_mutex;
-  auto size_columns = [&](const CleanBlock& block) {
-    std::lock_guard<std::mutex> lock(size_mutex);
-    for (Tag& tag : session.tags) {
-      const size_t rows = block.limit[static_cast<size_t>(tag.sensor)];
-      if (tag.t_s.size() >= rows) continue;
-      tag.t_s.resize(rows);
-      tag.line.resize(rows);
-      for (Quantity& q : tag.quantities) q.values.resize(rows);
-    }
-  };
-  std::atomic<bool> clean{true};
-  release->StartPass(BlockBegins(blocks), BlockEnds(blocks));
-  ParallelFor(blocks.size(), threads, [&](size_t i) {
-    if (!clean.load(std::memory_order_relaxed)) return;
-    size_columns(blocks[i]);
-    if (ParseCleanBlock(file, plan, first_line[i], columns, &blocks[i])) {
-      progress->Parsed(i, blocks[i].begin, blocks[i].end);
-      release->BlockDone(i);
-    } else {
-      clean.store(false);
-    }
-  });
-  if (!clean.load()) return std::nullopt;
-  for (const Tag& tag : session.tags) {
-    METRO_CHECK(tag.t_s.size() == static_cast<size_t>(tag.counts.fresh));  // Last block's limits.
-  }
+  if (session.tags.empty()) return std::nullopt;  // Header only: the general loader words it.
   // Time must increase strictly per tag; if it does not, the general loader reports (or,
   // with --lenient, rejects) the rows in file order.
   ParallelFor(session.tags.size(), threads, [&](size_t i) {

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -300,6 +301,47 @@ TEST_CASE("The clean-file path equals the general loader", "[io][csv]") {
     REQUIRE(fast.ok());
     REQUIRE(general.ok());
     REQUIRE(fast.value().tags.size() == 5);
+    CheckSameTags(fast.value(), general.value());
+  }
+}
+
+TEST_CASE("Tags whose row rates change through the file load as the general loader does",
+          "[io][csv]") {
+  // The clean path reserves a tag's columns from its rate in the block where it first
+  // appears. Here tag 2 appears only after ~2 MB, tag 3 has one row in the first block and
+  // then most of the rows (it outgrows its reservation many times over), and tag 1 stops
+  // half way: every column must still hold exactly the general loader's values and lines.
+  std::string text = "t_s,sensor,pitch_deg,temp_c\n";
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> accel(-2.0, 2.0);
+  std::array<int, 4> count{};
+  const int rows = 160000;  // ~5 MB: ten blocks of the clean path.
+  for (int i = 0; i < rows; ++i) {
+    int sensor = 1;
+    if (i == 3) {
+      sensor = 3;
+    } else if (i > 50000 && i % 4 == 0) {
+      sensor = 2;
+    } else if (i > rows / 2) {
+      sensor = 3;
+    }
+    const double t = 0.01 * count[static_cast<size_t>(sensor)]++;
+    text += fmt::format("{:.6f},{},{:.6f},{:.3f}\n", t, sensor, accel(rng), 25.0 + 0.001 * (i % 7));
+  }
+  TempFile file(text);
+  for (const int threads : {1, 2}) {
+    LoadOptions options;
+    options.threads = threads;
+    const int64_t clean_before = internal::CleanPathLoads();
+    auto fast = internal::LoadSessionCsv(file.path(), options, true);
+    CHECK(internal::CleanPathLoads() == clean_before + 1);  // It took the clean path.
+    auto general = internal::LoadSessionCsv(file.path(), options, false);
+    REQUIRE(fast.ok());
+    REQUIRE(general.ok());
+    REQUIRE(fast.value().tags.size() == 3);
+    for (size_t k = 0; k < 3; ++k) {
+      CHECK(fast.value().tags[k].size() == static_cast<size_t>(count[k + 1]));
+    }
     CheckSameTags(fast.value(), general.value());
   }
 }
