@@ -9,6 +9,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "io/decimal_rows.hpp"
 #include "io/session_internal.hpp"
@@ -257,6 +258,28 @@ void CheckSameTags(const Session& a, const Session& b) {
   }
 }
 
+// Loads `path` with 1 and 2 threads through the clean path, which it must take, and
+// through the general loader: both must give `tags` tags, identical (CheckSameTags).
+// Returns the clean path's sessions.
+std::vector<Session> CheckCleanEqualsGeneral(const std::string& path, size_t tags) {
+  std::vector<Session> sessions;
+  for (const int threads : {1, 2}) {
+    LoadOptions options;
+    options.threads = threads;
+    const int64_t clean_before = internal::CleanPathLoads();
+    auto fast = internal::LoadSessionCsv(path, options, true);
+    CHECK(internal::CleanPathLoads() == clean_before + 1);  // It took the clean path.
+    auto general = internal::LoadSessionCsv(path, options, false);
+    CHECK(internal::CleanPathLoads() == clean_before + 1);
+    REQUIRE(fast.ok());
+    REQUIRE(general.ok());
+    REQUIRE(fast.value().tags.size() == tags);
+    CheckSameTags(fast.value(), general.value());
+    sessions.push_back(std::move(fast).value());
+  }
+  return sessions;
+}
+
 // A logger's file (LF, fixed decimals per column, signs), as the vectorized reader takes
 // it, with one comment line that sends its run to the scalar parser: the clean path and
 // the general loader (fast_float on every field) must agree bit for bit.
@@ -270,39 +293,16 @@ TEST_CASE("Logger rows read four fields at a time equal the general loader", "[i
                         accel(rng), -250.0 + 500.0 * (i % 997) / 997.0, -0.0004 * (i % 5));
   }
   TempFile file(text);
-  for (const int threads : {1, 2}) {
-    LoadOptions options;
-    options.threads = threads;
-    const int64_t clean_before = internal::CleanPathLoads();
-    const int64_t runs_before = internal::DecimalRowsRead();
-    auto fast = internal::LoadSessionCsv(file.path(), options, true);
-    CHECK(internal::CleanPathLoads() == clean_before + 1);  // It took the clean path.
-    if (internal::DecimalRowsAvailable()) {
-      CHECK(internal::DecimalRowsRead() > runs_before);  // It read runs four fields at a time.
-    }
-    auto general = internal::LoadSessionCsv(file.path(), options, false);
-    REQUIRE(fast.ok());
-    REQUIRE(general.ok());
-    REQUIRE(fast.value().tags.size() == 3);
-    CheckSameTags(fast.value(), general.value());
+  const int64_t runs_before = internal::DecimalRowsRead();
+  CheckCleanEqualsGeneral(file.path(), 3);
+  if (internal::DecimalRowsAvailable()) {
+    CHECK(internal::DecimalRowsRead() > runs_before);  // It read runs four fields at a time.
   }
 }
 
 TEST_CASE("The clean-file path equals the general loader", "[io][csv]") {
   TempFile file(CleanMultiBlockText(90000));  // ~3 MB: several blocks.
-  for (const int threads : {1, 2}) {
-    LoadOptions options;
-    options.threads = threads;
-    const int64_t clean_before = internal::CleanPathLoads();
-    auto fast = internal::LoadSessionCsv(file.path(), options, true);
-    CHECK(internal::CleanPathLoads() == clean_before + 1);  // It took the clean path.
-    auto general = internal::LoadSessionCsv(file.path(), options, false);
-    CHECK(internal::CleanPathLoads() == clean_before + 1);
-    REQUIRE(fast.ok());
-    REQUIRE(general.ok());
-    REQUIRE(fast.value().tags.size() == 5);
-    CheckSameTags(fast.value(), general.value());
-  }
+  CheckCleanEqualsGeneral(file.path(), 5);
 }
 
 TEST_CASE("Tags whose row rates change through the file load as the general loader does",
@@ -329,20 +329,10 @@ TEST_CASE("Tags whose row rates change through the file load as the general load
     text += fmt::format("{:.6f},{},{:.6f},{:.3f}\n", t, sensor, accel(rng), 25.0 + 0.001 * (i % 7));
   }
   TempFile file(text);
-  for (const int threads : {1, 2}) {
-    LoadOptions options;
-    options.threads = threads;
-    const int64_t clean_before = internal::CleanPathLoads();
-    auto fast = internal::LoadSessionCsv(file.path(), options, true);
-    CHECK(internal::CleanPathLoads() == clean_before + 1);  // It took the clean path.
-    auto general = internal::LoadSessionCsv(file.path(), options, false);
-    REQUIRE(fast.ok());
-    REQUIRE(general.ok());
-    REQUIRE(fast.value().tags.size() == 3);
+  for (const Session& session : CheckCleanEqualsGeneral(file.path(), 3)) {
     for (size_t k = 0; k < 3; ++k) {
-      CHECK(fast.value().tags[k].size() == static_cast<size_t>(count[k + 1]));
+      CHECK(session.tags[k].size() == static_cast<size_t>(count[k + 1]));
     }
-    CheckSameTags(fast.value(), general.value());
   }
 }
 
