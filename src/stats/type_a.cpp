@@ -48,9 +48,10 @@ inline void Load4(const double* p, Lanes4* v) { std::memcpy(v, p, sizeof(Lanes4)
 inline double AddLanes(const Lanes4& s) { return (s[0] + s[1]) + (s[2] + s[3]); }
 
 // The sanitizer build keeps the default path only, so CI runs the tests on both paths (the
-// plain build takes AVX2 on a CPU that has it).
+// plain build takes AVX2 on a CPU that has it). Under ThreadSanitizer the clones' resolver,
+// instrumented, would run before the sanitizer's runtime starts (a crash at load).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
-    !defined(__SANITIZE_ADDRESS__)
+    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 #define METRO_TYPE_A_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define METRO_TYPE_A_CLONES
