@@ -936,7 +936,9 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
 
   std::atomic<bool> clean{true};
   std::atomic<size_t> next_block{0};
-  release->StartPass(BlockBegins(blocks), BlockEnds(blocks));
+  // The mapping's pages are released file block by file block (8 MB), not piece by
+  // piece: each release is a TLB shootdown on every core.
+  release->StartPass(BlockBegins(cut), BlockEnds(cut));
   auto worker = [&] {
     for (;;) {
       while (pages.FaultOne()) {
@@ -954,8 +956,10 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
         return;
       }
       const size_t c = blocks[i].cut;
-      if (pieces_left[c].fetch_sub(1) == 1) progress->Parsed(c, cut[c].begin, cut[c].end);
-      release->BlockDone(i);
+      if (pieces_left[c].fetch_sub(1) == 1) {
+        progress->Parsed(c, cut[c].begin, cut[c].end);
+        release->BlockDone(c);
+      }
       parsed_block(i, std::move(stage));
     }
   };
