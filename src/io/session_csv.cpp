@@ -9,7 +9,10 @@
 // into row-major buffers, then one sequential pass moves the rows, in file order, into the
 // per-tag columns, checking time order per tag, so strict and lenient loads behave exactly
 // as a one-thread reader would, whatever the thread count, and every error names its line.
-// The mapping's pages are released behind pass 2 (or the general loader) and the SHA-256
+// No buffer or column asks for transparent huge pages: on a VM whose host takes back free
+// huge pages (virtio-balloon free page reporting), a cold huge page faults in at ~1 GB/s,
+// and both loaders measured faster without them (docs/benchmarks.md, session 8).
+// The mapping's pages are released behind the clean path (or the general loader) and the SHA-256
 // hasher, whichever is slower (ReleaseBehind), so the file's pages give way to the parsed
 // numbers and peak memory stays near the larger of the two (about 1.2 x the file for a
 // clean session), not file + numbers, however fast the hasher runs.
@@ -113,7 +116,6 @@ struct MmapAllocator {
     const size_t bytes = std::max<size_t>(n * sizeof(T), 1);
     void* p = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) throw std::bad_alloc();
-    AdviseHugePages(p, bytes);
     return static_cast<T*>(p);
   }
   void deallocate(T* p, size_t n) { ::munmap(p, std::max<size_t>(n * sizeof(T), 1)); }
@@ -1080,8 +1082,6 @@ Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
     const size_t rows = static_cast<size_t>(per_sensor[s]);
     tb->tag.t_s.reserve(rows);
     tb->tag.line.reserve(rows);
-    AdviseHugePages(tb->tag.t_s.data(), rows * sizeof(double));
-    AdviseHugePages(tb->tag.line.data(), rows * sizeof(uint32_t));
     for (size_t q = 0; q < nq; ++q) {
       Quantity quantity;
       const int f = plan.numeric_fields[q];
@@ -1089,7 +1089,6 @@ Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
       quantity.unit = plan.info[f].unit;
       quantity.origin = QuantityOrigin::kFile;
       quantity.values.reserve(rows);
-      AdviseHugePages(quantity.values.data(), rows * sizeof(double));
       tb->tag.quantities.push_back(std::move(quantity));
     }
     tb->text.resize(nt);
