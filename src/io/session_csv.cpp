@@ -542,8 +542,9 @@ struct CleanBlock {
   size_t cut = 0;  // The file's block (CutBlocks) this one is part of.
 };
 
-// Bytes per clean-path block: its stage (about as many bytes of numbers) stays in the
-// core's L2 cache until it is appended.
+// Bytes per clean-path block. Its stage holds about as many bytes of numbers, half a 1 MB
+// L2; with the block's text and the columns it is appended to it does not stay there
+// whole, but 128 kB to 8 MB blocks measured no faster (docs/benchmarks.md, session 8).
 constexpr size_t kCleanBlockBytes = size_t{512} << 10;
 
 // End of a line's last field at `q`: "\n", "\r\n" or the end of the block. Returns the
