@@ -865,6 +865,9 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
   std::array<std::unique_ptr<Tag>, 256> tags;
   std::array<std::vector<uintptr_t>, 256> queued_pages;
   int64_t next_line = header.line_number + 1;  // First line of the next block to append.
+  // False once a block's rows do not fit the clean path (a line neither parser accepts,
+  // or a time that does not increase strictly within its tag).
+  std::atomic<bool> clean{true};
   // Appends block i's stage. A tag's columns are reserved, when the tag first appears,
   // for the rows it would have if the rest of the file held them at this block's rate,
   // 5% over (only the pages written are ever faulted in); a tag that outgrows that is
@@ -904,6 +907,19 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
       }
       const size_t n = st.rows;
       const double* t = st.values.data();
+      // Time must increase strictly per tag; if it does not, the general loader reports
+      // (or, with --lenient, rejects) the rows in file order. Checked here, while the
+      // stage is in cache, rather than in another pass over the columns.
+      double last_t = tag.t_s.empty() ? -std::numeric_limits<double>::infinity() : tag.t_s.back();
+      bool increasing = true;
+      for (size_t r = 0; r < n; ++r) {
+        increasing &= t[r] > last_t;
+        last_t = t[r];
+      }
+      if (!increasing) {
+        clean.store(false);
+        return;
+      }
       tag.t_s.insert(tag.t_s.end(), t, t + n);
       for (size_t q = 0; q < nq; ++q) {
         const double* v = st.values.data() + (q + 1) * st.room;
@@ -930,6 +946,10 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
       std::unique_ptr<BlockStage> next = std::move(parsed[next_append]);
       lock.unlock();
       append(next_append, *next);
+      if (!clean.load()) {
+        pool.Fail();
+        return;  // `appending` stays set: nothing more is appended.
+      }
       pool.Give(std::move(next));
       lock.lock();
       ++next_append;
@@ -937,7 +957,6 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
     appending = false;
   };
 
-  std::atomic<bool> clean{true};
   std::atomic<size_t> next_block{0};
   // The mapping's pages are released file block by file block (8 MB), not piece by
   // piece: each release is a TLB shootdown on every core.
@@ -985,18 +1004,6 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
     session.tags.push_back(std::move(*tag));
   }
   if (session.tags.empty()) return std::nullopt;  // Header only: the general loader words it.
-  // Time must increase strictly per tag; if it does not, the general loader reports (or,
-  // with --lenient, rejects) the rows in file order.
-  ParallelFor(session.tags.size(), threads, [&](size_t i) {
-    const std::vector<double>& t = session.tags[i].t_s;
-    for (size_t k = 1; k < t.size(); ++k) {
-      if (!(t[k] > t[k - 1])) {
-        clean.store(false);
-        return;
-      }
-    }
-  });
-  if (!clean.load()) return std::nullopt;
   clean_path_loads.fetch_add(1);
   return session;
 }
