@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/progress.hpp"
+#include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "output.hpp"
@@ -58,7 +59,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
   // Load (bytes), Type A, Allan, Monte Carlo (trials): one line each on a terminal.
   TerminalProgress progress(stderr, CliProgressOptions());
   options.progress = &progress;
-  const SessionAnalysis analysis = AnalyzeSession(o.session, options);
+  SessionAnalysis analysis = AnalyzeSession(o.session, options);
   progress.Finish();
   if (!analysis.ok) {
     PrintError(analysis.error);
@@ -89,14 +90,16 @@ int RunAnalyze(const AnalyzeOptions& o) {
   if (o.output.empty()) {
     std::fwrite(json.data(), 1, json.size(), stdout);
     std::fflush(stdout);
-    return write_html();
+  } else {
+    if (Status s = WriteFileAtomically(o.output, json); !s.ok()) {
+      PrintError(s.error());
+      return kExitFailed;
+    }
+    std::fwrite(analysis.table.data(), 1, analysis.table.size(), stdout);
   }
-  if (Status s = WriteFileAtomically(o.output, json); !s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
-  }
-  std::fwrite(analysis.table.data(), 1, analysis.table.size(), stdout);
-  return write_html();
+  const int exit_code = write_html();
+  ReleaseSessionSamples(&analysis.session, o.threads);
+  return exit_code;
 }
 
 }  // namespace

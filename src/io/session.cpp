@@ -3,6 +3,7 @@
 #include <fast_float/fast_float.h>
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include <queue>
 #include <thread>
 
+#include "core/parallel.hpp"
 #include "io/session_internal.hpp"
 #include "metro/core/angles.hpp"
 #include "metro/core/file.hpp"
@@ -69,6 +71,12 @@ const Tag* Session::FindTag(int sensor) const {
   return nullptr;
 }
 
+void ReleaseSessionSamples(Session* session, int threads) {
+  internal::ReturnColumnPages(session, threads);
+  session->tags.clear();
+  session->tags.shrink_to_fit();
+}
+
 bool LoadOptions::IsValid(std::string* why) const {
   if (!(frame_period_s > 0.0) || !std::isfinite(frame_period_s)) {
     if (why) *why = "frame_period_s must be a positive number of seconds";
@@ -82,6 +90,36 @@ bool LoadOptions::IsValid(std::string* why) const {
 }
 
 namespace internal {
+
+void ReturnColumnPages(Session* session, int threads) {
+#if defined(__linux__) && defined(MADV_DONTNEED)
+  // The whole pages inside each column; the allocator's bookkeeping just before and after
+  // a column's values is never on one of them.
+  std::vector<std::pair<uintptr_t, uintptr_t>> pages;
+  auto add = [&pages](const auto& column) {
+    constexpr uintptr_t kPage = 4096;
+    const uintptr_t begin = reinterpret_cast<uintptr_t>(column.data());
+    const uintptr_t lo = (begin + kPage - 1) & ~(kPage - 1);
+    const uintptr_t hi = (begin + column.capacity() * sizeof(column[0])) & ~(kPage - 1);
+    if (hi >= lo + (uintptr_t{1} << 20)) pages.emplace_back(lo, hi);
+  };
+  for (const Tag& tag : session->tags) {
+    add(tag.t_s);
+    add(tag.line);
+    for (const Quantity& q : tag.quantities) add(q.values);
+  }
+  // munmap needs the address space's lock exclusively, so frees in several threads would
+  // still run one after another; MADV_DONTNEED needs it only shared, so the threads return
+  // the pages side by side.
+  ParallelFor(pages.size(), threads, [&pages](size_t i) {
+    ::madvise(reinterpret_cast<void*>(pages[i].first), pages[i].second - pages[i].first,
+              MADV_DONTNEED);
+  });
+#else
+  (void)session;
+  (void)threads;
+#endif
+}
 
 void AddTextOrUnknownColumn(const std::string& name, bool unknown, const std::string& unit,
                             std::vector<std::string> values, Tag* tag) {

@@ -28,4 +28,10 @@ void AddTextOrUnknownColumn(const std::string& name, bool unknown, const std::st
 // quaternion and none of the three angles.
 void DeriveEulerIfAbsent(Tag* tag);
 
+// Returns the whole pages inside every column of 1 MB or more to the system, on up to
+// `threads` threads (MADV_DONTNEED, Linux; elsewhere nothing). The columns keep their sizes,
+// but the values on those pages then read as zeros: for columns about to be destroyed
+// (ReleaseSessionSamples).
+void ReturnColumnPages(Session* session, int threads);
+
 }  // namespace metro::internal
