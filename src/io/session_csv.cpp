@@ -926,7 +926,12 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
         tag.quantities[q].values.insert(tag.quantities[q].values.end(), v, v + n);
       }
       const uint32_t first = static_cast<uint32_t>(next_line);
-      for (size_t r = 0; r < n; ++r) tag.line.push_back(first + st.line[r]);
+      // Block-relative lines copied, then made absolute where they now lie (in cache; a
+      // loop of push_backs checks the capacity per row).
+      const size_t at = tag.line.size();
+      tag.line.insert(tag.line.end(), st.line.data(), st.line.data() + n);
+      uint32_t* lines = tag.line.data() + at;
+      for (size_t r = 0; r < n; ++r) lines[r] += first;
     }
     next_line += stage.lines;
   };
