@@ -7,6 +7,8 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <exception>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -19,18 +21,69 @@ inline int ResolveThreads(int threads) {
 }
 
 // Runs fn(i) for every i in [0, n), items handed out one at a time to up to
-// ResolveThreads(threads) threads; the calling thread is one of them. fn must not throw.
+// ResolveThreads(threads) threads; the calling thread is one of them. If fn throws (say
+// std::bad_alloc on a session too large for the machine), no further items are handed out
+// and, once every thread has finished, the first exception is rethrown in the calling
+// thread: an exception leaving a std::thread would end the process.
 template <typename Fn>
 void ParallelFor(size_t n, int threads, Fn&& fn) {
   std::atomic<size_t> next{0};
+  std::mutex failure_mutex;
+  std::exception_ptr failure;
   auto worker = [&] {
-    for (size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i);
+    try {
+      for (size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i);
+    } catch (...) {
+      next.store(n);
+      std::lock_guard<std::mutex> lock(failure_mutex);
+      if (failure == nullptr) failure = std::current_exception();
+    }
   };
   const size_t workers = std::min(static_cast<size_t>(ResolveThreads(threads)), n);
   std::vector<std::thread> pool;
-  for (size_t k = 1; k < workers; ++k) pool.emplace_back(worker);
+  try {
+    for (size_t k = 1; k < workers; ++k) pool.emplace_back(worker);
+  } catch (...) {
+    // No thread to be had (std::system_error): the threads that started, and this one,
+    // do the work.
+  }
   worker();
   for (std::thread& t : pool) t.join();
+  if (failure != nullptr) std::rethrow_exception(failure);
+}
+
+// Runs `beside` on a second thread while the calling thread runs `here`, and returns once
+// both are done. An exception from either is rethrown here after both have finished (the
+// one from `here` first), never left to end the process from a thread; if no thread can be
+// started, `beside` runs after `here` on this thread.
+template <typename Beside, typename Here>
+void RunBeside(Beside&& beside, Here&& here) {
+  std::exception_ptr beside_failure;
+  auto run_beside = [&] {
+    try {
+      beside();
+    } catch (...) {
+      beside_failure = std::current_exception();
+    }
+  };
+  std::thread thread;
+  try {
+    thread = std::thread(run_beside);
+  } catch (...) {
+  }
+  std::exception_ptr here_failure;
+  try {
+    here();
+  } catch (...) {
+    here_failure = std::current_exception();
+  }
+  if (thread.joinable()) {
+    thread.join();
+  } else {
+    run_beside();
+  }
+  if (here_failure != nullptr) std::rethrow_exception(here_failure);
+  if (beside_failure != nullptr) std::rethrow_exception(beside_failure);
 }
 
 // Asks for transparent huge pages on the whole 2 MiB pages inside [p, p + bytes) (Linux
