@@ -1,6 +1,8 @@
 // calibrate: accelerometer and gyroscope calibration with the uncertainty of every constant.
 // A dispatch table: the work is done by the metro library (metro/calibration/).
 #include <CLI/CLI.hpp>
+#include <cstdio>
+#include <new>
 
 #include "commands.hpp"
 
@@ -20,6 +22,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? 0 : app_ns::kExitUsage;
+  } catch (const std::bad_alloc&) {
+    // The loaders turn this into an error naming the file; anything else that runs out.
+    std::fputs("error: out of memory\n", stderr);
+    return app_ns::kExitFailed;
   }
   return exit_code;
 }

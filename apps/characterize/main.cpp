@@ -1,6 +1,8 @@
 // characterize: GUM Type A/Type B evaluation, Monte Carlo and noise analysis of IMU tag
 // sessions. A dispatch table: the work is done by the metro library.
 #include <CLI/CLI.hpp>
+#include <cstdio>
+#include <new>
 
 #include "budget_command.hpp"
 #include "commands.hpp"
@@ -23,6 +25,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? 0 : metro::apps::kExitUsage;
+  } catch (const std::bad_alloc&) {
+    // The loaders turn this into an error naming the file; anything else that runs out.
+    std::fputs("error: out of memory\n", stderr);
+    return metro::apps::kExitFailed;
   }
   return exit_code;
 }

@@ -4,8 +4,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <thread>
+#include <new>
 
+#include "core/parallel.hpp"
 #include "io/session_internal.hpp"
 #include "metro/core/file.hpp"
 
@@ -75,6 +76,9 @@ Result<ImuTkFile> ReadImuTkFile(const std::string& path, const LoadOptions& opti
       }
       continue;
     }
+    if (line_number > internal::kMaxLineNumber) {
+      return internal::TooManyLinesError(path, line_number);
+    }
     out.t_s.push_back(v[0]);
     out.line.push_back(static_cast<uint32_t>(line_number));
     for (int k = 0; k < 3; ++k) out.xyz[k].push_back(v[k + 1]);
@@ -83,15 +87,12 @@ Result<ImuTkFile> ReadImuTkFile(const std::string& path, const LoadOptions& opti
   return out;
 }
 
-}  // namespace
-
-Result<Session> LoadImuTk(const std::string& acc_path, const std::string& gyro_path,
-                          const LoadOptions& options) {
+Result<Session> LoadImuTkOrThrow(const std::string& acc_path, const std::string& gyro_path,
+                                 const LoadOptions& options) {
   Result<ImuTkFile> acc = MakeError("unset");
   Result<ImuTkFile> gyro = MakeError("unset");
-  std::thread reader([&] { acc = ReadImuTkFile(acc_path, options); });
-  gyro = ReadImuTkFile(gyro_path, options);
-  reader.join();
+  internal::RunBeside([&] { acc = ReadImuTkFile(acc_path, options); },
+                      [&] { gyro = ReadImuTkFile(gyro_path, options); });
   if (!acc.ok()) return acc.error();
   if (!gyro.ok()) return gyro.error();
   const ImuTkFile& a = acc.value();
@@ -141,6 +142,17 @@ Result<Session> LoadImuTk(const std::string& acc_path, const std::string& gyro_p
   if (!gyro_hash.ok()) return gyro_hash.error();
   session.sha256 = acc_hash.value() + "+" + gyro_hash.value();
   return session;
+}
+
+}  // namespace
+
+Result<Session> LoadImuTk(const std::string& acc_path, const std::string& gyro_path,
+                          const LoadOptions& options) {
+  try {
+    return LoadImuTkOrThrow(acc_path, gyro_path, options);
+  } catch (const std::bad_alloc&) {
+    return internal::OutOfMemoryError(acc_path + "+" + gyro_path);
+  }
 }
 
 }  // namespace metro

@@ -186,6 +186,9 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
       }
     }
     b.tag.t_s.push_back(static_cast<double>(frame) * options.frame_period_s);
+    if (line_number > internal::kMaxLineNumber) {
+      return internal::TooManyLinesError(path, line_number);
+    }
     b.tag.line.push_back(static_cast<uint32_t>(line_number));
     b.tag.quantities[0].values.push_back(q.w);
     b.tag.quantities[1].values.push_back(q.x);

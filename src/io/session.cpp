@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <iterator>
+#include <new>
 #include <queue>
 #include <thread>
 
@@ -90,6 +91,19 @@ bool LoadOptions::IsValid(std::string* why) const {
 }
 
 namespace internal {
+
+Error TooManyLinesError(const std::string& path, int64_t line) {
+  return MakeError(path, line,
+                   fmt::format("more than {} lines: metro keeps each observation's source line "
+                               "as a 32-bit number; split the file",
+                               kMaxLineNumber));
+}
+
+Error OutOfMemoryError(const std::string& path) {
+  return MakeError(path, 0,
+                   "out of memory while loading: the session's columns (8 bytes per number) "
+                   "do not fit in this machine's memory; split the file by time or by tag");
+}
 
 void ReturnColumnPages(Session* session, int threads) {
 #if defined(__linux__) && defined(MADV_DONTNEED)
@@ -231,7 +245,9 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
                    "header or receiver lines");
 }
 
-Result<Session> LoadSession(const std::string& path, const LoadOptions& options) {
+namespace {
+
+Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(path, 0, "invalid load options: " + why);
   SessionFormat format = options.format;
@@ -249,9 +265,8 @@ Result<Session> LoadSession(const std::string& path, const LoadOptions& options)
   } else {
     // Hash the bytes on a second thread while the parser works.
     Result<std::string> digest = std::string();
-    std::thread hasher([&] { digest = Sha256File(path); });
-    session = internal::LoadReceiverCapture(path, options);
-    hasher.join();
+    internal::RunBeside([&] { digest = Sha256File(path); },
+                        [&] { session = internal::LoadReceiverCapture(path, options); });
     if (session.ok() && !digest.ok()) return digest.error();
     if (session.ok()) session.value().sha256 = digest.value();
   }
@@ -261,6 +276,16 @@ Result<Session> LoadSession(const std::string& path, const LoadOptions& options)
     for (Tag& tag : out.tags) internal::DeriveEulerIfAbsent(&tag);
   }
   return out;
+}
+
+}  // namespace
+
+Result<Session> LoadSession(const std::string& path, const LoadOptions& options) {
+  try {
+    return LoadSessionOrThrow(path, options);
+  } catch (const std::bad_alloc&) {
+    return internal::OutOfMemoryError(path);
+  }
 }
 
 std::string FormatSessionCsv(const Session& session, bool include_derived) {

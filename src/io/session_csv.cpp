@@ -30,6 +30,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <map>
@@ -874,6 +875,10 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
   // reallocated (correct, only slower).
   auto append = [&](size_t i, const BlockStage& stage) {
     const CleanBlock& block = blocks[i];
+    if (next_line + stage.lines - 1 > kMaxLineNumber) {
+      clean.store(false);  // The general loader reports the line beyond 32 bits.
+      return;
+    }
     for (const StagedTag& st : stage) {
       std::unique_ptr<Tag>& slot = tags[static_cast<size_t>(st.sensor)];
       if (slot == nullptr) {
@@ -884,17 +889,26 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
             static_cast<double>(st.rows) / static_cast<double>(block.end - block.begin);
         const size_t expected =
             static_cast<size_t>(rate * static_cast<double>(file.size() - block.begin));
-        const size_t rows = expected + expected / 20 + 64;
-        tag.t_s.reserve(rows);
-        tag.line.reserve(rows);
         for (size_t q = 0; q < nq; ++q) {
           Quantity quantity;
           const int f = plan.numeric_fields[q];
           quantity.name = plan.names[static_cast<size_t>(f)];
           quantity.unit = plan.info[static_cast<size_t>(f)].unit;
           quantity.origin = QuantityOrigin::kFile;
-          quantity.values.reserve(rows);
           tag.quantities.push_back(std::move(quantity));
+        }
+        auto reserve = [&tag](size_t rows) {
+          tag.t_s.reserve(rows);
+          tag.line.reserve(rows);
+          for (Quantity& quantity : tag.quantities) quantity.values.reserve(rows);
+        };
+        try {
+          reserve(expected + expected / 20 + 64);
+        } catch (const std::bad_alloc&) {
+          // The guess can exceed what the system lets one allocation have (a tag dense in
+          // its first block, rare after it, on a file of tens of GB); the columns then grow
+          // as they fill. If they cannot, the load fails with a clear error.
+          reserve(2 * st.rows);
         }
       }
       Tag& tag = *slot;
@@ -990,10 +1004,31 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
       parsed_block(i, std::move(stage));
     }
   };
+  // An exception in a worker (std::bad_alloc: the session does not fit in memory) stops
+  // the others and is rethrown here once they have finished.
+  std::mutex failure_mutex;
+  std::exception_ptr failure;
+  auto guarded_worker = [&] {
+    try {
+      worker();
+    } catch (...) {
+      {
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (failure == nullptr) failure = std::current_exception();
+      }
+      clean.store(false);
+      pool.Fail();
+    }
+  };
   std::vector<std::thread> pool_threads;
-  for (size_t k = 1; k < workers; ++k) pool_threads.emplace_back(worker);
-  worker();
+  try {
+    for (size_t k = 1; k < workers; ++k) pool_threads.emplace_back(guarded_worker);
+  } catch (...) {
+    // No more threads to be had: the ones that started, and this one, do the work.
+  }
+  guarded_worker();
   for (std::thread& t : pool_threads) t.join();
+  if (failure != nullptr) std::rethrow_exception(failure);
   if (!clean.load()) return std::nullopt;
   METRO_CHECK(next_append == blocks.size());
 
@@ -1153,6 +1188,7 @@ Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
         if (Status s = reject(line, plan.time_field + 1, message); !s.ok()) return s.error();
         continue;
       }
+      if (line > kMaxLineNumber) return TooManyLinesError(path, line);
       ++session.rows;
       tb.last_t = t;
       tb.last_line = static_cast<uint32_t>(line);
@@ -1206,17 +1242,16 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   ReleaseBehind release([&file](size_t begin, size_t end) { file.ReleaseBelow(begin, end); }, hash,
                         std::max(file.size() / 4, kMinReleaseGapBytes));
   std::string digest;
-  std::thread hasher;
-  if (hash) {
-    hasher = std::thread([&] {
-      digest = Sha256Hex(std::string_view(file.data(), file.size()), kHashChunkBytes,
-                         [&release](size_t hashed) { release.Hashed(hashed); });
-    });
-  }
-  Result<Session> session = LoadMappedCsv(path, file, options, allow_clean_path, &release);
-  if (hasher.joinable()) hasher.join();
-  if (session.ok() && hash) session.value().sha256 = std::move(digest);
-  return session;
+  std::optional<Result<Session>> session;
+  RunBeside(
+      [&] {
+        if (!hash) return;
+        digest = Sha256Hex(std::string_view(file.data(), file.size()), kHashChunkBytes,
+                           [&release](size_t hashed) { release.Hashed(hashed); });
+      },
+      [&] { session = LoadMappedCsv(path, file, options, allow_clean_path, &release); });
+  if (session->ok() && hash) session->value().sha256 = std::move(digest);
+  return *std::move(session);
 }
 
 }  // namespace metro::internal

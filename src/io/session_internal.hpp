@@ -1,6 +1,7 @@
 // Private declarations shared by the session loaders.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,15 @@ void AddTextOrUnknownColumn(const std::string& name, bool unknown, const std::st
 // Adds yaw_deg, pitch_deg, roll_deg (origin kDerived) from qw..qz when the tag has the
 // quaternion and none of the three angles.
 void DeriveEulerIfAbsent(Tag* tag);
+
+// Tag::line keeps source lines as uint32_t: the error for a line beyond that, from every
+// loader (a file of more than 4,294,967,295 lines, some 40 GB at least).
+constexpr int64_t kMaxLineNumber = UINT32_MAX;
+Error TooManyLinesError(const std::string& path, int64_t line);
+
+// The error a loader returns when a session's columns do not fit in memory (it catches
+// std::bad_alloc, from any of its threads).
+Error OutOfMemoryError(const std::string& path);
 
 // Returns the whole pages inside every column of 1 MB or more to the system, on up to
 // `threads` threads (MADV_DONTNEED, Linux; elsewhere nothing). The columns keep their sizes,

@@ -1,14 +1,21 @@
-// Freeing a loaded session's columns at the end of a run (ReleaseSessionSamples).
+// Sessions and memory: freeing a loaded session's columns at the end of a run
+// (ReleaseSessionSamples), and loading a session that does not fit in the memory allowed.
+#include <fmt/format.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cstdint>
 #include <cstdio>
+#include <random>
+#include <string>
 #include <vector>
 
 #include "io/session_internal.hpp"
 #include "metro/io/session.hpp"
 #include "metro/io/session_io.hpp"
+#include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
@@ -92,6 +99,95 @@ TEST_CASE("A session's large columns go back to the system, small ones are left 
 
   ReleaseSessionSamples(&session, 2);
   CHECK(session.tags.empty());
+}
+
+// The outcome of loading `path` in a child process whose address space is limited to its
+// size at the fork plus `extra_bytes`: 'L' loaded, 'M' the out-of-memory error naming the
+// file, 'E' another error naming the file (the file could not be mapped), 'X' any other
+// error, 'T' an exception out of LoadSession, 'C' a crash (a signal, std::terminate).
+char LoadUnderLimit(const std::string& path, const LoadOptions& options, int64_t extra_bytes) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    long long size_pages = 0;
+    std::FILE* f = std::fopen("/proc/self/statm", "r");
+    if (f == nullptr || std::fscanf(f, "%lld", &size_pages) != 1) _exit(3);
+    std::fclose(f);
+    const rlim_t limit = static_cast<rlim_t>(size_pages * sysconf(_SC_PAGESIZE) + extra_bytes);
+    const rlimit as{limit, limit};
+    if (setrlimit(RLIMIT_AS, &as) != 0) _exit(3);
+    try {
+      const Result<Session> session = LoadSession(path, options);
+      if (session.ok()) _exit(0);
+      const Error& e = session.error();
+      if (e.file != path) _exit(4);
+      _exit(e.message.find("out of memory") != std::string::npos ? 1 : 2);
+    } catch (...) {
+      _exit(5);  // Never back into the test framework in the child.
+    }
+  }
+  int status = 0;
+  if (pid < 0 || waitpid(pid, &status, 0) != pid) return '?';
+  if (!WIFEXITED(status)) return 'C';
+  switch (WEXITSTATUS(status)) {
+    case 0:
+      return 'L';
+    case 1:
+      return 'M';
+    case 2:
+      return 'E';
+    case 4:
+      return 'X';
+    case 5:
+      return 'T';
+    default:
+      return '?';
+  }
+}
+
+TEST_CASE("A session too large for the memory allowed fails with a clear error, never a crash",
+          "[io][memory]") {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || !defined(__linux__)
+  WARN("not run here: the sanitizers reserve terabytes of address space (RLIMIT_AS)");
+#else
+  // 12 MB of short rows (3.4 x as many bytes of columns as of text, so that the columns
+  // dominate whatever free heap the test process has), 15 tags; and the same with one
+  // malformed row, which only the general loader (--lenient) takes.
+  std::string text = "t_s,sensor,ax_lsb,ay_lsb,az_lsb,gx_lsb,gy_lsb,gz_lsb,temp_c\n";
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> lsb(-9, 9);
+  for (int i = 0; i < 600000; ++i) {
+    text += fmt::format("{},{},{},{},{},{},{},{},{}\n", i / 15, 1 + i % 15, lsb(rng), lsb(rng),
+                        lsb(rng), lsb(rng), lsb(rng), lsb(rng), 25 + i % 3);
+  }
+  testing::TempFile clean(text);
+  testing::TempFile bad(text + "not,a,row\n");
+  // From less than the file's own size to plenty: every load either succeeds or returns an
+  // error naming the file, the out-of-memory one once the file is mapped; the loosest loads.
+  // (The limits are only roughly the memory left: the process at the fork has free heap,
+  // and a second thread's allocations go to its own arena.)
+  struct Case {
+    const char* name;
+    const std::string* path;
+    bool lenient;
+    int threads;
+  };
+  const std::string clean_path = clean.path(), bad_path = bad.path();
+  for (const Case& c : {Case{"clean path, 1 thread", &clean_path, false, 1},
+                        Case{"clean path, 2 threads", &clean_path, false, 2},
+                        Case{"general loader, 2 threads", &bad_path, true, 2}}) {
+    LoadOptions options;
+    options.lenient = c.lenient;
+    options.threads = c.threads;
+    std::string outcomes;
+    for (int64_t mb : {0, 8, 16, 20, 24, 28, 32, 40, 48, 64, 96, 160, 256}) {
+      outcomes += LoadUnderLimit(*c.path, options, mb << 20);
+    }
+    INFO(c.name << ": outcomes by limit, +0 to +256 MB: " << outcomes);
+    CHECK(outcomes.find_first_not_of("LME") == std::string::npos);
+    CHECK(outcomes.find('M') != std::string::npos);
+    CHECK(outcomes.back() == 'L');
+  }
+#endif
 }
 
 }  // namespace
