@@ -45,28 +45,25 @@ TEST_CASE("An exception in ParallelFor's items reaches the caller and stops the 
 
 TEST_CASE("RunBeside runs both, then rethrows the caller's exception first", "[core][parallel]") {
   std::atomic<int> beside{0}, here{0};
-  RunBeside([&] { beside = 1; }, [&] { here = 1; });
+  auto run = [&](bool beside_throws, bool here_throws) {
+    beside = here = 0;
+    RunBeside(
+        [&] {
+          beside = 1;
+          if (beside_throws) throw std::runtime_error("beside");
+        },
+        [&] {
+          here = 1;
+          if (here_throws) throw std::runtime_error("here");
+        });
+  };
+  CHECK_NOTHROW(run(false, false));
   CHECK((beside == 1 && here == 1));
-  beside = here = 0;
-  CHECK_THROWS_WITH(RunBeside(
-                        [&] {
-                          beside = 1;
-                          throw std::runtime_error("beside");
-                        },
-                        [&] { here = 1; }),
-                    "beside");
+  CHECK_THROWS_WITH(run(true, false), "beside");
   CHECK((beside == 1 && here == 1));
-  beside = here = 0;
-  CHECK_THROWS_WITH(RunBeside(
-                        [&] {
-                          beside = 1;
-                          throw std::runtime_error("beside");
-                        },
-                        [&] {
-                          here = 1;
-                          throw std::runtime_error("here");
-                        }),
-                    "here");
+  CHECK_THROWS_WITH(run(false, true), "here");
+  CHECK((beside == 1 && here == 1));
+  CHECK_THROWS_WITH(run(true, true), "here");
   CHECK((beside == 1 && here == 1));
 }
 
