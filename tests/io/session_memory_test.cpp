@@ -75,13 +75,14 @@ TEST_CASE("A session's large columns go back to the system, small ones are left 
   internal::ReturnColumnPages(&session, 2);
   const int64_t after = ResidentBytes();
   if (before >= 0) {
-    // Everything inside went; nothing else this test holds is that large.
-    CHECK(before - after >= inside - (int64_t{1} << 20));
+    // Everything inside went (give or take what the process did meanwhile: a sanitizer's
+    // bookkeeping, the list of pages); nothing else this test holds is that large.
+    CHECK(before - after >= inside / 10 * 9);
   } else {
     WARN("no /proc/self/statm: resident memory not checked");
   }
   // The columns keep their sizes; the returned pages read as zeros (Linux), the small tag
-  // and the values before a column's first whole page are untouched.
+  // and the values outside a column's whole pages are untouched.
 #ifdef __linux__
   for (size_t k = 0; k < 2; ++k) {
     const Tag& tag = session.tags[k];
@@ -89,7 +90,13 @@ TEST_CASE("A session's large columns go back to the system, small ones are left 
     CHECK(tag.quantities[0].values[kLarge / 2] == 0.0);
     CHECK(tag.t_s[kLarge / 2] == 0.0);
     CHECK(tag.line[kLarge / 2] == 0u);
-    CHECK(tag.quantities[1].values[0] == 1.5);
+    const std::vector<double>& v = tag.quantities[1].values;
+    const uintptr_t begin = reinterpret_cast<uintptr_t>(v.data());
+    const size_t head = ((4096 - begin % 4096) % 4096) / sizeof(double);  // Before page 1.
+    const size_t tail = (begin + v.size() * sizeof(double)) % 4096 / sizeof(double);
+    if (head > 0) CHECK(v[head - 1] == 1.5);
+    if (head < v.size()) CHECK(v[head] == 0.0);
+    if (tail > 0) CHECK(v[v.size() - tail] == 1.5);
   }
 #endif
   const Tag& small = session.tags[2];
