@@ -604,6 +604,10 @@ class BlockStage {
   const StagedTag* end() const { return tags_.data() + used_; }
 
   uint32_t lines = 0;  // Lines in the block, blank and comment lines included.
+  // DecimalRows's separators and values for one run: scratch space kept with the stage so
+  // that it is allocated (and zero-filled) once per stage, not once per block.
+  std::vector<uint32_t> run_separators;
+  std::vector<double> run_values;
 
  private:
   void Grow(StagedTag* tag) const {
@@ -704,8 +708,8 @@ bool ParseCleanBlock(const MappedFile& file, const ColumnPlan& plan, const Clean
   // DecimalRows loads the 16 bytes before each field's end: the run must not start at the
   // very beginning of the mapping (a block never does unless the header is tiny).
   const bool vector = DecimalRowsAvailable() && block.begin >= 16;
-  std::vector<uint32_t> separators;
-  std::vector<double> values;
+  std::vector<uint32_t>& separators = stage->run_separators;
+  std::vector<double>& values = stage->run_values;
   bool ok = true;
   while (p < end && ok) {
     const char* run_end = end;
