@@ -47,15 +47,15 @@ Result<Session> LoadSession(const std::string& path, const LoadOptions& options 
 Result<Session> LoadImuTk(const std::string& acc_path, const std::string& gyro_path,
                           const LoadOptions& options = {});
 
-// Renders a session as canonical session.csv text: t_s, sensor, then every quantity and
-// text column in the order of the first tag's columns; rows ordered by time, then sensor.
-// Derived columns are written only if `include_derived`.
 // Frees every tag of `session` (leaving `tags` empty), returning the pages of its columns to
 // the system on up to `threads` threads (0 = all cores). For the end of a run on a large
 // session: destroyed the usual way, hundreds of MB of columns keep one core busy for tens of
 // milliseconds (docs/benchmarks.md, session 9) while the others wait.
 void ReleaseSessionSamples(Session* session, int threads = 0);
 
+// Renders a session as canonical session.csv text: t_s, sensor, then every quantity and
+// text column in the order of the first tag's columns; rows ordered by time, then sensor.
+// Derived columns are written only if `include_derived`.
 std::string FormatSessionCsv(const Session& session, bool include_derived = true);
 
 }  // namespace metro
