@@ -20,36 +20,48 @@ inline int ResolveThreads(int threads) {
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
 
-// Runs fn(i) for every i in [0, n), items handed out one at a time to up to
-// ResolveThreads(threads) threads; the calling thread is one of them. If fn throws (say
-// std::bad_alloc on a session too large for the machine), no further items are handed out
-// and, once every thread has finished, the first exception is rethrown in the calling
-// thread: an exception leaving a std::thread would end the process.
-template <typename Fn>
-void ParallelFor(size_t n, int threads, Fn&& fn) {
-  std::atomic<size_t> next{0};
+// Runs fn() on `threads` threads at once (at least 1; the calling thread is one of them) and
+// returns once every one has finished. If fn throws (say std::bad_alloc on a session too
+// large for the machine), `on_failure()` runs in the throwing thread, to stop the others,
+// and the first exception is rethrown in the calling thread once every thread has finished:
+// an exception leaving a std::thread would end the process. A thread that cannot be
+// started leaves its share of the work to the others.
+template <typename Fn, typename OnFailure>
+void RunOnThreads(size_t threads, Fn&& fn, OnFailure&& on_failure) {
   std::mutex failure_mutex;
   std::exception_ptr failure;
-  auto worker = [&] {
+  auto guarded = [&] {
     try {
-      for (size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i);
+      fn();
     } catch (...) {
-      next.store(n);
+      on_failure();
       std::lock_guard<std::mutex> lock(failure_mutex);
       if (failure == nullptr) failure = std::current_exception();
     }
   };
-  const size_t workers = std::min(static_cast<size_t>(ResolveThreads(threads)), n);
   std::vector<std::thread> pool;
   try {
-    for (size_t k = 1; k < workers; ++k) pool.emplace_back(worker);
+    for (size_t k = 1; k < threads; ++k) pool.emplace_back(guarded);
   } catch (...) {
-    // No thread to be had (std::system_error): the threads that started, and this one,
-    // do the work.
+    // No more threads to be had (std::system_error).
   }
-  worker();
+  guarded();
   for (std::thread& t : pool) t.join();
   if (failure != nullptr) std::rethrow_exception(failure);
+}
+
+// Runs fn(i) for every i in [0, n), items handed out one at a time to up to
+// ResolveThreads(threads) threads (RunOnThreads); once an item throws, no further items
+// are handed out, and the exception reaches the caller.
+template <typename Fn>
+void ParallelFor(size_t n, int threads, Fn&& fn) {
+  std::atomic<size_t> next{0};
+  RunOnThreads(
+      std::min(static_cast<size_t>(ResolveThreads(threads)), n),
+      [&] {
+        for (size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i);
+      },
+      [&] { next.store(n); });
 }
 
 // Runs `beside` on a second thread while the calling thread runs `here`, and returns once

@@ -14,7 +14,7 @@
 // and both loaders measured faster without them (docs/benchmarks.md, session 8).
 // The mapping's pages are released behind the clean path (or the general loader) and the SHA-256
 // hasher, whichever is slower (ReleaseBehind), so the file's pages give way to the parsed
-// numbers and peak memory stays near the larger of the two (about 1.2 x the file for a
+// numbers and peak memory stays near the larger of the two (about 1.3 x the file for a
 // clean session), not file + numbers, however fast the hasher runs.
 #include <fast_float/fast_float.h>
 #include <fcntl.h>
@@ -30,7 +30,6 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstring>
-#include <exception>
 #include <functional>
 #include <limits>
 #include <map>
@@ -1010,29 +1009,10 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
   };
   // An exception in a worker (std::bad_alloc: the session does not fit in memory) stops
   // the others and is rethrown here once they have finished.
-  std::mutex failure_mutex;
-  std::exception_ptr failure;
-  auto guarded_worker = [&] {
-    try {
-      worker();
-    } catch (...) {
-      {
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (failure == nullptr) failure = std::current_exception();
-      }
-      clean.store(false);
-      pool.Fail();
-    }
-  };
-  std::vector<std::thread> pool_threads;
-  try {
-    for (size_t k = 1; k < workers; ++k) pool_threads.emplace_back(guarded_worker);
-  } catch (...) {
-    // No more threads to be had: the ones that started, and this one, do the work.
-  }
-  guarded_worker();
-  for (std::thread& t : pool_threads) t.join();
-  if (failure != nullptr) std::rethrow_exception(failure);
+  RunOnThreads(workers, worker, [&] {
+    clean.store(false);
+    pool.Fail();
+  });
   if (!clean.load()) return std::nullopt;
   METRO_CHECK(next_append == blocks.size());
 
