@@ -76,6 +76,7 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
   int previous_sensor = 256;
   int64_t line_number = 0;
   size_t pos = 0;
+  bool seen_line = false;  // A line that is neither blank nor a comment.
 
   auto reject = [&](int64_t column, const std::string& message) -> Status {
     if (!options.lenient) return MakeError(path, line_number, column, message);
@@ -103,12 +104,27 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.empty() || line.front() == '#') continue;
+    const bool first_line = !seen_line;
+    seen_line = true;
+    // A capture starts wherever the serial port was opened, usually mid-line: a first line
+    // that is the tail of a receiver line is skipped (even in strict mode), with a note.
+    if (first_line && line.size() < static_cast<size_t>(kReceiverLineHexChars) &&
+        std::all_of(line.begin(), line.end(), [](char c) { return HexValue(c) >= 0; })) {
+      session.input.notes.push_back(fmt::format(
+          "line {}: {} hex characters, the tail of a receiver line (the port was opened "
+          "mid-line): skipped",
+          line_number, line.size()));
+      continue;
+    }
 
     if (line.size() != static_cast<size_t>(kReceiverLineHexChars)) {
       const std::string message = fmt::format(
           "receiver line has {} characters: expected {} hex characters (sensor, NewData flag, "
-          "{} payload bytes)",
-          line.size(), kReceiverLineHexChars, kReceiverPayloadBytes);
+          "{} payload bytes){}",
+          line.size(), kReceiverLineHexChars, kReceiverPayloadBytes,
+          first_line ? "; the first line of a capture may be a terminal program's banner: "
+                       "remove it, or pass --lenient to skip it"
+                     : "");
       if (Status s = reject(0, message); !s.ok()) return s.error();
       continue;
     }

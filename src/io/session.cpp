@@ -15,26 +15,90 @@
 #include <thread>
 
 #include "core/parallel.hpp"
+#include "io/csv_plan.hpp"
 #include "io/session_internal.hpp"
+#include "io/stdin_input.hpp"
 #include "metro/core/angles.hpp"
 #include "metro/core/file.hpp"
+#include "metro/io/columns.hpp"
 #include "metro/io/receiver.hpp"
 #include "metro/io/session_io.hpp"
 
 namespace metro {
 
+namespace {
+
+struct FormatName {
+  SessionFormat format;
+  const char* name;
+};
+constexpr FormatName kFormatNames[] = {
+    {SessionFormat::kAuto, "auto"},          {SessionFormat::kCsv, "csv"},
+    {SessionFormat::kReceiver, "receiver"},  {SessionFormat::kImuTk, "imutk"},
+    {SessionFormat::kEuroc, "euroc"},        {SessionFormat::kRaw, "raw"},
+    {SessionFormat::kPhyphox, "phyphox"},    {SessionFormat::kSensorLogger, "sensorlogger"},
+};
+
+}  // namespace
+
 const char* SessionFormatName(SessionFormat format) {
-  switch (format) {
-    case SessionFormat::kAuto:
-      return "auto";
-    case SessionFormat::kCsv:
-      return "csv";
-    case SessionFormat::kReceiver:
-      return "receiver";
-    case SessionFormat::kImuTk:
-      return "imutk";
+  for (const FormatName& f : kFormatNames) {
+    if (f.format == format) return f.name;
   }
   return "?";
+}
+
+bool ParseSessionFormat(std::string_view name, SessionFormat* format) {
+  for (const FormatName& f : kFormatNames) {
+    if (name == f.name) {
+      *format = f.format;
+      return true;
+    }
+  }
+  return false;
+}
+
+Result<ColumnMapping> ParseColumnMapping(std::string_view spec) {
+  const size_t eq = spec.rfind('=');
+  if (eq == std::string_view::npos || eq == 0) {
+    return MakeError(fmt::format("--column '{}': expected SRC=DST, e.g. 'gyro_x (deg/s)=gx_dps' "
+                                 "(or SRC= to leave the column out)",
+                                 spec));
+  }
+  ColumnMapping m{std::string(spec.substr(0, eq)), std::string(spec.substr(eq + 1))};
+  if (!m.canonical.empty() && !IsValidColumnName(m.canonical)) {
+    return MakeError(fmt::format("--column '{}': '{}' is not a canonical column name "
+                                 "([a-z][a-z0-9_]* with its unit, e.g. gx_dps; docs/formats.md)",
+                                 spec, m.canonical));
+  }
+  return m;
+}
+
+Result<std::vector<ColumnMapping>> LoadColumnMappings(const std::string& path) {
+  auto text = ReadFile(path);
+  if (!text.ok()) return text.error();
+  std::vector<ColumnMapping> out;
+  size_t pos = 0;
+  int64_t line = 0;
+  const std::string& t = text.value();
+  while (pos < t.size()) {
+    size_t nl = t.find('\n', pos);
+    if (nl == std::string::npos) nl = t.size();
+    std::string_view l(t.data() + pos, nl - pos);
+    pos = nl + 1;
+    ++line;
+    if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
+    while (!l.empty() && (l.front() == ' ' || l.front() == '\t')) l.remove_prefix(1);
+    if (l.empty() || l.front() == '#') continue;
+    auto m = ParseColumnMapping(l);
+    if (!m.ok()) {
+      return MakeError(path, line, 1,
+                       fmt::format("expected one SRC=DST mapping per line: {}",
+                                   m.error().message));
+    }
+    out.push_back(std::move(m).value());
+  }
+  return out;
 }
 
 const Quantity* Tag::Find(std::string_view name) const {
@@ -53,6 +117,7 @@ void Tag::KeepRows(size_t begin, size_t end) {
     v.erase(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(begin));
   };
   keep(t_s);
+  keep(t_ns);
   keep(line);
   for (Quantity& q : quantities) keep(q.values);
   for (TextColumn& c : text_columns) keep(c.values);
@@ -72,10 +137,16 @@ const Tag* Session::FindTag(int sensor) const {
   return nullptr;
 }
 
-void ReleaseSessionSamples(Session* session, int threads) {
-  internal::ReturnColumnPages(session, threads);
-  session->tags.clear();
-  session->tags.shrink_to_fit();
+Session::~Session() {
+  // Below this the pages go as fast on one core as the threads would take to start.
+  constexpr size_t kParallelReleaseBytes = size_t{64} << 20;
+  size_t bytes = 0;
+  for (const Tag& tag : tags) {
+    bytes += tag.t_s.capacity() * sizeof(double) + tag.t_ns.capacity() * sizeof(int64_t) +
+             tag.line.capacity() * sizeof(uint32_t);
+    for (const Quantity& q : tag.quantities) bytes += q.values.capacity() * sizeof(double);
+  }
+  if (bytes >= kParallelReleaseBytes) internal::ReturnColumnPages(this, 0);
 }
 
 bool LoadOptions::IsValid(std::string* why) const {
@@ -119,6 +190,7 @@ void ReturnColumnPages(Session* session, int threads) {
   };
   for (const Tag& tag : session->tags) {
     add(tag.t_s);
+    add(tag.t_ns);
     add(tag.line);
     for (const Quantity& q : tag.quantities) add(q.values);
   }
@@ -211,6 +283,7 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
   ::close(fd);
   if (got < 0) return MakeError(path, 0, std::string("cannot read: ") + std::strerror(errno));
   head.resize(static_cast<size_t>(got));
+  if (head.compare(0, 3, "\xEF\xBB\xBF") == 0) head.erase(0, 3);  // UTF-8 byte-order mark.
   if (head.empty()) {
     return MakeError(path, 0, "empty file: expected a session.csv or a receiver capture");
   }
@@ -228,21 +301,32 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
                      "binary data (control bytes): expected a text session.csv or "
                      "a receiver capture");
   }
+  // The first meaningful lines: a receiver capture when most of them are receiver lines
+  // (a cut first line or a terminal program's banner does not defeat it).
+  size_t meaningful = 0;
+  size_t receiver = 0;
   size_t pos = 0;
-  while (pos < head.size()) {
+  while (pos < head.size() && meaningful < 20) {
     size_t nl = head.find('\n', pos);
-    if (nl == std::string::npos) nl = head.size();
+    if (nl == std::string::npos) {
+      if (pos > 0 && meaningful > 0) break;  // A line cut by the 64 kB head.
+      nl = head.size();
+    }
     std::string_view line(head.data() + pos, nl - pos);
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     while (!line.empty() && (line.front() == ' ' || line.front() == '\t')) line.remove_prefix(1);
-    if (!line.empty() && line.front() != '#') {
-      return LooksLikeReceiverLine(line) ? SessionFormat::kReceiver : SessionFormat::kCsv;
-    }
     pos = nl + 1;
+    if (line.empty() || line.front() == '#') continue;
+    ++meaningful;
+    if (LooksLikeReceiverLine(line)) ++receiver;
   }
-  return MakeError(path, 0,
-                   "no data: only blank or comment lines; expected a session.csv "
-                   "header or receiver lines");
+  if (meaningful == 0) {
+    return MakeError(path, 0,
+                     "no data: only blank or comment lines; expected a session.csv "
+                     "header or receiver lines");
+  }
+  if (2 * receiver > meaningful) return SessionFormat::kReceiver;
+  return internal::DetectNamedFormat(path, head);
 }
 
 namespace {
@@ -260,8 +344,9 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
     return MakeError(path, 0, "imu_tk input is two files: use LoadImuTk(acc, gyro)");
   }
   Result<Session> session = MakeError(path, 0, "not loaded");
-  if (format == SessionFormat::kCsv) {
-    session = internal::LoadSessionCsv(path, options, /*allow_clean_path=*/true, /*hash=*/true);
+  if (format != SessionFormat::kReceiver) {
+    session = internal::LoadSessionCsv(path, options, /*allow_clean_path=*/true, /*hash=*/true,
+                                       format);
   } else {
     // Hash the bytes on a second thread while the parser works.
     Result<std::string> digest = std::string();
@@ -282,7 +367,19 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
 
 Result<Session> LoadSession(const std::string& path, const LoadOptions& options) {
   try {
-    return LoadSessionOrThrow(path, options);
+    if (!internal::IsStdinPath(path)) return LoadSessionOrThrow(path, options);
+    // `-`: standard input, copied whole first (the loaders map their input); the session
+    // and its errors name it "<stdin>", never the copy's path.
+    auto copy = internal::CopyStdinToFile();
+    if (!copy.ok()) return copy.error();
+    Result<Session> session = LoadSessionOrThrow(copy.value().path(), options);
+    if (session.ok()) {
+      session.value().path = internal::kStdinDisplayName;
+      return session;
+    }
+    Error error = session.error();
+    if (error.file == copy.value().path()) error.file = internal::kStdinDisplayName;
+    return error;
   } catch (const std::bad_alloc&) {
     return internal::OutOfMemoryError(path);
   }
@@ -303,10 +400,15 @@ std::string FormatSessionCsv(const Session& session, bool include_derived) {
       if (std::find(text.begin(), text.end(), c.name) == text.end()) text.push_back(c.name);
     }
   }
+  // Exact integer times stay exact: t_ns when every tag has them.
+  const bool exact_time = !session.tags.empty() &&
+                          std::all_of(session.tags.begin(), session.tags.end(), [](const Tag& t) {
+                            return t.t_ns.size() == t.t_s.size();
+                          });
   std::string out;
   out.reserve(64 * 1024);
   auto it = std::back_inserter(out);
-  fmt::format_to(it, "t_s,sensor");
+  fmt::format_to(it, exact_time ? "t_ns,sensor" : "t_s,sensor");
   for (const auto& n : numeric) fmt::format_to(it, ",{}", n);
   for (const auto& n : text) fmt::format_to(it, ",{}", n);
   out += '\n';
@@ -345,7 +447,11 @@ std::string FormatSessionCsv(const Session& session, bool include_derived) {
     heads.pop();
     const Tag& tag = session.tags[k];
     const size_t i = cursor[k]++;
-    fmt::format_to(it, "{},{}", tag.t_s[i], tag.sensor);
+    if (exact_time) {
+      fmt::format_to(it, "{},{}", tag.t_ns[i], tag.sensor);
+    } else {
+      fmt::format_to(it, "{},{}", tag.t_s[i], tag.sensor);
+    }
     for (const auto* values : columns[k].numeric) {
       out += ',';
       if (values != nullptr && std::isfinite((*values)[i])) fmt::format_to(it, "{}", (*values)[i]);

@@ -13,9 +13,12 @@ namespace metro::internal {
 
 // `allow_clean_path` = false forces the general (sequential-distribution) loader; the
 // result is the same either way (tests compare the two). `hash`: also sets the session's
-// sha256 (hashed on a second thread from the parser's own mapping of the file).
+// sha256 (hashed on a second thread from the parser's own mapping of the file). `format`:
+// kCsv, a named CSV-like format (kEuroc, kRaw, kPhyphox, kSensorLogger), or kAuto to detect
+// a named format from the header.
 Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& options,
-                               bool allow_clean_path = true, bool hash = false);
+                               bool allow_clean_path = true, bool hash = false,
+                               SessionFormat format = SessionFormat::kAuto);
 // How many loads the clean-file path has completed in this process (for tests).
 int64_t CleanPathLoads();
 Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& options);
@@ -41,7 +44,7 @@ Error OutOfMemoryError(const std::string& path);
 // Returns the whole pages inside every column of 1 MB or more to the system, on up to
 // `threads` threads (MADV_DONTNEED, Linux; elsewhere nothing). The columns keep their sizes,
 // but the values on those pages then read as zeros: for columns about to be destroyed
-// (ReleaseSessionSamples).
+// (Session::~Session).
 void ReturnColumnPages(Session* session, int threads);
 
 }  // namespace metro::internal

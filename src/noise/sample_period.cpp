@@ -36,29 +36,16 @@ bool SamplePeriodOptions::IsValid(std::string* why) const {
   return true;
 }
 
-Result<SamplePeriod> EstimateSamplePeriod(const std::vector<double>& t_s,
-                                          const std::vector<uint32_t>& line,
-                                          const SamplePeriodOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) return MakeError("sample period options: " + why);
-  if (t_s.size() != line.size()) {
-    return MakeError(
-        fmt::format("sample period: {} timestamps but {} line numbers", t_s.size(), line.size()));
-  }
-  if (t_s.size() < 3) {
-    return MakeError(fmt::format("sample period: {} timestamps are too few (at least 3 are needed)",
-                                 t_s.size()));
-  }
-  for (size_t i = 0; i < t_s.size(); ++i) {
-    if (!std::isfinite(t_s[i])) {
-      return MakeError("", line[i], fmt::format("timestamp {} is not finite", t_s[i]));
-    }
-  }
-  const size_t n = t_s.size();
-  std::vector<double> dt(n - 1);
+namespace {
+
+// The estimate from the intervals dt[i] = t[i + 1] - t[i] [s] and the whole span
+// t[n - 1] - t[0] [s]; `line` has one entry per timestamp.
+Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
+                                   const std::vector<uint32_t>& line,
+                                   const SamplePeriodOptions& options) {
+  const size_t n = dt.size() + 1;
   std::vector<uint32_t> reset_lines;
   for (size_t i = 0; i + 1 < n; ++i) {
-    dt[i] = t_s[i + 1] - t_s[i];
     if (!(dt[i] > 0.0)) reset_lines.push_back(line[i + 1]);
   }
   if (!reset_lines.empty()) {
@@ -81,7 +68,7 @@ Result<SamplePeriod> EstimateSamplePeriod(const std::vector<double>& t_s,
   period.tau0_s = median;
   period.rate_hz = 1.0 / median;
   period.n_samples = static_cast<int64_t>(n);
-  period.mean_dt_s = (t_s.back() - t_s.front()) / static_cast<double>(n - 1);
+  period.mean_dt_s = span_s / static_cast<double>(n - 1);
   std::vector<uint32_t> gap_lines;
   double sum_sq = 0.0;
   int64_t regular = 0;
@@ -122,6 +109,57 @@ Result<SamplePeriod> EstimateSamplePeriod(const std::vector<double>& t_s,
                     period.jitter_rms_s, options.max_relative_jitter, median));
   }
   return period;
+}
+
+Status CheckSizes(size_t times, size_t lines) {
+  if (times != lines) {
+    return MakeError(
+        fmt::format("sample period: {} timestamps but {} line numbers", times, lines));
+  }
+  if (times < 3) {
+    return MakeError(fmt::format("sample period: {} timestamps are too few (at least 3 are needed)",
+                                 times));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Result<SamplePeriod> EstimateSamplePeriod(const std::vector<double>& t_s,
+                                          const std::vector<uint32_t>& line,
+                                          const SamplePeriodOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("sample period options: " + why);
+  if (Status s = CheckSizes(t_s.size(), line.size()); !s.ok()) return s.error();
+  for (size_t i = 0; i < t_s.size(); ++i) {
+    if (!std::isfinite(t_s[i])) {
+      return MakeError("", line[i], fmt::format("timestamp {} is not finite", t_s[i]));
+    }
+  }
+  std::vector<double> dt(t_s.size() - 1);
+  for (size_t i = 0; i + 1 < t_s.size(); ++i) dt[i] = t_s[i + 1] - t_s[i];
+  return FromIntervals(dt, t_s.back() - t_s.front(), line, options);
+}
+
+Result<SamplePeriod> EstimateSamplePeriodNs(const std::vector<int64_t>& t_ns,
+                                            const std::vector<uint32_t>& line,
+                                            const SamplePeriodOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("sample period options: " + why);
+  if (Status s = CheckSizes(t_ns.size(), line.size()); !s.ok()) return s.error();
+  // Differences of integers, exact (saturated where they would overflow: a time reset that
+  // large is refused as a reset either way); each converted once, correctly rounded.
+  std::vector<double> dt(t_ns.size() - 1);
+  for (size_t i = 0; i + 1 < t_ns.size(); ++i) {
+    int64_t d = 0;
+    if (__builtin_sub_overflow(t_ns[i + 1], t_ns[i], &d)) {
+      d = t_ns[i + 1] > t_ns[i] ? INT64_MAX : INT64_MIN;
+    }
+    dt[i] = static_cast<double>(d) / 1e9;
+  }
+  int64_t span = 0;
+  if (__builtin_sub_overflow(t_ns.back(), t_ns.front(), &span)) span = INT64_MAX;
+  return FromIntervals(dt, static_cast<double>(span) / 1e9, line, options);
 }
 
 }  // namespace metro

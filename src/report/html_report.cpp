@@ -546,10 +546,29 @@ std::optional<Session> ReloadReportSession(const ordered_json& report, const std
       continue;
     }
     LoadOptions load;
-    const std::string format = JsonString(input, "format");
-    load.format = format == "receiver" ? SessionFormat::kReceiver
-                  : format == "csv"    ? SessionFormat::kCsv
-                                       : SessionFormat::kAuto;
+    if (!ParseSessionFormat(JsonString(input, "format"), &load.format)) {
+      load.format = SessionFormat::kAuto;
+    }
+    // The same columns, time and scales as the report's load (type_a_report's "input").
+    if (input.contains("mapping") && input["mapping"].is_array()) {
+      for (const auto& m : input["mapping"]) {
+        if (m.is_object() && m.value("source", ordered_json()).is_string() &&
+            m.value("canonical", ordered_json()).is_string()) {
+          load.column_map.push_back({m["source"].get<std::string>(),
+                                     m["canonical"].get<std::string>()});
+        }
+      }
+    }
+    if (input.contains("time") && input["time"].is_object()) {
+      const double rate_hz = JsonNumber(input["time"], "rate_hz");
+      if (std::isfinite(rate_hz) && rate_hz > 0.0) load.rate_hz = rate_hz;
+    }
+    if (input.contains("raw_full_scale") && input["raw_full_scale"].is_object()) {
+      const double accel = JsonNumber(input["raw_full_scale"], "accel_fs_g");
+      const double gyro = JsonNumber(input["raw_full_scale"], "gyro_fs_dps");
+      if (std::isfinite(accel) && accel > 0.0) load.accel_fs_g = accel;
+      if (std::isfinite(gyro) && gyro > 0.0) load.gyro_fs_dps = gyro;
+    }
     load.lenient = JsonNumber(input, "rejected_rows") > 0;
     const double period = JsonNumber(input, "frame_period_s");
     if (std::isfinite(period) && period > 0.0) load.frame_period_s = period;

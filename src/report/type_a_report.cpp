@@ -24,6 +24,31 @@ nlohmann::ordered_json OptionalNumber(const std::optional<double>& v) {
   return v ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
 }
 
+// What the loader applied to a text file (docs/report-schema.md, "input"): enough to read
+// the file again the same way (html_report's reload) and to see that nothing was guessed.
+void AddInputDialect(const InputDialect& d, nlohmann::ordered_json* input) {
+  using json = nlohmann::ordered_json;
+  (*input)["dialect"] = {{"delimiter", std::string(1, d.delimiter)},
+                         {"decimal_point", std::string(1, d.decimal_point)},
+                         {"line_ends", d.line_ends},
+                         {"bom", d.bom},
+                         {"quoted", d.quoted},
+                         {"header_in_comment", d.header_in_comment}};
+  json mapping = json::array();
+  for (const ColumnMapping& m : d.mapping) {
+    mapping.push_back({{"source", m.source}, {"canonical", m.canonical}});
+  }
+  (*input)["mapping"] = mapping;
+  json time = {{"source", d.time_source}, {"unit", d.time_unit}, {"integer", d.time_integer}};
+  if (d.time_integer) time["origin_ns"] = d.time_origin_ns;
+  if (d.rate_hz > 0.0) time["rate_hz"] = d.rate_hz;
+  if (d.time_resolution_s > 0.0) time["resolution_s"] = d.time_resolution_s;
+  (*input)["time"] = time;
+  if (d.accel_fs_g > 0.0 || d.gyro_fs_dps > 0.0) {
+    (*input)["raw_full_scale"] = {{"accel_fs_g", d.accel_fs_g}, {"gyro_fs_dps", d.gyro_fs_dps}};
+  }
+}
+
 }  // namespace
 
 nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionTypeA& result,
@@ -49,7 +74,11 @@ nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionType
   input["unknown_columns"] = session.unknown_columns;
   if (session.format == SessionFormat::kReceiver) {
     input["frame_period_s"] = session.frame_period_s;
+  } else {
+    AddInputDialect(session.input, &input);
   }
+  if (!session.input.notes.empty()) input["notes"] = session.input.notes;
+  if (!session.input.warnings.empty()) input["warnings"] = session.input.warnings;
   report["input"] = input;
 
   const WindowOptions& w = options.window;

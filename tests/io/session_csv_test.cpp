@@ -133,17 +133,24 @@ TEST_CASE("session.csv bad input: each class names file, line and what was expec
   CHECK(ErrorOf("t_s,sensor,pitch_deg\n0,0,1\n") ==
         "session.csv:2:2: sensor: expected a tag number 1..255, found '0'");
   CHECK(ErrorOf("t_s,Pitch (deg)\n0,1\n") ==
-        "session.csv:1:2: header: column 2 is 'Pitch (deg)': expected a lower-case name with "
-        "its unit, e.g. pitch_deg ([a-z][a-z0-9_]*; see docs/formats.md)");
+        "session.csv:1:2: header: column 2 is 'Pitch (deg)', not a canonical column name "
+        "([a-z][a-z0-9_]* with its unit, e.g. gx_dps); map it: --column 'Pitch (deg)=pitch_deg'");
   CHECK(ErrorOf("t_s,pitch_deg,pitch_deg\n0,1,1\n") ==
         "session.csv:1:3: header: column 'pitch_deg' appears twice (columns 2 and 3)");
   CHECK(ErrorOf("time,ax,ay\n0,1,1\n") ==
-        "session.csv:1: header: no t_s column; expected a session.csv header naming t_s (time "
-        "in seconds) and quantities with units, e.g. t_s,sensor,qw,qx,qy,qz; found "
-        "'time,ax,ay'");
-  CHECK(ErrorOf("t_s,ax_g,ay_g\n0,1,1\n") ==
-        "session.csv:1: header: 'ax_g' needs its whole axis family (3 columns of family "
-        "accel_g), found only ax_g,ay_g");
+        "session.csv:1: header: no time column; expected t_s, t_ms, t_us or t_ns (or --rate-hz "
+        "R for a file without one); found 'time,ax,ay'");
+  CHECK(ErrorOf("Time (ms),gz_dps\n0,1\n") ==
+        "session.csv:1:1: header: column 1 is 'Time (ms)', not a canonical column name "
+        "([a-z][a-z0-9_]* with its unit, e.g. gx_dps); map it: --column 'Time (ms)=t_ms'");
+  CHECK(ErrorOf("t_s,gz_dps,t_ms\n0,1,0\n") ==
+        "session.csv:1:3: header: two time columns, 't_s' and 't_ms'; leave one out with "
+        "--column 't_ms='");
+  CHECK(ErrorOf("t_s,gz_dps\n0,1,2\n") == "session.csv:2:3: expected 2 fields, found 3");
+  CHECK(ErrorOf("0,1\n1,2\n") ==
+        "session.csv:1:1: no header: line 1 is a data row ('0,1'); expected a header line "
+        "naming the columns with their units before it, e.g. t_s,gx_dps,gy_dps,gz_dps "
+        "(docs/formats.md)");
   CHECK(ErrorOf("") == "session.csv: empty file: expected a session.csv or a receiver capture");
   CHECK(ErrorOf("t_s,pitch_deg\n") ==
         "session.csv:1: header only: no data rows after the header; expected one row per "

@@ -1,5 +1,5 @@
 // Sessions and memory: freeing a loaded session's columns at the end of a run
-// (ReleaseSessionSamples), and loading a session that does not fit in the memory allowed.
+// (Session::~Session), and loading a session that does not fit in the memory allowed.
 #include <fmt/format.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -105,9 +105,6 @@ TEST_CASE("A session's large columns go back to the system, small ones are left 
   CHECK(small.t_s[999] == 0.01 * 999.0);
   CHECK(small.line[500] == 502u);
   CHECK(small.quantities[1].values[700] == 1.5);
-
-  ReleaseSessionSamples(&session, 2);
-  CHECK(session.tags.empty());
 }
 
 // The outcome of loading `path` in a child process whose address space is limited to its

@@ -23,10 +23,58 @@
 
 namespace metro {
 
-enum class SessionFormat { kAuto, kCsv, kReceiver, kImuTk };
+// kCsv is session.csv in any dialect (docs/formats.md); the named formats are other tools'
+// files, read through the same CSV loader with their own column names and units.
+enum class SessionFormat {
+  kAuto,
+  kCsv,
+  kReceiver,
+  kImuTk,
+  kEuroc,         // ASL/EuRoC imu0/data.csv: ns timestamps, rad/s and m/s^2.
+  kRaw,           // Arduino-style raw-count prints: ax,ay,az,gx,gy,gz (+ metadata lines).
+  kPhyphox,       // phyphox CSV exports ("Time (s)", "Gyroscope x (rad/s)", ...).
+  kSensorLogger,  // Sensor Logger per-sensor files: time (epoch ns), seconds_elapsed, z, y, x.
+};
 
-// "csv", "receiver", "imutk" ("auto" for kAuto).
+// "csv", "receiver", "imutk", "euroc", "raw", "phyphox", "sensorlogger" ("auto" for kAuto).
 const char* SessionFormatName(SessionFormat format);
+// The format with that name; false if none.
+bool ParseSessionFormat(std::string_view name, SessionFormat* format);
+
+// A header name mapped to a canonical column name (--column 'SRC=DST').
+struct ColumnMapping {
+  std::string source;     // As written in the file's header (matched case-insensitively).
+  std::string canonical;  // A canonical column name, e.g. gx_dps.
+};
+
+// How a text file was read: what the loader detected or was told, so that the report can
+// say it and a reload can repeat it. Nothing is guessed silently.
+struct InputDialect {
+  char delimiter = ',';        // ',', ';' or '\t'.
+  char decimal_point = '.';    // ',' only when the delimiter is not a comma.
+  std::string line_ends = "LF";  // "LF", "CRLF", "CR".
+  bool bom = false;            // A UTF-8 byte-order mark was skipped.
+  bool quoted = false;         // Some header field was quoted.
+  bool header_in_comment = false;  // The header line started with '#' (EuRoC).
+  // Every header name that is not already canonical, with the name it was given.
+  std::vector<ColumnMapping> mapping;
+  // Time: the source column and its unit ("s", "ms", "us", "ns"), or "rate" when the
+  // times are i / rate_hz (a file without a time column, --rate-hz).
+  std::string time_source;
+  std::string time_unit = "s";
+  double rate_hz = 0.0;
+  // Integer time (ms, us, ns): t_s = (t_ns - time_origin_ns) * 1e-9, exact differences.
+  bool time_integer = false;
+  int64_t time_origin_ns = 0;
+  // Resolution of the time column when it was written with fewer digits than its unit
+  // (E-notation after a spreadsheet round trip), in seconds; 0 when the unit's own.
+  double time_resolution_s = 0.0;
+  // Raw counts converted beside themselves at full scale / 32768 per count (0: not).
+  double accel_fs_g = 0.0;
+  double gyro_fs_dps = 0.0;
+  std::vector<std::string> notes;     // E.g. a cut first line skipped.
+  std::vector<std::string> warnings;  // Doubtful input the numbers depend on.
+};
 
 enum class QuantityOrigin {
   kFile,     // A canonical column read from the file.
@@ -63,6 +111,10 @@ struct FrameCounts {
 struct Tag {
   int sensor = 1;
   std::vector<double> t_s;     // Observation times [s], strictly increasing.
+  // Exact integer times [ns] when the file's time column was integer (t_ms, t_us, t_ns);
+  // empty otherwise. Sample periods and gaps come from their differences, never from
+  // doubles of epoch nanoseconds. t_s[i] = (t_ns[i] - InputDialect::time_origin_ns) * 1e-9.
+  std::vector<int64_t> t_ns;
   std::vector<uint32_t> line;  // 1-based source line of each observation.
   std::vector<Quantity> quantities;
   std::vector<TextColumn> text_columns;
@@ -88,9 +140,20 @@ struct Session {
   std::vector<std::string> columns;           // Header names in file order.
   std::vector<std::string> unknown_columns;   // Names in `columns` metro does not know.
   double frame_period_s = 0.0;                // Receiver input only.
+  InputDialect input;                         // How a text file was read.
   std::vector<Tag> tags;                      // Sorted by sensor number.
 
   const Tag* FindTag(int sensor) const;
+
+  Session() = default;
+  Session(const Session&) = default;
+  Session(Session&&) = default;
+  Session& operator=(const Session&) = default;
+  Session& operator=(Session&&) = default;
+  // A session of hundreds of MB returns its column pages to the system on all cores
+  // before they are freed: freed the usual way they keep one core busy for tens of
+  // milliseconds while the others wait (docs/benchmarks.md, "Returning column pages").
+  ~Session();
 };
 
 }  // namespace metro

@@ -25,6 +25,16 @@ struct LoadOptions {
   // 0.10013 s (exactly 0.100128173828125 s).
   double frame_period_s = kReceiverFramePeriodS;
   bool derive_euler = true;       // Add yaw/pitch/roll_deg from qw..qz when absent.
+  // Header names mapped to canonical names (--column 'SRC=DST', --columns-file); they
+  // take precedence over the named formats' own mappings.
+  std::vector<ColumnMapping> column_map;
+  // A file without a time column: observation k of each tag is at t_s = k / rate_hz
+  // (--rate-hz). 0: a time column is required (the raw format's "Fs,R" line also sets it).
+  double rate_hz = 0.0;
+  // Raw counts: full-scale settings that add ax_g.. and gx_dps.. (origin derived) beside
+  // the _lsb columns, at fs / 32768 per count. 0: counts only.
+  double accel_fs_g = 0.0;
+  double gyro_fs_dps = 0.0;
   int threads = 0;                // Parser threads; 0 = all cores.
   size_t max_rejected_kept = 10;  // How many rejected line numbers to keep.
   // Progress of a load: called with the byte count of each stretch of the file once it is
@@ -36,8 +46,15 @@ struct LoadOptions {
   bool IsValid(std::string* why) const;
 };
 
-// Detects the format of a file from its first meaningful line.
+// Detects the format of a file from its first lines: a receiver capture when most of the
+// first meaningful lines are receiver lines (a cut first line or a terminal program's banner
+// does not defeat it), a named format from its header, session.csv otherwise.
 Result<SessionFormat> DetectSessionFormat(const std::string& path);
+
+// "SRC=DST" (the last '=' splits; DST must be a canonical column name).
+Result<ColumnMapping> ParseColumnMapping(std::string_view spec);
+// A file of SRC=DST lines (blank lines and '#' comments ignored), errors with file:line.
+Result<std::vector<ColumnMapping>> LoadColumnMappings(const std::string& path);
 
 // Loads a session.csv or a receiver capture (options.format, or detected).
 Result<Session> LoadSession(const std::string& path, const LoadOptions& options = {});
@@ -47,13 +64,8 @@ Result<Session> LoadSession(const std::string& path, const LoadOptions& options 
 Result<Session> LoadImuTk(const std::string& acc_path, const std::string& gyro_path,
                           const LoadOptions& options = {});
 
-// Frees every tag of `session` (leaving `tags` empty), returning the pages of its columns to
-// the system on up to `threads` threads (0 = all cores). For the end of a run on a large
-// session: destroyed the usual way, hundreds of MB of columns keep one core busy for tens of
-// milliseconds (docs/benchmarks.md, session 9) while the others wait.
-void ReleaseSessionSamples(Session* session, int threads = 0);
-
-// Renders a session as canonical session.csv text: t_s, sensor, then every quantity and
+// Renders a session as canonical session.csv text: t_s (t_ns, exact, when every tag has
+// integer times), sensor, then every quantity and
 // text column in the order of the first tag's columns; rows ordered by time, then sensor.
 // Derived columns are written only if `include_derived`.
 std::string FormatSessionCsv(const Session& session, bool include_derived = true);

@@ -49,4 +49,11 @@ Result<SamplePeriod> EstimateSamplePeriod(const std::vector<double>& t_s,
                                           const std::vector<uint32_t>& line,
                                           const SamplePeriodOptions& options = {});
 
+// The same from exact integer times [ns] (Tag::t_ns): intervals are integer differences,
+// so an epoch-nanosecond clock keeps its sample period (200 Hz: tau0 = 0.005 s, not the
+// 0.004999876 s that doubles of 1.4e18 ns give).
+Result<SamplePeriod> EstimateSamplePeriodNs(const std::vector<int64_t>& t_ns,
+                                            const std::vector<uint32_t>& line,
+                                            const SamplePeriodOptions& options = {});
+
 }  // namespace metro

@@ -1,0 +1,175 @@
+#include "io/stdin_input.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+namespace metro::internal {
+namespace {
+
+constexpr const char* kTerminalMessage =
+    "reading a session from stdin, but stdin is a terminal: pipe a file in or name it";
+constexpr const char* kNameTheFile = "; name the file instead of piping it";
+
+Error StdinError(const std::string& what, int errnum) {
+  return MakeError(kStdinDisplayName, 0, what + ": " + std::strerror(errnum));
+}
+
+std::string ProcPath(int fd) { return "/proc/self/fd/" + std::to_string(fd); }
+
+// True if `path` opens for reading (the /proc magic link of a descriptor we hold).
+bool Opens(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  ::close(fd);
+  return true;
+}
+
+// Waits until a non-blocking `fd` is readable (or hung up). False on a poll error.
+bool WaitReadable(int fd) {
+  struct pollfd p {};
+  p.fd = fd;
+  p.events = POLLIN;
+  for (;;) {
+    const int r = ::poll(&p, 1, -1);
+    if (r >= 0) return true;
+    if (errno != EINTR) return false;
+  }
+}
+
+bool WriteAll(int fd, const char* data, size_t size) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return false;
+    }
+    data += n;
+    size -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+}  // namespace
+
+StdinFile::StdinFile(StdinFile&& other) noexcept { *this = std::move(other); }
+
+StdinFile& StdinFile::operator=(StdinFile&& other) noexcept {
+  if (this != &other) {
+    Reset();
+    fd_ = std::exchange(other.fd_, -1);
+    path_ = std::move(other.path_);
+    other.path_.clear();
+    remove_path_ = std::exchange(other.remove_path_, false);
+    size_bytes_ = std::exchange(other.size_bytes_, 0);
+    storage_ = std::exchange(other.storage_, StdinStorage::kNone);
+  }
+  return *this;
+}
+
+StdinFile::~StdinFile() { Reset(); }
+
+void StdinFile::Reset() {
+  if (remove_path_) ::unlink(path_.c_str());
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  path_.clear();
+  remove_path_ = false;
+  size_bytes_ = 0;
+  storage_ = StdinStorage::kNone;
+}
+
+Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
+  const int source = options.source_fd;
+  // First, before this function opens anything that could take a closed descriptor's
+  // number (a closed stdin would otherwise read back our own, empty, copy).
+  struct stat st {};
+  if (::fstat(source, &st) != 0) return StdinError("cannot read stdin", errno);
+  if (::isatty(source)) return MakeError(kTerminalMessage);
+
+  StdinFile out;
+  // A regular file read from its start is its own copy.
+  if (S_ISREG(st.st_mode) && ::lseek(source, 0, SEEK_CUR) == 0) {
+    const int fd = ::fcntl(source, F_DUPFD_CLOEXEC, 0);
+    if (fd >= 0 && Opens(ProcPath(fd))) {
+      out.fd_ = fd;
+      out.path_ = ProcPath(fd);
+      out.size_bytes_ = static_cast<int64_t>(st.st_size);
+      out.storage_ = StdinStorage::kStdinItself;
+      return out;
+    }
+    if (fd >= 0) ::close(fd);
+  }
+
+  if (options.try_memfd) {
+    const int fd = ::memfd_create("metro-stdin", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+    if (fd >= 0 && Opens(ProcPath(fd))) {
+      out.fd_ = fd;
+      out.path_ = ProcPath(fd);
+      out.storage_ = StdinStorage::kMemfd;
+    } else if (fd >= 0) {
+      ::close(fd);
+    }
+  }
+  if (out.fd_ < 0) {
+    std::string dir = options.tmp_dir;
+    if (dir.empty()) {
+      const char* env = std::getenv("TMPDIR");
+      dir = env != nullptr && *env != '\0' ? env : "/tmp";
+    }
+    std::string name = dir + "/metro-stdin-XXXXXX";
+    std::vector<char> buffer(name.begin(), name.end());
+    buffer.push_back('\0');
+    const int fd = ::mkostemp(buffer.data(), O_CLOEXEC);
+    if (fd < 0) {
+      return StdinError("cannot make a temporary file in " + dir + " to hold stdin" + kNameTheFile,
+                        errno);
+    }
+    name.assign(buffer.data());
+    out.fd_ = fd;
+    out.storage_ = StdinStorage::kTmpfile;
+    if (Opens(ProcPath(fd))) {
+      ::unlink(name.c_str());  // Gone with the descriptor, even if the process is killed.
+      out.path_ = ProcPath(fd);
+    } else {
+      out.path_ = name;
+      out.remove_path_ = true;
+    }
+  }
+
+  std::vector<char> chunk(size_t{1} << 20);
+  int64_t total = 0;
+  for (;;) {
+    const ssize_t n = ::read(source, chunk.data(), chunk.size());
+    if (n == 0) break;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if ((errno == EAGAIN || errno == EWOULDBLOCK) && WaitReadable(source)) continue;
+      return StdinError("cannot read stdin", errno);
+    }
+    if (!WriteAll(out.fd_, chunk.data(), static_cast<size_t>(n))) {
+      return StdinError(std::string("cannot copy stdin to a ") +
+                            (out.storage_ == StdinStorage::kMemfd ? "memory" : "temporary") +
+                            " file" + kNameTheFile,
+                        errno);
+    }
+    total += n;
+  }
+  out.size_bytes_ = total;
+  if (out.storage_ == StdinStorage::kMemfd) {
+    // The loaders map the file: sealed, its bytes cannot change under a mapping. A kernel
+    // without seals leaves it unsealed, which is harmless (only we hold it).
+    ::fcntl(out.fd_, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL);
+  }
+  return out;
+}
+
+}  // namespace metro::internal
