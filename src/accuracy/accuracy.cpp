@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "metro/core/angles.hpp"
+#include "metro/stats/derived_quantity.hpp"
 #include "metro/uncertainty/budget.hpp"
 
 namespace metro {
@@ -212,11 +214,12 @@ Result<AccuracyResult> EvaluateAccuracy(const Session& session, const Session* r
   for (int a = 0; a < 3; ++a) {
     angle[a] = tag->Find(kAxes[a]);
     if (angle[a] == nullptr) {
+      const std::optional<std::string> gap = MissingDerivationInputs(*tag, kAxes[a]);
       return MakeError(session.path, 0,
-                       fmt::format("tag {} has no {} (nor a quaternion qw..qz to derive it from): "
-                                   "the accuracy evaluation needs the tag's yaw_deg, pitch_deg "
-                                   "and roll_deg",
-                                   tag->sensor, kAxes[a]));
+                       fmt::format("tag {} has no {} ({}): the accuracy evaluation needs the "
+                                   "tag's yaw_deg, pitch_deg and roll_deg",
+                                   tag->sensor, kAxes[a],
+                                   gap ? *gap : "nor a quaternion qw..qz to derive it from"));
     }
   }
   const int turned = static_cast<int>(options.axis);

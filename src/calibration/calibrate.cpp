@@ -92,13 +92,6 @@ const Quantity* FindQuantity(const Tag& tag, std::string_view name) {
   return nullptr;
 }
 
-struct Family {
-  const char* suffix;
-  const char* unit;
-};
-constexpr Family kAccelFamilies[] = {{"_lsb", "LSB"}, {"_g", "g"}, {"_mps2", "m/s^2"}};
-constexpr Family kGyroFamilies[] = {{"_lsb", "LSB"}, {"_dps", "deg/s"}, {"_rads", "rad/s"}};
-
 // One tag of one input, with the columns the calibrator needs.
 struct Record {
   int piece = 0;
@@ -112,39 +105,86 @@ struct Record {
   SegmentationSummary seg;
 };
 
-// Reads the first complete axis family (raw counts preferred). Returns false when none.
-Result<bool> ReadAxes(const Tag& tag, char prefix, const Family* families, size_t family_count,
-                      std::vector<Eigen::Vector3d>* out, std::string* unit) {
-  for (size_t f = 0; f < family_count; ++f) {
-    const Quantity* q[3];
-    int present = 0;
-    const char axes[3] = {'x', 'y', 'z'};
-    for (int a = 0; a < 3; ++a) {
-      q[a] = FindQuantity(tag, std::string(1, prefix) + axes[a] + families[f].suffix);
-      present += q[a] != nullptr ? 1 : 0;
+std::string JoinNames(const std::vector<std::string>& names, const char* separator) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : separator) + n;
+  return out;
+}
+
+// Which axis family of the sensor a tag holds (columns.hpp): the first complete one in
+// AxisUnits order (raw counts preferred), or, when none is complete, the first the tag holds
+// part of (`unit` is nullptr then) or none at all (`family` empty).
+struct FamilyMatch {
+  const Unit* unit = nullptr;        // The complete family's unit; nullptr if none.
+  std::vector<std::string> family;   // Its columns (or the partial family's).
+  std::vector<std::string> missing;  // Of a partial family, the absent columns.
+};
+
+FamilyMatch FindFamily(const Tag& tag, ImuSensor sensor) {
+  std::vector<std::string> present;
+  for (const Quantity& q : tag.quantities) present.push_back(q.name);
+  FamilyMatch partial;
+  for (const Unit* unit : AxisUnits(ColumnSensorKind(sensor))) {
+    std::vector<std::string> family = FamilyColumns(ColumnSensorKind(sensor), unit);
+    std::vector<std::string> missing = MissingColumns(family, present);
+    if (missing.empty()) return {unit, std::move(family), {}};
+    if (missing.size() < family.size() && partial.family.empty()) {
+      partial.family = std::move(family);
+      partial.missing = std::move(missing);
     }
-    if (present == 0) continue;
-    if (present != 3) {
-      return MakeError(fmt::format("sensor {}: incomplete {}x{} {}y{} {}z{} columns", tag.sensor,
-                                   prefix, families[f].suffix, prefix, families[f].suffix, prefix,
-                                   families[f].suffix));
-    }
-    out->resize(tag.size());
-    for (size_t i = 0; i < tag.size(); ++i) {
-      for (int a = 0; a < 3; ++a) {
-        const double v = q[a]->values[i];
-        if (!std::isfinite(v)) {
-          return MakeError(
-              "", tag.line.size() > i ? tag.line[i] : 0,
-              fmt::format("sensor {}: {} is not a finite number", tag.sensor, q[a]->name));
-        }
-        (*out)[i][a] = v;
-      }
-    }
-    *unit = families[f].unit;
-    return true;
   }
-  return false;
+  return partial;
+}
+
+// "sensor 1: the gyroscope calibration needs gx_dps, gy_dps, gz_dps; missing gx_dps, gy_dps"
+std::string IncompleteFamilyMessage(int sensor, ImuSensor imu, const FamilyMatch& match) {
+  return fmt::format("sensor {}: the {} calibration needs {}; missing {}", sensor,
+                     ImuSensorLongName(imu), JoinNames(match.family, ", "),
+                     JoinNames(match.missing, ", "));
+}
+
+// The families the calibrator accepts: "ax_lsb ay_lsb az_lsb (or ax_g ay_g az_g, or ax_mps2
+// ay_mps2 az_mps2)".
+std::string FamilyChoices(ImuSensor imu) {
+  std::string out;
+  const std::vector<const Unit*> units = AxisUnits(ColumnSensorKind(imu));
+  for (size_t i = 0; i < units.size(); ++i) {
+    out += i == 0 ? "" : (i == 1 ? " (or " : ", or ");
+    out += JoinNames(FamilyColumns(ColumnSensorKind(imu), units[i]), " ");
+  }
+  return units.size() > 1 ? out + ")" : out;
+}
+
+// Reads the family FindFamily picks. Returns false when the tag holds none of its columns;
+// an error names the missing columns of a partial family.
+Result<bool> ReadAxes(const Tag& tag, ImuSensor imu, std::vector<Eigen::Vector3d>* out,
+                      std::string* unit) {
+  const FamilyMatch match = FindFamily(tag, imu);
+  if (match.unit == nullptr) {
+    if (match.family.empty()) return false;
+    return MakeError(IncompleteFamilyMessage(tag.sensor, imu, match));
+  }
+  const Quantity* q[3];
+  for (int a = 0; a < 3; ++a) q[a] = FindQuantity(tag, match.family[static_cast<size_t>(a)]);
+  out->resize(tag.size());
+  for (size_t i = 0; i < tag.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const double v = q[a]->values[i];
+      if (!std::isfinite(v)) {
+        return MakeError(
+            "", tag.line.size() > i ? tag.line[i] : 0,
+            fmt::format("sensor {}: {} is not a finite number", tag.sensor, q[a]->name));
+      }
+      (*out)[i][a] = v;
+    }
+  }
+  *unit = std::string(match.unit->symbol);
+  return true;
+}
+
+bool IsRawCount(const std::string& unit_symbol) {
+  const Unit* unit = UnitBySymbol(unit_symbol);
+  return unit != nullptr && unit->dimension == Dimension::kRawCount;
 }
 
 // Saturation of raw counts: int16 limits, or uint16 limits for unsigned data (imu_tk's Xsens).
@@ -172,16 +212,16 @@ Result<Record> ReadRecord(const Tag& tag, int piece, const CalibrationOptions& o
   Record r;
   r.piece = piece;
   r.t_s = tag.t_s;
-  Result<bool> has_accel = ReadAxes(tag, 'a', kAccelFamilies, 3, &r.accel, &r.accel_unit);
+  Result<bool> has_accel = ReadAxes(tag, ImuSensor::kAccel, &r.accel, &r.accel_unit);
   if (!has_accel.ok()) return has_accel.error();
   if (!has_accel.value()) {
-    return MakeError(fmt::format(
-        "sensor {}: no accelerometer columns (ax_lsb ay_lsb az_lsb, ax_g.. or ax_mps2..); the "
-        "calibrator needs the accelerometer in static poses: log it together with the gyroscope",
-        tag.sensor));
+    return MakeError(
+        fmt::format("sensor {}: no accelerometer columns: the calibrator needs {} in static "
+                    "poses: log it together with the gyroscope",
+                    tag.sensor, FamilyChoices(ImuSensor::kAccel)));
   }
   if (options.fit_gyro) {
-    Result<bool> has_gyro = ReadAxes(tag, 'g', kGyroFamilies, 3, &r.gyro, &r.gyro_unit);
+    Result<bool> has_gyro = ReadAxes(tag, ImuSensor::kGyro, &r.gyro, &r.gyro_unit);
     if (!has_gyro.ok()) return has_gyro.error();
   }
   if (const Quantity* q = FindQuantity(tag, "temp_c")) r.temp_c = q->values;
@@ -191,8 +231,8 @@ Result<Record> ReadRecord(const Tag& tag, int piece, const CalibrationOptions& o
   }
   r.accel_sat.assign(r.accel.size(), 0);
   r.gyro_sat.assign(r.accel.size(), 0);
-  if (r.accel_unit == "LSB") r.accel_sat_count = FlagSaturation(r.accel, &r.accel_sat);
-  if (r.gyro_unit == "LSB") r.gyro_sat_count = FlagSaturation(r.gyro, &r.gyro_sat);
+  if (IsRawCount(r.accel_unit)) r.accel_sat_count = FlagSaturation(r.accel, &r.accel_sat);
+  if (IsRawCount(r.gyro_unit)) r.gyro_sat_count = FlagSaturation(r.gyro, &r.gyro_sat);
   r.saturated.resize(r.accel.size());
   for (size_t i = 0; i < r.accel.size(); ++i) r.saturated[i] = r.accel_sat[i] | r.gyro_sat[i];
 
@@ -616,7 +656,7 @@ SensorCalibration MakeSensorCalibration(ImuSensor sensor, ModelKind kind, bool t
   mo.sensor = sensor;
   mo.kind = kind;
   mo.input_unit = input_unit;
-  mo.output_unit = sensor == ImuSensor::kAccel ? "g" : "deg/s";
+  mo.output_unit = std::string(OutputUnit(sensor).symbol);
   const int nm = MisalignmentCount(sensor);
   mo.bias = Eigen::Vector3d(b[0], b[1], b[2]);
   mo.scale = Eigen::Vector3d(k[0], k[1], k[2]);
@@ -757,8 +797,8 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
   d.has_gyro = o.fit_gyro && !gyro_unit.empty();
   if (o.fit_gyro && gyro_unit.empty()) {
     out.warnings.push_back(fmt::format(
-        "sensor {}: no gyroscope columns (gx_lsb.., gx_dps.. or gx_rads..): accelerometer only",
-        out.sensor));
+        "sensor {}: no gyroscope columns, accelerometer only: the gyroscope calibration needs {}",
+        out.sensor, FamilyChoices(ImuSensor::kGyro)));
   }
   // Segments, saturation, table column.
   for (Record& r : d.records) {
@@ -1267,32 +1307,6 @@ Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,
   }
 }
 
-namespace {
-
-// Which axis family of `prefix` a tag has: its index, -1 for none; `missing` lists the
-// absent columns of the first incomplete family.
-int FindFamily(const Tag& tag, char prefix, const Family* families, size_t count,
-               std::vector<std::string>* missing) {
-  for (size_t f = 0; f < count; ++f) {
-    std::vector<std::string> absent;
-    for (char axis : {'x', 'y', 'z'}) {
-      const std::string name = std::string(1, prefix) + axis + families[f].suffix;
-      if (FindQuantity(tag, name) == nullptr) absent.push_back(name);
-    }
-    if (absent.empty()) return static_cast<int>(f);
-    if (absent.size() < 3 && missing->empty()) *missing = absent;
-  }
-  return -1;
-}
-
-std::string JoinNames(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : " ") + n;
-  return out;
-}
-
-}  // namespace
-
 Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
                                const CalibrationOptions& options) {
   // Sensors with a gyroscope family in some session.
@@ -1300,42 +1314,34 @@ Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
   for (const Session* s : sessions) {
     for (const Tag& t : s->tags) {
       if (options.sensor != 0 && t.sensor != options.sensor) continue;
-      std::vector<std::string> missing;
-      if (FindFamily(t, 'a', kAccelFamilies, 3, &missing) < 0) {
+      const FamilyMatch accel = FindFamily(t, ImuSensor::kAccel);
+      if (accel.unit == nullptr) {
+        return MakeError(s->path, 0,
+                         accel.family.empty()
+                             ? fmt::format("sensor {}: no accelerometer columns: the calibrator "
+                                           "needs {} in static poses",
+                                           t.sensor, FamilyChoices(ImuSensor::kAccel))
+                             : IncompleteFamilyMessage(t.sensor, ImuSensor::kAccel, accel));
+      }
+      const FamilyMatch gyro = FindFamily(t, ImuSensor::kGyro);
+      if (gyro.unit == nullptr && !gyro.family.empty() && options.fit_gyro) {
         return MakeError(
             s->path, 0,
-            missing.empty()
-                ? fmt::format("sensor {}: no accelerometer columns: the calibrator needs ax_lsb "
-                              "ay_lsb az_lsb (or ax_g ay_g az_g, or ax_mps2 ay_mps2 az_mps2) "
-                              "in static poses",
-                              t.sensor)
-                : fmt::format("sensor {}: missing accelerometer column(s) {}: the calibrator "
-                              "needs all three axes",
-                              t.sensor, JoinNames(missing)));
+            IncompleteFamilyMessage(t.sensor, ImuSensor::kGyro, gyro) + " (or --accel-only)");
       }
-      missing.clear();
-      const int gyro = FindFamily(t, 'g', kGyroFamilies, 3, &missing);
-      if (gyro < 0 && !missing.empty() && options.fit_gyro) {
-        return MakeError(s->path, 0,
-                         fmt::format("sensor {}: missing gyroscope column(s) {}: the calibrator "
-                                     "needs all three axes (or --accel-only)",
-                                     t.sensor, JoinNames(missing)));
-      }
-      if (gyro >= 0 && gyro_seen.count(t.sensor) == 0) gyro_seen[t.sensor] = s->path;
+      if (gyro.unit != nullptr && gyro_seen.count(t.sensor) == 0) gyro_seen[t.sensor] = s->path;
     }
   }
   if (!options.fit_gyro) return Status::Ok();
   for (const Session* s : sessions) {
     for (const Tag& t : s->tags) {
       if (options.sensor != 0 && t.sensor != options.sensor) continue;
-      std::vector<std::string> missing;
-      if (gyro_seen.count(t.sensor) != 0 && FindFamily(t, 'g', kGyroFamilies, 3, &missing) < 0) {
+      if (gyro_seen.count(t.sensor) != 0 && FindFamily(t, ImuSensor::kGyro).unit == nullptr) {
         return MakeError(
             s->path, 0,
-            fmt::format("sensor {}: no gyroscope columns (gx_lsb gy_lsb gz_lsb, gx_dps.. or "
-                        "gx_rads..) while {} has them: records of one tag are fitted together; "
-                        "log the gyroscope in every record or give --accel-only",
-                        t.sensor, gyro_seen[t.sensor]));
+            fmt::format("sensor {}: no gyroscope columns while {} has them: records of one tag "
+                        "are fitted together; log {} in every record or give --accel-only",
+                        t.sensor, gyro_seen[t.sensor], FamilyChoices(ImuSensor::kGyro)));
       }
     }
   }

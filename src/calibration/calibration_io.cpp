@@ -190,7 +190,7 @@ std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const st
   m.kind = *k;
   m.input_unit = rd->String(j, path, "input_unit");
   m.output_unit = rd->String(j, path, "output_unit");
-  const std::string expected_out = sensor == ImuSensor::kAccel ? "g" : "deg/s";
+  const std::string expected_out(OutputUnit(sensor).symbol);
   if (!rd->failed() && m.output_unit != expected_out) {
     rd->Fail(
         fmt::format("'{}output_unit' is '{}'; expected '{}'", path, m.output_unit, expected_out));
@@ -376,26 +376,26 @@ const Quantity* FindColumn(const Tag& tag, const std::string& name) {
   return nullptr;
 }
 
-const char* Suffix(ImuSensor sensor, const std::string& unit) {
-  if (unit == "LSB") return "_lsb";
-  if (sensor == ImuSensor::kAccel) return unit == "g" ? "_g" : "_mps2";
-  return unit == "deg/s" ? "_dps" : "_rads";
-}
-
 Status ApplySensor(const SensorCalibration& c, const std::string& file, Tag* tag) {
   const ImuSensor sensor = c.model.sensor;
-  const char prefix = sensor == ImuSensor::kAccel ? 'a' : 'g';
-  const std::string suffix = Suffix(sensor, c.model.input_unit);
+  const std::vector<std::string> in_names = InputColumns(sensor, c.model.input_unit);
+  if (in_names.empty()) {
+    return MakeError(file, 0,
+                     fmt::format("sensor {}: the {} calibration's input unit '{}' is not a unit "
+                                 "of the {}",
+                                 tag->sensor, ImuSensorName(sensor), c.model.input_unit,
+                                 ImuSensorLongName(sensor)));
+  }
   const Quantity* in[3];
   for (int a = 0; a < 3; ++a) {
-    const std::string name = std::string(1, prefix) + "xyz"[a] + suffix;
+    const std::string& name = in_names[static_cast<size_t>(a)];
     in[a] = FindColumn(*tag, name);
     if (in[a] == nullptr) {
-      return MakeError(
-          file, 0,
-          fmt::format("sensor {}: the {} calibration takes {} input ({} columns) "
-                      "but the session has no {} column",
-                      tag->sensor, ImuSensorName(sensor), c.model.input_unit, suffix, name));
+      return MakeError(file, 0,
+                       fmt::format("sensor {}: the {} calibration takes {} input (_{} columns) "
+                                   "but the session has no {} column",
+                                   tag->sensor, ImuSensorName(sensor), c.model.input_unit,
+                                   InputUnit(sensor, c.model.input_unit)->suffix, name));
     }
   }
   const Quantity* temp = FindColumn(*tag, "temp_c");
@@ -415,10 +415,10 @@ Status ApplySensor(const SensorCalibration& c, const std::string& file, Tag* tag
     const Eigen::Vector3d y = m * (raw - c.model.BiasAt(t));
     for (int a = 0; a < 3; ++a) out[a][i] = y[a];
   }
-  const std::string out_suffix = sensor == ImuSensor::kAccel ? "_g" : "_dps";
+  const std::vector<std::string> out_names =
+      FamilyColumns(ColumnSensorKind(sensor), &OutputUnit(sensor));
   for (int a = 0; a < 3; ++a) {
-    SetColumn(tag, std::string(1, prefix) + "xyz"[a] + out_suffix, c.model.output_unit,
-              std::move(out[a]));
+    SetColumn(tag, out_names[static_cast<size_t>(a)], c.model.output_unit, std::move(out[a]));
   }
   return Status::Ok();
 }

@@ -71,30 +71,50 @@ Eigen::Vector3d SensorModel::Invert(const Eigen::Vector3d& calibrated, double te
   return Matrix().partialPivLu().solve(calibrated) + BiasAt(temp_c);
 }
 
+SensorKind ColumnSensorKind(ImuSensor sensor) {
+  return sensor == ImuSensor::kAccel ? SensorKind::kAccelerometer : SensorKind::kGyroscope;
+}
+
+const char* ImuSensorLongName(ImuSensor sensor) {
+  return sensor == ImuSensor::kAccel ? "accelerometer" : "gyroscope";
+}
+
+const Unit& OutputUnit(ImuSensor sensor) {
+  const Unit* unit = UnitBySymbol(sensor == ImuSensor::kAccel ? "g" : "deg/s");
+  METRO_CHECK(unit != nullptr);
+  return *unit;
+}
+
+const Unit* InputUnit(ImuSensor sensor, std::string_view input_unit) {
+  const Unit* unit = UnitBySymbol(input_unit);
+  for (const Unit* allowed : AxisUnits(ColumnSensorKind(sensor))) {
+    if (unit != nullptr && allowed == unit) return unit;
+  }
+  return nullptr;
+}
+
+std::vector<std::string> InputColumns(ImuSensor sensor, std::string_view input_unit) {
+  const Unit* unit = InputUnit(sensor, input_unit);
+  if (unit == nullptr) return {};
+  return FamilyColumns(ColumnSensorKind(sensor), unit);
+}
+
 std::optional<double> NominalScale(ImuSensor sensor, std::string_view input_unit,
                                    double full_scale) {
-  constexpr double kPi = 3.14159265358979323846;
+  const Unit* unit = InputUnit(sensor, input_unit);
+  if (unit == nullptr) return std::nullopt;
+  if (unit->dimension != Dimension::kRawCount) return ConversionFactor(*unit, OutputUnit(sensor));
+  // Raw counts have no SI scale: the sensitivity comes from the datasheet.
+  if (!(full_scale > 0)) return std::nullopt;
   if (sensor == ImuSensor::kAccel) {
-    if (input_unit == "g") return 1.0;
-    if (input_unit == "m/s^2") return 1.0 / kStandardGravityMps2;
-    if (input_unit == "LSB") {
-      if (!(full_scale > 0)) return std::nullopt;
-      return full_scale / 32768.0;  // 16384 LSB/g at +-2 g (datasheet table 6.2).
-    }
-    return std::nullopt;
+    return full_scale / 32768.0;  // 16384 LSB/g at +-2 g (datasheet table 6.2).
   }
-  if (input_unit == "deg/s") return 1.0;
-  if (input_unit == "rad/s") return 180.0 / kPi;
-  if (input_unit == "LSB") {
-    if (!(full_scale > 0)) return std::nullopt;
-    // Datasheet table 6.1 sensitivities (131 LSB/(deg/s) at +-250, not 32768/250).
-    if (full_scale == 250.0) return 1.0 / 131.0;
-    if (full_scale == 500.0) return 1.0 / 65.5;
-    if (full_scale == 1000.0) return 1.0 / 32.8;
-    if (full_scale == 2000.0) return 1.0 / 16.4;
-    return full_scale / 32768.0;
-  }
-  return std::nullopt;
+  // Datasheet table 6.1 sensitivities (131 LSB/(deg/s) at +-250, not 32768/250).
+  if (full_scale == 250.0) return 1.0 / 131.0;
+  if (full_scale == 500.0) return 1.0 / 65.5;
+  if (full_scale == 1000.0) return 1.0 / 32.8;
+  if (full_scale == 2000.0) return 1.0 / 16.4;
+  return full_scale / 32768.0;
 }
 
 }  // namespace metro

@@ -113,7 +113,7 @@ ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool
   a.sensor = ImuSensor::kAccel;
   a.kind = ModelKind::kFull;
   a.input_unit = "LSB";
-  a.output_unit = "g";
+  a.output_unit = std::string(OutputUnit(ImuSensor::kAccel).symbol);
   const double lsb_per_g = 1.0 / NominalScale(ImuSensor::kAccel, "LSB", accel_fs_g).value();
   a.bias =
       Eigen::Vector3d(Uniform(rng, 0.050), Uniform(rng, 0.050), Uniform(rng, 0.080)) * lsb_per_g;
@@ -123,7 +123,7 @@ ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool
   g.sensor = ImuSensor::kGyro;
   g.kind = ModelKind::kFull;
   g.input_unit = "LSB";
-  g.output_unit = "deg/s";
+  g.output_unit = std::string(OutputUnit(ImuSensor::kGyro).symbol);
   const double lsb_per_dps = 1.0 / NominalScale(ImuSensor::kGyro, "LSB", gyro_fs_dps).value();
   for (int i = 0; i < 3; ++i) g.bias[i] = Uniform(rng, 20.0) * lsb_per_dps;
   for (int i = 0; i < 3; ++i) g.scale[i] = (1.0 + Uniform(rng, 0.03)) / lsb_per_dps;
@@ -252,7 +252,6 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
   }
   const char* names[8] = {"ax_lsb", "ay_lsb", "az_lsb", "gx_lsb",
                           "gy_lsb", "gz_lsb", "temp_c", "table_rate_dps"};
-  const char* units[8] = {"LSB", "LSB", "LSB", "LSB", "LSB", "LSB", "degC", "deg/s"};
   Session& s = out.session;
   s.path = fmt::format("simulated-seed-{}", o.seed);
   s.format = SessionFormat::kCsv;
@@ -263,7 +262,7 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
     if (c == 7 && o.table_rates_dps.empty() && !o.write_table_column) continue;
     Quantity q;
     q.name = names[c];
-    q.unit = units[c];
+    q.unit = ClassifyColumn(names[c]).UnitSymbol();
     q.values = std::move(cols[c]);
     tag.quantities.push_back(std::move(q));
     s.columns.push_back(names[c]);

@@ -33,7 +33,6 @@ const Unit& U(std::string_view symbol) {
   return *u;
 }
 
-
 char SensorPrefix(SensorKind sensor) {
   switch (sensor) {
     case SensorKind::kAccelerometer:
@@ -119,8 +118,8 @@ ColumnInfo ClassifyColumn(std::string_view name) {
       return info;
     }
   }
-  if (name.size() == 2 && name[0] == 'q' && std::string_view("wxyz").find(name[1]) != 
-      std::string_view::npos) {
+  if (name.size() == 2 && name[0] == 'q' &&
+      std::string_view("wxyz").find(name[1]) != std::string_view::npos) {
     info.role = ColumnRole::kQuantity;
     info.unit = &U("1");
     info.sensor = SensorKind::kQuaternion;
@@ -131,8 +130,7 @@ ColumnInfo ClassifyColumn(std::string_view name) {
   // Axis columns: [ag][xyz]_<unit> with a unit of the sensor's.
   if (name.size() > 3 && (name[0] == 'a' || name[0] == 'g') &&
       (name[1] == 'x' || name[1] == 'y' || name[1] == 'z') && name[2] == '_') {
-    const SensorKind sensor =
-        name[0] == 'a' ? SensorKind::kAccelerometer : SensorKind::kGyroscope;
+    const SensorKind sensor = name[0] == 'a' ? SensorKind::kAccelerometer : SensorKind::kGyroscope;
     const Unit* unit = UnitBySuffix(name.substr(3));
     for (const Unit* allowed : AxisUnits(sensor)) {
       if (allowed == unit) {
@@ -185,6 +183,7 @@ const std::array<std::string_view, 4>& TimeColumnNames() {
 }
 
 std::string AxisColumn(SensorKind sensor, char axis, const Unit& unit) {
+  if (sensor == SensorKind::kNone) return "";
   if (sensor == SensorKind::kQuaternion) return std::string{'q', axis};
   return std::string{SensorPrefix(sensor), axis, '_'} + std::string(unit.suffix);
 }
@@ -209,7 +208,7 @@ std::vector<std::string> FamilyColumns(SensorKind sensor, const Unit* unit) {
     for (char a : std::string_view("wxyz")) names.push_back(std::string{'q', a});
     return names;
   }
-  if (unit == nullptr) return names;
+  if (unit == nullptr || sensor == SensorKind::kNone) return names;
   for (char a : std::string_view("xyz")) names.push_back(AxisColumn(sensor, a, *unit));
   return names;
 }

@@ -2,10 +2,11 @@
 
 #include <cmath>
 
+#include "metro/io/columns.hpp"
+
 namespace metro {
 namespace {
 
-constexpr double kStandardGravity = 9.80665;  // m/s^2, exact (CGPM 1901).
 constexpr double kSqrtHourInSqrtSeconds = 60.0;
 constexpr double kSecondsPerHour = 3600.0;
 
@@ -34,27 +35,21 @@ NoiseUnits NoiseUnitsFor(const std::string& quantity_unit) {
   const double h15 = h * kSqrtHourInSqrtSeconds;  // s^-1.5 -> h^-1.5: 3600^1.5 = 216000
   double to_deg = 0.0;                            // Gyro: factor from [q] to deg/s.
   double to_mps2 = 0.0;                           // Accelerometer: factor from [q] to m/s^2.
-  if (q == "deg/s") {
-    to_deg = 1.0;
-    u.column_token = "dps";
-  } else if (q == "rad/s") {
-    to_deg = 180.0 / 3.14159265358979323846;
-    u.column_token = "rads";
-  } else if (q == "g") {
-    to_mps2 = kStandardGravity;
-    u.column_token = "g";
-  } else if (q == "m/s^2") {
-    to_mps2 = 1.0;
-    u.column_token = "mps2";
-  } else if (q == "LSB") {
-    u.column_token = "lsb";
+  // The units of the table above (columns.hpp); any other has conventional = base.
+  const Unit& deg_per_s = *UnitBySymbol("deg/s");
+  const Unit& mps2 = *UnitBySymbol("m/s^2");
+  const double standard_gravity_mps2 = UnitBySymbol("g")->to_si;  // 9.80665, exact.
+  const Unit* unit = UnitBySymbol(q);
+  const Dimension dimension = unit != nullptr ? unit->dimension : Dimension::kDimensionless;
+  if (dimension == Dimension::kAngularRate) {
+    to_deg = ConversionFactor(*unit, deg_per_s).value();
+  } else if (dimension == Dimension::kAcceleration) {
+    to_mps2 = ConversionFactor(*unit, mps2).value();
+  } else if (dimension == Dimension::kRawCount || q == "deg") {
     u.known = true;
-  } else if (q == "deg") {
-    u.column_token = "deg";
-    u.known = true;
-  } else {
-    u.column_token = "q";
   }
+  const bool tabled = to_deg > 0.0 || to_mps2 > 0.0 || u.known;
+  u.column_token = tabled ? std::string(unit->suffix) : "q";
   if (to_deg > 0.0) {
     u.known = true;
     t[kQ].unit_conventional = "arcsec";
@@ -77,13 +72,13 @@ NoiseUnits NoiseUnitsFor(const std::string& quantity_unit) {
     t[kN].unit_conventional = "m/s/sqrt(h)";
     t[kN].factor = to_mps2 * kSqrtHourInSqrtSeconds;
     t[kB].unit_conventional = "ug";
-    t[kB].factor = to_mps2 / kStandardGravity * 1e6;
+    t[kB].factor = to_mps2 / standard_gravity_mps2 * 1e6;
     t[kK].unit_conventional = "m/s/h/sqrt(h)";
     t[kK].factor = to_mps2 * h15;
     t[kR].unit_conventional = "m/s/h^2";
     t[kR].factor = to_mps2 * h * h;
     u.density.unit_conventional = "ug/sqrt(Hz)";
-    u.density.factor = to_mps2 / kStandardGravity * 1e6;
+    u.density.factor = to_mps2 / standard_gravity_mps2 * 1e6;
   }
   return u;
 }

@@ -4,17 +4,10 @@
 
 #include <algorithm>
 
+#include "metro/io/columns.hpp"
 #include "metro/noise/allan_report.hpp"
 
 namespace metro {
-
-bool IsRateQuantity(const std::string& name) {
-  static const char* kNames[] = {"gx_dps",  "gy_dps",  "gz_dps",  "gx_rads", "gy_rads", "gz_rads",
-                                 "gx_lsb",  "gy_lsb",  "gz_lsb",  "ax_g",    "ay_g",    "az_g",
-                                 "ax_mps2", "ay_mps2", "az_mps2", "ax_lsb",  "ay_lsb",  "az_lsb"};
-  return std::any_of(std::begin(kNames), std::end(kNames),
-                     [&](const char* n) { return name == n; });
-}
 
 Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                         const SessionAllanOptions& options, nlohmann::ordered_json* report,

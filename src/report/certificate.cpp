@@ -45,12 +45,6 @@ const char* kAxes[3] = {"x", "y", "z"};
 
 const Quantity* FindColumn(const Tag& tag, const std::string& name) { return tag.Find(name); }
 
-std::string ColumnSuffix(ImuSensor sensor, const std::string& unit) {
-  if (unit == "LSB") return "_lsb";
-  if (sensor == ImuSensor::kAccel) return unit == "g" ? "_g" : "_mps2";
-  return unit == "deg/s" ? "_dps" : "_rads";
-}
-
 Result<std::string> ResidualPlot(const SensorCalibration& c, int sensor,
                                  const std::vector<const Session*>& sessions, double gravity_mps2,
                                  const CertificateOptions& options) {
@@ -88,7 +82,7 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
   const bool accel = m.sensor == ImuSensor::kAccel;
   mustache::data d;
   d.set("sensor", std::to_string(sensor));
-  d.set("title", accel ? "accelerometer" : "gyroscope");
+  d.set("title", ImuSensorLongName(m.sensor));
   d.set("model", ModelKindName(m.kind));
   d.set("input_unit", m.input_unit);
   d.set("output_unit", m.output_unit);
@@ -149,7 +143,7 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
                         m.input_unit == "LSB"
                             ? fmt::format(", +-{} {} range",
                                           accel ? options.accel_fs_g : options.gyro_fs_dps,
-                                          accel ? "g" : "deg/s")
+                                          OutputUnit(m.sensor).symbol)
                             : ""));
     } else {
       f.set("svg", "");
@@ -173,9 +167,13 @@ Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& c, int s
       NominalScale(m.sensor, m.input_unit, accel ? options.accel_fs_g : options.gyro_fs_dps);
   if (!nominal) return MakeError(fmt::format("no nominal scale for input unit {}", m.input_unit));
   const double target = accel ? gravity_mps2 / kStandardGravityMps2 : 0.0;
-  const std::string suffix = ColumnSuffix(m.sensor, m.input_unit);
+  const std::vector<std::string> columns = InputColumns(m.sensor, m.input_unit);
+  if (columns.size() != 3) {
+    return MakeError(fmt::format("input unit {} is not a unit of the {}", m.input_unit,
+                                 ImuSensorLongName(m.sensor)));
+  }
   StaticResiduals out;
-  out.unit = accel ? "g" : "deg/s";
+  out.unit = std::string(OutputUnit(m.sensor).symbol);
   for (const Segment& seg : c.segments) {
     if (seg.kind != SegmentKind::kStatic || !seg.used) continue;
     if (seg.piece < 0 || static_cast<size_t>(seg.piece) >= sessions.size()) continue;
@@ -184,7 +182,7 @@ Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& c, int s
     const Quantity* col[3];
     bool have = true;
     for (int a = 0; a < 3; ++a) {
-      col[a] = FindColumn(*tag, std::string(1, accel ? 'a' : 'g') + kAxes[a] + suffix);
+      col[a] = FindColumn(*tag, columns[static_cast<size_t>(a)]);
       have = have && col[a] != nullptr;
     }
     if (!have || seg.end > tag->size() || seg.begin >= seg.end) continue;

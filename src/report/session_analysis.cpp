@@ -1,5 +1,6 @@
 #include "metro/report/session_analysis.hpp"
 
+#include "metro/io/columns.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"

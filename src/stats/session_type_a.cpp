@@ -7,6 +7,7 @@
 
 #include "core/parallel.hpp"
 #include "metro/core/angles.hpp"
+#include "metro/stats/derived_quantity.hpp"
 
 namespace metro {
 namespace {
@@ -127,6 +128,11 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
     bool found = false;
     for (const Tag& t : session.tags) found = found || t.Find(name) != nullptr;
     if (!found) {
+      if (std::optional<std::string> why_absent = MissingDerivationInputs(session, name)) {
+        return MakeError(
+            session.path, 0,
+            fmt::format("--quantity {}: no such quantity in the session: {}", name, *why_absent));
+      }
       std::vector<std::string> names;
       for (const Tag& t : session.tags) {
         for (const Quantity& q : t.quantities) {

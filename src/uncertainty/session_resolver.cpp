@@ -4,20 +4,34 @@
 
 #include <map>
 #include <memory>
+#include <optional>
+
+#include "metro/stats/derived_quantity.hpp"
 
 namespace metro {
 namespace {
 
-Result<TypeASummary> Summarize(const std::string& path, const SessionQuantityRef& ref,
+// "sensor 1 has no quantity yaw_deg", with the missing quaternion columns when the quantity
+// is derived from a quaternion the tag holds part of.
+Error NoQuantity(const Session& session, const SessionQuantityRef& ref) {
+  std::string message = fmt::format("sensor {} has no quantity {}", ref.sensor, ref.quantity);
+  const Tag* tag = session.FindTag(ref.sensor);
+  if (tag != nullptr) {
+    if (std::optional<std::string> why = MissingDerivationInputs(*tag, ref.quantity)) {
+      message += ": " + *why;
+    }
+  }
+  return MakeError(session.path, 0, message);
+}
+
+Result<TypeASummary> Summarize(const Session& session, const SessionQuantityRef& ref,
                                const TagTypeA& tag) {
+  const std::string& path = session.path;
   const QuantityTypeA* q = nullptr;
   for (const QuantityTypeA& candidate : tag.quantities) {
     if (candidate.name == ref.quantity) q = &candidate;
   }
-  if (q == nullptr) {
-    return MakeError(path, 0,
-                     fmt::format("sensor {} has no quantity {}", ref.sensor, ref.quantity));
-  }
+  if (q == nullptr) return NoQuantity(session, ref);
   if (!q->ok) {
     return MakeError(path, 0, fmt::format("sensor {} {}: {}", ref.sensor, ref.quantity, q->error));
   }
@@ -33,13 +47,18 @@ Result<TypeASummary> Summarize(const std::string& path, const SessionQuantityRef
 
 Result<TypeASummary> EvaluateRef(const Session& session, const SessionQuantityRef& ref,
                                  const WindowOptions& window) {
+  const Tag* tag = session.FindTag(ref.sensor);
+  if (tag != nullptr && tag->Find(ref.quantity) == nullptr &&
+      MissingDerivationInputs(*tag, ref.quantity)) {
+    return NoQuantity(session, ref);
+  }
   SessionTypeAOptions options;
   options.window = window;
   options.sensors = {ref.sensor};
   options.quantities = {ref.quantity};
   auto evaluated = EvaluateSessionTypeA(session, options);
   if (!evaluated.ok()) return evaluated.error();
-  return Summarize(session.path, ref, evaluated.value().tags.at(0));
+  return Summarize(session, ref, evaluated.value().tags.at(0));
 }
 
 }  // namespace
@@ -57,7 +76,7 @@ SessionQuantityResolver MakeSessionQuantityResolver(const Session& session,
     for (const TagTypeA& tag : evaluated.tags) {
       if (tag.sensor != ref.sensor) continue;
       for (const QuantityTypeA& q : tag.quantities) {
-        if (q.name == ref.quantity) return Summarize(session.path, ref, tag);
+        if (q.name == ref.quantity) return Summarize(session, ref, tag);
       }
     }
     return EvaluateRef(session, ref, window);

@@ -277,6 +277,18 @@ TEST_CASE("Accuracy bad input names what to collect", "[accuracy]") {
           "tag 1 has no yaw_deg (nor a quaternion qw..qz to derive it from): the accuracy "
           "evaluation needs the tag's yaw_deg, pitch_deg and roll_deg");
   }
+  SECTION("part of the quaternion") {
+    Session s = Load("t_s,table_angle_deg\n0,1\n0.1,1\n");
+    for (const char* name : {"qw", "qx"}) {
+      s.tags.front().quantities.push_back({name, "1", QuantityOrigin::kFile, {1.0, 1.0}});
+    }
+    auto r = EvaluateAccuracy(s, nullptr, {});
+    REQUIRE(!r.ok());
+    CHECK(r.error().message ==
+          "tag 1 has no yaw_deg (yaw_deg is derived from qw, qx, qy, qz; the session has qw, qx; "
+          "missing qy, qz): the accuracy evaluation needs the tag's yaw_deg, pitch_deg and "
+          "roll_deg");
+  }
   SECTION("several tags without --sensor, and an unknown one") {
     const Session s = Load("t_s,sensor,yaw_deg,pitch_deg,roll_deg\n0,1,0,0,0\n0,2,0,0,0\n");
     auto r = EvaluateAccuracy(s, nullptr, {});

@@ -129,11 +129,13 @@ struct Calibration {
 
 // The columns the fit needs, checked before fitting so that a session without them is an
 // input error (`calibrate fit` exits 2): for every tag to be calibrated (options.sensor) in
-// every session, a complete accelerometer family (ax ay az with _lsb, _g or _mps2); no
-// incomplete gyroscope family; and, with fit_gyro, gyroscope columns in every session when
-// any session of that tag has them (a tag's records are fitted together). A tag without any
-// gyroscope column anywhere stays an accelerometer-only fit with a warning. The error's file
-// is the session; its message names the sensor and the missing columns.
+// every session, a complete accelerometer family (AxisUnits/FamilyColumns in
+// metro/io/columns.hpp: ax ay az with _lsb, _g or _mps2); no incomplete gyroscope family;
+// and, with fit_gyro, gyroscope columns in every session when any session of that tag has
+// them (a tag's records are fitted together). A tag without any gyroscope column anywhere
+// stays an accelerometer-only fit with a warning. The error's file is the session; its
+// message names the sensor and, for a partial family, the family and its missing columns:
+// "sensor 1: the gyroscope calibration needs gx_dps, gy_dps, gz_dps; missing gx_dps, gy_dps".
 Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
                                const CalibrationOptions& options);
 

@@ -32,6 +32,8 @@
 #include <string_view>
 #include <vector>
 
+#include "metro/io/columns.hpp"
+
 namespace metro {
 
 enum class ModelKind { kBias, kScale, kFull };
@@ -69,12 +71,29 @@ struct SensorModel {
   Eigen::Vector3d Invert(const Eigen::Vector3d& calibrated, double temp_c = 0.0) const;
 };
 
+// The session columns' name for the sensor: kAccelerometer or kGyroscope (columns.hpp).
+SensorKind ColumnSensorKind(ImuSensor sensor);
+
+// "accelerometer", "gyroscope": the sensor as messages name it.
+const char* ImuSensorLongName(ImuSensor sensor);
+
+// The unit of the calibrated output: g (accelerometer), deg/s (gyroscope).
+const Unit& OutputUnit(ImuSensor sensor);
+
+// The unit with symbol `input_unit` if it is one of the sensor's column units (AxisUnits:
+// LSB, g, m/s^2 or LSB, deg/s, rad/s); nullptr otherwise.
+const Unit* InputUnit(ImuSensor sensor, std::string_view input_unit);
+
+// The three session columns of the sensor in `input_unit`, x y z ("LSB" for the
+// accelerometer: ax_lsb, ay_lsb, az_lsb); empty when InputUnit is nullptr.
+std::vector<std::string> InputColumns(ImuSensor sensor, std::string_view input_unit);
+
 // Nominal scale [output unit / input unit] of an input unit: for "LSB" the MPU6050 sensitivity
 // at the full-scale setting `full_scale` (g or deg/s; datasheet PS-MPU-6000A-00 rev 3.4:
 // 16384/8192/4096/2048 LSB/g at +-2/4/8/16 g, 131/65.5/32.8/16.4 LSB/(deg/s) at
 // +-250/500/1000/2000 deg/s; 32768/full_scale for any other range), for physical units the unit
-// conversion to the output unit. Returns nullopt for a unit that does not belong to the sensor
-// or a full_scale <= 0.
+// conversion to the output unit (ConversionFactor). Returns nullopt for a unit that does not
+// belong to the sensor or a full_scale <= 0.
 std::optional<double> NominalScale(ImuSensor sensor, std::string_view input_unit,
                                    double full_scale);
 

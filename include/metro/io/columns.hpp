@@ -64,8 +64,9 @@ struct Unit {
 const Unit* UnitBySymbol(std::string_view symbol);
 const Unit* UnitBySuffix(std::string_view suffix);
 
-// Factor taking a value in `from` to `to` (value_to = value_from * factor), or nullopt when
-// the dimensions differ or either unit has no SI scale (LSB, degC). Where quantities
+// Factor taking a value in `from` to `to` (value_to = value_from * factor): 1 from a unit to
+// itself; nullopt when the dimensions differ or, between two different units, either has
+// no SI scale (LSB, degC). Where quantities
 // combine, this is the check that their units may.
 std::optional<double> ConversionFactor(const Unit& from, const Unit& to);
 
@@ -100,7 +101,8 @@ bool IsValidColumnName(std::string_view name);
 // The time columns in the order they are looked for: t_s, t_ms, t_us, t_ns.
 const std::array<std::string_view, 4>& TimeColumnNames();
 
-// The column of `sensor`'s `axis` in `unit`: AxisColumn(kGyroscope, 'x', deg/s) = "gx_dps".
+// The column of `sensor`'s `axis` in `unit`: AxisColumn(kGyroscope, 'x', deg/s) = "gx_dps";
+// "" for SensorKind::kNone.
 std::string AxisColumn(SensorKind sensor, char axis, const Unit& unit);
 
 // The units an accelerometer or gyroscope column may have, raw counts first:

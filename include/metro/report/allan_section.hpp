@@ -20,13 +20,11 @@ struct SessionAllanOptions {
   AllanOptions allan;
   NoiseFitOptions fit;
   SamplePeriodOptions period;
-  // Quantities to analyse; empty: every rate quantity (gyroscope and accelerometer
-  // columns, any unit) that the Type A evaluation covered.
+  // Quantities to analyse; empty: every rate quantity (IsRateQuantity in
+  // metro/io/columns.hpp: gyroscope and accelerometer columns, any unit) that the Type A
+  // evaluation covered.
   std::vector<std::string> quantities;
 };
-
-// True for gyroscope and accelerometer columns (g*_dps/_rads/_lsb, a*_g/_mps2/_lsb).
-bool IsRateQuantity(const std::string& name);
 
 // Adds the "allan" objects to `report` (built by TypeAReportJson from the same `type_a`).
 // When `csv` is not null it receives every curve as CSV, one block per tag and quantity.
