@@ -33,10 +33,16 @@ Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
       const Quantity* values = tag->Find(q.name);
       const auto b = static_cast<ptrdiff_t>(t.window.begin);
       const auto e = static_cast<ptrdiff_t>(t.window.end);
-      const std::vector<double> t_s(tag->t_s.begin() + b, tag->t_s.begin() + e);
       const std::vector<uint32_t> line(tag->line.begin() + b, tag->line.begin() + e);
       const std::vector<double> rate(values->values.begin() + b, values->values.begin() + e);
-      auto period = EstimateSamplePeriod(t_s, line, options.period);
+      // tau0 from exact integer differences when the file's time was integer (t_ns).
+      auto period = tag->t_ns.size() == tag->t_s.size()
+                        ? EstimateSamplePeriodNs(
+                              std::vector<int64_t>(tag->t_ns.begin() + b, tag->t_ns.begin() + e),
+                              line, options.period)
+                        : EstimateSamplePeriod(
+                              std::vector<double>(tag->t_s.begin() + b, tag->t_s.begin() + e), line,
+                              options.period);
       if (!period.ok()) {
         Error err = period.error();
         err.file = session.path;

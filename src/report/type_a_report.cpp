@@ -162,6 +162,11 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
                  report["input"]["format"].get<std::string>(),
                  report["input"]["rows"].get<int64_t>(),
                  report["input"]["rejected_rows"].get<int64_t>());
+  if (report["input"].contains("notes")) {
+    for (const auto& note : report["input"]["notes"]) {
+      fmt::format_to(it, "  note: {}\n", note.get<std::string>());
+    }
+  }
   fmt::format_to(it, "{:>6} {:<16} {:<18} {:>8} {:>14} {:>10} {:>10} {:>10} {:>10}\n", "sensor",
                  "name", "quantity", "n", "mean", "s", "s(mean)", "n_eff", "u(mean)");
   for (const auto& s : report["sensors"]) {
@@ -188,6 +193,13 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
     }
   }
   bool any_warning = false;
+  if (report["input"].contains("warnings")) {
+    for (const auto& wmsg : report["input"]["warnings"]) {
+      if (!any_warning) out += "\nwarnings:\n";
+      any_warning = true;
+      fmt::format_to(it, "  input: {}\n", wmsg.get<std::string>());
+    }
+  }
   for (const auto& s : report["sensors"]) {
     for (const auto& wmsg : s["warnings"]) {
       if (!any_warning) out += "\nwarnings:\n";

@@ -1,0 +1,75 @@
+// The report's `input` block says how a text file was read (docs/report-schema.md): the
+// dialect, every renamed column, the time column and its unit, notes and warnings, and the
+// table for people shows the warnings.
+#include <catch2/catch.hpp>
+#include <string>
+
+#include "metro/report/session_analysis.hpp"
+#include "support/temp_file.hpp"
+
+namespace metro {
+namespace {
+
+using testing::TempFile;
+
+TEST_CASE("the input block records the dialect, mapping and time", "[report][dialect]") {
+  // 1.5 and 2.5 deg/s: mean 2, written with decimal commas; times in ms.
+  TempFile file(
+      "\xEF\xBB\xBF"
+      "Time (ms);gyro_z (deg/s)\r\n0;1,5\r\n10;2,5\r\n20;1,5\r\n30;2,5\r\n");
+  SessionAnalysisOptions options;
+  options.load.column_map = {{"Time (ms)", "t_ms"}, {"gyro_z (deg/s)", "gz_dps"}};
+  SessionAnalysis a = AnalyzeSession(file.path(), options);
+  REQUIRE(a.ok);
+  const auto& input = a.report["input"];
+  CHECK(input["format"] == "csv");
+  CHECK(input["dialect"]["delimiter"] == ";");
+  CHECK(input["dialect"]["decimal_point"] == ",");
+  CHECK(input["dialect"]["line_ends"] == "CRLF");
+  CHECK(input["dialect"]["bom"] == true);
+  REQUIRE(input["mapping"].size() == 2);
+  CHECK(input["mapping"][1]["source"] == "gyro_z (deg/s)");
+  CHECK(input["mapping"][1]["canonical"] == "gz_dps");
+  CHECK(input["time"]["unit"] == "ms");
+  CHECK(input["time"]["integer"] == true);
+  CHECK(input["time"]["origin_ns"] == 0);
+  const auto& q = a.report["sensors"][0]["quantities"]["gz_dps"]["type_a"];
+  CHECK(q["n"] == 4);
+  CHECK(q["mean"].get<double>() == 2.0);
+  // Sample variance of 1.5, 2.5, 1.5, 2.5: 4 * 0.25 / 3.
+  CHECK(q["variance"].get<double>() == Approx(1.0 / 3.0).epsilon(1e-15));
+}
+
+TEST_CASE("input warnings reach the table", "[report][dialect]") {
+  TempFile file("t_ns,gz_dps\n1.0E+10,1\n1.1E+10,2\n1.2E+10,3\n");
+  SessionAnalysis a = AnalyzeSession(file.path(), SessionAnalysisOptions{});
+  REQUIRE(a.ok);
+  REQUIRE(a.report["input"]["warnings"].size() == 1);
+  // 1.1E+10 ns = 11 s: its last written digit is the 1e9 ns place.
+  CHECK(a.report["input"]["time"]["resolution_s"].get<double>() == 1.0);
+  CHECK_THAT(a.table, Catch::Contains("input: t_ns is written in E-notation"));
+}
+
+TEST_CASE("Allan tau0 of an epoch-nanosecond clock comes from integer differences",
+          "[report][dialect][allan]") {
+  // 200 Hz from 1.4e18 ns: as doubles of seconds the period would come out 0.004999876 s.
+  std::string text = "t_ns,gz_rads\n";
+  uint64_t state = 12345;
+  for (int i = 0; i < 400; ++i) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    const double noise = static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5;
+    text +=
+        std::to_string(1403636579758555392LL + 5000000LL * i) + "," + std::to_string(noise) + "\n";
+  }
+  TempFile file(text);
+  SessionAnalysisOptions options;
+  options.allan = true;
+  SessionAnalysis a = AnalyzeSession(file.path(), options);
+  REQUIRE(a.ok);
+  const auto& period = a.report["sensors"][0]["quantities"]["gz_rads"]["allan"]["sample_period"];
+  CHECK(period["tau0_s"].get<double>() == 0.005);
+  CHECK(period["jitter_rms_s"].get<double>() == 0.0);
+}
+
+}  // namespace
+}  // namespace metro
