@@ -7,6 +7,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
+#include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
 namespace {
@@ -23,8 +24,14 @@ int RunApply(const ApplyOptions& a) {
     fmt::print(stderr, "error: apply takes one SESSION (or ACC GYRO with --imutk)\n");
     return kExitUsage;
   }
+  if (Status s = apps::CheckStdinInputs(a.inputs, a.imutk); !s.ok()) {
+    fmt::print(stderr, "error: {}\n", s.error().ToString());
+    return kExitUsage;
+  }
   for (const std::string& in : a.inputs) {
-    if (IsSameFile(in, a.output) || IsSameFile(a.calibration, a.output)) {
+    if (apps::IsStdio(a.output)) break;
+    const std::string in_file = apps::IsStdio(in) ? "/dev/stdin" : in;
+    if (IsSameFile(in_file, a.output) || IsSameFile(a.calibration, a.output)) {
       fmt::print(stderr, "error: the output {} is one of the inputs\n", a.output);
       return kExitUsage;
     }
@@ -46,12 +53,13 @@ int RunApply(const ApplyOptions& a) {
     fmt::print(stderr, "error: {}\n", summary.error().ToString());
     return kExitUsage;
   }
-  if (Status w = WriteFileAtomically(a.output, FormatSessionCsv(s, true)); !w.ok()) {
+  if (Status w = apps::WriteOutput(a.output, FormatSessionCsv(s, true)); !w.ok()) {
     fmt::print(stderr, "error: {}\n", w.error().ToString());
     return kExitFailed;
   }
-  fmt::print(stderr, "wrote {}: {} tags, {} rows calibrated\n", a.output,
-             summary.value().tags_calibrated, summary.value().rows);
+  apps::Note(fmt::format("wrote {}: {} tags, {} rows calibrated\n",
+                         apps::IsStdio(a.output) ? "stdout" : a.output,
+                         summary.value().tags_calibrated, summary.value().rows));
   return kExitOk;
 }
 
@@ -66,10 +74,11 @@ void AddApplyCommand(CLI::App& app, int* exit_code) {
   sub->add_option("calibration", o->calibration, "calibration.json")
       ->required()
       ->check(CLI::ExistingFile);
-  sub->add_option("session", o->inputs, "SESSION (or ACC GYRO with --imutk)")
+  sub->add_option("session", o->inputs, "SESSION (or ACC GYRO with --imutk); - reads stdin")
       ->required()
-      ->check(CLI::ExistingFile);
-  sub->add_option("-o,--output", o->output, "calibrated session.csv to write")->required();
+      ->check(apps::ExistingFileOrStdin());
+  sub->add_option("-o,--output", o->output, "calibrated session.csv to write (- for stdout)")
+      ->required();
   sub->add_flag("--imutk", o->imutk, "the session is an imu_tk pair: ACC GYRO");
   sub->callback([o, exit_code] { *exit_code = RunApply(*o); });
 }

@@ -9,6 +9,7 @@
 #include "metro/blob/intel_hex.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
+#include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
 namespace {
@@ -57,13 +58,20 @@ int RunBlob(const BlobOptions& b) {
     fmt::print(stderr, "error: {}\n", slot_a.error().message);
     return kExitUsage;
   }
+  for (Status s : {apps::CheckOneStdout({{"-o", &b.output}, {"--hex", &b.hex}}),
+                   apps::CheckBinaryStdout(b.output)}) {
+    if (!s.ok()) {
+      fmt::print(stderr, "error: {}\n", s.error().ToString());
+      return kExitUsage;
+    }
+  }
   for (const std::string& out : {b.output, b.hex}) {
-    if (!out.empty() && IsSameFile(b.calibration, out)) {
+    if (!out.empty() && !apps::IsStdio(out) && IsSameFile(b.calibration, out)) {
       fmt::print(stderr, "error: the output {} is the input\n", out);
       return kExitUsage;
     }
   }
-  if (!b.hex.empty() && IsSameFile(b.output, b.hex)) {
+  if (!b.hex.empty() && !apps::IsStdio(b.hex) && IsSameFile(b.output, b.hex)) {
     fmt::print(stderr, "error: -o and --hex name the same file\n");
     return kExitUsage;
   }
@@ -90,26 +98,30 @@ int RunBlob(const BlobOptions& b) {
     return kExitUsage;
   }
   const std::vector<uint8_t>& v = bytes.value();
-  if (Status w = WriteFileAtomically(
+  if (Status w = apps::WriteOutput(
           b.output, std::string_view(reinterpret_cast<const char*>(v.data()), v.size()));
       !w.ok()) {
     fmt::print(stderr, "error: {}\n", w.error().ToString());
     return kExitFailed;
   }
   const uint32_t crc = blob::Crc32(v.data(), v.size() - 4);
-  fmt::print(stderr, "wrote {}: {} bytes, sensor {}, device {}, seq {}, CRC-32 0x{:08X}\n",
-             b.output, v.size(), b.sensor, blob::FormatDeviceId(id.value()), b.seq, crc);
+  apps::Note(fmt::format("wrote {}: {} bytes, sensor {}, device {}, seq {}, CRC-32 0x{:08X}\n",
+                         apps::IsStdio(b.output) ? "stdout" : b.output, v.size(), b.sensor,
+                         blob::FormatDeviceId(id.value()), b.seq, crc));
   if (!b.hex.empty()) {
     Result<std::string> hex = blob::WriteIntelHex(
         blob::FactoryImage(v, slot_a.value(), slot_a.value() + blob::kPageSize));
     METRO_CHECK(hex.ok());  // two sorted, disjoint pages
-    if (Status w = WriteFileAtomically(b.hex, hex.value()); !w.ok()) {
+    if (Status w = apps::WriteOutput(b.hex, hex.value()); !w.ok()) {
       fmt::print(stderr, "error: {}\n", w.error().ToString());
       return kExitFailed;
     }
-    fmt::print(stderr, "wrote {}: blob at 0x{:05X} (slot A), tombstone at 0x{:05X} (slot B)\n",
-               b.hex, slot_a.value(), slot_a.value() + blob::kPageSize);
-    fmt::print(stderr, "program with: {}\n", blob::NrfjprogCommand(b.hex));
+    apps::Note(fmt::format("wrote {}: blob at 0x{:05X} (slot A), tombstone at 0x{:05X} (slot B)\n",
+                           apps::IsStdio(b.hex) ? "stdout" : b.hex, slot_a.value(),
+                           slot_a.value() + blob::kPageSize));
+    if (!apps::IsStdio(b.hex)) {
+      apps::Note(fmt::format("program with: {}\n", blob::NrfjprogCommand(b.hex)));
+    }
   }
   return kExitOk;
 }
@@ -131,8 +143,10 @@ void AddBlobCommand(CLI::App& app, int* exit_code) {
       ->required();
   sub->add_option("--seq", o->seq, "blob sequence number, 1..4294967294 (default 1)")
       ->check(CLI::Range(1u, 0xFFFFFFFEu));
-  sub->add_option("-o,--output", o->output, "tag.bin to write")->required();
-  sub->add_option("--hex", o->hex, "also write this Intel HEX: blob at slot A, tombstone at B");
+  sub->add_option("-o,--output", o->output, "tag.bin to write (- for stdout, not a terminal)")
+      ->required();
+  sub->add_option("--hex", o->hex,
+                  "also write this Intel HEX: blob at slot A, tombstone at B (- for stdout)");
   sub->add_option("--slot-address", o->slot_address,
                   "slot A address in the HEX (default 0x3B000); slot B is the next page");
   sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")

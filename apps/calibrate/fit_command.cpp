@@ -5,10 +5,12 @@
 
 #include "cli_progress.hpp"
 #include "commands.hpp"
+#include "load_cli.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/certificate.hpp"
+#include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
 namespace {
@@ -28,7 +30,8 @@ struct FitOptions {
   std::string loss = "none";
   double loss_scale = 3.0;
   bool accel_only = false;
-  std::string html;  // Calibration certificate (docs/reports.md).
+  std::string html;           // Calibration certificate (docs/reports.md).
+  apps::LoadCliOptions load;  // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
 };
 
 int RunFit(const FitOptions& f) {
@@ -63,9 +66,18 @@ int RunFit(const FitOptions& f) {
     fmt::print(stderr, "error: --imutk takes pairs of files: ACC GYRO [ACC GYRO ...]\n");
     return kExitUsage;
   }
+  if (Status s = apps::CheckStdinInputs(f.inputs, f.imutk); !s.ok()) {
+    fmt::print(stderr, "error: {}\n", s.error().ToString());
+    return kExitUsage;
+  }
+  if (Status s = apps::RefuseStdout(f.html, "--html", "the certificate goes to a file"); !s.ok()) {
+    fmt::print(stderr, "error: {}\n", s.error().ToString());
+    return kExitUsage;
+  }
   for (const std::string& in : f.inputs) {
+    const std::string in_file = apps::IsStdio(in) ? "/dev/stdin" : in;
     for (const std::string* out : {&f.output, &f.html}) {
-      if (!out->empty() && IsSameFile(in, *out)) {
+      if (!out->empty() && !apps::IsStdio(*out) && IsSameFile(in_file, *out)) {
         fmt::print(stderr, "error: the output {} is one of the inputs\n", *out);
         return kExitUsage;
       }
@@ -76,6 +88,10 @@ int RunFit(const FitOptions& f) {
   TerminalProgress progress(stderr, apps::CliProgressOptions());  // Loads (bytes), then the fit.
   for (size_t i = 0; i < f.inputs.size(); i += step) {
     LoadOptions load;
+    if (Status st = apps::MakeLoadOptions(f.load, &load); !st.ok()) {
+      fmt::print(stderr, "error: {}\n", st.error().ToString());
+      return kExitUsage;
+    }
     if (!f.imutk) {
       BeginLoadPhase(&progress, f.inputs[i]);
       load.on_bytes_parsed = [&progress](int64_t n) { progress.Advance(n); };
@@ -103,26 +119,34 @@ int RunFit(const FitOptions& f) {
     fmt::print(stderr, "error: {}\n", cal.error().ToString());
     return kExitFailed;
   }
-  if (Status w = WriteFileAtomically(f.output, FormatCalibrationJson(cal.value())); !w.ok()) {
+  if (Status w = apps::WriteOutput(f.output, FormatCalibrationJson(cal.value())); !w.ok()) {
     fmt::print(stderr, "error: {}\n", w.error().ToString());
     return kExitFailed;
   }
+  // The summary is a note (not under --quiet); the warnings always print.
   for (const TagCalibration& t : cal.value().tags) {
     int counts[3] = {0, 0, 0};
     for (const Segment& s : t.segments) ++counts[static_cast<int>(s.kind)];
-    fmt::print(stderr, "sensor {}: {} static, {} table, {} rotation segments (factor {})\n",
-               t.sensor, counts[0], counts[1], counts[2], t.threshold_factor);
+    apps::Note(fmt::format("sensor {}: {} static, {} table, {} rotation segments (factor {})\n",
+                           t.sensor, counts[0], counts[1], counts[2], t.threshold_factor));
     if (t.accel) {
-      fmt::print(stderr, "  accel residual rms {:.3g} {} ({:.3g} m/s^2)\n", t.accel->residual_rms,
-                 t.accel->residual_unit, t.accel->residual_rms * kStandardGravityMps2);
+      apps::Note(fmt::format("  accel residual rms {:.3g} {} ({:.3g} m/s^2)\n",
+                             t.accel->residual_rms, t.accel->residual_unit,
+                             t.accel->residual_rms * kStandardGravityMps2));
     }
     if (t.gyro) {
-      fmt::print(stderr, "  gyro residual rms {:.3g} {}\n", t.gyro->residual_rms,
-                 t.gyro->residual_unit);
+      apps::Note(fmt::format("  gyro residual rms {:.3g} {}\n", t.gyro->residual_rms,
+                             t.gyro->residual_unit));
     }
-    for (const std::string& w : t.warnings) fmt::print(stderr, "  warning: {}\n", w);
+    for (const std::string& w : t.warnings) {
+      if (apps::Quiet()) {
+        fmt::print(stderr, "warning: sensor {}: {}\n", t.sensor, w);
+      } else {
+        fmt::print(stderr, "  warning: {}\n", w);
+      }
+    }
   }
-  fmt::print(stderr, "wrote {}\n", f.output);
+  apps::Note(fmt::format("wrote {}\n", apps::IsStdio(f.output) ? "stdout" : f.output));
   if (!f.html.empty()) {
     CertificateOptions certificate;
     certificate.accel_fs_g = f.accel_fs_g;
@@ -135,7 +159,7 @@ int RunFit(const FitOptions& f) {
       fmt::print(stderr, "error: {}\n", s.error().ToString());
       return kExitFailed;
     }
-    fmt::print(stderr, "wrote {}\n", f.html);
+    apps::Note(fmt::format("wrote {}\n", f.html));
   }
   return kExitOk;
 }
@@ -148,11 +172,13 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
       "fit",
       "fit the calibration of every tag in the sessions (static poses, table runs, "
       "hand rotations) and write calibration.json");
-  sub->add_option("sessions", o->inputs, "SESSION... (session.csv; ACC GYRO pairs with --imutk)")
+  sub->add_option("sessions", o->inputs,
+                  "SESSION... (session.csv; ACC GYRO pairs with --imutk); - reads stdin")
       ->required()
-      ->check(CLI::ExistingFile);
-  sub->add_option("-o,--output", o->output, "calibration.json to write")->required();
+      ->check(apps::ExistingFileOrStdin());
+  sub->add_option("-o,--output", o->output, "calibration.json to write (- for stdout)")->required();
   sub->add_flag("--imutk", o->imutk, "inputs are imu_tk file pairs: ACC GYRO [ACC GYRO ...]");
+  apps::AddLoadCliOptions(sub, &o->load, /*full_scale_flags=*/false);
   sub->add_option("--sensor", o->sensor, "calibrate only this tag (0 = every tag)");
   sub->add_option("--model", o->model, "bias | scale | full, for both sensors")
       ->check(CLI::IsMember({"bias", "scale", "full"}));

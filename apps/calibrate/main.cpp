@@ -5,6 +5,7 @@
 #include <new>
 
 #include "commands.hpp"
+#include "unix_cli.hpp"
 
 int main(int argc, char** argv) {
   namespace app_ns = metro::calibrate_app;
@@ -17,6 +18,8 @@ int main(int argc, char** argv) {
   app_ns::AddBlobCommand(app, &exit_code);
   app_ns::AddInspectCommand(app, &exit_code);
   app_ns::AddPushCommand(app, &exit_code);
+  metro::apps::AddVersionFlag(app, "calibrate");
+  metro::apps::AddQuietFlag(app);  // On the app and every subcommand (docs/unix.md).
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -81,17 +81,21 @@ int RunPush(const PushCliOptions& c) {
   blob::PushSummary s =
       blob::PushCalibration(port.value().get(), cal.value(), bo, expect, po, progress);
   bar.Finish();
-  if (s.tag_answered) {
+  // What the tag and the link did: notes (not under --quiet), except on failure.
+  const bool notes = !s.ok || !apps::Quiet();
+  if (s.tag_answered && notes) {
     fmt::print(stderr, "tag {}: format {}.{}, active slot {}, seq {}\n",
                blob::FormatDeviceId(s.tag.device_id), s.tag.fmt_major, s.tag.fmt_minor,
                s.tag.active_slot < 0 ? "none" : (s.tag.active_slot == 0 ? "A" : "B"),
                s.tag.active_seq);
   }
-  fmt::print(stderr, "link: {} requests, {} frames sent, {} retries, {} NAKs, {} timeouts\n",
-             s.stats.requests, s.stats.frames_sent, s.stats.retries, s.stats.naks,
-             s.stats.timeouts);
+  if (notes) {
+    fmt::print(stderr, "link: {} requests, {} frames sent, {} retries, {} NAKs, {} timeouts\n",
+               s.stats.requests, s.stats.frames_sent, s.stats.retries, s.stats.naks,
+               s.stats.timeouts);
+  }
   if (s.ok) {
-    fmt::print(stderr, "OK: {}\n", s.message);
+    apps::Note(fmt::format("OK: {}\n", s.message));
     return kExitOk;
   }
   fmt::print(stderr, "FAILED: {}\n", s.message);

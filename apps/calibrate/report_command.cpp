@@ -7,6 +7,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/report/html_report.hpp"
+#include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
 namespace {
@@ -17,6 +18,12 @@ struct ReportOptions {
 };
 
 int RunReport(const ReportOptions& r) {
+  if (Status s = apps::RefuseStdout(r.html, "--html",
+                                    "the summary goes to stdout: name a file for the certificate");
+      !s.ok()) {
+    fmt::print(stderr, "error: {}\n", s.error().ToString());
+    return kExitUsage;
+  }
   Result<Calibration> cal = LoadCalibration(r.calibration);
   if (!cal.ok()) {
     fmt::print(stderr, "error: {}\n", cal.error().ToString());
@@ -35,7 +42,7 @@ int RunReport(const ReportOptions& r) {
       fmt::print(stderr, "error: {}\n", s.error().ToString());
       return kExitFailed;
     }
-    fmt::print(stderr, "wrote {}\n", r.html);
+    apps::Note(fmt::format("wrote {}\n", r.html));
   }
   return kExitOk;
 }

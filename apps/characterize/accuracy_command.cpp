@@ -44,8 +44,8 @@ void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
   app.add_option("--table-axis", o->table_axis, "the tag axis the table turns: yaw, pitch, roll")
       ->capture_default_str();
   app.add_option("--reference", o->reference,
-                 "separate reference log (t_s, table_angle_deg), aligned on t_s")
-      ->check(CLI::ExistingFile);
+                 "separate reference log (t_s, table_angle_deg), aligned on t_s; - reads stdin")
+      ->check(ExistingFileOrStdin());
   app.add_option("--reference-u", o->reference_u,
                  "the table's standard uncertainty in deg, or a budget file for it "
                  "(docs/budget-format.md)");
@@ -105,6 +105,14 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     PrintError(MakeError(why));
     return kExitUsage;
   }
+  if (Status s = CheckStdinInputs({in.session, a.reference}); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
+  if (Status s = RefuseStdout(in.html, "--html", "the HTML view goes to a file"); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   for (const std::string* out : {&in.output, &in.html}) {
     if (out->empty()) continue;
     if (Status s = CheckOutputPath(*out, {in.session, a.reference}); !s.ok()) {
@@ -117,11 +125,10 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     return kExitUsage;
   }
   LoadOptions load;
-  load.format = in.format == "csv"        ? SessionFormat::kCsv
-                : in.format == "receiver" ? SessionFormat::kReceiver
-                                          : SessionFormat::kAuto;
-  load.lenient = in.lenient;
-  if (in.frame_period_s > 0.0) load.frame_period_s = in.frame_period_s;
+  if (Status s = MakeLoadOptions(in.load, &load); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   load.threads = in.threads;
   // One line per phase on a terminal: the load in bytes, then the evaluation.
   TerminalProgress progress(stderr, CliProgressOptions());
@@ -166,18 +173,12 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     }
     return kExitOk;
   };
-  if (in.output.empty()) {
-    std::fwrite(json.data(), 1, json.size(), stdout);
-    std::fflush(stdout);
-    return write_html();
-  }
-  if (Status s = WriteFileAtomically(in.output, json); !s.ok()) {
+  // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.
+  if (Status s = WriteOutput(in.output.empty() ? "-" : in.output, json); !s.ok()) {
     PrintError(s.error());
     return kExitFailed;
   }
-  const std::string table = AccuracyReportTable(result.value());
-  std::fwrite(table.data(), 1, table.size(), stdout);
-  std::fflush(stdout);
+  if (!in.output.empty()) PrintTable(AccuracyReportTable(result.value()), in.output);
   return write_html();
 }
 

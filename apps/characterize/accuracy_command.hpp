@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "load_cli.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro::apps {
@@ -28,9 +29,7 @@ struct AccuracyCliOptions {
 // What the accuracy run shares with the main job's options.
 struct AccuracyRunInputs {
   std::string session;
-  std::string format = "auto";
-  double frame_period_s = 0.0;
-  bool lenient = false;
+  LoadCliOptions load;
   std::vector<int> sensors;
   std::string output;
   std::string settle = "none";  // "auto": MSER-5 within each plateau too.

@@ -5,14 +5,7 @@
 namespace metro::apps {
 
 void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o) {
-  app->add_option("--format", o->format, "input format")
-      ->check(CLI::IsMember({"auto", "csv", "receiver"}))
-      ->capture_default_str();
-  app->add_option("--frame-period-s", o->frame_period_s,
-                  "receiver frame period in seconds (default 3281/32768 = 0.10013)")
-      ->check(CLI::PositiveNumber);
-  app->add_flag("--lenient", o->lenient,
-                "skip malformed rows (counted in input.rejected_rows) instead of stopping");
+  AddLoadCliOptions(app, &o->load);
   app->add_option("--skip-samples", o->skip_samples, "drop the first N observations of each tag")
       ->check(CLI::NonNegativeNumber);
   app->add_option("--skip-seconds", o->skip_seconds,
@@ -39,11 +32,7 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o) {
 Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
                                   SessionAnalysisOptions* out) {
   LoadOptions& load = out->load;
-  load.format = o.format == "csv"        ? SessionFormat::kCsv
-                : o.format == "receiver" ? SessionFormat::kReceiver
-                                         : SessionFormat::kAuto;
-  load.lenient = o.lenient;
-  load.frame_period_s = o.frame_period_s;
+  if (Status s = MakeLoadOptions(o.load, &load); !s.ok()) return s;
   load.threads = threads;
   SessionTypeAOptions& type_a = out->type_a;
   type_a.window.skip_samples = o.skip_samples;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "load_cli.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/session_analysis.hpp"
@@ -14,9 +15,7 @@
 namespace metro::apps {
 
 struct AnalysisCliOptions {
-  std::string format = "auto";
-  double frame_period_s = kReceiverFramePeriodS;
-  bool lenient = false;
+  LoadCliOptions load;  // --format, --column, --rate-hz, ... (load_cli.hpp).
   int64_t skip_samples = 0;
   double skip_seconds = 0.0;
   std::optional<double> from_s;
@@ -30,7 +29,7 @@ struct AnalysisCliOptions {
   std::string estimator = "oadev";
 };
 
-// Registers --format, --frame-period-s, --lenient, --skip-samples, --skip-seconds,
+// Registers the load flags (load_cli.hpp), --skip-samples, --skip-seconds,
 // --from-s, --to-s, --settle, --sensor, --quantity, --tag-registry, --allan, --taus and
 // --estimator on `app`.
 void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o);

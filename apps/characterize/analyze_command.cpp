@@ -38,13 +38,20 @@ int RunAnalyze(const AnalyzeOptions& o) {
     window.skip_seconds = a.skip_seconds;
     window.from_s = a.from_s;
     window.to_s = a.to_s;
-    return RunAccuracy(o.accuracy, {o.session, a.format, a.frame_period_s, a.lenient, a.sensors,
-                                    o.output, a.settle, o.threads, o.type_a, o.html, window});
+    return RunAccuracy(o.accuracy, {o.session, a.load, a.sensors, o.output, a.settle, o.threads,
+                                    o.type_a, o.html, window});
   }
   SessionAnalysisOptions options;
   if (Status s = MakeSessionAnalysisOptions(o.analysis, o.threads, &options); !s.ok()) {
     PrintError(s.error());
     return kExitUsage;
+  }
+  for (Status s : {RefuseStdout(o.html, "--html", "the HTML report goes to a file"),
+                   RefuseStdout(o.allan_csv, "--allan-csv", "the Allan curves go to a file")}) {
+    if (!s.ok()) {
+      PrintError(s.error());
+      return kExitUsage;
+    }
   }
   for (const std::string* out : {&o.output, &o.allan_csv, &o.html}) {
     if (out->empty()) continue;
@@ -66,8 +73,8 @@ int RunAnalyze(const AnalyzeOptions& o) {
     return analysis.input_error ? kExitUsage : kExitFailed;
   }
   if (analysis.session.rejected_rows > 0) {
-    fmt::print(stderr, "note: --lenient skipped {} malformed rows (first at line {})\n",
-               analysis.session.rejected_rows, analysis.session.rejected_lines.front());
+    Note(fmt::format("note: --lenient skipped {} malformed rows (first at line {})\n",
+                     analysis.session.rejected_rows, analysis.session.rejected_lines.front()));
   }
   const std::string json = analysis.report.dump(2) + "\n";
   if (!o.allan_csv.empty()) {
@@ -87,32 +94,27 @@ int RunAnalyze(const AnalyzeOptions& o) {
     }
     return kExitOk;
   };
-  if (o.output.empty()) {
-    std::fwrite(json.data(), 1, json.size(), stdout);
-    std::fflush(stdout);
-  } else {
-    if (Status s = WriteFileAtomically(o.output, json); !s.ok()) {
-      PrintError(s.error());
-      return kExitFailed;
-    }
-    std::fwrite(analysis.table.data(), 1, analysis.table.size(), stdout);
+  // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.
+  if (Status s = WriteOutput(o.output.empty() ? "-" : o.output, json); !s.ok()) {
+    PrintError(s.error());
+    return kExitFailed;
   }
-  const int exit_code = write_html();
-  ReleaseSessionSamples(&analysis.session, o.threads);
-  return exit_code;
+  if (!o.output.empty()) PrintTable(analysis.table, o.output);
+  return write_html();
 }
 
 }  // namespace
 
 void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
   auto o = std::make_shared<AnalyzeOptions>();
-  app.add_option("session", o->session, "session.csv or receiver capture")
-      ->check(CLI::ExistingFile);
+  app.add_option("session", o->session, "session.csv or receiver capture; - reads stdin")
+      ->check(ExistingFileOrStdin());
   app.add_flag("--type-a", o->type_a,
                "GUM Type A evaluation of every quantity per tag (the default analysis)");
   AddAnalysisCliOptions(&app, &o->analysis);
   app.add_option("-o,--output", o->output,
-                 "write the JSON report here (atomically) and print a table to stdout");
+                 "write the JSON report here (atomically) and print a table to stdout; -o - "
+                 "writes it to stdout and the table to stderr");
   app.add_option("--allan-csv", o->allan_csv, "also write the Allan curves as CSV here");
   app.add_option("--budget", o->budget,
                  "evaluate this uncertainty budget (docs/budget-format.md); its session inputs "

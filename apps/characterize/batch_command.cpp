@@ -23,6 +23,13 @@ struct BatchCommandOptions {
 };
 
 int RunBatchCommand(const BatchCommandOptions& o) {
+  if (Status s = RefuseStdout(o.output_dir, "-o",
+                              "batch writes a report per session: name a "
+                              "directory");
+      !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   BatchOptions options;
   options.output_dir = o.output_dir;
   options.jobs = o.jobs;
@@ -42,7 +49,9 @@ int RunBatchCommand(const BatchCommandOptions& o) {
     PrintError(inputs.error());
     return kExitUsage;
   }
-  ProgressBar progress("batch", static_cast<int64_t>(inputs.value().size()));
+  ProgressOptions bar;
+  if (Quiet()) bar.mode = ProgressMode::kNever;
+  ProgressBar progress("batch", static_cast<int64_t>(inputs.value().size()), stderr, bar);
   options.on_progress = [&progress](size_t, size_t) { progress.Advance(); };
   const BatchSummary summary = RunBatch(inputs.value(), options);
   progress.Finish();
@@ -53,9 +62,9 @@ int RunBatchCommand(const BatchCommandOptions& o) {
   for (const BatchItem& item : summary.items) {
     if (!item.ok) PrintError(item.error);
   }
-  std::fwrite(summary.table.data(), 1, summary.table.size(), stdout);
-  fmt::print(stderr, "{} of {} sessions analysed; reports and summary.json in {}\n",
-             summary.items.size() - summary.failed, summary.items.size(), o.output_dir);
+  PrintTable(summary.table, o.output_dir);
+  Note(fmt::format("{} of {} sessions analysed; reports and summary.json in {}\n",
+                   summary.items.size() - summary.failed, summary.items.size(), o.output_dir));
   return summary.failed > 0 ? kExitFailed : kExitOk;
 }
 

@@ -32,7 +32,8 @@ void AddBudgetCommand(CLI::App& app, int* exit_code) {
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("-o,--output", options->output_path,
-                  "Write the metro.budget-report/1 JSON here and print the table");
+                  "Write the metro.budget-report/1 JSON here and print the table; -o - "
+                  "writes it to stdout and the table to stderr");
   sub->callback([options, exit_code]() {
     const int code = RunBudget(*options);
     if (exit_code != nullptr) {
@@ -46,7 +47,8 @@ void AddBudgetCommand(CLI::App& app, int* exit_code) {
 int RunBudget(const BudgetOptions& options) { return RunBudget(options, BudgetResolver()); }
 
 int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resolver) {
-  if (!options.output_path.empty() && IsSameFile(options.output_path, options.budget_path)) {
+  if (!options.output_path.empty() && !apps::IsStdio(options.output_path) &&
+      IsSameFile(options.output_path, options.budget_path)) {
     std::fprintf(stderr, "error: the output would overwrite the budget %s\n",
                  options.budget_path.c_str());
     return 2;
@@ -65,15 +67,15 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
     return 2;
   }
   const std::string json = BudgetReportJson(evaluation.value()).dump(2) + "\n";
-  if (options.output_path.empty()) {
-    std::fputs(json.c_str(), stdout);
-  } else {
-    const Status written = WriteFileAtomically(options.output_path, json);
-    if (!written.ok()) {
-      std::fprintf(stderr, "error: %s\n", written.error().ToString().c_str());
-      return 1;
-    }
-    std::fputs(BudgetReportTable(evaluation.value()).c_str(), stdout);
+  // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.
+  const std::string output = options.output_path.empty() ? "-" : options.output_path;
+  const Status written = apps::WriteOutput(output, json);
+  if (!written.ok()) {
+    std::fprintf(stderr, "error: %s\n", written.error().ToString().c_str());
+    return 1;
+  }
+  if (!options.output_path.empty()) {
+    apps::PrintTable(BudgetReportTable(evaluation.value()), options.output_path);
   }
   if (!evaluation.value().ok) {
     std::fprintf(stderr, "error: %s\n",

@@ -1,8 +1,9 @@
 // `characterize budget BUDGET.json [-o REPORT.json]`: evaluates an uncertainty budget (GUM
 // framework, Monte Carlo, GUF validation) and writes the "metro.budget-report/1" JSON.
-// With -o the JSON goes to the file and the readable table to stdout; without, the JSON
-// goes to stdout. Exit codes: 0 ok, 1 the work failed (adaptive Monte Carlo did not settle,
-// output not written), 2 usage or input error (the message names the input).
+// With -o the JSON goes to the file and the readable table to stdout; with -o -, the JSON
+// to stdout and the table to stderr (no table under --quiet); without -o, the JSON to
+// stdout. Exit codes: 0 ok, 1 the work failed (adaptive Monte Carlo did not settle, output
+// not written), 2 usage or input error (the message names the input).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -14,7 +15,7 @@ namespace metro {
 
 struct BudgetOptions {
   std::string budget_path;
-  std::string output_path;  // Empty: JSON to stdout.
+  std::string output_path;  // Empty or "-": JSON to stdout.
 };
 
 // Registers the `budget` subcommand. Its callback stores RunBudget's exit code in

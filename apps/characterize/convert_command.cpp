@@ -1,9 +1,13 @@
-// characterize convert INPUT... -o session.csv [--from auto|receiver|csv|imutk]
+// characterize convert INPUT... -o session.csv [--from auto|receiver|csv|imutk|euroc|raw|
+//   phyphox|sensorlogger]: one session to canonical session.csv, several files of one
+//   recording joined on time, or imu_tk's two files.
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "load_cli.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/io/session_join.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -13,31 +17,52 @@ struct ConvertOptions {
   std::vector<std::string> inputs;
   std::string from = "auto";
   std::string output;
-  double frame_period_s = kReceiverFramePeriodS;
-  bool lenient = false;
+  LoadCliOptions load;  // Its --format is --from here.
 };
 
 int RunConvert(const ConvertOptions& o) {
   LoadOptions load;
-  load.lenient = o.lenient;
-  load.frame_period_s = o.frame_period_s;
+  if (Status s = MakeLoadOptions(o.load, &load); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
+  if (o.from != "imutk" && !ParseSessionFormat(o.from, &load.format)) {
+    PrintError(MakeError("--from " + o.from + ": unknown format"));
+    return kExitUsage;
+  }
+  if (Status s = CheckStdinInputs(o.inputs, o.from == "imutk"); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   Result<Session> session = MakeError("no input");
+  std::string join_comments;
   if (o.from == "imutk") {
     if (o.inputs.size() != 2) {
       PrintError(MakeError("--from imutk takes two inputs: ACC GYRO"));
       return kExitUsage;
     }
     session = LoadImuTk(o.inputs[0], o.inputs[1], load);
-  } else {
-    if (o.inputs.size() != 1) {
-      PrintError(MakeError(fmt::format(
-          "convert takes one input (or ACC GYRO with --from imutk), got {}", o.inputs.size())));
-      return kExitUsage;
-    }
-    load.format = o.from == "receiver" ? SessionFormat::kReceiver
-                  : o.from == "csv"    ? SessionFormat::kCsv
-                                       : SessionFormat::kAuto;
+  } else if (o.inputs.size() == 1) {
     session = LoadSession(o.inputs[0], load);
+  } else {
+    // The per-sensor files of one recording, joined on time (docs/formats.md).
+    std::vector<Session> parts;
+    for (const std::string& input : o.inputs) {
+      auto part = LoadSession(input, load);
+      if (!part.ok()) {
+        PrintError(part.error());
+        return kExitUsage;
+      }
+      parts.push_back(std::move(part).value());
+    }
+    JoinSummary summary;
+    session = JoinSessionsOnTime(parts, &summary);
+    for (size_t i = 0; session.ok() && i < parts.size(); ++i) {
+      const std::string line = fmt::format("joined {}: {} samples, {} in no joined row",
+                                           parts[i].path, summary.samples[i], summary.unmatched[i]);
+      join_comments += "# " + line + "\n";
+      Note(line + "\n");
+    }
   }
   if (Status s = CheckOutputPath(o.output, o.inputs); !s.ok()) {
     PrintError(s.error());
@@ -59,14 +84,16 @@ int RunConvert(const ConvertOptions& o) {
     }
   }
   if (s.rejected_rows > 0) text += fmt::format("# rejected_rows {}\n", s.rejected_rows);
+  text += join_comments;
   text += FormatSessionCsv(s, true);
-  if (Status w = WriteFileAtomically(o.output, text); !w.ok()) {
+  if (Status w = WriteOutput(o.output, text); !w.ok()) {
     PrintError(w.error());
     return kExitFailed;
   }
   int64_t observations = 0;
   for (const Tag& t : s.tags) observations += static_cast<int64_t>(t.size());
-  fmt::print(stderr, "wrote {}: {} tags, {} observations\n", o.output, s.tags.size(), observations);
+  Note(fmt::format("wrote {}: {} tags, {} observations\n", IsStdio(o.output) ? "stdout" : o.output,
+                   s.tags.size(), observations));
   return kExitOk;
 }
 
@@ -75,17 +102,22 @@ int RunConvert(const ConvertOptions& o) {
 void AddConvertCommand(CLI::App& app, int* exit_code) {
   auto o = std::make_shared<ConvertOptions>();
   CLI::App* sub = app.add_subcommand(
-      "convert", "turn a receiver capture or imu_tk's two files into canonical session.csv");
-  sub->add_option("inputs", o->inputs, "INPUT (or ACC GYRO with --from imutk)")
+      "convert",
+      "turn any readable session (receiver capture, EuRoC, raw prints, phyphox, Sensor Logger, "
+      "imu_tk's two files) into canonical session.csv; several files are joined on time");
+  sub->add_option("inputs", o->inputs,
+                  "INPUT, several files of one recording (joined on time), or ACC GYRO with "
+                  "--from imutk; - reads stdin")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(ExistingFileOrStdin());
   sub->add_option("--from", o->from, "input format")
-      ->check(CLI::IsMember({"auto", "receiver", "csv", "imutk"}))
+      ->check(CLI::IsMember(
+          {"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox", "sensorlogger"}))
       ->capture_default_str();
-  sub->add_option("-o,--output", o->output, "session.csv to write")->required();
-  sub->add_option("--frame-period-s", o->frame_period_s, "receiver frame period in seconds")
-      ->check(CLI::PositiveNumber);
-  sub->add_flag("--lenient", o->lenient, "skip malformed rows instead of stopping");
+  sub->add_option("-o,--output", o->output, "session.csv to write (- for stdout)")->required();
+  // The load flags; the input format is --from here.
+  AddLoadCliOptions(sub, &o->load);
+  sub->remove_option(sub->get_option("--format"));
   sub->callback([o, exit_code] { *exit_code = RunConvert(*o); });
 }
 

@@ -7,6 +7,7 @@
 #include "budget_command.hpp"
 #include "commands.hpp"
 #include "metro/uncertainty/session_resolver.hpp"
+#include "unix_cli.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"metro characterize: uncertainty evaluation of IMU sensor-tag sessions"};
@@ -18,6 +19,8 @@ int main(int argc, char** argv) {
   metro::apps::AddBudgetCommand(app, &exit_code);
   metro::apps::AddBatchCommand(app, &exit_code);
   metro::apps::AddReportCommand(app, &exit_code);
+  metro::apps::AddVersionFlag(app, "characterize");
+  metro::apps::AddQuietFlag(app);  // On the app and every subcommand (docs/unix.md).
   // Budget files may name sessions; they are evaluated in full (no window).
   metro::SetBudgetSessionResolver(metro::MakeSessionQuantityResolver("", {}, {}));
   try {

@@ -11,15 +11,18 @@
 namespace metro::apps {
 
 Status CheckOutputPath(const std::string& output, const std::vector<std::string>& inputs) {
+  if (IsStdio(output)) return Status::Ok();
   for (const std::string& input : inputs) {
-    if (output == input || IsSameFile(output, input)) {
+    // `characterize - -o s.csv < s.csv`: stdin's own file.
+    const std::string file = IsStdio(input) ? "/dev/stdin" : input;
+    if (output == input || IsSameFile(output, file)) {
       return MakeError(
           fmt::format("output {} is the input file: refusing to overwrite it", output));
     }
   }
   struct stat st {};
   if (::stat(output.c_str(), &st) == 0) {
-    fmt::print(stderr, "note: replacing existing {}\n", output);
+    Note(fmt::format("note: replacing existing {}\n", output));
   }
   return Status::Ok();
 }

@@ -27,11 +27,11 @@ int RunReportCommand(const ReportCommandOptions& o) {
     PrintError(html.error());
     return kExitUsage;
   }
-  if (Status s = WriteFileAtomically(o.html, html.value()); !s.ok()) {
+  if (Status s = WriteOutput(o.html, html.value()); !s.ok()) {
     PrintError(s.error());
     return kExitFailed;
   }
-  fmt::print(stderr, "wrote {}\n", o.html);
+  Note(fmt::format("wrote {}\n", IsStdio(o.html) ? "stdout" : o.html));
   return kExitOk;
 }
 
@@ -45,7 +45,7 @@ void AddReportCommand(CLI::App& app, int* exit_code) {
       "other schema as tables) "
       "as a self-contained HTML page");
   sub->add_option("json", o->json, "REPORT.json")->required()->check(CLI::ExistingFile);
-  sub->add_option("--html", o->html, "HTML file to write")->required();
+  sub->add_option("--html", o->html, "HTML file to write (- for stdout)")->required();
   sub->add_option("--session", o->session,
                   "the session the report was made from, if it moved (its SHA-256 must match)")
       ->check(CLI::ExistingFile);

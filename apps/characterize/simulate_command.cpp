@@ -52,6 +52,11 @@ int RunTableSimulate(SimulateOptions o) {
     PrintError(MakeError("a receiver capture has no table column: give --reference-output"));
     return kExitUsage;
   }
+  if (Status s = CheckOneStdout({{"-o", &o.output}, {"--reference-output", &o.reference_output}});
+      !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   for (const std::string* out : {&o.output, &o.reference_output}) {
     if (out->empty()) continue;
     if (Status s = CheckOutputPath(*out, {}); !s.ok()) {
@@ -59,8 +64,8 @@ int RunTableSimulate(SimulateOptions o) {
       return kExitUsage;
     }
   }
-  AtomicFileWriter writer(o.output);
-  std::optional<AtomicFileWriter> ref_writer;
+  StreamedOutput writer(o.output);
+  std::optional<StreamedOutput> ref_writer;
   if (!o.reference_output.empty()) ref_writer.emplace(o.reference_output);
   Status s = writer.Open();
   if (s.ok() && ref_writer) s = ref_writer->Open();
@@ -77,7 +82,8 @@ int RunTableSimulate(SimulateOptions o) {
     PrintError(s.error());
     return kExitFailed;
   }
-  fmt::print(stderr, "wrote {} (table, {}, seed {})\n", o.output, o.format, o.table.seed);
+  Note(fmt::format("wrote {} (table, {}, seed {})\n", IsStdio(o.output) ? "stdout" : o.output,
+                   o.format, o.table.seed));
   return kExitOk;
 }
 
@@ -106,7 +112,7 @@ int RunSimulate(SimulateOptions o) {
     PrintError(s.error());
     return kExitUsage;
   }
-  AtomicFileWriter writer(o.output);
+  StreamedOutput writer(o.output);
   if (Status s = writer.Open(); !s.ok()) {
     PrintError(s.error());
     return kExitFailed;
@@ -120,7 +126,8 @@ int RunSimulate(SimulateOptions o) {
     PrintError(s.error());
     return kExitFailed;
   }
-  fmt::print(stderr, "wrote {} ({}, seed {})\n", o.output, o.format, o.sim.seed);
+  Note(fmt::format("wrote {} ({}, seed {})\n", IsStdio(o.output) ? "stdout" : o.output, o.format,
+                   o.sim.seed));
   return kExitOk;
 }
 
@@ -130,7 +137,7 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
   auto o = std::make_shared<SimulateOptions>();
   CLI::App* sub = app.add_subcommand(
       "simulate", "write a static tag session with known truth (docs/simulator.md)");
-  sub->add_option("-o,--output", o->output, "file to write")->required();
+  sub->add_option("-o,--output", o->output, "file to write (- for stdout)")->required();
   sub->add_option("--format", o->format, "csv or receiver")
       ->check(CLI::IsMember({"csv", "receiver"}))
       ->capture_default_str();

@@ -31,8 +31,8 @@ struct Block {
   size_t end = 0;
   uint32_t lines = 0;  // Lines in the block (the last may lack its line end).
   std::vector<uint8_t> sensor;
-  std::vector<double> t_s;       // Time in seconds (t_s columns).
-  std::vector<int64_t> t_ns;     // Or exact integer time in ns (t_ms, t_us, t_ns columns).
+  std::vector<double> t_s;    // Time in seconds (t_s columns).
+  std::vector<int64_t> t_ns;  // Or exact integer time in ns (t_ms, t_us, t_ns columns).
   std::vector<uint32_t> local_line;
   std::vector<double> numeric;    // Row-major, plan.numeric_fields.size() per row.
   std::vector<std::string> text;  // Row-major, plan.text_fields.size() per row.

@@ -60,7 +60,8 @@ struct CleanBlock {
 
 // Bytes per clean-path block. Its stage holds about as many bytes of numbers, half a 1 MB
 // L2; with the block's text and the columns it is appended to it does not stay there
-// whole, but 128 kB to 8 MB blocks measured no faster (docs/benchmarks.md, session 8).
+// whole, but 128 kB to 8 MB blocks measured no faster (docs/benchmarks.md, "One-pass
+// clean path and block size").
 constexpr size_t kCleanBlockBytes = size_t{512} << 10;
 
 // End of a line's last field at `q`: "\n", "\r\n" or the end of the block. Returns the
@@ -344,8 +345,6 @@ void QueueColumnPages(const std::vector<T>& column, uintptr_t* queued, PageQueue
     *queued = want;
   }
 }
-
-
 
 // Appends parsed blocks' stages to the tag columns, in block order, one block at a time
 // (the caller serialises the calls). A tag's columns are reserved, when the tag first

@@ -94,8 +94,8 @@ class NumberSyntax {
     if (decimal_point_ == '.') return ParseExactTimeNs(b, e, ns_per_unit, ns, resolution_ns, why);
     std::string copy(b, e);
     std::replace(copy.begin(), copy.end(), decimal_point_, '.');
-    return ParseExactTimeNs(copy.data(), copy.data() + copy.size(), ns_per_unit, ns,
-                            resolution_ns, why);
+    return ParseExactTimeNs(copy.data(), copy.data() + copy.size(), ns_per_unit, ns, resolution_ns,
+                            why);
   }
 
  private:
@@ -190,8 +190,9 @@ bool ParseRow(const ColumnPlan& plan, const NumberSyntax& syntax, const char* b,
     }
     if (last && at_delimiter) {
       int found = nf + 1;
-      for (const char* q = fe + 1; q < e; q = FieldEnd(q, e, delimiter) + 1) {
-        if (FieldEnd(q, e, delimiter) < e) ++found;
+      for (const char* q = FieldEnd(fe + 1, e, delimiter); q < e;
+           q = FieldEnd(q + 1, e, delimiter)) {
+        ++found;
       }
       block->bad.push_back(
           {local_line, nf + 1, fmt::format("expected {} fields, found {}", nf, found)});
@@ -238,8 +239,8 @@ bool ParseRow(const ColumnPlan& plan, const NumberSyntax& syntax, const char* b,
         block->bad.push_back(
             {local_line, f + 1,
              fmt::format("{}: expected a finite number{}, found '{}' ({})", plan.names[uf],
-                         plan.info[uf].allow_empty ? " or an empty field" : "",
-                         Printable(fb, fe), why)});
+                         plan.info[uf].allow_empty ? " or an empty field" : "", Printable(fb, fe),
+                         why)});
         return false;
       }
       (*numeric_row)[static_cast<size_t>(plan.numeric_slot[uf])] = v;
@@ -391,8 +392,13 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
     if (!b.parsed) break;
     for (uint8_t s : b.sensor) ++per_sensor[s];
   }
-  const bool integer_time = plan.time_ns_per_unit != 0;
   const bool rate_time = plan.time_field < 0;
+  // Rate-timed: integer time too when the period is a whole number of nanoseconds (100 Hz:
+  // 10,000,000 ns), so tau0 is exactly 1 / rate, not a difference of doubles k / rate.
+  const double rate_period_ns = rate_time ? 1e9 / plan.rate_hz : 0.0;
+  const bool rate_integer =
+      rate_time && rate_period_ns == std::round(rate_period_ns) && rate_period_ns < 9e15;
+  const bool integer_time = plan.time_ns_per_unit != 0 || rate_integer;
   std::vector<std::unique_ptr<TagBuilder>> builders(256);
   const size_t nq = plan.numeric_fields.size();
   const size_t nt = plan.text_fields.size();
@@ -466,7 +472,10 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
       TagBuilder& tb = *builders[b.sensor[r]];
       const int64_t line = first_line + b.local_line[r];
       double t = 0.0;
-      if (rate_time) {
+      int64_t t_ns = 0;
+      if (rate_integer) {
+        t_ns = slots[b.sensor[r]]++ * static_cast<int64_t>(rate_period_ns);
+      } else if (rate_time) {
         t = static_cast<double>(slots[b.sensor[r]]++) / plan.rate_hz;
       } else if (integer_time) {
         const int64_t ns = b.t_ns[r];
@@ -474,12 +483,13 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
           const std::string message = fmt::format(
               "{} = {} is not after {} = {} of sensor {} on line {}: rows must be sorted by "
               "strictly increasing time per tag",
-              time_name, ns / plan.time_ns_per_unit, time_name,
-              tb.last_ns / plan.time_ns_per_unit, b.sensor[r], tb.last_line);
+              time_name, ns / plan.time_ns_per_unit, time_name, tb.last_ns / plan.time_ns_per_unit,
+              b.sensor[r], tb.last_line);
           if (Status s = reject(line, plan.time_field + 1, message); !s.ok()) return s.error();
           continue;
         }
         tb.last_ns = ns;
+        t_ns = ns;
       } else {
         t = b.t_s[r];
         if (!(t > tb.last_t)) {
@@ -496,7 +506,7 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
       ++session.rows;
       tb.last_line = static_cast<uint32_t>(line);
       if (integer_time) {
-        tb.tag.t_ns.push_back(b.t_ns[r]);
+        tb.tag.t_ns.push_back(t_ns);
       } else {
         tb.tag.t_s.push_back(t);
       }
@@ -517,6 +527,7 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
       if (tb != nullptr && !tb->tag.t_ns.empty()) origin_ns = std::min(origin_ns, tb->tag.t_ns[0]);
     }
     session.input.time_origin_ns = origin_ns;
+    session.input.time_integer = true;
   }
   for (int s = 1; s < 256; ++s) {
     TagBuilder* tb = builders[static_cast<size_t>(s)].get();

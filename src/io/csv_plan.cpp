@@ -1,5 +1,6 @@
 #include "io/csv_plan.hpp"
 
+#include <fast_float/fast_float.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -9,8 +10,6 @@
 #include <cstring>
 #include <limits>
 #include <map>
-
-#include <fast_float/fast_float.h>
 
 namespace metro::internal {
 namespace {
@@ -57,8 +56,8 @@ std::vector<HeadLine> HeadLines(const MappedFile& file, size_t from, char line_e
   size_t pos = from;
   int64_t number = 0;
   while (pos < file.size() && lines.size() < max_lines) {
-    const char* nl = static_cast<const char*>(
-        std::memchr(file.data() + pos, line_end, file.size() - pos));
+    const char* nl =
+        static_cast<const char*>(std::memchr(file.data() + pos, line_end, file.size() - pos));
     const size_t le = nl != nullptr ? static_cast<size_t>(nl - file.data()) : file.size();
     HeadLine line;
     line.begin = pos;
@@ -99,9 +98,8 @@ bool IsNumber(std::string_view field, char decimal_point) {
 bool IsDataLine(std::string_view line, char delimiter, char decimal_point) {
   const std::vector<std::string> fields = SplitFields(line, delimiter);
   if (fields.empty()) return false;
-  return std::all_of(fields.begin(), fields.end(), [&](const std::string& f) {
-    return IsNumber(f, decimal_point);
-  });
+  return std::all_of(fields.begin(), fields.end(),
+                     [&](const std::string& f) { return IsNumber(f, decimal_point); });
 }
 
 size_t CountOutsideQuotes(std::string_view line, char c) {
@@ -136,6 +134,13 @@ void DetectDelimiter(const std::vector<HeadLine>& lines, InputDialect* dialect) 
       best = d;
     }
   }
+  // A one-column file: a header without any delimiter. Commas in its rows are then decimal
+  // commas, not a second column.
+  if (!texts.empty() && !IsDataLine(texts.front(), ',', '.') &&
+      CountOutsideQuotes(texts.front(), ',') == 0 && CountOutsideQuotes(texts.front(), ';') == 0 &&
+      CountOutsideQuotes(texts.front(), '\t') == 0) {
+    best = ';';
+  }
   dialect->delimiter = best;
   dialect->decimal_point = '.';
   if (best != ',') {
@@ -169,12 +174,12 @@ const Unit* UnitFromText(std::string unit) {
   replace("\xc2\xb5", "u");
   replace("\xce\xbc", "u");
   static const std::array<std::pair<std::string_view, std::string_view>, 24> kAliases = {{
-      {"s", "s"},         {"sec", "s"},         {"ms", "ms"},          {"us", "us"},
-      {"ns", "ns"},       {"deg/s", "deg/s"},   {"dps", "deg/s"},      {"degs^-1", "deg/s"},
-      {"rad/s", "rad/s"}, {"rads^-1", "rad/s"}, {"rads-1", "rad/s"},   {"m/s^2", "m/s^2"},
-      {"m/s2", "m/s^2"},  {"ms^-2", "m/s^2"},   {"ms-2", "m/s^2"},     {"g", "g"},
-      {"deg", "deg"},     {"rad", "rad"},       {"degc", "degC"},      {"c", "degC"},
-      {"lsb", "LSB"},     {"hz", "Hz"},         {"m", "m"},            {"v", "V"},
+      {"s", "s"},         {"sec", "s"},         {"ms", "ms"},        {"us", "us"},
+      {"ns", "ns"},       {"deg/s", "deg/s"},   {"dps", "deg/s"},    {"degs^-1", "deg/s"},
+      {"rad/s", "rad/s"}, {"rads^-1", "rad/s"}, {"rads-1", "rad/s"}, {"m/s^2", "m/s^2"},
+      {"m/s2", "m/s^2"},  {"ms^-2", "m/s^2"},   {"ms-2", "m/s^2"},   {"g", "g"},
+      {"deg", "deg"},     {"rad", "rad"},       {"degc", "degC"},    {"c", "degC"},
+      {"lsb", "LSB"},     {"hz", "Hz"},         {"m", "m"},          {"v", "V"},
   }};
   for (const auto& [alias, symbol] : kAliases) {
     if (u == alias) return UnitBySymbol(symbol);
@@ -235,8 +240,7 @@ std::string NamedFormatColumn(SessionFormat format, const std::string& path,
       const SensorKind sensor = SensorLoggerSensor(path);
       if (lower.size() == 1 && (lower[0] == 'x' || lower[0] == 'y' || lower[0] == 'z') &&
           sensor != SensorKind::kNone) {
-        const Unit* unit =
-            UnitBySymbol(sensor == SensorKind::kGyroscope ? "rad/s" : "m/s^2");
+        const Unit* unit = UnitBySymbol(sensor == SensorKind::kGyroscope ? "rad/s" : "m/s^2");
         return AxisColumn(sensor, lower[0], *unit);
       }
       break;
@@ -280,8 +284,8 @@ size_t FindDataEnd(const MappedFile& file, size_t data_begin, char line_end, cha
     size_t e = end;
     while (e > data_begin && (file.data()[e - 1] == '\n' || file.data()[e - 1] == '\r')) --e;
     if (e == data_begin) break;
-    const char* nl = static_cast<const char*>(
-        memrchr(file.data() + data_begin, line_end, e - data_begin));
+    const char* nl =
+        static_cast<const char*>(memrchr(file.data() + data_begin, line_end, e - data_begin));
     const size_t b = nl != nullptr ? static_cast<size_t>(nl - file.data()) + 1 : data_begin;
     const std::string_view line(file.data() + b, e - b);
     const std::vector<std::string> fields = SplitFields(line, delimiter);
@@ -290,8 +294,8 @@ size_t FindDataEnd(const MappedFile& file, size_t data_begin, char line_end, cha
                                         [](const std::string& f) { return f.empty(); });
     if (!rest_empty) break;
     const bool first_empty = fields.front().empty();
-    const bool first_text = !first_empty && !IsNumber(fields.front(), '.') &&
-                            fields.front().front() != '#';
+    const bool first_text =
+        !first_empty && !IsNumber(fields.front(), '.') && fields.front().front() != '#';
     if (!first_empty && !first_text) break;
     dropped.push_back(Printable(line));
     ++*footer_lines;
@@ -299,9 +303,9 @@ size_t FindDataEnd(const MappedFile& file, size_t data_begin, char line_end, cha
   }
   if (*footer_lines > 0) {
     std::reverse(dropped.begin(), dropped.end());
-    notes->push_back(fmt::format(
-        "{} line(s) after the last data row left out as a spreadsheet footer: {}",
-        *footer_lines, fmt::join(dropped, " | ")));
+    notes->push_back(
+        fmt::format("{} line(s) after the last data row left out as a spreadsheet footer: {}",
+                    *footer_lines, fmt::join(dropped, " | ")));
   }
   return end;
 }
@@ -500,8 +504,8 @@ std::string InferCanonicalName(std::string_view source) {
     return "t_" + std::string(unit->suffix);
   }
   SensorKind sensor = SensorKind::kNone;
-  if (HasPrefix(words, "gyr") || Has(words, "w") || Has(words, "omega") ||
-      Has(words, "angular") || Has(words, "rate")) {
+  if (HasPrefix(words, "gyr") || Has(words, "w") || Has(words, "omega") || Has(words, "angular") ||
+      Has(words, "rate")) {
     sensor = SensorKind::kGyroscope;
   } else if (HasPrefix(words, "acc") || Has(words, "a")) {
     sensor = SensorKind::kAccelerometer;
@@ -540,8 +544,7 @@ SessionFormat DetectNamedFormat(const std::string& path, std::string_view head) 
     for (char d : {',', ';', '\t'}) {
       const std::vector<std::string> f = SplitFields(line, d);
       if (f.size() < 2) continue;
-      if (f[0] == "time (s)" &&
-          std::any_of(f.begin() + 1, f.end(), [](const std::string& n) {
+      if (f[0] == "time (s)" && std::any_of(f.begin() + 1, f.end(), [](const std::string& n) {
             return n.rfind("gyroscope ", 0) == 0 || n.rfind("acceleration ", 0) == 0 ||
                    n.rfind("linear acceleration ", 0) == 0;
           })) {
@@ -674,8 +677,7 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
     dialect.bom = true;
     start = 3;
   }
-  const std::string_view head(file.data() + start,
-                              std::min(file.size() - start, kHeadBytes));
+  const std::string_view head(file.data() + start, std::min(file.size() - start, kHeadBytes));
   const size_t lf = static_cast<size_t>(std::count(head.begin(), head.end(), '\n'));
   const size_t cr = static_cast<size_t>(std::count(head.begin(), head.end(), '\r'));
   const char line_end = lf == 0 && cr > 0 ? '\r' : '\n';
@@ -688,9 +690,8 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
   if (!found_or.ok()) return found_or.error();
   const Found& found = found_or.value();
   *header = found.header;
-  dialect.header_in_comment =
-      IsComment(std::string_view(file.data() + header->line_begin,
-                                 std::min<size_t>(file.size() - header->line_begin, 256)));
+  dialect.header_in_comment = IsComment(std::string_view(
+      file.data() + header->line_begin, std::min<size_t>(file.size() - header->line_begin, 256)));
   if (format == SessionFormat::kAuto || format == SessionFormat::kCsv) {
     const SessionFormat named = DetectNamedFormat(path, head);
     if (format == SessionFormat::kAuto) format = named;
@@ -699,11 +700,15 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
   plan.rate_hz = options.rate_hz;
   for (const auto& [key, value] : found.metadata) {
     const std::string k = Lower(key);
+    double rate_hz = 0.0;
+    const auto parsed = fast_float::from_chars(value.data(), value.data() + value.size(), rate_hz);
+    const bool positive = parsed.ec == std::errc() && parsed.ptr == value.data() + value.size() &&
+                          std::isfinite(rate_hz) && rate_hz > 0.0;
     if ((k == "fs" || k == "rate_hz" || k == "sample rate" || k == "sampling rate") &&
-        options.rate_hz == 0.0 && IsNumber(value, '.')) {
-      plan.rate_hz = std::stod(value);
-      dialect.notes.push_back(fmt::format("metadata '{},{}' sets the sample rate to {} Hz",
-                                          key, value, plan.rate_hz));
+        options.rate_hz == 0.0 && positive) {
+      plan.rate_hz = rate_hz;
+      dialect.notes.push_back(
+          fmt::format("metadata '{},{}' sets the sample rate to {} Hz", key, value, plan.rate_hz));
     }
   }
   if (header->metadata_lines > 0) {
@@ -744,11 +749,10 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
       if (!IsValidColumnName(lower)) {
         const SessionFormat detected = DetectNamedFormat(path, head);
         const std::string hint = format == SessionFormat::kCsv ? FormatHint(detected) : "";
-        return MakeError(
-            path, header->line_number, column,
-            fmt::format("header: column {} is '{}', not a canonical column name "
-                        "([a-z][a-z0-9_]* with its unit, e.g. gx_dps); {}{}",
-                        column, Printable(source), ProposeMapping(source), hint));
+        return MakeError(path, header->line_number, column,
+                         fmt::format("header: column {} is '{}', not a canonical column name "
+                                     "([a-z][a-z0-9_]* with its unit, e.g. gx_dps); {}{}",
+                                     column, Printable(source), ProposeMapping(source), hint));
       }
       name = lower;
     }
@@ -828,11 +832,11 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
     }
     return MakeError(
         path, header->line_number,
-        fmt::format("header: no time column; expected t_s, t_ms, t_us or t_ns (or --rate-hz R "
-                    "for a file without one){}; found '{}'{}",
-                    proposal, Printable(header->text),
-                    format == SessionFormat::kCsv ? FormatHint(DetectNamedFormat(path, head))
-                                                  : ""));
+        fmt::format(
+            "header: no time column; expected t_s, t_ms, t_us or t_ns (or --rate-hz R "
+            "for a file without one){}; found '{}'{}",
+            proposal, Printable(header->text),
+            format == SessionFormat::kCsv ? FormatHint(DetectNamedFormat(path, head)) : ""));
   }
   // Raw counts with full-scale settings: the physical columns beside the counts.
   for (size_t q = 0; q < plan.numeric_fields.size(); ++q) {

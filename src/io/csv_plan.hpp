@@ -31,7 +31,7 @@ struct HeaderLine {
   size_t line_begin = 0;
   size_t data_begin = 0;  // Offset just after the header line.
   int64_t line_number = 0;
-  std::string text;        // Without the line end (and the leading '#' of a comment header).
+  std::string text;            // Without the line end (and the leading '#' of a comment header).
   int64_t metadata_lines = 0;  // Raw format: "key,value" lines before the header.
 };
 
@@ -45,8 +45,8 @@ struct ColumnPlan {
   int sensor_field = -1;
   // Integer time: nanoseconds per unit of the time column (1e6 for t_ms); 0 for t_s.
   int64_t time_ns_per_unit = 0;
-  double rate_hz = 0.0;   // Times i / rate_hz when time_field < 0.
-  size_t data_end = 0;    // Offset where the data rows end (a spreadsheet footer is left out).
+  double rate_hz = 0.0;  // Times i / rate_hz when time_field < 0.
+  size_t data_end = 0;   // Offset where the data rows end (a spreadsheet footer is left out).
   // Raw format with full-scale settings: for each numeric slot, the factor to its derived
   // physical column (0: none), and that column's name.
   std::vector<double> raw_scale;

@@ -33,10 +33,10 @@ struct FormatName {
   const char* name;
 };
 constexpr FormatName kFormatNames[] = {
-    {SessionFormat::kAuto, "auto"},          {SessionFormat::kCsv, "csv"},
-    {SessionFormat::kReceiver, "receiver"},  {SessionFormat::kImuTk, "imutk"},
-    {SessionFormat::kEuroc, "euroc"},        {SessionFormat::kRaw, "raw"},
-    {SessionFormat::kPhyphox, "phyphox"},    {SessionFormat::kSensorLogger, "sensorlogger"},
+    {SessionFormat::kAuto, "auto"},         {SessionFormat::kCsv, "csv"},
+    {SessionFormat::kReceiver, "receiver"}, {SessionFormat::kImuTk, "imutk"},
+    {SessionFormat::kEuroc, "euroc"},       {SessionFormat::kRaw, "raw"},
+    {SessionFormat::kPhyphox, "phyphox"},   {SessionFormat::kSensorLogger, "sensorlogger"},
 };
 
 }  // namespace
@@ -61,15 +61,17 @@ bool ParseSessionFormat(std::string_view name, SessionFormat* format) {
 Result<ColumnMapping> ParseColumnMapping(std::string_view spec) {
   const size_t eq = spec.rfind('=');
   if (eq == std::string_view::npos || eq == 0) {
-    return MakeError(fmt::format("--column '{}': expected SRC=DST, e.g. 'gyro_x (deg/s)=gx_dps' "
-                                 "(or SRC= to leave the column out)",
-                                 spec));
+    return MakeError(
+        fmt::format("--column '{}': expected SRC=DST, e.g. 'gyro_x (deg/s)=gx_dps' "
+                    "(or SRC= to leave the column out)",
+                    spec));
   }
   ColumnMapping m{std::string(spec.substr(0, eq)), std::string(spec.substr(eq + 1))};
   if (!m.canonical.empty() && !IsValidColumnName(m.canonical)) {
-    return MakeError(fmt::format("--column '{}': '{}' is not a canonical column name "
-                                 "([a-z][a-z0-9_]* with its unit, e.g. gx_dps; docs/formats.md)",
-                                 spec, m.canonical));
+    return MakeError(
+        fmt::format("--column '{}': '{}' is not a canonical column name "
+                    "([a-z][a-z0-9_]* with its unit, e.g. gx_dps; docs/formats.md)",
+                    spec, m.canonical));
   }
   return m;
 }
@@ -93,8 +95,7 @@ Result<std::vector<ColumnMapping>> LoadColumnMappings(const std::string& path) {
     auto m = ParseColumnMapping(l);
     if (!m.ok()) {
       return MakeError(path, line, 1,
-                       fmt::format("expected one SRC=DST mapping per line: {}",
-                                   m.error().message));
+                       fmt::format("expected one SRC=DST mapping per line: {}", m.error().message));
     }
     out.push_back(std::move(m).value());
   }
@@ -345,8 +346,8 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
   }
   Result<Session> session = MakeError(path, 0, "not loaded");
   if (format != SessionFormat::kReceiver) {
-    session = internal::LoadSessionCsv(path, options, /*allow_clean_path=*/true, /*hash=*/true,
-                                       format);
+    session =
+        internal::LoadSessionCsv(path, options, /*allow_clean_path=*/true, /*hash=*/true, format);
   } else {
     // Hash the bytes on a second thread while the parser works.
     Result<std::string> digest = std::string();
@@ -402,9 +403,8 @@ std::string FormatSessionCsv(const Session& session, bool include_derived) {
   }
   // Exact integer times stay exact: t_ns when every tag has them.
   const bool exact_time = !session.tags.empty() &&
-                          std::all_of(session.tags.begin(), session.tags.end(), [](const Tag& t) {
-                            return t.t_ns.size() == t.t_s.size();
-                          });
+                          std::all_of(session.tags.begin(), session.tags.end(),
+                                      [](const Tag& t) { return t.t_ns.size() == t.t_s.size(); });
   std::string out;
   out.reserve(64 * 1024);
   auto it = std::back_inserter(out);

@@ -44,8 +44,7 @@ Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
   // One cut of the file, shared by the clean path and the general loader (so a block is
   // the same block for both, which BlockProgress relies on).
   const char line_end = plan.dialect.line_ends == "CR" ? '\r' : '\n';
-  std::vector<Block> blocks =
-      CutBlocks(file, header.data_begin, plan.data_end, line_end, threads);
+  std::vector<Block> blocks = CutBlocks(file, header.data_begin, plan.data_end, line_end, threads);
   BlockProgress progress(options.on_bytes_parsed, blocks.size());
   // The comments and the header line before the first block, and a footer left out.
   if (options.on_bytes_parsed) {
@@ -84,9 +83,7 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
         digest = Sha256Hex(std::string_view(file.data(), file.size()), kHashChunkBytes,
                            [&release](size_t hashed) { release.Hashed(hashed); });
       },
-      [&] {
-        session = LoadMappedCsv(path, file, options, format, allow_clean_path, &release);
-      });
+      [&] { session = LoadMappedCsv(path, file, options, format, allow_clean_path, &release); });
   if (session->ok() && hash) session->value().sha256 = std::move(digest);
   return *std::move(session);
 }

@@ -122,7 +122,8 @@ Result<Session> JoinSessionsOnTime(const std::vector<Session>& parts, JoinSummar
         if (tags[p] == nullptr) continue;
         const size_t j = match[p][i];
         used[p][j] = true;
-        for (const Quantity& q : tags[p]->quantities) tag.quantities[k++].values.push_back(q.values[j]);
+        for (const Quantity& q : tags[p]->quantities)
+          tag.quantities[k++].values.push_back(q.values[j]);
       }
     }
     for (size_t p = 0; p < parts.size(); ++p) {
@@ -150,9 +151,10 @@ Result<Session> JoinSessionsOnTime(const std::vector<Session>& parts, JoinSummar
     }
   }
   if (out.tags.empty()) {
-    return MakeError(fmt::format("no sample of {} has a sample of every other file within half "
-                                 "a sample period: do the files share a clock?",
-                                 parts[0].path));
+    return MakeError(
+        fmt::format("no sample of {} has a sample of every other file within half "
+                    "a sample period: do the files share a clock?",
+                    parts[0].path));
   }
   return out;
 }

@@ -92,7 +92,12 @@ Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
   // First, before this function opens anything that could take a closed descriptor's
   // number (a closed stdin would otherwise read back our own, empty, copy).
   struct stat st {};
-  if (::fstat(source, &st) != 0) return StdinError("cannot read stdin", errno);
+  if (::fstat(source, &st) != 0) {
+    if (errno == EBADF) {
+      return MakeError(kStdinDisplayName, 0, "stdin is closed: pipe a file in or name it");
+    }
+    return StdinError("cannot read stdin", errno);
+  }
   if (::isatty(source)) return MakeError(kTerminalMessage);
 
   StdinFile out;
@@ -130,8 +135,9 @@ Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
     buffer.push_back('\0');
     const int fd = ::mkostemp(buffer.data(), O_CLOEXEC);
     if (fd < 0) {
+      const int why = errno;
       return StdinError("cannot make a temporary file in " + dir + " to hold stdin" + kNameTheFile,
-                        errno);
+                        why);
     }
     name.assign(buffer.data());
     out.fd_ = fd;
@@ -156,10 +162,11 @@ Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
       return StdinError("cannot read stdin", errno);
     }
     if (!WriteAll(out.fd_, chunk.data(), static_cast<size_t>(n))) {
+      const int why = errno;
       return StdinError(std::string("cannot copy stdin to a ") +
                             (out.storage_ == StdinStorage::kMemfd ? "memory" : "temporary") +
                             " file" + kNameTheFile,
-                        errno);
+                        why);
     }
     total += n;
   }

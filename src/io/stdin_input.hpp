@@ -73,7 +73,8 @@ class StdinFile {
 // "<stdin>", except the first, which needs no file name):
 //  - source_fd is a terminal: "reading a session from stdin, but stdin is a terminal: pipe
 //    a file in or name it" (nobody is going to type a session);
-//  - source_fd is closed, or a read fails (the OS's reason);
+//  - source_fd is closed: "stdin is closed: pipe a file in or name it";
+//  - a read fails (the OS's reason);
 //  - neither an in-memory nor a temporary file can be made or filled (e.g. ENOSPC, ENOMEM):
 //    the message suggests naming the file instead.
 Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options = {});

@@ -2,6 +2,8 @@
 // delimiters, decimal commas, line ends, quoting, case, column mappings, time units and
 // the named formats (EuRoC, raw, phyphox, Sensor Logger), each from a file the test writes,
 // each asserting the numbers read. Expected values are the decimals written in the files.
+#include "io/csv_plan.hpp"
+
 #include <fmt/format.h>
 
 #include <catch2/catch.hpp>
@@ -9,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "io/csv_plan.hpp"
 #include "io/session_internal.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/io/session_join.hpp"
@@ -155,8 +156,8 @@ TEST_CASE("E-notation times are read with the resolution they have left", "[io][
   CHECK(ns == 1403636579758560000);
   CHECK(resolution == 10000);
   const std::string plain = "1403636579758555392";
-  REQUIRE(internal::ParseExactTimeNs(plain.data(), plain.data() + plain.size(), 1, &ns,
-                                     &resolution, &why));
+  REQUIRE(internal::ParseExactTimeNs(plain.data(), plain.data() + plain.size(), 1, &ns, &resolution,
+                                     &why));
   CHECK(ns == 1403636579758555392);
   CHECK(resolution == 0);
   const std::string too_big = "9.3e18";
@@ -173,8 +174,8 @@ std::string Euroc(int rows, bool spreadsheet) {
     const int64_t t = 1403636579758555392 + 5000000LL * i;
     const std::string ts =
         spreadsheet ? fmt::format("{:.14E}", static_cast<double>(t)) : std::to_string(t);
-    text += fmt::format("{},{},{},{},{},{},{}\n", ts, -0.0991 + 0.001 * i, 0.1334, 0.0830,
-                        8.1476, -0.3759, -2.4447);
+    text += fmt::format("{},{},{},{},{},{},{}\n", ts, -0.0991 + 0.001 * i, 0.1334, 0.0830, 8.1476,
+                        -0.3759, -2.4447);
   }
   if (spreadsheet) text += ",,,,,,\nStep: 0.005 = 1/200,,,,,,\n";
   return text;
@@ -222,7 +223,13 @@ TEST_CASE("EuRoC after a spreadsheet round trip", "[io][csv][formats]") {
 
 TEST_CASE("a receiver capture opened mid-line", "[io][receiver][formats]") {
   // Two whole frames of sensor 1 after the tail of a line.
-  const std::string whole = "0101" "0000803f" "00000000" "00000000" "00000000" "000000000000000000";
+  const std::string whole =
+      "0101"
+      "0000803f"
+      "00000000"
+      "00000000"
+      "00000000"
+      "000000000000000000";
   REQUIRE(whole.size() == 54);
   const std::string text = "00000000000000\n" + whole + "\n" + whole + "\n" + whole + "\n";
   TempFile file(text, ".txt");
@@ -273,8 +280,8 @@ TEST_CASE("Sensor Logger per-sensor files, and joining them on time", "[io][csv]
   std::string accel = "time,seconds_elapsed,z,y,x\n";
   for (int i = 0; i < 10; ++i) {
     gyro += fmt::format("{},{},{},{},{}\n", t0 + 10000000LL * i, 0.01 * i, 0.3, 0.2, 0.1 * i);
-    accel += fmt::format("{},{},{},{},{}\n", t0 + 2000000 + 10000000LL * i, 0.01 * i + 0.002,
-                         9.8, 0.0, -0.5 * i);
+    accel += fmt::format("{},{},{},{},{}\n", t0 + 2000000 + 10000000LL * i, 0.01 * i + 0.002, 9.8,
+                         0.0, -0.5 * i);
   }
   accel += fmt::format("{},{},{},{},{}\n", t0 + 2000000 + 10000000LL * 10, 0.102, 9.8, 0.0, 5.0);
   TempFile g(gyro, "_Gyroscope.csv");
@@ -375,7 +382,8 @@ TEST_CASE("header names are inferred only when evident", "[io][csv][dialect]") {
   CHECK(internal::InferCanonicalName("timestamp [ns]") == "t_ns");
   CHECK(internal::InferCanonicalName("Time (s)") == "t_s");
   CHECK(internal::InferCanonicalName("Pitch (deg)") == "pitch_deg");
-  CHECK(internal::InferCanonicalName("Temperature (\xC2\xB0" "C)") == "temp_c");
+  CHECK(internal::InferCanonicalName("Temperature (\xC2\xB0"
+                                     "C)") == "temp_c");
   CHECK(internal::InferCanonicalName("gyro_x") == "");
   CHECK(internal::InferCanonicalName("gyro_x (m/s^2)") == "");  // Unit of another sensor.
 }

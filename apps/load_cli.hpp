@@ -1,0 +1,33 @@
+// The input flags every command that loads a session shares: format, dialect mapping, time
+// and raw-count scales (docs/formats.md). One definition, so the commands cannot drift.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "metro/core/status.hpp"
+#include "metro/io/session_io.hpp"
+
+namespace metro::apps {
+
+struct LoadCliOptions {
+  std::string format = "auto";
+  double frame_period_s = kReceiverFramePeriodS;
+  bool lenient = false;
+  std::vector<std::string> columns;  // --column 'SRC=DST', repeatable.
+  std::string columns_file;          // --columns-file FILE: SRC=DST lines.
+  double rate_hz = 0.0;              // --rate-hz: a file without a time column.
+  double accel_fs_g = 0.0;           // --accel-fs-g: raw counts to g beside the counts.
+  double gyro_fs_dps = 0.0;          // --gyro-fs-dps: raw counts to deg/s beside them.
+};
+
+// Registers --format, --frame-period-s, --lenient, --column, --columns-file, --rate-hz and,
+// with `full_scale_flags`, --accel-fs-g and --gyro-fs-dps (calibrate fit has its own).
+void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags = true);
+
+// The library's load options for these flags (threads left as they are). Errors (a bad
+// --column, an unreadable --columns-file) are usage errors.
+Status MakeLoadOptions(const LoadCliOptions& o, LoadOptions* load);
+
+}  // namespace metro::apps

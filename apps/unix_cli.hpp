@@ -1,0 +1,151 @@
+// How both metro programs behave as Unix tools (docs/unix.md): `-` names standard input
+// (a session) or standard output (a report), --version, --quiet.
+#pragma once
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <initializer_list>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "metro/core/file.hpp"
+#include "metro/core/status.hpp"
+#include "metro/core/version.hpp"
+
+namespace metro::apps {
+
+// `-` where a session is read names standard input (the library's LoadSession reads it);
+// where an output is written, standard output.
+inline bool IsStdio(const std::string& path) { return path == "-"; }
+
+// --quiet: set while the command line is parsed (before any command runs), read by the
+// commands. Quiet runs print no progress, notes or human-readable tables; results (a report
+// on stdout, a file) and errors and warnings are never suppressed.
+inline bool& QuietFlag() {
+  static bool quiet = false;
+  return quiet;
+}
+inline bool Quiet() { return QuietFlag(); }
+
+// --version: "<program> (metro) <version>" on stdout, exit 0 (metro/core/version.hpp).
+inline void AddVersionFlag(CLI::App& app, const std::string& program) {
+  app.set_version_flag("--version", fmt::format("{} ({}) {}", program, kToolName, kVersion),
+                       "print the version and exit");
+}
+
+// -q,--quiet on `app` and on each of its subcommands (so call it after adding them): it may
+// be given before or after the subcommand's name.
+inline void AddQuietFlag(CLI::App& app) {
+  const char* help = "no progress, notes or tables: results, warnings and errors only";
+  app.add_flag("-q,--quiet", QuietFlag(), help);
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    sub->add_flag("-q,--quiet", QuietFlag(), help);
+  }
+}
+
+// Prints `text` (a note, "wrote FILE", a summary) to stderr unless --quiet.
+inline void Note(std::string_view text) {
+  if (!Quiet()) std::fwrite(text.data(), 1, text.size(), stderr);
+}
+
+// Prints the human-readable table of a report unless --quiet: to stdout, or to stderr when
+// the report itself goes to stdout (`output` is `-`).
+inline void PrintTable(std::string_view table, const std::string& output) {
+  if (Quiet()) return;
+  std::FILE* stream = IsStdio(output) ? stderr : stdout;
+  std::fwrite(table.data(), 1, table.size(), stream);
+  std::fflush(stream);
+}
+
+// Writes `contents` to standard output (`path` is `-`; flushed, a failed write is an
+// error, e.g. a full disk behind a redirection) or atomically to the file `path`.
+inline Status WriteOutput(const std::string& path, std::string_view contents) {
+  if (!IsStdio(path)) return WriteFileAtomically(path, contents);
+  std::fwrite(contents.data(), 1, contents.size(), stdout);
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    return MakeError(std::string("cannot write to stdout: ") + std::strerror(errno));
+  }
+  return Status::Ok();
+}
+
+// A streamed output: the file `path` written atomically (AtomicFileWriter), or stdout
+// when `path` is `-` (a failed write, e.g. a closed pipe or a full disk, is an error).
+class StreamedOutput {
+ public:
+  explicit StreamedOutput(std::string path) : path_(path), file_(std::move(path)) {}
+  Status Open() { return IsStdio(path_) ? Status::Ok() : file_.Open(); }
+  Status Write(std::string_view chunk) {
+    if (!IsStdio(path_)) return file_.Write(chunk);
+    if (std::fwrite(chunk.data(), 1, chunk.size(), stdout) != chunk.size()) {
+      return MakeError(std::string("cannot write to stdout: ") + std::strerror(errno));
+    }
+    return Status::Ok();
+  }
+  Status Commit() { return IsStdio(path_) ? WriteOutput(path_, "") : file_.Commit(); }
+
+ private:
+  std::string path_;
+  AtomicFileWriter file_;
+};
+
+// Binary data (a blob) is not written to a terminal, as gzip refuses to.
+inline Status CheckBinaryStdout(const std::string& path) {
+  if (IsStdio(path) && ::isatty(STDOUT_FILENO)) {
+    return MakeError("refusing to write binary data to a terminal: redirect stdout or name a file");
+  }
+  return Status::Ok();
+}
+
+// An option that cannot write to standard output: `-` is a usage error, not a file named
+// "-". `why` says what to do instead.
+inline Status RefuseStdout(const std::string& path, const std::string& option,
+                           const std::string& why) {
+  if (!IsStdio(path)) return Status::Ok();
+  return MakeError(fmt::format("{} -: {}", option, why));
+}
+
+// At most one output goes to standard output.
+inline Status CheckOneStdout(
+    std::initializer_list<std::pair<const char*, const std::string*>> outs) {
+  const char* first = nullptr;
+  for (const auto& [option, path] : outs) {
+    if (!IsStdio(*path)) continue;
+    if (first != nullptr) {
+      return MakeError(
+          fmt::format("{} and {} both name stdout (-): give one a file", first, option));
+    }
+    first = option;
+  }
+  return Status::Ok();
+}
+
+// Standard input is read once, and as a session only: at most one input may be `-`, and
+// none with `imutk` (imu_tk pairs are read from named files).
+inline Status CheckStdinInputs(const std::vector<std::string>& inputs, bool imutk = false) {
+  int count = 0;
+  for (const std::string& in : inputs) count += IsStdio(in) ? 1 : 0;
+  if (count > 0 && imutk) {
+    return MakeError("imu_tk files are read by name: stdin (-) takes a session.csv or a capture");
+  }
+  if (count > 1) return MakeError("stdin (-) can be read only once: name the other inputs");
+  return Status::Ok();
+}
+
+// CLI11 check of a session input: an existing file, or `-` (stdin).
+inline CLI::Validator ExistingFileOrStdin() {
+  return CLI::Validator(
+      [](std::string& path) -> std::string {
+        if (IsStdio(path)) return std::string();
+        return CLI::ExistingFile(path);
+      },
+      "FILE|-");
+}
+
+}  // namespace metro::apps

@@ -1,0 +1,89 @@
+// End-to-end: the load flags every command shares (apps/load_cli.hpp) and convert's join of
+// the per-sensor files of one recording, each asserting the numbers that come out.
+#include <catch2/catch.hpp>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "support/run_program.hpp"
+#include "support/temp_file.hpp"
+
+namespace metro {
+namespace {
+
+using testing::TempFile;
+
+testing::ProgramRun Characterize(const std::string& args) {
+  return testing::RunProgram(METRO_CHARACTERIZE_EXE, args);
+}
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST_CASE("characterize reads a mapped header with --column and --rate-hz", "[apps][formats]") {
+  // No time column, a non-canonical header, decimal commas: 2.5, 3.5, 2.5, 3.5 deg/s.
+  TempFile file("Gyro Z (deg/s)\n2,5\n3,5\n2,5\n3,5\n");
+  auto r = Characterize(file.path() + " --type-a --rate-hz 50 --column 'Gyro Z (deg/s)=gz_dps'");
+  REQUIRE(r.exit_code == 0);
+  const auto report = nlohmann::json::parse(r.out);
+  CHECK(report["input"]["time"]["unit"] == "rate");
+  CHECK(report["input"]["time"]["rate_hz"] == 50);
+  const auto& q = report["sensors"][0]["quantities"]["gz_dps"]["type_a"];
+  CHECK(q["mean"].get<double>() == 3.0);
+  CHECK(q["n"] == 4);
+  // Without the mapping: exit 2 and the mapping proposed.
+  auto bad = Characterize(file.path() + " --type-a --rate-hz 50");
+  CHECK(bad.exit_code == 2);
+  CHECK_THAT(bad.err, Catch::Contains("--column 'Gyro Z (deg/s)=gz_dps'"));
+  auto bad_map = Characterize(file.path() + " --type-a --column nonsense");
+  CHECK(bad_map.exit_code == 2);
+  CHECK_THAT(bad_map.err, Catch::Contains("expected SRC=DST"));
+}
+
+TEST_CASE("raw prints with full-scale flags", "[apps][formats]") {
+  TempFile file("Fs,100\nax,ay,az\n0,0,16384\n0,0,16384\n0,0,8192\n0,0,8192\n");
+  auto r = Characterize(file.path() + " --type-a --accel-fs-g 2");
+  REQUIRE(r.exit_code == 0);
+  const auto report = nlohmann::json::parse(r.out);
+  CHECK(report["input"]["format"] == "raw");
+  // 16384 and 8192 counts at 16384 LSB/g: 1 g and 0.5 g, mean 0.75 g.
+  CHECK(report["sensors"][0]["quantities"]["az_g"]["type_a"]["mean"].get<double>() == 0.75);
+  CHECK(report["sensors"][0]["quantities"]["az_lsb"]["type_a"]["mean"].get<double>() == 12288);
+}
+
+TEST_CASE("convert joins Sensor Logger's per-sensor files on time", "[apps][formats]") {
+  const int64_t t0 = 1700000000000000000;
+  std::string gyro = "time,seconds_elapsed,z,y,x\n";
+  std::string accel = "time,seconds_elapsed,z,y,x\n";
+  for (int i = 0; i < 20; ++i) {
+    gyro += std::to_string(t0 + 10000000LL * i) + ",0," + "0.5,0.25," + std::to_string(i) + "\n";
+    // The accelerometer 3 ms later; its first two samples have no gyroscope partner.
+    accel += std::to_string(t0 + 3000000 + 10000000LL * (i - 2)) + ",0,9.75,0,-1\n";
+  }
+  TempFile g(gyro, "_Gyroscope.csv");
+  TempFile a(accel, "_Accelerometer.csv");
+  const std::string out = "metro_cli_joined.csv";
+  std::remove(out.c_str());
+  auto r = Characterize("convert " + g.path() + " " + a.path() + " -o " + out);
+  REQUIRE(r.exit_code == 0);
+  // Gyroscope samples 18, 19 and accelerometer samples 0, 1 have no partner.
+  CHECK_THAT(r.err, Catch::Contains("20 samples, 2 in no joined row"));
+  auto report = Characterize(out + " --type-a");
+  REQUIRE(report.exit_code == 0);
+  const auto j = nlohmann::json::parse(report.out);
+  // Gyro samples 0..17 have accelerometer partners (3 ms away, within half of 10 ms).
+  CHECK(j["sensors"][0]["quantities"]["gx_rads"]["type_a"]["n"] == 18);
+  CHECK(j["sensors"][0]["quantities"]["gx_rads"]["type_a"]["mean"].get<double>() == 8.5);
+  CHECK(j["sensors"][0]["quantities"]["az_mps2"]["type_a"]["mean"].get<double>() == 9.75);
+  CHECK(j["input"]["time"]["unit"] == "ns");
+  CHECK(Slurp(out).find("t_ns,sensor,gz_rads") != std::string::npos);
+  std::remove(out.c_str());
+}
+
+}  // namespace
+}  // namespace metro
