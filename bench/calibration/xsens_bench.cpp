@@ -32,7 +32,7 @@ double Median(std::vector<double> v) {
 int main(int argc, char** argv) {
   const int repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 7;
   const std::string dir =
-      argc > 2 ? argv[2] : std::string(METRO_SHARED_DIR) + "/datasets/external/imu_tk_xsens";
+      argc > 2 ? argv[2] : std::string(METRO_EXTERNAL_DATA_DIR) + "/imu_tk_xsens";
   metro::CalibrationOptions options;
   options.gravity_mps2 = 9.81744;  // As imu_tk's test program for this record.
   std::vector<double> load_s, fit_s, json_s, total_s;

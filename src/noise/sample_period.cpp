@@ -113,12 +113,11 @@ Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
 
 Status CheckSizes(size_t times, size_t lines) {
   if (times != lines) {
-    return MakeError(
-        fmt::format("sample period: {} timestamps but {} line numbers", times, lines));
+    return MakeError(fmt::format("sample period: {} timestamps but {} line numbers", times, lines));
   }
   if (times < 3) {
-    return MakeError(fmt::format("sample period: {} timestamps are too few (at least 3 are needed)",
-                                 times));
+    return MakeError(
+        fmt::format("sample period: {} timestamps are too few (at least 3 are needed)", times));
   }
   return Status::Ok();
 }

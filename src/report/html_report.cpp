@@ -554,8 +554,8 @@ std::optional<Session> ReloadReportSession(const ordered_json& report, const std
       for (const auto& m : input["mapping"]) {
         if (m.is_object() && m.value("source", ordered_json()).is_string() &&
             m.value("canonical", ordered_json()).is_string()) {
-          load.column_map.push_back({m["source"].get<std::string>(),
-                                     m["canonical"].get<std::string>()});
+          load.column_map.push_back(
+              {m["source"].get<std::string>(), m["canonical"].get<std::string>()});
         }
       }
     }

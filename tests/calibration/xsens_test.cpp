@@ -1,4 +1,4 @@
-// imu_tk's public Xsens record (../shared/datasets/external/imu_tk_xsens/, SOURCE.md):
+// imu_tk's public Xsens record (datasets/external/imu_tk_xsens/, SOURCE.md):
 // unsigned 16-bit counts around 32768, no temperature, 100 Hz, an initial 50 s static period
 // and about 37 hand-placed poses. imu_tk's published result on it: 38 static intervals, an
 // accelerometer gravity-norm residual of about 0.008 m/s^2 RMS per static sample (one
@@ -13,7 +13,7 @@ namespace metro {
 namespace {
 
 TEST_CASE("imu_tk Xsens record calibrates at least as well as imu_tk", "[calibration][slow]") {
-  const std::string dir = std::string(METRO_SHARED_DIR) + "/datasets/external/imu_tk_xsens/";
+  const std::string dir = std::string(METRO_EXTERNAL_DATA_DIR) + "/imu_tk_xsens/";
   Result<Session> session = LoadImuTk(dir + "xsens_acc.mat", dir + "xsens_gyro.mat");
   REQUIRE(session.ok());
   CalibrationOptions o;

@@ -40,7 +40,7 @@ TEST_CASE("imu_tk files with different timestamps are refused", "[io][imutk]") {
 }
 
 TEST_CASE("imu_tk Xsens record from the public data set loads", "[io][imutk]") {
-  const std::string dir = std::string(METRO_SHARED_DIR) + "/datasets/external/imu_tk_xsens/";
+  const std::string dir = std::string(METRO_EXTERNAL_DATA_DIR) + "/imu_tk_xsens/";
   auto r = LoadImuTk(dir + "xsens_acc.mat", dir + "xsens_gyro.mat");
   REQUIRE(r.ok());
   const Tag& t = r.value().tags.at(0);

@@ -15,12 +15,13 @@ TEST_CASE("Unit table converts to the conventional units", "[noise]") {
   const UnitConversion& n = dps.terms[static_cast<int>(NoiseTerm::kRandomWalk)];
   CHECK(n.unit == "deg/s*sqrt(s)");
   CHECK(n.unit_conventional == "deg/sqrt(h)");
-  CHECK(n.factor == Approx(60.0));  // metrology-notes sec. 5: deg/sqrt(h) = 60 x deg/s/sqrt(Hz)
+  // IEEE Std 952-1997 Annex C units: deg/sqrt(h) = 60 x deg/s/sqrt(Hz).
+  CHECK(n.factor == Approx(60.0));
   CHECK(dps.terms[static_cast<int>(NoiseTerm::kBiasInstability)].factor == Approx(3600.0));
   CHECK(dps.terms[static_cast<int>(NoiseTerm::kRateRandomWalk)].factor ==
         Approx(std::pow(3600.0, 1.5)));
   // MPU6050 datasheet: one-sided 0.005 deg/s/sqrt(Hz) -> N = 0.0035 deg/s*sqrt(s)
-  // = 0.21 deg/sqrt(h) (metrology-notes sec. 5).
+  // = 0.21 deg/sqrt(h) (IEEE Std 952-1997 Annex C units; docs/noise.md).
   CHECK(0.005 / std::sqrt(2.0) * n.factor == Approx(0.2121).epsilon(1e-3));
   const NoiseUnits rads = NoiseUnitsFor("rad/s");
   CHECK(rads.terms[static_cast<int>(NoiseTerm::kBiasInstability)].factor ==

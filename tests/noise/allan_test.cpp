@@ -12,8 +12,8 @@
 namespace metro {
 namespace {
 
+using testing::ExternalDataPath;
 using testing::ReadStable32;
-using testing::SharedPath;
 
 const std::vector<double> kNbs14 = {892, 809, 823, 798, 671, 644, 883, 903, 677};
 
@@ -23,7 +23,7 @@ double Dev(const std::vector<double>& y, int64_t m, AllanEstimator e) {
 }
 
 TEST_CASE("NBS14 nine-point set matches the published statistics", "[noise]") {
-  // metrology-notes sec. 5 (Riley, NIST SP 1065 test suite), tau0 = 1.
+  // NIST SP 1065 (Riley) test suite, tau0 = 1.
   CHECK(Dev(kNbs14, 1, AllanEstimator::kOadev) == Approx(91.22945).epsilon(1e-7));
   CHECK(Dev(kNbs14, 2, AllanEstimator::kOadev) == Approx(85.95287).epsilon(1e-7));
   CHECK(Dev(kNbs14, 2, AllanEstimator::kAdev) == Approx(115.8082).epsilon(1e-6));
@@ -60,7 +60,7 @@ TEST_CASE("An alternating rate has a closed-form Allan variance", "[noise]") {
 
 TEST_CASE("Regenerated NBS 1000-point frequency data reproduce PHASE.DAT", "[noise]") {
   const std::vector<double> phase_dat =
-      testing::ReadNumberColumn(SharedPath("nbs14_phasedat_stable32/PHASE.DAT"));
+      testing::ReadNumberColumn(ExternalDataPath("nbs14_phasedat_stable32/PHASE.DAT"));
   REQUIRE(phase_dat.size() == 1001);
   const std::vector<double> x = PhaseFromRate(testing::Nbs1000Frequency(), 1.0);
   REQUIRE(x.size() == 1001);
@@ -86,7 +86,7 @@ TEST_CASE("PHASE.DAT deviations and confidence intervals match Stable32", "[nois
         Stable32Case{"phase_dat_ohdev_octave.txt", AllanEstimator::kOhdev}}) {
     INFO(c.file);
     const std::vector<testing::Stable32Row> rows =
-        ReadStable32(SharedPath(std::string("nbs14_phasedat_stable32/") + c.file));
+        ReadStable32(ExternalDataPath(std::string("nbs14_phasedat_stable32/") + c.file));
     REQUIRE(rows.size() == 8);
     for (NoiseIdMethod id : {NoiseIdMethod::kFixed, NoiseIdMethod::kLag1Acf}) {
       AllanOptions options;
@@ -132,7 +132,7 @@ TEST_CASE("OCXO record deviations and intervals match Stable32", "[noise][slow]"
                         Case{"ohdev_octave.txt", AllanEstimator::kOhdev, 2e-3}}) {
     INFO(c.file);
     const std::vector<testing::Stable32Row> rows =
-        ReadStable32(SharedPath(std::string("ocxo_stable32/") + c.file));
+        ReadStable32(ExternalDataPath(std::string("ocxo_stable32/") + c.file));
     REQUIRE(!rows.empty());
     AllanOptions options;
     options.estimator = c.estimator;
@@ -175,7 +175,7 @@ TEST_CASE("OCXO all-tau curves match Stable32 at every averaging factor", "[nois
                         Case{"stable32_ohdev_alltau.txt", AllanEstimator::kOhdev}}) {
     INFO(c.file);
     const std::vector<testing::Stable32Row> rows =
-        ReadStable32(SharedPath(std::string("ocxo_stable32/") + c.file));
+        ReadStable32(ExternalDataPath(std::string("ocxo_stable32/") + c.file));
     AllanOptions options;
     options.estimator = c.estimator;
     options.taus.kind = TauSpacingKind::kAll;

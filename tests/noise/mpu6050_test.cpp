@@ -17,7 +17,7 @@ namespace {
 // Columns ax, ay, az, gx, gy, gz in raw LSB after 4 metadata lines and a header.
 std::vector<std::vector<double>> ReadMpu6050() {
   std::ifstream in(
-      testing::SharedPath("mpu6050_imucalibration_static_7min/example_data_tinit_calc.csv"));
+      testing::ExternalDataPath("mpu6050_imucalibration_static_7min/example_data_tinit_calc.csv"));
   std::vector<std::vector<double>> cols(6);
   std::string line;
   int number = 0;

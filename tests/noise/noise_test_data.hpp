@@ -1,4 +1,5 @@
-// Loaders for the public reference data in ../shared/datasets/external (tests only).
+// Loaders for the public reference data in datasets/external (tests only; the data sets,
+// their sources and licenses are listed in datasets/external/README.md).
 #pragma once
 
 #include <cstdint>
@@ -10,8 +11,9 @@
 
 namespace metro::testing {
 
-inline std::string SharedPath(const std::string& relative) {
-  return std::string(METRO_SHARED_DIR) + "/datasets/external/" + relative;
+// The path of a file under datasets/external, e.g. "ocxo_stable32/adev_octave.txt".
+inline std::string ExternalDataPath(const std::string& relative) {
+  return std::string(METRO_EXTERNAL_DATA_DIR) + "/" + relative;
 }
 
 // One number per line; lines starting with '#' and empty lines are skipped.
@@ -66,7 +68,7 @@ inline std::vector<double> Nbs1000Frequency() {
 
 // The OCXO record as fractional frequency y = (f - 1e7) / 1e7 (allantools' conversion).
 inline std::vector<double> OcxoFractionalFrequency() {
-  std::vector<double> f = ReadNumberColumn(SharedPath("ocxo_stable32/ocxo_frequency.txt"));
+  std::vector<double> f = ReadNumberColumn(ExternalDataPath("ocxo_stable32/ocxo_frequency.txt"));
   for (double& v : f) v = (v - 1.0e7) / 1.0e7;
   return f;
 }

@@ -101,7 +101,7 @@ TEST_CASE("characterize batch exits 1 and names the broken session", "[apps][rep
 TEST_CASE("calibrate fit and report write the certificate", "[apps][report][slow]") {
   Dir d("metro_cli_certificate");
   // imu_tk's public Xsens record (an accelerometer and a gyroscope file).
-  const std::string dir = std::string(METRO_SHARED_DIR) + "/datasets/external/imu_tk_xsens/";
+  const std::string dir = std::string(METRO_EXTERNAL_DATA_DIR) + "/imu_tk_xsens/";
   const std::string session = "--imutk " + dir + "xsens_acc.mat " + dir + "xsens_gyro.mat";
   const std::string cal = (d.path / "calibration.json").string();
   const std::string html = (d.path / "certificate.html").string();

@@ -10,7 +10,9 @@
 namespace metro {
 namespace {
 
-// Zhang's AR(1) test series, 40 values (../shared/design/metrology-notes.md sec. 3).
+// Zhang's AR(1) test series, 40 values, for the autocorrelation-aware u(mean) of N. F. Zhang,
+// "Calculation of the uncertainty of the mean of autocorrelated measurements", Metrologia 43
+// (2006) S276 (method in docs/type-a.md).
 const std::vector<double> kZhang = {10.720, 9.604,  8.076,  9.778,  9.275,  11.098, 12.365, 11.155,
                                     11.885, 10.940, 11.828, 10.956, 10.438, 10.223, 9.745,  11.923,
                                     11.896, 11.593, 10.970, 10.009, 9.842,  11.801, 11.709, 12.945,

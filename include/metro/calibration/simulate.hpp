@@ -3,7 +3,7 @@
 // temperature ramp. The output is raw MPU6050 counts (ax_lsb.. gx_lsb.., int16, saturating),
 // so the calibrator sees what a tag sends.
 //
-// Truth (drawn when random_truth, seedable, per metrology-notes sec. 6, datasheet
+// Truth (drawn when random_truth, seedable, per the MPU-6050 datasheet,
 // PS-MPU-6000A-00 rev 3.4): accel zero-g offset uniform in +-50 mg (x, y) and +-80 mg (z),
 // sensitivity uniform in +-3 % of 16384 LSB/g (at +-2 g), cross-axis uniform in +-2 %;
 // gyro zero-rate offset uniform in +-20 deg/s, sensitivity +-3 % of 131 LSB/(deg/s),

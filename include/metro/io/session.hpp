@@ -50,11 +50,11 @@ struct ColumnMapping {
 // How a text file was read: what the loader detected or was told, so that the report can
 // say it and a reload can repeat it. Nothing is guessed silently.
 struct InputDialect {
-  char delimiter = ',';        // ',', ';' or '\t'.
-  char decimal_point = '.';    // ',' only when the delimiter is not a comma.
-  std::string line_ends = "LF";  // "LF", "CRLF", "CR".
-  bool bom = false;            // A UTF-8 byte-order mark was skipped.
-  bool quoted = false;         // Some header field was quoted.
+  char delimiter = ',';            // ',', ';' or '\t'.
+  char decimal_point = '.';        // ',' only when the delimiter is not a comma.
+  std::string line_ends = "LF";    // "LF", "CRLF", "CR".
+  bool bom = false;                // A UTF-8 byte-order mark was skipped.
+  bool quoted = false;             // Some header field was quoted.
   bool header_in_comment = false;  // The header line started with '#' (EuRoC).
   // Every header name that is not already canonical, with the name it was given.
   std::vector<ColumnMapping> mapping;
@@ -102,7 +102,7 @@ struct FrameCounts {
   int64_t fresh = 0;   // NewData 01: a new packet; these rows are the observations.
   int64_t stale = 0;   // NewData 00: a repeat of the previous packet; not an observation.
   int64_t never = 0;   // NewData ff: nothing ever received; not an observation.
-  // Packet loss ratio per metrology-notes sec. 1: stale frames / all frames.
+  // Packet loss ratio (docs/formats.md, "Receiver capture"): stale frames / all frames.
   double PacketLossRatio() const {
     return frames > 0 ? static_cast<double>(stale) / static_cast<double>(frames) : 0.0;
   }
@@ -110,7 +110,7 @@ struct FrameCounts {
 
 struct Tag {
   int sensor = 1;
-  std::vector<double> t_s;     // Observation times [s], strictly increasing.
+  std::vector<double> t_s;  // Observation times [s], strictly increasing.
   // Exact integer times [ns] when the file's time column was integer (t_ms, t_us, t_ns);
   // empty otherwise. Sample periods and gaps come from their differences, never from
   // doubles of epoch nanoseconds. t_s[i] = (t_ns[i] - InputDialect::time_origin_ns) * 1e-9.

@@ -24,7 +24,7 @@ struct LoadOptions {
   // Receiver frame period: the central's DELTAT = 3281 ticks of its 32768 Hz RTC, i.e.
   // 0.10013 s (exactly 0.100128173828125 s).
   double frame_period_s = kReceiverFramePeriodS;
-  bool derive_euler = true;       // Add yaw/pitch/roll_deg from qw..qz when absent.
+  bool derive_euler = true;  // Add yaw/pitch/roll_deg from qw..qz when absent.
   // Header names mapped to canonical names (--column 'SRC=DST', --columns-file); they
   // take precedence over the named formats' own mappings.
   std::vector<ColumnMapping> column_map;
