@@ -215,7 +215,10 @@ bool ParseRow(const ColumnPlan& plan, const NumberSyntax& syntax, const char* b,
                            name, name.substr(2), Printable(fb, fe), why)});
           return false;
         }
-        block->time_resolution_ns = std::max(block->time_resolution_ns, resolution_ns);
+        // Only a resolution coarser than the column's unit is a loss worth a warning.
+        if (resolution_ns > plan.time_ns_per_unit) {
+          block->time_resolution_ns = std::max(block->time_resolution_ns, resolution_ns);
+        }
       } else if (!syntax.Field(fb, fe, &t, &why)) {
         block->bad.push_back({local_line, f + 1,
                               fmt::format("t_s: expected a finite time in seconds, found '{}' ({})",

@@ -636,7 +636,7 @@ bool ParseExactTimeNs(const char* b, const char* e, int64_t ns_per_unit, int64_t
       }
       value *= 10;
     }
-    if (has_exponent && place > k && mantissa != 0) {
+    if (has_exponent && place > 0 && mantissa != 0) {
       int64_t r = 1;
       for (int i = 0; i < place; ++i) r *= 10;
       *resolution_ns = r;
@@ -862,6 +862,33 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
   } else {
     dialect.accel_fs_g = options.accel_fs_g;
     dialect.gyro_fs_dps = options.gyro_fs_dps;
+  }
+  // Time in seconds written in E-notation (a spreadsheet round trip: 1.40363657975856E+09)
+  // keeps only the digits written: say which resolution is left, from the first data row
+  // (the clean path parses such a column as any number; integer time units are checked row
+  // by row in the general path).
+  if (plan.time_field >= 0 && plan.time_ns_per_unit == 0) {
+    for (const HeadLine& l : lines) {
+      if (l.begin < header->data_begin || IsBlank(l.text) || IsComment(l.text)) continue;
+      const std::vector<std::string> fields = SplitFields(l.text, dialect.delimiter);
+      if (static_cast<size_t>(plan.time_field) >= fields.size()) break;
+      std::string t = fields[static_cast<size_t>(plan.time_field)];
+      std::replace(t.begin(), t.end(), dialect.decimal_point, '.');
+      int64_t ns = 0;
+      int64_t resolution_ns = 0;
+      const char* why = nullptr;
+      if (t.find_first_of("eE") != std::string::npos &&
+          ParseExactTimeNs(t.data(), t.data() + t.size(), 1000000000, &ns, &resolution_ns, &why) &&
+          resolution_ns >= 1000) {
+        dialect.time_resolution_s = static_cast<double>(resolution_ns) / 1e9;
+        dialect.warnings.push_back(fmt::format(
+            "t_s is written in E-notation (a spreadsheet round trip?), '{}' on line {}: its "
+            "last digits are gone, so times are resolved to {:g} s only; sample periods, gaps "
+            "and Allan tau0 are good to that resolution",
+            Printable(l.text.substr(0, 60)), l.number, dialect.time_resolution_s));
+      }
+      break;
+    }
   }
   // Stage 4: a spreadsheet footer.
   int64_t footer = 0;

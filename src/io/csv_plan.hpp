@@ -79,9 +79,10 @@ std::vector<std::string> SplitFields(std::string_view line, char delimiter);
 
 // Parses a time field of integer unit (ns_per_unit nanoseconds) exactly into nanoseconds:
 // digits with an optional fraction and exponent ("1.40363657975856E+018"), as long as the
-// value is a whole number of nanoseconds within int64. `significant_digits_lost` is set to
-// the power of ten (in ns) of the last written digit when that is coarser than 1 unit
-// (E-notation), else 0. Returns false with a reason otherwise.
+// value is a whole number of nanoseconds within int64. `resolution_ns` is set to the power
+// of ten (in ns) of the last written digit when the number has an exponent and that digit
+// is coarser than 1 ns (E-notation: "1.40363657975856E+018" -> 10000), else 0; callers
+// decide which resolution is a loss. Returns false with a reason otherwise.
 bool ParseExactTimeNs(const char* b, const char* e, int64_t ns_per_unit, int64_t* ns,
                       int64_t* resolution_ns, const char** why);
 

@@ -204,6 +204,18 @@ TEST_CASE("EuRoC imu0/data.csv is detected and mapped", "[io][csv][formats]") {
   CHECK_THAT(e, Catch::Contains("--column 'timestamp [ns]=t_ns'"));
 }
 
+TEST_CASE("t_s in E-notation says the resolution it has left", "[io][csv][time]") {
+  // 1.40363657975856E+09 s: the last written digit is the 1e-5 s place.
+  auto r = LoadText("t_s,gz_dps\n1.40363657975856E+09,1\n1.40363657976356E+09,2\n");
+  REQUIRE(r.ok());
+  CHECK(r.value().input.time_resolution_s == 1e-5);
+  REQUIRE(r.value().input.warnings.size() == 1);
+  CHECK_THAT(r.value().input.warnings[0], Catch::Contains("line 2"));
+  auto plain = LoadText("t_s,gz_dps\n0.005,1\n0.010,2\n");
+  REQUIRE(plain.ok());
+  CHECK(plain.value().input.warnings.empty());
+}
+
 TEST_CASE("EuRoC after a spreadsheet round trip", "[io][csv][formats]") {
   auto r = LoadText(Euroc(20, true));
   REQUIRE(r.ok());
