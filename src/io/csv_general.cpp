@@ -477,7 +477,13 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
       double t = 0.0;
       int64_t t_ns = 0;
       if (rate_integer) {
-        t_ns = slots[b.sensor[r]]++ * static_cast<int64_t>(rate_period_ns);
+        if (__builtin_mul_overflow(slots[b.sensor[r]]++, static_cast<int64_t>(rate_period_ns),
+                                   &t_ns)) {
+          return MakeError(path, line,
+                           fmt::format("sample {} at {} Hz is beyond 2^63 ns (292 years) of "
+                                       "time: check the rate",
+                                       slots[b.sensor[r]] - 1, plan.rate_hz));
+        }
       } else if (rate_time) {
         t = static_cast<double>(slots[b.sensor[r]]++) / plan.rate_hz;
       } else if (integer_time) {
@@ -538,8 +544,25 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
     if (integer_time) {
       tb->tag.t_s.resize(tb->tag.t_ns.size());
       for (size_t i = 0; i < tb->tag.t_ns.size(); ++i) {
+        int64_t since_origin_ns = 0;
+        if (__builtin_sub_overflow(tb->tag.t_ns[i], origin_ns, &since_origin_ns)) {
+          return MakeError(path, tb->tag.line[i],
+                           "the session's times span more than 2^63 ns (292 years): expected "
+                           "one clock");
+        }
         // Correctly rounded: one division of two exactly representable integers.
-        tb->tag.t_s[i] = static_cast<double>(tb->tag.t_ns[i] - origin_ns) / 1e9;
+        tb->tag.t_s[i] = static_cast<double>(since_origin_ns) / 1e9;
+        // Far from the origin, times a few ns apart are one double of seconds: Tag::t_s
+        // must still increase strictly.
+        if (i > 0 && !(tb->tag.t_s[i] > tb->tag.t_s[i - 1])) {
+          return MakeError(
+              path, tb->tag.line[i],
+              fmt::format("{} = {} is {} ns after the previous time of sensor {} but {:g} s "
+                          "from the session's first time: closer than seconds in a double "
+                          "resolve there; expected one clock for the whole session",
+                          time_name.empty() ? std::string("time") : time_name, tb->tag.t_ns[i],
+                          tb->tag.t_ns[i] - tb->tag.t_ns[i - 1], s, tb->tag.t_s[i]));
+        }
       }
     }
     AddScaledRawColumns(plan, &tb->tag);

@@ -19,7 +19,7 @@ double TimeAt(const Tag& tag, size_t i, bool exact) {
 double MedianInterval(const Tag& tag, bool exact) {
   std::vector<double> dt;
   for (size_t i = 1; i < tag.size(); ++i) {
-    dt.push_back(exact ? static_cast<double>(tag.t_ns[i] - tag.t_ns[i - 1])
+    dt.push_back(exact ? static_cast<double>(tag.t_ns[i]) - static_cast<double>(tag.t_ns[i - 1])
                        : tag.t_s[i] - tag.t_s[i - 1]);
   }
   std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());

@@ -145,6 +145,10 @@ TEST_CASE("integer time units are exact", "[io][csv][time]") {
   CHECK(us.value().tags[0].t_ns == std::vector<int64_t>{7000, 8000});
   CHECK_THAT(ErrorOf("t_ns,ax_g\n1.5,1\n"), Catch::Contains("in.csv:2:1: t_ns:"));
   CHECK_THAT(ErrorOf("t_ms,ax_g\n2,1\n2,1\n"), Catch::Contains("t_ms = 2 is not after t_ms = 2"));
+  // 1 ns apart, 1e9 s from the first time: one double of seconds; refused, never equal t_s.
+  CHECK_THAT(ErrorOf("t_ns,sensor,ax_g\n0,2,1\n1000000000000000000,1,1\n"
+                     "1000000000000000001,1,1\n"),
+             Catch::Contains("in.csv:4: t_ns = 1000000000000000001 is 1 ns after"));
 }
 
 TEST_CASE("E-notation times are read with the resolution they have left", "[io][csv][time]") {
