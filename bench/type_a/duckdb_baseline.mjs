@@ -8,23 +8,12 @@
 //                 against metro's report (untimed)
 // Prints the seconds spent in-process (read + aggregate), excluding Node start-up, module
 // load and opening the in-memory database, in pandas_baseline.py's format.
+import { parseBaselineArgs } from "./baseline_args.mjs";
 import { writeFileSync } from "node:fs";
 
 import { DuckDBInstance, version } from "@duckdb/node-api";
 
-const args = process.argv.slice(2);
-let path = null;
-let threads = 2;
-let jsonPath = null;
-for (let i = 0; i < args.length; ++i) {
-  if (args[i] === "--threads") threads = Number(args[++i]);
-  else if (args[i] === "--json") jsonPath = args[++i];
-  else path = args[i];
-}
-if (!path || !(threads >= 1)) {
-  console.error("usage: duckdb_baseline.mjs SESSION.csv [--threads N] [--json OUT.json]");
-  process.exit(2);
-}
+const { path, threads, jsonPath } = parseBaselineArgs("duckdb_baseline.mjs");
 
 const instance = await DuckDBInstance.create(":memory:", { threads: String(threads) });
 const connection = await instance.connect();

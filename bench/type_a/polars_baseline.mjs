@@ -10,22 +10,11 @@
 //                 against metro's report (untimed)
 // Prints the seconds spent in-process (read + aggregate), excluding Node start-up and module
 // load, in pandas_baseline.py's format.
+import { parseBaselineArgs } from "./baseline_args.mjs";
 import { readFileSync, writeFileSync } from "node:fs";
 import { createRequire } from "node:module";
 
-const args = process.argv.slice(2);
-let path = null;
-let threads = 2;
-let jsonPath = null;
-for (let i = 0; i < args.length; ++i) {
-  if (args[i] === "--threads") threads = Number(args[++i]);
-  else if (args[i] === "--json") jsonPath = args[++i];
-  else path = args[i];
-}
-if (!path || !(threads >= 1)) {
-  console.error("usage: polars_baseline.mjs SESSION.csv [--threads N] [--json OUT.json]");
-  process.exit(2);
-}
+const { path, threads, jsonPath } = parseBaselineArgs("polars_baseline.mjs");
 
 // Polars sizes its pool once, from this variable, when the native module first runs.
 process.env.POLARS_MAX_THREADS = String(threads);
