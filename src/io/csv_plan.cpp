@@ -349,8 +349,6 @@ Result<Found> FindHeaderLine(const std::string& path, const std::vector<HeadLine
       c.remove_prefix(1);  // '#'
       if (SplitFields(c, d).size() == fields && !IsDataLine(c, d, dp)) {
         set(lines[i], c);
-        found.header.line_begin = lines[i].begin;
-        found.header.data_begin = lines[i].next;
         return found;
       }
       break;
