@@ -13,6 +13,7 @@
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
 #include "metro/report/session_analysis.hpp"
+#include "metro/report/type_a_report.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -99,7 +100,12 @@ int RunAnalyze(const AnalyzeOptions& o) {
     PrintError(s.error());
     return kExitFailed;
   }
-  if (!o.output.empty()) PrintTable(analysis.table, o.output);
+  if (!o.output.empty() && !Quiet()) {
+    PrintTable(analysis.table, o.output);
+  } else if (const std::string w = TypeAReportWarnings(analysis.report); !w.empty()) {
+    // No table (--quiet, or the JSON alone on stdout): the warnings still reach stderr.
+    std::fwrite(w.data() + 1, 1, w.size() - 1, stderr);
+  }
   return write_html();
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <utility>
 
 #include "accuracy_view.hpp"
 #include "html_common.hpp"
@@ -329,6 +330,63 @@ std::string SettleText(const ordered_json& window) {
                      s.value("at_limit", false) ? " (at the limit)" : "");
 }
 
+// How the file was read (the report's input.dialect, mapping and time), in words: empty for
+// a receiver capture, which has none of them.
+std::string DialectText(const ordered_json& input) {
+  if (!input.contains("dialect") || !input["dialect"].is_object()) return "";
+  const ordered_json& d = input["dialect"];
+  const std::string delimiter = JsonString(d, "delimiter");
+  std::string text = delimiter == "\t"  ? "tab-separated"
+                     : delimiter == ";" ? "semicolon-separated"
+                     : delimiter == "," ? "comma-separated"
+                                        : fmt::format("separated by {}", delimiter);
+  if (JsonString(d, "decimal_point") == ",") text += ", decimal comma";
+  text += fmt::format(", {} line ends", JsonString(d, "line_ends"));
+  if (d.value("bom", false)) text += ", UTF-8 byte-order mark";
+  if (d.value("quoted", false)) text += ", quoted fields";
+  if (d.value("header_in_comment", false)) text += ", header in a '#' comment";
+  return text;
+}
+
+std::string MappingText(const ordered_json& input) {
+  if (!input.contains("mapping") || !input["mapping"].is_array()) return "";
+  std::string text;
+  for (const ordered_json& m : input["mapping"]) {
+    const std::string canonical = JsonString(m, "canonical");
+    text += fmt::format("{}{} \u2192 {}", text.empty() ? "" : "; ", JsonString(m, "source"),
+                        canonical.empty() ? "(left out)" : canonical);
+  }
+  return text;
+}
+
+std::string TimeText(const ordered_json& input) {
+  if (!input.contains("time") || !input["time"].is_object()) return "";
+  const ordered_json& t = input["time"];
+  const std::string source = JsonString(t, "source");
+  std::string text = t.contains("rate_hz")
+                         ? fmt::format("none in the file: sample i at i / {} Hz",
+                                       ShortNumber(JsonNumber(t, "rate_hz"), 10))
+                         : fmt::format("column {} in {}", source, JsonString(t, "unit"));
+  if (t.value("integer", false)) {
+    text += fmt::format(", integer (exact), origin {} ns",
+                        t.contains("origin_ns") ? t["origin_ns"].dump() : "0");
+  }
+  if (t.contains("resolution_s")) {
+    text +=
+        fmt::format(", resolution {} s as written", ShortNumber(JsonNumber(t, "resolution_s"), 3));
+  }
+  return text;
+}
+
+mustache::data StringList(const ordered_json& j, const char* key) {
+  mustache::data list{mustache::data::type::list};
+  if (j.contains(key) && j[key].is_array()) {
+    for (const auto& v : j[key])
+      list.push_back(mustache::data(v.is_string() ? v.get<std::string>() : v.dump()));
+  }
+  return list;
+}
+
 Status ValidateReport(const ordered_json& report) {
   if (!report.is_object() || report.value("schema", "") != kReportSchema) {
     return MakeError(
@@ -380,6 +438,15 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
   data.set("input_format", JsonString(input, "format"));
   data.set("input_rows", ShortNumber(JsonNumber(input, "rows"), 12));
   data.set("input_rejected_rows", ShortNumber(JsonNumber(input, "rejected_rows"), 12));
+  // Each row only when the report has it (a receiver capture has no dialect, a canonical
+  // file no mapping): a missing value renders no section.
+  for (const auto& [key, text] :
+       {std::pair{"input_dialect", DialectText(input)},
+        std::pair{"input_mapping", MappingText(input)}, std::pair{"input_time", TimeText(input)}}) {
+    if (!text.empty()) data.set(key, text);
+  }
+  data.set("input_notes", StringList(input, "notes"));
+  data.set("input_warnings", StringList(input, "warnings"));
   data.set("window_options", report.contains("options") ? report["options"].dump() : "");
   data.set("session_ok", session != nullptr);
   data.set("session_note", session_note);

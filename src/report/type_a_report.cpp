@@ -192,6 +192,13 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
                      a["std_of_mean"].get<double>(), a["n_eff"].get<double>(), r.uncertainty);
     }
   }
+  out += TypeAReportWarnings(report);
+  return out;
+}
+
+std::string TypeAReportWarnings(const nlohmann::ordered_json& report) {
+  std::string out;
+  auto it = std::back_inserter(out);
   bool any_warning = false;
   if (report["input"].contains("warnings")) {
     for (const auto& wmsg : report["input"]["warnings"]) {

@@ -170,22 +170,39 @@ TEST_CASE("characterize --quiet: a good run prints nothing on stderr, results st
           "[apps][unix]") {
   const std::string out = "metro_unix_quiet.json";
   std::remove(out.c_str());
-  Run r = Characterize(kChest + " --type-a --quiet -o " + out);
+  // A report without warnings (the white-noise gyro of the IMU sample): stderr stays empty.
+  const std::string white = kDatasets + "static_imu_100hz.csv --quantity gx_dps";
+  Run r = Characterize(white + " --type-a --quiet -o " + out);
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.empty());  // No table.
   CHECK(r.err.empty());
   // Replacing the report is a note, also silenced.
-  r = Characterize(kChest + " --type-a -q -o " + out);
+  r = Characterize(white + " --type-a -q -o " + out);
   REQUIRE(r.exit_code == 0);
   CHECK(r.err.empty());
-  r = Characterize(kChest + " --type-a -o " + out);
+  r = Characterize(white + " --type-a -o " + out);
   CHECK(r.err.find("note: replacing existing") != std::string::npos);
+  CHECK(r.out.find("warnings:") == std::string::npos);
+
+  // The chest tag's report has warnings (autocorrelated quaternions): a quiet run prints
+  // them to stderr, as the table ends, and nothing else.
+  std::remove(out.c_str());
+  r = Characterize(kChest + " --type-a -o " + out);
+  REQUIRE(r.exit_code == 0);
+  const size_t at = r.out.find("\nwarnings:\n");
+  REQUIRE(at != std::string::npos);
+  const std::string warnings = r.out.substr(at + 1);
+  CHECK(warnings.find("sensor 2 qz: n_eff = ") != std::string::npos);
+  r = Characterize(kChest + " --type-a -q -o " + out);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.out.empty());
+  CHECK(r.err == warnings);
   std::remove(out.c_str());
 
   r = Characterize(kChest + " --type-a --quiet -o -");
   REQUIRE(r.exit_code == 0);
   CHECK(Json(r.out)["schema"] == "metro.report/1");
-  CHECK(r.err.empty());
+  CHECK(r.err == warnings);
 
   // Before or after the subcommand's name.
   const std::string budget = kDatasets + "budgets/gum_h1_end_gauge.json";
@@ -285,7 +302,10 @@ TEST_CASE("A session piped to - gives the report of its file", "[apps][unix][std
   Run in = CharacterizeStdin("- --type-a --settle auto --quiet", chest);
   REQUIRE(in.exit_code == 0);
   CheckSameNumbers(Json(in.out), Json(file.out));
-  CHECK(in.err.empty());
+  // Only the report's warnings (the table's last lines), no table.
+  const size_t at = file.err.find("\nwarnings:\n");
+  REQUIRE(at != std::string::npos);
+  CHECK(in.err == file.err.substr(at + 1));
 }
 
 TEST_CASE("convert - reads stdin; an empty stdin is an empty file", "[apps][unix][stdin]") {

@@ -2,6 +2,8 @@
 // schema dispatch and bad input.
 #include "metro/report/html_report.hpp"
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -74,6 +76,33 @@ TEST_CASE("Session HTML has every plot and no external reference", "[report][htm
                "</td>") != std::string::npos);
   // The settle window is shaded and named.
   CHECK(h.find("shaded: observations left out of the Type A window") != std::string::npos);
+}
+
+TEST_CASE("Session HTML says how a non-canonical file was read", "[report][html]") {
+  // ';'-separated with decimal commas and CRLF, integer milliseconds, one mapped column.
+  std::string text = "t_ms;sensor;Gyro Z\r\n";
+  for (int i = 0; i < 40; ++i) {
+    text += fmt::format("{};1;{},{}\r\n", 1000 + 10 * i, i % 2 == 0 ? 0 : 1, 25 + i % 3);
+  }
+  testing::TempFile file(text, ".csv");
+  SessionAnalysisOptions o;
+  o.load.column_map = {{"Gyro Z", "gz_dps"}};
+  const SessionAnalysis a = AnalyzeSession(file.path(), o);
+  REQUIRE(a.ok);
+  Result<std::string> html = RenderSessionAnalysisHtml(a);
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  CHECK(h.find("<tr><th>read as</th><td>semicolon-separated, decimal comma, CRLF line "
+               "ends</td></tr>") != std::string::npos);
+  CHECK(h.find("<tr><th>columns mapped</th><td>Gyro Z \u2192 gz_dps</td></tr>") !=
+        std::string::npos);
+  CHECK(h.find("<tr><th>time</th><td>column t_ms in ms, integer (exact), origin 1000000000 "
+               "ns</td></tr>") != std::string::npos);
+  // The canonical sample file has no mapping row.
+  Result<std::string> canonical = RenderSessionAnalysisHtml(ImuAnalysis());
+  REQUIRE(canonical.ok());
+  CHECK(canonical.value().find("columns mapped") == std::string::npos);
+  CHECK(canonical.value().find("<tr><th>read as</th>") != std::string::npos);
 }
 
 TEST_CASE("Report without its session keeps the JSON plots and says why", "[report][html]") {

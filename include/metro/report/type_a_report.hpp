@@ -19,6 +19,12 @@ nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionType
                                        const TagRegistry& registry);
 
 // A fixed-width table: one row per tag and quantity, values rounded per GUM 7.2.6.
+// Ends with the report's warnings (TypeAReportWarnings).
 std::string TypeAReportTable(const nlohmann::ordered_json& report);
+
+// The report's warnings (input, per tag, per quantity), one line each under a "warnings:"
+// heading; empty when there are none. The programs print it to stderr when the table is
+// not printed (--quiet, or the JSON on stdout), so a warning is never only in the JSON.
+std::string TypeAReportWarnings(const nlohmann::ordered_json& report);
 
 }  // namespace metro
