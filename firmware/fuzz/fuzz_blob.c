@@ -53,6 +53,17 @@ static void Check(const uint8_t* data, size_t size) {
       METRO_FW_OK) {
     return;
   }
+  /* Issue #20: an accepted blob declares at least one sensor, exactly the sections present,
+   * and every declared sensor is usable on its own configuration. */
+  if ((info.flags & 3u) == 0u) abort();
+  for (i = 0; i < 2; ++i) {
+    const int declared = (int)((info.flags >> i) & 1u);
+    if (metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, (metro_fw_sensor_kind)i, 0,
+                               &cal) != METRO_FW_OK ||
+        cal.status != (declared ? METRO_FW_SENSOR_OK : METRO_FW_SENSOR_ABSENT)) {
+      abort();
+    }
+  }
   cfg.device_id[0] = id[0];
   cfg.device_id[1] = id[1];
   cfg.accel_fs_sel = 0;

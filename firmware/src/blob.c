@@ -73,10 +73,12 @@ static int WalkSections(metro_fw_read_fn read, void* ctx, metro_fw_blob_info* in
       uint16_t* f = (uint16_t*)(void*)((char*)info + offsetof(metro_fw_blob_info, meta_off)) +
                     3u * known;                  /* off, len, version */
       if (f[0] != 0u) return METRO_FW_E_SECTION; /* duplicate */
-      /* A major this firmware knows must carry at least the v1.0 body. */
-      if ((version >> 8) == (METRO_FW_SEC_VERSION_1_0 >> 8) &&
-          body_len < (known == 0u ? METRO_FW_META_BODY_LEN : METRO_FW_SENSOR_BODY_LEN)) {
-        return METRO_FW_E_SECTION;
+      /* A major this firmware knows carries at least the v1.0 body; v1.0 exactly that. */
+      if ((version >> 8) == (METRO_FW_SEC_VERSION_1_0 >> 8)) {
+        const uint32_t v1_len = known == 0u ? METRO_FW_META_BODY_LEN : METRO_FW_SENSOR_BODY_LEN;
+        if (body_len < v1_len || ((version & 0xFFu) == 0u && body_len != v1_len)) {
+          return METRO_FW_E_SECTION;
+        }
       }
       f[0] = (uint16_t)off;
       f[1] = (uint16_t)body_len;
@@ -85,6 +87,27 @@ static int WalkSections(metro_fw_read_fn read, void* ctx, metro_fw_blob_info* in
     off += body_len;
   }
   return METRO_FW_OK; /* off == end: sections tile the blob exactly */
+}
+
+/* Step 8 of section 4: flags b0/b1 name exactly the sensor sections present (at least one),
+ * each of them passes 3.1 on its own fs_sel and dlpf_cfg (metro_fw_sensor_decode without a
+ * configuration), and flag b2 is set exactly when one of them has a temperature term. */
+METRO_FW_NOINLINE static int CheckSensors(metro_fw_read_fn read, void* ctx,
+                                          const metro_fw_blob_info* in) {
+  metro_fw_sensor_cal cal;
+  uint32_t k, temp = 0u;
+  int rc;
+  if ((in->flags & (METRO_FW_FLAG_ACCEL | METRO_FW_FLAG_GYRO)) == 0u) return METRO_FW_E_SENSOR;
+  for (k = 0; k < 2u; ++k) {
+    rc = metro_fw_sensor_decode(read, ctx, in, (metro_fw_sensor_kind)k, 0, &cal);
+    if (rc != METRO_FW_OK) return rc;
+    /* declared: usable (OK = 0); not declared: no section (ABSENT = 1) */
+    if (cal.status != (((in->flags >> k) & 1u) ^ 1u)) return METRO_FW_E_SENSOR;
+    temp |= cal.model_bits; /* 0 for an absent sensor */
+  }
+  /* flag b2 against model bit 0x04 or 0x08 of either sensor */
+  return (((temp | temp >> 1) ^ in->flags) & METRO_FW_FLAG_TEMP_MODEL) == 0u ? METRO_FW_OK
+                                                                             : METRO_FW_E_SENSOR;
 }
 
 int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
@@ -114,7 +137,8 @@ int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
   if (in->fmt_major != METRO_FW_FMT_MAJOR) return METRO_FW_E_UNSUPPORTED;
   if (((in->header_len | in->total_len) & 3u) != 0u || in->header_len < METRO_FW_HEADER_LEN ||
       in->total_len > METRO_FW_MAX_LEN || in->total_len > avail_len ||
-      (uint32_t)in->header_len + 4u > in->total_len) {
+      (uint32_t)in->header_len + 4u > in->total_len ||
+      (in->fmt_minor == 0u && in->header_len != METRO_FW_HEADER_LEN)) {
     return METRO_FW_E_BOUNDS;
   }
   /* The CRC-32 runs over the whole blob, stored CRC included: the CRC of bytes followed by
@@ -138,7 +162,8 @@ int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
     return METRO_FW_E_FOREIGN;
   }
   if (in->seq < METRO_FW_SEQ_MIN || in->seq > METRO_FW_SEQ_MAX) return METRO_FW_E_SEQ;
-  return WalkSections(read, ctx, in);
+  rc = WalkSections(read, ctx, in);
+  return rc != METRO_FW_OK ? rc : CheckSensors(read, ctx, in);
 }
 
 int metro_fw_slot_read(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len) {
@@ -352,8 +377,8 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob
   uint8_t fs_sel, bits, status;
   uint32_t i;
   int rc;
-  if (read == 0 || info == 0 || cfg == 0 || out == 0) return METRO_FW_E_ARG;
-  fs_sel = kind == METRO_FW_ACCEL ? cfg->accel_fs_sel : cfg->gyro_fs_sel;
+  if (read == 0 || info == 0 || out == 0) return METRO_FW_E_ARG;
+  fs_sel = cfg == 0 ? 0u : kind == METRO_FW_ACCEL ? cfg->accel_fs_sel : cfg->gyro_fs_sel;
   rc = metro_fw_sensor_defaults(kind, fs_sel, out);
   if (rc != METRO_FW_OK) return rc;
   /* off, len, version of ACCEL or GYRO (layout checked at the top; kind is 0 or 1, checked by
@@ -382,7 +407,12 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob
     goto done;
   }
   status = METRO_FW_SENSOR_CONFIG_MISMATCH;
-  if (b[0] != fs_sel || b[1] != cfg->dlpf_cfg) goto done;
+  if (cfg == 0) { /* the section's own configuration (the validator) */
+    fs_sel = b[0];
+    if (fs_sel > 3u || b[1] > 6u) goto done;
+  } else if (b[0] != fs_sel || b[1] != cfg->dlpf_cfg) {
+    goto done;
+  }
   /* Decoded in place (no struct copy: on the M0 that links memcpy); a LIMITS failure
    * restores the defaults. m, b0, b1, b2 (body bytes 8 ... 79), t_ref_c (4), t_valid_min_c
    * and t_valid_max_c (156, 160) are 21 consecutive floats of out; a term is read only if its

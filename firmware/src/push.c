@@ -71,8 +71,11 @@ int metro_fw_push_init(metro_fw_push* p, const metro_fw_flash* flash, const uint
   return METRO_FW_OK;
 }
 
-/* Push result of metro_fw_update's code, indexed by -code (codes 0 ... -13). */
-static const uint8_t kResultOfError[14] = {
+/* Push result of metro_fw_update's code, indexed by 1 - code (codes 1 ... -14). LIVE_UNVERIFIED:
+ * the new calibration is live (SUCCESS with slot and seq); the PC's read-back of every byte is
+ * the verification the tag could not make. */
+static const uint8_t kResultOfError[16] = {
+    METRO_FW_RES_SUCCESS,            /* LIVE_UNVERIFIED */
     METRO_FW_RES_SUCCESS,            /* OK */
     METRO_FW_RES_INVALID_BLOB,       /* E_ARG */
     METRO_FW_RES_INVALID_BLOB,       /* E_EMPTY */
@@ -86,7 +89,8 @@ static const uint8_t kResultOfError[14] = {
     METRO_FW_RES_FLASH_ERROR,        /* E_FLASH */
     METRO_FW_RES_FLASH_ERROR,        /* E_VERIFY */
     METRO_FW_RES_STALE_SEQ,          /* E_STALE_SEQ */
-    METRO_FW_RES_INVALID_BLOB        /* E_FRAME */
+    METRO_FW_RES_INVALID_BLOB,       /* E_FRAME */
+    METRO_FW_RES_INVALID_BLOB        /* E_SENSOR */
 };
 
 /* Request payload length of ops 0x01 ... 0x07 (section 7): at least the low nibble of
@@ -115,7 +119,7 @@ METRO_FW_NOINLINE static uint8_t Commit(metro_fw_push* p, int* slot) {
   /* the blob's seq is not CREATE's */
   if (metro_fw_get_u32(p->blob + 12) != p->expect_seq) return METRO_FW_RES_INVALID_PARAM;
   rc = metro_fw_update(p->flash, p->device_id, p->blob, p->total_len, slot);
-  return (uint32_t)-rc < 14u ? kResultOfError[-rc] : METRO_FW_RES_INVALID_BLOB;
+  return (uint32_t)(1 - rc) < 16u ? kResultOfError[1 - rc] : METRO_FW_RES_INVALID_BLOB;
 }
 
 /* Executes one request (payload in, n bytes; in is followed by the frame's CRC, so in[0] and

@@ -30,10 +30,24 @@ std::vector<uint8_t> WithAccel(const fwtest::Sensor& accel, uint32_t seq = 1) {
   return Build(b);
 }
 
-uint8_t AccelStatus(const std::vector<uint8_t>& bytes, metro_fw_config cfg = fwtest::Config()) {
+// The status the decoder gives the blob's ACCEL section (section 3.1). The validator refuses
+// the blob (METRO_FW_E_SENSOR: the accelerometer is declared) exactly when that status is not
+// OK, and a tag then boots without the slot, checked here too.
+uint8_t AccelStatus(const std::vector<uint8_t>& bytes) {
+  metro_fw_blob_info info{};
+  const int rc = Validate(bytes, &info);
+  metro_fw_buffer buf{bytes.data(), static_cast<uint32_t>(bytes.size())};
+  const metro_fw_config cfg = fwtest::Config();
+  metro_fw_sensor_cal cal{};
+  REQUIRE(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, METRO_FW_ACCEL, &cfg, &cal) ==
+          METRO_FW_OK);
+  CHECK(rc == (cal.status == METRO_FW_SENSOR_OK ? METRO_FW_OK : METRO_FW_E_SENSOR));
   FakeFlash flash;
   flash.Program(METRO_FW_SLOT_A_ADDR, bytes);
-  return Load(flash, cfg).accel.status;
+  const auto loaded = Load(flash);
+  CHECK(loaded.slot_result[0] == rc);
+  CHECK(loaded.slot == (rc == METRO_FW_OK ? 0 : METRO_FW_SLOT_NONE));
+  return cal.status;
 }
 
 }  // namespace
@@ -175,18 +189,20 @@ TEST_CASE("Header bounds of header_len are checked", "[fw][blob]") {
   }
 }
 
-TEST_CASE("A longer header is skipped and a blob without sections is valid", "[fw][blob]") {
+TEST_CASE("A longer header of a newer fmt_minor is skipped; fmt_minor 0 has 32 bytes exactly",
+          "[fw][blob]") {
   Blob b = StandardBlob(3);
+  b.fmt_minor = 1;
   b.header_len = 40;
   metro_fw_blob_info info{};
   REQUIRE(Validate(Build(b), &info) == METRO_FW_OK);
   CHECK(info.accel_off == 0x0B0 + 8);
-  b.sections.clear();
-  b.header_len = 32;
-  const auto empty = Build(b);
-  CHECK(empty.size() == 36u);
-  CHECK(Validate(empty, &info) == METRO_FW_OK);
-  CHECK(info.accel_off == 0);
+  b.fmt_minor = 0;  // v1.0 defines the header as 32 bytes: a longer one is inconsistent
+  for (uint16_t header : {36, 40, 64}) {
+    b.header_len = header;
+    INFO("header_len " << header);
+    CHECK(Validate(Build(b), &info) == METRO_FW_E_BOUNDS);
+  }
 }
 
 TEST_CASE("A section body crossing the CRC word is rejected", "[fw][blob][walker]") {
@@ -250,17 +266,32 @@ TEST_CASE("Bytes after the last section that cannot hold a section are rejected"
   CHECK(Validate(grown) == METRO_FW_E_SECTION);
 }
 
-TEST_CASE("A newer section major sends that sensor to defaults and the other stays",
+TEST_CASE("A declared sensor of a newer section major refuses the blob; the older slot stays",
           "[fw][blob][walker]") {
-  Blob b = StandardBlob(3);
+  // The walker skips it (2.2), but this firmware cannot use a sensor the flags declare: a tag
+  // would run that sensor on defaults (issue #20), so the blob is refused.
+  Blob b = StandardBlob(4);
   b.sections[1].version = 0x0200;
+  metro_fw_blob_info info{};
+  CHECK(Validate(Build(b), &info) == METRO_FW_E_SENSOR);
+  CHECK(info.accel_version == 0x0200);
   FakeFlash flash;
-  flash.Program(METRO_FW_SLOT_A_ADDR, Build(b));
+  flash.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(3)));
+  flash.Program(METRO_FW_SLOT_B_ADDR, Build(b));
   const auto cal = Load(flash);
+  CHECK(cal.slot_result[1] == METRO_FW_E_SENSOR);
   CHECK(cal.slot == 0);
-  CHECK(cal.accel.status == METRO_FW_SENSOR_UNSUPPORTED);
-  CHECK(cal.accel.m[0] == Approx(9.80665 / 16384.0).epsilon(1e-7));
+  CHECK(cal.seq == 3u);
+  CHECK(cal.accel.status == METRO_FW_SENSOR_OK);
   CHECK(cal.gyro.status == METRO_FW_SENSOR_OK);
+  // The decoder on its own still says why.
+  metro_fw_sensor_cal accel{};
+  const auto bytes = Build(b);
+  metro_fw_buffer buf{bytes.data(), static_cast<uint32_t>(bytes.size())};
+  const metro_fw_config cfg = fwtest::Config();
+  REQUIRE(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, METRO_FW_ACCEL, &cfg, &accel) ==
+          METRO_FW_OK);
+  CHECK(accel.status == METRO_FW_SENSOR_UNSUPPORTED);
 }
 
 TEST_CASE("A newer section minor with a longer body is read", "[fw][blob][walker]") {
@@ -303,7 +334,7 @@ TEST_CASE("seq 0 and 0xFFFFFFFF are rejected", "[fw][blob]") {
     CHECK(Validate(Build(StandardBlob(seq))) == METRO_FW_E_SEQ);
 }
 
-TEST_CASE("NaN or Inf constants send the sensor to defaults", "[fw][blob][limits]") {
+TEST_CASE("NaN or Inf constants of a declared sensor refuse the blob", "[fw][blob][limits]") {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
   for (float bad : {nan, inf, -inf}) {
@@ -322,7 +353,7 @@ TEST_CASE("NaN or Inf constants send the sensor to defaults", "[fw][blob][limits
   CHECK(AccelStatus(WithAccel(s)) == METRO_FW_SENSOR_NONFINITE);
 }
 
-TEST_CASE("Absurd constants send the sensor to defaults", "[fw][blob][limits]") {
+TEST_CASE("Absurd constants of a declared sensor refuse the blob", "[fw][blob][limits]") {
   auto scaled = [](float k) {
     auto s = fwtest::GoodAccel();
     for (auto& v : s.m) v *= k;

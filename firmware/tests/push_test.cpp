@@ -303,6 +303,43 @@ TEST_CASE("Blob-level refusals map to protocol results", "[fw][push]") {
   }
 }
 
+TEST_CASE("A blob the validator refuses or trailing bytes are INVALID_BLOB at EXECUTE",
+          "[fw][push]") {
+  {
+    Link link;  // cut down to its header, length and CRC fixed
+    auto cut = Build(StandardBlob(1));
+    cut.resize(36);
+    fwtest::Put16(cut, 8, 36);
+    fwtest::Reseal(cut, 36);
+    const auto r = link.Push(cut, 1);
+    CHECK(r.result() == METRO_FW_RES_INVALID_BLOB);
+    CHECK(r.payload[1] == 0xFF);
+    CHECK(link.flash.ops == 0);
+  }
+  {
+    Link link;  // CREATE's total_len 4 bytes beyond the blob's own
+    auto longer = Build(StandardBlob(1));
+    longer.resize(longer.size() + 4, 0);
+    CHECK(link.Push(longer, 1).result() == METRO_FW_RES_INVALID_BLOB);
+    CHECK(link.push()->updated == 0);
+    CHECK(link.flash.ops == 0);
+  }
+}
+
+TEST_CASE("EXECUTE answers SUCCESS when the commit happened but the tag's read-back failed",
+          "[fw][push]") {
+  Link link;
+  link.flash.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(4)));
+  link.flash.reads_fail_from = 3;  // after erase, body and commit word
+  const auto r = link.Push(Build(StandardBlob(5)), 5);
+  CHECK(r.result() == METRO_FW_RES_SUCCESS);
+  CHECK(r.payload[1] == 1);
+  CHECK(fwtest::Get32(r.payload, 2) == 5u);
+  CHECK(link.push()->updated == 1);
+  link.flash.reads_fail_from = -1;
+  CHECK(link.ReadBack(540) == Build(StandardBlob(5)));
+}
+
 TEST_CASE("Malformed requests are invalid parameters", "[fw][push]") {
   Link link;
   CHECK(link.Call(METRO_FW_OP_CAL_CREATE, Link::Create(1028, 0, 1)).result() ==

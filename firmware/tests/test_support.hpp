@@ -227,8 +227,10 @@ class FakeFlash {
   int fail_at = -1;  // this operation returns an error and changes nothing
   int cut_at = -1;   // power is cut during this operation (torn as `tear`)
   Tear tear = Tear::kNothing;
-  bool dead = false;    // after a cut every erase/write fails and changes nothing
-  int stuck_byte = -1;  // a write to this slot-A/B offset leaves the byte unchanged
+  bool dead = false;            // after a cut every erase/write fails and changes nothing
+  int stuck_byte = -1;          // a write to this slot-A/B offset leaves the byte unchanged
+  int lands_but_fails_at = -1;  // this operation does its work but returns an error
+  int reads_fail_from = -1;     // every read fails once this many operations were seen
 
   void Revive() {
     dead = false;
@@ -254,6 +256,7 @@ class FakeFlash {
   static int Read(void* ctx, uint32_t addr, uint8_t* dst, uint32_t len) {
     auto* self = static_cast<FakeFlash*>(ctx);
     if (!self->InRange(addr, len)) return -1;
+    if (self->reads_fail_from >= 0 && self->ops >= self->reads_fail_from) return -1;
     std::memcpy(dst, self->mem_.data() + (addr - METRO_FW_SLOT_A_ADDR), len);
     return 0;
   }
@@ -276,6 +279,7 @@ class FakeFlash {
     auto* self = static_cast<FakeFlash*>(ctx);
     if (addr % 4 != 0 || len % 4 != 0 || !self->InRange(addr, len)) return -1;
     bool torn;
+    const bool lands_but_fails = self->ops == self->lands_but_fails_at;
     if (!self->Begin(&torn)) return -1;
     uint32_t words = len / 4;
     uint32_t first = 0, last = words;
@@ -296,7 +300,7 @@ class FakeFlash {
       if (static_cast<int>(off % METRO_FW_PAGE_SIZE) == self->stuck_byte) continue;
       self->mem_[off] &= src[i];
     }
-    return torn ? -1 : 0;
+    return torn || lands_but_fails ? -1 : 0;
   }
 
   std::vector<uint8_t> mem_;

@@ -158,3 +158,54 @@ TEST_CASE("Update refuses NULL arguments", "[fw][update]") {
   CHECK(metro_fw_update(&f, nullptr, blob.data(), 540, nullptr) == METRO_FW_E_ARG);
   CHECK(metro_fw_update(&f, fwtest::kDeviceId, nullptr, 540, nullptr) == METRO_FW_E_ARG);
 }
+
+TEST_CASE("After the commit word a failed read-back still says the new calibration is live",
+          "[fw][update]") {
+  // Operations: 0 erase, 1 body, 2 commit word. Reads fail from the commit on, so the final
+  // read-back through the validator cannot read the slot; the commit happened.
+  FakeFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(5)));
+  flash.reads_fail_from = 3;
+  int slot = -5;
+  CHECK(Update(flash, Build(StandardBlob(6)), &slot) == METRO_FW_LIVE_UNVERIFIED);
+  CHECK(slot == 1);
+  flash.reads_fail_from = -1;  // reboot
+  const auto cal = Load(flash);
+  CHECK(cal.slot == 1);
+  CHECK(cal.seq == 6u);
+  // Reads failing before the commit: the body cannot be verified, nothing is committed.
+  FakeFlash early;
+  early.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(5)));
+  early.reads_fail_from = 2;
+  CHECK(Update(early, Build(StandardBlob(6)), &slot) == METRO_FW_E_FLASH);
+  CHECK(slot == METRO_FW_SLOT_NONE);
+  early.reads_fail_from = -1;
+  CHECK(Load(early).seq == 5u);
+  CHECK(early.Slot(1)[0] == 0xFF);
+}
+
+TEST_CASE("A commit write that reports an error is judged by the read-back", "[fw][update]") {
+  // The word landed although the callback said no: the slot reads back valid, so the new
+  // calibration is live and verified (OK, slot B), as the next boot confirms.
+  FakeFlash landed;
+  landed.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(5)));
+  landed.lands_but_fails_at = 2;
+  int slot = -5;
+  CHECK(Update(landed, Build(StandardBlob(6)), &slot) == METRO_FW_OK);
+  CHECK(slot == 1);
+  CHECK(Load(landed).seq == 6u);
+  // The word did not land: the old calibration stays and the result says so.
+  FakeFlash lost;
+  lost.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(5)));
+  lost.fail_at = 2;
+  CHECK(Update(lost, Build(StandardBlob(6)), &slot) == METRO_FW_E_FLASH);
+  CHECK(slot == METRO_FW_SLOT_NONE);
+  CHECK(Load(lost).seq == 5u);
+  // The word did not land but the callback said yes: the read-back shows the slot invalid.
+  FakeFlash lying;
+  lying.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(5)));
+  lying.stuck_byte = 0;  // the first byte of the commit word never programs
+  CHECK(Update(lying, Build(StandardBlob(6)), &slot) == METRO_FW_E_VERIFY);
+  CHECK(slot == METRO_FW_SLOT_NONE);
+  CHECK(Load(lying).seq == 5u);
+}

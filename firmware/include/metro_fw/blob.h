@@ -86,9 +86,14 @@ typedef struct {
 
 /* Validates the blob readable through read/ctx, of which avail_len bytes exist (1024 for a
  * flash slot), against the chip's device_id[2], in the order of section 4:
- * METRO_FW_E_EMPTY, METRO_FW_E_MAGIC, METRO_FW_E_UNSUPPORTED, METRO_FW_E_BOUNDS,
- * METRO_FW_E_CRC, METRO_FW_E_FOREIGN, METRO_FW_E_SEQ, METRO_FW_E_SECTION; METRO_FW_E_ARG for
- * NULL pointers; a failing read returns its code. info may be NULL; it is filled (header
+ * METRO_FW_E_EMPTY, METRO_FW_E_MAGIC, METRO_FW_E_UNSUPPORTED, METRO_FW_E_BOUNDS (also
+ * fmt_minor 0 with header_len != 32), METRO_FW_E_CRC, METRO_FW_E_FOREIGN, METRO_FW_E_SEQ,
+ * METRO_FW_E_SECTION (also a v1.0 section whose body is not exactly the v1.0 length), then the
+ * sensors: METRO_FW_E_UNSUPPORTED for a declared sensor section of unknown major,
+ * METRO_FW_E_SENSOR when flags b0/b1 do not name exactly the sensor sections present (at least
+ * one), a declared section fails 3.1 on its own fs_sel/dlpf_cfg (fs_sel 0..3, dlpf_cfg 0..6)
+ * or flag b2 disagrees with the sections' temperature terms; METRO_FW_E_ARG for NULL pointers;
+ * a failing read returns its code. info may be NULL; it is filled (header
  * fields at least) whenever the header could be read. Never reads outside [0, avail_len). */
 int metro_fw_blob_validate(metro_fw_read_fn read, void* ctx, uint32_t avail_len,
                            const uint32_t device_id[2], metro_fw_blob_info* info);
@@ -151,8 +156,10 @@ int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw
  * metro_fw_blob_validate found them) of a blob the validator accepted, and checks it against
  * cfg (section 3.1). On a usable section *out holds its constants with status
  * METRO_FW_SENSOR_OK; otherwise *out holds the defaults and the status says why (a body offset
- * of 0: METRO_FW_SENSOR_ABSENT). Returns METRO_FW_OK (whatever the status), METRO_FW_E_ARG for
- * NULL pointers, a bad kind or a body shorter than v1.0's, or a failing read's code (out then
+ * of 0: METRO_FW_SENSOR_ABSENT). cfg NULL is the validator's form: the section is checked on
+ * its own fs_sel and dlpf_cfg, which must be 0..3 and 0..6 (else CONFIG_MISMATCH), and the
+ * defaults are fs_sel 0's. Returns METRO_FW_OK (whatever the status), METRO_FW_E_ARG for NULL
+ * read/info/out, a bad kind or a body shorter than v1.0's, or a failing read's code (out then
  * holds the defaults). */
 int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob_info* info,
                            metro_fw_sensor_kind kind, const metro_fw_config* cfg,
