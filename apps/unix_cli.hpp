@@ -1,5 +1,7 @@
 // How both metro programs behave as Unix tools (docs/unix.md): `-` names standard input
-// (a session) or standard output (a report), --version, --quiet.
+// (a session) or standard output (a report), --version, --quiet, outputs that never
+// destroy anything, and text that is safe on a terminal. Shared by both programs
+// (unix_cli.cpp).
 #pragma once
 
 #include <fmt/format.h>
@@ -17,6 +19,7 @@
 
 #include "metro/core/file.hpp"
 #include "metro/core/status.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
 
 namespace metro::apps {
@@ -50,9 +53,26 @@ inline void AddQuietFlag(CLI::App& app) {
   }
 }
 
+// Everything below that prints text (errors, notes, tables, warnings) escapes the control
+// characters in it (metro/core/terminal_text.hpp): file names, CSV headers, tag names and
+// blob metadata never reach a terminal or a log raw. Errors are one line (a newline in
+// them is shown as \n); notes, tables and warnings keep their own line breaks.
+
+// Prints `text` to `stream` with its control characters escaped, line breaks kept.
+inline void PrintText(std::FILE* stream, std::string_view text) {
+  const std::string safe = EscapeControlCharsKeepLines(text);
+  std::fwrite(safe.data(), 1, safe.size(), stream);
+}
+
+// Prints "error: <message>" to stderr, on one line.
+inline void PrintError(const Error& error) {
+  const std::string line = "error: " + EscapeControlChars(error.ToString()) + "\n";
+  std::fwrite(line.data(), 1, line.size(), stderr);
+}
+
 // Prints `text` (a note, "wrote FILE", a summary) to stderr unless --quiet.
 inline void Note(std::string_view text) {
-  if (!Quiet()) std::fwrite(text.data(), 1, text.size(), stderr);
+  if (!Quiet()) PrintText(stderr, text);
 }
 
 // Prints the human-readable table of a report unless --quiet: to stdout, or to stderr when
@@ -60,9 +80,14 @@ inline void Note(std::string_view text) {
 inline void PrintTable(std::string_view table, const std::string& output) {
   if (Quiet()) return;
   std::FILE* stream = IsStdio(output) ? stderr : stdout;
-  std::fwrite(table.data(), 1, table.size(), stream);
+  PrintText(stream, table);
   std::fflush(stream);
 }
+
+// Call last in main: output still buffered for stdout is flushed, and a write to stdout that
+// failed at any point (`> /dev/full`, a closed descriptor) turns a successful `exit_code`
+// into kExitFailed (1) with "error: cannot write to stdout: ...". Another exit code is kept.
+int FinishStdout(int exit_code);
 
 // Writes `contents` to standard output (`path` is `-`; flushed, a failed write is an
 // error, e.g. a full disk behind a redirection) or atomically to the file `path`.
@@ -75,8 +100,17 @@ inline Status WriteOutput(const std::string& path, std::string_view contents) {
   return Status::Ok();
 }
 
+// The outputs of one run, replaced together: every file is written to its temporary and
+// flushed, then the one that goes to stdout (if any) is written, and only when all of that
+// succeeded are the files renamed into place. So a JSON report and its HTML are both
+// replaced or neither is (a full disk while writing the second leaves the first as it was).
+// Pairs of (path, contents); an empty path is skipped.
+Status WriteOutputs(const std::vector<std::pair<std::string, std::string_view>>& outputs);
+
 // A streamed output: the file `path` written atomically (AtomicFileWriter), or stdout
 // when `path` is `-` (a failed write, e.g. a closed pipe or a full disk, is an error).
+// Commit() = Finish() + Publish(); two outputs finished first and then published are
+// replaced together.
 class StreamedOutput {
  public:
   explicit StreamedOutput(std::string path) : path_(path), file_(std::move(path)) {}
@@ -88,7 +122,12 @@ class StreamedOutput {
     }
     return Status::Ok();
   }
-  Status Commit() { return IsStdio(path_) ? WriteOutput(path_, "") : file_.Commit(); }
+  Status Finish() { return IsStdio(path_) ? WriteOutput(path_, "") : file_.Finish(); }
+  Status Publish() { return IsStdio(path_) ? Status::Ok() : file_.Publish(); }
+  Status Commit() {
+    if (Status s = Finish(); !s.ok()) return s;
+    return Publish();
+  }
 
  private:
   std::string path_;
@@ -125,6 +164,24 @@ inline Status CheckOneStdout(
   }
   return Status::Ok();
 }
+
+// A path given on the command line and the option (or argument) that named it, e.g.
+// {"-o", "report.json"}, {"--tag-registry", "tags.json"}, {"SESSION", "-"}.
+struct NamedPath {
+  std::string option;
+  std::string path;
+};
+
+// The rule every command applies to its outputs before any work (docs/unix.md, "Outputs
+// never destroy"); empty paths are skipped:
+// - at most one output is `-` (CheckOneStdout); `-` is never checked further;
+// - each output can be replaced: not a directory, device, FIFO or socket, not in /dev,
+//   /proc or /sys, its directory exists (CheckReplaceableFile);
+// - no output is the same file as an input (through symlinks and hard links; an input `-`
+//   is the file behind stdin, if it is one) nor as another output (IsSameFile).
+// Prints "note: replacing existing FILE" for each output that exists (not under --quiet).
+// Every error is a usage error (exit 2) and names both paths.
+Status CheckOutputs(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs);
 
 // Standard input is read once, and as a session only: at most one input may be `-`, and
 // none with `imutk` (imu_tk pairs are read from named files).

@@ -25,36 +25,34 @@ int RunApply(const ApplyOptions& a) {
     return kExitUsage;
   }
   if (Status s = apps::CheckStdinInputs(a.inputs, a.imutk); !s.ok()) {
-    fmt::print(stderr, "error: {}\n", s.error().ToString());
+    apps::PrintError(s.error());
     return kExitUsage;
   }
-  for (const std::string& in : a.inputs) {
-    if (apps::IsStdio(a.output)) break;
-    const std::string in_file = apps::IsStdio(in) ? "/dev/stdin" : in;
-    if (IsSameFile(in_file, a.output) || IsSameFile(a.calibration, a.output)) {
-      fmt::print(stderr, "error: the output {} is one of the inputs\n", a.output);
-      return kExitUsage;
-    }
+  std::vector<apps::NamedPath> inputs = {{"CALIBRATION", a.calibration}};
+  for (const std::string& in : a.inputs) inputs.push_back({"SESSION", in});
+  if (Status s = apps::CheckOutputs({{"-o", a.output}}, inputs); !s.ok()) {
+    apps::PrintError(s.error());
+    return kExitUsage;
   }
   Result<Calibration> cal = LoadCalibration(a.calibration);
   if (!cal.ok()) {
-    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    apps::PrintError(cal.error());
     return kExitUsage;
   }
   Result<Session> session =
       a.imutk ? LoadImuTk(a.inputs[0], a.inputs[1]) : LoadSession(a.inputs[0]);
   if (!session.ok()) {
-    fmt::print(stderr, "error: {}\n", session.error().ToString());
+    apps::PrintError(session.error());
     return kExitUsage;
   }
   Session s = std::move(session).value();
   Result<ApplySummary> summary = ApplyCalibration(cal.value(), &s);
   if (!summary.ok()) {
-    fmt::print(stderr, "error: {}\n", summary.error().ToString());
+    apps::PrintError(summary.error());
     return kExitUsage;
   }
   if (Status w = apps::WriteOutput(a.output, FormatSessionCsv(s, true)); !w.ok()) {
-    fmt::print(stderr, "error: {}\n", w.error().ToString());
+    apps::PrintError(w.error());
     return kExitFailed;
   }
   apps::Note(fmt::format("wrote {}: {} tags, {} rows calibrated\n",

@@ -58,22 +58,13 @@ int RunBlob(const BlobOptions& b) {
     fmt::print(stderr, "error: {}\n", slot_a.error().message);
     return kExitUsage;
   }
-  for (Status s : {apps::CheckOneStdout({{"-o", &b.output}, {"--hex", &b.hex}}),
-                   apps::CheckBinaryStdout(b.output)}) {
+  for (Status s :
+       {apps::CheckOutputs({{"-o", b.output}, {"--hex", b.hex}}, {{"CALIBRATION", b.calibration}}),
+        apps::CheckBinaryStdout(b.output)}) {
     if (!s.ok()) {
-      fmt::print(stderr, "error: {}\n", s.error().ToString());
+      apps::PrintError(s.error());
       return kExitUsage;
     }
-  }
-  for (const std::string& out : {b.output, b.hex}) {
-    if (!out.empty() && !apps::IsStdio(out) && IsSameFile(b.calibration, out)) {
-      fmt::print(stderr, "error: the output {} is the input\n", out);
-      return kExitUsage;
-    }
-  }
-  if (!b.hex.empty() && !apps::IsStdio(b.hex) && IsSameFile(b.output, b.hex)) {
-    fmt::print(stderr, "error: -o and --hex name the same file\n");
-    return kExitUsage;
   }
   Result<Calibration> cal = LoadCalibration(b.calibration);
   if (!cal.ok()) {

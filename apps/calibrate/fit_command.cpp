@@ -67,21 +67,18 @@ int RunFit(const FitOptions& f) {
     return kExitUsage;
   }
   if (Status s = apps::CheckStdinInputs(f.inputs, f.imutk); !s.ok()) {
-    fmt::print(stderr, "error: {}\n", s.error().ToString());
+    apps::PrintError(s.error());
     return kExitUsage;
   }
   if (Status s = apps::RefuseStdout(f.html, "--html", "the certificate goes to a file"); !s.ok()) {
-    fmt::print(stderr, "error: {}\n", s.error().ToString());
+    apps::PrintError(s.error());
     return kExitUsage;
   }
-  for (const std::string& in : f.inputs) {
-    const std::string in_file = apps::IsStdio(in) ? "/dev/stdin" : in;
-    for (const std::string* out : {&f.output, &f.html}) {
-      if (!out->empty() && !apps::IsStdio(*out) && IsSameFile(in_file, *out)) {
-        fmt::print(stderr, "error: the output {} is one of the inputs\n", *out);
-        return kExitUsage;
-      }
-    }
+  std::vector<apps::NamedPath> inputs = {{"--columns-file", f.load.columns_file}};
+  for (const std::string& in : f.inputs) inputs.push_back({"SESSION", in});
+  if (Status s = apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs); !s.ok()) {
+    apps::PrintError(s.error());
+    return kExitUsage;
   }
   std::vector<Session> sessions;
   const size_t step = f.imutk ? 2 : 1;
@@ -89,7 +86,7 @@ int RunFit(const FitOptions& f) {
   for (size_t i = 0; i < f.inputs.size(); i += step) {
     LoadOptions load;
     if (Status st = apps::MakeLoadOptions(f.load, &load); !st.ok()) {
-      fmt::print(stderr, "error: {}\n", st.error().ToString());
+      apps::PrintError(st.error());
       return kExitUsage;
     }
     if (!f.imutk) {
@@ -100,7 +97,7 @@ int RunFit(const FitOptions& f) {
         f.imutk ? LoadImuTk(f.inputs[i], f.inputs[i + 1]) : LoadSession(f.inputs[i], load);
     progress.Finish();
     if (!s.ok()) {
-      fmt::print(stderr, "error: {}\n", s.error().ToString());
+      apps::PrintError(s.error());
       return kExitUsage;
     }
     sessions.push_back(std::move(s).value());
@@ -109,18 +106,35 @@ int RunFit(const FitOptions& f) {
   for (const Session& s : sessions) ptrs.push_back(&s);
   // Missing columns are bad input (exit 2), named with the file before any fitting.
   if (Status c = CheckCalibrationColumns(ptrs, o); !c.ok()) {
-    fmt::print(stderr, "error: {}\n", c.error().ToString());
+    apps::PrintError(c.error());
     return kExitUsage;
   }
   progress.BeginPhase("fit (Ceres)", kUncountedWork);
   Result<Calibration> cal = CalibrateSessions(ptrs, o);
   progress.Finish();
   if (!cal.ok()) {
-    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    apps::PrintError(cal.error());
     return kExitFailed;
   }
-  if (Status w = apps::WriteOutput(f.output, FormatCalibrationJson(cal.value())); !w.ok()) {
-    fmt::print(stderr, "error: {}\n", w.error().ToString());
+  std::string html;
+  if (!f.html.empty()) {
+    CertificateOptions certificate;
+    certificate.accel_fs_g = f.accel_fs_g;
+    certificate.gyro_fs_dps = f.gyro_fs_dps;
+    Result<std::string> rendered = RenderCalibrationCertificate(
+        cal.value(), ptrs, "Conditions and residual plots from the input records as fitted.",
+        certificate);
+    if (!rendered.ok()) {
+      apps::PrintError(rendered.error());
+      return kExitFailed;
+    }
+    html = std::move(rendered).value();
+  }
+  // calibration.json and its certificate are replaced together or not at all.
+  if (Status w =
+          apps::WriteOutputs({{f.output, FormatCalibrationJson(cal.value())}, {f.html, html}});
+      !w.ok()) {
+    apps::PrintError(w.error());
     return kExitFailed;
   }
   // The summary is a note (not under --quiet); the warnings always print.
@@ -140,27 +154,14 @@ int RunFit(const FitOptions& f) {
     }
     for (const std::string& w : t.warnings) {
       if (apps::Quiet()) {
-        fmt::print(stderr, "warning: sensor {}: {}\n", t.sensor, w);
+        apps::PrintText(stderr, fmt::format("warning: sensor {}: {}\n", t.sensor, w));
       } else {
-        fmt::print(stderr, "  warning: {}\n", w);
+        apps::PrintText(stderr, fmt::format("  warning: {}\n", w));
       }
     }
   }
   apps::Note(fmt::format("wrote {}\n", apps::IsStdio(f.output) ? "stdout" : f.output));
-  if (!f.html.empty()) {
-    CertificateOptions certificate;
-    certificate.accel_fs_g = f.accel_fs_g;
-    certificate.gyro_fs_dps = f.gyro_fs_dps;
-    Result<std::string> html = RenderCalibrationCertificate(
-        cal.value(), ptrs, "Conditions and residual plots from the input records as fitted.",
-        certificate);
-    Status s = html.ok() ? WriteFileAtomically(f.html, html.value()) : Status(html.error());
-    if (!s.ok()) {
-      fmt::print(stderr, "error: {}\n", s.error().ToString());
-      return kExitFailed;
-    }
-    apps::Note(fmt::format("wrote {}\n", f.html));
-  }
+  if (!f.html.empty()) apps::Note(fmt::format("wrote {}\n", f.html));
   return kExitOk;
 }
 

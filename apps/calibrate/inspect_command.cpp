@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "metro/blob/inspect.hpp"
+#include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
 namespace {
@@ -44,13 +45,13 @@ int RunInspect(const InspectCliOptions& c) {
   o.slot_b_address = static_cast<uint32_t>(a) + blob::kPageSize;
   Result<blob::InspectReport> r = blob::InspectFile(c.input, o);
   if (!r.ok()) {
-    fmt::print(stderr, "error: {}\n", r.error().ToString());
+    apps::PrintError(r.error());
     return kExitUsage;
   }
   if (c.json) {
     fmt::print("{}\n", blob::InspectToJson(r.value()).dump(2));
   } else {
-    fmt::print("{}", blob::FormatInspect(r.value()));
+    apps::PrintText(stdout, blob::FormatInspect(r.value()));  // Blob metadata is data.
   }
   return r.value().ok() ? kExitOk : kExitFailed;
 }

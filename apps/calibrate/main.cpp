@@ -24,11 +24,11 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
-    return code == 0 ? 0 : app_ns::kExitUsage;
+    return metro::apps::FinishStdout(code == 0 ? 0 : app_ns::kExitUsage);
   } catch (const std::bad_alloc&) {
     // The loaders turn this into an error naming the file; anything else that runs out.
     std::fputs("error: out of memory\n", stderr);
     return app_ns::kExitFailed;
   }
-  return exit_code;
+  return metro::apps::FinishStdout(exit_code);
 }

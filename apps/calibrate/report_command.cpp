@@ -21,25 +21,26 @@ int RunReport(const ReportOptions& r) {
   if (Status s = apps::RefuseStdout(r.html, "--html",
                                     "the summary goes to stdout: name a file for the certificate");
       !s.ok()) {
-    fmt::print(stderr, "error: {}\n", s.error().ToString());
+    apps::PrintError(s.error());
+    return kExitUsage;
+  }
+  if (Status s = apps::CheckOutputs({{"--html", r.html}}, {{"CALIBRATION", r.calibration}});
+      !s.ok()) {
+    apps::PrintError(s.error());
     return kExitUsage;
   }
   Result<Calibration> cal = LoadCalibration(r.calibration);
   if (!cal.ok()) {
-    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    apps::PrintError(cal.error());
     return kExitUsage;
   }
-  fmt::print("{}", FormatCalibrationReport(cal.value()));
+  apps::PrintText(stdout, FormatCalibrationReport(cal.value()));
   if (!r.html.empty()) {
-    if (IsSameFile(r.html, r.calibration)) {
-      fmt::print(stderr, "error: the output {} is the input\n", r.html);
-      return kExitUsage;
-    }
     // The certificate reloads the recorded inputs when their SHA-256 still matches.
     Result<std::string> html = RenderJsonFileHtml(r.calibration);
     Status s = html.ok() ? WriteFileAtomically(r.html, html.value()) : Status(html.error());
     if (!s.ok()) {
-      fmt::print(stderr, "error: {}\n", s.error().ToString());
+      apps::PrintError(s.error());
       return kExitFailed;
     }
     apps::Note(fmt::format("wrote {}\n", r.html));

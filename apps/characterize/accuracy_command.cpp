@@ -70,6 +70,28 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     PrintError(MakeError("--accuracy and --type-a are separate analyses: give one"));
     return kExitUsage;
   }
+  if (Status s = CheckStdinInputs({in.session, a.reference}); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
+  if (Status s = RefuseStdout(in.html, "--html", "the HTML view goes to a file"); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
+  // --reference-u is a budget file unless it is a number.
+  char* number_end = nullptr;
+  std::strtod(a.reference_u.c_str(), &number_end);
+  const bool reference_u_is_number = number_end != a.reference_u.c_str() && *number_end == '\0';
+  const std::string reference_u_file = reference_u_is_number ? "" : a.reference_u;
+  if (Status s = CheckOutputs({{"-o", in.output}, {"--html", in.html}},
+                              {{"SESSION", in.session},
+                               {"--reference", a.reference},
+                               {"--reference-u", reference_u_file},
+                               {"--columns-file", in.load.columns_file}});
+      !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   AccuracyOptions options;
   auto axis = ParseTableAxis(a.table_axis);
   if (!axis.ok()) {
@@ -103,25 +125,6 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   std::string why;
   if (!options.IsValid(&why)) {
     PrintError(MakeError(why));
-    return kExitUsage;
-  }
-  if (Status s = CheckStdinInputs({in.session, a.reference}); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
-  }
-  if (Status s = RefuseStdout(in.html, "--html", "the HTML view goes to a file"); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
-  }
-  for (const std::string* out : {&in.output, &in.html}) {
-    if (out->empty()) continue;
-    if (Status s = CheckOutputPath(*out, {in.session, a.reference}); !s.ok()) {
-      PrintError(s.error());
-      return kExitUsage;
-    }
-  }
-  if (!in.html.empty() && in.html == in.output) {
-    PrintError(MakeError(in.html, 0, "--html and -o name the same file"));
     return kExitUsage;
   }
   LoadOptions load;
@@ -162,24 +165,24 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   }
   const nlohmann::ordered_json report = AccuracyReportJson(result.value(), session.value(), ref);
   const std::string json = report.dump(2) + "\n";
-  // The HTML view, after the JSON: a failed render never costs the JSON (exit 1).
-  auto write_html = [&in, &report]() -> int {
-    if (in.html.empty()) return kExitOk;
-    Result<std::string> html = RenderJsonHtml(report, in.output);
-    Status s = html.ok() ? WriteFileAtomically(in.html, html.value()) : Status(html.error());
-    if (!s.ok()) {
-      PrintError(s.error());
+  std::string html;
+  if (!in.html.empty()) {
+    Result<std::string> rendered = RenderJsonHtml(report, in.output);
+    if (!rendered.ok()) {
+      PrintError(rendered.error());
       return kExitFailed;
     }
-    return kExitOk;
-  };
-  // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.
-  if (Status s = WriteOutput(in.output.empty() ? "-" : in.output, json); !s.ok()) {
+    html = std::move(rendered).value();
+  }
+  // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr. The
+  // JSON and the HTML are replaced together or not at all.
+  if (Status s = WriteOutputs({{in.output.empty() ? "-" : in.output, json}, {in.html, html}});
+      !s.ok()) {
     PrintError(s.error());
     return kExitFailed;
   }
   if (!in.output.empty()) PrintTable(AccuracyReportTable(result.value()), in.output);
-  return write_html();
+  return kExitOk;
 }
 
 }  // namespace metro::apps

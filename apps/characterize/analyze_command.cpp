@@ -42,11 +42,6 @@ int RunAnalyze(const AnalyzeOptions& o) {
     return RunAccuracy(o.accuracy, {o.session, a.load, a.sensors, o.output, a.settle, o.threads,
                                     o.type_a, o.html, window});
   }
-  SessionAnalysisOptions options;
-  if (Status s = MakeSessionAnalysisOptions(o.analysis, o.threads, &options); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
-  }
   for (Status s : {RefuseStdout(o.html, "--html", "the HTML report goes to a file"),
                    RefuseStdout(o.allan_csv, "--allan-csv", "the Allan curves go to a file")}) {
     if (!s.ok()) {
@@ -54,12 +49,19 @@ int RunAnalyze(const AnalyzeOptions& o) {
       return kExitUsage;
     }
   }
-  for (const std::string* out : {&o.output, &o.allan_csv, &o.html}) {
-    if (out->empty()) continue;
-    if (Status s = CheckOutputPath(*out, {o.session, o.budget}); !s.ok()) {
-      PrintError(s.error());
-      return kExitUsage;
-    }
+  if (Status s = CheckOutputs({{"-o", o.output}, {"--allan-csv", o.allan_csv}, {"--html", o.html}},
+                              {{"SESSION", o.session},
+                               {"--budget", o.budget},
+                               {"--tag-registry", o.analysis.tag_registry},
+                               {"--columns-file", o.analysis.load.columns_file}});
+      !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
+  SessionAnalysisOptions options;
+  if (Status s = MakeSessionAnalysisOptions(o.analysis, o.threads, &options); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
   }
   options.allan_csv = options.allan && !o.allan_csv.empty();
   options.budget_path = o.budget;
@@ -78,25 +80,21 @@ int RunAnalyze(const AnalyzeOptions& o) {
                      analysis.session.rejected_rows, analysis.session.rejected_lines.front()));
   }
   const std::string json = analysis.report.dump(2) + "\n";
-  if (!o.allan_csv.empty()) {
-    if (Status s = WriteFileAtomically(o.allan_csv, analysis.allan_csv); !s.ok()) {
-      PrintError(s.error());
+  std::string html;
+  if (!o.html.empty()) {
+    Result<std::string> rendered = RenderSessionAnalysisHtml(analysis);
+    if (!rendered.ok()) {
+      PrintError(rendered.error());
       return kExitFailed;
     }
+    html = std::move(rendered).value();
   }
-  // The HTML report, after the JSON: a failed render never costs the JSON.
-  auto write_html = [&o, &analysis]() -> int {
-    if (o.html.empty()) return kExitOk;
-    Result<std::string> html = RenderSessionAnalysisHtml(analysis);
-    Status s = html.ok() ? WriteFileAtomically(o.html, html.value()) : Status(html.error());
-    if (!s.ok()) {
-      PrintError(s.error());
-      return kExitFailed;
-    }
-    return kExitOk;
-  };
-  // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.
-  if (Status s = WriteOutput(o.output.empty() ? "-" : o.output, json); !s.ok()) {
+  // The JSON (no -o: to stdout, with no table), the Allan CSV and the HTML are replaced
+  // together or not at all.
+  if (Status s = WriteOutputs({{o.output.empty() ? "-" : o.output, json},
+                               {o.allan_csv, analysis.allan_csv},
+                               {o.html, html}});
+      !s.ok()) {
     PrintError(s.error());
     return kExitFailed;
   }
@@ -104,9 +102,9 @@ int RunAnalyze(const AnalyzeOptions& o) {
     PrintTable(analysis.table, o.output);
   } else if (const std::string w = TypeAReportWarnings(analysis.report); !w.empty()) {
     // No table (--quiet, or the JSON alone on stdout): the warnings still reach stderr.
-    std::fwrite(w.data() + 1, 1, w.size() - 1, stderr);
+    PrintText(stderr, std::string_view(w).substr(1));
   }
-  return write_html();
+  return kExitOk;
 }
 
 }  // namespace

@@ -44,17 +44,20 @@ int RunBatchCommand(const BatchCommandOptions& o) {
     PrintError(MakeError(why));
     return kExitUsage;
   }
-  Result<std::vector<std::string>> inputs = ExpandBatchInputs(o.inputs);
+  std::vector<std::string> skipped;
+  Result<std::vector<std::string>> inputs = ExpandBatchInputs(o.inputs, &skipped);
   if (!inputs.ok()) {
     PrintError(inputs.error());
     return kExitUsage;
   }
+  for (const std::string& line : skipped) Note("note: " + line + "\n");
   ProgressOptions bar;
   if (Quiet()) bar.mode = ProgressMode::kNever;
   ProgressBar progress("batch", static_cast<int64_t>(inputs.value().size()), stderr, bar);
   options.on_progress = [&progress](size_t, size_t) { progress.Advance(); };
   const BatchSummary summary = RunBatch(inputs.value(), options);
   progress.Finish();
+  for (const std::string& line : summary.skipped) Note("note: " + line + "\n");
   if (!summary.error.message.empty()) {
     PrintError(summary.error);
     return summary.items.empty() ? kExitUsage : kExitFailed;

@@ -47,15 +47,15 @@ void AddBudgetCommand(CLI::App& app, int* exit_code) {
 int RunBudget(const BudgetOptions& options) { return RunBudget(options, BudgetResolver()); }
 
 int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resolver) {
-  if (!options.output_path.empty() && !apps::IsStdio(options.output_path) &&
-      IsSameFile(options.output_path, options.budget_path)) {
-    std::fprintf(stderr, "error: the output would overwrite the budget %s\n",
-                 options.budget_path.c_str());
+  if (Status s =
+          apps::CheckOutputs({{"-o", options.output_path}}, {{"BUDGET", options.budget_path}});
+      !s.ok()) {
+    apps::PrintError(s.error());
     return 2;
   }
   auto budget = LoadBudget(options.budget_path, resolver);
   if (!budget.ok()) {
-    std::fprintf(stderr, "error: %s\n", budget.error().ToString().c_str());
+    apps::PrintError(budget.error());
     return 2;
   }
   TerminalProgress progress(stderr, apps::CliProgressOptions());  // The Monte Carlo trials.
@@ -63,7 +63,7 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
   progress.Finish();
   if (!evaluation.ok()) {
     // Bad models (NaN, undefined) and impossible joint distributions are input errors.
-    std::fprintf(stderr, "error: %s\n", evaluation.error().ToString().c_str());
+    apps::PrintError(evaluation.error());
     return 2;
   }
   const std::string json = BudgetReportJson(evaluation.value()).dump(2) + "\n";
@@ -71,16 +71,16 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
   const std::string output = options.output_path.empty() ? "-" : options.output_path;
   const Status written = apps::WriteOutput(output, json);
   if (!written.ok()) {
-    std::fprintf(stderr, "error: %s\n", written.error().ToString().c_str());
+    apps::PrintError(written.error());
     return 1;
   }
   if (!options.output_path.empty()) {
     apps::PrintTable(BudgetReportTable(evaluation.value()), options.output_path);
   }
   if (!evaluation.value().ok) {
-    std::fprintf(stderr, "error: %s\n",
-                 evaluation.value().monte_carlo ? evaluation.value().monte_carlo->message.c_str()
-                                                : "evaluation failed");
+    apps::PrintError(MakeError(evaluation.value().monte_carlo
+                                   ? evaluation.value().monte_carlo->message
+                                   : std::string("evaluation failed")));
     return 1;
   }
   return 0;

@@ -34,6 +34,12 @@ int RunConvert(const ConvertOptions& o) {
     PrintError(s.error());
     return kExitUsage;
   }
+  std::vector<NamedPath> inputs = {{"--columns-file", o.load.columns_file}};
+  for (const std::string& input : o.inputs) inputs.push_back({"INPUT", input});
+  if (Status s = CheckOutputs({{"-o", o.output}}, inputs); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   Result<Session> session = MakeError("no input");
   std::string join_comments;
   if (o.from == "imutk") {
@@ -63,10 +69,6 @@ int RunConvert(const ConvertOptions& o) {
       join_comments += "# " + line + "\n";
       Note(line + "\n");
     }
-  }
-  if (Status s = CheckOutputPath(o.output, o.inputs); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
   }
   if (!session.ok()) {
     PrintError(session.error());

@@ -27,11 +27,11 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
-    return code == 0 ? 0 : metro::apps::kExitUsage;
+    return metro::apps::FinishStdout(code == 0 ? 0 : metro::apps::kExitUsage);
   } catch (const std::bad_alloc&) {
     // The loaders turn this into an error naming the file; anything else that runs out.
     std::fputs("error: out of memory\n", stderr);
     return metro::apps::kExitFailed;
   }
-  return exit_code;
+  return metro::apps::FinishStdout(exit_code);
 }

@@ -18,7 +18,8 @@ struct ReportCommandOptions {
 };
 
 int RunReportCommand(const ReportCommandOptions& o) {
-  if (Status s = CheckOutputPath(o.html, {o.json, o.session}); !s.ok()) {
+  if (Status s = CheckOutputs({{"--html", o.html}}, {{"REPORT", o.json}, {"--session", o.session}});
+      !s.ok()) {
     PrintError(s.error());
     return kExitUsage;
   }

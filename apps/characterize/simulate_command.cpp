@@ -52,17 +52,10 @@ int RunTableSimulate(SimulateOptions o) {
     PrintError(MakeError("a receiver capture has no table column: give --reference-output"));
     return kExitUsage;
   }
-  if (Status s = CheckOneStdout({{"-o", &o.output}, {"--reference-output", &o.reference_output}});
+  if (Status s = CheckOutputs({{"-o", o.output}, {"--reference-output", o.reference_output}}, {});
       !s.ok()) {
     PrintError(s.error());
     return kExitUsage;
-  }
-  for (const std::string* out : {&o.output, &o.reference_output}) {
-    if (out->empty()) continue;
-    if (Status s = CheckOutputPath(*out, {}); !s.ok()) {
-      PrintError(s.error());
-      return kExitUsage;
-    }
   }
   StreamedOutput writer(o.output);
   std::optional<StreamedOutput> ref_writer;
@@ -76,8 +69,11 @@ int RunTableSimulate(SimulateOptions o) {
         o.table, receiver ? SessionFormat::kReceiver : SessionFormat::kCsv,
         [&](std::string_view chunk) { return writer.Write(chunk); }, ref_sink);
   }
-  if (s.ok()) s = writer.Commit();
-  if (s.ok() && ref_writer) s = ref_writer->Commit();
+  // The session and its reference log are replaced together or not at all.
+  if (s.ok()) s = writer.Finish();
+  if (s.ok() && ref_writer) s = ref_writer->Finish();
+  if (s.ok()) s = writer.Publish();
+  if (s.ok() && ref_writer) s = ref_writer->Publish();
   if (!s.ok()) {
     PrintError(s.error());
     return kExitFailed;
@@ -108,7 +104,7 @@ int RunSimulate(SimulateOptions o) {
     PrintError(MakeError(why));
     return kExitUsage;
   }
-  if (Status s = CheckOutputPath(o.output, {}); !s.ok()) {
+  if (Status s = CheckOutputs({{"-o", o.output}}, {}); !s.ok()) {
     PrintError(s.error());
     return kExitUsage;
   }

@@ -1,6 +1,7 @@
 #include "metro/core/file.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <openssl/evp.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <random>
 #include <vector>
@@ -17,6 +19,8 @@
 
 namespace metro {
 namespace {
+
+namespace fs = std::filesystem;
 
 std::string OsError(const std::string& what, const std::string& path) {
   return what + " '" + path + "': " + std::strerror(errno);
@@ -34,17 +38,51 @@ std::string DirectoryOf(const std::string& path) {
 AtomicFileWriter::AtomicFileWriter(std::string path) : path_(std::move(path)) {}
 
 AtomicFileWriter::~AtomicFileWriter() {
-  if (fd_ >= 0) {
-    ::close(fd_);
-    ::unlink(tmp_.c_str());
-  }
+  if (fd_ >= 0) ::close(fd_);
+  if (!tmp_.empty()) ::unlink(tmp_.c_str());
 }
 
 Status AtomicFileWriter::Open() {
+  METRO_CHECK(fd_ < 0 && tmp_.empty());
+  if (Status s = CheckReplaceableFile(path_); !s.ok()) return s;
+  target_ = path_;
+  struct stat link {};
+  if (::lstat(path_.c_str(), &link) == 0 && S_ISLNK(link.st_mode)) {
+    // Replace the file the link points to and keep the link (a dangling link is replaced).
+    std::error_code ec;
+    const fs::path resolved = fs::weakly_canonical(path_, ec);
+    if (!ec) target_ = resolved.string();
+  }
+  struct stat old {};
+  const bool replacing = ::stat(target_.c_str(), &old) == 0;
+  // A short name beside the target: `path` may be as long as a name can be (255 bytes).
+  static const char kAlphabet[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
   std::random_device entropy;
-  tmp_ = path_ + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entropy() & 0xFFFFFFu);
-  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd_ < 0) return MakeError(OsError("cannot create temporary file for", path_));
+  const std::string dir = DirectoryOf(target_);
+  for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
+    std::string name = ".metro-";
+    uint32_t bits = entropy();
+    for (int k = 0; k < 6; ++k, bits /= 62) name += kAlphabet[bits % 62];
+    tmp_ = (dir == "/" ? "" : dir) + "/" + name;
+    // 0666 minus the umask, as any new file.
+    fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd_ < 0 && errno != EEXIST) break;
+  }
+  if (fd_ < 0) {
+    const std::string why = OsError("cannot create a temporary file beside", path_);
+    tmp_.clear();
+    return MakeError(why);
+  }
+  if (replacing) {
+    // The replaced file keeps its permissions (a 0600 report stays 0600) and, where the
+    // system allows it, its owner and group.
+    if (old.st_uid != ::geteuid() || old.st_gid != ::getegid()) {
+      [[maybe_unused]] const int ignored = ::fchown(fd_, old.st_uid, old.st_gid);
+    }
+    if (::fchmod(fd_, old.st_mode & 07777) != 0) {
+      return MakeError(OsError("cannot keep the permissions of", path_));
+    }
+  }
   return Status::Ok();
 }
 
@@ -64,23 +102,34 @@ Status AtomicFileWriter::Write(std::string_view chunk) {
   return Status::Ok();
 }
 
-Status AtomicFileWriter::Commit() {
+Status AtomicFileWriter::Finish() {
   METRO_CHECK(fd_ >= 0);
   const bool flushed = ::fsync(fd_) == 0;
+  const int flush_errno = errno;
   const bool closed = ::close(fd_) == 0;
   fd_ = -1;
   if (!flushed || !closed) {
+    if (!flushed) errno = flush_errno;
     const std::string why = OsError("cannot flush", path_);
     ::unlink(tmp_.c_str());
+    tmp_.clear();
     return MakeError(why);
   }
-  if (::rename(tmp_.c_str(), path_.c_str()) != 0) {
+  finished_ = true;
+  return Status::Ok();
+}
+
+Status AtomicFileWriter::Publish() {
+  METRO_CHECK(finished_ && !tmp_.empty());
+  if (::rename(tmp_.c_str(), target_.c_str()) != 0) {
     const std::string why = OsError("cannot rename temporary file onto", path_);
     ::unlink(tmp_.c_str());
+    tmp_.clear();
     return MakeError(why);
   }
+  tmp_.clear();
   // Make the rename itself durable.
-  const int dir_fd = ::open(DirectoryOf(path_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const int dir_fd = ::open(DirectoryOf(target_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir_fd >= 0) {
     ::fsync(dir_fd);
     ::close(dir_fd);
@@ -88,11 +137,78 @@ Status AtomicFileWriter::Commit() {
   return Status::Ok();
 }
 
+Status AtomicFileWriter::Commit() {
+  if (Status s = Finish(); !s.ok()) return s;
+  return Publish();
+}
+
 Status WriteFileAtomically(const std::string& path, std::string_view contents) {
   AtomicFileWriter writer(path);
   if (Status s = writer.Open(); !s.ok()) return s;
   if (Status s = writer.Write(contents); !s.ok()) return s;
   return writer.Commit();
+}
+
+Status WriteFilesAtomically(const std::vector<std::pair<std::string, std::string_view>>& files) {
+  std::vector<std::unique_ptr<AtomicFileWriter>> writers;
+  for (const auto& [path, contents] : files) {
+    writers.push_back(std::make_unique<AtomicFileWriter>(path));
+    AtomicFileWriter& w = *writers.back();
+    if (Status s = w.Open(); !s.ok()) return s;
+    if (Status s = w.Write(contents); !s.ok()) return s;
+    if (Status s = w.Finish(); !s.ok()) return s;
+  }
+  // Every file is on disk under its temporary name: now the renames, which do not fail for
+  // lack of space. The writers not yet published remove their temporaries on the way out.
+  for (auto& w : writers) {
+    if (Status s = w->Publish(); !s.ok()) return s;
+  }
+  return Status::Ok();
+}
+
+Status CheckReplaceableFile(const std::string& path) {
+  auto refuse = [&path](const std::string& what) {
+    return MakeError(fmt::format(
+        "{} {}: metro writes an output to a new file and renames it into place, which would "
+        "replace it; name a regular file (or - for stdout, redirected where you want it)",
+        path, what));
+  };
+  if (path.empty()) return MakeError("an output with an empty file name");
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) return refuse("is a directory");
+    if (S_ISCHR(st.st_mode)) return refuse("is a character device");
+    if (S_ISBLK(st.st_mode)) return refuse("is a block device");
+    if (S_ISFIFO(st.st_mode)) return refuse("is a FIFO (named pipe)");
+    if (S_ISSOCK(st.st_mode)) return refuse("is a socket");
+    if (!S_ISREG(st.st_mode)) return refuse("is not a regular file");
+  }
+  // The directory the new file goes into (the link's own directory for a dangling link,
+  // the target's for a link that resolves), symlinks resolved.
+  std::error_code ec;
+  std::string target = path;
+  struct stat link {};
+  if (::lstat(path.c_str(), &link) == 0 && S_ISLNK(link.st_mode)) {
+    const fs::path resolved = fs::weakly_canonical(path, ec);
+    if (!ec) target = resolved.string();
+  }
+  const std::string dir = DirectoryOf(target);
+  struct stat dir_st {};
+  if (::stat(dir.c_str(), &dir_st) != 0) {
+    return MakeError(
+        fmt::format("{}: the directory {} does not exist: create it first", path, dir));
+  }
+  if (!S_ISDIR(dir_st.st_mode)) {
+    return MakeError(fmt::format("{}: {} is not a directory", path, dir));
+  }
+  const std::string canonical_dir = fs::canonical(dir, ec).string();
+  for (const char* system : {"/dev", "/proc", "/sys"}) {
+    const std::string prefix = system;
+    if (!ec && (canonical_dir == prefix || canonical_dir.rfind(prefix + "/", 0) == 0)) {
+      return refuse("is in " + prefix);
+    }
+  }
+  return Status::Ok();
 }
 
 Result<std::string> ReadFile(const std::string& path) {
@@ -213,8 +329,16 @@ Result<std::string> Sha256File(const std::string& path) {
 bool IsSameFile(const std::string& a, const std::string& b) {
   struct stat sa {
   }, sb{};
-  if (::stat(a.c_str(), &sa) != 0 || ::stat(b.c_str(), &sb) != 0) return false;
-  return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  const bool a_exists = ::stat(a.c_str(), &sa) == 0;
+  const bool b_exists = ::stat(b.c_str(), &sb) == 0;
+  if (a_exists && b_exists) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  if (a_exists || b_exists) return false;
+  // Neither exists yet: the files they would become.
+  std::error_code ea, eb;
+  const fs::path ca = fs::weakly_canonical(a, ea);
+  const fs::path cb = fs::weakly_canonical(b, eb);
+  if (ea || eb) return a == b;
+  return ca == cb;
 }
 
 }  // namespace metro

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "metro/core/check.hpp"
+#include "metro/core/terminal_text.hpp"
 
 namespace metro {
 
@@ -169,8 +170,10 @@ void ElapsedTicker::DrawLocked() {
 void BeginLoadPhase(ProgressSink* progress, const std::string& path) {
   std::error_code ec;
   const auto bytes = std::filesystem::file_size(path, ec);
-  progress->BeginPhase("load " + std::filesystem::path(path).filename().string(),
-                       ec ? 0 : static_cast<int64_t>(bytes), "MB", 1e6);
+  // The file name is data: escaped before it reaches the terminal.
+  progress->BeginPhase(
+      "load " + EscapeControlChars(std::filesystem::path(path).filename().string()),
+      ec ? 0 : static_cast<int64_t>(bytes), "MB", 1e6);
 }
 
 TerminalProgress::TerminalProgress(std::FILE* stream, const ProgressOptions& options)

@@ -1,10 +1,17 @@
 #include "metro/report/batch.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <glob.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -13,6 +20,7 @@
 #include "core/parallel.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/rounding.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
 
 namespace metro {
@@ -63,7 +71,93 @@ std::vector<QuantityResult> ExtractResults(const ordered_json& report) {
   return out;
 }
 
+// A batch's own outputs in its folder: never sessions.
+bool IsBatchOutputName(const std::string& name) {
+  const std::string report = ".report.json";
+  return name == "summary.json" || name == "summary.txt" || name == kBatchLockName ||
+         (name.size() > report.size() &&
+          name.compare(name.size() - report.size(), report.size(), report) == 0);
+}
+
+// `inputs` without the files this batch writes into `output_dir` (left from an earlier run
+// into the same folder: `batch DIR -o DIR`), each named in out->skipped.
+std::vector<std::string> WithoutOwnOutputs(const std::vector<std::string>& inputs,
+                                           const std::string& output_dir, BatchSummary* out) {
+  std::vector<std::string> kept;
+  for (const std::string& in : inputs) {
+    const fs::path p(in);
+    std::error_code ec;
+    const fs::path parent = p.has_parent_path() ? p.parent_path() : fs::path(".");
+    if (IsBatchOutputName(p.filename().string()) && fs::equivalent(parent, output_dir, ec)) {
+      out->skipped.push_back(
+          fmt::format("skipping {}: written by batch into its output directory", in));
+      continue;
+    }
+    kept.push_back(in);
+  }
+  return kept;
+}
+
+// Why `path` cannot be read as a session ("" if it can): a symlink that leads nowhere, a
+// directory, a FIFO (reading it would wait for a writer), a device or a socket.
+std::string NotASessionFile(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int err = errno;
+    struct stat link {};
+    if (::lstat(path.c_str(), &link) == 0 && S_ISLNK(link.st_mode)) {
+      std::error_code ec;
+      const fs::path target = fs::read_symlink(path, ec);
+      return fmt::format("a symlink to {} ({}): fix or remove the link",
+                         ec ? std::string("?") : target.string(), std::strerror(err));
+    }
+    return fmt::format("cannot open: {}", std::strerror(err));
+  }
+  if (S_ISREG(st.st_mode)) return "";
+  if (S_ISDIR(st.st_mode)) return "is a directory, not a session file";
+  if (S_ISFIFO(st.st_mode)) return "is a FIFO, not a session file (batch reads named files)";
+  return "is not a regular file (a device or a socket): batch reads session files";
+}
+
 }  // namespace
+
+FileLock::~FileLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+Result<FileLock> LockBatchDirectory(const std::string& output_dir) {
+  const std::string path = (fs::path(output_dir) / kBatchLockName).string();
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    return MakeError(output_dir, 0,
+                     fmt::format("cannot create the lock file {}: {}", path, std::strerror(errno)));
+  }
+  FileLock lock(fd);
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    if (err != EWOULDBLOCK) {
+      return MakeError(output_dir, 0, fmt::format("cannot lock {}: {}", path, std::strerror(err)));
+    }
+    // The holder wrote who it is when it took the lock.
+    char holder[256] = {};
+    const ssize_t n = ::pread(fd, holder, sizeof holder - 1, 0);
+    std::string who = n > 0 ? std::string(holder, static_cast<size_t>(n)) : std::string();
+    while (!who.empty() && (who.back() == '\n' || who.back() == ' ')) who.pop_back();
+    return MakeError(
+        output_dir, 0,
+        fmt::format("the output directory is in use by another batch ({}): wait for it to "
+                    "finish or give another -o",
+                    who.empty() ? "its lock file " + path : EscapeControlChars(who)));
+  }
+  char host[128] = {};
+  ::gethostname(host, sizeof host - 1);
+  const std::string who = fmt::format("pid {} on {}, since {}", ::getpid(), host,
+                                      static_cast<long long>(::time(nullptr)));
+  if (::ftruncate(fd, 0) == 0) {
+    [[maybe_unused]] const ssize_t written = ::pwrite(fd, who.data(), who.size(), 0);
+  }
+  return Result<FileLock>(std::move(lock));
+}
 
 bool BatchOptions::IsValid(std::string* why) const {
   if (output_dir.empty()) {
@@ -77,37 +171,45 @@ bool BatchOptions::IsValid(std::string* why) const {
   return analysis.IsValid(why);
 }
 
-Result<std::vector<std::string>> ExpandBatchInputs(const std::vector<std::string>& arguments) {
+Result<std::vector<std::string>> ExpandBatchInputs(const std::vector<std::string>& arguments,
+                                                   std::vector<std::string>* skipped) {
   if (arguments.empty()) return MakeError("batch: no session files, directories or patterns");
   std::set<std::string> files;
+  auto skip = [skipped](const std::string& path, const std::string& why) {
+    if (skipped != nullptr) skipped->push_back(fmt::format("skipping {}: {}", path, why));
+  };
   for (const std::string& arg : arguments) {
     std::error_code ec;
     size_t found = 0;
     if (fs::is_directory(arg, ec)) {
       for (const fs::directory_entry& e : fs::directory_iterator(arg, ec)) {
         const std::string ext = e.path().extension().string();
-        if (e.is_regular_file(ec) && (ext == ".csv" || ext == ".txt")) {
-          files.insert(e.path().string());
-          ++found;
-        }
+        if (ext != ".csv" && ext != ".txt") continue;
+        // Every *.csv and *.txt entry is a session, whatever it is: a symlink is followed,
+        // and one that leads nowhere, a FIFO or a directory fails as its own session with
+        // the reason (RunBatch), never silently left out.
+        files.insert(e.path().string());
+        ++found;
       }
       if (ec) return MakeError(arg, 0, fmt::format("cannot list the directory: {}", ec.message()));
       if (found == 0) return MakeError(arg, 0, "directory has no *.csv or *.txt session files");
-    } else if (IsPattern(arg) && !fs::exists(arg, ec)) {
+    } else if (IsPattern(arg) && !fs::exists(fs::symlink_status(arg, ec))) {
       glob_t g{};
       const int rc = ::glob(arg.c_str(), 0, nullptr, &g);
       if (rc == 0) {
         for (size_t i = 0; i < g.gl_pathc; ++i) {
-          if (fs::is_regular_file(g.gl_pathv[i], ec)) {
-            files.insert(g.gl_pathv[i]);
-            ++found;
+          if (fs::is_directory(g.gl_pathv[i], ec)) {
+            skip(g.gl_pathv[i], "a directory (name it to read its *.csv and *.txt files)");
+            continue;
           }
+          files.insert(g.gl_pathv[i]);
+          ++found;
         }
       }
       ::globfree(&g);
       if (found == 0) return MakeError(arg, 0, "pattern matches no file");
     } else {
-      if (!fs::is_regular_file(arg, ec)) return MakeError(arg, 0, "no such file");
+      if (!fs::exists(fs::symlink_status(arg, ec))) return MakeError(arg, 0, "no such file");
       files.insert(arg);
     }
   }
@@ -132,7 +234,7 @@ std::vector<std::string> BatchReportNames(const std::vector<std::string>& inputs
   return names;
 }
 
-BatchSummary RunBatch(const std::vector<std::string>& inputs, const BatchOptions& options) {
+BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOptions& options) {
   BatchSummary out;
   std::string why;
   if (!options.IsValid(&why)) {
@@ -146,6 +248,13 @@ BatchSummary RunBatch(const std::vector<std::string>& inputs, const BatchOptions
                           fmt::format("cannot create the output directory: {}", ec.message()));
     return out;
   }
+  // The folder is this run's until it returns (the lock goes with the descriptor).
+  Result<FileLock> lock = LockBatchDirectory(options.output_dir);
+  if (!lock.ok()) {
+    out.error = lock.error();
+    return out;
+  }
+  const std::vector<std::string> inputs = WithoutOwnOutputs(all_inputs, options.output_dir, &out);
   SessionAnalysisOptions analysis = options.analysis;
   analysis.load.threads = 1;
   analysis.type_a.threads = 1;
@@ -156,17 +265,36 @@ BatchSummary RunBatch(const std::vector<std::string>& inputs, const BatchOptions
   out.items.resize(inputs.size());
   std::vector<std::vector<QuantityResult>> results(inputs.size());
   std::vector<std::string> hashes(inputs.size());
+  // Every input's identity: no report is written over one (through links).
+  std::set<std::pair<dev_t, ino_t>> input_ids;
+  for (const std::string& in : inputs) {
+    struct stat st {};
+    if (::stat(in.c_str(), &st) == 0) input_ids.insert({st.st_dev, st.st_ino});
+  }
   std::mutex progress_mutex;
   size_t done = 0;
   internal::ParallelFor(inputs.size(), options.jobs, [&](size_t i) {
     BatchItem& item = out.items[i];
     item.input = inputs[i];
-    const SessionAnalysis a = AnalyzeSession(inputs[i], analysis);
-    if (!a.ok) {
+    const std::string report_path = (fs::path(options.output_dir) / names[i]).string();
+    std::string refused = NotASessionFile(inputs[i]);
+    struct stat report_st {};
+    if (refused.empty() && ::stat(report_path.c_str(), &report_st) == 0 &&
+        input_ids.count({report_st.st_dev, report_st.st_ino}) > 0) {
+      refused = fmt::format(
+          "its report {} is one of the inputs: refusing to overwrite an input; "
+          "move that file or choose another -o",
+          report_path);
+    }
+    const SessionAnalysis a =
+        refused.empty() ? AnalyzeSession(inputs[i], analysis) : SessionAnalysis{};
+    if (!refused.empty()) {
+      item.error = MakeError(inputs[i], 0, refused);
+    } else if (!a.ok) {
       item.error = a.error;
       item.input_error = a.input_error;
     } else {
-      item.report_path = (fs::path(options.output_dir) / names[i]).string();
+      item.report_path = report_path;
       if (Status s = WriteFileAtomically(item.report_path, a.report.dump(2) + "\n"); !s.ok()) {
         item.error = s.error();
         item.input_error = false;
@@ -265,14 +393,14 @@ BatchSummary RunBatch(const std::vector<std::string>& inputs, const BatchOptions
     if (!item.ok) table += fmt::format("FAILED {}: {}\n", item.input, item.error.ToString());
   }
   out.summary = summary;
-  out.table = table;
   const fs::path dir(options.output_dir);
-  if (Status s = WriteFileAtomically((dir / "summary.json").string(), summary.dump(2) + "\n");
+  // Both or neither. Tag names and file names in the table are data: escaped, so that
+  // `cat summary.txt` cannot drive a terminal.
+  out.table = EscapeControlCharsKeepLines(table);
+  const std::string summary_json = summary.dump(2) + "\n";
+  if (Status s = WriteFilesAtomically({{(dir / "summary.json").string(), summary_json},
+                                       {(dir / "summary.txt").string(), out.table}});
       !s.ok()) {
-    out.error = s.error();
-    return out;
-  }
-  if (Status s = WriteFileAtomically((dir / "summary.txt").string(), table); !s.ok()) {
     out.error = s.error();
     return out;
   }

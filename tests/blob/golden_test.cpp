@@ -128,7 +128,8 @@ TEST_CASE("calibrate blob and inspect refuse bad input with the reason", "[blob]
         "the next page)\n");
   r = Calibrate("blob " + cal + " --sensor 2 --device-id 9ABCDEF012345678 -o " + cal);
   CHECK(r.exit_code == 2);
-  CHECK(r.err == "error: the output " + cal + " is the input\n");
+  CHECK(r.err == "error: -o " + cal + " is the input file: refusing to overwrite it (CALIBRATION " +
+                     cal + "); name another output file\n");
   r = Calibrate("blob " + cal + " --sensor 2 --device-id 9ABCDEF012345678 --seq 0 -o x.bin");
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("--seq") != std::string::npos);

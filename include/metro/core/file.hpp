@@ -5,6 +5,8 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "metro/core/status.hpp"
 
@@ -13,7 +15,22 @@ namespace metro {
 // Writes `contents` to `path` atomically: the data go to a temporary file in the same
 // directory, are flushed to disk (fsync), and the temporary is renamed over `path`. A
 // reader never sees a partial file and a failure leaves any previous `path` untouched.
+// The rules of AtomicFileWriter apply (a replaced file keeps its mode; `path` must be
+// replaceable, CheckReplaceableFile).
 Status WriteFileAtomically(const std::string& path, std::string_view contents);
+
+// Several files replaced together: all are written to temporaries and flushed first, and
+// only when every one succeeded are they renamed into place, in order. A failure while
+// writing (a full disk) leaves every previous file untouched. `files` are (path, contents).
+Status WriteFilesAtomically(const std::vector<std::pair<std::string, std::string_view>>& files);
+
+// Ok if `path` can be an output that metro replaces by renaming a new file over it: it does
+// not exist yet, or it is a regular file (or a symlink to one; the link's target is
+// replaced and the link kept), and the directory it goes into exists. Refused, with an
+// error naming `path` and saying what to do instead: a directory, a character or block
+// device (/dev/null, /dev/full), a FIFO, a socket, anything in /dev, /proc or /sys, a
+// missing directory.
+Status CheckReplaceableFile(const std::string& path);
 
 // Reads a whole file. Errors name the path and the operating system's reason.
 Result<std::string> ReadFile(const std::string& path);
@@ -29,8 +46,10 @@ Result<std::string> Sha256File(const std::string& path);
 std::string Sha256Hex(std::string_view bytes, size_t chunk_bytes,
                       const std::function<void(size_t)>& on_hashed);
 
-// True if both paths name the same existing file (same device and inode). Used to refuse
-// writing an output over one of the inputs.
+// True if both paths name the same file: the same device and inode when both exist (so
+// through symlinks and hard links), else the same canonical path (symlinked directories
+// and `..` resolved) for files not written yet. Used to refuse writing an output over an
+// input or over another output of the same command.
 bool IsSameFile(const std::string& a, const std::string& b);
 
 }  // namespace metro
@@ -40,6 +59,12 @@ namespace metro {
 // Streams a large output to `path` atomically: chunks go to a temporary file in the same
 // directory; Commit() flushes, fsyncs and renames it over `path`. Destroying the writer
 // without a successful Commit() removes the temporary and leaves `path` untouched.
+//
+// The temporary is `.metro-XXXXXX` beside the target (O_EXCL, so never an existing file):
+// short, so any name the file system accepts for `path` works. A file that is replaced
+// keeps its permission bits (and, where allowed, its owner and group); a new file gets
+// 0666 minus the umask. When `path` is a symlink, the file it points to is replaced and
+// the link stays. Open() refuses a `path` that CheckReplaceableFile refuses.
 class AtomicFileWriter {
  public:
   explicit AtomicFileWriter(std::string path);
@@ -49,12 +74,20 @@ class AtomicFileWriter {
 
   Status Open();
   Status Write(std::string_view chunk);
+  // Finish() + Publish().
   Status Commit();
+  // Flushes (fsync) and closes the temporary; `path` is still untouched.
+  Status Finish();
+  // Renames the finished temporary over `path`. Several writers finished first and then
+  // published replace their files together (WriteFilesAtomically).
+  Status Publish();
 
  private:
-  std::string path_;
+  std::string path_;    // As given, for messages.
+  std::string target_;  // The file replaced: `path_`, or where the symlink `path_` points.
   std::string tmp_;
   int fd_ = -1;
+  bool finished_ = false;
 };
 
 }  // namespace metro

@@ -16,11 +16,20 @@ namespace metro {
 
 inline constexpr const char* kBatchSummarySchema = "metro.batch-summary/1";
 
+// The lock file batch keeps in its output directory (docs/reports.md, "One batch per
+// folder"); it holds "pid N on HOST, since UNIX-TIME" of the run holding it.
+inline constexpr const char* kBatchLockName = ".metro-batch.lock";
+
 // Expands the command-line arguments into session files, sorted and without duplicates:
-// a directory gives its *.csv and *.txt files (not recursive), a pattern with * ? or [ is
-// expanded with glob(3), anything else is taken as a file. Errors: an argument that names
-// nothing (missing file, empty directory, pattern without a match), no argument.
-Result<std::vector<std::string>> ExpandBatchInputs(const std::vector<std::string>& arguments);
+// a directory gives its *.csv and *.txt entries (not recursive), a pattern with * ? or [ is
+// expanded with glob(3), anything else is taken as a file. Nothing is silently left out:
+// every *.csv and *.txt entry of a directory is returned whatever it is (a symlink is
+// followed; a dangling link, a FIFO or a directory then fails as its own session in
+// RunBatch, with the reason), and a directory matched by a pattern is named in `skipped`
+// ("skipping PATH: why") when `skipped` is given. Errors: an argument that names nothing
+// (missing file, empty directory, pattern without a match), no argument.
+Result<std::vector<std::string>> ExpandBatchInputs(const std::vector<std::string>& arguments,
+                                                   std::vector<std::string>* skipped = nullptr);
 
 // Report file names (without directory) for `inputs`: "<stem>.report.json", and
 // "<stem>-<first 8 hex digits of the SHA-256 of the path>.report.json" for stems that
@@ -53,12 +62,41 @@ struct BatchSummary {
   std::vector<BatchItem> items;    // In input order.
   nlohmann::ordered_json summary;  // Also written to output_dir/summary.json.
   std::string table;               // Also written to output_dir/summary.txt.
+  // Inputs that were batch's own outputs in output_dir (summary.json, summary.txt,
+  // *.report.json from an earlier run into the same folder), not analysed: "skipping PATH:
+  // why", one per input.
+  std::vector<std::string> skipped;
   Error error;  // Set when the run itself failed (bad options, output directory, summary).
 };
+
+// An exclusive lock (flock) held while the object lives; closing the descriptor releases it.
+class FileLock {
+ public:
+  explicit FileLock(int fd) : fd_(fd) {}
+  FileLock(FileLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+  FileLock& operator=(FileLock&&) = delete;
+  FileLock(const FileLock&) = delete;
+  ~FileLock();
+
+ private:
+  int fd_ = -1;
+};
+
+// Takes the batch lock of `output_dir` (which exists): the file kBatchLockName in it, locked
+// with flock(LOCK_EX | LOCK_NB), and records who holds it. Never waits: when another run
+// holds it the error names that run ("pid N on HOST, since T") and says to wait or choose
+// another directory.
+Result<FileLock> LockBatchDirectory(const std::string& output_dir);
 
 // Analyses every input. Per tag (sensor number and name) and quantity, across the sessions
 // that evaluated it: the mean of the session means, the standard deviation of the session
 // means (n - 1), and the worst (smallest) n_eff/n with its session.
+//
+// The output directory is created, then locked for the whole run (LockBatchDirectory: a
+// second run into it fails with BatchSummary::error). Inputs that are batch's own outputs
+// in that directory are left out and named in `skipped`; an input that is not a readable
+// regular file, or whose report would be written over an input, fails as its own session.
+// summary.json and summary.txt are replaced together (WriteFilesAtomically).
 BatchSummary RunBatch(const std::vector<std::string>& inputs, const BatchOptions& options);
 
 }  // namespace metro
