@@ -8,7 +8,6 @@
 
 #include "cli_progress.hpp"
 #include "commands.hpp"
-#include "metro/blob/intel_hex.hpp"
 #include "metro/blob/push_client.hpp"
 #include "metro/blob/serial_port.hpp"
 #include "metro/calibration/calibration_io.hpp"
@@ -98,15 +97,16 @@ int RunPush(const PushCliOptions& c) {
     apps::Note(fmt::format("OK: {}\n", s.message));
     return kExitOk;
   }
-  fmt::print(stderr, "FAILED: {}\n", s.message);
-  if (s.tag_answered && !s.input_error) {
-    // The wired path: the same constants through the programmer, other pages kept.
-    fmt::print(stderr,
-               "to program over SWD instead: calibrate blob {} --sensor {} --device-id {} "
-               "--seq {} -o tag.bin --hex tag.hex && {}\n",
-               c.calibration, c.sensor, blob::FormatDeviceId(s.tag.device_id),
-               s.seq != 0 ? s.seq : s.tag.active_seq + 1, blob::NrfjprogCommand("tag.hex"));
+  // An unknown outcome or a live but unchecked calibration is not a failure to write: the
+  // message says what the tag may hold (docs/calibration-blob.md section 11).
+  if (s.commit == blob::CommitState::kUnknown) {
+    fmt::print(stderr, "{}\n", s.message);
+  } else if (s.commit == blob::CommitState::kCommitted) {
+    fmt::print(stderr, "UNVERIFIED: {}\n", s.message);
+  } else {
+    fmt::print(stderr, "FAILED: {}\n", s.message);
   }
+  fmt::print(stderr, "{}", blob::PushRecoveryAdvice(s, c.port, c.calibration, c.sensor));
   return s.input_error ? kExitUsage : kExitFailed;
 }
 

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <random>
 
+#include "metro/blob/intel_hex.hpp"
 #include "metro_fw/crc.h"
 #include "metro_fw/push.h"
 
@@ -261,6 +262,7 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
     return MakeError(
         fmt::format("blob of {} bytes: expected a multiple of 4 in 36..1024", blob.size()));
   }
+  commit_ = CommitState::kNotSent;
   const uint16_t total = static_cast<uint16_t>(blob.size());
   const uint32_t crc = metro_fw_crc32(0, blob.data(), total);
   const uint32_t seq = Get32(blob, 12);
@@ -279,7 +281,10 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
 
   for (int pass = 0; pass < 2; ++pass) {
     size_t offset = 0;
-    int stalls = 0;
+    // Every INVALID_OFFSET answer moves the transfer to the tag's received_len; a tag that
+    // keeps answering it (even with lengths that look like progress, 16, 0, 16, ...) would
+    // otherwise hold the PC forever, so each pass allows max_retries of them.
+    int resumes = 0;
     while (offset < total) {
       const size_t len = std::min(options_.chunk_bytes, total - offset);
       std::vector<uint8_t> w;
@@ -294,12 +299,14 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
         return Refused(METRO_FW_OP_CAL_WRITE, x.result, fmt::format("offset {}", offset));
       }
       const size_t received = Get16(x.payload, 0);
+      if (x.result == METRO_FW_RES_INVALID_OFFSET && ++resumes > options_.max_retries) {
+        return MakeError(fmt::format(
+            "CAL_WRITE: the tag answered INVALID_OFFSET {} times in one pass (last: offset {} "
+            "sent, received_len {}); at most {} resumes (--retries) are allowed",
+            resumes, offset, received, options_.max_retries));
+      }
       // Contiguous transfer: continue where the tag says it is (resume after a gap).
       const size_t next = x.result == METRO_FW_RES_SUCCESS ? offset + len : received;
-      if (next == offset && ++stalls > options_.max_retries) {
-        return MakeError(fmt::format("CAL_WRITE: no progress at offset {} (tag has {} bytes)",
-                                     offset, received));
-      }
       offset = std::min<size_t>(next, total);
       if (progress) progress("write", offset, total);
     }
@@ -319,17 +326,46 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
     }
   }
 
+  commit_ = CommitState::kUnknown;  // from the first EXECUTE frame on, the tag may commit
   Result<Response> e = Transact(METRO_FW_OP_CAL_EXECUTE, {}, options_.execute_timeout_ms);
-  if (!e.ok()) return e.error();
-  if (e.value().result != METRO_FW_RES_SUCCESS || e.value().payload.size() < 5) {
+  int slot = -1;
+  if (e.ok() && e.value().result == METRO_FW_RES_SUCCESS && e.value().payload.size() >= 5) {
+    commit_ = CommitState::kCommitted;
+    slot = e.value().payload[0];
+    if (Get32(e.value().payload, 1) != seq) {
+      return MakeError(fmt::format("CAL_EXECUTE: the tag reports seq {}, expected {}",
+                                   Get32(e.value().payload, 1), seq));
+    }
+  } else if (e.ok() && e.value().result != METRO_FW_RES_FLASH_ERROR &&
+             e.value().result != METRO_FW_RES_SUCCESS) {
+    commit_ = CommitState::kNotDone;  // refused before the update touched the flash
     return Refused(METRO_FW_OP_CAL_EXECUTE, e.value().result);
+  } else {
+    // No answer, or FLASH_ERROR (which may come after the commit word was written): ask the
+    // tag which calibration is live.
+    const Error what = e.ok() ? Refused(METRO_FW_OP_CAL_EXECUTE, e.value().result) : e.error();
+    Result<TagInfo> info = GetInfo();
+    if (!info.ok()) return what;  // commit_ stays kUnknown
+    // GET_INFO reports the blob's own CRC word (over [0, total_len - 4)).
+    if (info.value().active_seq == seq && info.value().active_crc32 == Get32(blob, total - 4u)) {
+      commit_ = CommitState::kCommitted;
+      slot = info.value().active_slot;
+    } else if (info.value().active_seq < seq) {
+      commit_ = CommitState::kNotDone;
+      return MakeError(fmt::format("{}; GET_INFO: the tag still holds seq {}", what.message,
+                                   info.value().active_seq));
+    } else {
+      return MakeError(fmt::format("{}; GET_INFO: the tag holds seq {} with CRC-32 0x{:08X}",
+                                   what.message, info.value().active_seq,
+                                   info.value().active_crc32));
+    }
   }
-  const int slot = e.value().payload[0];
-  if (Get32(e.value().payload, 1) != seq) {
-    return MakeError(fmt::format("CAL_EXECUTE: the tag reports seq {}, expected {}",
-                                 Get32(e.value().payload, 1), seq));
-  }
+  if (Status s = ReadBack(blob, progress); !s.ok()) return s.error();
+  return slot;
+}
 
+Status PushClient::ReadBack(const std::vector<uint8_t>& blob, const PushProgress& progress) {
+  const size_t total = blob.size();
   for (size_t offset = 0; offset < total; offset += options_.chunk_bytes) {
     const size_t len = std::min(options_.chunk_bytes, total - offset);
     std::vector<uint8_t> q;
@@ -349,7 +385,7 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
     }
     if (progress) progress("verify", offset + len, total);
   }
-  return slot;
+  return Status::Ok();
 }
 
 PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
@@ -380,8 +416,9 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
   blob_options.device_id = s.tag.device_id;
   if (blob_options.seq == 0) {
     if (s.tag.active_seq >= kSeqMax) {
-      s.message = fmt::format("the tag's seq is exhausted ({}); only a factory re-flash resets it",
-                              s.tag.active_seq);
+      s.message = fmt::format(
+          "the tag's seq is exhausted ({}); only the wired path (a factory HEX) resets it",
+          s.tag.active_seq);
       return s;
     }
     blob_options.seq = s.tag.active_seq + 1;
@@ -396,6 +433,26 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
     return s;
   }
   s.blob = blob.value();
+  if (s.tag.active_slot >= 0 && s.tag.active_seq == s.seq &&
+      s.tag.active_crc32 == Get32(s.blob, s.blob.size() - 4)) {
+    // The same push again (after an unknown outcome): nothing to write, only to compare.
+    s.already_held = true;
+    s.commit = CommitState::kCommitted;
+    s.slot = s.tag.active_slot;
+    Status back = client.ReadBack(s.blob, progress);
+    s.stats = client.stats();
+    if (!back.ok()) {
+      s.message = fmt::format("the tag holds seq {} with this blob's CRC-32, but {}", s.seq,
+                              back.error().message);
+      return s;
+    }
+    s.ok = true;
+    s.message = fmt::format(
+        "tag {} already holds this calibration: seq {} in slot {}, {} bytes read back "
+        "identical; nothing written",
+        FormatDeviceId(s.tag.device_id), s.seq, s.slot == 0 ? "A" : "B", s.blob.size());
+    return s;
+  }
   if (s.blob.size() > s.tag.max_len) {
     s.message = fmt::format("the blob has {} bytes; the tag takes at most {}", s.blob.size(),
                             s.tag.max_len);
@@ -403,8 +460,17 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
   }
   Result<int> slot = client.Push(s.blob, progress);
   s.stats = client.stats();
+  s.commit = client.commit_state();
   if (!slot.ok()) {
-    s.message = slot.error().message;
+    if (s.commit == CommitState::kUnknown) {
+      s.message =
+          fmt::format("outcome unknown: the tag may hold seq {} ({})", s.seq, slot.error().message);
+    } else if (s.commit == CommitState::kCommitted) {
+      s.message = fmt::format("the tag committed seq {}, but the read-back did not finish ({})",
+                              s.seq, slot.error().message);
+    } else {
+      s.message = slot.error().message;
+    }
     return s;
   }
   s.slot = slot.value();
@@ -412,7 +478,40 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
   s.message =
       fmt::format("tag {} calibrated: seq {} in slot {}, {} bytes read back identical",
                   FormatDeviceId(s.tag.device_id), s.seq, s.slot == 0 ? "A" : "B", s.blob.size());
+  if (s.seq == kSeqMax) {
+    s.message += fmt::format(
+        "; seq {} is the last: the next update needs the wired path (it restarts at 1)", kSeqMax);
+  }
   return s;
+}
+
+uint32_t WiredPathSeq(const PushSummary& s) {
+  const uint64_t seq = s.seq != 0 ? uint64_t{s.seq} : uint64_t{s.tag.active_seq} + 1;
+  return seq >= 1 && seq <= kSeqMax ? static_cast<uint32_t>(seq) : 1u;
+}
+
+std::string PushRecoveryAdvice(const PushSummary& s, const std::string& port,
+                               const std::string& calibration_path, int sensor) {
+  if (s.ok || s.input_error || !s.tag_answered) return "";
+  std::string out;
+  if (s.commit == CommitState::kUnknown || s.commit == CommitState::kCommitted) {
+    out += fmt::format(
+        "to find out: calibrate push --port {} {} --sensor {} --seq {} (a tag that holds this "
+        "blob is only read back and compared; one that does not gets seq {})\n",
+        port, calibration_path, sensor, s.seq, s.seq);
+  }
+  const uint32_t seq = WiredPathSeq(s);
+  out += fmt::format(
+      "to program over SWD instead: calibrate blob {} --sensor {} --device-id {} --seq {} -o "
+      "tag.bin --hex tag.hex && {}\n",
+      calibration_path, sensor, FormatDeviceId(s.tag.device_id), seq, NrfjprogCommand("tag.hex"));
+  if (seq == 1 && s.tag.active_seq >= kSeqMax) {
+    out += fmt::format(
+        "the tag's seq space is exhausted ({}): the HEX erases both slot pages, so seq 1 is "
+        "the only calibration afterwards\n",
+        s.tag.active_seq);
+  }
+  return out;
 }
 
 }  // namespace metro::blob

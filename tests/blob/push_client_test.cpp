@@ -4,8 +4,10 @@
 #include "metro/blob/push_client.hpp"
 
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <deque>
 #include <functional>
+#include <map>
 #include <set>
 
 #include "blob/blob_test_support.hpp"
@@ -241,7 +243,10 @@ TEST_CASE("Push: a flash error and a read-back difference are reported", "[blob]
     PushClient client(&tag, Fast());
     Result<int> r = client.Push(Blob(8));
     REQUIRE_FALSE(r.ok());
-    CHECK(r.error().message == "CAL_EXECUTE: the tag answered FLASH_ERROR");
+    // FLASH_ERROR may follow the commit word: GET_INFO says the old seq is still live.
+    CHECK(r.error().message ==
+          "CAL_EXECUTE: the tag answered FLASH_ERROR; GET_INFO: the tag still holds seq 7");
+    CHECK(client.commit_state() == CommitState::kNotDone);
     CHECK(SlotBytes(flash, 0, old_blob.size()) == old_blob);
   }
   SECTION("read-back difference") {
@@ -330,6 +335,234 @@ TEST_CASE("Push: PushCalibration builds the blob for the tag on the link", "[blo
   CHECK(wrong.input_error);
   CHECK(wrong.message ==
         "the tag on the link is 9ABCDEF012345678, not 0102030405060708: nothing was written");
+}
+
+namespace {
+
+// A tag that answers every request at once with what `answer` returns (result byte and
+// payload), through the firmware's own frame encoder: for answers the real receiver never gives.
+class ScriptedTag : public ByteStream {
+ public:
+  std::function<std::vector<uint8_t>(uint8_t op, const std::vector<uint8_t>& payload)> answer;
+  std::map<uint8_t, int> requests;  // frames received per op
+
+  Status Write(const uint8_t* data, size_t size) override {
+    for (size_t i = 0; i < size; ++i) {
+      std::optional<SlipDecoder::Frame> f = decoder_.Feed(data[i]);
+      if (!f || f->bad) continue;
+      const int n = metro_fw_frame_parse(f->bytes.data(), static_cast<uint32_t>(f->bytes.size()));
+      REQUIRE(n >= 0);
+      const uint8_t op = f->bytes[0];
+      ++requests[op];
+      const std::vector<uint8_t> payload(f->bytes.begin() + 4, f->bytes.begin() + 4 + n);
+      const std::vector<uint8_t> r = answer(op, payload);
+      std::vector<uint8_t> enc(2 * METRO_FW_PUSH_MAX_FRAME + 2);
+      uint32_t len = 0;
+      REQUIRE(metro_fw_frame_encode(static_cast<uint8_t>(op | METRO_FW_PUSH_RESPONSE_BIT),
+                                    f->bytes[1], r.data(), static_cast<uint32_t>(r.size()),
+                                    enc.data(), static_cast<uint32_t>(enc.size()),
+                                    &len) == METRO_FW_OK);
+      out_.insert(out_.end(), enc.begin(), enc.begin() + len);
+    }
+    return Status::Ok();
+  }
+  Result<size_t> Read(uint8_t* data, size_t capacity, int) override {
+    size_t n = 0;
+    while (n < capacity && !out_.empty()) {
+      data[n++] = out_.front();
+      out_.pop_front();
+    }
+    return n;
+  }
+
+ private:
+  SlipDecoder decoder_{METRO_FW_PUSH_MAX_FRAME};
+  std::deque<uint8_t> out_;
+};
+
+}  // namespace
+
+TEST_CASE("Push: a tag answering CAL_WRITE with INVALID_OFFSET and 16, 0, 16, ... stops",
+          "[blob][push]") {
+  // issue #20: the old client followed the tag's received_len forever (0 -> 16 -> 0 ...).
+  ScriptedTag tag;
+  int writes = 0;
+  tag.answer = [&](uint8_t op, const std::vector<uint8_t>&) -> std::vector<uint8_t> {
+    if (op == METRO_FW_OP_CAL_WRITE) {
+      const uint8_t received = (writes++ % 2 == 0) ? 16 : 0;
+      return {METRO_FW_RES_INVALID_OFFSET, received, 0};
+    }
+    return {METRO_FW_RES_SUCCESS};
+  };
+  PushOptions o = Fast();
+  o.max_retries = 5;
+  PushClient client(&tag, o);
+  const auto start = std::chrono::steady_clock::now();
+  Result<int> r = client.Push(Blob(8));
+  const auto took = std::chrono::steady_clock::now() - start;
+  REQUIRE_FALSE(r.ok());
+  // Resumes 1..5 are allowed (offsets 0, 16, 0, 16, 0 sent), the 6th (offset 16) is refused.
+  CHECK(r.error().message ==
+        "CAL_WRITE: the tag answered INVALID_OFFSET 6 times in one pass (last: offset 16 sent, "
+        "received_len 0); at most 5 resumes (--retries) are allowed");
+  CHECK(tag.requests[METRO_FW_OP_CAL_WRITE] == 6);
+  CHECK(tag.requests[METRO_FW_OP_CAL_EXECUTE] == 0);
+  CHECK(client.commit_state() == CommitState::kNotSent);
+  CHECK(took < std::chrono::seconds(2));
+
+  // --retries 0: the first INVALID_OFFSET already ends the push.
+  ScriptedTag tag0;
+  writes = 0;
+  tag0.answer = tag.answer;
+  o.max_retries = 0;
+  PushClient client0(&tag0, o);
+  Result<int> r0 = client0.Push(Blob(8));
+  REQUIRE_FALSE(r0.ok());
+  CHECK(r0.error().message ==
+        "CAL_WRITE: the tag answered INVALID_OFFSET 1 times in one pass (last: offset 0 sent, "
+        "received_len 16); at most 0 resumes (--retries) are allowed");
+  CHECK(tag0.requests[METRO_FW_OP_CAL_WRITE] == 1);
+}
+
+TEST_CASE("Push: a tag that answers nonsense to every request ends within the retry budget",
+          "[blob][push]") {
+  // Every request is answered with a frame for another op (skipped as stale): only the
+  // timeouts end each request, --retries + 1 attempts of --timeout-ms each.
+  ScriptedTag tag;
+  tag.answer = [](uint8_t, const std::vector<uint8_t>&) -> std::vector<uint8_t> { return {}; };
+  PushOptions o = Fast();
+  o.timeout_ms = 20;
+  o.max_retries = 2;
+  PushClient client(&tag, o);
+  const auto start = std::chrono::steady_clock::now();
+  Result<TagInfo> r = client.GetInfo();
+  const auto took = std::chrono::steady_clock::now() - start;
+  REQUIRE_FALSE(r.ok());
+  // An answer with no result byte is not an answer: 3 attempts, 3 timeouts.
+  CHECK(r.error().message == "GET_INFO: no valid answer after 3 attempts (no answer within 20 ms)");
+  CHECK(client.stats().timeouts == 3);
+  CHECK(client.stats().ignored_frames == 3);
+  CHECK(took >= std::chrono::milliseconds(57));  // 3 x 20 ms, each cut to whole ms
+  CHECK(took < std::chrono::seconds(2));
+}
+
+TEST_CASE("Push: a link lost after CAL_EXECUTE is an unknown outcome, not a failure",
+          "[blob][push]") {
+  // Frames of Push(540 bytes): CREATE 1, CAL_WRITE 2..35, GET_CRC 36, EXECUTE 37.
+  RamFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, Blob(7));
+  {
+    LossyTag tag(&flash);
+    tag.drop_answers = {37};
+    tag.hangup_after = 37;  // the tag commits, its answer is lost, the link drops
+    PushClient client(&tag, Fast());
+    Result<int> r = client.Push(Blob(8));
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().message == "CAL_EXECUTE: link lost: hung up");
+    CHECK(client.commit_state() == CommitState::kUnknown);
+  }
+  CHECK(SlotBytes(flash, 1, Blob(8).size()) == Blob(8));  // it did commit
+
+  SECTION("PushCalibration says so, and the same push with --seq 8 only reads it back") {
+    RamFlash f2;
+    f2.Program(METRO_FW_SLOT_A_ADDR, Blob(7));
+    Calibration cal;
+    cal.date_utc = "2024-05-01T12:00:00Z";
+    TagCalibration t;
+    t.sensor = 2;
+    SensorCalibration a;
+    a.model.sensor = ImuSensor::kAccel;
+    a.model.kind = ModelKind::kBias;
+    a.model.input_unit = "LSB";
+    a.model.output_unit = "g";
+    a.model.scale = Eigen::Vector3d::Constant(1.0 / 16384.0);
+    t.accel = a;
+    cal.tags.push_back(t);
+    BlobFromCalibrationOptions bo;
+    bo.sensor = 2;
+    bo.seq = 8;
+    PushSummary s;
+    {
+      LossyTag tag(&f2);
+      // GET_INFO is frame 1, so EXECUTE is frame 1 + 1 + 23 + 1 + 1 = 27 for 356 bytes.
+      tag.drop_answers = {27};
+      tag.hangup_after = 27;
+      s = PushCalibration(&tag, cal, bo, std::nullopt, Fast());
+    }
+    CHECK_FALSE(s.ok);
+    CHECK(s.commit == CommitState::kUnknown);
+    CHECK(s.message == "outcome unknown: the tag may hold seq 8 (CAL_EXECUTE: link lost: hung up)");
+    const std::string advice = PushRecoveryAdvice(s, "/dev/ttyACM0", "cal.json", 2);
+    CHECK(advice ==
+          "to find out: calibrate push --port /dev/ttyACM0 cal.json --sensor 2 --seq 8 (a tag "
+          "that holds this blob is only read back and compared; one that does not gets seq 8)\n"
+          "to program over SWD instead: calibrate blob cal.json --sensor 2 --device-id "
+          "9ABCDEF012345678 --seq 8 -o tag.bin --hex tag.hex && nrfjprog -f NRF51 --program "
+          "tag.hex --sectorerase --verify --reset\n");
+    LossyTag again(&f2);
+    PushSummary s2 = PushCalibration(&again, cal, bo, std::nullopt, Fast());
+    REQUIRE(s2.ok);
+    CHECK(s2.already_held);
+    CHECK(s2.message ==
+          "tag 9ABCDEF012345678 already holds this calibration: seq 8 in slot B, 356 bytes read "
+          "back identical; nothing written");
+    CHECK(again.frames == 1 + 23);  // GET_INFO and the reads, no write
+  }
+}
+
+TEST_CASE("Push: a lost CAL_EXECUTE answer on a live link is settled by GET_INFO and read back",
+          "[blob][push]") {
+  RamFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, Blob(7));
+  LossyTag tag(&flash);
+  // EXECUTE (frame 37) and its 2 resends: the tag commits once, its cached answers are lost.
+  tag.drop_answers = {37, 38, 39};
+  PushOptions o = Fast();
+  o.max_retries = 2;
+  PushClient client(&tag, o);
+  Result<int> r = client.Push(Blob(8));
+  REQUIRE(r.ok());
+  CHECK(r.value() == 1);
+  CHECK(client.commit_state() == CommitState::kCommitted);
+  CHECK(SlotBytes(flash, 1, Blob(8).size()) == Blob(8));
+}
+
+TEST_CASE("Push: recovery advice never names a seq the tools refuse", "[blob][push]") {
+  PushSummary s;
+  s.tag_answered = true;
+  s.tag.device_id = testing::kDeviceId;
+  s.tag.active_seq = kSeqMax;  // 4294967294: exhausted, seq never set
+  s.message = "the tag's seq is exhausted (4294967294)";
+  CHECK(WiredPathSeq(s) == 1u);  // the old advice said 4294967295
+  const std::string advice = PushRecoveryAdvice(s, "/dev/ttyACM0", "cal.json", 2);
+  CHECK(advice ==
+        "to program over SWD instead: calibrate blob cal.json --sensor 2 --device-id "
+        "9ABCDEF012345678 --seq 1 -o tag.bin --hex tag.hex && nrfjprog -f NRF51 --program "
+        "tag.hex --sectorerase --verify --reset\n"
+        "the tag's seq space is exhausted (4294967294): the HEX erases both slot pages, so seq 1 "
+        "is the only calibration afterwards\n");
+  s.tag.active_seq = kSeqMax - 1;  // 4294967293: the next seq is the last one
+  CHECK(WiredPathSeq(s) == kSeqMax);
+  s.seq = 12;
+  CHECK(WiredPathSeq(s) == 12u);
+  s.input_error = true;
+  CHECK(PushRecoveryAdvice(s, "p", "c", 2).empty());
+
+  // PushCalibration on an exhausted tag: refused before anything is written.
+  RamFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, Blob(kSeqMax));
+  LossyTag tag(&flash);
+  Calibration cal;
+  BlobFromCalibrationOptions bo;
+  bo.sensor = 2;
+  bo.seq = 0;
+  PushSummary e = PushCalibration(&tag, cal, bo, std::nullopt, Fast());
+  CHECK_FALSE(e.ok);
+  CHECK(e.commit == CommitState::kNotSent);
+  CHECK(e.message ==
+        "the tag's seq is exhausted (4294967294); only the wired path (a factory HEX) resets it");
+  CHECK(tag.frames == 1);
+  CHECK(WiredPathSeq(e) == 1u);
 }
 
 TEST_CASE("SLIP decoder: escapes and bad escapes and overlong frames", "[blob][push]") {

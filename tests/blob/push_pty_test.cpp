@@ -280,6 +280,55 @@ TEST_CASE("pty: calibrate push reports a stale seq and a disconnect and a flash 
   std::remove(flash.c_str());
   std::remove((flash + ".ref").c_str());
 }
+TEST_CASE("pty: calibrate push says outcome unknown when the link drops after CAL_EXECUTE",
+          "[blob][push][apps][security]") {
+  // issue #20: the tag committed, its answer was lost with the link, and push said FAILED.
+  const std::vector<uint8_t> golden = Bytes(kGolden + "tag_sensor2.bin");  // seq 3
+  const std::string flash = "metro_pty_unknown_flash.bin";
+  {
+    // Frames: GET_INFO 1, CREATE 2, CAL_WRITE 3..36, GET_CRC 37, EXECUTE 38.
+    SimTag sim(FlashWith(flash, golden), {"--drop-response", "38", "--hangup-after", "38"});
+    Run r = Push(sim.pty(), "--timeout-ms 2000");
+    INFO(r.err);
+    CHECK(r.exit_code == 1);
+    CHECK(Has(r.err, "outcome unknown: the tag may hold seq 4 (CAL_EXECUTE: link lost: "));
+    CHECK_FALSE(Has(r.err, "FAILED"));
+    CHECK(Has(r.err, "to find out: calibrate push --port " + sim.pty() + " " + kGolden +
+                         "calibration_sensor2.json --sensor 2 --seq 4 (a tag that holds this "
+                         "blob is only read back and compared; one that does not gets seq 4)"));
+    sim.Stop();
+  }
+  // It did commit; the advised command finds that out and writes nothing.
+  SimTag sim(flash, {});
+  Run r = Push(sim.pty(), "--seq 4");
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(Has(r.err,
+            "OK: tag 9ABCDEF012345678 already holds this calibration: seq 4 in slot B, 540 bytes "
+            "read back identical; nothing written"));
+  CHECK(Has(r.err, "link: 35 requests"));  // GET_INFO and 34 reads
+  sim.Stop();
+  std::remove(flash.c_str());
+}
+
+TEST_CASE("pty: calibrate push on an exhausted seq advises seq 1 over the wire path",
+          "[blob][push][apps][security]") {
+  // issue #20: at seq 4294967294 the advice named --seq 4294967295, which calibrate blob refuses.
+  BlobContents c = DecodeBlob(Bytes(kGolden + "tag_sensor2.bin")).value();
+  c.seq = kSeqMax;
+  const std::string flash = "metro_pty_exhausted_flash.bin";
+  SimTag sim(FlashWith(flash, WriteBlob(c).value()), {});
+  Run r = Push(sim.pty());
+  INFO(r.err);
+  CHECK(r.exit_code == 1);
+  CHECK(Has(r.err,
+            "FAILED: the tag's seq is exhausted (4294967294); only the wired path (a factory HEX) "
+            "resets it"));
+  CHECK(Has(r.err, "--device-id 9ABCDEF012345678 --seq 1 -o tag.bin --hex tag.hex && nrfjprog"));
+  CHECK_FALSE(Has(r.err, "4294967295"));
+  sim.Stop();
+  std::remove(flash.c_str());
+}
 #endif  // METRO_CALIBRATE_EXE
 
 }  // namespace metro::blob

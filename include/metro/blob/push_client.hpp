@@ -80,6 +80,14 @@ struct PushStats {
   int ignored_frames = 0;  // Stale, duplicate or corrupted responses skipped.
 };
 
+// What the tag holds after CAL_EXECUTE was sent, as far as the PC knows.
+enum class CommitState {
+  kNotSent,    // CAL_EXECUTE was never sent: the tag keeps its calibration.
+  kNotDone,    // The tag refused the update, or GET_INFO afterwards shows its old seq.
+  kUnknown,    // Sent, and neither an answer nor GET_INFO came back: the tag may hold the seq.
+  kCommitted,  // The tag answered SUCCESS, or GET_INFO shows the pushed seq and CRC-32.
+};
+
 // Name of a push result code, e.g. "STALE_SEQ" (0x05).
 std::string PushResultName(uint8_t result);
 
@@ -92,14 +100,20 @@ class PushClient {
   PushClient(ByteStream* stream, PushOptions options);
 
   Result<TagInfo> GetInfo();
-  // CAL_CREATE, CAL_WRITE (resuming at the tag's received_len on INVALID_OFFSET), CAL_GET_CRC
-  // (one full resend on a mismatch), CAL_EXECUTE, then CAL_READ of every byte compared with
-  // `blob`. Returns the slot written. Errors name the step and the tag's result, e.g.
-  // "CAL_CREATE: the tag answered STALE_SEQ".
+  // CAL_CREATE, CAL_WRITE (resuming at the tag's received_len on INVALID_OFFSET, at most
+  // max_retries times per pass whatever the tag answers), CAL_GET_CRC (one full resend on a
+  // mismatch), CAL_EXECUTE, then CAL_READ of every byte compared with `blob`. Returns the slot
+  // written. Errors name the step and the tag's result, e.g. "CAL_CREATE: the tag answered
+  // STALE_SEQ". When CAL_EXECUTE gets no answer (link lost, retries spent) or FLASH_ERROR, the
+  // tag may have committed: GET_INFO asks which seq it holds; the pushed seq and CRC-32 there
+  // mean the update is live and the read-back follows. commit_state() says what is known.
   Result<int> Push(const std::vector<uint8_t>& blob, const PushProgress& progress = {});
+  // CAL_READ of every byte of the active slot, compared with `blob`.
+  Status ReadBack(const std::vector<uint8_t>& blob, const PushProgress& progress = {});
   Status Abort();
 
   const PushStats& stats() const { return stats_; }
+  CommitState commit_state() const { return commit_; }
 
  private:
   struct Response {
@@ -116,14 +130,19 @@ class PushClient {
   SlipDecoder decoder_;
   std::vector<uint8_t> rx_;  // Bytes read but not yet decoded.
   size_t rx_pos_ = 0;
+  CommitState commit_ = CommitState::kNotSent;
 };
 
 // What `calibrate push` reports.  Defaults read as failure.
 struct PushSummary {
   bool ok = false;
   bool input_error = false;  // The calibration could not become a blob (exit 2, not 1).
-  std::string message;       // Final status, one line.
-  TagInfo tag;               // From GET_INFO (valid once the tag answered).
+  // kUnknown: "outcome unknown: the tag may hold seq N"; kCommitted without ok: the new
+  // calibration is live but the read-back did not finish.
+  CommitState commit = CommitState::kNotSent;
+  bool already_held = false;  // The tag already held this blob (--seq N): only read back.
+  std::string message;        // Final status, one line.
+  TagInfo tag;                // From GET_INFO (valid once the tag answered).
   bool tag_answered = false;
   uint32_t seq = 0;  // Of the pushed blob.
   int slot = -1;     // Written by the tag.
@@ -133,10 +152,26 @@ struct PushSummary {
 
 // calibrate push: GET_INFO, then the blob of blob_options.sensor built for the tag's device id
 // with seq = blob_options.seq if not 0, else the tag's active seq + 1, then Push. When
-// expect_device_id is set, a tag with another id is refused before anything is written.
+// expect_device_id is set, a tag with another id is refused before anything is written. A tag
+// whose active seq and CRC-32 already are the blob's (a push repeated with --seq N after an
+// unknown outcome) is only read back (already_held). An active seq of kSeqMax cannot be
+// exceeded: refused before anything is sent (the wired path restarts the seq space).
 PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
                             BlobFromCalibrationOptions blob_options,
                             std::optional<uint64_t> expect_device_id, const PushOptions& options,
                             const PushProgress& progress = {});
+
+// The seq for the wired path (`calibrate blob --seq S --hex` and nrfjprog --sectorerase, which
+// erases both slot pages: the blob in A, the tombstone in B): the pushed seq, else the tag's
+// active seq + 1, and 1 past the end of the seq space (an exhausted tag restarts at 1). Always
+// in 1..kSeqMax, so the advice never names a seq `calibrate blob` refuses.
+uint32_t WiredPathSeq(const PushSummary& summary);
+
+// The lines `calibrate push` prints after a push that did not end OK: how to find out what the
+// tag holds (outcome unknown, or committed but not read back), and the wired path with
+// WiredPathSeq. Empty for an input error or when no tag answered. `port` and
+// `calibration_path` as given on the command line.
+std::string PushRecoveryAdvice(const PushSummary& summary, const std::string& port,
+                               const std::string& calibration_path, int sensor);
 
 }  // namespace metro::blob
