@@ -1,21 +1,126 @@
 #include "metro/blob/inspect.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <tuple>
 
 #include "metro/blob/intel_hex.hpp"
-#include "metro/core/file.hpp"
 #include "metro_fw/blob.h"
 
 namespace metro::blob {
 namespace {
 
+// METRO_FW_E_SENSOR (firmware/include/metro_fw/error.h): the validator refused the blob's
+// sensors after its section walk passed, so info locates the sections and the gate below can
+// say which sensor and why.
+constexpr int kFwSensorRefused = -14;
+
+bool SectionsLocated(int code) { return code == METRO_FW_OK || code == kFwSensorRefused; }
+
+const char* StatusReason(int status) {
+  switch (status) {
+    case METRO_FW_SENSOR_UNSUPPORTED:
+      return "a section major this firmware does not know";
+    case METRO_FW_SENSOR_NONFINITE:
+      return "a NaN or Inf constant, or a negative uncertainty; expected finite constants";
+    case METRO_FW_SENSOR_BAD_MODEL:
+      return "model bits outside 0x01, 0x02, 0x04, 0x08, 0x80";
+    case METRO_FW_SENSOR_CONFIG_MISMATCH:
+      return "fs_sel above 3 or dlpf_cfg above 6, a configuration no tag has";
+    case METRO_FW_SENSOR_LIMITS:
+      return "expected row norms of M within 10 % of the nominal sensitivity, det(M) > 0, bias "
+             "within 0.25 g / 60 deg/s and -40 <= t_valid_min_c < t_valid_max_c <= 85 "
+             "(section 3.1)";
+    default:
+      return "see docs/calibration-blob.md section 3.1";
+  }
+}
+
+// "bytes 0x0B0-0x15F" in a .bin, "0x3B0B0-0x3B15F" in a slot of a .hex.
+std::string Range(uint32_t base, uint64_t begin, uint64_t end) {
+  if (base == 0) return fmt::format("bytes 0x{:03X}-0x{:03X}", begin, end - 1);
+  return fmt::format("0x{:05X}-0x{:05X}", base + begin, base + end - 1);
+}
+
+// The gate's sensor rules (docs/calibration-blob.md section 8.1) on a blob whose sections the
+// validator located: flags b0/b1 name exactly the sections present, at least one is present,
+// each is usable on a tag configured as the section says, flag b2 matches the temperature terms.
+void SensorGate(const std::vector<uint8_t>& bytes, const metro_fw_blob_info& info,
+                const std::string& where, uint32_t base, const uint32_t id[2], SlotReport* r,
+                std::vector<std::string>* refusals) {
+  metro_fw_buffer buf{bytes.data(), static_cast<uint32_t>(bytes.size())};
+  bool temp_terms = false;
+  for (const auto& [name, kind, off, bit] : {std::tuple{"accel", METRO_FW_ACCEL, info.accel_off, 0},
+                                             std::tuple{"gyro", METRO_FW_GYRO, info.gyro_off, 1}}) {
+    const bool declared = ((info.flags >> bit) & 1u) != 0;
+    const std::string range = Range(base, off, off + uint64_t{METRO_FW_SENSOR_BODY_LEN});
+    if (declared && off == 0) {
+      refusals->push_back(fmt::format(
+          "{}: flags 0x{:08X} declare a {} section (bit b{}) that the blob does not hold; the tag "
+          "would run the {} on default constants; expected flags naming exactly the sensor "
+          "sections present",
+          where, info.flags, name, bit, name));
+    } else if (!declared && off != 0) {
+      refusals->push_back(fmt::format(
+          "{}: the {} section at {} is not declared by flags 0x{:08X} (bit b{} clear); expected "
+          "flags naming exactly the sensor sections present",
+          where, name, range, info.flags, bit));
+    }
+    metro_fw_config cfg{};
+    cfg.device_id[0] = id[0];
+    cfg.device_id[1] = id[1];
+    if (off != 0 && off + 2u <= bytes.size()) {
+      const uint8_t fs = std::min<uint8_t>(bytes[off], 3);
+      cfg.accel_fs_sel = fs;
+      cfg.gyro_fs_sel = fs;
+      cfg.dlpf_cfg = bytes[off + 1];
+    }
+    metro_fw_sensor_cal cal{};
+    METRO_CHECK(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, kind, &cfg, &cal) ==
+                METRO_FW_OK);
+    // An fs_sel above 3 is a configuration no tag has: report it as a mismatch.
+    int status = cal.status;
+    if (off != 0 && bytes[off] > 3) status = METRO_FW_SENSOR_CONFIG_MISMATCH;
+    r->sensors.push_back(SensorVerdict{name, status, SensorStatusName(status)});
+    if (off != 0 && status != METRO_FW_SENSOR_OK) {
+      refusals->push_back(fmt::format(
+          "{}: the {} section at {} is {}: {}; the tag would run the {} on default constants",
+          where, name, range, SensorStatusName(status), StatusReason(status), name));
+    }
+    if (off != 0 && status == METRO_FW_SENSOR_OK) {
+      temp_terms |= (cal.model_bits & (kModelLinearT | kModelQuadraticT)) != 0;
+    }
+  }
+  if (info.accel_off == 0 && info.gyro_off == 0) {
+    refusals->push_back(fmt::format(
+        "{}: no accel and no gyro section: the tag would run both sensors on default constants; "
+        "expected at least one sensor section",
+        where));
+  }
+  const bool temp_flag = (info.flags & METRO_FW_FLAG_TEMP_MODEL) != 0;
+  const bool all_ok = std::all_of(r->sensors.begin(), r->sensors.end(), [](const auto& v) {
+    return v.status == METRO_FW_SENSOR_OK || v.status == METRO_FW_SENSOR_ABSENT;
+  });
+  if (all_ok && temp_flag != temp_terms) {
+    refusals->push_back(fmt::format(
+        "{}: flags 0x{:08X} {} the temperature model (bit b2) but the sensor sections have {} "
+        "temperature term (model bits 0x04, 0x08)",
+        where, info.flags, temp_flag ? "declare" : "do not declare", temp_terms ? "a" : "no"));
+  }
+}
+
 // The slot as the firmware sees it: validator, then each sensor on a tag configured as the
-// section itself says (fs_sel, dlpf_cfg), so only physical limits and finiteness can fail.
+// section itself says (fs_sel, dlpf_cfg), so only physical limits and finiteness can fail;
+// the gate's refusals go to `refusals`. `base` is the slot's address (0 for a .bin).
 SlotReport InspectSlot(const std::vector<uint8_t>& bytes, const std::string& label,
-                       uint32_t address, const InspectOptions& options) {
+                       uint32_t address, const InspectOptions& options,
+                       std::vector<std::string>* refusals, metro_fw_blob_info* info_out) {
   SlotReport r;
   r.label = label;
   r.address = address;
@@ -34,30 +139,115 @@ SlotReport InspectSlot(const std::vector<uint8_t>& bytes, const std::string& lab
   r.code = metro_fw_blob_validate(metro_fw_buffer_read, &buf, buf.len, id, &info);
   r.code_name = FirmwareErrorName(r.code);
   r.message = FirmwareErrorMessage(r.code);
+  if (info_out != nullptr) *info_out = info;
+  if (!SectionsLocated(r.code)) return r;
+  const std::string where = address ? fmt::format("slot {}", label) : "blob";
+  SensorGate(bytes, info, where, address, id, &r, refusals);
   if (r.code != METRO_FW_OK) return r;
   auto decoded = DecodeBlob(bytes, uint64_t{id[1]} << 32 | id[0]);
   METRO_CHECK(decoded.ok());  // the same validator accepted it a moment ago
   r.contents = std::move(decoded).value();
-  for (const auto& [name, kind, off] : {std::tuple{"accel", METRO_FW_ACCEL, info.accel_off},
-                                        std::tuple{"gyro", METRO_FW_GYRO, info.gyro_off}}) {
-    metro_fw_config cfg{};
-    cfg.device_id[0] = id[0];
-    cfg.device_id[1] = id[1];
-    if (off != 0 && off + 2u <= bytes.size()) {
-      const uint8_t fs = std::min<uint8_t>(bytes[off], 3);
-      cfg.accel_fs_sel = fs;
-      cfg.gyro_fs_sel = fs;
-      cfg.dlpf_cfg = bytes[off + 1];
-    }
-    metro_fw_sensor_cal cal{};
-    METRO_CHECK(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, kind, &cfg, &cal) ==
-                METRO_FW_OK);
-    // An fs_sel above 3 is a configuration no tag has: report it as a mismatch.
-    int status = cal.status;
-    if (off != 0 && bytes[off] > 3) status = METRO_FW_SENSOR_CONFIG_MISMATCH;
-    r.sensors.push_back(SensorVerdict{name, status, SensorStatusName(status)});
-  }
   return r;
+}
+
+// The nRF51802's memory map (docs/calibration-blob.md section 1), to name what a write
+// outside the calibration slots would overwrite.
+struct Region {
+  uint64_t begin, end;
+  const char* name;
+};
+constexpr Region kRegions[] = {
+    {0x00000, 0x18000, "the MBR and SoftDevice S110 (0x00000-0x17FFF)"},
+    {0x18000, 0x3B000, "the application (0x18000-0x3AFFF)"},
+    {0x3B000, 0x3B800, "the default calibration slots (0x3B000-0x3B7FF), not the ones inspected"},
+    {0x3B800, 0x3C000, "the pages between slot B and the bootloader (0x3B800-0x3BFFF)"},
+    {0x3C000, 0x40000, "the DFU bootloader (0x3C000-0x3FFFF)"},
+    {0x40000, 0x10000000, "no flash (the nRF51802 has 256 KiB, 0x00000-0x3FFFF)"},
+    {0x10000000, 0x10001000, "the FICR (factory information, read-only)"},
+    {0x10001000, 0x10002000, "the UICR (bootloader address, readback protection)"},
+    {0x10002000, 0x100000000, "no flash"},
+};
+
+// The byte ranges of `segments` outside both slot pages, split at region boundaries.
+void OutsideSlots(const std::vector<HexSegment>& segments, const InspectOptions& o,
+                  std::vector<std::string>* refusals) {
+  const uint64_t slots[2][2] = {{o.slot_a_address, uint64_t{o.slot_a_address} + kPageSize},
+                                {o.slot_b_address, uint64_t{o.slot_b_address} + kPageSize}};
+  constexpr size_t kMaxListed = 16;
+  size_t found = 0;
+  for (const HexSegment& seg : segments) {
+    std::vector<std::pair<uint64_t, uint64_t>> parts = {
+        {seg.address, uint64_t{seg.address} + seg.bytes.size()}};
+    for (const auto& slot : slots) {
+      std::vector<std::pair<uint64_t, uint64_t>> rest;
+      for (const auto& [b, e] : parts) {
+        if (e <= slot[0] || b >= slot[1]) {
+          rest.push_back({b, e});
+          continue;
+        }
+        if (b < slot[0]) rest.push_back({b, slot[0]});
+        if (e > slot[1]) rest.push_back({slot[1], e});
+      }
+      parts = rest;
+    }
+    for (const auto& [b, e] : parts) {
+      for (const Region& region : kRegions) {
+        const uint64_t lo = std::max(b, region.begin), hi = std::min(e, region.end);
+        if (lo >= hi) continue;
+        if (++found > kMaxListed) continue;
+        refusals->push_back(fmt::format(
+            "0x{:08X}-0x{:08X} ({} bytes) is written in {}: a calibration image writes only "
+            "slot A 0x{:05X}-0x{:05X} and slot B 0x{:05X}-0x{:05X}",
+            lo, hi - 1, hi - lo, region.name, slots[0][0], slots[0][1] - 1, slots[1][0],
+            slots[1][1] - 1));
+      }
+    }
+  }
+  if (found > kMaxListed) {
+    refusals->push_back(
+        fmt::format("... and {} more ranges outside the calibration slots", found - kMaxListed));
+  }
+}
+
+// Reads at most kMaxInspectFileBytes: the size is checked before anything is read, and a file
+// that grows meanwhile is still cut off at the limit.
+Result<std::string> ReadBounded(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return MakeError(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  struct stat st {};
+  std::string out;
+  const auto too_large = [&](uint64_t size) {
+    return MakeError(path, 0,
+                     fmt::format("{}{} bytes; calibrate inspect reads at most {} bytes (both slot "
+                                 "pages as Intel HEX take about 6 KiB, a .bin at most 1024 bytes)",
+                                 size > kMaxInspectFileBytes + 1 ? "" : "more than ", size,
+                                 kMaxInspectFileBytes));
+  };
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return MakeError(path, 0, "not a regular file; expected a tag.bin or tag.hex file");
+  }
+  if (static_cast<uint64_t>(st.st_size) > kMaxInspectFileBytes) {
+    ::close(fd);
+    return too_large(static_cast<uint64_t>(st.st_size));
+  }
+  out.resize(kMaxInspectFileBytes + 1);
+  size_t n = 0;
+  while (n < out.size()) {
+    const ssize_t got = ::read(fd, out.data() + n, out.size() - n);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) {
+      const int err = errno;
+      ::close(fd);
+      return MakeError(path, 0, fmt::format("cannot read: {}", std::strerror(err)));
+    }
+    if (got == 0) break;
+    n += static_cast<size_t>(got);
+  }
+  ::close(fd);
+  if (n > kMaxInspectFileBytes) return too_large(n);
+  out.resize(n);
+  return out;
 }
 
 std::string Hex(const uint8_t* p, size_t n) {
@@ -104,15 +294,94 @@ bool InspectOptions::IsValid(std::string* why) const {
 InspectReport InspectBin(const std::vector<uint8_t>& bytes, const InspectOptions& options) {
   InspectReport report;
   report.format = "bin";
-  report.slots.push_back(InspectSlot(bytes, "file", 0, options));
+  metro_fw_blob_info info{};
+  report.slots.push_back(InspectSlot(bytes, "file", 0, options, &report.refusals, &info));
+  if (SectionsLocated(report.slots[0].code) && bytes.size() > info.total_len) {
+    report.refusals.push_back(fmt::format(
+        "{} bytes after total_len {} (bytes 0x{:X}-0x{:X}): a .bin holds exactly one blob; "
+        "expected a file of {} bytes",
+        bytes.size() - info.total_len, info.total_len, info.total_len, bytes.size() - 1,
+        info.total_len));
+  }
   if (report.slots[0].code == METRO_FW_OK) report.active = 0;
+  return report;
+}
+
+InspectReport InspectHexSegments(const std::vector<HexSegment>& segments,
+                                 const InspectOptions& options) {
+  InspectReport report;
+  report.format = "hex";
+  OutsideSlots(segments, options, &report.refusals);
+  uint32_t seq[2] = {0, 0};
+  for (int slot = 0; slot < 2; ++slot) {
+    const uint32_t base = slot == 0 ? options.slot_a_address : options.slot_b_address;
+    const char* label = slot == 0 ? "A" : "B";
+    std::vector<uint8_t> page(kPageSize, 0xFF);  // what nrfjprog --sectorerase leaves
+    std::vector<bool> written(kPageSize, false);
+    for (const auto& seg : segments) {
+      for (size_t i = 0; i < seg.bytes.size(); ++i) {
+        const uint64_t a = uint64_t{seg.address} + i;
+        if (a >= base && a < uint64_t{base} + kPageSize) {
+          page[a - base] = seg.bytes[i];
+          written[a - base] = true;
+        }
+      }
+    }
+    metro_fw_blob_info info{};
+    report.slots.push_back(InspectSlot(page, label, base, options, &report.refusals, &info));
+    const SlotReport& r = report.slots.back();
+    if (r.code == METRO_FW_OK) seq[slot] = r.contents->seq;
+    const auto first_written = [&](size_t from) {
+      return static_cast<size_t>(
+          std::find(written.begin() + static_cast<std::ptrdiff_t>(from), written.end(), true) -
+          written.begin());
+    };
+    const auto last_written = [&] {
+      return kPageSize - 1 -
+             static_cast<size_t>(std::find(written.rbegin(), written.rend(), true) -
+                                 written.rbegin());
+    };
+    if (first_written(0) == kPageSize) {
+      report.refusals.push_back(fmt::format(
+          "slot {} (0x{:05X}-0x{:05X}) is not written: nrfjprog --sectorerase leaves the tag's "
+          "old slot {}, whose blob may carry a higher seq and win; expected a blob or the "
+          "tombstone word 0x00000000 at 0x{:05X} (docs/calibration-blob.md section 8)",
+          label, base, base + kPageSize - 1, label, base));
+      continue;
+    }
+    const size_t end = SectionsLocated(r.code) ? info.total_len : 4;
+    const bool tombstone = !SectionsLocated(r.code) && page[0] == 0 && page[1] == 0 &&
+                           page[2] == 0 && page[3] == 0 && written[0] && written[1] && written[2] &&
+                           written[3];
+    if (!SectionsLocated(r.code) && !tombstone) {
+      report.refusals.push_back(fmt::format(
+          "slot {} (0x{:05X}-0x{:05X}) holds no valid blob ({}) and no tombstone: expected a "
+          "valid blob or the word 0x00000000 at 0x{:05X}",
+          label, base, base + kPageSize - 1, r.code_name, base));
+    } else if (first_written(end) != kPageSize) {
+      const size_t from = first_written(end), to = last_written();
+      report.refusals.push_back(fmt::format(
+          "slot {}: bytes written after the {} (0x{:05X}-0x{:05X}); expected them left erased "
+          "(docs/calibration-blob.md section 1)",
+          label, tombstone ? "tombstone word" : fmt::format("blob's total_len {}", end),
+          base + from, base + to));
+    }
+  }
+  // metro_fw_choose_active's rule: the larger seq, slot A on a tie.
+  const bool a_ok = report.slots[0].code == METRO_FW_OK;
+  const bool b_ok = report.slots[1].code == METRO_FW_OK;
+  if (a_ok && (!b_ok || seq[0] >= seq[1])) {
+    report.active = 0;
+  } else if (b_ok) {
+    report.active = 1;
+  }
   return report;
 }
 
 Result<InspectReport> InspectFile(const std::string& path, const InspectOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError("inspect options: " + why);
-  auto text = ReadFile(path);
+  auto text = ReadBounded(path);
   if (!text.ok()) return text.error();
   const std::string& data = text.value();
   const size_t first = data.find_first_not_of(" \t\r\n");
@@ -124,30 +393,8 @@ Result<InspectReport> InspectFile(const std::string& path, const InspectOptions&
   }
   auto segments = ReadIntelHex(data, path);
   if (!segments.ok()) return segments.error();
-  InspectReport report;
+  InspectReport report = InspectHexSegments(segments.value(), options);
   report.file = path;
-  report.format = "hex";
-  uint32_t seq[2] = {0, 0};
-  for (int slot = 0; slot < 2; ++slot) {
-    const uint32_t base = slot == 0 ? options.slot_a_address : options.slot_b_address;
-    std::vector<uint8_t> page(kPageSize, 0xFF);  // what nrfjprog --sectorerase leaves
-    for (const auto& seg : segments.value()) {
-      for (size_t i = 0; i < seg.bytes.size(); ++i) {
-        const uint64_t a = uint64_t{seg.address} + i;
-        if (a >= base && a < uint64_t{base} + kPageSize) page[a - base] = seg.bytes[i];
-      }
-    }
-    report.slots.push_back(InspectSlot(page, slot == 0 ? "A" : "B", base, options));
-    if (report.slots.back().code == METRO_FW_OK) seq[slot] = report.slots.back().contents->seq;
-  }
-  // metro_fw_choose_active's rule: the larger seq, slot A on a tie.
-  const bool a_ok = report.slots[0].code == METRO_FW_OK;
-  const bool b_ok = report.slots[1].code == METRO_FW_OK;
-  if (a_ok && (!b_ok || seq[0] >= seq[1])) {
-    report.active = 0;
-  } else if (b_ok) {
-    report.active = 1;
-  }
   return report;
 }
 
@@ -180,7 +427,13 @@ std::string FormatInspect(const InspectReport& report) {
       out += "\n";
     }
   }
-  out += report.ok() ? "result: valid\n" : "result: NO VALID CALIBRATION\n";
+  for (const std::string& why : report.refusals) out += "refused: " + why + "\n";
+  if (!report.refusals.empty()) {
+    out += fmt::format("result: REFUSED ({} problem{}): do not program this file\n",
+                       report.refusals.size(), report.refusals.size() == 1 ? "" : "s");
+  } else {
+    out += report.ok() ? "result: valid\n" : "result: NO VALID CALIBRATION\n";
+  }
   return out;
 }
 
@@ -189,6 +442,7 @@ nlohmann::json InspectToJson(const InspectReport& report) {
   j["file"] = report.file;
   j["format"] = report.format;
   j["ok"] = report.ok();
+  j["refusals"] = report.refusals;
   j["active_slot"] = report.active >= 0 ? nlohmann::json(report.slots[report.active].label)
                                         : nlohmann::json(nullptr);
   j["slots"] = nlohmann::json::array();

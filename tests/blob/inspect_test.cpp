@@ -1,11 +1,15 @@
 #include "metro/blob/inspect.hpp"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "blob/blob_test_support.hpp"
 #include "metro/blob/intel_hex.hpp"
 #include "metro/core/file.hpp"
+#include "support/run_program.hpp"
 
 using namespace metro::blob;
 
@@ -101,7 +105,7 @@ TEST_CASE("Inspect of a .hex picks the larger seq", "[blob][inspect]") {
   CHECK(r.value().active == 1);
 }
 
-TEST_CASE("Inspect reports a sensor the firmware would not use", "[blob][inspect]") {
+TEST_CASE("Inspect refuses a blob with a sensor the firmware would not use", "[blob][inspect]") {
   auto blob = WriteBlob(testing::Contents());
   REQUIRE(blob.ok());
   auto bytes = blob.value();
@@ -115,9 +119,15 @@ TEST_CASE("Inspect reports a sensor the firmware would not use", "[blob][inspect
   for (int i = 0; i < 4; ++i) bytes[0x218 + i] = static_cast<uint8_t>(crc >> (8 * i));
   auto r = InspectFile(WriteTemp("inf.bin", Bytes(bytes)), InspectOptions{});
   REQUIRE(r.ok());
-  CHECK(r.value().ok());
+  // issue #20: this passed (the tag would have run the gyro on defaults).
+  CHECK_FALSE(r.value().ok());
   CHECK(r.value().slots[0].sensors[0].status_name == "OK");
   CHECK(r.value().slots[0].sensors[1].status_name == "NONFINITE");
+  CHECK(r.value().refusals ==
+        std::vector<std::string>{
+            "blob: the gyro section at bytes 0x168-0x217 is NONFINITE: a NaN or Inf constant, or "
+            "a negative uncertainty; expected finite constants; the tag would run the gyro on "
+            "default constants"});
 }
 
 TEST_CASE("Inspect refuses unreadable files and bad HEX and bad options", "[blob][inspect]") {
@@ -138,3 +148,219 @@ TEST_CASE("Inspect refuses unreadable files and bad HEX and bad options", "[blob
   CHECK(!options.IsValid(&why));
   CHECK(why == "slot A and slot B must be different pages");
 }
+
+namespace {
+
+// Sets the f32 at blob offset `off` and fixes the CRC.
+void SetF32(std::vector<uint8_t>& b, size_t off, uint32_t bits) {
+  for (int i = 0; i < 4; ++i) b[off + i] = static_cast<uint8_t>(bits >> (8 * i));
+  const uint32_t crc = Crc32(b.data(), b.size() - 4);
+  for (int i = 0; i < 4; ++i) b[b.size() - 4 + i] = static_cast<uint8_t>(crc >> (8 * i));
+}
+
+std::vector<uint8_t> Golden() {
+  auto blob = WriteBlob(testing::Contents());
+  REQUIRE(blob.ok());
+  return blob.value();
+}
+
+std::string Factory(std::vector<HexSegment> extra = {}) {
+  std::vector<HexSegment> segs = FactoryImage(Golden(), kSlotAAddress, kSlotBAddress);
+  segs.insert(segs.end(), extra.begin(), extra.end());
+  std::sort(segs.begin(), segs.end(),
+            [](const HexSegment& a, const HexSegment& b) { return a.address < b.address; });
+  auto hex = WriteIntelHex(segs);
+  REQUIRE(hex.ok());
+  return hex.value();
+}
+
+const std::string kSlots =
+    ": a calibration image writes only slot A 0x3B000-0x3B3FF and slot B 0x3B400-0x3B7FF";
+
+}  // namespace
+
+TEST_CASE("Inspect refuses a HEX that writes the MBR, the bootloader or 0x3B800",
+          "[blob][inspect][security]") {
+  // issue #20: each of these said "result: valid"; programming them bricks the tag.
+  const std::vector<uint8_t> sixteen(16, 0xAB);
+  auto r = InspectFile(
+      WriteTemp("brick.hex", Factory({HexSegment{0x00000000, sixteen},
+                                      HexSegment{0x3B7F0, std::vector<uint8_t>(32, 0xAB)},
+                                      HexSegment{0x3C000, sixteen},
+                                      HexSegment{0x10001014, {0x00, 0xC0, 0x03, 0x00}}})),
+      InspectOptions{});
+  REQUIRE(r.ok());
+  const InspectReport& report = r.value();
+  CHECK(report.active == 0);  // the firmware would load slot A ...
+  CHECK_FALSE(report.ok());   // ... but the file must not reach a programmer
+  CHECK(report.refusals ==
+        std::vector<std::string>{
+            "0x00000000-0x0000000F (16 bytes) is written in the MBR and SoftDevice S110 "
+            "(0x00000-0x17FFF)" +
+                kSlots,
+            "0x0003B800-0x0003B80F (16 bytes) is written in the pages between slot B and the "
+            "bootloader (0x3B800-0x3BFFF)" +
+                kSlots,
+            "0x0003C000-0x0003C00F (16 bytes) is written in the DFU bootloader (0x3C000-0x3FFFF)" +
+                kSlots,
+            "0x10001014-0x10001017 (4 bytes) is written in the UICR (bootloader address, "
+            "readback protection)" +
+                kSlots,
+            "slot B: bytes written after the tombstone word (0x3B7F0-0x3B7FF); expected them left "
+            "erased (docs/calibration-blob.md section 1)"});
+  const std::string text = FormatInspect(report);
+  CHECK_THAT(text, Catch::Contains("refused: 0x00000000-0x0000000F (16 bytes) is written in the "
+                                   "MBR and SoftDevice S110"));
+  CHECK_THAT(text, Catch::EndsWith("result: REFUSED (5 problems): do not program this file\n"));
+  const auto j = InspectToJson(report);
+  CHECK(j["ok"] == false);
+  CHECK(j["refusals"].size() == 5u);
+  // The factory image alone still passes.
+  auto clean = InspectFile(WriteTemp("clean.hex", Factory()), InspectOptions{});
+  REQUIRE(clean.ok());
+  CHECK(clean.value().ok());
+  CHECK(clean.value().refusals.empty());
+}
+
+TEST_CASE("Inspect refuses a HEX without the slot-B tombstone or with garbage in a slot",
+          "[blob][inspect][security]") {
+  SECTION("no tombstone") {
+    auto hex = WriteIntelHex({HexSegment{kSlotAAddress, Golden()}});
+    REQUIRE(hex.ok());
+    auto r = InspectFile(WriteTemp("notomb.hex", hex.value()), InspectOptions{});
+    REQUIRE(r.ok());
+    CHECK_FALSE(r.value().ok());
+    CHECK(r.value().refusals ==
+          std::vector<std::string>{
+              "slot B (0x3B400-0x3B7FF) is not written: nrfjprog --sectorerase leaves the tag's "
+              "old slot B, whose blob may carry a higher seq and win; expected a blob or the "
+              "tombstone word 0x00000000 at 0x3B400 (docs/calibration-blob.md section 8)"});
+  }
+  SECTION("a broken blob instead of the tombstone, bytes after total_len in slot A") {
+    std::vector<uint8_t> broken = Golden();
+    broken[0x100] ^= 1;
+    auto hex = WriteIntelHex({HexSegment{kSlotAAddress, Golden()},
+                              HexSegment{kSlotAAddress + 0x300, {1, 2, 3, 4}},
+                              HexSegment{kSlotBAddress, broken}});
+    REQUIRE(hex.ok());
+    auto r = InspectFile(WriteTemp("garbage.hex", hex.value()), InspectOptions{});
+    REQUIRE(r.ok());
+    CHECK_FALSE(r.value().ok());
+    CHECK(r.value().refusals ==
+          std::vector<std::string>{
+              "slot A: bytes written after the blob's total_len 540 (0x3B300-0x3B303); expected "
+              "them left erased (docs/calibration-blob.md section 1)",
+              "slot B (0x3B400-0x3B7FF) holds no valid blob (METRO_FW_E_CRC) and no tombstone: "
+              "expected a valid blob or the word 0x00000000 at 0x3B400"});
+  }
+}
+
+TEST_CASE("Inspect refuses a blob whose sensors are both NaN or absent or disagree with flags",
+          "[blob][inspect][security]") {
+  SECTION("both NaN") {
+    std::vector<uint8_t> b = Golden();
+    SetF32(b, 0x0B0 + 8, 0x7FC00000u);  // accel M[0] = NaN
+    SetF32(b, 0x168 + 8, 0x7FC00000u);  // gyro M[0] = NaN
+    auto r = InspectFile(WriteTemp("nan.bin", Bytes(b)), InspectOptions{});
+    REQUIRE(r.ok());
+    CHECK_FALSE(r.value().ok());
+    CHECK(r.value().refusals ==
+          std::vector<std::string>{
+              "blob: the accel section at bytes 0x0B0-0x15F is NONFINITE: a NaN or Inf constant, "
+              "or a negative uncertainty; expected finite constants; the tag would run the accel "
+              "on default constants",
+              "blob: the gyro section at bytes 0x168-0x217 is NONFINITE: a NaN or Inf constant, or "
+              "a negative uncertainty; expected finite constants; the tag would run the gyro on "
+              "default constants"});
+  }
+  SECTION("both absent, header flags cleared") {
+    // Header, META and CRC only (172 bytes), by hand: WriteBlob refuses it.
+    std::vector<uint8_t> b = Golden();
+    b.resize(0x0A8 + 4);
+    b[8] = 0xAC;  // total_len
+    b[9] = 0x00;
+    SetF32(b, 24, 0);  // flags 0, CRC fixed
+    auto r = InspectFile(WriteTemp("none.bin", Bytes(b)), InspectOptions{});
+    REQUIRE(r.ok());
+    CHECK_FALSE(r.value().ok());
+    CHECK_THAT(FormatInspect(r.value()),
+               Catch::Contains("refused: blob: no accel and no gyro section: the tag would run "
+                               "both sensors on default constants; expected at least one sensor "
+                               "section"));
+  }
+  SECTION("flags declare a gyro the blob does not hold") {
+    BlobContents c = testing::Contents();
+    c.gyro.reset();
+    std::vector<uint8_t> b = WriteBlob(c).value();
+    b[24] |= 0x02;  // flags b1
+    SetF32(b, 24, b[24] | uint32_t{b[25]} << 8);
+    auto r = InspectFile(WriteTemp("flags.bin", Bytes(b)), InspectOptions{});
+    REQUIRE(r.ok());
+    CHECK_FALSE(r.value().ok());
+    CHECK(r.value().refusals ==
+          std::vector<std::string>{
+              "blob: flags 0x00000007 declare a gyro section (bit b1) that the blob does not "
+              "hold; the tag would run the gyro on default constants; expected flags naming "
+              "exactly the sensor sections present"});
+  }
+}
+
+TEST_CASE("Inspect refuses a .bin with data after total_len", "[blob][inspect][security]") {
+  std::vector<uint8_t> b = Golden();
+  b.resize(b.size() + 4096, 0x00);
+  auto r = InspectFile(WriteTemp("trailing.bin", Bytes(b)), InspectOptions{});
+  REQUIRE(r.ok());
+  CHECK(r.value().active == 0);
+  CHECK_FALSE(r.value().ok());
+  CHECK(r.value().refusals ==
+        std::vector<std::string>{"4096 bytes after total_len 540 (bytes 0x21C-0x121B): a .bin "
+                                 "holds exactly one blob; expected a file of 540 bytes"});
+}
+
+TEST_CASE("Inspect refuses a file past 64 KiB from its size, before reading it",
+          "[blob][inspect][security]") {
+  const auto dir = std::filesystem::temp_directory_path() / "metro_inspect_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "huge.hex").string();
+  {
+    // A sparse 180 MB file: reading it all (the old code) would take 180 MB and more.
+    std::ofstream f(path, std::ios::binary);
+    f << ':';
+  }
+  std::filesystem::resize_file(path, 180u * 1024 * 1024);
+  auto r = InspectFile(path, InspectOptions{});
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().ToString() ==
+        path +
+            ": 188743680 bytes; calibrate inspect reads at most 65536 bytes (both slot pages as "
+            "Intel HEX take about 6 KiB, a .bin at most 1024 bytes)");
+  // One byte past the limit is refused too; the limit itself is read.
+  std::filesystem::resize_file(path, kMaxInspectFileBytes + 1);
+  CHECK_FALSE(InspectFile(path, InspectOptions{}).ok());
+  std::filesystem::resize_file(path, kMaxInspectFileBytes);
+  auto at_limit = InspectFile(path, InspectOptions{});
+  REQUIRE_FALSE(at_limit.ok());  // read, then refused as HEX syntax (NUL bytes)
+  CHECK(at_limit.error().line == 1);
+  std::filesystem::remove(path);
+}
+
+#ifdef METRO_CALIBRATE_EXE
+TEST_CASE("calibrate inspect exits 1 with ok false for a HEX that writes the bootloader",
+          "[blob][inspect][security][apps]") {
+  const std::string path =
+      WriteTemp("boot.hex", Factory({HexSegment{0x3C000, std::vector<uint8_t>(16, 0xAB)}}));
+  metro::testing::ProgramRun r =
+      metro::testing::RunProgram(METRO_CALIBRATE_EXE, "inspect --json " + path);
+  CHECK(r.exit_code == 1);
+  const auto j = nlohmann::json::parse(r.out);
+  CHECK(j["ok"] == false);
+  CHECK(j["active_slot"] == "A");
+  CHECK(j["refusals"][0] ==
+        "0x0003C000-0x0003C00F (16 bytes) is written in the DFU bootloader (0x3C000-0x3FFFF)" +
+            kSlots);
+  metro::testing::ProgramRun text =
+      metro::testing::RunProgram(METRO_CALIBRATE_EXE, "inspect " + path);
+  CHECK(text.exit_code == 1);
+  CHECK_THAT(text.out, Catch::Contains("result: REFUSED (1 problem): do not program this file"));
+}
+#endif

@@ -1,5 +1,13 @@
 // `calibrate inspect`: decode and validate a blob file (.bin) or a programmer image (.hex)
 // with the firmware's rules, and render the result for people (text) and programs (JSON).
+//
+// Inspect is the gate before a programmer (docs/calibration-blob.md section 8.1): beyond the
+// firmware's validator it refuses a file larger than kMaxInspectFileBytes (checked before it is
+// read), a .bin with bytes after total_len, a .hex that writes anything outside the two
+// calibration slot pages or leaves a slot page unwritten (no tombstone), bytes after total_len
+// or beside the tombstone in a slot page, and a blob whose flags disagree with its sensor
+// sections, that holds no sensor section, or whose sensor section the firmware would not use
+// (NaN/Inf, limits, model bits).
 #pragma once
 
 #include <cstdint>
@@ -9,9 +17,14 @@
 #include <vector>
 
 #include "metro/blob/blob.hpp"
+#include "metro/blob/intel_hex.hpp"
 #include "metro/core/status.hpp"
 
 namespace metro::blob {
+
+// The largest file inspect reads. Both slot pages as Intel HEX take about 6 KiB (2048 data
+// bytes in 16-byte records of 45 characters, plus 04 and 01 records); a .bin is at most 1024.
+inline constexpr uint64_t kMaxInspectFileBytes = 64 * 1024;
 
 struct InspectOptions {
   // The tag's device id; without it each slot is checked against its own id.
@@ -46,16 +59,25 @@ struct InspectReport {
   std::string format;  // "bin" or "hex"
   std::vector<SlotReport> slots;
   int active = -1;  // index into slots of the slot the firmware would load, -1 = none
+  // Why the file must not go to a programmer although the firmware might load it, one line
+  // each, naming the address range or byte offsets and what was expected.
+  std::vector<std::string> refusals;
 
-  // A .bin is valid when its blob validates; a .hex when some slot is active.
-  bool ok() const { return active >= 0; }
+  // A .bin is valid when its blob validates; a .hex when some slot is active. Either only
+  // when the gate found nothing to refuse.
+  bool ok() const { return active >= 0 && refusals.empty(); }
 };
+
+// Inspects an Intel HEX image already parsed into segments (ReadIntelHex).
+InspectReport InspectHexSegments(const std::vector<HexSegment>& segments,
+                                 const InspectOptions& options);
 
 // Inspects the bytes of a .bin blob (a single slot).
 InspectReport InspectBin(const std::vector<uint8_t>& bytes, const InspectOptions& options);
 
 // Inspects the file: Intel HEX if its first non-blank character is ':', else a raw blob.
-// Errors: unreadable file, HEX syntax (with line and column), invalid options.
+// Errors: unreadable file, a file larger than kMaxInspectFileBytes (refused from its size,
+// before it is read), HEX syntax (with line and column), invalid options.
 Result<InspectReport> InspectFile(const std::string& path, const InspectOptions& options);
 
 // Human-readable summary, one block per slot.
