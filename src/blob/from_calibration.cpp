@@ -128,7 +128,9 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
                     "calibration must be fitted on LSB data",
                     name, model.input_unit));
   }
-  const Eigen::Matrix3d m_c = model.Matrix();
+  // docs/calibration-blob.md section 10: M is calibration.json's `matrix` (the reader checked it
+  // against `scale` and `misalignment`); a calibration straight from a fit has model.Matrix().
+  const Eigen::Matrix3d m_c = c.M();
   Result<uint8_t> fs = InferFsSel(model.sensor, m_c);
   if (!fs.ok()) return MakeError(fmt::format("{}: {}", name, fs.error().message));
   if (model.kind != ModelKind::kBias && c.matrix_u.isZero(0.0)) {

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 
@@ -54,7 +55,7 @@ json SensorJson(const SensorCalibration& c) {
   std::vector<double> mis_u = c.misalignment_u;
   if (mis_u.empty()) mis_u.assign(mis.size(), 0.0);
   j["misalignment_u"] = mis_u;
-  j["matrix"] = Mat(m.Matrix());
+  j["matrix"] = Mat(c.M());
   j["matrix_u"] = Mat(c.matrix_u);
   j["sensitivity"] = Vec(c.sensitivity);
   j["sensitivity_u"] = Vec(c.sensitivity_u);
@@ -175,6 +176,36 @@ class Reader {
   std::string message_;
 };
 
+// The redundant fields agree to double rounding (calibration_io.hpp): each element of
+// `matrix` with t_ij k_j from `scale` and `misalignment`, each `sensitivity` with 1 / k.
+void CheckRedundant(Reader* rd, const std::string& path, const SensorCalibration& c,
+                    const Eigen::Matrix3d& file_matrix, const Eigen::Vector3d& file_sensitivity) {
+  const auto agree = [](double a, double b) {
+    return std::fabs(a - b) <= kRedundantRelTolerance * std::max(std::fabs(a), std::fabs(b));
+  };
+  const Eigen::Matrix3d tk = c.model.Matrix();
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (agree(file_matrix(i, k), tk(i, k))) continue;
+      rd->Fail(fmt::format(
+          "'{}matrix'[{}][{}] is {:.17g} but 'scale' and 'misalignment' give T K = {:.17g} "
+          "(difference {:.3g}, tolerance {:.3g} relative, the double rounding of both): the "
+          "redundant fields disagree; expected matrix = T K (docs/calibration-format.md)",
+          path, i, k, file_matrix(i, k), tk(i, k), file_matrix(i, k) - tk(i, k),
+          kRedundantRelTolerance));
+      return;
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (agree(file_sensitivity[a], c.sensitivity[a])) continue;
+    rd->Fail(fmt::format(
+        "'{}sensitivity'[{}] is {:.17g} but 1 / 'scale'[{}] is {:.17g} (tolerance {:.3g} "
+        "relative): the redundant fields disagree; expected sensitivity = 1 / scale",
+        path, a, file_sensitivity[a], a, c.sensitivity[a], kRedundantRelTolerance));
+    return;
+  }
+}
+
 std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const std::string& path,
                                              ImuSensor sensor) {
   SensorCalibration c;
@@ -261,6 +292,18 @@ std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const st
     c.sensitivity[a] = 1.0 / m.scale[a];
     c.sensitivity_u[a] = c.scale_u[a] / (m.scale[a] * m.scale[a]);
   }
+  // `matrix` is what the blob carries (docs/calibration-blob.md section 10) and what apply uses;
+  // `scale` and `misalignment` (and `sensitivity`) say the same, or the file is refused.
+  const Eigen::MatrixXd matrix = rd->Matrix(j, path, "matrix");
+  if (!rd->failed() && matrix.rows() != 3) {
+    rd->Fail(fmt::format("'{}matrix' must be 3 x 3", path));
+  }
+  const Eigen::Vector3d sensitivity =
+      j.contains("sensitivity") ? rd->Vec3(j, path, "sensitivity") : c.sensitivity;
+  if (rd->failed()) return std::nullopt;
+  c.matrix = Eigen::Matrix3d(matrix);
+  CheckRedundant(rd, path, c, *c.matrix, sensitivity);
+  if (rd->failed()) return std::nullopt;
   if (j.contains("matrix_u")) {
     const Eigen::MatrixXd mu = rd->Matrix(j, path, "matrix_u");
     if (mu.rows() == 3) c.matrix_u = mu;
@@ -331,7 +374,7 @@ void ReportSensor(const SensorCalibration& c, std::string* out) {
                           ValueU(m.bias_per_c[a], c.bias_per_c_u[a]), m.input_unit);
     }
   }
-  const Eigen::Matrix3d mm = m.Matrix();
+  const Eigen::Matrix3d mm = c.M();
   *out += "    M =\n";
   for (int r = 0; r < 3; ++r) {
     *out +=
@@ -408,7 +451,7 @@ Status ApplySensor(const SensorCalibration& c, const std::string& file, Tag* tag
   const size_t n = tag->size();
   std::vector<double> out[3];
   for (auto& o : out) o.resize(n);
-  const Eigen::Matrix3d m = c.model.Matrix();
+  const Eigen::Matrix3d m = c.M();
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d raw(in[0]->values[i], in[1]->values[i], in[2]->values[i]);
     const double t = temp != nullptr ? temp->values[i] : 0.0;

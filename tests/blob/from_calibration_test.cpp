@@ -4,6 +4,8 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <tuple>
 
 #include "metro/calibration/calibration_io.hpp"
@@ -413,6 +415,32 @@ TEST_CASE("Firmware apply equals calibrate apply within the binary32 bound", "[b
     // 2600 LSB), which the bound accounts for through D_j.
     CHECK(worst_rel < 1e-6);
   }
+}
+
+}  // namespace metro::blob
+
+namespace metro::blob {
+
+TEST_CASE("Mapping: the blob's M is calibration.json's matrix (section 10)", "[blob][security]") {
+  // issue #20: `calibrate blob` built M from scale and misalignment and ignored `matrix`.
+  const std::string path = std::string(METRO_SOURCE_DIR) + "/datasets/golden/";
+  std::ifstream f(path + "calibration_sensor2.json");
+  nlohmann::json j = nlohmann::json::parse(f);
+  // One unit in the last place: within the reader's tolerance, so the file is accepted, and
+  // only a blob built from `matrix` carries this value.
+  const double tk = j["tags"][0]["accel"]["matrix"][1][2].get<double>();
+  const double file_value = std::nextafter(tk, 0.0);
+  j["tags"][0]["accel"]["matrix"][1][2] = file_value;
+  Result<Calibration> cal = CalibrationFromJson(j, "calibration_sensor2.json");
+  REQUIRE(cal.ok());
+  BlobFromCalibrationOptions o;
+  o.sensor = 2;
+  o.device_id = kId;
+  o.seq = 3;
+  Result<BlobContents> c = BlobContentsFromCalibration(cal.value(), o);
+  REQUIRE(c.ok());
+  CHECK(c.value().accel->m[5] == 9.80665 * file_value);
+  CHECK(c.value().accel->m[5] != 9.80665 * tk);
 }
 
 }  // namespace metro::blob

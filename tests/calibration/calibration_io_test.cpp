@@ -2,6 +2,7 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
 #include <map>
 
 #include "metro/calibration/simulate.hpp"
@@ -156,4 +157,80 @@ TEST_CASE("The report names every constant with its uncertainty", "[calibration]
 }
 
 }  // namespace
+}  // namespace metro
+
+namespace metro {
+namespace {
+
+nlohmann::json GoldenCalibrationJson() {
+  std::ifstream f(std::string(METRO_SOURCE_DIR) + "/datasets/golden/calibration_sensor2.json");
+  return nlohmann::json::parse(f);
+}
+
+}  // namespace
+
+TEST_CASE("calibration.json: matrix that disagrees with scale and misalignment is refused",
+          "[calibration][security]") {
+  // issue #20: `matrix` was never read, so a file whose matrix said something else than its
+  // scale and misalignment was accepted (and the blob silently used scale and misalignment).
+  nlohmann::json j = GoldenCalibrationJson();
+  REQUIRE(CalibrationFromJson(j, "c.json").ok());
+  // T K [0][1] = -(-a_yz) k_y = 7.201811526559342e-07; 7.2e-07 is an edit, not a rounding.
+  j["tags"][0]["accel"]["matrix"][0][1] = 7.2e-07;
+  Result<Calibration> r = CalibrationFromJson(j, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().ToString() ==
+        "c.json: 'tags[0].accel.matrix'[0][1] is 7.1999999999999999e-07 but 'scale' and "
+        "'misalignment' give T K = 7.2018115265593419e-07 (difference -1.81e-10, tolerance "
+        "4.44e-16 relative, the double rounding of both): the redundant fields disagree; "
+        "expected matrix = T K (docs/calibration-format.md)");
+}
+
+TEST_CASE("calibration.json: the matrix tolerance is the double rounding, 2^-51 relative",
+          "[calibration][security]") {
+  const nlohmann::json golden = GoldenCalibrationJson();
+  const double tk = golden["tags"][0]["gyro"]["matrix"][1][0].get<double>();  // g_xz k_x
+  // One unit in the last place (a writer rounding its product differently) is accepted, and
+  // M is then the file's value, bit for bit.
+  nlohmann::json j = golden;
+  const double one_ulp = std::nextafter(tk, 1.0);
+  j["tags"][0]["gyro"]["matrix"][1][0] = one_ulp;
+  Result<Calibration> ok = CalibrationFromJson(j, "c.json");
+  REQUIRE(ok.ok());
+  CHECK(ok.value().tags[0].gyro->M()(1, 0) == one_ulp);
+  CHECK(ok.value().tags[0].gyro->model.Matrix()(1, 0) == tk);
+  // Four units in the last place exceed 2^-51 relative for any value.
+  double four_ulp = tk;
+  for (int i = 0; i < 4; ++i) four_ulp = std::nextafter(four_ulp, 1.0);
+  j["tags"][0]["gyro"]["matrix"][1][0] = four_ulp;
+  Result<Calibration> bad = CalibrationFromJson(j, "c.json");
+  REQUIRE_FALSE(bad.ok());
+  CHECK_THAT(bad.error().message, Catch::StartsWith("'tags[0].gyro.matrix'[1][0] is ") &&
+                                      Catch::Contains("but 'scale' and 'misalignment' give T K"));
+  // A zero of T K must be written as 0.
+  j = golden;
+  j["tags"][0]["accel"]["matrix"][2][0] = 1e-300;
+  Result<Calibration> zero = CalibrationFromJson(j, "c.json");
+  REQUIRE_FALSE(zero.ok());
+  CHECK_THAT(zero.error().message, Catch::StartsWith("'tags[0].accel.matrix'[2][0] is 1e-300 but "
+                                                     "'scale' and 'misalignment' give T K = 0 "));
+}
+
+TEST_CASE("calibration.json: sensitivity that disagrees with scale is refused, matrix required",
+          "[calibration][security]") {
+  nlohmann::json j = GoldenCalibrationJson();
+  j["tags"][0]["accel"]["sensitivity"][1] = 16637.56399613637;
+  Result<Calibration> r = CalibrationFromJson(j, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message ==
+        "'tags[0].accel.sensitivity'[1] is 16637.56399613637 but 1 / 'scale'[1] is "
+        "16636.56399613637 (tolerance 4.44e-16 relative): the redundant fields disagree; "
+        "expected sensitivity = 1 / scale");
+  j = GoldenCalibrationJson();
+  j["tags"][0]["gyro"].erase("matrix");
+  r = CalibrationFromJson(j, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message == "missing key 'tags[0].gyro.matrix'");
+}
+
 }  // namespace metro

@@ -98,6 +98,12 @@ struct SensorCalibration {
   double coverage_factor_95 = 0;  // Student t_0.975(dof) (JCGM 100:2008 G.3.2).
   // When every input has a temp_c column.
   std::optional<PoseTemperatureRange> static_pose_temperature;
+  // M as calibration.json's `matrix` holds it (set by the reader, which checked it against
+  // model.Matrix() to double rounding); unset after a fit, where M is model.Matrix().
+  std::optional<Eigen::Matrix3d> matrix;
+
+  // The M that apply, the report and the blob use: `matrix` when read from a file.
+  Eigen::Matrix3d M() const { return matrix ? *matrix : model.Matrix(); }
 };
 
 struct TagCalibration {

@@ -13,8 +13,19 @@ namespace metro {
 
 inline constexpr const char* kCalibrationSchema = "metro.calibration/1";
 
+// Relative tolerance of the redundant fields on read: `matrix` against T K from `scale` and
+// `misalignment`, `sensitivity` against 1 / `scale`. Each element of T K is one product t_ij k_j
+// (t_ii = 1, t_ij = +-a misalignment term, imu_model.hpp) and 1 / k one quotient: the writer
+// rounds it once to binary64 (at most 2^-53 relative) and writes it exactly (shortest
+// round-trip or 17 significant digits, as nlohmann_json does); the reader rounds its own
+// product once more. An honest file is therefore within 2 * 2^-53; the tolerance is twice that,
+// 2^-51 = 4.4e-16, relative to the larger of the two values (so a zero must be written as 0).
+inline constexpr double kRedundantRelTolerance = 0x1p-51;
+
 nlohmann::json CalibrationToJson(const Calibration& calibration);
-// Errors name `file` and the JSON key that is missing or malformed.
+// Errors name `file` and the JSON key that is missing or malformed, and refuse redundant fields
+// that disagree beyond kRedundantRelTolerance, naming both (`matrix` and `scale` and
+// `misalignment`, or `sensitivity` and `scale`).
 Result<Calibration> CalibrationFromJson(const nlohmann::json& json, const std::string& file = "");
 // Pretty-printed JSON text (2-space indent, trailing newline).
 std::string FormatCalibrationJson(const Calibration& calibration);
