@@ -1,9 +1,12 @@
 #include "metro/core/file.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -61,6 +64,149 @@ TEST_CASE("File errors name the path", "[core]") {
   auto dir_write = WriteFileAtomically("/nonexistent-dir/out.json", "{}");
   REQUIRE_FALSE(dir_write.ok());
   CHECK(dir_write.error().ToString().find("/nonexistent-dir/out.json") != std::string::npos);
+}
+
+// A fresh directory for the output tests, removed at the end.
+struct OutDir {
+  OutDir() {
+    static int counter = 0;
+    path = "metro_file_out_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~OutDir() { std::filesystem::remove_all(path); }
+  std::string operator/(const std::string& name) const { return path + "/" + name; }
+  // Nothing but `names` in the directory (no temporary left behind).
+  size_t Entries() const {
+    size_t n = 0;
+    for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(path)) ++n;
+    return n;
+  }
+  std::string path;
+};
+
+std::string Contents(const std::string& path) {
+  Result<std::string> text = ReadFile(path);
+  REQUIRE(text.ok());
+  return text.value();
+}
+
+mode_t Mode(const std::string& path) {
+  struct stat st {};
+  REQUIRE(::stat(path.c_str(), &st) == 0);
+  return st.st_mode & 07777;
+}
+
+TEST_CASE("A replaced file keeps its mode; a new file gets 0666 minus the umask",
+          "[core][security]") {
+  OutDir d;
+  const std::string path = d / "report.json";
+  REQUIRE(WriteFileAtomically(path, "one").ok());
+  const mode_t mask = ::umask(022);
+  ::umask(mask);
+  CHECK(Mode(path) == (0666 & ~mask));
+  for (const mode_t mode : {mode_t{0600}, mode_t{0640}, mode_t{0604}}) {
+    REQUIRE(::chmod(path.c_str(), mode) == 0);
+    REQUIRE(WriteFileAtomically(path, "two").ok());
+    CHECK(Mode(path) == mode);
+  }
+  CHECK(Contents(path) == "two");
+  CHECK(d.Entries() == 1);
+}
+
+TEST_CASE("An output name of 254 and 255 characters can be written and replaced",
+          "[core][security]") {
+  OutDir d;
+  for (const size_t length : {size_t{254}, size_t{255}}) {
+    const std::string path = d / std::string(length, 'n');
+    INFO(length);
+    REQUIRE(WriteFileAtomically(path, "a").ok());
+    REQUIRE(WriteFileAtomically(path, "b").ok());
+    CHECK(Contents(path) == "b");
+  }
+  CHECK(d.Entries() == 2);
+}
+
+TEST_CASE("Outputs refuse devices, FIFOs, directories and /dev; the file is untouched",
+          "[core][security]") {
+  OutDir d;
+  const std::string fifo = d / "fifo";
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  const std::string tail =
+      ": metro writes an output to a new file and renames it into place, which would replace "
+      "it; name a regular file (or - for stdout, redirected where you want it)";
+  struct Case {
+    std::string path, what;
+  };
+  for (const Case& c :
+       {Case{"/dev/null", "is a character device"}, Case{"/dev/full", "is a character device"},
+        Case{fifo, "is a FIFO (named pipe)"}, Case{d.path, "is a directory"},
+        Case{"/dev/shm/metro_never_written", "is in /dev"},
+        Case{"/proc/self/metro", "is in /proc"}}) {
+    INFO(c.path);
+    Status s = CheckReplaceableFile(c.path);
+    REQUIRE_FALSE(s.ok());
+    CHECK(s.error().message == c.path + " " + c.what + tail);
+    Status w = WriteFileAtomically(c.path, "x");
+    REQUIRE_FALSE(w.ok());
+    CHECK(w.error().message == s.error().message);
+  }
+  struct stat st {};
+  REQUIRE(::stat("/dev/null", &st) == 0);
+  CHECK(S_ISCHR(st.st_mode));
+  REQUIRE(::stat(fifo.c_str(), &st) == 0);
+  CHECK(S_ISFIFO(st.st_mode));
+  Status missing = CheckReplaceableFile(d / "no/such/x.json");
+  REQUIRE_FALSE(missing.ok());
+  CHECK(missing.error().message == d / "no/such/x.json" + ": the directory " + d / "no/such" +
+                                       " does not exist: create it first");
+  CHECK(d.Entries() == 1);
+}
+
+TEST_CASE("WriteFilesAtomically replaces every file or none", "[core][security]") {
+  OutDir d;
+  const std::string json = d / "r.json", html = d / "r.html";
+  REQUIRE(WriteFileAtomically(json, "old json").ok());
+  REQUIRE(WriteFileAtomically(html, "old html").ok());
+  // The second cannot be written (its directory is gone): the first is not replaced.
+  Status s = WriteFilesAtomically({{json, "new json"}, {d / "gone/r.html", "new html"}});
+  REQUIRE_FALSE(s.ok());
+  CHECK(Contents(json) == "old json");
+  CHECK(d.Entries() == 2);  // No temporary left.
+  REQUIRE(WriteFilesAtomically({{json, "new json"}, {html, "new html"}}).ok());
+  CHECK(Contents(json) == "new json");
+  CHECK(Contents(html) == "new html");
+  CHECK(d.Entries() == 2);
+}
+
+TEST_CASE("IsSameFile sees through symlinks, hard links, and paths not written yet",
+          "[core][security]") {
+  namespace fs = std::filesystem;
+  OutDir d;
+  const std::string file = d / "f.json";
+  REQUIRE(WriteFileAtomically(file, "x").ok());
+  fs::create_symlink(fs::absolute(file), d / "link.json");
+  fs::create_hard_link(file, d / "hard.json");
+  CHECK(IsSameFile(file, d / "link.json"));
+  CHECK(IsSameFile(d / "hard.json", d / "link.json"));
+  CHECK_FALSE(IsSameFile(file, d / "other.json"));
+  fs::create_directories(d / "sub");
+  fs::create_directory_symlink(fs::absolute(d / "sub"), d / "sublink");
+  CHECK(IsSameFile(d / "sub/new.json", d / "sublink/../sub/./new.json"));
+  CHECK(IsSameFile(d / "sub/new.json", d / "sublink/new.json"));
+  CHECK_FALSE(IsSameFile(d / "sub/new.json", d / "sub/new.html"));
+}
+
+TEST_CASE("Writing through a symlink replaces its target and keeps the link", "[core][security]") {
+  namespace fs = std::filesystem;
+  OutDir d;
+  fs::create_directories(d / "archive");
+  const std::string target = d / "archive/r1.json";
+  REQUIRE(WriteFileAtomically(target, "old").ok());
+  fs::create_symlink(fs::absolute(target), d / "latest.json");
+  REQUIRE(WriteFileAtomically(d / "latest.json", "new").ok());
+  CHECK(fs::is_symlink(d / "latest.json"));
+  CHECK(Contents(target) == "new");
 }
 
 }  // namespace

@@ -1,0 +1,473 @@
+// Issue #20 parts 2, 4 and 5 through the programs (docs/security.md): outputs never
+// destroy (devices, FIFOs, directories, inputs, each other, modes, long names, stdout
+// errors, JSON and HTML together), batch owns its folder, and data never reaches the
+// terminal raw.
+#include <sys/file.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "metro/blob/blob.hpp"
+#include "metro/core/file.hpp"
+#include "metro/report/batch.hpp"
+#include "support/run_program.hpp"
+
+namespace metro {
+namespace {
+
+namespace fs = std::filesystem;
+using Run = testing::ProgramRun;
+
+const std::string kDatasets = std::string(METRO_SOURCE_DIR) + "/datasets/";
+const std::string kChest = kDatasets + "static_chest.csv";
+const std::string kSweep = kDatasets + "table_sweep.csv";
+const std::string kBudget = kDatasets + "budgets/gum_h1_end_gauge.json";
+
+Run Characterize(const std::string& args) {
+  return testing::RunProgram(METRO_CHARACTERIZE_EXE, args);
+}
+
+// A fresh directory in the build's working directory, removed at the end.
+struct Dir {
+  Dir() {
+    static int counter = 0;
+    path = "metro_outputs_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~Dir() { fs::remove_all(path); }
+  std::string operator/(const std::string& name) const { return path + "/" + name; }
+  std::string path;
+};
+
+void Put(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+std::string Get(const std::string& path) {
+  Result<std::string> text = ReadFile(path);
+  REQUIRE(text.ok());
+  return text.value();
+}
+
+mode_t TypeOf(const std::string& path) {
+  struct stat st {};
+  REQUIRE(::stat(path.c_str(), &st) == 0);
+  return st.st_mode & S_IFMT;
+}
+
+mode_t ModeOf(const std::string& path) {
+  struct stat st {};
+  REQUIRE(::stat(path.c_str(), &st) == 0);
+  return st.st_mode & 07777;
+}
+
+// No temporary (.metro-XXXXXX) left in `dir`.
+bool NoTemporaries(const std::string& dir) {
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(".metro-", 0) == 0 && name != kBatchLockName) return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------- 2. outputs never destroy
+
+TEST_CASE("Outputs: -o on a device is refused before any work (exit 2), the device stays",
+          "[apps][unix][security]") {
+  const std::string expected =
+      "error: -o /dev/full is a character device: metro writes an output to a new file and "
+      "renames it into place, which would replace it; name a regular file (or - for stdout, "
+      "redirected where you want it)\n";
+  for (const std::string& args : std::vector<std::string>{
+           kChest + " --type-a -o /dev/full", "convert " + kChest + " -o /dev/full",
+           "simulate -o /dev/full", "budget " + kBudget + " -o /dev/full",
+           kSweep + " --accuracy -o /dev/full"}) {
+    INFO(args);
+    Run r = Characterize(args);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == expected);
+    CHECK(r.out.empty());
+  }
+  Run r = Characterize(kChest + " --type-a -o x.json --html /dev/null");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: --html /dev/null is a character device") == 0);
+  r = Characterize("report " + kDatasets + "golden/calibration_sensor2.json --html /dev/zero");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: --html /dev/zero is a character device") == 0);
+  CHECK(TypeOf("/dev/full") == S_IFCHR);
+  CHECK(TypeOf("/dev/null") == S_IFCHR);
+  CHECK_FALSE(fs::exists("x.json"));
+}
+
+TEST_CASE("Outputs: a FIFO, a socket, a directory or a path in /dev is refused (exit 2)",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string fifo = d / "out.fifo";
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  Run r = Characterize(kChest + " --type-a -o " + fifo);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: -o " + fifo + " is a FIFO (named pipe): metro writes") == 0);
+  CHECK(TypeOf(fifo) == S_IFIFO);
+
+  const std::string sock = d / "out.sock";
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", sock.c_str());
+  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0);
+  r = Characterize("convert " + kChest + " -o " + sock);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: -o " + sock + " is a socket") == 0);
+  CHECK(TypeOf(sock) == S_IFSOCK);
+  ::close(fd);
+
+  r = Characterize("simulate -o " + d.path);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: -o " + d.path + " is a directory") == 0);
+  CHECK(fs::is_directory(d.path));
+
+  r = Characterize("simulate -o /dev/metro_no_such_file");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: -o /dev/metro_no_such_file is in /dev") == 0);
+  r = Characterize("simulate -o " + d.path + "/no/such/dir/x.csv");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: -o " + d.path + "/no/such/dir/x.csv: the directory " + d.path +
+                     "/no/such/dir does not exist: create it first\n");
+  CHECK(NoTemporaries(d.path));
+}
+
+TEST_CASE("Outputs: no output is an input of the command (registry, budget, reference-u)",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string reg = d / "reg.json";
+  const std::string reg_text = "{\"2\": \"Chest\"}\n";
+  Put(reg, reg_text);
+  Run r = Characterize(kChest + " --type-a --tag-registry " + reg + " -o " + reg);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: -o " + reg +
+                     " is the input file: refusing to overwrite it (--tag-registry " + reg +
+                     "); name another output file\n");
+  CHECK(Get(reg) == reg_text);
+  // Through a symlink and a hard link.
+  fs::create_symlink(fs::absolute(reg), d / "reg_link.json");
+  fs::create_hard_link(reg, d / "reg_hard.json");
+  for (const std::string& out : {d / "reg_link.json", d / "reg_hard.json"}) {
+    r = Characterize(kChest + " --type-a --tag-registry " + reg + " --html " + out);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("error: --html " + out + " is the input file") == 0);
+  }
+  CHECK(Get(reg) == reg_text);
+
+  const std::string ru = d / "ru.json";
+  const std::string ru_text = Get(kDatasets + "budgets/tag_static_angle.json");
+  Put(ru, ru_text);
+  r = Characterize(kSweep + " --accuracy --reference-u " + ru + " -o " + ru);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: -o " + ru +
+                     " is the input file: refusing to overwrite it (--reference-u " + ru +
+                     "); name another output file\n");
+  CHECK(Get(ru) == ru_text);
+  // The budget through a symlink.
+  fs::create_symlink(fs::absolute(ru), d / "ru_link.json");
+  r = Characterize("budget " + ru + " -o " + d / "ru_link.json");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("(BUDGET " + ru + ")") != std::string::npos);
+  CHECK(Get(ru) == ru_text);
+  CHECK(NoTemporaries(d.path));
+}
+
+TEST_CASE("Outputs: two outputs of one command never name the same file",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string x = d / "x";
+  Run r = Characterize(kChest + " --type-a -o " + x + " --html " + x);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: --html and -o name the same file (-o " + x + ", --html " + x +
+                     "): give each output its own file\n");
+  const std::string a = d / "a.json";
+  r = Characterize(kChest + " --type-a --allan -o " + a + " --allan-csv " + a);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: --allan-csv and -o name the same file") == 0);
+  // Not yet existing, but the same file: through a symlinked directory and `..`.
+  fs::create_directories(d / "sub");
+  fs::create_directory_symlink(fs::absolute(d / "sub"), d / "sublink");
+  r = Characterize(kChest + " --type-a -o " + d / "sub/r.json" + " --html " +
+                   d / "sublink/../sublink/r.json");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: --html and -o name the same file") == 0);
+  r = Characterize("simulate --kind table --sensor 2 -o " + x + " --reference-output " + x);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: --reference-output and -o name the same file") == 0);
+  CHECK_FALSE(fs::exists(x));
+  CHECK_FALSE(fs::exists(a));
+  CHECK_FALSE(fs::exists(d / "sub/r.json"));
+}
+
+TEST_CASE("Outputs: a replaced report keeps its mode, and a 254-character name works",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string out = d / "report.json";
+  Put(out, "old\n");
+  REQUIRE(::chmod(out.c_str(), 0600) == 0);
+  Run r = Characterize(kChest + " --type-a -q -o " + out);
+  REQUIRE(r.exit_code == 0);
+  CHECK(ModeOf(out) == 0600);
+  CHECK(Get(out).find("\"schema\": \"metro.report/1\"") != std::string::npos);
+  REQUIRE(::chmod(out.c_str(), 0640) == 0);
+  r = Characterize("convert " + kChest + " -q -o " + out);
+  REQUIRE(r.exit_code == 0);
+  CHECK(ModeOf(out) == 0640);
+
+  const std::string long_name = d / (std::string(249, 'r') + ".json");  // 254 characters.
+  REQUIRE(fs::path(long_name).filename().string().size() == 254);
+  r = Characterize(kChest + " --type-a -q -o " + long_name);
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(fs::exists(long_name));
+  r = Characterize(kChest + " --type-a -q -o " + long_name);  // Replacing it too.
+  CHECK(r.exit_code == 0);
+  CHECK(NoTemporaries(d.path));
+}
+
+TEST_CASE("Outputs: a failed write to stdout is exit 1 with a message, in every command",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string expected_start = "error: cannot write to stdout: ";
+  for (const std::string& args : std::vector<std::string>{
+           kChest + " --type-a -q", kChest + " --type-a -o " + d / "r.json", "budget " + kBudget,
+           "convert " + kChest + " -o -", "simulate -o -", "--version",
+           "report " + kDatasets + "golden/calibration_sensor2.json --html -"}) {
+    INFO(args);
+    Run r = Characterize(args + " > /dev/full");
+    CHECK(r.exit_code == 1);
+    CHECK(r.err.rfind(expected_start, 0) == 0);
+  }
+#ifdef METRO_CALIBRATE_EXE
+  const std::string cal = kDatasets + "golden/calibration_sensor2.json";
+  for (const std::string& args : std::vector<std::string>{
+           "report " + cal, "inspect " + kDatasets + "golden/tag_sensor2.bin", "--version",
+           "blob " + cal + " --sensor 2 --device-id 9abcdef012345678 -o " + d / "t.bin" +
+               " --hex -"}) {
+    INFO(args);
+    Run r = testing::RunProgram(METRO_CALIBRATE_EXE, args + " > /dev/full");
+    CHECK(r.exit_code == 1);
+    CHECK(r.err.find(expected_start) != std::string::npos);
+  }
+#endif
+}
+
+TEST_CASE("Outputs: the JSON and the HTML of one run are replaced together or not at all",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string json = d / "r.json", html = d / "r.html";
+  Put(json, "old json\n");
+  Put(html, "old html\n");
+  // A file size limit (SIGXFSZ ignored, so write() fails with EFBIG) that the JSON report
+  // (about 10 KB) fits in and the HTML (hundreds of KB of plots) does not: the disk is full
+  // when the second file is written.
+  Run r = Characterize(kChest + " --type-a -q -o " + json + " --html " + html);
+  REQUIRE(r.exit_code == 0);
+  const auto json_size = fs::file_size(json), html_size = fs::file_size(html);
+  REQUIRE(json_size < 60 * 1024);
+  REQUIRE(html_size > 120 * 1024);
+  Put(json, "old json\n");
+  Put(html, "old html\n");
+  r = testing::RunProgram(
+      "trap '' XFSZ; ulimit -f 160; exec " + std::string(METRO_CHARACTERIZE_EXE),
+      kChest + " --type-a -q -o " + json + " --html " + html);
+  CHECK(r.exit_code == 1);
+  CHECK(r.err == "error: cannot write '" + html + "': File too large\n");
+  CHECK(Get(json) == "old json\n");
+  CHECK(Get(html) == "old html\n");
+  CHECK(NoTemporaries(d.path));
+}
+
+#ifdef METRO_CALIBRATE_EXE
+TEST_CASE("Outputs: calibrate blob -o x --hex x, -o /dev/full and fit/apply/report inputs",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string cal = kDatasets + "golden/calibration_sensor2.json";
+  const std::string args = "blob " + cal + " --sensor 2 --device-id 9abcdef012345678 ";
+  const std::string bb = d / "bb.bin";
+  Run r = testing::RunProgram(METRO_CALIBRATE_EXE, args + "-o " + bb + " --hex " + bb);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: --hex and -o name the same file (-o " + bb + ", --hex " + bb +
+                     "): give each output its own file\n");
+  CHECK_FALSE(fs::exists(bb));
+  r = testing::RunProgram(METRO_CALIBRATE_EXE, args + "-o /dev/full");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: -o /dev/full is a character device") == 0);
+  CHECK(TypeOf("/dev/full") == S_IFCHR);
+
+  const std::string copy = d / "cal.json";
+  Put(copy, Get(cal));
+  fs::create_hard_link(copy, d / "cal_hard.json");
+  r = testing::RunProgram(METRO_CALIBRATE_EXE, "report " + copy + " --html " + d / "cal_hard.json");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: --html " + d / "cal_hard.json" +
+                     " is the input file: refusing to overwrite it (CALIBRATION " + copy +
+                     "); name another output file\n");
+  r = testing::RunProgram(METRO_CALIBRATE_EXE,
+                          "apply " + copy + " " + kChest + " -o " + d / "cal_hard.json");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("(CALIBRATION " + copy + ")") != std::string::npos);
+  r = testing::RunProgram(METRO_CALIBRATE_EXE, "fit " + kChest + " -o /dev/null");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: -o /dev/null is a character device") == 0);
+  r = testing::RunProgram(METRO_CALIBRATE_EXE,
+                          "fit " + kChest + " -o " + d / "c.json" + " --html " + d / "c.json");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: --html and -o name the same file") == 0);
+  CHECK(Get(copy) == Get(cal));
+}
+#endif
+
+// ----------------------------------------------------------------- 4. batch owns its folder
+
+TEST_CASE("Batch: a second run into a locked folder refuses, naming the holder",
+          "[apps][batch][security]") {
+  Dir d;
+  fs::create_directories(d / "out");
+  Result<FileLock> held = LockBatchDirectory(d / "out");
+  REQUIRE(held.ok());
+  Run r = Characterize("batch " + kChest + " -o " + d / "out");
+  CHECK(r.exit_code == 2);
+  const std::string prefix = "error: " + d / "out" +
+                             ": the output directory is in use by another batch (pid " +
+                             std::to_string(::getpid()) + " on ";
+  CHECK(r.err.rfind(prefix, 0) == 0);
+  CHECK(r.err.find(", since ") != std::string::npos);
+  CHECK(r.err.find("): wait for it to finish or give another -o\n") != std::string::npos);
+  CHECK_FALSE(fs::exists(d / "out/summary.json"));
+  // Released: the next run goes ahead.
+  { Result<FileLock> released = std::move(held); }
+}
+
+TEST_CASE("Batch: its own outputs are never read as sessions (batch DIR -o DIR twice)",
+          "[apps][batch][security]") {
+  Dir d;
+  fs::copy_file(kChest, d / "chest.csv");
+  fs::copy_file(kDatasets + "static_imu_100hz.csv", d / "imu.csv");
+  Run first = Characterize("batch " + d.path + " -o " + d.path);
+  INFO(first.err);
+  REQUIRE(first.exit_code == 0);
+  Run second = Characterize("batch " + d.path + " -o " + d.path);
+  INFO(second.err);
+  CHECK(second.exit_code == 0);
+  CHECK(second.err.find("note: skipping " + d / "summary.txt" +
+                        ": written by batch into its output directory\n") != std::string::npos);
+  const nlohmann::json summary = nlohmann::json::parse(Get(d / "summary.json"));
+  CHECK(summary["sessions_total"] == 2);
+  CHECK(summary["sessions_failed"] == 0);
+  // A pattern that also matches the reports and the summaries.
+  Run third = Characterize("batch '" + d.path + "/*' -o " + d.path);
+  CHECK(third.exit_code == 0);
+  CHECK(nlohmann::json::parse(Get(d / "summary.json"))["sessions_total"] == 2);
+}
+
+TEST_CASE("Batch: symlinked inputs are followed, broken ones and FIFOs reported, never skipped",
+          "[apps][batch][security]") {
+  Dir d;
+  fs::create_directories(d / "in");
+  fs::copy_file(kChest, d / "chest.csv");
+  fs::create_symlink(fs::absolute(d / "chest.csv"), d / "in/linked.csv");
+  fs::create_symlink(fs::absolute(d / "missing.csv"), d / "in/dangling.csv");
+  REQUIRE(::mkfifo((d / "in/pipe.csv").c_str(), 0600) == 0);
+  Run r = Characterize("batch " + d / "in" + " -o " + d / "out");
+  INFO(r.err);
+  CHECK(r.exit_code == 1);
+  CHECK(fs::exists(d / "out/linked.report.json"));
+  CHECK(r.err.find("error: " + d / "in/dangling.csv" + ": a symlink to " +
+                   fs::absolute(d / "missing.csv").string() +
+                   " (No such file or directory): fix or remove the link\n") != std::string::npos);
+  CHECK(r.err.find("error: " + d / "in/pipe.csv" +
+                   ": is a FIFO, not a session file (batch reads named files)\n") !=
+        std::string::npos);
+  const nlohmann::json summary = nlohmann::json::parse(Get(d / "out/summary.json"));
+  CHECK(summary["sessions_total"] == 3);
+  CHECK(summary["sessions_failed"] == 2);
+}
+
+// ------------------------------------------------------------------- 5. terminal safety
+
+bool HasRawControl(const std::string& text) {
+  for (char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if ((u < 0x20 && c != '\n') || u == 0x7F) return true;
+  }
+  return false;
+}
+
+TEST_CASE("Terminal: control characters in a file name are escaped in errors and notes",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string name = "evil\x1b]0;owned\x07\nerror: fake.csv";
+  const std::string path = d / name;
+  Put(path, "t_s,pitch_deg\n0,1\n1,oops\n");
+  Run r = Characterize("'" + path + "' --type-a -o -");
+  CHECK(r.exit_code == 2);
+  CHECK_FALSE(HasRawControl(r.err));
+  CHECK(r.err == "error: " + d.path + "/evil\\x1b]0;owned\\x07\\nerror: fake.csv:3:2: " +
+                     r.err.substr(r.err.find(":3:2: ") + 6));
+  // One line: the newline in the name cannot forge a second "error:" line.
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+}
+
+TEST_CASE("Terminal: tag-registry names and CSV header names are escaped",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string reg = d / "reg.json";
+  Put(reg, "{\"2\": \"Chest\\u001b[2J\\u009b31m\"}\n");
+  Run r = Characterize(kChest + " --type-a --tag-registry " + reg + " -o " + d / "r.json");
+  REQUIRE(r.exit_code == 0);
+  CHECK_FALSE(HasRawControl(r.out));
+  CHECK(r.out.find("Chest\\x1b[2J\\u009b31m") != std::string::npos);
+  CHECK(r.out.find("\xc2\x9b") == std::string::npos);
+  // The JSON keeps the name as given (JSON escapes it itself).
+  CHECK(nlohmann::json::parse(Get(d / "r.json"))["sensors"][0]["name"] ==
+        "Chest\x1b[2J\xc2\x9b"
+        "31m");
+
+  const std::string csv = d / "h.csv";
+  Put(csv, "t_s,pitch\x1b[31m_deg\n0,1\n1,2\n2,x\n");
+  r = Characterize(csv + " --type-a -o -");
+  CHECK(r.exit_code == 2);
+  INFO(r.err);
+  CHECK_FALSE(HasRawControl(r.err));
+  CHECK(r.err.find("\\x1b[31m") != std::string::npos);
+}
+
+#ifdef METRO_CALIBRATE_EXE
+TEST_CASE("Terminal: blob metadata is escaped by calibrate inspect", "[apps][unix][security]") {
+  Dir d;
+  std::string bin = Get(kDatasets + "golden/tag_sensor2.bin");
+  const size_t at = bin.find(std::string("tag2\0", 5));
+  REQUIRE(at != std::string::npos);
+  bin.replace(at, 7, std::string("\x1b[2J\x1b]0", 7));
+  const uint32_t crc = blob::Crc32(reinterpret_cast<const uint8_t*>(bin.data()), bin.size() - 4);
+  for (int i = 0; i < 4; ++i) bin[bin.size() - 4 + i] = static_cast<char>((crc >> (8 * i)) & 0xFF);
+  const std::string path = d / "evil.bin";
+  Put(path, bin);
+  Run r = testing::RunProgram(METRO_CALIBRATE_EXE, "inspect " + path);
+  INFO(r.out);
+  CHECK_FALSE(HasRawControl(r.out));
+  CHECK_FALSE(HasRawControl(r.err));
+  CHECK(r.out.find("\\x1b[2J\\x1b]0") != std::string::npos);
+}
+#endif
+
+}  // namespace
+}  // namespace metro
