@@ -16,10 +16,9 @@
 namespace metro::blob {
 namespace {
 
-// METRO_FW_E_SENSOR (firmware/include/metro_fw/error.h): the validator refused the blob's
-// sensors after its section walk passed, so info locates the sections and the gate below can
-// say which sensor and why.
-constexpr int kFwSensorRefused = -14;
+// METRO_FW_E_SENSOR: the validator refused the blob's sensors after its section walk passed,
+// so info locates the sections and the gate below can say which sensor and why.
+constexpr int kFwSensorRefused = METRO_FW_E_SENSOR;
 
 bool SectionsLocated(int code) { return code == METRO_FW_OK || code == kFwSensorRefused; }
 
