@@ -7,6 +7,7 @@
 #include <exception>
 
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 
 namespace metro {
 
@@ -554,13 +555,9 @@ std::string FormatCalibrationJson(const Calibration& calibration) {
 Result<Calibration> LoadCalibration(const std::string& path) {
   Result<std::string> text = ReadFile(path);
   if (!text.ok()) return text.error();
-  json j;
-  try {
-    j = json::parse(text.value());
-  } catch (const std::exception& e) {
-    return MakeError(path, 0, std::string("not valid JSON: ") + e.what());
-  }
-  return CalibrationFromJson(j, path);
+  Result<json> j = ParseJsonText(text.value(), path);
+  if (!j.ok()) return j.error();
+  return CalibrationFromJson(j.value(), path);
 }
 
 std::string FormatCalibrationReport(const Calibration& cal) {

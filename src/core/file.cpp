@@ -15,6 +15,7 @@
 #include <random>
 #include <vector>
 
+#include "core/mapping_guard.hpp"
 #include "metro/core/check.hpp"
 
 namespace metro {
@@ -238,7 +239,11 @@ Result<std::string> ReadFile(const std::string& path) {
     if (n == 0) break;
     out.append(buffer, static_cast<size_t>(n));
   }
+  // A regular file written to or truncated while it was read gives no text at all.
+  const std::string changed =
+      S_ISREG(st.st_mode) ? internal::ChangedWhileRead(fd, internal::IdentityOf(st), false) : "";
   ::close(fd);
+  if (!changed.empty()) return MakeError(path, 0, changed);
   return out;
 }
 
@@ -292,16 +297,24 @@ Result<std::string> Sha256File(const std::string& path) {
     const size_t size = static_cast<size_t>(st.st_size);
     void* map = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
     if (map != MAP_FAILED) {
-      ::close(fd);
       ::madvise(map, size, MADV_SEQUENTIAL);
       constexpr size_t kChunkBytes = size_t{4} << 20;  // A multiple of the page size.
       char* data = static_cast<char*>(map);
       size_t released = 0;
-      std::string digest = Sha256Hex(std::string_view(data, size), kChunkBytes, [&](size_t hashed) {
-        ::madvise(data + released, hashed - released, MADV_DONTNEED);
-        released = hashed;
-      });
+      std::string digest;
+      std::string changed;
+      {
+        // A file truncated while it is hashed reads as zeros, not SIGBUS, and is an error.
+        internal::MappingGuard guard(map, size);
+        digest = Sha256Hex(std::string_view(data, size), kChunkBytes, [&](size_t hashed) {
+          ::madvise(data + released, hashed - released, MADV_DONTNEED);
+          released = hashed;
+        });
+        changed = internal::ChangedWhileRead(fd, internal::IdentityOf(st), guard.Shrunk());
+      }
       ::munmap(map, size);
+      ::close(fd);
+      if (!changed.empty()) return MakeError(path, 0, changed);
       return digest;
     }
   }

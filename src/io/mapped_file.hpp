@@ -1,4 +1,6 @@
-// Private: a read-only memory map of a whole file, for the session loaders.
+// Private: a read-only memory map of a whole file, for the session loaders. The mapping is
+// guarded (core/mapping_guard.hpp): a file truncated while it is read gives zeros, not
+// SIGBUS, and `ChangedSinceOpen` tells the loader to discard what it read.
 #pragma once
 
 #include <fcntl.h>
@@ -8,8 +10,10 @@
 
 #include <cerrno>
 #include <cstring>
+#include <memory>
 #include <string>
 
+#include "core/mapping_guard.hpp"
 #include "metro/core/status.hpp"
 
 namespace metro::internal {
@@ -20,7 +24,9 @@ class MappedFile {
   MappedFile(const MappedFile&) = delete;
   MappedFile& operator=(const MappedFile&) = delete;
   ~MappedFile() {
+    guard_.reset();
     if (data_ != nullptr) ::munmap(const_cast<char*>(data_), size_);
+    if (fd_ >= 0) ::close(fd_);
   }
 
   Status Open(const std::string& path) {
@@ -39,10 +45,20 @@ class MappedFile {
         return MakeError(path, 0, std::string("cannot map: ") + std::strerror(errno));
       }
       data_ = static_cast<const char*>(p);
+      guard_ = std::make_unique<MappingGuard>(p, size_);
       ::madvise(p, size_, MADV_SEQUENTIAL);
     }
-    ::close(fd);
+    // Kept open to compare the file after reading with the file as opened.
+    fd_ = fd;
+    identity_ = IdentityOf(st);
     return Status::Ok();
+  }
+
+  // "" when the file is as it was opened; else what changed (or that it shrank) while it
+  // was read (ChangedWhileRead). Call after reading, before trusting what was read.
+  std::string ChangedSinceOpen() const {
+    if (fd_ < 0) return "";
+    return ChangedWhileRead(fd_, identity_, guard_ != nullptr && guard_->Shrunk());
   }
 
   // Drops the pages from the one holding `begin` to the last one wholly before `end`
@@ -61,6 +77,9 @@ class MappedFile {
  private:
   const char* data_ = nullptr;
   size_t size_ = 0;
+  int fd_ = -1;
+  FileIdentity identity_;
+  std::unique_ptr<MappingGuard> guard_;
 };
 
 }  // namespace metro::internal

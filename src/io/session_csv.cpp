@@ -84,6 +84,11 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
                            [&release](size_t hashed) { release.Hashed(hashed); });
       },
       [&] { session = LoadMappedCsv(path, file, options, format, allow_clean_path, &release); });
+  // A file truncated or rewritten while it was read: whatever was parsed (or whatever error
+  // its zeros caused) is discarded for the one error that says what happened.
+  if (const std::string changed = file.ChangedSinceOpen(); !changed.empty()) {
+    return MakeError(path, 0, changed);
+  }
   if (session->ok() && hash) session->value().sha256 = std::move(digest);
   return *std::move(session);
 }

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 
 namespace metro {
 
@@ -20,12 +21,9 @@ TagRegistry TagRegistry::Default() {
 Result<TagRegistry> TagRegistry::Load(const std::string& path) {
   auto text = ReadFile(path);
   if (!text.ok()) return text.error();
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text.value());
-  } catch (const nlohmann::json::parse_error& e) {
-    return MakeError(path, 0, fmt::format("not valid JSON: {}", e.what()));
-  }
+  Result<nlohmann::json> parsed = ParseJsonText(text.value(), path);
+  if (!parsed.ok()) return parsed.error();
+  const nlohmann::json& j = parsed.value();
   if (!j.is_object()) {
     return MakeError(path, 0, R"(expected a JSON object {"1": "Forehead", ...})");
   }

@@ -14,6 +14,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/angles.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/noise/allan.hpp"
@@ -711,13 +712,9 @@ Result<std::string> RenderJsonFileHtml(const std::string& json_path,
                                        const HtmlReportOptions& options) {
   Result<std::string> text = ReadFile(json_path);
   if (!text.ok()) return text.error();
-  ordered_json document;
-  try {
-    document = ordered_json::parse(text.value());
-  } catch (const nlohmann::json::parse_error& e) {
-    return MakeError(json_path, 0, fmt::format("not valid JSON: {}", e.what()));
-  }
-  return RenderJsonHtml(document, json_path, session_path, options);
+  Result<ordered_json> document = ParseOrderedJsonText(text.value(), json_path);
+  if (!document.ok()) return document.error();
+  return RenderJsonHtml(document.value(), json_path, session_path, options);
 }
 
 }  // namespace metro

@@ -174,7 +174,36 @@ TEST_CASE("Bad report input is refused with a message", "[report][html]") {
   Result<std::string> r = RenderJsonFileHtml(not_json.path());
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().file == not_json.path());
-  CHECK(r.error().message.rfind("not valid JSON: ", 0) == 0);
+  CHECK(r.error().message.rfind("invalid JSON: ", 0) == 0);
+  // The parser takes 'n' for the start of null and stops at the 'o' that breaks it: column 3,
+  // as nlohmann::json's own message says.
+  CHECK(r.error().line == 1);
+  CHECK(r.error().column == 3);
+  CHECK(r.error().message.find("line 1, column 3") != std::string::npos);
+
+  // A number beyond a double's range made nlohmann::json throw out_of_range, which nothing
+  // caught: the process terminated (issue #20, found by fuzz/report_fuzz). Now an input
+  // error at the number.
+  testing::TempFile huge("{\"schema\": \"metro.report/1\",\n \"x\": [1, -1e999]}", ".json");
+  r = RenderJsonFileHtml(huge.path());
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().file == huge.path());
+  CHECK(r.error().line == 2);
+  CHECK(r.error().column == 11);
+  CHECK(r.error().message.find("number overflow") != std::string::npos);
+
+  // 70,000 levels of nesting crashed the page's recursive walk (issue #20): refused at the
+  // bracket that opens level 65.
+  testing::TempFile deep(std::string(70000, '[') + std::string(70000, ']'), ".json");
+  r = RenderJsonFileHtml(deep.path());
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().ToString() ==
+        deep.path() +
+            ":1:65: JSON nested deeper than 64 levels; metro's files nest a few levels "
+            "(docs/report-schema.md, docs/budget-format.md)");
+  // 64 levels are JSON like any other (a generic page).
+  testing::TempFile deep64(std::string(64, '[') + std::string(64, ']'), ".json");
+  CHECK(RenderJsonFileHtml(deep64.path()).ok());
 
   r = RenderJsonFileHtml("no_such_report.json");
   REQUIRE_FALSE(r.ok());

@@ -68,7 +68,7 @@ TEST_CASE("characterize --html writes the JSON and the HTML report", "[apps][rep
   CHECK(r.err.find("refusing to overwrite") != std::string::npos);
   r = Characterize("report " + kDatasets + "static_chest.csv --html " + html2);
   CHECK(r.exit_code == 2);
-  CHECK(r.err.find("not valid JSON") != std::string::npos);
+  CHECK(r.err.find("invalid JSON") != std::string::npos);
 }
 
 TEST_CASE("characterize batch exits 1 and names the broken session", "[apps][report]") {

@@ -1,0 +1,25 @@
+// JSON text from users' files (budgets, tag registries, calibration.json, reports): parsed
+// with a nesting limit, errors at file:line:column.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+
+#include "metro/core/status.hpp"
+
+namespace metro {
+
+// Deeper nesting than any metro file has (a report nests 6 levels) and far below what
+// would exhaust the stack of code that walks a document recursively (a 70,000-level
+// document crashed `characterize report`).
+inline constexpr int kMaxJsonDepth = 64;
+
+// `text` as JSON, or an error `path:line:column: invalid JSON: ...` (the nlohmann parser's
+// message), or `path:line:column: JSON nested deeper than 64 levels ...` at the bracket
+// that goes beyond the limit, or `path:line:column: invalid JSON: ... number overflow ...` at
+// a number too large for a double (1e999). Never throws.
+Result<nlohmann::json> ParseJsonText(std::string_view text, const std::string& path);
+Result<nlohmann::ordered_json> ParseOrderedJsonText(std::string_view text, const std::string& path);
+
+}  // namespace metro

@@ -1,0 +1,126 @@
+#include "metro/core/json_text.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+
+namespace metro {
+namespace {
+
+// 1-based line and column of byte `offset` of `text`.
+std::pair<int64_t, int64_t> LineColumn(std::string_view text, size_t offset) {
+  int64_t line = 1;
+  int64_t column = 1;
+  for (size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return {line, column};
+}
+
+// The offset of the first '[' or '{' (outside strings) that opens level kMaxJsonDepth + 1,
+// or npos. One pass, no recursion.
+size_t TooDeepAt(std::string_view text) {
+  int depth = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth) return i;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return std::string_view::npos;
+}
+
+// The offset of the first number (outside strings) too large for a double, which
+// nlohmann::json refuses with out_of_range 406 and no position; npos when there is none.
+size_t OverflowingNumberAt(std::string_view text) {
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+      continue;
+    }
+    if (c != '-' && (c < '0' || c > '9')) continue;
+    size_t end = i;
+    while (end < text.size() &&
+           std::string_view("+-.0123456789eE").find(text[end]) != std::string_view::npos) {
+      ++end;
+    }
+    const std::string token(text.substr(i, end - i));
+    errno = 0;
+    char* stop = nullptr;
+    const double value = std::strtod(token.c_str(), &stop);
+    if (errno == ERANGE && (value == HUGE_VAL || value == -HUGE_VAL)) return i;
+    i = end - 1;
+  }
+  return std::string_view::npos;
+}
+
+template <class Json>
+Result<Json> Parse(std::string_view text, const std::string& path) {
+  if (const size_t at = TooDeepAt(text); at != std::string_view::npos) {
+    const auto [line, column] = LineColumn(text, at);
+    return MakeError(path, line, column,
+                     fmt::format("JSON nested deeper than {} levels; metro's files nest a few "
+                                 "levels (docs/report-schema.md, docs/budget-format.md)",
+                                 kMaxJsonDepth));
+  }
+  try {
+    return Json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // e.byte is the 1-based position of the byte the parser stopped at.
+    const auto [line, column] = LineColumn(text, e.byte > 0 ? e.byte - 1 : 0);
+    return MakeError(path, line, column, std::string("invalid JSON: ") + e.what());
+  } catch (const nlohmann::json::exception& e) {
+    // out_of_range 406: a number beyond a double's range (1e999); it carries no position.
+    const size_t at = OverflowingNumberAt(text);
+    if (at == std::string_view::npos) return MakeError(path + ": invalid JSON: " + e.what());
+    const auto [line, column] = LineColumn(text, at);
+    return MakeError(path, line, column,
+                     std::string("invalid JSON: ") + e.what() +
+                         "; numbers must be finite doubles (at most about 1.8e308)");
+  }
+}
+
+}  // namespace
+
+Result<nlohmann::json> ParseJsonText(std::string_view text, const std::string& path) {
+  return Parse<nlohmann::json>(text, path);
+}
+
+Result<nlohmann::ordered_json> ParseOrderedJsonText(std::string_view text,
+                                                    const std::string& path) {
+  return Parse<nlohmann::ordered_json>(text, path);
+}
+
+}  // namespace metro

@@ -1,0 +1,47 @@
+#include "metro/core/json_text.hpp"
+
+#include <catch2/catch.hpp>
+#include <string>
+
+namespace metro {
+namespace {
+
+TEST_CASE("JSON text: errors at line and column, never an exception", "[core]") {
+  // nlohmann::json's own position for a syntax error: it stops at the 'o' of "no".
+  Result<nlohmann::json> r = ParseJsonText("{\n  \"a\": no}", "f.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().file == "f.json");
+  CHECK(r.error().line == 2);
+  CHECK(r.error().column == 9);
+  CHECK(r.error().message.rfind("invalid JSON: ", 0) == 0);
+
+  // A number past DBL_MAX (1.7976931348623157e308) threw out_of_range 406, which terminated
+  // the budget, registry, calibration and report readers (issue #20, fuzz/crashes/README.md).
+  for (const char* huge : {"1e999", "-1e999", "1.8e308", "7.90436972062e8841"}) {
+    const std::string text = std::string("{\"u\": [1.5, \"1e999\",\n   ") + huge + "]}";
+    r = ParseJsonText(text, "b.json");
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().line == 2);
+    CHECK(r.error().column == 4);
+    CHECK(r.error().message.find("number overflow parsing") != std::string::npos);
+    CHECK(ParseOrderedJsonText(text, "b.json").error().ToString() == r.error().ToString());
+  }
+  // The largest double and the smallest subnormal are numbers like any other.
+  r = ParseJsonText("[1.7976931348623157e308, 4.9e-324, -1.7976931348623157e308]", "ok.json");
+  REQUIRE(r.ok());
+  CHECK(r.value()[0].get<double>() == 1.7976931348623157e308);
+
+  // Nesting: 64 levels parse; the bracket opening level 65 is named, brackets inside strings
+  // do not count.
+  CHECK(ParseJsonText(std::string(64, '[') + std::string(64, ']'), "d.json").ok());
+  const std::string quoted = "[\"[[[[\\\"[[\", " + std::string(63, '[') + std::string(64, ']');
+  CHECK(ParseJsonText(quoted, "q.json").ok());
+  r = ParseJsonText("\n" + std::string(65, '{'), "deep.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().line == 2);
+  CHECK(r.error().column == 65);
+  CHECK(r.error().message.rfind("JSON nested deeper than 64 levels", 0) == 0);
+}
+
+}  // namespace
+}  // namespace metro
