@@ -346,6 +346,15 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   double p[kDirectLags + 1];
   CentredLagSums(values, n, first, &s1, p);
   const double s2 = p[0];
+  if (!std::isfinite(s2) || !std::isfinite(s1)) {
+    // Deviations beyond about 1e154 square past the largest double: the variance (and so u)
+    // cannot be formed; a NaN or infinite u is never reported.
+    return MakeError(fmt::format(
+        "the sum of squared deviations of the {} observations overflows double precision "
+        "(deviations from the mean of order 1e154 or more); express the quantity in a larger "
+        "unit",
+        n));
+  }
   TypeAResult r;
   r.n = static_cast<int64_t>(n);
   r.mean = first + s1 / dn;

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 #include "uncertainty/model.hpp"
 
 namespace metro {
@@ -526,8 +527,16 @@ bool McOptions::IsValid(std::string* why) const {
     *why = "trials must be at least 2";
     return false;
   }
-  if (!adaptive && trials > 500000000) {
+  // The same cap for both: the adaptive run keeps every trial too (JCGM 101 7.9), so a
+  // max_trials beyond it would grow until memory runs out.
+  constexpr int64_t kMaxStoredTrials = 500000000;
+  if (!adaptive && trials > kMaxStoredTrials) {
     *why = "trials must be at most 5e8 (memory: 8 bytes per trial)";
+    return false;
+  }
+  if (adaptive && max_trials > kMaxStoredTrials) {
+    *why = "max_trials must be at most 5e8 (memory: 8 bytes per trial), got " +
+           std::to_string(max_trials);
     return false;
   }
   if (ndig < 1 || ndig > 6) {
@@ -653,22 +662,9 @@ Status ValidateBudget(const Budget& budget) {
 
 Result<Budget> ParseBudget(const std::string& json_text, const std::string& budget_path,
                            const SessionQuantityResolver& resolver) {
-  json root;
-  try {
-    root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    int64_t line = 1;
-    int64_t column = 1;
-    for (size_t i = 0; i + 1 < e.byte && i < json_text.size(); ++i) {
-      if (json_text[i] == '\n') {
-        ++line;
-        column = 1;
-      } else {
-        ++column;
-      }
-    }
-    return MakeError(budget_path, line, column, std::string("invalid JSON: ") + e.what());
-  }
+  Result<json> parsed = ParseJsonText(json_text, budget_path);
+  if (!parsed.ok()) return parsed.error();
+  json root = std::move(parsed).value();
   if (!root.is_object()) return MakeError(budget_path, 0, "a budget must be a JSON object");
   Budget budget;
   budget.file = budget_path;

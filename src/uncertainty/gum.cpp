@@ -121,6 +121,14 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
   for (size_t i = 0; i < n; ++i) {
     for (size_t j = 0; j < n; ++j) variance += c[i] * c[j] * u[i] * u[j] * r[i][j];
   }
+  if (!std::isfinite(variance)) {
+    // A c_i u_i of order 1e154 or more squares past the largest double: no u is reported
+    // rather than an infinite or NaN one (issue #20).
+    return MakeError(budget.file, 0,
+                     "the combined variance sum c_i c_j u_i u_j r_ij overflows double precision "
+                     "(a contribution |c_i| u_i of order 1e154 or more); express the measurand "
+                     "and inputs in larger units");
+  }
   if (variance < 0.0) variance = 0.0;  // Rounding only: R is positive definite.
   result.u_first_order = std::sqrt(variance);
 

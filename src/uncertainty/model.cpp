@@ -1,5 +1,6 @@
 #include "uncertainty/model.hpp"
 
+#include <fmt/format.h>
 #include <muParser.h>
 
 #include <cmath>
@@ -374,6 +375,22 @@ Result<MeasurementModel> MeasurementModel::FromExpression(const std::string& exp
                        "digits or '_'");
     }
   }
+  // A model is one expression without side effects: muparser's assignment (`x=5`, which
+  // would overwrite an input and report y = 5 +- 0) is refused; ==, <=, >= and != compare.
+  for (size_t i = 0; i < expression.size(); ++i) {
+    if (expression[i] != '=') continue;
+    const char before = i > 0 ? expression[i - 1] : '\0';
+    const char after = i + 1 < expression.size() ? expression[i + 1] : '\0';
+    if (after == '=') {
+      ++i;  // ==
+      continue;
+    }
+    if (before == '<' || before == '>' || before == '!') continue;
+    return MakeError(fmt::format(
+        "model '{}': '=' at position {} assigns; a model is one expression of its inputs (no "
+        "assignment: write the right-hand side alone, or == to compare)",
+        expression, i + 1));
+  }
   // Pass 1: find identifiers that are not inputs (muparser calls the factory for them).
   std::pair<std::vector<std::string>, std::deque<double>> unknown;
   try {
@@ -386,6 +403,15 @@ Result<MeasurementModel> MeasurementModel::FromExpression(const std::string& exp
     probe.SetVarFactory(CollectUndefined, &unknown);
     probe.SetExpr(expression);
     probe.GetUsedVar();
+    if (unknown.first.empty()) {
+      probe.Eval();
+      if (probe.GetNumResults() > 1) {
+        return MakeError(fmt::format(
+            "model '{}': {} comma-separated expressions; a model is one expression (commas "
+            "only between a function's arguments, e.g. max(a, b))",
+            expression, probe.GetNumResults()));
+      }
+    }
   } catch (const mu::Parser::exception_type& e) {
     const std::string token = e.GetToken();
     return MakeError("model '" + expression + "': " + e.GetMsg() +

@@ -291,6 +291,19 @@ TEST_CASE("Type A rejects too few or non-finite observations", "[stats][type_a]"
   auto r4 = EvaluateTypeA(huge.data(), huge.size());
   REQUIRE_FALSE(r4.ok());
   CHECK(r4.error().message == "the sum of the 3 observations overflows double precision");
+  // A finite sum whose squared deviations overflow (issue #20: u = inf, then NaN, exit 0).
+  const std::vector<double> wide = {1e308, -1e308, 1e308, -1e308};
+  auto r5 = EvaluateTypeA(wide.data(), wide.size());
+  REQUIRE_FALSE(r5.ok());
+  CHECK(r5.error().message.rfind("the sum of squared deviations of the 4 observations "
+                                 "overflows double precision",
+                                 0) == 0);
+  // Deviations of 1e150 still square below the largest double: evaluated, exactly.
+  const std::vector<double> large = {1e150, -1e150, 1e150, -1e150};
+  auto r6 = EvaluateTypeA(large.data(), large.size());
+  REQUIRE(r6.ok());
+  CHECK(r6.value().mean == 0.0);
+  CHECK(r6.value().std == Approx(std::sqrt(4.0 / 3.0) * 1e150).epsilon(1e-14));
 }
 
 }  // namespace

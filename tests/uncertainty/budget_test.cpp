@@ -171,6 +171,33 @@ TEST_CASE("Bad input: undefined name in the model", "[uncertainty][budget]") {
               "input 'x': 'sensitivity' is only for budgets without a model");
 }
 
+TEST_CASE("Bad input: a model that assigns or has several results", "[uncertainty][budget]") {
+  // muparser would evaluate `x=5` by overwriting x: y = 5 +- 0 (issue #20).
+  ExpectError(P(R"({"name": "x", "value": 2, "u": 1})", "", "x=5"),
+              "model 'x=5': '=' at position 2 assigns; a model is one expression");
+  ExpectError(P(R"({"name": "x", "value": 2, "u": 1})", "", "3*x = 5"),
+              "'=' at position 5 assigns");
+  ExpectError(P(R"({"name": "x", "value": 2, "u": 1})", "", "x, 2*x"),
+              "model 'x, 2*x': 2 comma-separated expressions; a model is one expression");
+  // Comparisons and function arguments stay legal.
+  for (const char* model :
+       {"x == 2 ? x : 0", "x >= 1 ? x : 0", "x <= 3 ? x : 0", "x != 1 ? x : 0", "max(x, 1)"}) {
+    INFO(model);
+    auto b = P(R"({"name": "x", "value": 2, "u": 1})", "", model);
+    CHECK(b.ok());
+  }
+}
+
+TEST_CASE("Bad input: max_trials beyond the memory cap", "[uncertainty][budget]") {
+  ExpectError(P(R"({"name": "x", "value": 0, "u": 1})",
+                R"(, "monte_carlo": {"adaptive": true, "max_trials": 1000000000000000})"),
+              "monte_carlo: max_trials must be at most 5e8 (memory: 8 bytes per trial), got "
+              "1000000000000000");
+  auto b = P(R"({"name": "x", "value": 0, "u": 1})",
+             R"(, "monte_carlo": {"adaptive": true, "max_trials": 500000000})");
+  CHECK(b.ok());
+}
+
 TEST_CASE("Bad input: model evaluating to NaN", "[uncertainty][budget]") {
   ExpectError(P(R"({"name": "x", "value": -1, "u": 0.1})", "", "sqrt(x)"),
               "model 'sqrt(x)' evaluates to");

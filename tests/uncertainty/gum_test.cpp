@@ -190,6 +190,23 @@ TEST_CASE("GUM H.3 thermometer correction at 30 degC", "[uncertainty][gum]") {
   CHECK(r.value().dof_eff == Approx(9.0));
 }
 
+TEST_CASE("A combined variance beyond double precision is an error, not u = inf",
+          "[uncertainty][gum]") {
+  // u = 1e308: u^2 overflows (issue #20: the report said u = inf, exit 0).
+  Budget huge = Parse(R"({"measurand": {"name": "y", "model": "x"},
+    "inputs": [{"name": "x", "value": 1.0, "u": 1e308}], "monte_carlo": false})");
+  auto r = EvaluateGum(huge);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().ToString().find("the combined variance sum c_i c_j u_i u_j r_ij overflows "
+                                  "double precision") != std::string::npos);
+  // u = 1e150 squares to 1e300: evaluated exactly.
+  Budget large = Parse(R"({"measurand": {"name": "y", "model": "x"},
+    "inputs": [{"name": "x", "value": 1.0, "u": 1e150}], "monte_carlo": false})");
+  auto ok = EvaluateGum(large);
+  REQUIRE(ok.ok());
+  CHECK(ok.value().u == Approx(1e150).epsilon(1e-9));
+}
+
 TEST_CASE("Budget table without a model and the dof policies", "[uncertainty][gum]") {
   // y = 2 a + b: u^2 = 4 u_a^2 + u_b^2 + 2 * 2 * r u_a u_b.
   const std::string text = R"({"measurand": {"name": "y"},
