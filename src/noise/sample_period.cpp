@@ -77,8 +77,13 @@ Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
       TimingGap gap;
       gap.line = line[i + 1];
       gap.dt_s = dt[i];
-      gap.missing_samples = std::max<int64_t>(1, std::llround(dt[i] / median) - 1);
-      period.missing_samples += gap.missing_samples;
+      // Counted in double and saturated: a gap of 1e300 s (a corrupt timestamp) must not
+      // overflow the int64 count (UBSan: signed overflow, issue #20).
+      constexpr double kMaxCount = 1e18;
+      const double missing = std::min(kMaxCount, std::max(1.0, std::round(dt[i] / median) - 1.0));
+      gap.missing_samples = static_cast<int64_t>(missing);
+      period.missing_samples = static_cast<int64_t>(
+          std::min(kMaxCount, static_cast<double>(period.missing_samples) + missing));
       period.gaps.push_back(gap);
       gap_lines.push_back(gap.line);
       continue;

@@ -8,6 +8,8 @@
 #include <pcg_random.hpp>
 #include <random>
 
+#include "metro/sim/limits.hpp"
+
 namespace metro {
 namespace {
 
@@ -59,9 +61,29 @@ bool StaticSimulationOptions::IsValid(std::string* why) const {
       return fail(fmt::format("sensor {} cannot both send and never connect", s));
     }
   }
-  if (!(duration_s > 0.0) || !std::isfinite(duration_s)) return fail("duration_s must be > 0");
-  if (!(rate_hz >= 0.0) || !std::isfinite(rate_hz)) return fail("rate_hz must be >= 0");
-  if (!(frame_period_s > 0.0)) return fail("frame_period_s must be > 0");
+  if (!(duration_s > 0.0 && duration_s <= kSimMaxDurationS)) {
+    return fail(
+        fmt::format("duration_s must be in (0, {:g}] s, got {:g}", kSimMaxDurationS, duration_s));
+  }
+  if (!(rate_hz >= 0.0 && rate_hz <= kSimMaxRateHz)) {
+    return fail(
+        fmt::format("rate_hz must be in [0, {:g}] Hz (0: one sample per receiver "
+                    "frame), got {:g}",
+                    kSimMaxRateHz, rate_hz));
+  }
+  if (!(frame_period_s >= kSimMinFramePeriodS && frame_period_s <= kSimMaxFramePeriodS)) {
+    return fail(fmt::format("frame_period_s must be in [{:g}, {:g}] s, got {:g}",
+                            kSimMinFramePeriodS, kSimMaxFramePeriodS, frame_period_s));
+  }
+  const double per_s = rate_hz > 0.0 ? rate_hz : 1.0 / frame_period_s;
+  const double observations =
+      duration_s * per_s * static_cast<double>(sensors.size() + never_sensors.size());
+  if (observations > kSimMaxObservations) {
+    return fail(
+        fmt::format("{:.3g} observations (duration x rate x tags) is more than the "
+                    "simulator writes ({:g}); shorten the session or lower the rate",
+                    observations, kSimMaxObservations));
+  }
   if (!(noise_ar1 >= 0.0 && noise_ar1 < 1.0)) return fail("noise_ar1 must be in [0, 1)");
   if (!(packet_loss >= 0.0 && packet_loss < 1.0)) return fail("packet_loss must be in [0, 1)");
   if (!(transient_tau_s > 0.0)) return fail("transient_tau_s must be > 0");

@@ -8,6 +8,8 @@
 #include <pcg_random.hpp>
 #include <random>
 
+#include "metro/sim/limits.hpp"
+
 namespace metro {
 namespace {
 
@@ -114,25 +116,61 @@ bool TableSimulationOptions::IsValid(std::string* why) const {
     return false;
   };
   if (sensor < 1 || sensor > 255) return fail(fmt::format("sensor {} is not in 1..255", sensor));
-  if (!(step_deg > 0.0) || !std::isfinite(step_deg)) return fail("step_deg must be > 0");
+  if (!(step_deg >= kSimMinTableStepDeg) || !std::isfinite(step_deg)) {
+    return fail(
+        fmt::format("step_deg must be at least {:g} deg, got {:g}", kSimMinTableStepDeg, step_deg));
+  }
   if (!(end_deg > start_deg) || !std::isfinite(start_deg) || !std::isfinite(end_deg)) {
     return fail("end_deg must be greater than start_deg");
   }
   if (end_deg - start_deg > 360.0) return fail("the sweep may span at most 360 deg");
+  const double plateaus = std::floor((end_deg - start_deg) / step_deg) + 1.0;
+  if (plateaus > kSimMaxTablePlateaus) {
+    return fail(
+        fmt::format("{:.0f} plateaus per sweep ((end - start) / step + 1) is more than "
+                    "{}; take a larger step_deg",
+                    plateaus, kSimMaxTablePlateaus));
+  }
   if (sweeps < 1 || sweeps > 100) return fail("sweeps must be in 1..100");
   if (!(dwell_s > 0.0) || !std::isfinite(dwell_s)) return fail("dwell_s must be > 0");
   if (!(move_rate_dps > 0.0) || !std::isfinite(move_rate_dps)) {
     return fail("move_rate_dps must be > 0");
   }
-  if (!(rate_hz >= 0.0) || !std::isfinite(rate_hz)) return fail("rate_hz must be >= 0");
-  if (!(frame_period_s > 0.0)) return fail("frame_period_s must be > 0");
+  if (!(rate_hz >= 0.0 && rate_hz <= kSimMaxRateHz)) {
+    return fail(
+        fmt::format("rate_hz must be in [0, {:g}] Hz (0: one sample per receiver "
+                    "frame), got {:g}",
+                    kSimMaxRateHz, rate_hz));
+  }
+  if (!(frame_period_s >= kSimMinFramePeriodS && frame_period_s <= kSimMaxFramePeriodS)) {
+    return fail(fmt::format("frame_period_s must be in [{:g}, {:g}] s, got {:g}",
+                            kSimMinFramePeriodS, kSimMaxFramePeriodS, frame_period_s));
+  }
+  // Up and down, each plateau's dwell and the moves between them.
+  const double duration_s =
+      2.0 * sweeps * (plateaus * dwell_s + (end_deg - start_deg) / move_rate_dps);
+  if (duration_s > kSimMaxDurationS) {
+    return fail(
+        fmt::format("the sweeps last {:.3g} s, more than {:g} s; fewer plateaus, "
+                    "sweeps or a shorter dwell_s",
+                    duration_s, kSimMaxDurationS));
+  }
+  const double per_s = rate_hz > 0.0 ? rate_hz : 1.0 / frame_period_s;
+  if (duration_s * std::max(per_s, reference_rate_hz) > kSimMaxObservations) {
+    return fail(
+        fmt::format("{:.3g} observations is more than the simulator writes ({:g}); "
+                    "lower the rate or shorten the sweeps",
+                    duration_s * std::max(per_s, reference_rate_hz), kSimMaxObservations));
+  }
   if (!(noise_std_deg >= 0.0)) return fail("noise_std_deg must be >= 0");
   if (!(noise_ar1 >= 0.0 && noise_ar1 < 1.0)) return fail("noise_ar1 must be in [0, 1)");
   if (!(lag_tau_s >= 0.0)) return fail("lag_tau_s must be >= 0");
   if (!(quantization_deg >= 0.0)) return fail("quantization_deg must be >= 0");
   if (!(reference_resolution_deg >= 0.0)) return fail("reference_resolution_deg must be >= 0");
   if (!(packet_loss >= 0.0 && packet_loss < 1.0)) return fail("packet_loss must be in [0, 1)");
-  if (!(reference_rate_hz > 0.0)) return fail("reference_rate_hz must be > 0");
+  if (!(reference_rate_hz > 0.0 && reference_rate_hz <= kSimMaxRateHz)) {
+    return fail(fmt::format("reference_rate_hz must be in (0, {:g}] Hz", kSimMaxRateHz));
+  }
   if (!std::isfinite(reference_clock_offset_s)) return fail("reference_clock_offset_s");
   for (double v : {offset_deg, scale_error, cos1_deg, sin1_deg, hysteresis_deg, tilt_deg,
                    base_deg[0], base_deg[1]}) {

@@ -52,6 +52,25 @@ TEST_CASE("Sample period, jitter and gaps from timestamps", "[noise]") {
   CHECK(warned.value().warnings[0].rfind("line 105: gap of 0.4", 0) == 0);
 }
 
+TEST_CASE("Sample period of corrupt huge gaps saturates its counts", "[noise]") {
+  // 21 samples 1 s apart, then three 1e300 s jumps (a corrupt clock): the missing-sample
+  // count of each gap (1e300) and their sum saturate at 1e18 instead of overflowing int64
+  // (UBSan, issue #20).
+  std::vector<double> t;
+  std::vector<uint32_t> line;
+  for (int i = 0; i <= 20; ++i) t.push_back(i);
+  for (double v : {1e300, 2e300, 3e300}) t.push_back(v);
+  for (size_t i = 0; i < t.size(); ++i) line.push_back(static_cast<uint32_t>(i + 2));
+  SamplePeriodOptions allow;
+  allow.allow_gaps = true;
+  const Result<SamplePeriod> p = EstimateSamplePeriod(t, line, allow);
+  REQUIRE(p.ok());
+  CHECK(p.value().tau0_s == 1.0);
+  REQUIRE(p.value().gaps.size() == 3);
+  CHECK(p.value().gaps[0].missing_samples == 1000000000000000000);
+  CHECK(p.value().missing_samples == 1000000000000000000);
+}
+
 TEST_CASE("Sample period refuses resets, bad sizes and heavy jitter", "[noise]") {
   std::vector<double> t;
   std::vector<uint32_t> line;

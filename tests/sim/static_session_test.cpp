@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "metro/io/session_io.hpp"
+#include "metro/sim/table_session.hpp"
 #include "metro/stats/session_type_a.hpp"
 #include "support/temp_file.hpp"
 
@@ -108,6 +109,49 @@ TEST_CASE("Simulator options are validated", "[sim]") {
   o.packet_loss = 1.0;
   CHECK_FALSE(o.IsValid(&why));
   CHECK(why == "packet_loss must be in [0, 1)");
+}
+
+TEST_CASE("Simulator options beyond their limits are refused", "[sim]") {
+  // issue #20: --duration-s 1e12 wrote without limit; --table-step-deg 1e-9 crashed.
+  std::string why;
+  StaticSimulationOptions o;
+  o.duration_s = 1e12;
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK(why == "duration_s must be in (0, 1e+06] s, got 1e+12");
+  o.duration_s = 1e6;
+  o.rate_hz = 1000.0;
+  o.sensors = {1, 2};  // 2e9 observations.
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK(why.rfind("2e+09 observations (duration x rate x tags) is more than the simulator "
+                  "writes (1e+09)",
+                  0) == 0);
+  o.sensors = {1};  // 1e9: at the limit.
+  CHECK(o.IsValid(&why));
+  o.rate_hz = 2e4;
+  CHECK_FALSE(o.IsValid(&why));
+  CHECK(why.rfind("rate_hz must be in [0, 10000] Hz", 0) == 0);
+
+  TableSimulationOptions t;
+  REQUIRE(t.IsValid(&why));
+  t.step_deg = 1e-9;
+  CHECK_FALSE(t.IsValid(&why));
+  CHECK(why == "step_deg must be at least 0.001 deg, got 1e-09");
+  t.start_deg = -180.0;
+  t.end_deg = 180.0;
+  t.step_deg = 0.01;  // 36,001 plateaus.
+  CHECK_FALSE(t.IsValid(&why));
+  CHECK(why.rfind("36001 plateaus per sweep", 0) == 0);
+  t.step_deg = 0.05;  // About 7,200 plateaus of 20 s, 2 sweeps up and down: 576,000 s or more.
+  CHECK(t.IsValid(&why));
+  t.dwell_s = 100.0;  // 2 x 2 x (7201 x 100 + 360 / 20) = 2.88 M s.
+  CHECK_FALSE(t.IsValid(&why));
+  CHECK(why.rfind("the sweeps last 2.88e+06 s, more than 1e+06 s", 0) == 0);
+
+  // The loader's receiver frame period (convert --frame-period-s 1e307 wrote t_s = inf).
+  LoadOptions load;
+  load.frame_period_s = 1e307;
+  CHECK_FALSE(load.IsValid(&why));
+  CHECK(why == "frame_period_s must be in (0, 60] s, got 1e+307");
 }
 
 }  // namespace

@@ -1,0 +1,20 @@
+// What the simulators accept (docs/simulator.md, "Limits"): every session they write is
+// bounded, whatever the options.
+#pragma once
+
+namespace metro {
+
+// Length of a simulated session.
+inline constexpr double kSimMaxDurationS = 1e6;  // 11.6 days.
+// session.csv sample rate and the reference log's rate.
+inline constexpr double kSimMaxRateHz = 1e4;
+// Receiver frame period: the central's DELTAT is a 16-bit count of its 32768 Hz clock.
+inline constexpr double kSimMinFramePeriodS = 1e-3;
+inline constexpr double kSimMaxFramePeriodS = 65535.0 / 32768.0;
+// Observations in all (tags x samples): about 70 GB of session.csv.
+inline constexpr double kSimMaxObservations = 1e9;
+// Rotation table: plateaus per sweep, and the step between them.
+inline constexpr double kSimMinTableStepDeg = 1e-3;
+inline constexpr int kSimMaxTablePlateaus = 10000;
+
+}  // namespace metro
