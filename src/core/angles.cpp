@@ -11,7 +11,12 @@ constexpr double kDegPerRad = 180.0 / M_PI;
 }  // namespace
 
 EulerDeg EulerFromQuaternion(const Quaternion& q) {
-  const double w = q.w, x = q.x, y = q.y, z = q.z;
+  // The angles do not depend on the quaternion's scale (every term below is quadratic), so
+  // it is scaled by its largest component first: no product overflows (qw = 1e308) or
+  // underflows (1e-170).
+  const double m = std::max({std::fabs(q.w), std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
+  const double k = m > 0.0 && std::isfinite(m) ? 1.0 / m : 1.0;
+  const double w = q.w * k, x = q.x * k, y = q.y * k, z = q.z * k;
   const double norm2 = w * w + x * x + y * y + z * z;
   EulerDeg e;
   e.yaw_deg = std::atan2(2.0 * (x * y + w * z), w * w + x * x - y * y - z * z) * kDegPerRad;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <iterator>
+#include <limits>
 #include <new>
 #include <queue>
 #include <thread>
@@ -151,8 +152,14 @@ Session::~Session() {
 }
 
 bool LoadOptions::IsValid(std::string* why) const {
-  if (!(frame_period_s > 0.0) || !std::isfinite(frame_period_s)) {
-    if (why) *why = "frame_period_s must be a positive number of seconds";
+  // The central's DELTAT is a 16-bit count of its 32768 Hz clock (at most 2 s); a minute
+  // allows any other receiver and keeps the times of 2^32 frames far from overflow.
+  constexpr double kMaxFramePeriodS = 60.0;
+  if (!(frame_period_s > 0.0 && frame_period_s <= kMaxFramePeriodS)) {
+    if (why) {
+      *why = fmt::format("frame_period_s must be in (0, {:g}] s, got {:g}", kMaxFramePeriodS,
+                         frame_period_s);
+    }
     return false;
   }
   if (threads < 0) {
@@ -234,27 +241,46 @@ void AddTextOrUnknownColumn(const std::string& name, bool unknown, const std::st
   tag->text_columns.push_back(TextColumn{name, std::move(values)});
 }
 
-void DeriveEulerIfAbsent(Tag* tag) {
+std::string DeriveEulerIfAbsent(Tag* tag) {
   const Quantity* qw = tag->Find("qw");
   const Quantity* qx = tag->Find("qx");
   const Quantity* qy = tag->Find("qy");
   const Quantity* qz = tag->Find("qz");
-  if (!qw || !qx || !qy || !qz) return;
-  if (tag->Find("yaw_deg") || tag->Find("pitch_deg") || tag->Find("roll_deg")) return;
+  if (!qw || !qx || !qy || !qz) return "";
+  if (tag->Find("yaw_deg") || tag->Find("pitch_deg") || tag->Find("roll_deg")) return "";
   const size_t n = tag->size();
   Quantity yaw{"yaw_deg", "deg", QuantityOrigin::kDerived, std::vector<double>(n)};
   Quantity pitch{"pitch_deg", "deg", QuantityOrigin::kDerived, std::vector<double>(n)};
   Quantity roll{"roll_deg", "deg", QuantityOrigin::kDerived, std::vector<double>(n)};
+  // A rotation is a unit quaternion; norms far from 1 (raw fixed-point counts, a wrong
+  // column) are reported, from the largest-component scaling that cannot overflow.
+  constexpr double kNormTolerance = 0.01;
+  double min_norm = std::numeric_limits<double>::infinity();
+  double max_norm = 0.0;
+  size_t off = 0;
   for (size_t i = 0; i < n; ++i) {
-    const EulerDeg e =
-        EulerFromQuaternion({qw->values[i], qx->values[i], qy->values[i], qz->values[i]});
+    const Quaternion q{qw->values[i], qx->values[i], qy->values[i], qz->values[i]};
+    const EulerDeg e = EulerFromQuaternion(q);
     yaw.values[i] = e.yaw_deg;
     pitch.values[i] = e.pitch_deg;
     roll.values[i] = e.roll_deg;
+    const double m = std::max({std::fabs(q.w), std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
+    const double norm =
+        m > 0.0 ? m * std::hypot(std::hypot(q.w / m, q.x / m), std::hypot(q.y / m, q.z / m)) : 0.0;
+    if (!std::isfinite(norm)) continue;  // A missing value: no angle, nothing to check.
+    min_norm = std::min(min_norm, norm);
+    max_norm = std::max(max_norm, norm);
+    if (std::fabs(norm - 1.0) > kNormTolerance) ++off;
   }
   tag->quantities.push_back(std::move(yaw));
   tag->quantities.push_back(std::move(pitch));
   tag->quantities.push_back(std::move(roll));
+  if (off == 0) return "";
+  return fmt::format(
+      "sensor {}: {} of {} quaternions have a norm more than {:g} from 1 (norms {:.6g} to "
+      "{:.6g}): yaw_deg, pitch_deg and roll_deg are derived from their directions, but check "
+      "the quaternions' scale (raw Q30 counts?)",
+      tag->sensor, off, n, kNormTolerance, min_norm, max_norm);
 }
 
 }  // namespace internal
@@ -359,7 +385,11 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
   if (!session.ok()) return session;
   Session out = std::move(session).value();
   if (options.derive_euler) {
-    for (Tag& tag : out.tags) internal::DeriveEulerIfAbsent(&tag);
+    for (Tag& tag : out.tags) {
+      if (std::string w = internal::DeriveEulerIfAbsent(&tag); !w.empty()) {
+        out.input.warnings.push_back(std::move(w));
+      }
+    }
   }
   return out;
 }

@@ -94,6 +94,31 @@ TEST_CASE("Euler angles are derived from quaternions of thesis Listing 1", "[io]
   CHECK(s2.Find("roll_deg")->values[0] == Approx(1.361458).margin(5e-4));
 }
 
+TEST_CASE("Quaternions far from unit norm derive their angles and warn", "[io][csv]") {
+  // Row 1: thesis Listing 1's first quaternion scaled by 1e308 (its products overflowed:
+  // the angles came out 0); row 2: the same in Q30 counts (2^30 per unit); row 3: unit.
+  const double k = 1073741824.0;
+  auto r =
+      Load(fmt::format("t_s,qw,qx,qy,qz\n"
+                       "0,9.96276e307,7.8654e306,7.692e305,3.4479e306\n"
+                       "1,{},{},{},{}\n"
+                       "2,0.996276,0.078654,0.007692,0.034479\n",
+                       0.996276 * k, 0.078654 * k, 0.007692 * k, 0.034479 * k));
+  REQUIRE(r.ok());
+  const Tag& tag = r.value().tags[0];
+  for (size_t i = 0; i < 3; ++i) {
+    INFO("row " << i);
+    CHECK(tag.Find("yaw_deg")->values[i] == Approx(4.009102).margin(5e-4));
+    CHECK(tag.Find("pitch_deg")->values[i] == Approx(0.567438).margin(5e-4));
+    CHECK(tag.Find("roll_deg")->values[i] == Approx(9.047937).margin(5e-4));
+  }
+  REQUIRE(r.value().input.warnings.size() == 1);
+  CHECK(r.value().input.warnings[0].rfind(
+            "sensor 1: 2 of 3 quaternions have a norm more than 0.01 from 1 (norms 1 to "
+            "1e+308)",
+            0) == 0);
+}
+
 TEST_CASE("Euler angles in the file are not replaced", "[io][csv]") {
   auto r = Load("t_s,qw,qx,qy,qz,yaw_deg\n0,1,0,0,0,5\n");
   REQUIRE(r.ok());
