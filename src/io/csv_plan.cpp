@@ -716,6 +716,13 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
 
   // Stage 3: the columns.
   const std::vector<std::string> sources = SplitFields(header->text, dialect.delimiter);
+  if (sources.size() > kMaxSessionColumns) {
+    return MakeError(path, header->line_number,
+                     fmt::format("{} columns; metro reads at most {} (docs/formats.md, "
+                                 "\"Limits\"): write the columns you need to a new file, or "
+                                 "split it",
+                                 sources.size(), kMaxSessionColumns));
+  }
   dialect.quoted = header->text.find('"') != std::string::npos;
   std::map<std::string, int> seen;
   for (size_t f = 0; f < sources.size(); ++f) {

@@ -27,6 +27,10 @@
 
 namespace metro::internal {
 
+// Columns a session file may have (docs/formats.md, "Limits"): far more than any IMU log,
+// and few enough that a report's per-quantity work stays fast.
+inline constexpr size_t kMaxSessionColumns = 10000;
+
 struct HeaderLine {
   size_t line_begin = 0;
   size_t data_begin = 0;  // Offset just after the header line.

@@ -145,7 +145,9 @@ nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionType
       }
       if (w.settle_auto) jq["settle_samples"] = q.settle_samples;
       jq["warnings"] = q.warnings;
-      quantities[q.name] = jq;
+      // Appended without a lookup (operator[] of an ordered object is a linear search): a
+      // tag's quantity names are unique.
+      quantities.get_ref<json::object_t&>().emplace_back(q.name, std::move(jq));
     }
     s["quantities"] = quantities;
     s["warnings"] = t.warnings;

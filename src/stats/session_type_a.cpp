@@ -148,6 +148,9 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
 
   SessionTypeA out;
   std::vector<const Tag*> tags;
+  // source[k][slot]: the index in tags[k]->quantities of out.tags[k].quantities[slot] (no
+  // name lookups: a file of 10^4 columns would make them quadratic).
+  std::vector<std::vector<size_t>> source;
   for (const Tag& tag : session.tags) {
     if (!options.sensors.empty() && std::find(options.sensors.begin(), options.sensors.end(),
                                               tag.sensor) == options.sensors.end()) {
@@ -162,8 +165,11 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
       t.warnings.push_back(fmt::format("no fresh observations (frames {}, stale {}, never {})",
                                        tag.counts.frames, tag.counts.stale, tag.counts.never));
     }
-    for (const Quantity& q : tag.quantities) {
+    source.emplace_back();
+    for (size_t i = 0; i < tag.quantities.size(); ++i) {
+      const Quantity& q = tag.quantities[i];
       if (!Selected(options.quantities, q.name)) continue;
+      source.back().push_back(i);
       QuantityTypeA r;
       r.name = q.name;
       r.unit = q.unit;
@@ -180,8 +186,9 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
       TagTypeA& t = out.tags[k];
       size_t settle = 0;
       bool at_limit = false;
-      for (QuantityTypeA& r : t.quantities) {
-        const Quantity* q = tags[k]->Find(r.name);
+      for (size_t slot = 0; slot < t.quantities.size(); ++slot) {
+        QuantityTypeA& r = t.quantities[slot];
+        const Quantity* q = &tags[k]->quantities[source[k][slot]];
         int jumps = 0;
         size_t dropped = 0;
         const std::vector<double> x =
@@ -211,10 +218,7 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
   std::vector<Job> jobs;
   for (size_t k = 0; k < tags.size(); ++k) {
     for (size_t slot = 0; slot < out.tags[k].quantities.size(); ++slot) {
-      const std::string& name = out.tags[k].quantities[slot].name;
-      const auto it = std::find_if(tags[k]->quantities.begin(), tags[k]->quantities.end(),
-                                   [&](const Quantity& q) { return q.name == name; });
-      jobs.push_back({k, static_cast<size_t>(it - tags[k]->quantities.begin()), slot});
+      jobs.push_back({k, source[k][slot], slot});
     }
   }
   internal::ParallelFor(jobs.size(), options.threads, [&](size_t j) {

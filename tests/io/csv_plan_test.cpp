@@ -404,5 +404,25 @@ TEST_CASE("header names are inferred only when evident", "[io][csv][dialect]") {
   CHECK(internal::InferCanonicalName("gyro_x (m/s^2)") == "");  // Unit of another sensor.
 }
 
+TEST_CASE("A header of more than 10000 columns is refused", "[io][csv]") {
+  // issue #20: load and report grew quadratically (40,000 columns took 71 s).
+  auto text = [](int columns) {
+    std::string header = "t_s";
+    std::string row = "0";
+    for (int i = 1; i < columns; ++i) {
+      header += fmt::format(",c{}", i);
+      row += fmt::format(",{}", i);
+    }
+    return header + "\n" + row + "\n";
+  };
+  CHECK(ErrorOf(text(10001)) ==
+        "in.csv:1: 10001 columns; metro reads at most 10000 (docs/formats.md, \"Limits\"): "
+        "write the columns you need to a new file, or split it");
+  auto most = LoadText(text(10000));
+  REQUIRE(most.ok());
+  CHECK(most.value().tags[0].quantities.size() == 9999);
+  CHECK(Values(most.value(), "c9999")[0] == 9999.0);
+}
+
 }  // namespace
 }  // namespace metro
