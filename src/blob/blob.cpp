@@ -242,6 +242,11 @@ uint32_t Crc32(const uint8_t* data, size_t size) {
 Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
   std::string why;
   if (!c.IsValid(&why)) return MakeError("calibration blob: " + why);
+  if (!c.accel && !c.gyro) {
+    return MakeError(
+        "calibration blob: no sensor constants; a blob carries the accel constants, the gyro "
+        "constants or both (docs/calibration-blob.md section 2)");
+  }
   size_t total = kHeaderLen + kSectionHeaderLen + kMetaBodyLen + 4;
   if (c.accel) total += kSectionHeaderLen + kSensorBodyLen;
   if (c.gyro) total += kSectionHeaderLen + kSensorBodyLen;
@@ -282,7 +287,9 @@ Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
   const uint32_t id[2] = {static_cast<uint32_t>(c.device_id & 0xFFFFFFFFu),
                           static_cast<uint32_t>(c.device_id >> 32)};
   const int rc = metro_fw_blob_validate(metro_fw_buffer_read, &buf, buf.len, id, &info);
-  METRO_CHECK(rc == METRO_FW_OK);  // the writer follows the layout the validator checks
+  // The writer follows the layout the validator checks; the validator's one objection can be a
+  // sensor section outside the firmware's limits (METRO_FW_E_SENSOR), named below per sensor.
+  METRO_CHECK(rc == METRO_FW_OK || rc == METRO_FW_E_SENSOR);
   for (const auto& [sensor, kind, name] : {std::tuple{&c.accel, METRO_FW_ACCEL, "accel"},
                                            std::tuple{&c.gyro, METRO_FW_GYRO, "gyro"}}) {
     if (!*sensor) continue;
@@ -304,6 +311,10 @@ Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
                 "0.25 g / 60 deg/s and -40 <= t_valid_min_c < t_valid_max_c <= 85 are required"
               : "see docs/calibration-blob.md section 3.1"));
     }
+  }
+  if (rc != METRO_FW_OK) {
+    return MakeError("calibration blob: " + FirmwareErrorName(rc) + ": " +
+                     FirmwareErrorMessage(rc));
   }
   return b;
 }
