@@ -181,6 +181,10 @@ TEST_CASE("The writer refuses invalid contents with a message", "[blob]") {
   c = Contents();
   c.gyro->b0_lsb[2] = 8000.0;  // 61 deg/s
   check(c, "would not use the gyro constants (LIMITS)");
+  c = Contents();
+  c.accel.reset();
+  c.gyro.reset();  // the firmware's validator refuses it (METRO_FW_E_SENSOR)
+  check(c, "no sensor constants; a blob carries the accel constants, the gyro constants or both");
 }
 
 TEST_CASE("Device ids parse from 16 hex digits", "[blob]") {
