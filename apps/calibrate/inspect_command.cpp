@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "metro/blob/inspect.hpp"
+#include "metro/core/json_text.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -49,7 +50,7 @@ int RunInspect(const InspectCliOptions& c) {
     return kExitUsage;
   }
   if (c.json) {
-    fmt::print("{}\n", blob::InspectToJson(r.value()).dump(2));
+    fmt::print("{}\n", JsonText(blob::InspectToJson(r.value()), 2));
   } else {
     apps::PrintText(stdout, blob::FormatInspect(r.value()));  // Blob metadata is data.
   }

@@ -10,6 +10,7 @@
 #include "metro/accuracy/accuracy.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
@@ -164,7 +165,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     return kExitUsage;
   }
   const nlohmann::ordered_json report = AccuracyReportJson(result.value(), session.value(), ref);
-  const std::string json = report.dump(2) + "\n";
+  const std::string json = JsonText(report, 2) + "\n";
   std::string html;
   if (!in.html.empty()) {
     Result<std::string> rendered = RenderJsonHtml(report, in.output);

@@ -9,6 +9,7 @@
 #include "cli_progress.hpp"
 #include "commands.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
@@ -79,7 +80,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
     Note(fmt::format("note: --lenient skipped {} malformed rows (first at line {})\n",
                      analysis.session.rejected_rows, analysis.session.rejected_lines.front()));
   }
-  const std::string json = analysis.report.dump(2) + "\n";
+  const std::string json = JsonText(analysis.report, 2) + "\n";
   std::string html;
   if (!o.html.empty()) {
     Result<std::string> rendered = RenderSessionAnalysisHtml(analysis);

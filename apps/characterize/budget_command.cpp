@@ -6,6 +6,7 @@
 
 #include "cli_progress.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/uncertainty/budget_report.hpp"
 #include "output.hpp"
@@ -66,7 +67,7 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
     apps::PrintError(evaluation.error());
     return 2;
   }
-  const std::string json = BudgetReportJson(evaluation.value()).dump(2) + "\n";
+  const std::string json = JsonText(BudgetReportJson(evaluation.value()), 2) + "\n";
   // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.
   const std::string output = options.output_path.empty() ? "-" : options.output_path;
   const Status written = apps::WriteOutput(output, json);

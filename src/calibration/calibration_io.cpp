@@ -549,7 +549,7 @@ Result<Calibration> CalibrationFromJson(const json& j, const std::string& file) 
 }
 
 std::string FormatCalibrationJson(const Calibration& calibration) {
-  return CalibrationToJson(calibration).dump(2) + "\n";
+  return JsonText(CalibrationToJson(calibration), 2) + "\n";
 }
 
 Result<Calibration> LoadCalibration(const std::string& path) {

@@ -123,4 +123,12 @@ Result<nlohmann::ordered_json> ParseOrderedJsonText(std::string_view text,
   return Parse<nlohmann::ordered_json>(text, path);
 }
 
+std::string JsonText(const nlohmann::json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+std::string JsonText(const nlohmann::ordered_json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+}
+
 }  // namespace metro

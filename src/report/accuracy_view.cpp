@@ -11,6 +11,7 @@
 #include "html_common.hpp"
 #include "html_templates.hpp"
 #include "metro/accuracy/error_fit.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/report/svg_plot.hpp"
 #include "metro/uncertainty/gum.hpp"
@@ -307,7 +308,7 @@ mustache::data InputData(const ordered_json& report) {
     add("reference", fmt::format("the session's column {}", JsonString(ref, "column")));
   }
   const ordered_json& o = Member(report, "options");
-  add("options", o.empty() ? "" : o.dump());
+  add("options", o.empty() ? "" : JsonText(o));
   return rows;
 }
 
@@ -600,7 +601,7 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
 
   mustache::data warnings{mustache::data::type::list};
   for (const ordered_json& w : Member(report, "warnings")) {
-    warnings.push_back(mustache::data(w.is_string() ? w.get<std::string>() : w.dump()));
+    warnings.push_back(mustache::data(w.is_string() ? w.get<std::string>() : JsonText(w)));
   }
   data.set("warnings", warnings);
 

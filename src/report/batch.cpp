@@ -19,6 +19,7 @@
 
 #include "core/parallel.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
@@ -295,7 +296,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
       item.input_error = a.input_error;
     } else {
       item.report_path = report_path;
-      if (Status s = WriteFileAtomically(item.report_path, a.report.dump(2) + "\n"); !s.ok()) {
+      if (Status s = WriteFileAtomically(item.report_path, JsonText(a.report, 2) + "\n"); !s.ok()) {
         item.error = s.error();
         item.input_error = false;
         item.report_path.clear();
@@ -397,7 +398,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
   // Both or neither. Tag names and file names in the table are data: escaped, so that
   // `cat summary.txt` cannot drive a terminal.
   out.table = EscapeControlCharsKeepLines(table);
-  const std::string summary_json = summary.dump(2) + "\n";
+  const std::string summary_json = JsonText(summary, 2) + "\n";
   if (Status s = WriteFilesAtomically({{(dir / "summary.json").string(), summary_json},
                                        {(dir / "summary.txt").string(), out.table}});
       !s.ok()) {

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "html_templates.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/report/svg_plot.hpp"
 
@@ -35,7 +36,7 @@ constexpr int kMaxDepth = 6;
 std::string ScalarHtml(const ordered_json& v) {
   if (v.is_string()) return EscapeHtml(v.get<std::string>());
   if (v.is_number_float()) return EscapeHtml(ShortNumber(v.get<double>(), 10));
-  return EscapeHtml(v.dump());
+  return EscapeHtml(JsonText(v));
 }
 
 bool IsScalar(const ordered_json& v) { return !v.is_object() && !v.is_array(); }
@@ -96,7 +97,7 @@ std::string ArrayHtml(const ordered_json& arr, int depth) {
 
 std::string ValueHtml(const ordered_json& v, int depth) {
   if (IsScalar(v)) return ScalarHtml(v);
-  if (depth >= kMaxDepth) return "<code>" + EscapeHtml(v.dump()) + "</code>";
+  if (depth >= kMaxDepth) return "<code>" + EscapeHtml(JsonText(v)) + "</code>";
   return v.is_object() ? ObjectHtml(v, depth) : ArrayHtml(v, depth);
 }
 
@@ -114,7 +115,7 @@ double NumberAt(const ordered_json& a, size_t i) {
 
 std::string JsonString(const ordered_json& j, const char* key) {
   if (!j.is_object() || !j.contains(key) || j[key].is_null()) return "";
-  return j[key].is_string() ? j[key].get<std::string>() : j[key].dump();
+  return j[key].is_string() ? j[key].get<std::string>() : JsonText(j[key]);
 }
 
 std::string ShortNumber(double x, int significant) {

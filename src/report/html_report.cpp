@@ -370,7 +370,7 @@ std::string TimeText(const ordered_json& input) {
                          : fmt::format("column {} in {}", source, JsonString(t, "unit"));
   if (t.value("integer", false)) {
     text += fmt::format(", integer (exact), origin {} ns",
-                        t.contains("origin_ns") ? t["origin_ns"].dump() : "0");
+                        t.contains("origin_ns") ? JsonText(t["origin_ns"]) : "0");
   }
   if (t.contains("resolution_s")) {
     text +=
@@ -383,7 +383,7 @@ mustache::data StringList(const ordered_json& j, const char* key) {
   mustache::data list{mustache::data::type::list};
   if (j.contains(key) && j[key].is_array()) {
     for (const auto& v : j[key])
-      list.push_back(mustache::data(v.is_string() ? v.get<std::string>() : v.dump()));
+      list.push_back(mustache::data(v.is_string() ? v.get<std::string>() : JsonText(v)));
   }
   return list;
 }
@@ -448,7 +448,7 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
   }
   data.set("input_notes", StringList(input, "notes"));
   data.set("input_warnings", StringList(input, "warnings"));
-  data.set("window_options", report.contains("options") ? report["options"].dump() : "");
+  data.set("window_options", report.contains("options") ? JsonText(report["options"]) : "");
   data.set("session_ok", session != nullptr);
   data.set("session_note", session_note);
 
@@ -477,7 +477,8 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
     mustache::data sensor_warnings{mustache::data::type::list};
     if (s.contains("warnings")) {
       for (const auto& w : s["warnings"]) {
-        sensor_warnings.push_back(mustache::data(w.is_string() ? w.get<std::string>() : w.dump()));
+        sensor_warnings.push_back(
+            mustache::data(w.is_string() ? w.get<std::string>() : JsonText(w)));
       }
     }
     sd.set("warnings", sensor_warnings);
@@ -522,7 +523,7 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
         mustache::data qwarn{mustache::data::type::list};
         if (q.contains("warnings")) {
           for (const auto& w : q["warnings"]) {
-            qwarn.push_back(mustache::data(w.is_string() ? w.get<std::string>() : w.dump()));
+            qwarn.push_back(mustache::data(w.is_string() ? w.get<std::string>() : JsonText(w)));
           }
         }
         qd.set("warnings", qwarn);
@@ -686,7 +687,7 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
   }
   if (schema == kCalibrationSchema) {
     Result<Calibration> cal =
-        CalibrationFromJson(nlohmann::json::parse(document.dump()), json_path);
+        CalibrationFromJson(nlohmann::json::parse(JsonText(document)), json_path);
     if (!cal.ok()) return cal.error();
     ReloadedInputs inputs = ReloadCalibrationInputs(cal.value(), json_path);
     std::vector<const Session*> ptrs;

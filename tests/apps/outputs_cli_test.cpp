@@ -466,8 +466,39 @@ TEST_CASE("Terminal: blob metadata is escaped by calibrate inspect", "[apps][uni
   CHECK_FALSE(HasRawControl(r.out));
   CHECK_FALSE(HasRawControl(r.err));
   CHECK(r.out.find("\\x1b[2J\\x1b]0") != std::string::npos);
+
+  // Bytes that are not UTF-8 in the label: JSON cannot hold them, and nlohmann's dump threw
+  // type_error 316 (std::terminate). Each bad byte is written as U+FFFD.
+  bin.replace(at, 7, std::string("t\xe9g\xff\0\0\0", 7));
+  const uint32_t crc2 = blob::Crc32(reinterpret_cast<const uint8_t*>(bin.data()), bin.size() - 4);
+  for (int i = 0; i < 4; ++i) bin[bin.size() - 4 + i] = static_cast<char>((crc2 >> (8 * i)) & 0xFF);
+  Put(path, bin);
+  r = testing::RunProgram(METRO_CALIBRATE_EXE, "inspect --json " + path);
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(r.out.find("t\xef\xbf\xbdg\xef\xbf\xbd") != std::string::npos);
+  CHECK(nlohmann::json::parse(r.out)["ok"] == true);
 }
 #endif
+
+TEST_CASE("JSON outputs: a session named in Latin-1 is analysed, not a crash",
+          "[apps][unix][security]") {
+  // A file name (or a CSV header) is bytes; a report names it in JSON, which is UTF-8. The
+  // name \xe9 made nlohmann's dump throw type_error 316 and characterize abort (SIGABRT).
+  Dir d;
+  const std::string path = d / "l\xe9t.csv";
+  Put(path, "t_s,gx_dps\n0,1\n0.01,1.1\n0.02,1.2\n0.03,1.0\n");
+  Run r = Characterize("'" + path + "' --type-a -o " + d / "r.json");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const nlohmann::json report = nlohmann::json::parse(Get(d / "r.json"));
+  CHECK(report["input"]["path"].get<std::string>().find("l\xef\xbf\xbdt.csv") != std::string::npos);
+  // The batch summary and per-session reports too.
+  r = Characterize("batch " + d.path + " -o " + d / "out");
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(nlohmann::json::parse(Get(d / "out/summary.json"))["sessions_total"] == 1);
+}
 
 }  // namespace
 }  // namespace metro

@@ -22,4 +22,11 @@ inline constexpr int kMaxJsonDepth = 64;
 Result<nlohmann::json> ParseJsonText(std::string_view text, const std::string& path);
 Result<nlohmann::ordered_json> ParseOrderedJsonText(std::string_view text, const std::string& path);
 
+// `j` as JSON text (`indent` < 0: one line). Strings that are not valid UTF-8 (a file name
+// or a CSV header in Latin-1, a blob label) are written with U+FFFD in place of each bad
+// byte instead of throwing nlohmann's type_error 316, which terminated `characterize` for a
+// session named in Latin-1 (issue #20). Every JSON metro writes goes through here.
+std::string JsonText(const nlohmann::json& j, int indent = -1);
+std::string JsonText(const nlohmann::ordered_json& j, int indent = -1);
+
 }  // namespace metro
