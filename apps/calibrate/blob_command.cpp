@@ -89,8 +89,18 @@ int RunBlob(const BlobOptions& b) {
     return kExitUsage;
   }
   const std::vector<uint8_t>& v = bytes.value();
-  if (Status w = apps::WriteOutput(
-          b.output, std::string_view(reinterpret_cast<const char*>(v.data()), v.size()));
+  std::string hex;
+  if (!b.hex.empty()) {
+    Result<std::string> image = blob::WriteIntelHex(
+        blob::FactoryImage(v, slot_a.value(), slot_a.value() + blob::kPageSize));
+    METRO_CHECK(image.ok());  // two sorted, disjoint pages
+    hex = std::move(image).value();
+  }
+  // The blob and its HEX are replaced together or not at all: a .bin beside the HEX of an
+  // older blob would program another calibration than the one inspected.
+  if (Status w = apps::WriteOutputs(
+          {{b.output, std::string_view(reinterpret_cast<const char*>(v.data()), v.size())},
+           {b.hex, hex}});
       !w.ok()) {
     fmt::print(stderr, "error: {}\n", w.error().ToString());
     return kExitFailed;
@@ -100,13 +110,6 @@ int RunBlob(const BlobOptions& b) {
                          apps::IsStdio(b.output) ? "stdout" : b.output, v.size(), b.sensor,
                          blob::FormatDeviceId(id.value()), b.seq, crc));
   if (!b.hex.empty()) {
-    Result<std::string> hex = blob::WriteIntelHex(
-        blob::FactoryImage(v, slot_a.value(), slot_a.value() + blob::kPageSize));
-    METRO_CHECK(hex.ok());  // two sorted, disjoint pages
-    if (Status w = apps::WriteOutput(b.hex, hex.value()); !w.ok()) {
-      fmt::print(stderr, "error: {}\n", w.error().ToString());
-      return kExitFailed;
-    }
     apps::Note(fmt::format("wrote {}: blob at 0x{:05X} (slot A), tombstone at 0x{:05X} (slot B)\n",
                            apps::IsStdio(b.hex) ? "stdout" : b.hex, slot_a.value(),
                            slot_a.value() + blob::kPageSize));

@@ -332,6 +332,23 @@ TEST_CASE("Outputs: calibrate blob -o x --hex x, -o /dev/full and fit/apply/repo
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("error: --html and -o name the same file") == 0);
   CHECK(Get(copy) == Get(cal));
+
+  // The blob and its HEX are replaced together: with the .bin (540 bytes) fitting a 1 KiB
+  // file size limit and the HEX (two slot pages, about 6 KiB) not, the old pair stays.
+  const std::string bin = d / "t.bin", hex = d / "t.hex";
+  r = testing::RunProgram(METRO_CALIBRATE_EXE, args + "--seq 3 -o " + bin + " --hex " + hex);
+  REQUIRE(r.exit_code == 0);
+  REQUIRE(fs::file_size(bin) < 1024);
+  REQUIRE(fs::file_size(hex) > 1024);
+  Put(bin, "old bin\n");
+  Put(hex, "old hex\n");
+  r = testing::RunProgram("trap '' XFSZ; ulimit -f 2; exec " + std::string(METRO_CALIBRATE_EXE),
+                          args + "--seq 4 -o " + bin + " --hex " + hex);
+  CHECK(r.exit_code == 1);
+  CHECK(r.err.find("error: cannot write '" + hex + "': File too large\n") != std::string::npos);
+  CHECK(Get(bin) == "old bin\n");
+  CHECK(Get(hex) == "old hex\n");
+  CHECK(NoTemporaries(d.path));
 }
 #endif
 
