@@ -15,6 +15,7 @@
 #include "metro/report/html_report.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "metro/report/type_a_report.hpp"
+#include "metro/uncertainty/budget.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -50,11 +51,17 @@ int RunAnalyze(const AnalyzeOptions& o) {
       return kExitUsage;
     }
   }
+  std::vector<NamedPath> inputs = {{"SESSION", o.session},
+                                   {"--budget", o.budget},
+                                   {"--tag-registry", o.analysis.tag_registry},
+                                   {"--columns-file", o.analysis.load.columns_file}};
+  if (!o.budget.empty()) {
+    for (std::string& session : SessionsNamedInBudget(o.budget)) {
+      inputs.push_back({"a session of --budget", std::move(session)});
+    }
+  }
   if (Status s = CheckOutputs({{"-o", o.output}, {"--allan-csv", o.allan_csv}, {"--html", o.html}},
-                              {{"SESSION", o.session},
-                               {"--budget", o.budget},
-                               {"--tag-registry", o.analysis.tag_registry},
-                               {"--columns-file", o.analysis.load.columns_file}});
+                              inputs);
       !s.ok()) {
     PrintError(s.error());
     return kExitUsage;

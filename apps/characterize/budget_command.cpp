@@ -48,9 +48,11 @@ void AddBudgetCommand(CLI::App& app, int* exit_code) {
 int RunBudget(const BudgetOptions& options) { return RunBudget(options, BudgetResolver()); }
 
 int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resolver) {
-  if (Status s =
-          apps::CheckOutputs({{"-o", options.output_path}}, {{"BUDGET", options.budget_path}});
-      !s.ok()) {
+  std::vector<apps::NamedPath> inputs = {{"BUDGET", options.budget_path}};
+  for (std::string& session : SessionsNamedInBudget(options.budget_path)) {
+    inputs.push_back({"a session of BUDGET", std::move(session)});
+  }
+  if (Status s = apps::CheckOutputs({{"-o", options.output_path}}, inputs); !s.ok()) {
     apps::PrintError(s.error());
     return 2;
   }

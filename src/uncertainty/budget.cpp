@@ -732,4 +732,27 @@ Result<Budget> LoadBudget(const std::string& path, const SessionQuantityResolver
   return ParseBudget(text.value(), path, resolver);
 }
 
+std::vector<std::string> SessionsNamedInBudget(const std::string& budget_path) {
+  std::vector<std::string> sessions;
+  Result<std::string> text = ReadFile(budget_path);
+  if (!text.ok()) return sessions;
+  Result<json> root = ParseJsonText(text.value(), budget_path);
+  if (!root.ok() || !root.value().is_object() || !root.value().contains("inputs") ||
+      !root.value().at("inputs").is_array()) {
+    return sessions;
+  }
+  for (const json& input : root.value().at("inputs")) {
+    if (!input.is_object() || !input.contains("type_a")) continue;
+    const json& type_a = input.at("type_a");
+    if (!type_a.is_object() || !type_a.contains("session") || !type_a.at("session").is_string()) {
+      continue;
+    }
+    std::string session = type_a.at("session").get<std::string>();
+    if (session.empty()) continue;
+    if (session[0] != '/') session = DirectoryOf(budget_path) + session;
+    sessions.push_back(std::move(session));
+  }
+  return sessions;
+}
+
 }  // namespace metro

@@ -186,6 +186,27 @@ TEST_CASE("Outputs: no output is an input of the command (registry, budget, refe
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("(BUDGET " + ru + ")") != std::string::npos);
   CHECK(Get(ru) == ru_text);
+
+  // A session the budget names (relative to the budget's folder) is an input too: the report
+  // overwrote it.
+  const std::string session = d / "s.csv";
+  const std::string session_text = "t_s,pitch_deg\n0,1.0\n0.1,1.2\n0.2,0.9\n0.3,1.1\n";
+  Put(session, session_text);
+  const std::string sb = d / "sb.json";
+  Put(sb, R"({"measurand": {"name": "p", "model": "p"},
+              "inputs": [{"name": "p", "type_a": {"session": "s.csv",
+                                                    "quantity": "pitch_deg"}}]})");
+  r = Characterize("budget " + sb + " -o " + session);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: -o " + session + " is the input file: refusing to overwrite it (a " +
+                     "session of BUDGET " + session + "); name another output file\n");
+  r = Characterize(kChest + " --type-a --budget " + sb + " --html " + session);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("(a session of --budget " + session + ")") != std::string::npos);
+  CHECK(Get(session) == session_text);
+  r = Characterize("budget " + sb + " -o " + d / "sb_report.json");
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
   CHECK(NoTemporaries(d.path));
 }
 

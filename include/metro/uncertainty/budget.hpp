@@ -153,6 +153,11 @@ Result<Budget> ParseBudget(const std::string& json_text, const std::string& budg
 Result<Budget> LoadBudget(const std::string& path,
                           const SessionQuantityResolver& resolver = nullptr);
 
+// The session files a budget's inputs name (`"session"`, resolved like ParseBudget does), read
+// without loading them, so a command can refuse an output that would overwrite one before it
+// does any work. A file that is not a budget names none (LoadBudget reports why).
+std::vector<std::string> SessionsNamedInBudget(const std::string& budget_path);
+
 // Checks the cross-input rules (names unique, correlations, model) on a Budget built in
 // code. ParseBudget calls it.
 Status ValidateBudget(const Budget& budget);
