@@ -70,6 +70,12 @@ inline void PrintError(const Error& error) {
   std::fwrite(line.data(), 1, line.size(), stderr);
 }
 
+// Prints "error: <message>" to stderr, on one line (a newline in `message` is shown as \n).
+inline void PrintErrorText(std::string_view message) {
+  const std::string line = "error: " + EscapeControlChars(message) + "\n";
+  std::fwrite(line.data(), 1, line.size(), stderr);
+}
+
 // Prints `text` (a note, "wrote FILE", a summary) to stderr unless --quiet.
 inline void Note(std::string_view text) {
   if (!Quiet()) PrintText(stderr, text);

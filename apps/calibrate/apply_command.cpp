@@ -21,7 +21,7 @@ struct ApplyOptions {
 
 int RunApply(const ApplyOptions& a) {
   if (a.inputs.size() != (a.imutk ? 2u : 1u)) {
-    fmt::print(stderr, "error: apply takes one SESSION (or ACC GYRO with --imutk)\n");
+    apps::PrintErrorText("apply takes one SESSION (or ACC GYRO with --imutk)");
     return kExitUsage;
   }
   if (Status s = apps::CheckStdinInputs(a.inputs, a.imutk); !s.ok()) {

@@ -50,12 +50,12 @@ Result<uint32_t> ParseSlotAddress(const std::string& text) {
 int RunBlob(const BlobOptions& b) {
   Result<uint64_t> id = blob::ParseDeviceId(b.device_id);
   if (!id.ok()) {
-    fmt::print(stderr, "error: --device-id: {}\n", id.error().message);
+    apps::PrintErrorText(fmt::format("--device-id: {}", id.error().message));
     return kExitUsage;
   }
   Result<uint32_t> slot_a = ParseSlotAddress(b.slot_address);
   if (!slot_a.ok()) {
-    fmt::print(stderr, "error: {}\n", slot_a.error().message);
+    apps::PrintErrorText(slot_a.error().message);
     return kExitUsage;
   }
   for (Status s :
@@ -68,7 +68,7 @@ int RunBlob(const BlobOptions& b) {
   }
   Result<Calibration> cal = LoadCalibration(b.calibration);
   if (!cal.ok()) {
-    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    apps::PrintErrorText(cal.error().ToString());
     return kExitUsage;
   }
   blob::BlobFromCalibrationOptions o;
@@ -80,12 +80,12 @@ int RunBlob(const BlobOptions& b) {
   o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
   Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal.value(), o);
   if (!contents.ok()) {
-    fmt::print(stderr, "error: {}: {}\n", b.calibration, contents.error().ToString());
+    apps::PrintErrorText(fmt::format("{}: {}", b.calibration, contents.error().ToString()));
     return kExitUsage;
   }
   Result<std::vector<uint8_t>> bytes = blob::WriteBlob(contents.value());
   if (!bytes.ok()) {
-    fmt::print(stderr, "error: {}: {}\n", b.calibration, bytes.error().ToString());
+    apps::PrintErrorText(fmt::format("{}: {}", b.calibration, bytes.error().ToString()));
     return kExitUsage;
   }
   const std::vector<uint8_t>& v = bytes.value();
@@ -102,7 +102,7 @@ int RunBlob(const BlobOptions& b) {
           {{b.output, std::string_view(reinterpret_cast<const char*>(v.data()), v.size())},
            {b.hex, hex}});
       !w.ok()) {
-    fmt::print(stderr, "error: {}\n", w.error().ToString());
+    apps::PrintErrorText(w.error().ToString());
     return kExitFailed;
   }
   const uint32_t crc = blob::Crc32(v.data(), v.size() - 4);

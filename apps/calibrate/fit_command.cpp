@@ -42,7 +42,9 @@ int RunFit(const FitOptions& f) {
   const std::optional<ModelKind> gm = ParseModelKind(f.gyro_model.empty() ? f.model : f.gyro_model);
   const std::optional<LossKind> loss = ParseLossKind(f.loss);
   if (!model || !am || !gm || !loss) {
-    fmt::print(stderr, "error: --model takes bias, scale or full; --loss none, huber or cauchy\n");
+    apps::PrintText(
+        stderr,
+        fmt::format("error: --model takes bias, scale or full; --loss none, huber or cauchy\n"));
     return kExitUsage;
   }
   o.accel_model = *am;
@@ -59,11 +61,11 @@ int RunFit(const FitOptions& f) {
                                            : TemperatureMode::kAuto;
   std::string why;
   if (!o.IsValid(&why)) {
-    fmt::print(stderr, "error: {}\n", why);
+    apps::PrintErrorText(why);
     return kExitUsage;
   }
   if (f.imutk && f.inputs.size() % 2 != 0) {
-    fmt::print(stderr, "error: --imutk takes pairs of files: ACC GYRO [ACC GYRO ...]\n");
+    apps::PrintErrorText("--imutk takes pairs of files: ACC GYRO [ACC GYRO ...]");
     return kExitUsage;
   }
   if (Status s = apps::CheckStdinInputs(f.inputs, f.imutk); !s.ok()) {

@@ -25,7 +25,7 @@ int RunInspect(const InspectCliOptions& c) {
   if (!c.device_id.empty()) {
     Result<uint64_t> id = blob::ParseDeviceId(c.device_id);
     if (!id.ok()) {
-      fmt::print(stderr, "error: --device-id: {}\n", id.error().message);
+      apps::PrintErrorText(fmt::format("--device-id: {}", id.error().message));
       return kExitUsage;
     }
     o.device_id = id.value();
@@ -38,8 +38,8 @@ int RunInspect(const InspectCliOptions& c) {
     used = 0;
   }
   if (used == 0 || used != c.slot_address.size() || a + 2 * blob::kPageSize > 0x40000) {
-    fmt::print(stderr, "error: --slot-address '{}': expected an address below 0x3F800\n",
-               c.slot_address);
+    apps::PrintErrorText(
+        fmt::format("--slot-address '{}': expected an address below 0x3F800", c.slot_address));
     return kExitUsage;
   }
   o.slot_a_address = static_cast<uint32_t>(a);

@@ -33,23 +33,24 @@ int RunPush(const PushCliOptions& c) {
   if (!c.device_id.empty()) {
     Result<uint64_t> id = blob::ParseDeviceId(c.device_id);
     if (!id.ok()) {
-      fmt::print(stderr, "error: --device-id: {}\n", id.error().message);
+      apps::PrintErrorText(fmt::format("--device-id: {}", id.error().message));
       return kExitUsage;
     }
     expect = id.value();
   }
   Result<Calibration> cal = LoadCalibration(c.calibration);
   if (!cal.ok()) {
-    fmt::print(stderr, "error: {}\n", cal.error().ToString());
+    apps::PrintErrorText(cal.error().ToString());
     return kExitUsage;
   }
   if (cal.value().FindTag(c.sensor) == nullptr) {
-    fmt::print(stderr, "error: {}: calibration has no sensor {}\n", c.calibration, c.sensor);
+    apps::PrintText(
+        stderr, fmt::format("error: {}: calibration has no sensor {}\n", c.calibration, c.sensor));
     return kExitUsage;
   }
   Result<std::unique_ptr<blob::SerialPort>> port = blob::SerialPort::Open(c.port);
   if (!port.ok()) {
-    fmt::print(stderr, "error: {}\n", port.error().ToString());
+    apps::PrintErrorText(port.error().ToString());
     return kExitFailed;
   }
   blob::BlobFromCalibrationOptions bo;
@@ -83,30 +84,34 @@ int RunPush(const PushCliOptions& c) {
   // What the tag and the link did: notes (not under --quiet), except on failure.
   const bool notes = !s.ok || !apps::Quiet();
   if (s.tag_answered && notes) {
-    fmt::print(stderr, "tag {}: format {}.{}, active slot {}, seq {}\n",
-               blob::FormatDeviceId(s.tag.device_id), s.tag.fmt_major, s.tag.fmt_minor,
-               s.tag.active_slot < 0 ? "none" : (s.tag.active_slot == 0 ? "A" : "B"),
-               s.tag.active_seq);
+    apps::PrintText(
+        stderr, fmt::format("tag {}: format {}.{}, active slot {}, seq {}\n",
+                            blob::FormatDeviceId(s.tag.device_id), s.tag.fmt_major, s.tag.fmt_minor,
+                            s.tag.active_slot < 0 ? "none" : (s.tag.active_slot == 0 ? "A" : "B"),
+                            s.tag.active_seq));
   }
   if (notes) {
-    fmt::print(stderr, "link: {} requests, {} frames sent, {} retries, {} NAKs, {} timeouts\n",
-               s.stats.requests, s.stats.frames_sent, s.stats.retries, s.stats.naks,
-               s.stats.timeouts);
+    apps::PrintText(
+        stderr, fmt::format("link: {} requests, {} frames sent, {} retries, {} NAKs, {} timeouts\n",
+                            s.stats.requests, s.stats.frames_sent, s.stats.retries, s.stats.naks,
+                            s.stats.timeouts));
   }
+  // The result is one line: a newline in the message (from a port or file name) is escaped.
+  const std::string message = EscapeControlChars(s.message);
   if (s.ok) {
-    apps::Note(fmt::format("OK: {}\n", s.message));
+    apps::Note(fmt::format("OK: {}\n", message));
     return kExitOk;
   }
   // An unknown outcome or a live but unchecked calibration is not a failure to write: the
   // message says what the tag may hold (docs/calibration-blob.md section 11).
   if (s.commit == blob::CommitState::kUnknown) {
-    fmt::print(stderr, "{}\n", s.message);
+    apps::PrintText(stderr, message + "\n");
   } else if (s.commit == blob::CommitState::kCommitted) {
-    fmt::print(stderr, "UNVERIFIED: {}\n", s.message);
+    apps::PrintText(stderr, fmt::format("UNVERIFIED: {}\n", message));
   } else {
-    fmt::print(stderr, "FAILED: {}\n", s.message);
+    apps::PrintText(stderr, fmt::format("FAILED: {}\n", message));
   }
-  fmt::print(stderr, "{}", blob::PushRecoveryAdvice(s, c.port, c.calibration, c.sensor));
+  apps::PrintText(stderr, blob::PushRecoveryAdvice(s, c.port, c.calibration, c.sensor));
   return s.input_error ? kExitUsage : kExitFailed;
 }
 

@@ -140,7 +140,7 @@ void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
   app.callback([&app, o, exit_code] {
     if (!app.get_subcommands().empty()) return;
     if (o->session.empty()) {
-      fmt::print(stderr, "error: no session given\n{}", app.help());
+      apps::PrintText(stderr, fmt::format("error: no session given\n{}", app.help()));
       *exit_code = kExitUsage;
       return;
     }

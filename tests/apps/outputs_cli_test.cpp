@@ -519,6 +519,32 @@ TEST_CASE("Terminal: blob metadata is escaped by calibrate inspect", "[apps][uni
 }
 #endif
 
+#ifdef METRO_CALIBRATE_EXE
+TEST_CASE("Terminal: calibrate push and blob escape port and file names",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string cal = kDatasets + "golden/calibration_sensor2.json";
+  // A port name with an OSC title sequence and a newline that forges a second line.
+  const std::string port = d / "tty\x1b]0;owned\x07\nOK: pushed";
+  Run r =
+      testing::RunProgram(METRO_CALIBRATE_EXE, "push " + cal + " --sensor 2 --port '" + port + "'");
+  INFO(r.err);
+  CHECK(r.exit_code != 0);
+  CHECK_FALSE(HasRawControl(r.err));
+  CHECK(r.err.find("tty\\x1b]0;owned\\x07\\nOK: pushed") != std::string::npos);
+  // A calibration file name in calibrate blob's messages.
+  const std::string evil_cal = d / "c\x1b[2J.json";
+  Put(evil_cal, Get(cal));
+  r = testing::RunProgram(
+      METRO_CALIBRATE_EXE,
+      "blob '" + evil_cal + "' --sensor 7 --device-id 9abcdef012345678 -o " + d / "b.bin");
+  INFO(r.err);
+  CHECK(r.exit_code == 2);
+  CHECK_FALSE(HasRawControl(r.err));
+  CHECK(r.err.find("c\\x1b[2J.json") != std::string::npos);
+}
+#endif
+
 TEST_CASE("JSON outputs: a session named in Latin-1 is analysed, not a crash",
           "[apps][unix][security]") {
   // A file name (or a CSV header) is bytes; a report names it in JSON, which is UTF-8. The
