@@ -8,6 +8,7 @@
 
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
+#include "metro/core/rounding.hpp"
 
 namespace metro {
 
@@ -342,8 +343,9 @@ std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const st
 
 std::string Fixed(double v, int digits) { return fmt::format("{:.{}g}", v, digits); }
 
+// JCGM 100:2008 7.2.2 concise notation: "826.6(5.0)", never "826.6026 (50)".
 std::string ValueU(double v, double u) {
-  if (u > 0) return fmt::format("{:.7g} ({:.2g})", v, u);
+  if (u > 0) return ConciseNotation(v, u);
   return fmt::format("{:.7g} (fixed)", v);
 }
 

@@ -6,6 +6,7 @@
 #include <map>
 
 #include "metro/calibration/simulate.hpp"
+#include "metro/core/rounding.hpp"
 
 namespace metro {
 namespace {
@@ -154,6 +155,11 @@ TEST_CASE("The report names every constant with its uncertainty", "[calibration]
   CHECK_THAT(text, Catch::Contains("g_yx = "));
   CHECK_THAT(text, Catch::Contains("rotation_gravity"));
   CHECK_THAT(text, Catch::Contains("segments used: 26 static"));
+  // issue #21 part 7: every constant in the concise notation of JCGM 100 7.2.2, never
+  // "826.6026 (50)" (which reads as u = 0.0050).
+  const SensorCalibration& accel = *FitOnce().cal.tags.front().accel;
+  CHECK_THAT(text, Catch::Contains(
+                       "b_x  = " + ConciseNotation(accel.model.bias[0], accel.bias_u[0]) + " LSB"));
 }
 
 }  // namespace
