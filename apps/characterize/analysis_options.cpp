@@ -14,8 +14,14 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o) {
   app->add_option("--from-s", o->from_s, "keep observations with t_s >= this");
   app->add_option("--to-s", o->to_s, "keep observations with t_s <= this");
   app->add_option("--settle", o->settle,
-                  "auto: drop each tag's start-up transient (MSER-5, docs/type-a.md)")
+                  "auto: drop each quantity's start-up transient (fitted exponential, cut "
+                  "where the rest biases the mean by <= 0.1 u; docs/type-a.md)")
       ->check(CLI::IsMember({"none", "auto"}))
+      ->capture_default_str();
+  app->add_option("--settle-scope", o->settle_scope,
+                  "with --settle auto: quantity (each from its own settle point) or tag (every "
+                  "quantity of a tag from the largest non-temperature cut)")
+      ->check(CLI::IsMember({"quantity", "tag"}))
       ->capture_default_str();
   app->add_option("--sensor", o->sensors, "only this tag (repeatable)");
   app->add_option("--quantity", o->quantities, "only this quantity, e.g. pitch_deg (repeatable)");
@@ -40,6 +46,7 @@ Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
   type_a.window.from_s = o.from_s;
   type_a.window.to_s = o.to_s;
   type_a.window.settle_auto = o.settle == "auto";
+  type_a.window.settle_tag_wide = o.settle_scope == "tag";
   type_a.sensors = o.sensors;
   type_a.quantities = o.quantities;
   type_a.threads = threads;

@@ -21,6 +21,7 @@ struct AnalysisCliOptions {
   std::optional<double> from_s;
   std::optional<double> to_s;
   std::string settle = "none";
+  std::string settle_scope = "quantity";  // "tag": one cut per tag (--settle-scope).
   std::vector<int> sensors;
   std::vector<std::string> quantities;
   std::string tag_registry;
@@ -30,8 +31,8 @@ struct AnalysisCliOptions {
 };
 
 // Registers the load flags (load_cli.hpp), --skip-samples, --skip-seconds,
-// --from-s, --to-s, --settle, --sensor, --quantity, --tag-registry, --allan, --taus and
-// --estimator on `app`.
+// --from-s, --to-s, --settle, --settle-scope, --sensor, --quantity, --tag-registry,
+// --allan, --taus and --estimator on `app`.
 void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o);
 
 // The library options for these flags; `threads` is the worker count inside one session

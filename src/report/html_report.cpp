@@ -95,6 +95,10 @@ void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
   const ordered_json& window = sensor["window"];
   const size_t n_total = tag.size();
   size_t first = static_cast<size_t>(JsonNumber(window, "first_index"));
+  // `--settle auto` evaluates each quantity from its own settle point.
+  if (quantity.contains("window_first_index")) {
+    first = static_cast<size_t>(JsonNumber(quantity, "window_first_index"));
+  }
   size_t end = static_cast<size_t>(JsonNumber(window, "end_index"));
   if (!(first < end && end <= n_total)) {
     out->unavailable.push_back(mustache::data(

@@ -1,6 +1,7 @@
 #include "metro/report/session_analysis.hpp"
 
 #include "metro/io/columns.hpp"
+#include "metro/report/settle_report.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
@@ -36,6 +37,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
   if (!type_a.ok()) return fail(type_a.error(), true);
   out.type_a = std::move(type_a).value();
   out.report = TypeAReportJson(out.session, out.type_a, options.type_a, options.registry);
+  AddSettleToReport(out.session, out.type_a, options.type_a.window, &out.report);
   bool run_allan = options.allan;
   if (run_allan && options.allan_skip_without_rates && options.allan_options.quantities.empty()) {
     bool any_rate = false;

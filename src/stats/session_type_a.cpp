@@ -7,6 +7,7 @@
 
 #include "core/parallel.hpp"
 #include "metro/core/angles.hpp"
+#include "metro/io/columns.hpp"
 #include "metro/stats/derived_quantity.hpp"
 
 namespace metro {
@@ -28,6 +29,12 @@ std::vector<double> WindowValues(const Quantity& q, size_t begin, size_t end, in
                         q.values.begin() + static_cast<ptrdiff_t>(end));
   *jumps = IsWrappingAngle(q.name) ? UnwrapDegInPlace(&x) : 0;
   return x;
+}
+
+// A temperature never decides a tag-wide settle cut.
+bool IsTemperature(const Quantity& q) {
+  const Unit* unit = UnitBySymbol(q.unit);
+  return unit != nullptr && unit->dimension == Dimension::kTemperature;
 }
 
 // Table columns may be empty ("unknown"): those observations are left out.
@@ -100,6 +107,10 @@ bool WindowOptions::IsValid(std::string* why) const {
   if (from_s && !std::isfinite(*from_s)) return fail("from_s must be finite");
   if (to_s && !std::isfinite(*to_s)) return fail("to_s must be finite");
   if (from_s && to_s && !(*from_s < *to_s)) return fail("from_s must be before to_s");
+  if (settle_tag_wide && !settle_auto) {
+    return fail("a tag-wide settle cut (--settle-scope tag) needs --settle auto");
+  }
+  if (!settle.IsValid(why)) return false;
   return true;
 }
 
@@ -180,36 +191,93 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
     out.tags.push_back(std::move(t));
   }
 
-  // Settle detection: the largest MSER-5 truncation over the tag's evaluated quantities.
+  // Settle detection (stats/settle.hpp): each quantity's own cut; the tag window takes the
+  // largest cut of a non-temperature quantity, and with settle_tag_wide so does every
+  // quantity. The fits run on all cores (each is O(n) per trial tau).
   if (options.window.settle_auto) {
+    std::vector<Job> settle_jobs;
     for (size_t k = 0; k < tags.size(); ++k) {
-      TagTypeA& t = out.tags[k];
-      size_t settle = 0;
-      bool at_limit = false;
-      for (size_t slot = 0; slot < t.quantities.size(); ++slot) {
-        QuantityTypeA& r = t.quantities[slot];
-        const Quantity* q = &tags[k]->quantities[source[k][slot]];
-        int jumps = 0;
-        size_t dropped = 0;
-        const std::vector<double> x =
-            Finite(WindowValues(*q, t.window.begin, t.window.end, &jumps), &dropped);
-        if (dropped > 0) continue;  // Columns with gaps (table_*) do not decide the settle.
-        const SettleResult s = DetectSettleMser5(x.data(), x.size());
-        r.settle_samples = s.samples;
-        if (s.samples > settle) {
-          settle = s.samples;
-          at_limit = s.at_limit;
-        }
+      for (size_t slot = 0; slot < out.tags[k].quantities.size(); ++slot) {
+        settle_jobs.push_back({k, source[k][slot], slot});
       }
-      t.window.settle_samples = settle;
-      t.window.settle_at_limit = at_limit;
-      t.window.begin = std::min(t.window.end, t.window.begin + settle);
-      if (at_limit) {
-        t.warnings.push_back(fmt::format(
-            "--settle auto: the transient did not end within the first half of the window "
-            "({} samples dropped); the tag may still be settling or drifting",
-            settle));
+    }
+    internal::ParallelFor(settle_jobs.size(), options.threads, [&](size_t j) {
+      const Job& job = settle_jobs[j];
+      const TagTypeA& t = out.tags[job.tag];
+      QuantityTypeA& r = out.tags[job.tag].quantities[job.slot];
+      int jumps = 0;
+      size_t dropped = 0;
+      const std::vector<double> x = Finite(WindowValues(tags[job.tag]->quantities[job.quantity],
+                                                        t.window.begin, t.window.end, &jumps),
+                                           &dropped);
+      if (dropped > 0) {
+        // Columns with gaps (table_*): no time axis to fit a transient on.
+        r.settle.note = "empty (unknown) values in the window: not examined for a transient";
+        return;
       }
+      r.settle = DetectSettleTransient(x.data(), x.size(), options.window.settle);
+      r.settle_samples = r.settle.samples;
+    });
+  }
+  for (size_t k = 0; k < tags.size(); ++k) {
+    TagTypeA& t = out.tags[k];
+    for (QuantityTypeA& r : t.quantities) r.window_begin = t.window.begin;
+    if (!options.window.settle_auto) continue;
+    const Tag& tag = *tags[k];
+    size_t settle = 0;
+    const QuantityTypeA* driver = nullptr;
+    for (size_t slot = 0; slot < t.quantities.size(); ++slot) {
+      QuantityTypeA& r = t.quantities[slot];
+      const Quantity* q = &tag.quantities[source[k][slot]];
+      if (!IsTemperature(*q) && r.settle.samples > settle) {
+        settle = r.settle.samples;
+        driver = &r;
+      }
+    }
+    const size_t explicit_begin = t.window.begin;
+    const size_t n_window = t.window.n();
+    t.window.settle_samples = settle;
+    t.window.settle_at_limit = driver != nullptr && driver->settle.at_limit;
+    t.window.settle_driver = driver != nullptr ? driver->name : "";
+    t.window.begin = std::min(t.window.end, explicit_begin + settle);
+    const double period_s = n_window > 1 ? (tag.t_s[t.window.end - 1] - tag.t_s[explicit_begin]) /
+                                               static_cast<double>(n_window - 1)
+                                         : 0.0;
+    for (QuantityTypeA& r : t.quantities) {
+      r.window_begin = options.window.settle_tag_wide
+                           ? t.window.begin
+                           : std::min(t.window.end, explicit_begin + r.settle_samples);
+      const SettleResult& s = r.settle;
+      if (!s.fitted || s.samples == 0) continue;
+      const std::string what = fmt::format(
+          "--settle auto: {}: start-up transient of tau = {:.3g} samples ({:.3g} s), "
+          "amplitude {:.3g} {} ({:.1f} u(A))",
+          r.name, s.tau_samples, s.tau_samples * period_s, s.amplitude, r.unit, s.t_ratio);
+      if (s.at_limit) {
+        r.warnings.push_back(fmt::format(
+            "{}: it did not decay within the first half of the window ({} of {} samples "
+            "dropped); what remains biases the mean by about {:.2g} u: the quantity may still "
+            "be settling or drifting",
+            what, s.samples, n_window, s.bias_over_u_kept));
+      } else if (static_cast<double>(s.samples) > 0.1 * static_cast<double>(n_window)) {
+        r.warnings.push_back(fmt::format(
+            "{}: {} of {} samples ({:.0f} %) dropped, until the remaining transient biases the "
+            "mean by at most {:.2g} u (it biased the whole window's mean by {:.2g} u)",
+            what, s.samples, n_window, 100.0 * s.samples / n_window, s.bias_over_u_kept,
+            s.bias_over_u_uncut));
+      }
+    }
+    if (driver != nullptr && options.window.settle_tag_wide) {
+      t.warnings.push_back(fmt::format(
+          "--settle-scope tag: every quantity of the tag cut at {} samples, the cut of {} "
+          "(temperature never decides it)",
+          settle, driver->name));
+    }
+    if (driver != nullptr && driver->settle.at_limit) {
+      t.warnings.push_back(fmt::format(
+          "--settle auto: {}'s transient did not end within the first half of the window ({} "
+          "samples dropped); it may still be settling or drifting",
+          driver->name, settle));
     }
   }
   for (size_t k = 0; k < tags.size(); ++k) FillWindowTimes(*tags[k], &out.tags[k].window);
@@ -232,11 +300,11 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
     // values to leave out: a copy of 360 k samples per series is as slow as the mean.
     // Empty values (NaN) make EvaluateTypeA fail, so the window is scanned for them only
     // then (a scan of every series would cost another read of all the columns).
-    const double* window = q.values.data() + t.window.begin;
-    size_t n = t.window.n();
+    const double* window = q.values.data() + r.window_begin;
+    size_t n = t.window.end - r.window_begin;
     std::vector<double> copy;
     auto copy_window = [&] {
-      copy = Finite(WindowValues(q, t.window.begin, t.window.end, &r.unwrap_jumps), &dropped);
+      copy = Finite(WindowValues(q, r.window_begin, t.window.end, &r.unwrap_jumps), &dropped);
       window = copy.data();
       n = copy.size();
     };
@@ -278,6 +346,25 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
       if (worst >= kGimbalLockWarnPitchDeg) {
         r.warnings.push_back(fmt::format(
             "|pitch| reaches {:.2f} deg: near gimbal lock yaw and roll are ill-defined", worst));
+      }
+    }
+    // Near pitch +-90 deg only yaw - roll (or yaw + roll) is defined by the attitude: each
+    // of them alone swings by up to 180 deg on a tiny rotation, and its spread is not
+    // noise of the tag.
+    if (q.name == "yaw_deg" || q.name == "roll_deg") {
+      if (const Quantity* pitch = tag.Find("pitch_deg")) {
+        double worst = 0.0;
+        for (size_t i = r.window_begin; i < t.window.end; ++i) {
+          if (std::isfinite(pitch->values[i])) worst = std::max(worst, std::abs(pitch->values[i]));
+        }
+        if (worst >= kGimbalLockWarnPitchDeg) {
+          r.warnings.push_back(fmt::format(
+              "{}{}: |pitch_deg| reaches {:.2f} deg in the window (gimbal lock at 90): yaw and "
+              "roll are then ill-defined, only their sum or difference is; this mean and "
+              "spread are not the tag's",
+              q.name, q.origin == QuantityOrigin::kDerived ? " (derived from the quaternion)" : "",
+              worst));
+        }
       }
     }
   });

@@ -3,7 +3,13 @@
 // Windows are applied per tag, in this order: skip the first `skip_samples` observations;
 // skip observations earlier than the tag's first time + `skip_seconds`; keep
 // from_s <= t_s <= to_s; then, with `settle_auto`, drop the start-up transient found by
-// MSER-5 (stats/settle.hpp), the largest truncation over the evaluated quantities.
+// DetectSettleTransient (stats/settle.hpp): by default each quantity from its own settle
+// point (QuantityTypeA::window_begin); with `settle_tag_wide` every quantity of the tag from
+// the largest cut of its non-temperature quantities. A temperature (degC) never cuts the
+// other quantities: a sensor's warm-up drift is not a transient of its rates or angles.
+// The tag's AppliedWindow always carries that largest non-temperature cut (settle_driver
+// names the quantity), so analyses that need one window per tag (the Allan deviation, the
+// HTML time series) start where every rate and angle has settled.
 //
 // Angles that wrap at +-180 deg (yaw_deg, roll_deg, table_angle_deg) are unwrapped before
 // the statistics (each step taken as the shortest turn) and the mean is wrapped back into
@@ -27,6 +33,10 @@ struct WindowOptions {
   std::optional<double> from_s;
   std::optional<double> to_s;
   bool settle_auto = false;
+  // With settle_auto: cut every quantity of a tag at the largest cut of its
+  // non-temperature quantities (`--settle-scope tag`) instead of each at its own.
+  bool settle_tag_wide = false;
+  SettleOptions settle;
 
   bool IsValid(std::string* why) const;
 };
@@ -42,12 +52,13 @@ struct SessionTypeAOptions {
 };
 
 struct AppliedWindow {
-  size_t n_total = 0;  // Observations of the tag.
-  size_t begin = 0;    // First observation kept (index).
-  size_t end = 0;      // One past the last kept.
-  size_t settle_samples = 0;
+  size_t n_total = 0;         // Observations of the tag.
+  size_t begin = 0;           // First observation kept (index).
+  size_t end = 0;             // One past the last kept.
+  size_t settle_samples = 0;  // Largest settle cut of a non-temperature quantity.
   bool settle_at_limit = false;
-  double t_first_s = 0.0;  // Times of the first and last kept observation.
+  std::string settle_driver;  // The quantity whose cut that is ("" when none).
+  double t_first_s = 0.0;     // Times of the first and last kept observation.
   double t_last_s = 0.0;
   uint32_t first_line = 0;
   uint32_t last_line = 0;
@@ -68,7 +79,9 @@ struct QuantityTypeA {
   TypeAResult type_a;
   std::string angle_handling = "linear";  // or "unwrapped"
   int unwrap_jumps = 0;
-  size_t settle_samples = 0;  // This quantity's own MSER-5 truncation (settle_auto).
+  size_t settle_samples = 0;  // This quantity's own settle cut (settle_auto).
+  SettleResult settle;        // Its detection (settle_auto; `fitted` false otherwise).
+  size_t window_begin = 0;    // Index of the first observation evaluated (own window).
   std::vector<std::string> warnings;
 };
 

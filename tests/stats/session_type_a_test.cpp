@@ -1,0 +1,146 @@
+// EvaluateSessionTypeA: settle per quantity or per tag, temperature never cuts the others,
+// and the gimbal-lock warnings of yaw and roll.
+#include "metro/stats/session_type_a.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace metro {
+namespace {
+
+bool AnyContains(const std::vector<std::string>& lines, const std::string& text) {
+  for (const std::string& l : lines) {
+    if (l.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+const QuantityTypeA& Find(const TagTypeA& t, const std::string& name) {
+  for (const QuantityTypeA& q : t.quantities) {
+    if (q.name == name) return q;
+  }
+  FAIL("no quantity " << name);
+  return t.quantities.front();
+}
+
+// One tag at 10 Hz for 600 s (n = 6000): gx_dps with a transient of 20 sigma and tau 5 s,
+// ax_g stationary, temp_c warming by 5 degC with a 600 s time constant (the simulator's),
+// all with white noise of sigma 1 (temp 0.01).
+Session WarmUpSession() {
+  Session s;
+  s.path = "warm_up";
+  Tag tag;
+  tag.sensor = 4;
+  const size_t n = 6000;
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> w(0.0, 1.0);
+  Quantity gx{"gx_dps", "deg/s", QuantityOrigin::kFile, {}};
+  Quantity ax{"ax_g", "g", QuantityOrigin::kFile, {}};
+  Quantity temp{"temp_c", "degC", QuantityOrigin::kFile, {}};
+  for (size_t i = 0; i < n; ++i) {
+    const double t_s = 0.1 * static_cast<double>(i);
+    tag.t_s.push_back(t_s);
+    tag.line.push_back(static_cast<uint32_t>(i + 2));
+    gx.values.push_back(20.0 * std::exp(-t_s / 5.0) + w(rng));
+    ax.values.push_back(w(rng));
+    temp.values.push_back(30.0 - 5.0 * std::exp(-t_s / 600.0) + 0.01 * w(rng));
+  }
+  tag.quantities = {gx, ax, temp};
+  s.tags.push_back(std::move(tag));
+  return s;
+}
+
+TEST_CASE("Settle per quantity: each from its own cut, temperature cuts no other",
+          "[stats][settle]") {
+  const Session session = WarmUpSession();
+  SessionTypeAOptions o;
+  o.window.settle_auto = true;
+  auto r = EvaluateSessionTypeA(session, o);
+  REQUIRE(r.ok());
+  const TagTypeA& t = r.value().tags.at(0);
+  const QuantityTypeA& gx = Find(t, "gx_dps");
+  const QuantityTypeA& ax = Find(t, "ax_g");
+  const QuantityTypeA& temp = Find(t, "temp_c");
+  // gx: b(d) = 0.1 u(d) with A = 20, tau = 50 samples, u(d) = 1 / sqrt(6000 - d) at about
+  // d = 50 ln(20 * 50 / (0.1 sqrt(6000 - d))) = 50 ln(130) = 243 samples (fitted: +-15 %).
+  CHECK(double(gx.settle_samples) == Approx(243).epsilon(0.15));
+  CHECK(gx.window_begin == gx.settle_samples);
+  CHECK(gx.type_a.n == int64_t(6000 - gx.settle_samples));
+  // ax: stationary, nothing dropped.
+  CHECK(ax.settle_samples == 0);
+  CHECK(ax.type_a.n == 6000);
+  // temp: a warm-up of tau 600 s in a 600 s record cannot settle: cut at the half-window
+  // limit, with a warning naming temp_c.
+  CHECK(temp.settle.at_limit);
+  CHECK(temp.settle_samples == 3000);
+  CHECK(AnyContains(temp.warnings, "--settle auto: temp_c: start-up transient"));
+  CHECK(AnyContains(temp.warnings, "did not decay within the first half"));
+  // The tag window takes the largest non-temperature cut: gx's, named.
+  CHECK(t.window.settle_samples == gx.settle_samples);
+  CHECK(t.window.settle_driver == "gx_dps");
+  CHECK_FALSE(t.window.settle_at_limit);
+  CHECK_FALSE(AnyContains(t.warnings, "temp_c"));
+}
+
+TEST_CASE("Settle tag-wide on request: every quantity from the driver's cut", "[stats][settle]") {
+  const Session session = WarmUpSession();
+  SessionTypeAOptions o;
+  o.window.settle_auto = true;
+  o.window.settle_tag_wide = true;
+  auto r = EvaluateSessionTypeA(session, o);
+  REQUIRE(r.ok());
+  const TagTypeA& t = r.value().tags.at(0);
+  const size_t cut = Find(t, "gx_dps").settle_samples;
+  for (const QuantityTypeA& q : t.quantities) {
+    CHECK(q.window_begin == cut);
+    CHECK(q.type_a.n == int64_t(6000 - cut));
+  }
+  CHECK(AnyContains(t.warnings, "--settle-scope tag: every quantity of the tag cut at " +
+                                    std::to_string(cut) + " samples, the cut of gx_dps"));
+  SessionTypeAOptions bad;
+  bad.window.settle_tag_wide = true;
+  std::string why;
+  CHECK_FALSE(bad.IsValid(&why));
+  CHECK(why == "a tag-wide settle cut (--settle-scope tag) needs --settle auto");
+}
+
+TEST_CASE("Yaw and roll near gimbal lock carry their own warning", "[stats]") {
+  // Pitch 89.9 deg: yaw and roll alone are ill-defined (only yaw - roll is); the warning
+  // must reach both, not only pitch.
+  Session s;
+  s.path = "gimbal";
+  Tag tag;
+  tag.sensor = 1;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> any(-180.0, 180.0);
+  Quantity yaw{"yaw_deg", "deg", QuantityOrigin::kDerived, {}};
+  Quantity pitch{"pitch_deg", "deg", QuantityOrigin::kDerived, {}};
+  Quantity roll{"roll_deg", "deg", QuantityOrigin::kDerived, {}};
+  Quantity gx{"gx_dps", "deg/s", QuantityOrigin::kFile, {}};
+  for (int i = 0; i < 200; ++i) {
+    tag.t_s.push_back(0.1 * i);
+    tag.line.push_back(static_cast<uint32_t>(i + 2));
+    const double a = any(rng);
+    yaw.values.push_back(a);
+    roll.values.push_back(a - 30.0 > -180.0 ? a - 30.0 : a + 330.0);
+    pitch.values.push_back(89.9);
+    gx.values.push_back(0.01 * (i % 3));
+  }
+  tag.quantities = {yaw, pitch, roll, gx};
+  s.tags.push_back(std::move(tag));
+  auto r = EvaluateSessionTypeA(s, {});
+  REQUIRE(r.ok());
+  const TagTypeA& t = r.value().tags.at(0);
+  CHECK(AnyContains(Find(t, "yaw_deg").warnings,
+                    "yaw_deg (derived from the quaternion): |pitch_deg| reaches 89.90 deg"));
+  CHECK(AnyContains(Find(t, "roll_deg").warnings,
+                    "roll_deg (derived from the quaternion): |pitch_deg| reaches 89.90 deg"));
+  CHECK(AnyContains(Find(t, "pitch_deg").warnings, "|pitch| reaches 89.90 deg"));
+  CHECK(Find(t, "gx_dps").warnings.empty());
+}
+
+}  // namespace
+}  // namespace metro
