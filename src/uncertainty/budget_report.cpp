@@ -126,6 +126,20 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
     mc["u"] = Number(m.u);
     mc["interval_symmetric"] = {Number(m.symmetric.low), Number(m.symmetric.high)};
     mc["interval_shortest"] = {Number(m.shortest.low), Number(m.shortest.high)};
+    // JCGM 101 7.7 as written, beside the fitted minimum reported above (docs/uncertainty.md).
+    mc["interval_shortest_discrete"] = {Number(m.shortest_discrete.low),
+                                        Number(m.shortest_discrete.high)};
+    // The MCM's own numerical tolerance (7.9.2) and, adaptive, the 95 % half-widths that met it.
+    mc["numerical_tolerance"] = Number(m.delta);
+    if (m.adaptive) {
+      const McStability& st = m.stability;
+      mc["stability_half_width"] = {
+          {"value", Number(st.value)},
+          {"u", Number(st.u)},
+          {"interval_symmetric", {Number(st.symmetric_low), Number(st.symmetric_high)}},
+          {"interval_shortest", {Number(st.shortest_low), Number(st.shortest_high)}},
+          {"groups", st.groups}};
+    }
     if (e.validation) {
       mc["delta"] = Number(e.validation->delta);
       mc["d_low"] = Number(e.validation->d_low);
@@ -176,6 +190,14 @@ std::string BudgetReportTable(const BudgetEvaluation& e) {
     out += fmt::format("  {} interval: shortest [{}, {}], symmetric [{}, {}]{}\n",
                        Percent(m.coverage), Long(m.shortest.low), Long(m.shortest.high),
                        Long(m.symmetric.low), Long(m.symmetric.high), unit);
+    if (m.adaptive) {
+      const McStability& st = m.stability;
+      out += fmt::format(
+          "  stable to delta = {} (7.9.2): 95 % half-widths y {}, u {}, symmetric [{}, {}], "
+          "shortest [{}, {}]\n",
+          Short(m.delta), Short(st.value), Short(st.u), Short(st.symmetric_low),
+          Short(st.symmetric_high), Short(st.shortest_low), Short(st.shortest_high));
+    }
     if (e.validation) {
       out += fmt::format("  GUF validation (clause 8): d_low = {}, d_high = {}, delta = {} -> {}\n",
                          Short(e.validation->d_low), Short(e.validation->d_high),

@@ -3,15 +3,14 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <algorithm>
+#include <atomic>
 #include <boost/math/distributions/students_t.hpp>
 #include <boost/random/normal_distribution.hpp>
 #include <cmath>
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <pcg_random.hpp>
-#include <thread>
 
 #include "core/parallel.hpp"
 #include "uncertainty/mc_sampling.hpp"
@@ -354,6 +353,7 @@ NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, 
   if (chunk_moments != nullptr) chunk_moments->assign(static_cast<size_t>(chunks), {});
   const int workers = static_cast<int>(std::max<int64_t>(1, std::min<int64_t>(threads, chunks)));
   std::vector<NanReport> reports(static_cast<size_t>(workers));
+  std::atomic<bool> stop{false};
   const auto work = [&](int w) {
     auto evaluator = plan.model->MakeEvaluator();
     const size_t n_in = plan.inputs.size();
@@ -366,7 +366,7 @@ NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, 
     const int64_t begin = chunks * w / workers;
     const int64_t end = chunks * (w + 1) / workers;
     int64_t unreported = 0;
-    for (int64_t c = begin; c < end; ++c) {
+    for (int64_t c = begin; c < end && !stop.load(std::memory_order_relaxed); ++c) {
       const int64_t global = first_chunk + c;
       WordSource rng(plan.seed, static_cast<uint64_t>(global));
       const int64_t offset = c * kChunkTrials;
@@ -402,13 +402,18 @@ NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, 
       }
     }
   };
-  if (workers == 1) {
-    work(0);
-  } else {
-    std::vector<std::thread> pool;
-    for (int w = 0; w < workers; ++w) pool.emplace_back(work, w);
-    for (auto& t : pool) t.join();
-  }
+  // core/parallel: an exception in a worker (std::bad_alloc, or one thrown by
+  // on_trials_done) stops the other workers at their next chunk and reaches the caller.
+  std::atomic<int> next_worker{0};
+  internal::RunOnThreads(
+      static_cast<size_t>(workers),
+      [&] {
+        for (int w = next_worker.fetch_add(1); w < workers; w = next_worker.fetch_add(1)) work(w);
+      },
+      [&] {
+        next_worker.store(workers);
+        stop.store(true);
+      });
   NanReport total;
   for (const auto& r : reports) {
     if (r.count > 0 && (total.count == 0 || r.trial < total.trial)) {
@@ -434,23 +439,26 @@ Moments MeanAndU(const double* y, size_t m) {
 
 struct Intervals {
   CoverageInterval symmetric;
-  CoverageInterval shortest;
+  CoverageInterval shortest;           // located by the fitted width minimum (below)
+  CoverageInterval shortest_discrete;  // JCGM 101 7.7 as written
 };
 
-// Runs fn(lo, hi, worker) on `threads` contiguous slices of [0, n).
+// Half-width, in probability, of the window over which the width function of the shortest
+// interval is fitted (docs/uncertainty.md, "Shortest interval"): (1 - p)/5 up to M = 10^6
+// trials, then shrinking like M^(-1/5) so that the fit's bias vanishes as M grows.
+double FitWindow(double p, size_t m) {
+  const double shrink = std::min(1.0, std::pow(1e6 / static_cast<double>(m), 0.2));
+  return (1.0 - p) / 5.0 * shrink;
+}
+
+// Runs fn(lo, hi, slice) on `threads` contiguous slices of [0, n), through core/parallel
+// (an exception in a slice reaches the caller).
 template <typename Fn>
-void ParallelSlices(int threads, size_t n, Fn fn) {
-  if (threads <= 1) {
-    fn(size_t{0}, n, 0);
-    return;
-  }
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) {
-    const size_t lo = n * static_cast<size_t>(t) / static_cast<size_t>(threads);
-    const size_t hi = n * static_cast<size_t>(t + 1) / static_cast<size_t>(threads);
-    pool.emplace_back([=, &fn] { fn(lo, hi, t); });
-  }
-  for (auto& th : pool) th.join();
+void ForEachSlice(int threads, size_t n, Fn fn) {
+  const size_t slices = static_cast<size_t>(std::max(1, threads));
+  internal::ParallelFor(slices, threads, [&](size_t t) {
+    fn(n * t / slices, n * (t + 1) / slices, static_cast<int>(t));
+  });
 }
 
 // The `tail` lowest values of v[0, m) in increasing order into *low and the `tail` highest
@@ -486,7 +494,7 @@ bool TailsByThreshold(const double* v, size_t m, size_t tail, int threads, std::
   const int workers = std::max(1, threads);
   std::vector<std::vector<double>> lows(static_cast<size_t>(workers));
   std::vector<std::vector<double>> highs(static_cast<size_t>(workers));
-  ParallelSlices(workers, m, [&](size_t lo, size_t hi, int w) {
+  ForEachSlice(workers, m, [&](size_t lo, size_t hi, int w) {
     std::vector<double>& l = lows[static_cast<size_t>(w)];
     std::vector<double>& h = highs[static_cast<size_t>(w)];
     const size_t expect = (hi - lo) * tail / m * 9 / 8 + 64;
@@ -521,9 +529,7 @@ bool TailsByThreshold(const double* v, size_t m, size_t tail, int threads, std::
     std::sort(high->begin(), high->end());
   };
   if (threads > 1) {
-    std::thread other(order_high);
-    order_low();
-    other.join();
+    internal::RunBeside(order_high, order_low);  // core/parallel: exceptions reach the caller
   } else {
     order_low();
     order_high();
@@ -571,8 +577,87 @@ Intervals CoverageIntervals(double* v, size_t m, double p, int threads = 1) {
       best = s;
     }
   }
-  out.shortest = {y(best - 1), y(best + q - 1)};
+  out.shortest_discrete = {y(best - 1), y(best + q - 1)};
+  out.shortest = out.shortest_discrete;
+  // The discrete minimiser `best` wanders on the noise of the widths: near the minimum the
+  // width w(s) = y_(s+q) - y_(s) is flat to first order, so its argmin converges like
+  // M^(-1/3) (Chernoff's rate for the argmin of a quadratic plus a Brownian motion), not
+  // M^(-1/2). A least-squares parabola w(s) ~ c0 + c1 t + c2 t^2, t = (s - best)/W, over
+  // the W ranks either side of `best` averages that noise; its vertex s* = best - W c1/(2 c2)
+  // locates the minimum, and the end points are the order statistics at s* and s* + q,
+  // interpolated linearly between ranks (the continuous G of JCGM 101 7.5.2). A minimum at
+  // the edge (best = 1 or L), a window of fewer than 5 ranks, a fit without positive
+  // curvature or a vertex outside the window keep the discrete interval.
+  // The window also stays within a quarter of the distance from `best` to either edge of
+  // [1, L]: near an edge the width is far from a parabola (the bias of the fitted vertex
+  // grows like W^2 times the width's third derivative, which is large there).
+  const size_t edge = std::min(best - 1, tail - best) / 4;
+  const size_t window =
+      std::min(edge, static_cast<size_t>(std::llround(FitWindow(p, m) * static_cast<double>(m))));
+  if (best > 1 && best < tail && window >= 2) {
+    const size_t lo = best > window ? best - window : 1;
+    const size_t hi = std::min(tail, best + window);
+    if (hi - lo + 1 >= 5) {
+      const double w0 = y(best + q - 1) - y(best - 1);
+      const double scale = static_cast<double>(window);
+      double s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, b0 = 0, b1 = 0, b2 = 0;
+      for (size_t k = lo; k <= hi; ++k) {
+        const double t = (static_cast<double>(k) - static_cast<double>(best)) / scale;
+        const double w = (y(k + q - 1) - y(k - 1)) - w0;
+        const double t2 = t * t;
+        s0 += 1;
+        s1 += t;
+        s2 += t2;
+        s3 += t2 * t;
+        s4 += t2 * t2;
+        b0 += w;
+        b1 += t * w;
+        b2 += t2 * w;
+      }
+      Eigen::Matrix3d a;
+      a << s0, s1, s2, s1, s2, s3, s2, s3, s4;
+      const Eigen::Vector3d c = a.ldlt().solve(Eigen::Vector3d(b0, b1, b2));
+      const double t_min = (static_cast<double>(lo) - static_cast<double>(best)) / scale;
+      const double t_max = (static_cast<double>(hi) - static_cast<double>(best)) / scale;
+      if (c(2) > 0.0 && std::isfinite(c(1))) {
+        const double t_star = -c(1) / (2.0 * c(2));
+        if (t_star >= t_min && t_star <= t_max) {
+          const double rank = static_cast<double>(best) + t_star * scale;  // 1-based s*
+          const size_t k = std::min(tail - 1, static_cast<size_t>(std::floor(rank)));
+          const double f = rank - static_cast<double>(k);  // in [0, 1]
+          // y_(s) at real s between ranks k and k + 1 (0-based k - 1 and k).
+          const auto at = [&](size_t i) { return y(i) + f * (y(i + 1) - y(i)); };
+          out.shortest = {at(k - 1), at(k + q - 1)};
+        }
+      }
+    }
+  }
   return out;
+}
+
+// The adaptive rule's constants (docs/uncertainty.md): at least 10 blocks, G = 10 groups
+// for the test of the shortest end points, which are taken to converge like M^(-2/5).
+constexpr int64_t kMinBlocks = 10;
+constexpr int64_t kGroups = 10;
+constexpr double kShortestRate = 0.4;
+
+struct GroupSpread {
+  double s_low = 0.0;   // standard deviation of the G groups' shortest lower end points
+  double s_high = 0.0;  // and of their upper end points
+};
+
+// y[0, m) split into kGroups consecutive groups of m / kGroups values; each group's shortest
+// interval (copied, y is left as it is), groups on `threads` threads (core/parallel).
+GroupSpread ShortestSpread(const double* y, size_t m, double p, int threads) {
+  const size_t n = m / static_cast<size_t>(kGroups);
+  std::vector<double> low(static_cast<size_t>(kGroups)), high(static_cast<size_t>(kGroups));
+  internal::ParallelFor(static_cast<size_t>(kGroups), threads, [&](size_t g) {
+    std::vector<double> copy(y + g * n, y + (g + 1) * n);
+    const Intervals iv = CoverageIntervals(copy.data(), copy.size(), p);
+    low[g] = iv.shortest.low;
+    high[g] = iv.shortest.high;
+  });
+  return {MeanAndU(low.data(), low.size()).u, MeanAndU(high.data(), high.size()).u};
 }
 
 Error NanError(const Budget& budget, const NanReport& nan, int64_t trials) {
@@ -603,6 +688,10 @@ CoverageInterval SymmetricInterval(std::vector<double>* values, double coverage)
 }
 
 CoverageInterval ShortestInterval(std::vector<double>* values, double coverage) {
+  return CoverageIntervals(values->data(), values->size(), coverage).shortest_discrete;
+}
+
+CoverageInterval ShortestIntervalFitted(std::vector<double>* values, double coverage) {
   return CoverageIntervals(values->data(), values->size(), coverage).shortest;
 }
 
@@ -643,9 +732,7 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
   result.adaptive = options.adaptive;
   result.seed = options.seed;
   result.coverage = options.coverage;
-  result.threads = options.threads > 0
-                       ? options.threads
-                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  result.threads = internal::ResolveThreads(options.threads);
   result.generator =
       "pcg64 (pcg-cpp PCG XSL RR 128/64) x 4 interleaved; chunk c of 1000 trials: engine j "
       "starts at splitmix64(splitmix64(seed) + 4c + j) on stream 4c + j";
@@ -672,18 +759,21 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
     const Intervals iv = CoverageIntervals(values.get(), m, options.coverage, result.threads);
     result.symmetric = iv.symmetric;
     result.shortest = iv.shortest;
+    result.shortest_discrete = iv.shortest_discrete;
     result.ok = true;
     return result;
   } else {
-    // JCGM 101 7.9 with the robust rule (docs/uncertainty.md).
+    // JCGM 101 7.9, with the rule of docs/uncertainty.md ("Adaptive procedure"): stop only
+    // when every reported number is stable to delta (7.9.2), the shortest interval's end
+    // points tested on themselves.
     const double j = std::ceil(100.0 / (1.0 - options.coverage));
     int64_t block = std::max<int64_t>(static_cast<int64_t>(j), 10000);
     block = (block + kChunkTrials - 1) / kChunkTrials * kChunkTrials;
     std::vector<double> means, us, lows, highs;
     std::vector<double> scratch(static_cast<size_t>(block));
     double pooled_sum = 0.0;
-    double pooled_ss = 0.0;  // sum over blocks of (M_b - 1) u_h^2
-    const int64_t min_blocks = 10;
+    double pooled_ss = 0.0;                // sum over blocks of (M_b - 1) u_h^2
+    int64_t next_group_test = kMinBlocks;  // h of the next test of the shortest end points
     for (int64_t h = 1; h * block <= options.max_trials; ++h) {
       const int64_t first = (h - 1) * block;
       y.resize(static_cast<size_t>(h * block));
@@ -701,7 +791,7 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
       pooled_ss += m.u * m.u * static_cast<double>(block - 1);
       result.trials = h * block;
       result.blocks = h;
-      if (h < min_blocks) continue;
+      if (h < kMinBlocks) continue;
       // Pooled u(y) from the h blocks: within-block and between-block sums of squares.
       const double total = static_cast<double>(h * block);
       const double grand = pooled_sum / total;
@@ -710,16 +800,52 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
       const double u_pooled =
           std::sqrt((pooled_ss + static_cast<double>(block) * between) / (total - 1.0));
       const double delta = NumericalTolerance(u_pooled, options.ndig);
+      // Stage 1, JCGM 101 7.9.4 with t_0.975(h - 1) for its factor 2: the 95 % half-width
+      // t s(z_1..z_h)/sqrt(h) of the pooled value of each block statistic that converges
+      // like M^(-1/2) (mean, u, symmetric end points).
       const double t =
           boost::math::quantile(boost::math::students_t(static_cast<double>(h - 1)), 0.975);
-      const auto settled = [&](const std::vector<double>& z) {
-        const Moments s = MeanAndU(z.data(), z.size());
-        return t * s.u / std::sqrt(static_cast<double>(z.size())) <= delta;
+      const auto half_width = [&](const std::vector<double>& z) {
+        return t * MeanAndU(z.data(), z.size()).u / std::sqrt(static_cast<double>(z.size()));
       };
-      if (settled(means) && settled(us) && settled(lows) && settled(highs)) {
+      McStability st;
+      st.value = half_width(means);
+      st.u = half_width(us);
+      st.symmetric_low = half_width(lows);
+      st.symmetric_high = half_width(highs);
+      result.stability = st;
+      result.delta = delta;
+      if (st.value > delta || st.u > delta || st.symmetric_low > delta ||
+          st.symmetric_high > delta || h < next_group_test || h % kGroups != 0) {
+        continue;
+      }
+      // Stage 2, the shortest end points themselves: the pooled h blocks split into G = 10
+      // groups of h/G blocks, each group's shortest interval (as reported, fitted minimum);
+      // their spread s_G, scaled to the pooled M = G M_G by the slowest rate of that
+      // estimator (M^(-2/5), docs/uncertainty.md), gives the half-width
+      // t_0.975(G - 1) s_G G^(-2/5). Below delta: settled. Otherwise the next test is where
+      // that rate predicts success (Stein's two-stage idea as applied to JCGM 101 by
+      // Wuebbeler, Harris, Cox and Elster, Metrologia 47 (2010) 317), at least 10 and at
+      // most h blocks further on, on a multiple of G blocks.
+      const GroupSpread g = ShortestSpread(y.data(), static_cast<size_t>(h * block),
+                                           options.coverage, result.threads);
+      const double t_g =
+          boost::math::quantile(boost::math::students_t(static_cast<double>(kGroups - 1)), 0.975);
+      const double reduce = std::pow(static_cast<double>(kGroups), -kShortestRate);
+      st.shortest_low = t_g * g.s_low * reduce;
+      st.shortest_high = t_g * g.s_high * reduce;
+      st.groups = kGroups;
+      result.stability = st;
+      const double worst = std::max(st.shortest_low, st.shortest_high);
+      if (worst <= delta) {
         result.converged = true;
         break;
       }
+      const double predicted =
+          static_cast<double>(h) * std::pow(worst / delta, 1.0 / kShortestRate);
+      const int64_t want = static_cast<int64_t>(std::min(
+          std::max(predicted, static_cast<double>(h + kGroups)), 2.0 * static_cast<double>(h)));
+      next_group_test = (want + kGroups - 1) / kGroups * kGroups;
     }
     if (!result.converged) {
       result.message = "adaptive procedure did not settle within max_trials = " +
@@ -736,11 +862,13 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
         CoverageIntervals(copy.data(), copy.size(), options.coverage, result.threads);
     result.symmetric = iv.symmetric;
     result.shortest = iv.shortest;
+    result.shortest_discrete = iv.shortest_discrete;
     result.samples = std::move(y);
   } else {
     const Intervals iv = CoverageIntervals(y.data(), y.size(), options.coverage, result.threads);
     result.symmetric = iv.symmetric;
     result.shortest = iv.shortest;
+    result.shortest_discrete = iv.shortest_discrete;
   }
   result.ok = result.converged;
   return result;

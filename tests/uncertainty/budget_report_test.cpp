@@ -42,9 +42,38 @@ TEST_CASE("Budget report JSON for GUM H.1 with Monte Carlo", "[uncertainty][repo
                           "d_high", "guf_validated"}) {
     CHECK(mc.contains(key));
   }
+  // Beside the contract keys: the discrete 7.7 interval and the MCM's own tolerance (7.9.2,
+  // from u = 36 nm at ndig 2: delta = 0.5 nm); no stopping half-widths for a fixed run.
+  CHECK(mc["interval_shortest_discrete"].size() == 2);
+  CHECK(mc["numerical_tolerance"].get<double>() == Approx(0.5));
+  CHECK_FALSE(mc.contains("stability_half_width"));
   const std::string table = BudgetReportTable(e.value());
   CHECK(table.find("Result (JCGM 100 7.2.6): l = (50000838 +- 92) nm") != std::string::npos);
   CHECK(table.find("Monte Carlo (JCGM 101): M = 100000") != std::string::npos);
+}
+
+TEST_CASE("Budget report of an adaptive run states the half-widths that met delta",
+          "[uncertainty][report]") {
+  auto b =
+      LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/jcgm101_9_2_2_additive.json");
+  REQUIRE(b.ok());
+  auto e = EvaluateBudget(b.value());
+  REQUIRE(e.ok());
+  const auto j = BudgetReportJson(e.value());
+  const auto& mc = j["monte_carlo"];
+  REQUIRE(mc["converged"] == true);
+  // u = 2 at ndig 2: delta = 0.05 (JCGM 101 9.2.2).
+  const double delta = mc["numerical_tolerance"].get<double>();
+  CHECK(delta == Approx(0.05));
+  const auto& st = mc["stability_half_width"];
+  CHECK(st["groups"] == 10);
+  for (const auto& x :
+       {st["value"], st["u"], st["interval_symmetric"][0], st["interval_symmetric"][1],
+        st["interval_shortest"][0], st["interval_shortest"][1]}) {
+    REQUIRE(x.is_number());
+    CHECK(x.get<double>() <= delta);
+  }
+  CHECK(BudgetReportTable(e.value()).find("stable to delta = 0.05 (7.9.2)") != std::string::npos);
 }
 
 }  // namespace

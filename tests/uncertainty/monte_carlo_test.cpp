@@ -12,9 +12,11 @@
 #include <atomic>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
+#include <boost/math/quadrature/gauss.hpp>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
+#include <stdexcept>
 #include <string>
 
 #include "metro/uncertainty/budget.hpp"
@@ -261,47 +263,54 @@ TEST_CASE("Adaptive Monte Carlo stops by its rule", "[uncertainty][mc]") {
   const McResult& r = run.value();
   REQUIRE(r.converged);
   REQUIRE(r.ok);
-  CHECK(r.blocks >= 10);
-  CHECK(r.trials == r.blocks * 10000);
+  const int64_t h = r.blocks;
+  CHECK(h >= 10);
+  CHECK(h % 10 == 0);  // stage 2 is tested on multiples of G = 10 blocks
+  CHECK(r.trials == h * 10000);
   REQUIRE(r.samples.size() == static_cast<size_t>(r.trials));
-  // Recompute the rule from the pooled values: it holds at h and not at h - 1.
-  const auto rule = [&](int64_t h) {
-    std::vector<double> means, us, lows, highs;
-    std::vector<double> all(r.samples.begin(), r.samples.begin() + h * 10000);
-    for (int64_t k = 0; k < h; ++k) {
-      std::vector<double> block(r.samples.begin() + k * 10000, r.samples.begin() + (k + 1) * 10000);
-      double mean = 0;
-      for (double y : block) mean += y;
-      mean /= 10000;
-      double ss = 0;
-      for (double y : block) ss += (y - mean) * (y - mean);
-      std::sort(block.begin(), block.end());
-      means.push_back(mean);
-      us.push_back(std::sqrt(ss / 9999));
-      lows.push_back(block[250 - 1]);  // r = (M - q)/2 = 250, y_(r)
-      highs.push_back(block[250 + 9500 - 1]);
-    }
-    double mean = 0;
-    for (double y : all) mean += y;
-    mean /= static_cast<double>(all.size());
-    double ss = 0;
-    for (double y : all) ss += (y - mean) * (y - mean);
-    const double delta = NumericalTolerance(std::sqrt(ss / static_cast<double>(all.size() - 1)), 2);
-    const double t =
-        boost::math::quantile(boost::math::students_t(static_cast<double>(h - 1)), 0.975);
-    const auto ok = [&](const std::vector<double>& z) {
-      double m = 0;
-      for (double v : z) m += v;
-      m /= static_cast<double>(z.size());
-      double s = 0;
-      for (double v : z) s += (v - m) * (v - m);
-      s = std::sqrt(s / static_cast<double>(z.size() - 1));
-      return t * s / std::sqrt(static_cast<double>(z.size())) <= delta;
-    };
-    return ok(means) && ok(us) && ok(lows) && ok(highs);
+  const auto mean_sd = [](const std::vector<double>& z) {
+    double m = 0;
+    for (double v : z) m += v;
+    m /= static_cast<double>(z.size());
+    double s = 0;
+    for (double v : z) s += (v - m) * (v - m);
+    return std::pair{m, std::sqrt(s / static_cast<double>(z.size() - 1))};
   };
-  CHECK(rule(r.blocks));
-  if (r.blocks > 10) CHECK_FALSE(rule(r.blocks - 1));
+  // Both stages recomputed from the pooled values (docs/uncertainty.md).
+  std::vector<double> means, us, lows, highs;
+  for (int64_t k = 0; k < h; ++k) {
+    std::vector<double> block(r.samples.begin() + k * 10000, r.samples.begin() + (k + 1) * 10000);
+    const auto [mean, sd] = mean_sd(block);
+    std::sort(block.begin(), block.end());
+    means.push_back(mean);
+    us.push_back(sd);
+    lows.push_back(block[250 - 1]);  // r = (M - q)/2 = 250, y_(r)
+    highs.push_back(block[250 + 9500 - 1]);
+  }
+  const double delta = NumericalTolerance(mean_sd(r.samples).second, 2);
+  CHECK(r.delta == Approx(delta));
+  const double t =
+      boost::math::quantile(boost::math::students_t(static_cast<double>(h - 1)), 0.975);
+  for (const auto* z : {&means, &us, &lows, &highs}) {
+    CHECK(t * mean_sd(*z).second / std::sqrt(static_cast<double>(h)) <= delta);
+  }
+  std::vector<double> g_low, g_high;
+  const size_t group = static_cast<size_t>(r.trials / 10);
+  for (size_t g = 0; g < 10; ++g) {
+    std::vector<double> part(r.samples.begin() + static_cast<std::ptrdiff_t>(g * group),
+                             r.samples.begin() + static_cast<std::ptrdiff_t>((g + 1) * group));
+    const CoverageInterval iv = ShortestIntervalFitted(&part, 0.95);
+    g_low.push_back(iv.low);
+    g_high.push_back(iv.high);
+  }
+  const double t9 = boost::math::quantile(boost::math::students_t(9.0), 0.975);
+  const double half_low = t9 * mean_sd(g_low).second * std::pow(10.0, -0.4);
+  const double half_high = t9 * mean_sd(g_high).second * std::pow(10.0, -0.4);
+  CHECK(half_low <= delta);
+  CHECK(half_high <= delta);
+  CHECK(r.stability.shortest_low == Approx(half_low).epsilon(1e-9));
+  CHECK(r.stability.shortest_high == Approx(half_high).epsilon(1e-9));
+  CHECK(r.stability.groups == 10);
   // And the pooled result agrees with the published 9.3 values at its own tolerance.
   CHECK(r.u == Approx(0.07545).margin(2 * r.delta + 1e-4));
 }
@@ -456,6 +465,245 @@ TEST_CASE("JCGM 101 9.5 gauge block at 1e7 trials", "[uncertainty][mc][slow]") {
   CHECK(r.u == Approx(35.68).epsilon(0.005));
   CHECK(r.shortest.low == Approx(745.0).margin(0.5 + 5 * 0.05));
   CHECK(r.shortest.high == Approx(932.0).margin(0.5 + 5 * 0.05));
+}
+
+TEST_CASE("An exception in a Monte Carlo worker reaches the caller", "[uncertainty][mc]") {
+  // issue #21 part 8: the chunks run on core/parallel, which rethrows a worker's exception
+  // in the calling thread (a bare std::thread would call std::terminate). on_trials_done is
+  // called from the workers, so a throwing one is an exception inside a worker.
+  const Budget b = Load("jcgm101_9_3_mass.json");
+  for (const bool adaptive : {false, true}) {
+    for (const int threads : {1, 2, 3}) {
+      INFO("adaptive " << adaptive << ", threads " << threads);
+      McOptions options = b.monte_carlo;
+      options.adaptive = adaptive;
+      options.trials = 300000;
+      options.threads = threads;
+      std::atomic<int64_t> heard{0};
+      options.on_trials_done = [&](int64_t n) {
+        if ((heard += n) > 64000) throw std::runtime_error("worker stopped by the test");
+      };
+      CHECK_THROWS_WITH(RunMonteCarlo(b, options), "worker stopped by the test");
+    }
+  }
+  // The same options without the throw still run (nothing left behind by the failure).
+  McOptions options = b.monte_carlo;
+  options.adaptive = false;
+  options.trials = 100000;
+  options.threads = 2;
+  auto r = RunMonteCarlo(b, options);
+  REQUIRE(r.ok());
+  CHECK(r.value().trials == 100000);
+}
+
+TEST_CASE("The fitted shortest interval is closer to the exact one than the discrete",
+          "[uncertainty][mc]") {
+  // JCGM 101 7.7's discrete minimiser converges like M^(-1/3); the fitted minimum of the
+  // width (docs/uncertainty.md) faster. Y = exp(X), X ~ N(0, 0.25^2), is lognormal and
+  // skewed; its shortest 95 % interval minimises exp(0.25 z(s + 0.95)) - exp(0.25 z(s)),
+  // z the normal quantile: [0.566982, 1.556482] (golden section, Python, separately), where
+  // the pdf phi(ln y / 0.25) / (0.25 y) is equal at both ends.
+  const Budget b = Parse(R"j({"measurand": {"name": "Y", "model": "exp(X)"},
+    "inputs": [{"name": "X", "value": 0, "u": 0.25}],
+    "monte_carlo": {"trials": 1000000, "seed": 1}})j");
+  const CoverageInterval exact = {0.566982, 1.556482};
+  const auto pdf = [](double y) { return PhiDensity(std::log(y) / 0.25) / (0.25 * y); };
+  CHECK(pdf(exact.low) == Approx(pdf(exact.high)).epsilon(1e-4));
+  CHECK(Phi(std::log(exact.high) / 0.25) - Phi(std::log(exact.low) / 0.25) ==
+        Approx(0.95).margin(1e-6));
+  double ss_fitted = 0.0;
+  double ss_discrete = 0.0;
+  for (uint64_t seed = 1; seed <= 12; ++seed) {
+    McOptions options = b.monte_carlo;
+    options.adaptive = false;
+    options.trials = 1000000;
+    options.seed = seed;
+    auto r = RunMonteCarlo(b, options);
+    REQUIRE(r.ok());
+    const McResult& m = r.value();
+    const auto sq = [](double x) { return x * x; };
+    ss_fitted += sq(m.shortest.low - exact.low) + sq(m.shortest.high - exact.high);
+    ss_discrete +=
+        sq(m.shortest_discrete.low - exact.low) + sq(m.shortest_discrete.high - exact.high);
+  }
+  WARN("lognormal, 12 seeds at M = 1e6: rms error of the end points, fitted "
+       << std::sqrt(ss_fitted / 24) << ", discrete " << std::sqrt(ss_discrete / 24));
+  CHECK(ss_fitted < ss_discrete);
+}
+
+// JCGM 101 9.3 by quadrature, independent of any sampling. With S = mrc + dmrc ~ N(mu_S,
+// sigma_S^2), mu_S = 100001.234 mg, sigma_S^2 = 0.05^2 + 0.02^2, A = rhoa - 1.2 ~ R(-0.1, 0.1)
+// and B = 1/rhow - 1/rhor, the model is Y = S (1 + A B) - 100000. Given B, Y is the sum of
+// N(1.234, sigma_S^2) and a rectangular of half-width 0.1 mu_S |B| (the sd of the normal part
+// is sigma_S |1 + A B|, which differs from sigma_S by at most 3.2e-6 relative, moving the
+// end points by < 1e-6 mg), whose CDF is NormalPlusRectCdf; F_Y is its mean over rhow ~
+// R(7000, 9000) and rhor ~ R(7950, 8050) kg/m^3 by Gauss-Legendre quadrature with N nodes.
+template <int N>
+double MassCdf(double y) {
+  const double mu = 1.234;
+  const double sigma = std::sqrt(0.05 * 0.05 + 0.02 * 0.02);
+  const double mu_s = 100001.234;
+  // Nodes of the product rule, once: half-width a_k and weight (w_i/2)(w_j/2) of the mean
+  // over the two rectangular densities (N even: nodes +-x_i on [-1, 1]).
+  static const std::vector<std::pair<double, double>> nodes = [&] {
+    using Gauss = boost::math::quadrature::gauss<double, N>;
+    std::vector<std::pair<double, double>> t;  // (x on [-1, 1], weight on the mean)
+    for (size_t i = 0; i < Gauss::abscissa().size(); ++i) {
+      t.emplace_back(Gauss::abscissa()[i], Gauss::weights()[i] / 2);
+      t.emplace_back(-Gauss::abscissa()[i], Gauss::weights()[i] / 2);
+    }
+    std::vector<std::pair<double, double>> out;
+    for (const auto& [xw, ww] : t) {
+      for (const auto& [xr, wr] : t) {
+        const double rhow = 8000.0 + 1000.0 * xw;
+        const double rhor = 8000.0 + 50.0 * xr;
+        out.emplace_back(0.1 * mu_s * std::fabs(1 / rhow - 1 / rhor), ww * wr);
+      }
+    }
+    return out;
+  }();
+  double f = 0.0;
+  for (const auto& [a, w] : nodes) {
+    f += w * (a < 1e-9 ? Phi((y - mu) / sigma) : NormalPlusRectCdf(y - mu, sigma, a));
+  }
+  return f;
+}
+
+struct Reference {
+  CoverageInterval symmetric;
+  CoverageInterval shortest;
+};
+
+// 95 % intervals of a CDF: symmetric [G^-1(0.025), G^-1(0.975)]; shortest by golden-section
+// search of the width G^-1(s + 0.95) - G^-1(s) over s in (0, 0.05).
+Reference Intervals95(const std::function<double(double)>& cdf, double lo, double hi) {
+  const auto q = [&](double p) {
+    double a = lo;
+    double b = hi;
+    for (int i = 0; i < 64; ++i) {
+      const double mid = 0.5 * (a + b);
+      (cdf(mid) < p ? a : b) = mid;
+    }
+    return 0.5 * (a + b);
+  };
+  Reference r;
+  r.symmetric = {q(0.025), q(0.975)};
+  const auto width = [&](double s) { return q(s + 0.95) - q(s); };
+  double a = 1e-4;
+  double b = 0.05 - 1e-4;
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  for (int i = 0; i < 40; ++i) {
+    const double c = b - g * (b - a);
+    const double d = a + g * (b - a);
+    if (width(c) < width(d)) {
+      b = d;
+    } else {
+      a = c;
+    }
+  }
+  const double s = 0.5 * (a + b);
+  r.shortest = {q(s), q(s + 0.95)};
+  return r;
+}
+
+// The share of adaptive runs, over seeds 1..n, whose intervals both lie within delta of the
+// reference at every end point; the trial counts for docs/uncertainty.md.
+struct SeedSweep {
+  int hits = 0;
+  int shortest_hits = 0;
+  int symmetric_hits = 0;
+  int converged = 0;
+  std::vector<int64_t> trials;
+};
+
+SeedSweep Sweep(const Budget& b, const Reference& ref, double delta, int n) {
+  SeedSweep out;
+  for (int seed = 1; seed <= n; ++seed) {
+    McOptions options = b.monte_carlo;
+    REQUIRE(options.adaptive);
+    options.seed = static_cast<uint64_t>(seed);
+    auto run = RunMonteCarlo(b, options);
+    REQUIRE(run.ok());
+    const McResult& m = run.value();
+    out.converged += m.converged ? 1 : 0;
+    out.trials.push_back(m.trials);
+    const auto near = [&](const CoverageInterval& x, const CoverageInterval& y) {
+      return std::fabs(x.low - y.low) <= delta && std::fabs(x.high - y.high) <= delta;
+    };
+    const bool shortest = near(m.shortest, ref.shortest);
+    const bool symmetric = near(m.symmetric, ref.symmetric);
+    UNSCOPED_INFO("seed " << seed << ": M = " << m.trials << ", shortest [" << m.shortest.low
+                          << ", " << m.shortest.high << "], symmetric [" << m.symmetric.low << ", "
+                          << m.symmetric.high << "]");
+    out.shortest_hits += shortest ? 1 : 0;
+    out.symmetric_hits += symmetric ? 1 : 0;
+    out.hits += shortest && symmetric ? 1 : 0;
+  }
+  std::sort(out.trials.begin(), out.trials.end());
+  return out;
+}
+
+std::string Summary(const char* name, const SeedSweep& s) {
+  const size_t n = s.trials.size();
+  const double median = n % 2 ? static_cast<double>(s.trials[n / 2])
+                              : 0.5 * static_cast<double>(s.trials[n / 2 - 1] + s.trials[n / 2]);
+  return std::string(name) + ": both intervals within delta in " + std::to_string(s.hits) + " of " +
+         std::to_string(n) + " seeds (shortest " + std::to_string(s.shortest_hits) +
+         ", symmetric " + std::to_string(s.symmetric_hits) + "); trials median " +
+         std::to_string(static_cast<int64_t>(median)) + ", range " +
+         std::to_string(s.trials.front()) + " - " + std::to_string(s.trials.back());
+}
+
+TEST_CASE("JCGM 101 9.3 reference intervals by quadrature", "[uncertainty][mc]") {
+  // Quadrature of order 24 and 32 agree to 2e-6 mg. The issue's references from 2 x 1e8
+  // draws: symmetric [1.0844, 1.3836] mg, reproduced to their rounding; shortest [1.0843,
+  // 1.3834] mg, a discrete JCGM 101 7.7 minimiser, which at 2e8 trials still wanders by
+  // ~1e-3 (2e8/1e6)^(-1/3) = 1.7e-4 mg (docs/uncertainty.md): within 2.5e-4 of the exact
+  // [1.08443, 1.38357] mg.
+  const Reference r32 = Intervals95(MassCdf<32>, 0.5, 2.0);
+  const Reference r24 = Intervals95(MassCdf<24>, 0.5, 2.0);
+  CHECK(r32.shortest.low == Approx(r24.shortest.low).margin(2e-6));
+  CHECK(r32.shortest.high == Approx(r24.shortest.high).margin(2e-6));
+  CHECK(r32.symmetric.low == Approx(r24.symmetric.low).margin(2e-6));
+  // Every component N(1.234, sigma_S^2) + R(-a, a) is symmetric about 1.234 mg, so is the
+  // mixture, and the shortest interval of a symmetric unimodal pdf is the symmetric one.
+  CHECK(r32.shortest.low == Approx(r32.symmetric.low).margin(1e-6));
+  CHECK(r32.shortest.high == Approx(r32.symmetric.high).margin(1e-6));
+  CHECK(r32.symmetric.low + r32.symmetric.high == Approx(2 * 1.234).margin(1e-6));
+  CHECK(r32.symmetric.low == Approx(1.0844).margin(1e-4));
+  CHECK(r32.symmetric.high == Approx(1.3836).margin(1e-4));
+  CHECK(r32.shortest.low == Approx(1.0843).margin(2.5e-4));
+  CHECK(r32.shortest.high == Approx(1.3834).margin(2.5e-4));
+  // The published JCGM 101 9.3 result (10^6 trials): shortest [1.0834, 1.3825] mg, width
+  // 0.2991 mg; the width is the well-determined part.
+  CHECK(r32.shortest.high - r32.shortest.low == Approx(0.2991).margin(2e-4));
+  WARN("JCGM 101 9.3 by quadrature: symmetric [" << r32.symmetric.low << ", " << r32.symmetric.high
+                                                 << "], shortest [" << r32.shortest.low << ", "
+                                                 << r32.shortest.high << "] mg");
+}
+
+TEST_CASE("Adaptive Monte Carlo keeps its tolerance over 40 seeds (JCGM 101 9.3, 9.2.2)",
+          "[uncertainty][mc][slow]") {
+  // issue #21 part 6: with n_dig = 2, both 95 % intervals within delta of the exact ones at
+  // every end point in at least 36 of 40 seeds (the rule aims at 95 %).
+  SECTION("9.3 mass calibration, delta = 0.0005 mg") {
+    const Budget b = Load("jcgm101_9_3_mass.json");
+    const Reference ref = Intervals95(MassCdf<32>, 0.5, 2.0);
+    const SeedSweep s = Sweep(b, ref, 0.0005, 40);
+    WARN(Summary("JCGM 101 9.3", s));
+    CHECK(s.converged == 40);
+    CHECK(s.hits >= 36);
+  }
+  SECTION("9.2.2 additive normal, delta = 0.05") {
+    const Budget b = Load("jcgm101_9_2_2_additive.json");
+    // Y ~ N(0, 4): both intervals are +-1.959964 * 2 (closed form).
+    const double z = boost::math::quantile(boost::math::normal(), 0.975);
+    const Reference ref{{-2 * z, 2 * z}, {-2 * z, 2 * z}};
+    const SeedSweep s = Sweep(b, ref, 0.05, 40);
+    WARN(Summary("JCGM 101 9.2.2", s));
+    CHECK(s.converged == 40);
+    CHECK(s.hits >= 36);
+  }
 }
 
 }  // namespace

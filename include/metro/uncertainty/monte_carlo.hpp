@@ -7,7 +7,7 @@
 // only, never on the number of threads or on how chunks are shared between them. Each chunk
 // draws input by input, in blocks (samplers and their accuracy: src/uncertainty/
 // mc_sampling.hpp; t inputs by Bailey's polar method). Chunks are spread over std::thread
-// workers (McOptions::threads, default: all cores).
+// workers (McOptions::threads, default: all cores) through core/parallel.
 //
 //   estimate y = mean of the M model values, u(y) their standard deviation      (7.6)
 //   (two passes per chunk, chunks merged in chunk order by the pairwise update of
@@ -18,11 +18,15 @@
 //   M >= 2^18 and L <= M/8 they are copied out by thresholds taken from a pilot subsample
 //   (on all threads), otherwise by partial selection (std::nth_element); never a full sort.
 //
-// Adaptive run (7.9) with the robust stopping rule of docs/uncertainty.md: blocks of
-// M_b = max(100/(1-p), 1e4) trials (rounded up to whole chunks); after h >= 10 blocks stop
-// when t_0.975(h-1) * s(h block values)/sqrt(h) <= delta for the mean, u(y) and both
+// Adaptive run (7.9) with the stopping rule of docs/uncertainty.md: blocks of
+// M_b = max(100/(1-p), 1e4) trials (rounded up to whole chunks); after h >= 10 blocks,
+// stage 1 asks t_0.975(h-1) * s(h block values)/sqrt(h) <= delta for the mean, u(y) and both
 // symmetric end points, delta = 1/2 10^l with u(y) = c 10^l, c an ndig-digit integer
-// (7.9.2). The reported results come from the pooled h M_b values.
+// (7.9.2); stage 2 then tests the shortest end points themselves: the pooled values in
+// G = 10 groups, t_0.975(9) s_G 10^(-2/5) <= delta for both end points. The reported
+// results come from the pooled h M_b values; McResult::stability holds the half-widths.
+// Chunks run on core/parallel: an exception in a worker (one thrown by
+// McOptions::on_trials_done, std::bad_alloc) reaches the caller of RunMonteCarlo.
 #pragma once
 
 #include <cstdint>
@@ -43,6 +47,19 @@ struct CoverageInterval {
   double high = std::numeric_limits<double>::quiet_NaN();
 };
 
+// 95 % half-widths of the reported numbers at the stop of an adaptive run (JCGM 101 7.9.4
+// with t factors, docs/uncertainty.md): each is compared with delta. NaN when not computed
+// (fixed-size runs; the shortest end points before their test was reached).
+struct McStability {
+  double value = std::numeric_limits<double>::quiet_NaN();
+  double u = std::numeric_limits<double>::quiet_NaN();
+  double symmetric_low = std::numeric_limits<double>::quiet_NaN();
+  double symmetric_high = std::numeric_limits<double>::quiet_NaN();
+  double shortest_low = std::numeric_limits<double>::quiet_NaN();
+  double shortest_high = std::numeric_limits<double>::quiet_NaN();
+  int64_t groups = 0;  // G of the shortest end points' test
+};
+
 struct McResult {
   bool ok = false;  // False until a run finished (and, adaptive, converged).
   bool adaptive = false;
@@ -56,7 +73,9 @@ struct McResult {
   double value = std::numeric_limits<double>::quiet_NaN();  // y
   double u = std::numeric_limits<double>::quiet_NaN();      // u(y)
   CoverageInterval symmetric;
-  CoverageInterval shortest;
+  CoverageInterval shortest;           // Fitted minimum of the width (docs/uncertainty.md).
+  CoverageInterval shortest_discrete;  // JCGM 101 7.7 as written: the discrete minimiser.
+  McStability stability;               // Adaptive runs.
   double delta = std::numeric_limits<double>::quiet_NaN();  // Numerical tolerance (7.9.2).
   std::string message;                                      // Why not ok, or notes.
   std::vector<double> samples;  // The M model values (unordered), if McOptions asked.
@@ -71,7 +90,12 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options,
 // Coverage intervals of a sample (may be reordered in place). Precondition: 0 < p < 1, at
 // least two values, no NaN.
 CoverageInterval SymmetricInterval(std::vector<double>* values, double coverage);
+// ShortestInterval is JCGM 101 7.7 as written (the r minimising y_(r+q) - y_(r));
+// ShortestIntervalFitted locates the minimum of that width by a least-squares parabola over
+// the ranks around it (docs/uncertainty.md, "Shortest interval"), which is what McResult
+// reports: its end points converge like M^(-1/2) to M^(-2/5) instead of M^(-1/3).
 CoverageInterval ShortestInterval(std::vector<double>* values, double coverage);
+CoverageInterval ShortestIntervalFitted(std::vector<double>* values, double coverage);
 
 // Numerical tolerance of u with ndig significant digits (JCGM 101 7.9.2): u = c 10^l with
 // c an ndig-digit integer, delta = 10^l / 2 (0.0996, ndig 2 -> c = 10, l = -2, 0.005).
