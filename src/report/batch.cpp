@@ -18,11 +18,13 @@
 #include <set>
 
 #include "core/parallel.hpp"
+#include "metro/core/angles.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
+#include "metro/io/columns.hpp"
 
 namespace metro {
 
@@ -45,14 +47,41 @@ struct QuantityResult {
   double n_eff = 0.0;
 };
 
+// One tag's receiver frame counts in one session.
+struct TagResult {
+  int sensor = 0;
+  std::string tag_name;
+  int64_t frames = 0, fresh = 0, stale = 0, never = 0;
+};
+
+struct SessionResults {
+  std::vector<QuantityResult> quantities;
+  std::vector<TagResult> tags;
+  std::vector<std::string> warnings;  // NoFreshPacketWarnings, prefixed with the session.
+};
+
+int64_t Count(const ordered_json& j, const char* key) {
+  return j.contains(key) && j[key].is_number_integer() ? j[key].get<int64_t>() : 0;
+}
+
 double Number(const ordered_json& j, const char* key) {
   if (!j.contains(key) || !j[key].is_number()) return std::nan("");
   return j[key].get<double>();
 }
 
-std::vector<QuantityResult> ExtractResults(const ordered_json& report) {
-  std::vector<QuantityResult> out;
+SessionResults ExtractResults(const ordered_json& report, const std::string& input) {
+  SessionResults results;
+  results.warnings = NoFreshPacketWarnings(report, input + ": ");
+  std::vector<QuantityResult>& out = results.quantities;
   for (const auto& s : report["sensors"]) {
+    TagResult t;
+    t.sensor = s["sensor"].get<int>();
+    t.tag_name = s.value("name", "");
+    t.frames = Count(s, "frames");
+    t.fresh = Count(s, "fresh");
+    t.stale = Count(s, "stale");
+    t.never = Count(s, "never");
+    results.tags.push_back(t);
     if (!s.contains("quantities")) continue;
     for (const auto& [name, q] : s["quantities"].items()) {
       if (!q.contains("type_a") || !q["type_a"].is_object()) continue;
@@ -69,7 +98,13 @@ std::vector<QuantityResult> ExtractResults(const ordered_json& report) {
       out.push_back(std::move(r));
     }
   }
-  return out;
+  return results;
+}
+
+// Angles are pooled on the circle: a unit of dimension angle (deg, rad).
+bool IsAngleUnit(const std::string& unit) {
+  const Unit* u = UnitBySymbol(unit);
+  return u != nullptr && u->dimension == Dimension::kAngle && u->to_si > 0.0;
 }
 
 // A batch's own outputs in its folder: never sessions.
@@ -121,6 +156,46 @@ std::string NotASessionFile(const std::string& path) {
 }
 
 }  // namespace
+
+CircularStatistics CircularStatisticsDeg(const std::vector<double>& angles_deg) {
+  CircularStatistics out;
+  const size_t n = angles_deg.size();
+  if (n == 0) return out;
+  constexpr double kRadPerDeg = M_PI / 180.0;
+  double c = 0.0, s = 0.0;
+  for (double a : angles_deg) {
+    c += std::cos(a * kRadPerDeg);
+    s += std::sin(a * kRadPerDeg);
+  }
+  c /= static_cast<double>(n);
+  s /= static_cast<double>(n);
+  // Mardia & Jupp (2000) 2.2.1 (mean direction), 2.3.1 (R), 2.3.2 (circular std).
+  out.resultant_length = std::min(1.0, std::hypot(c, s));
+  // R below rounding noise (e.g. 0 and 180 deg): no mean direction.
+  if (out.resultant_length > 1e-12) out.mean_deg = WrapDeg180(std::atan2(s, c) / kRadPerDeg);
+  out.std_deg = std::sqrt(-2.0 * std::log(out.resultant_length)) / kRadPerDeg;
+  if (n >= 2) {
+    out.sample_std_deg =
+        out.std_deg * std::sqrt(static_cast<double>(n) / static_cast<double>(n - 1));
+  }
+  return out;
+}
+
+std::vector<std::string> NoFreshPacketWarnings(const ordered_json& report,
+                                               const std::string& prefix) {
+  std::vector<std::string> out;
+  if (!report.contains("sensors")) return out;
+  for (const auto& s : report["sensors"]) {
+    const int64_t frames = Count(s, "frames");
+    if (frames <= 0 || Count(s, "fresh") != 0) continue;
+    out.push_back(
+        fmt::format("{}WARNING sensor {} ({}): no fresh packet in {} frames (stale {}, never {}): "
+                    "packet_loss_ratio 1.0, no observations; the tag never connected or was lost",
+                    prefix, s["sensor"].get<int>(), s.value("name", ""), frames, Count(s, "stale"),
+                    Count(s, "never")));
+  }
+  return out;
+}
 
 FileLock::~FileLock() {
   if (fd_ >= 0) ::close(fd_);
@@ -264,7 +339,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
 
   const std::vector<std::string> names = BatchReportNames(inputs);
   out.items.resize(inputs.size());
-  std::vector<std::vector<QuantityResult>> results(inputs.size());
+  std::vector<SessionResults> results(inputs.size());
   std::vector<std::string> hashes(inputs.size());
   // Every input's identity: no report is written over one (through links).
   std::set<std::pair<dev_t, ino_t>> input_ids;
@@ -303,7 +378,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
       } else {
         item.ok = true;
         hashes[i] = a.session.sha256;
-        results[i] = ExtractResults(a.report);
+        results[i] = ExtractResults(a.report, inputs[i]);
       }
     }
     if (options.on_progress) {
@@ -321,8 +396,29 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
     std::set<std::string> units;
   };
   std::map<std::pair<int, std::string>, Accumulated> by_quantity;
+  // Receiver counts per tag across sessions.
+  struct TagAccumulated {
+    std::string tag_name;
+    size_t sessions = 0, sessions_without_fresh = 0;
+    int64_t frames = 0, fresh = 0, stale = 0, never = 0;
+  };
+  std::map<int, TagAccumulated> by_tag;
+  std::vector<std::string> warnings;
   for (size_t i = 0; i < inputs.size(); ++i) {
-    for (const QuantityResult& r : results[i]) {
+    for (const std::string& w : results[i].warnings) warnings.push_back(w);
+    for (const TagResult& t : results[i].tags) {
+      TagAccumulated& acc = by_tag[t.sensor];
+      if (acc.tag_name.empty()) acc.tag_name = t.tag_name;
+      ++acc.sessions;
+      acc.frames += t.frames;
+      acc.fresh += t.fresh;
+      acc.stale += t.stale;
+      acc.never += t.never;
+      if (t.frames > 0 && t.fresh == 0) ++acc.sessions_without_fresh;
+    }
+  }
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    for (const QuantityResult& r : results[i].quantities) {
       Accumulated& acc = by_quantity[{r.sensor, r.quantity}];
       if (acc.tag_name.empty()) acc.tag_name = r.tag_name;
       acc.unit = r.unit;
@@ -338,6 +434,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
   ordered_json summary;
   summary["schema"] = kBatchSummarySchema;
   summary["tool"] = {{"name", kToolName}, {"version", kVersion}};
+  summary["warnings"] = warnings;
   summary["output_dir"] = options.output_dir;
   summary["sessions_total"] = inputs.size();
   ordered_json sessions = ordered_json::array();
@@ -359,37 +456,94 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
   summary["sessions_failed"] = out.failed;
   summary["sessions"] = sessions;
   ordered_json quantities = ordered_json::array();
-  std::string table = fmt::format("{} sessions, {} failed\n", inputs.size(), out.failed);
+  std::string table;
+  for (const std::string& w : warnings) table += w + "\n";
+  table += fmt::format("{} sessions, {} failed\n", inputs.size(), out.failed);
   table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10}\n", "sensor", "tag",
                        "quantity", "unit", "n", "mean of means", "std of means", "worst n_eff/n");
   for (const auto& [key, acc] : by_quantity) {
     const size_t n = acc.means.size();
-    double sum = 0.0;
-    for (double m : acc.means) sum += m;
-    const double mean = sum / static_cast<double>(n);
-    double ss = 0.0;
-    for (double m : acc.means) ss += (m - mean) * (m - mean);
-    // JCGM 100:2008 4.2.2: experimental standard deviation of the session means.
-    const double std_of_means = n >= 2 ? std::sqrt(ss / static_cast<double>(n - 1)) : std::nan("");
+    const bool circular = acc.units.size() == 1 && IsAngleUnit(acc.unit);
+    double mean = 0.0, std_of_means = std::nan("");
+    CircularStatistics circle;
+    if (circular) {
+      // Angles on the circle (Mardia & Jupp 2000): +179.95 and -179.95 deg pool to 180.
+      const double deg_per_unit = UnitBySymbol(acc.unit)->to_si * 180.0 / M_PI;
+      std::vector<double> deg;
+      for (double m : acc.means) deg.push_back(m * deg_per_unit);
+      circle = CircularStatisticsDeg(deg);
+      mean = circle.mean_deg / deg_per_unit;
+      std_of_means = circle.sample_std_deg / deg_per_unit;
+    } else {
+      double sum = 0.0;
+      for (double m : acc.means) sum += m;
+      mean = sum / static_cast<double>(n);
+      double ss = 0.0;
+      for (double m : acc.means) ss += (m - mean) * (m - mean);
+      // JCGM 100:2008 4.2.2: experimental standard deviation of the session means.
+      if (n >= 2) std_of_means = std::sqrt(ss / static_cast<double>(n - 1));
+    }
     ordered_json q;
     q["sensor"] = key.first;
     q["name"] = acc.tag_name;
     q["quantity"] = key.second;
     q["unit"] = acc.unit;
     q["sessions"] = n;
-    q["mean_of_means"] = mean;
-    q["std_of_means"] = n >= 2 ? ordered_json(std_of_means) : ordered_json(nullptr);
+    q["statistics"] = circular ? "circular" : "linear";
+    q["mean_of_means"] = std::isfinite(mean) ? ordered_json(mean) : ordered_json(nullptr);
+    q["std_of_means"] =
+        n >= 2 && std::isfinite(std_of_means) ? ordered_json(std_of_means) : ordered_json(nullptr);
+    if (circular) q["resultant_length"] = circle.resultant_length;
     q["worst_n_eff_ratio"] =
         std::isfinite(acc.worst_ratio) ? ordered_json(acc.worst_ratio) : ordered_json(nullptr);
     q["worst_n_eff_session"] = acc.worst_session;
     if (acc.units.size() > 1) q["warning"] = "sessions disagree on the unit of this quantity";
+    if (circular && !std::isfinite(mean)) {
+      q["warning"] = "the session means cancel on the circle (R = 0): no mean direction";
+    }
     quantities.push_back(q);
-    const RoundedResult r = RoundForStatement(mean, n >= 2 ? std_of_means : 0.0);
+    const bool has_std = n >= 2 && std::isfinite(std_of_means);
+    const RoundedResult r = std::isfinite(mean)
+                                ? RoundForStatement(mean, has_std ? std_of_means : 0.0)
+                                : RoundedResult{"-", "-"};
     table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10.3f}\n", key.first,
                          acc.tag_name, key.second, acc.unit, n, r.value,
-                         n >= 2 ? r.uncertainty : "-", acc.worst_ratio);
+                         has_std ? r.uncertainty : "-", acc.worst_ratio);
   }
   summary["quantities"] = quantities;
+  // Per tag: receiver counts; packet_loss_ratio = (stale + never) / frames (docs/formats.md).
+  ordered_json tags = ordered_json::array();
+  std::string tag_table;
+  for (const auto& [sensor, acc] : by_tag) {
+    const bool receiver = acc.frames > 0;
+    const double loss =
+        receiver ? static_cast<double>(acc.stale + acc.never) / static_cast<double>(acc.frames)
+                 : 0.0;
+    ordered_json t;
+    t["sensor"] = sensor;
+    t["name"] = acc.tag_name;
+    t["sessions"] = acc.sessions;
+    t["frames"] = acc.frames;
+    t["fresh"] = acc.fresh;
+    t["stale"] = acc.stale;
+    t["never"] = acc.never;
+    t["packet_loss_ratio"] = loss;
+    t["sessions_without_fresh"] = acc.sessions_without_fresh;
+    tags.push_back(t);
+    if (!receiver) continue;
+    tag_table += fmt::format(
+        "{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>8.2f} %{}\n", sensor, acc.tag_name,
+        acc.sessions, acc.frames, acc.fresh, acc.stale, acc.never, 100.0 * loss,
+        acc.sessions_without_fresh > 0
+            ? fmt::format("  no fresh packet in {} session(s)", acc.sessions_without_fresh)
+            : "");
+  }
+  summary["tags"] = tags;
+  if (!tag_table.empty()) {
+    table += fmt::format("\n{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10}\n", "sensor",
+                         "tag", "sessions", "frames", "fresh", "stale", "never", "loss");
+    table += tag_table;
+  }
   for (const BatchItem& item : out.items) {
     if (!item.ok) table += fmt::format("FAILED {}: {}\n", item.input, item.error.ToString());
   }

@@ -1,6 +1,7 @@
 #include "metro/report/session_analysis.hpp"
 
 #include "metro/io/columns.hpp"
+#include "metro/report/batch.hpp"
 #include "metro/report/settle_report.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
@@ -59,7 +60,9 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
       return fail(s.error(), true);
     }
   }
-  out.table = TypeAReportTable(out.report);
+  out.table.clear();
+  for (const std::string& w : NoFreshPacketWarnings(out.report)) out.table += w + "\n";
+  out.table += TypeAReportTable(out.report);
   if (!options.budget_path.empty()) {
     auto budget =
         LoadBudget(options.budget_path,

@@ -59,6 +59,8 @@ TEST_CASE("Receiver capture: frames, stale and never rows", "[io][receiver]") {
   CHECK(t2.counts.PacketLossRatio() == Approx(1.0 / 3.0));
   CHECK(t3.counts.never == 3);
   CHECK(t3.size() == 0);
+  // (stale + never) / frames: a tag that never connected has lost every frame.
+  CHECK(t3.counts.PacketLossRatio() == 1.0);
   // Stale rows are not observations: sensor 2 has frames 0 and 2 only.
   REQUIRE(t2.size() == 2);
   CHECK(t2.t_s[0] == 0.0);

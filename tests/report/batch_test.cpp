@@ -1,12 +1,14 @@
 // Batch: a broken file among good ones, output names that never collide, the summary.
 #include "metro/report/batch.hpp"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 
 #include "metro/core/file.hpp"
@@ -143,7 +145,15 @@ TEST_CASE("Std of session means across different sessions", "[report][batch]") {
   REQUIRE(summary.ok);
   REQUIRE(summary.summary["quantities"].size() == 1);
   const auto& q = summary.summary["quantities"][0];
-  CHECK(q["std_of_means"].get<double>() == Approx(d_deg / std::sqrt(2.0)).epsilon(1e-9));
+  // pitch_deg is an angle: pooled on the circle. Two means d apart: R = cos(d / 2), so the
+  // circular std with n - 1 is sqrt(2) sqrt(-2 ln cos(d / 2)) = d / sqrt(2) (1 + d^2 / 96 +
+  // ...), d in rad: 0.35355395 deg against the linear 0.35355339.
+  const double half_rad = 0.5 * d_deg * M_PI / 180.0;
+  CHECK(q["statistics"] == "circular");
+  CHECK(q["std_of_means"].get<double>() ==
+        Approx(std::sqrt(2.0) * std::sqrt(-2.0 * std::log(std::cos(half_rad))) * 180.0 / M_PI)
+            .epsilon(1e-9));
+  CHECK(q["std_of_means"].get<double>() == Approx(d_deg / std::sqrt(2.0)).epsilon(2e-6));
 }
 
 TEST_CASE("Batch report names never collide", "[report][batch]") {
@@ -154,6 +164,133 @@ TEST_CASE("Batch report names never collide", "[report][batch]") {
   CHECK(names[0].rfind("session-", 0) == 0);
   CHECK(names[2] == "other.report.json");
   CHECK(names[3] == "summary.report.json");
+}
+
+TEST_CASE("Circular statistics of angles, closed forms", "[report][batch]") {
+  // {0, 90} deg: C = S = 1/2, mean 45 deg, R = sqrt(1/2), circular std = sqrt(-2 ln R) =
+  // sqrt(ln 2) rad (Mardia & Jupp 2.3.2); with n - 1: sqrt(2 ln 2) rad.
+  CircularStatistics c = CircularStatisticsDeg({0.0, 90.0});
+  CHECK(c.mean_deg == Approx(45.0).margin(1e-12));
+  CHECK(c.resultant_length == Approx(std::sqrt(0.5)).epsilon(1e-14));
+  CHECK(c.std_deg == Approx(std::sqrt(std::log(2.0)) * 180.0 / M_PI).epsilon(1e-13));
+  CHECK(c.sample_std_deg == Approx(std::sqrt(2.0 * std::log(2.0)) * 180.0 / M_PI).epsilon(1e-13));
+  // Across the +-180 cut: +179.95 and -179.95 are 0.1 deg apart around 180. For a spread of
+  // +-d the circular std is d (1 + O(d^2)), here 0.05 deg to 1e-7 relative, and the sample
+  // std 0.05 sqrt(2) (a linear pool says mean 0, std 254.5).
+  c = CircularStatisticsDeg({179.95, -179.95});
+  CHECK(std::abs(c.mean_deg) == Approx(180.0).margin(1e-9));
+  CHECK(c.std_deg == Approx(0.05).epsilon(1e-6));
+  CHECK(c.sample_std_deg == Approx(0.05 * std::sqrt(2.0)).epsilon(1e-6));
+  // Opposite directions: no mean direction (R = 0).
+  c = CircularStatisticsDeg({0.0, 180.0});
+  CHECK(std::isnan(c.mean_deg));
+  CHECK(c.resultant_length == Approx(0.0).margin(1e-15));
+  CHECK(std::isnan(CircularStatisticsDeg({}).mean_deg));
+}
+
+TEST_CASE("Batch pools yaw across +-180 on the circle", "[report][batch]") {
+  TempDir in, out;
+  // Two sessions of one tag: yaw alternates 179.94 / 179.96 (mean 179.95) in one and
+  // -179.94 / -179.96 (mean -179.95) in the other; pitch means 10 and 20; gx_dps 1 and 3.
+  for (int k = 0; k < 2; ++k) {
+    std::ofstream f(in.path / fmt::format("s{}.csv", k));
+    f << "t_s,sensor,yaw_deg,pitch_deg,gx_dps\n";
+    const double sign = k == 0 ? 1.0 : -1.0;
+    for (int i = 0; i < 40; ++i) {
+      f << fmt::format("{},1,{:.2f},{:.2f},{:.2f}\n", 0.1 * i,
+                       sign * (i % 2 == 0 ? 179.94 : 179.96),
+                       (k == 0 ? 10.0 : 20.0) + (i % 2 ? 0.01 : -0.01),
+                       (k == 0 ? 1.0 : 3.0) + (i % 2 ? 0.01 : -0.01));
+    }
+  }
+  BatchOptions o;
+  o.output_dir = (out.path / "reports").string();
+  o.jobs = 1;
+  const BatchSummary summary =
+      RunBatch({(in.path / "s0.csv").string(), (in.path / "s1.csv").string()}, o);
+  REQUIRE(summary.ok);
+  std::map<std::string, ordered_json> q;
+  for (const auto& row : summary.summary["quantities"]) q[row["quantity"].get<std::string>()] = row;
+  REQUIRE(q.count("yaw_deg") == 1);
+  CHECK(q["yaw_deg"]["statistics"] == "circular");
+  CHECK(std::abs(q["yaw_deg"]["mean_of_means"].get<double>()) == Approx(180.0).margin(1e-6));
+  CHECK(q["yaw_deg"]["std_of_means"].get<double>() == Approx(0.05 * std::sqrt(2.0)).epsilon(1e-4));
+  // Pitch on the circle too: symmetric means 10 and 20 give 15 exactly; the spread of +-5
+  // deg is 5 sqrt(2) (1 + O(1e-3)).
+  CHECK(q["pitch_deg"]["statistics"] == "circular");
+  CHECK(q["pitch_deg"]["mean_of_means"].get<double>() == Approx(15.0).epsilon(1e-9));
+  CHECK(q["pitch_deg"]["std_of_means"].get<double>() == Approx(5.0 * std::sqrt(2.0)).epsilon(2e-3));
+  // A rate stays linear: mean 2, sample std sqrt(2).
+  CHECK(q["gx_dps"]["statistics"] == "linear");
+  CHECK(q["gx_dps"]["mean_of_means"].get<double>() == Approx(2.0).epsilon(1e-12));
+  CHECK(q["gx_dps"]["std_of_means"].get<double>() == Approx(std::sqrt(2.0)).epsilon(1e-12));
+}
+
+TEST_CASE("A tag that never connected has its row, loss 1.0 and a warning on top",
+          "[report][batch]") {
+  // datasets/capture_15tags_receiver.txt: tag 13 never connects (datasets/regenerate.sh).
+  // Its frames are the capture's lines for sensor 13, all of them "ff".
+  const std::string capture = kDatasets + "capture_15tags_receiver.txt";
+  int64_t frames_13 = 0, stale_2 = 0, never_2 = 0, frames_2 = 0;
+  {
+    std::ifstream f(capture);
+    std::string line;
+    while (std::getline(f, line)) {
+      if (line.size() < 4) continue;
+      const int sensor = std::stoi(line.substr(0, 2), nullptr, 16);
+      const std::string flag = line.substr(2, 2);
+      if (sensor == 13) ++frames_13;
+      if (sensor == 2) {
+        ++frames_2;
+        stale_2 += flag == "00" ? 1 : 0;
+        never_2 += flag == "ff" ? 1 : 0;
+      }
+    }
+  }
+  REQUIRE(frames_13 > 0);
+  TempDir out;
+  BatchOptions o;
+  o.output_dir = (out.path / "reports").string();
+  o.jobs = 1;
+  const BatchSummary summary = RunBatch({capture}, o);
+  REQUIRE(summary.ok);
+  const ordered_json& s = summary.summary;
+  // The warning heads summary.json (before the sessions) and the table.
+  REQUIRE(s["warnings"].size() == 1);
+  const std::string w = s["warnings"][0].get<std::string>();
+  CHECK(w.find("WARNING sensor 13") != std::string::npos);
+  CHECK(w.find("packet_loss_ratio 1.0") != std::string::npos);
+  CHECK(summary.table.rfind(capture + ": WARNING sensor 13", 0) == 0);
+  bool found_13 = false, found_2 = false;
+  for (const auto& t : s["tags"]) {
+    if (t["sensor"] == 13) {
+      found_13 = true;
+      CHECK(t["frames"].get<int64_t>() == frames_13);
+      CHECK(t["fresh"].get<int64_t>() == 0);
+      CHECK(t["never"].get<int64_t>() == frames_13);
+      CHECK(t["packet_loss_ratio"].get<double>() == 1.0);
+      CHECK(t["sessions_without_fresh"].get<int64_t>() == 1);
+    }
+    if (t["sensor"] == 2) {
+      found_2 = true;
+      CHECK(t["packet_loss_ratio"].get<double>() ==
+            Approx(double(stale_2 + never_2) / double(frames_2)).epsilon(1e-15));
+    }
+  }
+  CHECK(found_13);
+  CHECK(found_2);
+  CHECK(summary.table.find("no fresh packet in 1 session(s)") != std::string::npos);
+  std::ifstream txt(fs::path(o.output_dir) / "summary.txt");
+  std::string first;
+  std::getline(txt, first);
+  CHECK(first.find("WARNING sensor 13") != std::string::npos);
+  // One session: the warning heads the console table, and the report says 1.0.
+  const SessionAnalysis a = AnalyzeSession(capture, {});
+  REQUIRE(a.ok);
+  CHECK(a.table.rfind("WARNING sensor 13 (", 0) == 0);
+  for (const auto& sensor : a.report["sensors"]) {
+    if (sensor["sensor"] == 13) CHECK(sensor["packet_loss_ratio"].get<double>() == 1.0);
+  }
 }
 
 TEST_CASE("Batch bad input is refused with a message", "[report][batch]") {

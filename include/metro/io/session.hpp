@@ -102,9 +102,11 @@ struct FrameCounts {
   int64_t fresh = 0;   // NewData 01: a new packet; these rows are the observations.
   int64_t stale = 0;   // NewData 00: a repeat of the previous packet; not an observation.
   int64_t never = 0;   // NewData ff: nothing ever received; not an observation.
-  // Packet loss ratio (docs/formats.md, "Receiver capture"): stale frames / all frames.
+  // Packet loss ratio (docs/formats.md, "Receiver capture"): frames without a fresh packet
+  // (stale + never) / all frames; 1.0 for a tag that never sent one. 0 without frames
+  // (session.csv input).
   double PacketLossRatio() const {
-    return frames > 0 ? static_cast<double>(stale) / static_cast<double>(frames) : 0.0;
+    return frames > 0 ? static_cast<double>(stale + never) / static_cast<double>(frames) : 0.0;
   }
 };
 
