@@ -612,6 +612,7 @@ struct SeedSweep {
   int hits = 0;
   int shortest_hits = 0;
   int symmetric_hits = 0;
+  int discrete_hits = 0;  // JCGM 101 7.7's discrete shortest interval of the same runs
   int converged = 0;
   std::vector<int64_t> trials;
 };
@@ -637,6 +638,7 @@ SeedSweep Sweep(const Budget& b, const Reference& ref, double delta, int n) {
                           << m.symmetric.high << "]");
     out.shortest_hits += shortest ? 1 : 0;
     out.symmetric_hits += symmetric ? 1 : 0;
+    out.discrete_hits += near(m.shortest_discrete, ref.shortest) ? 1 : 0;
     out.hits += shortest && symmetric ? 1 : 0;
   }
   std::sort(out.trials.begin(), out.trials.end());
@@ -649,7 +651,8 @@ std::string Summary(const char* name, const SeedSweep& s) {
                               : 0.5 * static_cast<double>(s.trials[n / 2 - 1] + s.trials[n / 2]);
   return std::string(name) + ": both intervals within delta in " + std::to_string(s.hits) + " of " +
          std::to_string(n) + " seeds (shortest " + std::to_string(s.shortest_hits) +
-         ", symmetric " + std::to_string(s.symmetric_hits) + "); trials median " +
+         ", symmetric " + std::to_string(s.symmetric_hits) + "; discrete 7.7 shortest " +
+         std::to_string(s.discrete_hits) + "); trials median " +
          std::to_string(static_cast<int64_t>(median)) + ", range " +
          std::to_string(s.trials.front()) + " - " + std::to_string(s.trials.back());
 }
