@@ -330,8 +330,12 @@ void AddAllanPlot(const std::string& qname, const ordered_json& quantity, Quanti
 std::string SettleText(const ordered_json& window) {
   if (!window.contains("settle")) return "none";
   const ordered_json& s = window["settle"];
-  return fmt::format("{}: {} samples{}", JsonString(s, "method"),
-                     ShortNumber(JsonNumber(s, "samples"), 10),
+  // `driver`: the quantity whose cut the tag window takes (each quantity has its own).
+  const std::string driver = s.contains("driver") && s["driver"].is_string()
+                                 ? fmt::format(", the cut of {}", s["driver"].get<std::string>())
+                                 : "";
+  return fmt::format("{}: {} samples{}{}", JsonString(s, "method"),
+                     ShortNumber(JsonNumber(s, "samples"), 10), driver,
                      s.value("at_limit", false) ? " (at the limit)" : "");
 }
 
