@@ -2,11 +2,17 @@
 // and the gimbal-lock warnings of yaw and roll.
 #include "metro/stats/session_type_a.hpp"
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
 #include <string>
 #include <vector>
+
+#include "metro/core/angles.hpp"
+#include "metro/io/session_io.hpp"
+#include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
@@ -140,6 +146,34 @@ TEST_CASE("Yaw and roll near gimbal lock carry their own warning", "[stats]") {
                     "roll_deg (derived from the quaternion): |pitch_deg| reaches 89.90 deg"));
   CHECK(AnyContains(Find(t, "pitch_deg").warnings, "|pitch| reaches 89.90 deg"));
   CHECK(Find(t, "gx_dps").warnings.empty());
+}
+
+TEST_CASE("Quaternions at pitch 89.9 deg: derived yaw and roll are warned about", "[stats]") {
+  // A tag at pitch 89.9 deg whose attitude jitters by 0.05 deg: the derived roll and yaw
+  // swing by tens of degrees (only yaw - roll is defined near the lock); each says so.
+  std::mt19937_64 rng(21);
+  std::normal_distribution<double> jitter(0.0, 0.05);
+  std::string csv = "t_s,sensor,qw,qx,qy,qz\n";
+  for (int i = 0; i < 300; ++i) {
+    EulerDeg e;
+    e.yaw_deg = 30.0 + jitter(rng);
+    e.pitch_deg = 89.9 + jitter(rng);
+    e.roll_deg = 10.0 + jitter(rng);
+    const Quaternion q = QuaternionFromEuler(e);
+    csv += fmt::format("{:.1f},5,{:.9f},{:.9f},{:.9f},{:.9f}\n", 0.1 * i, q.w, q.x, q.y, q.z);
+  }
+  testing::TempFile file(csv, ".csv");
+  auto session = LoadSession(file.path());
+  REQUIRE(session.ok());
+  auto r = EvaluateSessionTypeA(session.value(), {});
+  REQUIRE(r.ok());
+  const TagTypeA& t = r.value().tags.at(0);
+  for (const char* name : {"yaw_deg", "roll_deg"}) {
+    INFO(name);
+    CHECK(Find(t, name).origin == QuantityOrigin::kDerived);
+    CHECK(AnyContains(Find(t, name).warnings,
+                      std::string(name) + " (derived from the quaternion): |pitch_deg| reaches"));
+  }
 }
 
 }  // namespace
