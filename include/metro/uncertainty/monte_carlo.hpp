@@ -6,14 +6,17 @@
 // splitmix64(splitmix64(seed) + 4c + j) on stream 4c + j, so the values depend on the seed
 // only, never on the number of threads or on how chunks are shared between them. Each chunk
 // draws input by input, in blocks (samplers and their accuracy: src/uncertainty/
-// mc_sampling.hpp; t inputs by Bailey's polar method). Chunks are spread over std::thread
-// workers (McOptions::threads, default: all cores) through core/parallel.
+// mc_sampling.hpp; t inputs by Bailey's polar method). Chunks are spread over worker threads
+// (McOptions::threads, default: all cores) by core/parallel.
 //
 //   estimate y = mean of the M model values, u(y) their standard deviation      (7.6)
 //   (two passes per chunk, chunks merged in chunk order by the pairwise update of
 //   Chan, Golub and LeVeque, so the result does not depend on the thread count)
 //   q = round(p M); probabilistically symmetric interval [y_(r), y_(r+q)],
 //   r = (M - q)/2 rounded up; shortest interval: the r minimising y_(r+q) - y_(r)  (7.7)
+//   (reported: the minimum of that width located by a least-squares parabola over the
+//   ranks around the discrete one, end points interpolated between ranks (7.5.2); the
+//   discrete r wanders like M^(-1/3), docs/uncertainty.md "Shortest interval")
 //   Only the L = M - q lowest and highest order statistics are put in order: for
 //   M >= 2^18 and L <= M/8 they are copied out by thresholds taken from a pilot subsample
 //   (on all threads), otherwise by partial selection (std::nth_element); never a full sort.
