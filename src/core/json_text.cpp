@@ -26,10 +26,10 @@ std::pair<int64_t, int64_t> LineColumn(std::string_view text, size_t offset) {
   return {line, column};
 }
 
-// The offset of the first '[' or '{' (outside strings) that opens level kMaxJsonDepth + 1,
-// or npos. One pass, no recursion.
-size_t TooDeepAt(std::string_view text) {
-  int depth = 0;
+// Calls visit(i) for each byte of `text` outside JSON strings, in order, until it returns
+// true; returns that offset, or npos. visit may move i forward past a token it has read.
+template <typename Visit>
+size_t FirstOutsideStrings(std::string_view text, Visit visit) {
   bool in_string = false;
   for (size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
@@ -39,38 +39,33 @@ size_t TooDeepAt(std::string_view text) {
       } else if (c == '"') {
         in_string = false;
       }
-      continue;
-    }
-    if (c == '"') {
+    } else if (c == '"') {
       in_string = true;
-    } else if (c == '[' || c == '{') {
-      if (++depth > kMaxJsonDepth) return i;
-    } else if ((c == ']' || c == '}') && depth > 0) {
-      --depth;
+    } else if (visit(i)) {
+      return i;
     }
   }
   return std::string_view::npos;
 }
 
-// The offset of the first number (outside strings) too large for a double, which
-// nlohmann::json refuses with out_of_range 406 and no position; npos when there is none.
-size_t OverflowingNumberAt(std::string_view text) {
-  bool in_string = false;
-  for (size_t i = 0; i < text.size(); ++i) {
+// The offset of the first '[' or '{' that opens level kMaxJsonDepth + 1, or npos. One pass,
+// no recursion.
+size_t TooDeepAt(std::string_view text) {
+  int depth = 0;
+  return FirstOutsideStrings(text, [&](size_t& i) {
     const char c = text[i];
-    if (in_string) {
-      if (c == '\\') {
-        ++i;
-      } else if (c == '"') {
-        in_string = false;
-      }
-      continue;
-    }
-    if (c == '"') {
-      in_string = true;
-      continue;
-    }
-    if (c != '-' && (c < '0' || c > '9')) continue;
+    if (c == '[' || c == '{') return ++depth > kMaxJsonDepth;
+    if ((c == ']' || c == '}') && depth > 0) --depth;
+    return false;
+  });
+}
+
+// The offset of the first number too large for a double, which nlohmann::json refuses with
+// out_of_range 406 and no position; npos when there is none.
+size_t OverflowingNumberAt(std::string_view text) {
+  return FirstOutsideStrings(text, [&](size_t& i) {
+    const char c = text[i];
+    if (c != '-' && (c < '0' || c > '9')) return false;
     size_t end = i;
     while (end < text.size() &&
            std::string_view("+-.0123456789eE").find(text[end]) != std::string_view::npos) {
@@ -78,12 +73,11 @@ size_t OverflowingNumberAt(std::string_view text) {
     }
     const std::string token(text.substr(i, end - i));
     errno = 0;
-    char* stop = nullptr;
-    const double value = std::strtod(token.c_str(), &stop);
-    if (errno == ERANGE && (value == HUGE_VAL || value == -HUGE_VAL)) return i;
+    const double value = std::strtod(token.c_str(), nullptr);
+    if (errno == ERANGE && (value == HUGE_VAL || value == -HUGE_VAL)) return true;
     i = end - 1;
-  }
-  return std::string_view::npos;
+    return false;
+  });
 }
 
 template <class Json>

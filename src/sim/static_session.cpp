@@ -65,15 +65,8 @@ bool StaticSimulationOptions::IsValid(std::string* why) const {
     return fail(
         fmt::format("duration_s must be in (0, {:g}] s, got {:g}", kSimMaxDurationS, duration_s));
   }
-  if (!(rate_hz >= 0.0 && rate_hz <= kSimMaxRateHz)) {
-    return fail(
-        fmt::format("rate_hz must be in [0, {:g}] Hz (0: one sample per receiver "
-                    "frame), got {:g}",
-                    kSimMaxRateHz, rate_hz));
-  }
-  if (!(frame_period_s >= kSimMinFramePeriodS && frame_period_s <= kSimMaxFramePeriodS)) {
-    return fail(fmt::format("frame_period_s must be in [{:g}, {:g}] s, got {:g}",
-                            kSimMinFramePeriodS, kSimMaxFramePeriodS, frame_period_s));
+  if (std::string sampling; !SamplingWithinLimits(rate_hz, frame_period_s, &sampling)) {
+    return fail(sampling);
   }
   const double per_s = rate_hz > 0.0 ? rate_hz : 1.0 / frame_period_s;
   const double observations =

@@ -136,15 +136,8 @@ bool TableSimulationOptions::IsValid(std::string* why) const {
   if (!(move_rate_dps > 0.0) || !std::isfinite(move_rate_dps)) {
     return fail("move_rate_dps must be > 0");
   }
-  if (!(rate_hz >= 0.0 && rate_hz <= kSimMaxRateHz)) {
-    return fail(
-        fmt::format("rate_hz must be in [0, {:g}] Hz (0: one sample per receiver "
-                    "frame), got {:g}",
-                    kSimMaxRateHz, rate_hz));
-  }
-  if (!(frame_period_s >= kSimMinFramePeriodS && frame_period_s <= kSimMaxFramePeriodS)) {
-    return fail(fmt::format("frame_period_s must be in [{:g}, {:g}] s, got {:g}",
-                            kSimMinFramePeriodS, kSimMaxFramePeriodS, frame_period_s));
+  if (std::string sampling; !SamplingWithinLimits(rate_hz, frame_period_s, &sampling)) {
+    return fail(sampling);
   }
   // Up and down, each plateau's dwell and the moves between them.
   const double duration_s =

@@ -2,6 +2,10 @@
 // bounded, whatever the options.
 #pragma once
 
+#include <fmt/format.h>
+
+#include <string>
+
 namespace metro {
 
 // Length of a simulated session.
@@ -16,5 +20,22 @@ inline constexpr double kSimMaxObservations = 1e9;
 // Rotation table: plateaus per sweep, and the step between them.
 inline constexpr double kSimMinTableStepDeg = 1e-3;
 inline constexpr int kSimMaxTablePlateaus = 10000;
+
+// The sample rate (0: one sample per receiver frame) and the receiver frame period within
+// the limits above; otherwise false with the reason in *why. Both simulators call it.
+inline bool SamplingWithinLimits(double rate_hz, double frame_period_s, std::string* why) {
+  if (!(rate_hz >= 0.0 && rate_hz <= kSimMaxRateHz)) {
+    *why =
+        fmt::format("rate_hz must be in [0, {:g}] Hz (0: one sample per receiver frame), got {:g}",
+                    kSimMaxRateHz, rate_hz);
+    return false;
+  }
+  if (!(frame_period_s >= kSimMinFramePeriodS && frame_period_s <= kSimMaxFramePeriodS)) {
+    *why = fmt::format("frame_period_s must be in [{:g}, {:g}] s, got {:g}", kSimMinFramePeriodS,
+                       kSimMaxFramePeriodS, frame_period_s);
+    return false;
+  }
+  return true;
+}
 
 }  // namespace metro
