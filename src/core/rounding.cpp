@@ -66,6 +66,12 @@ std::string ConciseNotation(double value, double u, int significant) {
   // The value's exponent after rounding to the last place (999.96(5) -> 1000.0).
   const double step = std::pow(10.0, last_place);
   const double v_rounded = std::round(value / step) * step;
+  // A value more than 10^17 times its uncertainty has more digits than a double holds (and
+  // value / step may overflow): print both in plain exponent form instead.
+  if (!std::isfinite(v_rounded) || !std::isfinite(step) || step == 0.0 ||
+      std::fabs(value) / u > 1e17) {
+    return fmt::format("{:.17g} (u = {:.2g})", value, u);
+  }
   const int exponent_v = v_rounded == 0.0
                              ? exponent_u
                              : static_cast<int>(std::floor(std::log10(std::fabs(v_rounded))));

@@ -59,6 +59,11 @@ TEST_CASE("JCGM 100 7.2.2 concise notation", "[core][rounding]") {
   CHECK(ConciseNotation(1234.5, 0.0) == "1234.5 (u = 0)");
   CHECK(ConciseNotation(1234.5, std::nan("")) == "1234.5 (u = nan)");
   CHECK(ConciseNotation(std::nan(""), 0.5) == "nan (u = 0.5)");
+  // More digits than a double holds (the calibration fuzzer's 1e300 with u = 1e-300 overflowed
+  // value / step): both printed as they are.
+  CHECK(ConciseNotation(1e300, 1e-300) == "1.0000000000000001e+300 (u = 1e-300)");
+  CHECK(ConciseNotation(68.6, 1e-300) == "68.599999999999994 (u = 1e-300)");
+  CHECK(ConciseNotation(-1e308, 1e308) == "-1.0(1.0)e308");
 }
 
 }  // namespace
