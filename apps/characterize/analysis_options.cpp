@@ -33,6 +33,12 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o) {
   app->add_option("--taus", o->taus, "Allan taus: octave, decade:N, all")->capture_default_str();
   app->add_option("--estimator", o->estimator, "Allan estimator: oadev, mdev, ohdev")
       ->capture_default_str();
+  app->add_option("--gaps", o->gaps,
+                  "Allan through missing samples: skip (leave out the terms that read one, "
+                  "NIST SP 1065), split (the longest gap-free stretch only) or refuse "
+                  "(docs/noise.md)")
+      ->check(CLI::IsMember({"skip", "split", "refuse"}))
+      ->capture_default_str();
 }
 
 Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
@@ -67,6 +73,9 @@ Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
     out->allan_options.allan.estimator = estimator.value();
     out->allan_options.allan.threads = threads;
     out->allan_options.quantities = o.quantities;
+    auto gaps = ParseAllanGapPolicy(o.gaps);
+    if (!gaps.ok()) return gaps.error();
+    out->allan_options.gaps = gaps.value();
   }
   return Status::Ok();
 }

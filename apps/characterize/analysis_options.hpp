@@ -28,11 +28,12 @@ struct AnalysisCliOptions {
   bool allan = false;
   std::string taus = "octave";
   std::string estimator = "oadev";
+  std::string gaps = "skip";  // --gaps: skip, split or refuse (docs/noise.md, "Gaps").
 };
 
 // Registers the load flags (load_cli.hpp), --skip-samples, --skip-seconds,
 // --from-s, --to-s, --settle, --settle-scope, --sensor, --quantity, --tag-registry,
-// --allan, --taus and --estimator on `app`.
+// --allan, --taus, --estimator and --gaps on `app`.
 void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o);
 
 // The library options for these flags; `threads` is the worker count inside one session

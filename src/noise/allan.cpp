@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <thread>
 #include <utility>
 
@@ -43,21 +44,18 @@ int ResolveThreads(int requested, int64_t work_points) {
   return static_cast<int>(std::min<int64_t>(threads, useful));
 }
 
-// Runs fn(lo, hi, thread_index) on `threads` contiguous slices of [0, n).
+// Runs fn(lo, hi, slice) on `threads` contiguous slices of [0, n), one slice per thread
+// (internal::ParallelFor, so an exception reaches the caller).
 template <typename Fn>
 void ParallelSlices(int threads, int64_t n, Fn fn) {
   if (threads <= 1 || n < 2) {
     fn(int64_t{0}, n, 0);
     return;
   }
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<size_t>(threads));
-  for (int t = 0; t < threads; ++t) {
-    const int64_t lo = n * t / threads;
-    const int64_t hi = n * (t + 1) / threads;
-    pool.emplace_back([=, &fn] { fn(lo, hi, t); });
-  }
-  for (std::thread& th : pool) th.join();
+  internal::ParallelFor(static_cast<size_t>(threads), threads, [&](size_t t) {
+    const int64_t ti = static_cast<int64_t>(t);
+    fn(n * ti / threads, n * (ti + 1) / threads, static_cast<int>(t));
+  });
 }
 
 // Eight lanes of doubles as two 4-wide vectors (GCC/Clang vector extension): lane j of the
@@ -153,19 +151,11 @@ double SumThirdDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) {
   return AddLanes(s0, s1);
 }
 
-// Runs task(0), ..., task(count - 1) on up to `threads` threads, each task once; free
-// threads take the next task in increasing order.
+// Runs task(0), ..., task(count - 1) on up to `threads` threads (internal::ParallelFor:
+// an exception in a task reaches the caller once every thread has stopped).
 template <typename Task>
 void RunTasks(int threads, int64_t count, Task task) {
-  std::atomic<int64_t> next{0};
-  const auto worker = [&] {
-    for (int64_t t = next++; t < count; t = next++) task(t);
-  };
-  const int64_t helpers = std::min<int64_t>(threads, count) - 1;
-  std::vector<std::thread> pool;
-  for (int64_t h = 0; h < helpers; ++h) pool.emplace_back(worker);
-  worker();
-  for (std::thread& th : pool) th.join();
+  internal::RunAllanTasks(threads, count, task);
 }
 
 // Overlapping Allan / Hadamard sums for all m. The index range is cut into a fixed number
@@ -709,6 +699,58 @@ Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
 
 namespace internal {
 
+void FillAlphaAndIntervals(const std::vector<char>& identified,
+                           const std::vector<int>& identified_alpha,
+                           const std::vector<int64_t>& n_phase_edf, const AllanOptions& options,
+                           AllanCurve* curve) {
+  const size_t n = curve->m.size();
+  const EstimatorShape shape = ShapeOf(options.estimator);
+  curve->ci_low.resize(n);
+  curve->ci_high.resize(n);
+  curve->edf.resize(n);
+  curve->alpha.resize(n);
+  curve->alpha_source.resize(n);
+  bool have_identified = false;
+  int last_alpha = 0;
+  for (size_t k = 0; k < n; ++k) {
+    if (options.noise_id == NoiseIdMethod::kFixed) {
+      curve->alpha[k] = options.fixed_alpha;
+      curve->alpha_source[k] = AlphaSource::kFixed;
+    } else if (identified[k]) {
+      curve->alpha[k] = identified_alpha[k];
+      curve->alpha_source[k] = AlphaSource::kLag1Acf;
+      last_alpha = identified_alpha[k];
+      have_identified = true;
+    } else if (have_identified) {
+      curve->alpha[k] = last_alpha;
+      curve->alpha_source[k] = AlphaSource::kCarried;
+    } else {
+      curve->alpha[k] = 0;
+      curve->alpha_source[k] = AlphaSource::kDefault;
+    }
+    const Result<double> edf = GreenhallRileyEdf(curve->alpha[k], shape.d, curve->m[k],
+                                                 n_phase_edf[k], shape.overlapping, shape.modified);
+    const double nan = std::nan("");
+    curve->edf[k] = edf.ok() ? edf.value() : nan;
+    curve->ci_low[k] = nan;
+    curve->ci_high[k] = nan;
+    if (edf.ok()) {
+      const Result<DeviationInterval> ci =
+          ChiSquaredInterval(curve->dev[k], edf.value(), options.confidence);
+      if (ci.ok()) {
+        curve->ci_low[k] = ci.value().low;
+        curve->ci_high[k] = ci.value().high;
+      }
+    }
+  }
+}
+
+void RunAllanTasks(int threads, int64_t count, const std::function<void(int64_t)>& task) {
+  if (count <= 0) return;
+  ParallelFor(static_cast<size_t>(count), std::max(threads, 1),
+              [&task](size_t t) { task(static_cast<int64_t>(t)); });
+}
+
 Result<AllanCurve> ComputeAllanInPlace(std::vector<double>* buffer, double tau0_s,
                                        const AllanOptions& options) {
   METRO_CHECK(buffer != nullptr && !buffer->empty());
@@ -808,50 +850,15 @@ Result<AllanCurve> AllanFromPhase(const double* phase, int64_t n_rate, double ra
   curve.m = m;
   curve.tau_s.resize(n);
   curve.dev.resize(n);
-  curve.ci_low.resize(n);
-  curve.ci_high.resize(n);
-  curve.edf.resize(n);
   curve.n_terms.resize(n);
-  curve.alpha.resize(n);
-  curve.alpha_source.resize(n);
-  bool have_identified = false;
-  int last_alpha = 0;
+  std::vector<int64_t> n_phase_edf(n, n_phase);
   for (size_t k = 0; k < n; ++k) {
     curve.tau_s[k] = static_cast<double>(m[k]) * tau0_s;
     curve.dev[k] = std::sqrt(std::max(variance[k], 0.0));
     curve.n_terms[k] = AllanTermCount(options.estimator, n_phase, m[k]);
-    if (options.noise_id == NoiseIdMethod::kFixed) {
-      curve.alpha[k] = options.fixed_alpha;
-      curve.alpha_source[k] = AlphaSource::kFixed;
-    } else {
-      if (identified[k]) {
-        curve.alpha[k] = identified_alpha[k];
-        curve.alpha_source[k] = AlphaSource::kLag1Acf;
-        last_alpha = identified_alpha[k];
-        have_identified = true;
-      } else if (have_identified) {
-        curve.alpha[k] = last_alpha;
-        curve.alpha_source[k] = AlphaSource::kCarried;
-      } else {
-        curve.alpha[k] = 0;
-        curve.alpha_source[k] = AlphaSource::kDefault;
-      }
-    }
-    const Result<double> edf = GreenhallRileyEdf(curve.alpha[k], shape.d, m[k], n_phase,
-                                                 shape.overlapping, shape.modified);
-    const double nan = std::nan("");
-    curve.edf[k] = edf.ok() ? edf.value() : nan;
-    curve.ci_low[k] = nan;
-    curve.ci_high[k] = nan;
-    if (edf.ok()) {
-      const Result<DeviationInterval> ci =
-          ChiSquaredInterval(curve.dev[k], edf.value(), options.confidence);
-      if (ci.ok()) {
-        curve.ci_low[k] = ci.value().low;
-        curve.ci_high[k] = ci.value().high;
-      }
-    }
   }
+  curve.n_terms_gap_free = curve.n_terms;
+  internal::FillAlphaAndIntervals(identified, identified_alpha, n_phase_edf, options, &curve);
   return curve;
 }
 

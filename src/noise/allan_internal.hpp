@@ -8,6 +8,8 @@
 // 0-based sample index). On an error the buffer may hold samples or phase.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "metro/core/status.hpp"
@@ -25,6 +27,20 @@ Result<AllanCurve> ComputeAllanInPlace(std::vector<double>* buffer, double tau0_
 // Precondition: data is not null and size >= 1.
 Result<AllanCurve> ComputeAllanInPlace(double* data, int64_t size, double tau0_s,
                                        const AllanOptions& options = AllanOptions());
+
+// The last stage of every curve: alpha at each tau (identified where identified[k], else
+// carried from the largest smaller tau identified, else white rate noise; or the fixed
+// alpha), then the Greenhall-Riley EDF for n_phase_edf[k] phase points and the chi-squared
+// interval (NIST SP 1065 5.3.2). curve->m and curve->dev must be filled.
+void FillAlphaAndIntervals(const std::vector<char>& identified,
+                           const std::vector<int>& identified_alpha,
+                           const std::vector<int64_t>& n_phase_edf, const AllanOptions& options,
+                           AllanCurve* curve);
+
+// How the Allan module runs its parallel work: task(0..count-1) on up to `threads` threads
+// (core/parallel.hpp ParallelFor); an exception thrown by a task is rethrown here, in the
+// caller, once the other threads have stopped (it used to end the process).
+void RunAllanTasks(int threads, int64_t count, const std::function<void(int64_t)>& task);
 
 }  // namespace internal
 }  // namespace metro

@@ -34,6 +34,9 @@ Json AllanToJson(const AllanCurve& curve, const NoiseFit& fit, const std::string
   j["ci_high"] = NumberArray(curve.ci_high);
   j["edf"] = NumberArray(curve.edf);
   j["n_terms"] = curve.n_terms;
+  // Terms lost to missing samples at each tau (ComputeAllanWithGaps; 0 without gaps).
+  j["n_terms_gap_free"] = curve.n_terms_gap_free;
+  j["missing_fraction"] = NumberArray(MissingFractions(curve));
   Json noise = Json::object();
   for (NoiseTerm t : kAllNoiseTerms) {
     const size_t i = static_cast<size_t>(t);
@@ -89,16 +92,29 @@ Json AllanTypeALinkToJson(const AllanCurve& curve, const NoiseFit& fit, double d
   return j;
 }
 
+std::vector<double> MissingFractions(const AllanCurve& curve) {
+  std::vector<double> f(curve.size(), 0.0);
+  for (size_t i = 0; i < curve.size() && i < curve.n_terms_gap_free.size(); ++i) {
+    if (curve.n_terms_gap_free[i] > 0) {
+      f[i] = 1.0 -
+             static_cast<double>(curve.n_terms[i]) / static_cast<double>(curve.n_terms_gap_free[i]);
+    }
+  }
+  return f;
+}
+
 std::string AllanCurveCsv(const AllanCurve& curve, const std::string& quantity_unit) {
   const std::string tok = NoiseUnitsFor(quantity_unit).column_token;
-  std::string out =
-      fmt::format("tau_s,m,n_terms,alpha,alpha_source,edf,{0}_{1},ci_low_{1},ci_high_{1}\n",
-                  AllanEstimatorName(curve.estimator), tok);
+  std::string out = fmt::format(
+      "tau_s,m,n_terms,alpha,alpha_source,edf,{0}_{1},ci_low_{1},ci_high_{1},"
+      "missing_fraction\n",
+      AllanEstimatorName(curve.estimator), tok);
+  const std::vector<double> missing = MissingFractions(curve);
   for (size_t i = 0; i < curve.size(); ++i) {
-    out += fmt::format("{},{},{},{},{},{},{},{},{}\n", CsvNumber(curve.tau_s[i]), curve.m[i],
+    out += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", CsvNumber(curve.tau_s[i]), curve.m[i],
                        curve.n_terms[i], curve.alpha[i], AlphaSourceName(curve.alpha_source[i]),
                        CsvNumber(curve.edf[i]), CsvNumber(curve.dev[i]), CsvNumber(curve.ci_low[i]),
-                       CsvNumber(curve.ci_high[i]));
+                       CsvNumber(curve.ci_high[i]), CsvNumber(missing[i]));
   }
   return out;
 }

@@ -3,16 +3,114 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 
 #include "metro/io/columns.hpp"
 #include "metro/noise/allan_report.hpp"
 
 namespace metro {
+namespace {
+
+using json = nlohmann::ordered_json;
+
+// Position of each sample on the grid of period tau0: k = round((t - t_first) / tau0), from
+// the exact integer times when the file had them. Errors: two samples in one grid slot (a
+// clock that does not fit one grid).
+Result<std::vector<int64_t>> GridIndices(const Tag& tag, size_t begin, size_t end, double tau0_s,
+                                         const std::string& path) {
+  std::vector<int64_t> index(end - begin);
+  const bool exact = tag.t_ns.size() == tag.t_s.size();
+  for (size_t k = begin; k < end; ++k) {
+    const double dt_s = exact ? static_cast<double>(tag.t_ns[k] - tag.t_ns[begin]) * 1e-9
+                              : tag.t_s[k] - tag.t_s[begin];
+    index[k - begin] = std::llround(dt_s / tau0_s);
+    if (k > begin && index[k - begin] <= index[k - begin - 1]) {
+      return MakeError(path, tag.line[k],
+                       fmt::format("this sample and the one at line {} fall on one slot of the "
+                                   "{} s sample grid: the clock does not fit one grid; expected "
+                                   "timestamps near multiples of the sample period",
+                                   tag.line[k - 1], tau0_s));
+    }
+  }
+  return index;
+}
+
+// The curve of a record with missing grid samples, by `policy`; *gaps describes what was
+// missing and what was done about it (report key allan.gaps, docs/noise.md "Gaps").
+Result<AllanCurve> CurveThroughGaps(const std::vector<double>& rate,
+                                    const std::vector<int64_t>& index, double tau0_s,
+                                    const SessionAllanOptions& options, json* gaps) {
+  const int64_t grid = index.back() + 1;
+  const int64_t n = static_cast<int64_t>(rate.size());
+  const int64_t missing = grid - n;
+  const double fraction = static_cast<double>(missing) / static_cast<double>(grid);
+  (*gaps)["policy"] = AllanGapPolicyName(options.gaps);
+  (*gaps)["grid_samples"] = grid;
+  (*gaps)["missing_samples"] = missing;
+  (*gaps)["missing_fraction"] = fraction;
+  if (fraction > options.max_missing_fraction) {
+    return MakeError(fmt::format(
+        "{} of the {} samples of the record's time grid are missing ({:.1f} %, more than {:.0f} "
+        "%): an Allan deviation would rest on a minority of the record; expected a record with "
+        "fewer gaps, or a window (--from-s/--to-s) around a complete stretch",
+        missing, grid, 100.0 * fraction, 100.0 * options.max_missing_fraction));
+  }
+  if (options.gaps == AllanGapPolicy::kSkip) {
+    std::vector<double> on_grid(static_cast<size_t>(grid), 0.0);
+    std::vector<uint8_t> present(static_cast<size_t>(grid), 0);
+    for (size_t k = 0; k < rate.size(); ++k) {
+      on_grid[static_cast<size_t>(index[k])] = rate[k];
+      present[static_cast<size_t>(index[k])] = 1;
+    }
+    return ComputeAllanWithGaps(on_grid, present, tau0_s, options.allan);
+  }
+  // kSplit: the longest run of consecutive grid slots.
+  size_t best_begin = 0, best_length = 0, stretches = 0;
+  for (size_t k = 0, begin = 0; k <= rate.size(); ++k) {
+    if (k == rate.size() || (k > begin && index[k] != index[k - 1] + 1)) {
+      ++stretches;
+      if (k - begin > best_length) {
+        best_begin = begin;
+        best_length = k - begin;
+      }
+      begin = k;
+    }
+  }
+  (*gaps)["stretches"] = stretches;
+  (*gaps)["analysed_first_sample"] = best_begin;
+  (*gaps)["analysed_samples"] = best_length;
+  const auto b = static_cast<ptrdiff_t>(best_begin);
+  const auto e = static_cast<ptrdiff_t>(best_begin + best_length);
+  return ComputeAllan(std::vector<double>(rate.begin() + b, rate.begin() + e), tau0_s,
+                      options.allan);
+}
+
+}  // namespace
+
+const char* AllanGapPolicyName(AllanGapPolicy policy) {
+  switch (policy) {
+    case AllanGapPolicy::kSkip:
+      return "skip";
+    case AllanGapPolicy::kSplit:
+      return "split";
+    case AllanGapPolicy::kRefuse:
+      return "refuse";
+  }
+  return "?";
+}
+
+Result<AllanGapPolicy> ParseAllanGapPolicy(const std::string& text) {
+  for (AllanGapPolicy p :
+       {AllanGapPolicy::kSkip, AllanGapPolicy::kSplit, AllanGapPolicy::kRefuse}) {
+    if (text == AllanGapPolicyName(p)) return p;
+  }
+  return MakeError(fmt::format("--gaps '{}': expected skip, split or refuse", text));
+}
 
 Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                         const SessionAllanOptions& options, nlohmann::ordered_json* report,
                         std::string* csv) {
-  using json = nlohmann::ordered_json;
   std::string why;
   if (!options.allan.IsValid(&why)) return MakeError("invalid --allan options: " + why);
   size_t analysed = 0;
@@ -36,22 +134,39 @@ Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
       const std::vector<uint32_t> line(tag->line.begin() + b, tag->line.begin() + e);
       const std::vector<double> rate(values->values.begin() + b, values->values.begin() + e);
       // tau0 from exact integer differences when the file's time was integer (t_ns).
+      SamplePeriodOptions period_options = options.period;
+      period_options.allow_gaps = options.gaps != AllanGapPolicy::kRefuse;
       auto period = tag->t_ns.size() == tag->t_s.size()
                         ? EstimateSamplePeriodNs(
                               std::vector<int64_t>(tag->t_ns.begin() + b, tag->t_ns.begin() + e),
-                              line, options.period)
+                              line, period_options)
                         : EstimateSamplePeriod(
                               std::vector<double>(tag->t_s.begin() + b, tag->t_s.begin() + e), line,
-                              options.period);
+                              period_options);
       if (!period.ok()) {
         Error err = period.error();
         err.file = session.path;
+        if (options.gaps == AllanGapPolicy::kRefuse &&
+            err.message.find("gap") != std::string::npos) {
+          err.message += " (--gaps refuse; --gaps skip analyses through them)";
+        }
         jq["allan"] = {{"error", err.ToString()}};
         continue;
       }
-      auto curve = ComputeAllan(rate, period.value().tau0_s, options.allan);
+      json gaps;
+      Result<AllanCurve> curve = MakeError("not computed");
+      if (period.value().missing_samples == 0) {
+        curve = ComputeAllan(rate, period.value().tau0_s, options.allan);
+      } else {
+        Result<std::vector<int64_t>> index =
+            GridIndices(*tag, t.window.begin, t.window.end, period.value().tau0_s, session.path);
+        curve = index.ok()
+                    ? CurveThroughGaps(rate, index.value(), period.value().tau0_s, options, &gaps)
+                    : Result<AllanCurve>(index.error());
+      }
       if (!curve.ok()) {
-        jq["allan"] = {{"error", curve.error().message}};
+        jq["allan"] = {{"error", curve.error().ToString()}};
+        if (!gaps.is_null()) jq["allan"]["gaps"] = gaps;
         continue;
       }
       auto fit = FitNoiseTerms(curve.value(), options.fit);
@@ -65,6 +180,7 @@ Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                                 {"max_abs_jitter_s", p.max_abs_jitter_s},
                                 {"missing_samples", p.missing_samples},
                                 {"warnings", p.warnings}};
+      if (!gaps.is_null()) allan["gaps"] = gaps;
       if (!fit.ok()) allan["fit_error"] = fit.error().message;
       jq["allan"] = allan;
       jq["allan_type_a_link"] =

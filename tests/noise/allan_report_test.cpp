@@ -97,12 +97,14 @@ TEST_CASE("Allan CSV carries units in the header and blanks for NaN", "[noise]")
   c.ci_high = {0.6, std::nan("")};
   c.edf = {12.5, std::nan("")};
   c.n_terms = {97, 94};
+  c.n_terms_gap_free = {97, 100};  // 6 of the 100 terms at m = 2 read a missing sample
   c.alpha = {0, 0};
   c.alpha_source = {AlphaSource::kLag1Acf, AlphaSource::kCarried};
   CHECK(AllanCurveCsv(c, "deg/s") ==
-        "tau_s,m,n_terms,alpha,alpha_source,edf,ohdev_dps,ci_low_dps,ci_high_dps\n"
-        "0.01,1,97,0,lag1_acf,12.5,0.5,0.4,0.6\n"
-        "0.02,2,94,0,carried,,0.25,,\n");
+        "tau_s,m,n_terms,alpha,alpha_source,edf,ohdev_dps,ci_low_dps,ci_high_dps,"
+        "missing_fraction\n"
+        "0.01,1,97,0,lag1_acf,12.5,0.5,0.4,0.6,0\n"
+        "0.02,2,94,0,carried,,0.25,,,0.06\n");
 }
 
 }  // namespace

@@ -115,6 +115,10 @@ struct AllanCurve {
   std::vector<double> ci_high;   // [q]; NaN where no EDF exists.
   std::vector<double> edf;       // NaN where no EDF exists.
   std::vector<int64_t> n_terms;  // Terms in the sum (Stable32's "#").
+  // Terms a record of the same length without missing samples has; n_terms where nothing is
+  // missing. 1 - n_terms / n_terms_gap_free is the fraction of terms lost to gaps at a tau.
+  std::vector<int64_t> n_terms_gap_free;
+  int64_t n_missing_samples = 0;  // Missing grid points among the M (ComputeAllanWithGaps).
   std::vector<int> alpha;
   std::vector<AlphaSource> alpha_source;
 
@@ -144,5 +148,28 @@ std::vector<double> AllanVariances(const std::vector<double>& phase, double tau0
 // computes the variance, identifies the noise type and the confidence interval at each tau.
 Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
                                 const AllanOptions& options = AllanOptions());
+
+// Rate samples on a regular grid of period tau0_s, some of them missing (present[k] == 0: a
+// lost BLE packet, a stale or never frame, an absent row), with the gap handling of NIST
+// SP 1065 (section 5.15, "Data gaps") and Stable32: a term of the sums above that reads a
+// missing sample is left out, and the variance is the mean of the terms that remain,
+//   s^2 = (sum over valid terms) / (norm * n_valid)   instead of / (norm * n_terms).
+// A term at phase index i reads the rate samples y[i, i + 2m) (oadev, adev), y[i, i + 3m)
+// (ohdev, hdev), and the modified sum at j reads y[j, j + 3m - 1); a missing sample is never
+// replaced by a guess. The mean removed before integration is that of the present samples.
+// Taus left with no valid term are dropped. The EDF (SP 1065 5.3.2, GreenhallRileyEdf) is
+// that of a gap-free record with as many terms as remain (N_eq = n_valid + 2m for oadev,
+// + 3m for ohdev, + 3m - 1 for mdev, (n_valid + 1) m + 1 for adev, (n_valid + 2) m + 1 for
+// hdev), so the confidence interval widens as terms are lost. The noise type at each tau is
+// identified on the longest gap-free stretch (the lag-1 ACF needs consecutive averages);
+// where that stretch is too short, alpha is carried from a smaller tau as in ComputeAllan.
+// Every curve field is as in ComputeAllan; n_terms counts the valid terms, n_terms_gap_free
+// what the record would have without gaps, n_missing_samples the missing grid points.
+// With every sample present the curve equals ComputeAllan's to rounding.
+// Errors: sizes differ, fewer than 2 present samples, a present sample not finite, no tau
+// with a valid term.
+Result<AllanCurve> ComputeAllanWithGaps(const std::vector<double>& rate,
+                                        const std::vector<uint8_t>& present, double tau0_s,
+                                        const AllanOptions& options = AllanOptions());
 
 }  // namespace metro

@@ -17,12 +17,14 @@
 //    "u_mean_allan", "u_u_mean_allan", "dominant_term", "extrapolated"}
 //
 // AllanCurveCsv: header "tau_s,m,n_terms,alpha,alpha_source,edf,adev_<tok>,ci_low_<tok>,
-// ci_high_<tok>" (tok from NoiseUnits::column_token, e.g. adev_dps), one row per tau, numbers
-// with 10 significant digits, empty fields for NaN.
+// ci_high_<tok>,missing_fraction" (tok from NoiseUnits::column_token, e.g. adev_dps), one row
+// per tau, numbers with 10 significant digits, empty fields for NaN. missing_fraction is the
+// fraction of the tau's terms left out for missing samples (0 without gaps).
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "metro/noise/allan.hpp"
 #include "metro/noise/noise_fit.hpp"
@@ -36,5 +38,8 @@ nlohmann::ordered_json AllanTypeALinkToJson(const AllanCurve& curve, const Noise
                                             double duration_s);
 
 std::string AllanCurveCsv(const AllanCurve& curve, const std::string& quantity_unit);
+
+// 1 - n_terms / n_terms_gap_free at each tau (0 where nothing is missing).
+std::vector<double> MissingFractions(const AllanCurve& curve);
 
 }  // namespace metro

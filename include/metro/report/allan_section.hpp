@@ -16,10 +16,25 @@
 
 namespace metro {
 
+// What --allan does with missing samples (timing gaps: lost packets, absent rows).
+enum class AllanGapPolicy {
+  kSkip,    // The record on its sample grid; terms that read a missing sample are left out
+            // and counted (ComputeAllanWithGaps, NIST SP 1065 5.15, Stable32).
+  kSplit,   // Only the longest gap-free stretch is analysed (the other stretches counted).
+  kRefuse,  // A gap is an error for that quantity (metro before issue #21).
+};
+// "skip", "split", "refuse".
+const char* AllanGapPolicyName(AllanGapPolicy policy);
+Result<AllanGapPolicy> ParseAllanGapPolicy(const std::string& text);
+
 struct SessionAllanOptions {
   AllanOptions allan;
   NoiseFitOptions fit;
-  SamplePeriodOptions period;
+  SamplePeriodOptions period;  // allow_gaps is set from `gaps`.
+  AllanGapPolicy gaps = AllanGapPolicy::kSkip;
+  // A record with more than this fraction of its grid missing is refused whatever `gaps`
+  // says (beyond it the estimate rests on a minority of the time span).
+  double max_missing_fraction = 0.5;
   // Quantities to analyse; empty: every rate quantity (IsRateQuantity in
   // metro/io/columns.hpp: gyroscope and accelerometer columns, any unit) that the Type A
   // evaluation covered.
@@ -28,8 +43,10 @@ struct SessionAllanOptions {
 
 // Adds the "allan" objects to `report` (built by TypeAReportJson from the same `type_a`).
 // When `csv` is not null it receives every curve as CSV, one block per tag and quantity.
-// A quantity that cannot be analysed (timing gaps, too few samples) gets
-// "allan": {"error": "..."}; the others are still analysed. Errors: no rate quantity.
+// A quantity that cannot be analysed (too few samples, a refused gap, a clock that does not
+// fit one grid) gets "allan": {"error": "..."}; the others are still analysed. Missing
+// samples are handled by `options.gaps`, and the curve says what was missing
+// ("allan.gaps"). Errors: no rate quantity.
 Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                         const SessionAllanOptions& options, nlohmann::ordered_json* report,
                         std::string* csv);
