@@ -701,7 +701,7 @@ namespace internal {
 
 void FillAlphaAndIntervals(const std::vector<char>& identified,
                            const std::vector<int>& identified_alpha,
-                           const std::vector<int64_t>& n_phase_edf, const AllanOptions& options,
+                           const std::vector<EdfRecords>& records, const AllanOptions& options,
                            AllanCurve* curve) {
   const size_t n = curve->m.size();
   const EstimatorShape shape = ShapeOf(options.estimator);
@@ -728,8 +728,23 @@ void FillAlphaAndIntervals(const std::vector<char>& identified,
       curve->alpha[k] = 0;
       curve->alpha_source[k] = AlphaSource::kDefault;
     }
-    const Result<double> edf = GreenhallRileyEdf(curve->alpha[k], shape.d, curve->m[k],
-                                                 n_phase_edf[k], shape.overlapping, shape.modified);
+    auto edf_of = [&](int64_t n_phase) {
+      return GreenhallRileyEdf(curve->alpha[k], shape.d, curve->m[k], n_phase, shape.overlapping,
+                               shape.modified);
+    };
+    const EdfRecords& record = records[k];
+    Result<double> edf = MakeError("no run of terms");
+    if (record.run_phase_points.size() == 1) {
+      edf = edf_of(record.run_phase_points[0]);
+    } else if (!record.run_phase_points.empty()) {
+      double sum = 0.0;
+      for (int64_t n_phase : record.run_phase_points) {
+        const Result<double> part = edf_of(n_phase);
+        if (part.ok()) sum += part.value();
+      }
+      const Result<double> whole = edf_of(record.whole_phase_points);
+      edf = whole.ok() ? std::min(sum, whole.value()) : sum;
+    }
     const double nan = std::nan("");
     curve->edf[k] = edf.ok() ? edf.value() : nan;
     curve->ci_low[k] = nan;
@@ -851,14 +866,16 @@ Result<AllanCurve> AllanFromPhase(const double* phase, int64_t n_rate, double ra
   curve.tau_s.resize(n);
   curve.dev.resize(n);
   curve.n_terms.resize(n);
-  std::vector<int64_t> n_phase_edf(n, n_phase);
+  std::vector<internal::EdfRecords> records(n);
   for (size_t k = 0; k < n; ++k) {
     curve.tau_s[k] = static_cast<double>(m[k]) * tau0_s;
     curve.dev[k] = std::sqrt(std::max(variance[k], 0.0));
     curve.n_terms[k] = AllanTermCount(options.estimator, n_phase, m[k]);
+    records[k].run_phase_points = {n_phase};
+    records[k].whole_phase_points = n_phase;
   }
   curve.n_terms_gap_free = curve.n_terms;
-  internal::FillAlphaAndIntervals(identified, identified_alpha, n_phase_edf, options, &curve);
+  internal::FillAlphaAndIntervals(identified, identified_alpha, records, options, &curve);
   return curve;
 }
 

@@ -84,7 +84,24 @@ double Norm(AllanEstimator estimator, int64_t m, double tau0_s) {
 struct GapSum {
   double sum = 0.0;
   int64_t valid = 0;
+  // Lengths of the runs of consecutive valid terms (in term index), in order: terms of
+  // different runs read disjoint sample sets, so each run is a gap-free record of its own.
+  std::vector<int64_t> runs;
 };
+
+// Appends the validity of the next term to the runs.
+void CountRun(bool valid, bool* in_run, GapSum* out) {
+  if (!valid) {
+    *in_run = false;
+    return;
+  }
+  if (*in_run) {
+    ++out->runs.back();
+  } else {
+    out->runs.push_back(1);
+    *in_run = true;
+  }
+}
 
 // The sum over the valid terms at m. `missing` is the prefix count of missing samples
 // (missing[k] = missing samples among y[0, k)), so y[a, b) is complete when
@@ -96,6 +113,7 @@ GapSum SumValidTerms(const std::vector<double>& x, const std::vector<int64_t>& m
   auto complete = [&](int64_t i) { return missing[i + layout.span] == missing[i]; };
   auto second = [&](int64_t i) { return (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]; };
   GapSum out;
+  bool in_run = false;
   if (estimator == AllanEstimator::kMdev) {
     // sum_j (sum_{i=j}^{j+m-1} d_i)^2 over complete j; the inner sum slides, recomputed every
     // `resync` steps so rounding cannot accumulate (as ModifiedSum in allan.cpp).
@@ -106,7 +124,9 @@ GapSum SumValidTerms(const std::vector<double>& x, const std::vector<int64_t>& m
       for (int64_t i = start; i < start + m; ++i) inner += second(i);
       for (int64_t j = start; j < stop; ++j) {
         if (j > start) inner += second(j + m - 1) - second(j - 1);
-        if (complete(j)) {
+        const bool valid = complete(j);
+        CountRun(valid, &in_run, &out);
+        if (valid) {
           out.sum += inner * inner;
           ++out.valid;
         }
@@ -117,7 +137,9 @@ GapSum SumValidTerms(const std::vector<double>& x, const std::vector<int64_t>& m
   const bool hadamard = estimator == AllanEstimator::kOhdev || estimator == AllanEstimator::kHdev;
   for (int64_t k = 0; k < layout.count; ++k) {
     const int64_t i = k * layout.stride;
-    if (!complete(i)) continue;
+    const bool valid = complete(i);
+    CountRun(valid, &in_run, &out);
+    if (!valid) continue;
     const double v = hadamard ? (x[i + 3 * m] - x[i]) - 3.0 * (x[i + 2 * m] - x[i + m]) : second(i);
     out.sum += v * v;
     ++out.valid;
@@ -221,7 +243,7 @@ Result<AllanCurve> ComputeAllanWithGaps(const std::vector<double>& rate,
   curve.rate_mean = mean;
   std::vector<char> identified;
   std::vector<int> identified_alpha;
-  std::vector<int64_t> n_phase_edf;
+  std::vector<internal::EdfRecords> records;
   for (size_t k = 0; k < m.size(); ++k) {
     if (sums[k].valid < 1) continue;  // Every term reads a gap: no estimate at this tau.
     curve.m.push_back(m[k]);
@@ -231,7 +253,12 @@ Result<AllanCurve> ComputeAllanWithGaps(const std::vector<double>& rate,
     curve.dev.push_back(std::sqrt(std::max(variance, 0.0)));
     curve.n_terms.push_back(sums[k].valid);
     curve.n_terms_gap_free.push_back(AllanTermCount(options.estimator, n_phase, m[k]));
-    n_phase_edf.push_back(EquivalentPhasePoints(options.estimator, sums[k].valid, m[k]));
+    internal::EdfRecords record;
+    for (int64_t run : sums[k].runs) {
+      record.run_phase_points.push_back(EquivalentPhasePoints(options.estimator, run, m[k]));
+    }
+    record.whole_phase_points = n_phase;
+    records.push_back(std::move(record));
     bool ok = false;
     int alpha = 0;
     if (options.noise_id != NoiseIdMethod::kFixed &&
@@ -250,7 +277,7 @@ Result<AllanCurve> ComputeAllanWithGaps(const std::vector<double>& rate,
         fmt::format("every {} term at every tau reads a missing sample ({} of {} samples missing)",
                     AllanEstimatorName(options.estimator), curve.n_missing_samples, n_rate));
   }
-  internal::FillAlphaAndIntervals(identified, identified_alpha, n_phase_edf, options, &curve);
+  internal::FillAlphaAndIntervals(identified, identified_alpha, records, options, &curve);
   return curve;
 }
 

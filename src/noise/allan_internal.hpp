@@ -28,13 +28,24 @@ Result<AllanCurve> ComputeAllanInPlace(std::vector<double>* buffer, double tau0_
 Result<AllanCurve> ComputeAllanInPlace(double* data, int64_t size, double tau0_s,
                                        const AllanOptions& options = AllanOptions());
 
+// The records whose terms make up the estimate at one tau, for its EDF: the phase points
+// of each gap-free run of terms (one run, the whole record, without gaps), and of the record
+// as a whole had it no gaps.
+struct EdfRecords {
+  std::vector<int64_t> run_phase_points;
+  int64_t whole_phase_points = 0;
+};
+
 // The last stage of every curve: alpha at each tau (identified where identified[k], else
 // carried from the largest smaller tau identified, else white rate noise; or the fixed
-// alpha), then the Greenhall-Riley EDF for n_phase_edf[k] phase points and the chi-squared
-// interval (NIST SP 1065 5.3.2). curve->m and curve->dev must be filled.
+// alpha), then the EDF and the chi-squared interval (NIST SP 1065 5.3.2). The EDF is the
+// Greenhall-Riley EDF of a single run; with several runs it is the sum of the runs' EDFs
+// (runs read disjoint samples: independent for white noise), capped at the EDF of the whole
+// record without gaps, which no subset of its terms can exceed. curve->m and curve->dev must
+// be filled.
 void FillAlphaAndIntervals(const std::vector<char>& identified,
                            const std::vector<int>& identified_alpha,
-                           const std::vector<int64_t>& n_phase_edf, const AllanOptions& options,
+                           const std::vector<EdfRecords>& records, const AllanOptions& options,
                            AllanCurve* curve);
 
 // How the Allan module runs its parallel work: task(0..count-1) on up to `threads` threads
