@@ -97,10 +97,18 @@ int RunAnalyze(const AnalyzeOptions& o) {
     }
     html = std::move(rendered).value();
   }
+  // An analysis asked for that produced nothing for a quantity says so here (issue #21).
+  for (const std::string& f : analysis.failures) PrintErrorText(f);
+  // No curve at all: no --allan-csv (an empty file would read as an analysis that ran).
+  const std::string allan_csv_path = analysis.allan_csv.empty() ? std::string() : o.allan_csv;
+  if (!o.allan_csv.empty() && allan_csv_path.empty()) {
+    PrintErrorText(
+        fmt::format("--allan-csv {}: not written, no Allan curve was computed", o.allan_csv));
+  }
   // The JSON (no -o: to stdout, with no table), the Allan CSV and the HTML are replaced
   // together or not at all.
   if (Status s = WriteOutputs({{o.output.empty() ? "-" : o.output, json},
-                               {o.allan_csv, analysis.allan_csv},
+                               {allan_csv_path, analysis.allan_csv},
                                {o.html, html}});
       !s.ok()) {
     PrintError(s.error());
@@ -111,6 +119,10 @@ int RunAnalyze(const AnalyzeOptions& o) {
   } else if (const std::string w = TypeAReportWarnings(analysis.report); !w.empty()) {
     // No table (--quiet, or the JSON alone on stdout): the warnings still reach stderr.
     PrintText(stderr, std::string_view(w).substr(1));
+  }
+  if (analysis.nothing_produced) {
+    PrintErrorText("--allan produced no curve for any quantity (reasons above and in the report)");
+    return kExitFailed;
   }
   return kExitOk;
 }

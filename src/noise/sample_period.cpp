@@ -95,12 +95,13 @@ Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
   }
   period.jitter_rms_s = regular > 0 ? std::sqrt(sum_sq / static_cast<double>(regular)) : 0.0;
   if (!gap_lines.empty() && !options.allow_gaps) {
-    return MakeError("", gap_lines.front(),
-                     fmt::format("{} gaps longer than {} x the median interval {:.6g} s at {} "
-                                 "({} samples missing): the Allan estimators need uniform "
-                                 "sampling; analyse the runs between gaps separately",
-                                 gap_lines.size(), options.gap_factor, median, LineList(gap_lines),
-                                 period.missing_samples));
+    return MakeError(
+        "", gap_lines.front(),
+        fmt::format("{} {} longer than {} x the median interval {:.6g} s at {} "
+                    "({} samples missing): the Allan estimators need uniform "
+                    "sampling; analyse the runs between gaps separately",
+                    gap_lines.size(), gap_lines.size() == 1 ? "gap" : "gaps", options.gap_factor,
+                    median, LineList(gap_lines), period.missing_samples));
   }
   for (const TimingGap& gap : period.gaps) {
     period.warnings.push_back(fmt::format("line {}: gap of {:.6g} s (about {} samples missing)",

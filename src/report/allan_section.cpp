@@ -108,12 +108,15 @@ Result<AllanGapPolicy> ParseAllanGapPolicy(const std::string& text) {
   return MakeError(fmt::format("--gaps '{}': expected skip, split or refuse", text));
 }
 
-Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
-                        const SessionAllanOptions& options, nlohmann::ordered_json* report,
-                        std::string* csv) {
+Result<AllanSectionSummary> AddAllanToReport(const Session& session, const SessionTypeA& type_a,
+                                             const SessionAllanOptions& options,
+                                             nlohmann::ordered_json* report, std::string* csv) {
   std::string why;
   if (!options.allan.IsValid(&why)) return MakeError("invalid --allan options: " + why);
-  size_t analysed = 0;
+  AllanSectionSummary summary;
+  auto failed = [&summary](const TagTypeA& t, const QuantityTypeA& q, const std::string& reason) {
+    summary.failures.push_back(fmt::format("sensor {} {}: {}", t.sensor, q.name, reason));
+  };
   auto& sensors = (*report)["sensors"];
   for (size_t k = 0; k < type_a.tags.size(); ++k) {
     const TagTypeA& t = type_a.tags[k];
@@ -126,7 +129,7 @@ Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                               : std::find(options.quantities.begin(), options.quantities.end(),
                                           q.name) != options.quantities.end();
       if (!wanted) continue;
-      ++analysed;
+      ++summary.requested;
       json& jq = jtag["quantities"][q.name];
       const Quantity* values = tag->Find(q.name);
       const auto b = static_cast<ptrdiff_t>(t.window.begin);
@@ -151,6 +154,7 @@ Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
           err.message += " (--gaps refuse; --gaps skip analyses through them)";
         }
         jq["allan"] = {{"error", err.ToString()}};
+        failed(t, q, err.ToString());
         continue;
       }
       json gaps;
@@ -167,8 +171,10 @@ Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
       if (!curve.ok()) {
         jq["allan"] = {{"error", curve.error().ToString()}};
         if (!gaps.is_null()) jq["allan"]["gaps"] = gaps;
+        failed(t, q, curve.error().ToString());
         continue;
       }
+      ++summary.analysed;
       auto fit = FitNoiseTerms(curve.value(), options.fit);
       const NoiseFit noise_fit = fit.ok() ? fit.value() : NoiseFit{};
       json allan = AllanToJson(curve.value(), noise_fit, q.unit);
@@ -191,12 +197,12 @@ Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
       }
     }
   }
-  if (analysed == 0) {
+  if (summary.requested == 0) {
     return MakeError(session.path, 0,
                      "--allan: no rate quantity (gyroscope or accelerometer column) in the "
                      "window; name one with --quantity");
   }
-  return Status::Ok();
+  return summary;
 }
 
 }  // namespace metro

@@ -57,7 +57,8 @@ struct TagResult {
 struct SessionResults {
   std::vector<QuantityResult> quantities;
   std::vector<TagResult> tags;
-  std::vector<std::string> warnings;  // NoFreshPacketWarnings, prefixed with the session.
+  // NoFreshPacketWarnings and the analyses that produced nothing, prefixed with the session.
+  std::vector<std::string> warnings;
 };
 
 int64_t Count(const ordered_json& j, const char* key) {
@@ -379,10 +380,12 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
         item.ok = true;
         hashes[i] = a.session.sha256;
         results[i] = ExtractResults(a.report, inputs[i]);
+        // An analysis asked for that produced nothing for a quantity (issue #21).
+        for (const std::string& f : a.failures) results[i].warnings.push_back(inputs[i] + ": " + f);
       }
     }
     if (options.on_progress) {
-      std::lock_guard<std::mutex> lock(progress_mutex);
+      std::lock_guard<std::mutex> guard(progress_mutex);
       options.on_progress(++done, inputs.size());
     }
   });

@@ -54,11 +54,12 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
   }
   if (run_allan) {
     if (progress != nullptr) progress->BeginPhase("Allan deviation", kUncountedWork);
-    if (Status s = AddAllanToReport(out.session, out.type_a, options.allan_options, &out.report,
-                                    options.allan_csv ? &out.allan_csv : nullptr);
-        !s.ok()) {
-      return fail(s.error(), true);
-    }
+    Result<AllanSectionSummary> allan =
+        AddAllanToReport(out.session, out.type_a, options.allan_options, &out.report,
+                         options.allan_csv ? &out.allan_csv : nullptr);
+    if (!allan.ok()) return fail(allan.error(), true);
+    for (const std::string& f : allan.value().failures) out.failures.push_back("--allan: " + f);
+    out.nothing_produced = out.nothing_produced || allan.value().NothingProduced();
   }
   out.table.clear();
   for (const std::string& w : NoFreshPacketWarnings(out.report)) out.table += w + "\n";

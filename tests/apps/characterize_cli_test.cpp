@@ -171,17 +171,64 @@ TEST_CASE("characterize --allan adds the Allan deviation of the rate quantities"
         Approx(q["type_a"]["std_of_mean_autocorr"].get<double>()).epsilon(0.1));
 }
 
-TEST_CASE("characterize --allan refuses gaps with line numbers", "[apps]") {
+TEST_CASE("characterize --allan analyses through gaps, or refuses them with line numbers",
+          "[apps]") {
+  // 10 ms grid; 0.03 and 0.04 are missing (grid of 10 slots, 8 present).
   TempFile session(
       "t_s,gx_dps,gy_dps,gz_dps\n0,1,0,0\n0.01,1.1,0,0\n0.02,0.9,0,0\n0.05,1,0,0\n"
-      "0.06,1.2,0,0\n0.07,1,0,0\n");
-  Run r = Characterize(session.path() + " --type-a --allan");
+      "0.06,1.2,0,0\n0.07,1,0,0\n0.08,0.8,0,0\n0.09,1.1,0,0\n");
+  Run r = Characterize(session.path() + " --type-a --allan --quantity gx_dps");
   REQUIRE(r.exit_code == 0);
-  const auto allan = nlohmann::json::parse(r.out)["sensors"][0]["quantities"]["gx_dps"]["allan"];
+  auto allan = nlohmann::json::parse(r.out)["sensors"][0]["quantities"]["gx_dps"]["allan"];
+  REQUIRE_FALSE(allan.contains("error"));
+  CHECK(allan["gaps"]["policy"] == "skip");
+  CHECK(allan["gaps"]["grid_samples"] == 10);
+  CHECK(allan["gaps"]["missing_samples"] == 2);
+  // m = 1: 9 terms read y[i, i + 2), those with i = 2, 3, 4 read a missing sample.
+  CHECK(allan["n_terms"][0] == 6);
+
+  // Refused: the analysis asked for produced nothing, so stderr says why and the exit is 1.
+  const std::string csv = session.path() + ".allan.csv";
+  r = Characterize(session.path() + " --type-a --allan --gaps refuse --allan-csv " + csv + " -o " +
+                   session.path() + ".json");
+  CHECK(r.exit_code == 1);
+  std::ifstream in(session.path() + ".json");
+  allan = nlohmann::json::parse(in)["sensors"][0]["quantities"]["gx_dps"]["allan"];
   REQUIRE(allan.contains("error"));
   CHECK(allan["error"].get<std::string>().find(session.path() + ":5:") == 0);
+  CHECK(r.err.find("error: --allan: sensor 1 gx_dps: " + session.path() + ":5:") !=
+        std::string::npos);
+  CHECK(r.err.find("error: --allan: sensor 1 gz_dps: ") != std::string::npos);
+  CHECK(r.err.find("--allan-csv " + csv + ": not written") != std::string::npos);
+  CHECK(r.err.find("error: --allan produced no curve for any quantity") != std::string::npos);
+  CHECK_FALSE(Exists(csv));
+  std::remove((session.path() + ".json").c_str());
   Run none = Characterize(session.path() + " --type-a --allan --quantity t_s");
   CHECK(none.exit_code == 2);
+}
+
+TEST_CASE("characterize --allan on a simulated BLE log with 2 % packet loss", "[apps]") {
+  // The simulator's own default loss (issue #21: this used to exit 0 with an empty CSV).
+  TempFile session("");
+  REQUIRE(Characterize("simulate --columns imu --duration-s 120 --packet-loss 0.02 -o " +
+                       session.path())
+              .exit_code == 0);
+  const std::string csv = session.path() + ".allan.csv";
+  Run r = Characterize(session.path() + " --allan --quantity gx_dps --allan-csv " + csv);
+  REQUIRE(r.exit_code == 0);
+  const auto allan = nlohmann::json::parse(r.out)["sensors"][0]["quantities"]["gx_dps"]["allan"];
+  REQUIRE(allan.contains("adev"));
+  const int64_t missing = allan["gaps"]["missing_samples"].get<int64_t>();
+  const int64_t grid = allan["gaps"]["grid_samples"].get<int64_t>();
+  CHECK(missing > 0);
+  CHECK(allan["gaps"]["missing_fraction"].get<double>() ==
+        Approx(static_cast<double>(missing) / static_cast<double>(grid)));
+  std::ifstream in(csv);
+  std::stringstream text;
+  text << in.rdbuf();
+  CHECK(text.str().find("missing_fraction") != std::string::npos);
+  CHECK(text.str().find("\n0.1") != std::string::npos);  // the first tau's row
+  std::remove(csv.c_str());
 }
 
 TEST_CASE("characterize --budget takes its Type A input from the session", "[apps]") {

@@ -57,7 +57,11 @@ TEST_CASE("Allan JSON has the report shape and white noise numbers", "[noise]") 
   std::vector<std::string> keys;
   for (auto it = j.begin(); it != j.end(); ++it) keys.push_back(it.key());
   CHECK(keys == std::vector<std::string>{"estimator", "tau_s", "adev", "ci_low", "ci_high", "edf",
-                                         "n_terms", "noise"});
+                                         "n_terms", "n_terms_gap_free", "missing_fraction",
+                                         "noise"});
+  // A record without gaps: every term is there.
+  CHECK(j["n_terms_gap_free"] == j["n_terms"]);
+  for (const auto& f : j["missing_fraction"]) CHECK(f.get<double>() == 0.0);
   CHECK(j["estimator"] == "oadev");
   CHECK(j["tau_s"].size() == curve.value().size());
   CHECK(j["tau_s"][0].get<double>() == Approx(0.01));

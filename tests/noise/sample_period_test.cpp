@@ -38,7 +38,7 @@ TEST_CASE("Sample period, jitter and gaps from timestamps", "[noise]") {
   REQUIRE_FALSE(refused.ok());
   CHECK(refused.error().line == 105);
   CHECK(refused.error().ToString() ==
-        "line 105: 1 gaps longer than 1.5 x the median interval 0.1 s at line 105 (3 samples "
+        "line 105: 1 gap longer than 1.5 x the median interval 0.1 s at line 105 (3 samples "
         "missing): the Allan estimators need uniform sampling; analyse the runs between gaps "
         "separately");
   SamplePeriodOptions allow;

@@ -156,6 +156,26 @@ TEST_CASE("Std of session means across different sessions", "[report][batch]") {
   CHECK(q["std_of_means"].get<double>() == Approx(d_deg / std::sqrt(2.0)).epsilon(2e-6));
 }
 
+TEST_CASE("Batch names the Allan analyses that produced nothing", "[report][batch]") {
+  TempDir in, out;
+  {
+    // 10 ms grid with samples 3 and 4 missing: refused under --gaps refuse.
+    std::ofstream a(in.path / "gap.csv");
+    a << "t_s,sensor,gx_dps\n";
+    for (int i : {0, 1, 2, 5, 6, 7, 8, 9, 10, 11}) a << i * 0.01 << ",1," << (i % 3) * 0.1 << "\n";
+  }
+  BatchOptions o;
+  o.output_dir = out.path.string();
+  o.analysis.allan = true;
+  o.analysis.allan_options.gaps = AllanGapPolicy::kRefuse;
+  const BatchSummary summary = RunBatch({(in.path / "gap.csv").string()}, o);
+  REQUIRE(summary.ok);  // The Type A report was written.
+  const std::string expected = (in.path / "gap.csv").string() + ": --allan: sensor 1 gx_dps: ";
+  REQUIRE(summary.summary["warnings"].size() == 1);
+  CHECK(summary.summary["warnings"][0].get<std::string>().find(expected) == 0);
+  CHECK(summary.table.find(expected) != std::string::npos);
+}
+
 TEST_CASE("Batch report names never collide", "[report][batch]") {
   const std::vector<std::string> names =
       BatchReportNames({"x/session.csv", "y/session.csv", "y/other.txt", "summary.csv"});

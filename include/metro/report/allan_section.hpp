@@ -41,14 +41,26 @@ struct SessionAllanOptions {
   std::vector<std::string> quantities;
 };
 
+// What AddAllanToReport did: the quantities it was asked for, how many got a curve, and a
+// line for each that did not ("sensor 3 gx_dps: <reason>"), for stderr.
+struct AllanSectionSummary {
+  int requested = 0;
+  int analysed = 0;
+  std::vector<std::string> failures;
+
+  // Asked for something and produced nothing at all (the caller exits 1).
+  bool NothingProduced() const { return requested > 0 && analysed == 0; }
+};
+
 // Adds the "allan" objects to `report` (built by TypeAReportJson from the same `type_a`).
-// When `csv` is not null it receives every curve as CSV, one block per tag and quantity.
+// When `csv` is not null it receives every curve as CSV, one block per tag and quantity
+// (nothing when no curve was made).
 // A quantity that cannot be analysed (too few samples, a refused gap, a clock that does not
-// fit one grid) gets "allan": {"error": "..."}; the others are still analysed. Missing
-// samples are handled by `options.gaps`, and the curve says what was missing
-// ("allan.gaps"). Errors: no rate quantity.
-Status AddAllanToReport(const Session& session, const SessionTypeA& type_a,
-                        const SessionAllanOptions& options, nlohmann::ordered_json* report,
-                        std::string* csv);
+// fit one grid) gets "allan": {"error": "..."} and a line in the summary's failures; the
+// others are still analysed. Missing samples are handled by `options.gaps`, and the curve
+// says what was missing ("allan.gaps"). Errors: no rate quantity.
+Result<AllanSectionSummary> AddAllanToReport(const Session& session, const SessionTypeA& type_a,
+                                             const SessionAllanOptions& options,
+                                             nlohmann::ordered_json* report, std::string* csv);
 
 }  // namespace metro

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "metro/core/progress.hpp"
 #include "metro/core/status.hpp"
@@ -51,7 +52,12 @@ struct SessionAnalysis {
   SessionTypeA type_a;
   nlohmann::ordered_json report;  // "metro.report/1" (docs/report-schema.md).
   std::string table;              // TypeAReportTable + the budget table, for people.
-  std::string allan_csv;          // When options.allan_csv.
+  std::string allan_csv;          // When options.allan_csv and a curve was made.
+  // A line per requested analysis that produced nothing for a quantity ("--allan: sensor 3
+  // gx_dps: <reason>"), for stderr; the report holds the same reason.
+  std::vector<std::string> failures;
+  // A requested analysis produced nothing for any quantity (the app exits 1, issue #21).
+  bool nothing_produced = false;
 };
 
 SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOptions& options);
