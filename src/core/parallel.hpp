@@ -64,6 +64,21 @@ void ParallelFor(size_t n, int threads, Fn&& fn) {
       [&] { next.store(n); });
 }
 
+// Runs fn(lo, hi, slice) on `threads` contiguous slices [n t / threads, n (t + 1) / threads)
+// of [0, n), one slice per thread (ParallelFor, so an exception reaches the caller); on one
+// thread, or n < 2, fn(0, n, 0) here.
+template <typename Fn>
+void ParallelSlices(int threads, int64_t n, Fn&& fn) {
+  if (threads <= 1 || n < 2) {
+    fn(int64_t{0}, n, 0);
+    return;
+  }
+  ParallelFor(static_cast<size_t>(threads), threads, [&](size_t t) {
+    const int64_t ti = static_cast<int64_t>(t);
+    fn(n * ti / threads, n * (ti + 1) / threads, static_cast<int>(t));
+  });
+}
+
 // Runs `beside` on a second thread while the calling thread runs `here`, and returns once
 // both are done. An exception from either is rethrown here after both have finished (the
 // one from `here` first), never left to end the process from a thread; if no thread can be

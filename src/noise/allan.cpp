@@ -44,20 +44,6 @@ int ResolveThreads(int requested, int64_t work_points) {
   return static_cast<int>(std::min<int64_t>(threads, useful));
 }
 
-// Runs fn(lo, hi, slice) on `threads` contiguous slices of [0, n), one slice per thread
-// (internal::ParallelFor, so an exception reaches the caller).
-template <typename Fn>
-void ParallelSlices(int threads, int64_t n, Fn fn) {
-  if (threads <= 1 || n < 2) {
-    fn(int64_t{0}, n, 0);
-    return;
-  }
-  internal::ParallelFor(static_cast<size_t>(threads), threads, [&](size_t t) {
-    const int64_t ti = static_cast<int64_t>(t);
-    fn(n * ti / threads, n * (ti + 1) / threads, static_cast<int>(t));
-  });
-}
-
 // Eight lanes of doubles as two 4-wide vectors (GCC/Clang vector extension): lane j of the
 // accumulators sums the terms i = j (mod 8) of a call, and the lanes are added in one fixed
 // order, so the result is the same whatever instructions carry the vectors (SSE2 pairs by
@@ -151,13 +137,6 @@ double SumThirdDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) {
   return AddLanes(s0, s1);
 }
 
-// Runs task(0), ..., task(count - 1) on up to `threads` threads (internal::ParallelFor:
-// an exception in a task reaches the caller once every thread has stopped).
-template <typename Task>
-void RunTasks(int threads, int64_t count, Task task) {
-  internal::RunAllanTasks(threads, count, task);
-}
-
 // Overlapping Allan / Hadamard sums for all m. The index range is cut into a fixed number
 // of slices (whatever the thread count); a slice is one blocked pass over its part of the
 // data for every m, and may run on any thread. Sums() adds the slices' partial sums in
@@ -219,7 +198,7 @@ double ModifiedSum(const double* p, int64_t n_phase, int64_t m, int threads) {
   const int64_t resync = std::max<int64_t>(int64_t{1} << 16, 16 * m);
   const int n_threads = ResolveThreads(threads, n_terms);
   std::vector<double> partial(static_cast<size_t>(n_threads), 0.0);
-  ParallelSlices(n_threads, n_terms, [&](int64_t lo, int64_t hi, int t) {
+  internal::ParallelSlices(n_threads, n_terms, [&](int64_t lo, int64_t hi, int t) {
     double total = 0.0;
     for (int64_t start = lo; start < hi; start += resync) {
       const int64_t stop = std::min(start + resync, hi);
@@ -349,7 +328,7 @@ PhaseResult IntegratePhase(const double* y, int64_t n, double tau0_s, int thread
   PhaseResult out;
   std::vector<double> block_sum(static_cast<size_t>(blocks), 0.0);
   std::vector<int64_t> block_bad(static_cast<size_t>(blocks), -1);
-  ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
+  internal::ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
     for (int64_t b = b0; b < b1; ++b) {
       const int64_t lo = b * kPhaseBlock;
       const int64_t hi = std::min(n, lo + kPhaseBlock);
@@ -382,7 +361,7 @@ PhaseResult IntegratePhase(const double* y, int64_t n, double tau0_s, int thread
   // Pass 2: block totals of the centred steps (sum and its compensation).
   std::vector<double> step_sum(static_cast<size_t>(blocks), 0.0);
   std::vector<double> step_carry(static_cast<size_t>(blocks), 0.0);
-  ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
+  internal::ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
     RunBlocks(y, n, mean, tau0_s, b0, b1, step_sum.data(), step_carry.data(), nullptr);
   });
   // Starting phase of each block (x and its compensation).
@@ -397,7 +376,7 @@ PhaseResult IntegratePhase(const double* y, int64_t n, double tau0_s, int thread
   }
   double* phase = get_phase();
   phase[0] = 0.0;
-  ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
+  internal::ParallelSlices(n_threads, blocks, [&](int64_t b0, int64_t b1, int) {
     RunBlocks(y, n, mean, tau0_s, b0, b1, start_x.data(), start_carry.data(), phase);
   });
   return out;
@@ -625,8 +604,8 @@ std::vector<double> PhaseVariances(const double* phase, int64_t n_phase, double 
     case AllanEstimator::kOadev:
     case AllanEstimator::kOhdev: {
       OverlappingSums overlapping(phase, n_phase, m, estimator);
-      RunTasks(ResolveThreads(threads, n_phase), overlapping.slices(),
-               [&](int64_t slice) { overlapping.RunSlice(slice); });
+      internal::RunAllanTasks(ResolveThreads(threads, n_phase), overlapping.slices(),
+                              [&](int64_t slice) { overlapping.RunSlice(slice); });
       sums = overlapping.Sums();
       break;
     }
@@ -849,7 +828,7 @@ Result<AllanCurve> AllanFromPhase(const double* phase, int64_t n_rate, double ra
     // One pool of tasks: the identifications (smallest m, the costliest, first), then the
     // slices of the variance sums.
     OverlappingSums overlapping(phase, n_phase, m, options.estimator);
-    RunTasks(threads, n_id + overlapping.slices(), [&](int64_t t) {
+    internal::RunAllanTasks(threads, n_id + overlapping.slices(), [&](int64_t t) {
       if (t < n_id) {
         identify(static_cast<size_t>(t));
       } else {
@@ -859,7 +838,7 @@ Result<AllanCurve> AllanFromPhase(const double* phase, int64_t n_rate, double ra
     variance = VariancesFromSums(overlapping.Sums(), n_phase, tau0_s, m, options.estimator);
   } else {
     variance = PhaseVariances(phase, n_phase, tau0_s, m, options.estimator, threads);
-    RunTasks(threads, n_id, [&](int64_t t) { identify(static_cast<size_t>(t)); });
+    internal::RunAllanTasks(threads, n_id, [&](int64_t t) { identify(static_cast<size_t>(t)); });
   }
 
   curve.m = m;

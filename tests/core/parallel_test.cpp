@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <new>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace metro::internal {
@@ -65,6 +66,28 @@ TEST_CASE("RunBeside runs both, then rethrows the caller's exception first", "[c
   CHECK((beside == 1 && here == 1));
   CHECK_THROWS_WITH(run(true, true), "here");
   CHECK((beside == 1 && here == 1));
+}
+
+TEST_CASE("ParallelSlices covers [0, n) in contiguous slices and rethrows", "[core][parallel]") {
+  for (int threads : {1, 2, 3, 7}) {
+    std::vector<int> seen(100, 0);
+    std::vector<std::pair<int64_t, int64_t>> ranges(static_cast<size_t>(threads));
+    ParallelSlices(threads, 100, [&](int64_t lo, int64_t hi, int slice) {
+      ranges[static_cast<size_t>(slice)] = {lo, hi};
+      for (int64_t i = lo; i < hi; ++i) ++seen[static_cast<size_t>(i)];
+    });
+    for (int v : seen) CHECK(v == 1);
+    // Slice t is [100 t / threads, 100 (t + 1) / threads).
+    for (int t = 0; t < threads; ++t) {
+      CHECK(ranges[static_cast<size_t>(t)].first == 100 * t / threads);
+      CHECK(ranges[static_cast<size_t>(t)].second == 100 * (t + 1) / threads);
+    }
+  }
+  CHECK_THROWS_WITH(ParallelSlices(4, 100,
+                                   [](int64_t lo, int64_t, int) {
+                                     if (lo > 0) throw std::runtime_error("slice");
+                                   }),
+                    "slice");
 }
 
 }  // namespace
