@@ -33,6 +33,7 @@ all_targets=$(awk 'NF {print $1}' <<<"$table")
 targets="${*:-$all_targets}"
 
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
   -DMETRO_FUZZ=ON -DMETRO_SANITIZE=ON -DMETRO_BUILD_TESTS=OFF -DMETRO_BUILD_APPS=OFF \
   -DMETRO_BUILD_BENCH=OFF -DMETRO_BUILD_FIRMWARE=OFF \
   -DMETRO_MODULES="core;io;stats;uncertainty;noise;calibration;blob;sim;accuracy;report" > /dev/null
