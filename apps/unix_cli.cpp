@@ -41,9 +41,14 @@ Status WriteOutputs(const std::vector<std::pair<std::string, std::string_view>>&
   if (to_stdout != nullptr) {
     if (Status s = WriteOutput("-", *to_stdout); !s.ok()) return s;
   }
+  std::vector<std::string> replaced;
+  for (const auto& output : outputs) {
+    if (OutputExists(output.first)) replaced.push_back(output.first);
+  }
   for (auto& file : files) {
     if (Status s = file->Publish(); !s.ok()) return s;
   }
+  for (const std::string& path : replaced) NoteReplaced(path);
   return Status::Ok();
 }
 
@@ -82,13 +87,6 @@ Status CheckOutputs(const std::vector<NamedPath>& outputs, const std::vector<Nam
                         "output its own file",
                         out.option, other.option, other.option, other.path, out.option, out.path));
       }
-    }
-  }
-  for (const NamedPath& out : outputs) {
-    if (out.path.empty() || IsStdio(out.path)) continue;
-    struct stat st {};
-    if (::stat(out.path.c_str(), &st) == 0) {
-      Note(fmt::format("note: replacing existing {}\n", out.path));
     }
   }
   return Status::Ok();

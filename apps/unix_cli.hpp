@@ -5,6 +5,7 @@
 #pragma once
 
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -95,10 +96,27 @@ inline void PrintTable(std::string_view table, const std::string& output) {
 // into kExitFailed (1) with "error: cannot write to stdout: ...". Another exit code is kept.
 int FinishStdout(int exit_code);
 
+// True when `path` names an existing file (an output about to be replaced).
+inline bool OutputExists(const std::string& path) {
+  struct stat st {};
+  return !path.empty() && !IsStdio(path) && ::stat(path.c_str(), &st) == 0;
+}
+
+// Prints "note: replaced existing FILE" (not under --quiet): called once the new file is in
+// place, so a run that fails never claims to have replaced anything.
+inline void NoteReplaced(const std::string& path) {
+  Note(fmt::format("note: replaced existing {}\n", path));
+}
+
 // Writes `contents` to standard output (`path` is `-`; flushed, a failed write is an
 // error, e.g. a full disk behind a redirection) or atomically to the file `path`.
 inline Status WriteOutput(const std::string& path, std::string_view contents) {
-  if (!IsStdio(path)) return WriteFileAtomically(path, contents);
+  if (!IsStdio(path)) {
+    const bool existed = OutputExists(path);
+    if (Status s = WriteFileAtomically(path, contents); !s.ok()) return s;
+    if (existed) NoteReplaced(path);
+    return Status::Ok();
+  }
   std::fwrite(contents.data(), 1, contents.size(), stdout);
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
     return MakeError(std::string("cannot write to stdout: ") + std::strerror(errno));
@@ -129,7 +147,13 @@ class StreamedOutput {
     return Status::Ok();
   }
   Status Finish() { return IsStdio(path_) ? WriteOutput(path_, "") : file_.Finish(); }
-  Status Publish() { return IsStdio(path_) ? Status::Ok() : file_.Publish(); }
+  Status Publish() {
+    if (IsStdio(path_)) return Status::Ok();
+    const bool existed = OutputExists(path_);
+    if (Status s = file_.Publish(); !s.ok()) return s;
+    if (existed) NoteReplaced(path_);
+    return Status::Ok();
+  }
   Status Commit() {
     if (Status s = Finish(); !s.ok()) return s;
     return Publish();
@@ -185,7 +209,8 @@ struct NamedPath {
 //   /proc or /sys, its directory exists (CheckReplaceableFile);
 // - no output is the same file as an input (through symlinks and hard links; an input `-`
 //   is the file behind stdin, if it is one) nor as another output (IsSameFile).
-// Prints "note: replacing existing FILE" for each output that exists (not under --quiet).
+// (The writers below print "note: replaced existing FILE" once an existing output was
+// replaced.)
 // Every error is a usage error (exit 2) and names both paths.
 Status CheckOutputs(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs);
 

@@ -181,8 +181,22 @@ TEST_CASE("characterize --quiet: a good run prints nothing on stderr, results st
   REQUIRE(r.exit_code == 0);
   CHECK(r.err.empty());
   r = Characterize(white + " --type-a -o " + out);
-  CHECK(r.err.find("note: replacing existing") != std::string::npos);
+  CHECK(r.err.find("note: replaced existing " + out + "\n") != std::string::npos);
   CHECK(r.out.find("warnings:") == std::string::npos);
+  // A run that fails after the outputs were checked replaces nothing and says nothing of it.
+  {
+    std::ifstream before_in(out);
+    std::stringstream before;
+    before << before_in.rdbuf();
+    TempFile budget("{ not json");
+    r = Characterize(white + " --type-a -o " + out + " --budget " + budget.path());
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("note: replaced") == std::string::npos);
+    std::ifstream after_in(out);
+    std::stringstream after;
+    after << after_in.rdbuf();
+    CHECK(after.str() == before.str());
+  }
 
   // The chest tag's report has warnings (autocorrelated quaternions): a quiet run prints
   // them to stderr, as the table ends, and nothing else.
