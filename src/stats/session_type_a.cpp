@@ -328,17 +328,28 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
       r.warnings.push_back(fmt::format("{} empty (unknown) values left out", dropped));
     }
     const TypeAResult& ta = r.type_a;
-    if (ta.n_eff < 0.5 * static_cast<double>(ta.n)) {
-      r.warnings.push_back(fmt::format(
-          "n_eff = {:.1f} < n/2 = {:.1f}: the observations are autocorrelated; "
-          "std_of_mean ({:.3g}) understates the uncertainty of the mean, use "
-          "std_of_mean_autocorr ({:.3g})",
-          ta.n_eff, 0.5 * static_cast<double>(ta.n), ta.std_of_mean, ta.std_of_mean_autocorr));
+    if (ta.autocorr_computed && ta.n_eff < 0.5 * static_cast<double>(ta.n)) {
+      r.warnings.push_back(
+          fmt::format("n_eff = {:.1f} < n/2 = {:.1f}: the observations are autocorrelated; "
+                      "std_of_mean ({:.3g}) understates the uncertainty of the mean, use "
+                      "u_mean ({:.3g}, {} dof)",
+                      ta.n_eff, 0.5 * static_cast<double>(ta.n), ta.std_of_mean, ta.u_mean,
+                      fmt::format("{:.1f}", ta.u_mean_dof)));
     }
     if (ta.cutoff_reached_limit) {
       r.warnings.push_back(
           "the autocorrelation did not decay within n/4 lags (drift or a trend): even "
-          "std_of_mean_autocorr is optimistic; see the Allan deviation");
+          "std_of_mean_autocorr is optimistic; see u_mean and the Allan deviation");
+    }
+    if (!ta.u_mean_available) r.warnings.push_back(ta.autocorr_note);
+    if (ta.drift_detected) {
+      r.warnings.push_back(fmt::format(
+          "drift or a random walk: the stationarity check (means of {} batches) gives u of the "
+          "mean {:.3g}, more than 2x the autoregressive {:.3g} (std_of_mean_autocorr {:.3g}); "
+          "u_mean takes the batch-means value ({} dof). The mean of a drifting record depends "
+          "on the window; see the Allan deviation",
+          kStationarityBatches, ta.u_mean_batch, ta.u_mean_ar, ta.std_of_mean_autocorr,
+          kStationarityBatches - 1));
     }
     if (q.name == "pitch_deg") {
       double worst = 0.0;

@@ -11,6 +11,8 @@
 #include <memory>
 #include <mutex>
 
+#include "metro/stats/spectral_mean.hpp"
+
 namespace metro {
 namespace {
 
@@ -365,7 +367,68 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   r.dof = r.n - 1;
   r.n_eff = dn;
   r.std_of_mean_autocorr = r.std_of_mean;
-  if (!options.autocorrelation || n < 4 || r.variance == 0.0) return r;
+  r.u_mean_available = true;
+  r.u_mean = r.std_of_mean;
+  r.u_mean_dof = dn - 1.0;
+  r.u_mean_method = kUMeanClassical;
+  if (!options.autocorrelation) {
+    r.autocorr_note = "autocorrelation off: u_mean is the classical s(mean)";
+    return r;
+  }
+  if (n < 4) {
+    r.autocorr_note = fmt::format(
+        "n = {} <= 3: too few observations to estimate an autocorrelation; u_mean is the "
+        "classical s(mean) with n - 1 dof",
+        n);
+    return r;
+  }
+  if (r.variance == 0.0) {
+    r.autocorr_note =
+        "constant series (s = 0): no autocorrelation and no uncertainty of the mean can be "
+        "computed from it; the readings' resolution (a Type B input) bounds u";
+    r.u_mean_available = false;
+    r.u_mean = 0.0;
+    r.u_mean_dof = 0.0;
+    r.u_mean_method.clear();
+    return r;
+  }
+  // metro's u_mean: the AR(p) spectral density at frequency zero (spectral_mean.hpp).
+  auto ar = ArSpectralMeanUncertainty(values, n);
+  if (ar.ok()) {
+    r.u_mean = ar.value().u_mean;
+    r.u_mean_ar = r.u_mean;
+    r.u_mean_dof = ar.value().dof;
+    r.u_mean_method = kUMeanArSpectral;
+    r.ar_order = ar.value().order;
+  }
+  // A series the AR model predicts almost exactly (innovations below 1e-6 of the variance:
+  // a deterministic pattern, not noise) has no noise to test the batch means against.
+  const bool deterministic = ar.ok() && ar.value().innovation_variance < 1e-6 * r.variance;
+  if (n >= kBatchMeansMinN && !deterministic) {
+    // Stationarity check: batch means of the last b * m values (type_a.hpp).
+    const size_t b = kStationarityBatches;
+    const size_t m = n / b;
+    const double* x0 = values + (n - b * m);
+    double means[kStationarityBatches];
+    double grand = 0.0;
+    for (size_t j = 0; j < b; ++j) {
+      double sum = 0.0;
+      for (size_t i = 0; i < m; ++i) sum += x0[j * m + i] - r.mean;
+      means[j] = sum / static_cast<double>(m);
+      grand += means[j];
+    }
+    grand /= static_cast<double>(b);
+    double ss = 0.0;
+    for (double v : means) ss += (v - grand) * (v - grand);
+    r.u_mean_batch = std::sqrt(ss / static_cast<double>((b - 1) * b));
+    if (r.u_mean_batch > 2.0 * r.u_mean) {
+      r.drift_detected = true;
+      r.u_mean = r.u_mean_batch;
+      r.u_mean_dof = static_cast<double>(b - 1);
+      r.u_mean_method = kUMeanBatchMeans;
+    }
+  }
+  r.autocorr_computed = true;
 
   // Zhang (2006): variance factor from the autocorrelation up to the cut-off lag.
   // Direct lag sums about the mean from those about `first`: with e_i = x_i - first and

@@ -17,6 +17,13 @@
 // the band ends the scan; lag n_c itself is included), and at most n/4.
 // rho_k is computed directly for the first lags and by FFT (FFTW) when the correlation
 // extends further, so the cost is O(n log n) in the worst case.
+//
+// u_mean, metro's recommended standard uncertainty of the mean (docs/type-a.md): the AR(p)
+// spectral density at frequency zero (stats/spectral_mean.hpp), u_mean^2 = S(0) / n, with
+// dof nu = 1 / (2 R^2) (JCGM 100 G.4.2). Zhang's s(q_bar)_autocorr covers the mean too
+// rarely under strong correlation (about 82 % instead of 95 % for AR(1), phi = 0.9,
+// n = 200, with dof n_eff - 1); the AR estimator covers 94-96 % for phi <= 0.95, n >= 200.
+// For n <= 3, or with autocorrelation off, u_mean is the classical s(q_bar) with n - 1 dof.
 #pragma once
 
 #include <cstddef>
@@ -46,8 +53,12 @@ struct TypeAResult {
   double variance_of_mean = 0.0;  // s^2(q_bar) = s^2 / n.
   double std_of_mean = 0.0;       // s(q_bar).
   int64_t dof = 0;                // n - 1.
-  // Autocorrelation-aware (Zhang 2006); equal to the classical values when
-  // autocorrelation is off or n < 4.
+  // Autocorrelation-aware (Zhang 2006). Computed only when autocorr_computed; otherwise
+  // (autocorrelation off, n <= 3, a constant series) they hold the classical values
+  // (n_eff = n, F = 1, rho1 = 0, n_c = 0) for callers that need a number, the report
+  // writes them as null and autocorr_note says why.
+  bool autocorr_computed = false;
+  std::string autocorr_note;
   double n_eff = 0.0;
   double std_of_mean_autocorr = 0.0;
   int64_t cutoff_lag = 0;        // n_c.
@@ -56,7 +67,36 @@ struct TypeAResult {
   // True when the lag scan reached max_lag_fraction * n without entering the band: the
   // series is dominated by drift and even n_eff is optimistic.
   bool cutoff_reached_limit = false;
+
+  // Recommended standard uncertainty of the mean (unit of the series) and its dof.
+  // u_mean_available is false only for a constant series (s = 0 says nothing about the
+  // mean's uncertainty: the readings' resolution, a Type B input, bounds it).
+  bool u_mean_available = false;
+  double u_mean = 0.0;
+  double u_mean_dof = 0.0;
+  std::string u_mean_method;  // kUMeanArSpectral, kUMeanClassical, or "" (not available).
+  int ar_order = 0;           // p of the AR fit (u_mean_method ar_spectral).
+  // Stationarity check (n >= kBatchMeansMinN): non-overlapping batch means of b = 10
+  // batches (Schmeiser, Oper. Res. 30 (1982) 556), u_batch^2 = s^2(batch means) / b with
+  // b - 1 dof. A drift or random walk inflates it (a trend's spread stays in the batch
+  // means however many samples a batch holds) while the AR fit absorbs it as noise. When
+  // u_batch > 2 u_mean (by chance with probability < 1e-4 for stationary data: chi^2 with 9
+  // dof beyond 36), u_mean takes u_batch, u_mean_dof = b - 1, u_mean_method
+  // "batch_means" and drift_detected is set; the session report warns. Not made when the AR
+  // innovations are below 1e-6 of the variance (a deterministic pattern, no noise).
+  double u_mean_batch = 0.0;  // 0 when not computed.
+  double u_mean_ar = 0.0;     // The AR spectral u before the check (0: not computed).
+  bool drift_detected = false;
 };
+
+inline constexpr size_t kBatchMeansMinN = 100;
+inline constexpr int kStationarityBatches = 10;
+
+// Values of TypeAResult::u_mean_method (the session report adds "allan_noise_model" and
+// "batch_means" when drift makes them larger; docs/type-a.md).
+inline constexpr const char* kUMeanArSpectral = "ar_spectral";
+inline constexpr const char* kUMeanClassical = "classical";
+inline constexpr const char* kUMeanBatchMeans = "batch_means";
 
 // Evaluates n observations. Requires n >= 2 (one observation has no Type A evaluation)
 // and finite values; returns an Error otherwise.
