@@ -93,7 +93,8 @@ SessionResults ExtractResults(const ordered_json& report, const std::string& inp
       r.quantity = name;
       r.unit = q.value("unit", "");
       r.mean = Number(a, "mean");
-      r.u_mean = Number(a, "std_of_mean_autocorr");
+      // metro's recommended u of the mean; reports from before it had only Zhang's.
+      r.u_mean = Number(a, a.contains("u_mean") ? "u_mean" : "std_of_mean_autocorr");
       r.n = Number(a, "n");
       r.n_eff = Number(a, "n_eff");
       out.push_back(std::move(r));

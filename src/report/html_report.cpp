@@ -496,8 +496,9 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
         const bool evaluated = q.contains("type_a") && q["type_a"].is_object();
         if (evaluated) {
           const ordered_json& a = q["type_a"];
-          const RoundedResult r =
-              RoundForStatement(JsonNumber(a, "mean"), JsonNumber(a, "std_of_mean_autocorr"));
+          const RoundedResult r = RoundForStatement(
+              JsonNumber(a, "mean"),
+              JsonNumber(a, a.contains("u_mean") ? "u_mean" : "std_of_mean_autocorr"));
           const double n = JsonNumber(a, "n");
           const double n_eff = JsonNumber(a, "n_eff");
           mustache::data row;

@@ -4,6 +4,7 @@
 #include "metro/report/batch.hpp"
 #include "metro/report/settle_report.hpp"
 #include "metro/report/type_a_report.hpp"
+#include "metro/report/u_mean_evidence.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
 #include "metro/uncertainty/session_resolver.hpp"
@@ -60,6 +61,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
     if (!allan.ok()) return fail(allan.error(), true);
     for (const std::string& f : allan.value().failures) out.failures.push_back("--allan: " + f);
     out.nothing_produced = out.nothing_produced || allan.value().NothingProduced();
+    ApplyAllanEvidenceToUMean(&out.type_a, &out.report);
   }
   out.table.clear();
   for (const std::string& w : NoFreshPacketWarnings(out.report)) out.table += w + "\n";

@@ -128,6 +128,9 @@ nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionType
       if (q.angle_handling == "unwrapped") jq["unwrap_jumps"] = q.unwrap_jumps;
       if (q.ok) {
         const TypeAResult& r = q.type_a;
+        // Terms that were not computed are null, with the reason (autocorr_note).
+        const bool ac = r.autocorr_computed;
+        const bool um = r.u_mean_available;
         jq["type_a"] = {{"n", r.n},
                         {"mean", r.mean},
                         {"variance", r.variance},
@@ -135,10 +138,16 @@ nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionType
                         {"variance_of_mean", r.variance_of_mean},
                         {"std_of_mean", r.std_of_mean},
                         {"dof", r.dof},
-                        {"n_eff", r.n_eff},
-                        {"std_of_mean_autocorr", r.std_of_mean_autocorr},
-                        {"autocorr_cutoff_lag", r.cutoff_lag},
-                        {"rho1", r.rho1}};
+                        {"n_eff", ac ? json(r.n_eff) : json(nullptr)},
+                        {"std_of_mean_autocorr", ac ? json(r.std_of_mean_autocorr) : json(nullptr)},
+                        {"autocorr_cutoff_lag", ac ? json(r.cutoff_lag) : json(nullptr)},
+                        {"rho1", ac ? json(r.rho1) : json(nullptr)},
+                        {"autocorr_note", ac ? json(nullptr) : json(r.autocorr_note)},
+                        {"u_mean", um ? json(r.u_mean) : json(nullptr)},
+                        {"u_mean_dof", um ? json(r.u_mean_dof) : json(nullptr)},
+                        {"u_mean_method", um ? json(r.u_mean_method) : json(nullptr)},
+                        {"u_mean_ar_order",
+                         r.u_mean_method == kUMeanArSpectral ? json(r.ar_order) : json(nullptr)}};
       } else {
         jq["type_a"] = nullptr;
         jq["error"] = q.error;
@@ -186,12 +195,22 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
         continue;
       }
       const auto& a = q["type_a"];
-      // GUM 7.2.6: mean rounded to the autocorrelation-aware u(mean) (2 significant digits).
-      const RoundedResult r =
-          RoundForStatement(a["mean"].get<double>(), a["std_of_mean_autocorr"].get<double>());
-      fmt::format_to(it, "{:>6} {:<16} {:<18} {:>8} {:>14} {:>10.3g} {:>10.2g} {:>10.1f} {:>10}\n",
-                     sensor, name, qname, a["n"].get<int64_t>(), r.value, a["std"].get<double>(),
-                     a["std_of_mean"].get<double>(), a["n_eff"].get<double>(), r.uncertainty);
+      // GUM 7.2.6: mean rounded to u_mean, metro's recommended u(mean) (2 significant
+      // digits); a report written before u_mean existed has std_of_mean_autocorr.
+      const char* u_key = a.contains("u_mean") ? "u_mean" : "std_of_mean_autocorr";
+      const std::string n_eff =
+          a["n_eff"].is_number() ? fmt::format("{:.1f}", a["n_eff"].get<double>()) : "-";
+      std::string value, uncertainty = "-";
+      if (a[u_key].is_number()) {
+        const RoundedResult r = RoundForStatement(a["mean"].get<double>(), a[u_key].get<double>());
+        value = r.value;
+        uncertainty = r.uncertainty;
+      } else {
+        value = fmt::format("{:.6g}", a["mean"].get<double>());
+      }
+      fmt::format_to(it, "{:>6} {:<16} {:<18} {:>8} {:>14} {:>10.3g} {:>10.2g} {:>10} {:>10}\n",
+                     sensor, name, qname, a["n"].get<int64_t>(), value, a["std"].get<double>(),
+                     a["std_of_mean"].get<double>(), n_eff, uncertainty);
     }
   }
   out += TypeAReportWarnings(report);

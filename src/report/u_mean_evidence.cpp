@@ -1,0 +1,58 @@
+#include "metro/report/u_mean_evidence.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <string>
+
+namespace metro {
+
+void ApplyAllanEvidenceToUMean(SessionTypeA* type_a, nlohmann::ordered_json* report) {
+  auto& sensors = (*report)["sensors"];
+  for (size_t k = 0; k < type_a->tags.size() && k < sensors.size(); ++k) {
+    for (QuantityTypeA& q : type_a->tags[k].quantities) {
+      if (!q.ok || !q.type_a.u_mean_available) continue;
+      auto& quantities = sensors[k]["quantities"];
+      if (!quantities.contains(q.name)) continue;
+      auto& jq = quantities[q.name];
+      if (!jq.contains("allan_type_a_link")) continue;
+      const auto& link = jq["allan_type_a_link"];
+      if (!link.contains("u_mean_allan") || !link["u_mean_allan"].is_number()) continue;
+      const double u_allan = link["u_mean_allan"].get<double>();
+      TypeAResult& ta = q.type_a;
+      if (!(u_allan > 2.0 * ta.u_mean)) continue;
+      const double u_u = link.contains("u_u_mean_allan") && link["u_u_mean_allan"].is_number()
+                             ? link["u_u_mean_allan"].get<double>()
+                             : 0.0;
+      const double n_minus_1 = static_cast<double>(ta.n - 1);
+      // JCGM 100:2008 G.4.2: nu = (1/2) (u / u(u))^2.
+      const double ratio = u_u > 0.0 ? u_allan / u_u : 0.0;
+      const double dof = u_u > 0.0 ? std::clamp(0.5 * ratio * ratio, 1.0, n_minus_1) : n_minus_1;
+      const std::string dominant =
+          link.contains("dominant_term") && link["dominant_term"].is_string()
+              ? link["dominant_term"].get<std::string>()
+              : "unknown";
+      const bool extrapolated = link.contains("extrapolated") &&
+                                link["extrapolated"].is_boolean() &&
+                                link["extrapolated"].get<bool>();
+      const std::string warning = fmt::format(
+          "the Allan deviation shows noise the autocorrelation misses: the fitted noise model "
+          "(dominant term {}{}) predicts u of the mean {:.3g} over the window, {:.1f}x the "
+          "Type A u_mean {:.3g} ({}); u_mean takes the Allan value ({:.1f} dof)",
+          dominant, extrapolated ? ", extrapolated to the window's duration" : "", u_allan,
+          u_allan / ta.u_mean, ta.u_mean, ta.u_mean_method, dof);
+      ta.u_mean = u_allan;
+      ta.u_mean_dof = dof;
+      ta.u_mean_method = kUMeanAllan;
+      q.warnings.push_back(warning);
+      auto& ja = jq["type_a"];
+      ja["u_mean"] = u_allan;
+      ja["u_mean_dof"] = dof;
+      ja["u_mean_method"] = kUMeanAllan;
+      ja["u_mean_ar_order"] = nullptr;
+      jq["warnings"].push_back(warning);
+    }
+  }
+}
+
+}  // namespace metro
