@@ -1,0 +1,65 @@
+#include "metro/report/u_mean_evidence.hpp"
+
+#include <catch2/catch.hpp>
+#include <string>
+
+namespace metro {
+namespace {
+
+// One tag, one quantity with u_mean = 0.1 (n = 1001) and an Allan link predicting u_allan.
+void Build(double u_allan, double u_u, SessionTypeA* s, nlohmann::ordered_json* report) {
+  QuantityTypeA q;
+  q.name = "gy_dps";
+  q.ok = true;
+  q.type_a.n = 1001;
+  q.type_a.u_mean_available = true;
+  q.type_a.u_mean = 0.1;
+  q.type_a.u_mean_dof = 40.0;
+  q.type_a.u_mean_method = kUMeanArSpectral;
+  TagTypeA t;
+  t.quantities.push_back(q);
+  s->tags.push_back(t);
+  nlohmann::ordered_json jq;
+  jq["type_a"] = {{"u_mean", 0.1}, {"u_mean_dof", 40.0}, {"u_mean_method", kUMeanArSpectral}};
+  jq["warnings"] = nlohmann::ordered_json::array();
+  jq["allan_type_a_link"] = {{"u_mean_allan", u_allan},
+                             {"u_u_mean_allan", u_u},
+                             {"dominant_term", "rate_random_walk"},
+                             {"extrapolated", true}};
+  (*report)["sensors"] = nlohmann::ordered_json::array();
+  (*report)["sensors"].push_back({{"quantities", {{"gy_dps", jq}}}});
+}
+
+TEST_CASE("Allan evidence more than 2x u_mean replaces it, dof by JCGM 100 G.4.2",
+          "[report][u_mean]") {
+  SessionTypeA s;
+  nlohmann::ordered_json report;
+  Build(0.9, 0.3, &s, &report);
+  ApplyAllanEvidenceToUMean(&s, &report);
+  const TypeAResult& a = s.tags[0].quantities[0].type_a;
+  // nu = (1/2) (0.9 / 0.3)^2 = 4.5.
+  CHECK(a.u_mean == 0.9);
+  CHECK(a.u_mean_dof == Approx(4.5).epsilon(1e-14));
+  CHECK(a.u_mean_method == std::string(kUMeanAllan));
+  const auto& jq = report["sensors"][0]["quantities"]["gy_dps"];
+  CHECK(jq["type_a"]["u_mean"].get<double>() == 0.9);
+  CHECK(jq["type_a"]["u_mean_method"].get<std::string>() == kUMeanAllan);
+  REQUIRE(jq["warnings"].size() == 1);
+  const std::string w = jq["warnings"][0].get<std::string>();
+  CHECK(w.find("rate_random_walk") != std::string::npos);
+  CHECK(w.find("9.0x") != std::string::npos);
+  CHECK(s.tags[0].quantities[0].warnings.size() == 1);
+}
+
+TEST_CASE("Allan evidence within 2x u_mean leaves it alone", "[report][u_mean]") {
+  SessionTypeA s;
+  nlohmann::ordered_json report;
+  Build(0.19, 0.05, &s, &report);
+  ApplyAllanEvidenceToUMean(&s, &report);
+  CHECK(s.tags[0].quantities[0].type_a.u_mean == 0.1);
+  CHECK(s.tags[0].quantities[0].type_a.u_mean_method == std::string(kUMeanArSpectral));
+  CHECK(report["sensors"][0]["quantities"]["gy_dps"]["warnings"].empty());
+}
+
+}  // namespace
+}  // namespace metro
