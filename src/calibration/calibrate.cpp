@@ -668,53 +668,7 @@ SensorCalibration MakeSensorCalibration(ImuSensor sensor, ModelKind kind, bool t
   }
   c.parameter_names = FreeNames(sensor, kind, temperature);
   c.covariance = cov;
-  c.misalignment_u.assign(static_cast<size_t>(nm), 0.0);
-  Eigen::VectorXd free(cov.rows());
-  int i = 0;
-  for (int a = 0; a < 3; ++a) {
-    free[i] = b[a];
-    c.bias_u[a] = std::sqrt(cov(i, i));
-    ++i;
-  }
-  if (kind != ModelKind::kBias) {
-    for (int a = 0; a < 3; ++a) {
-      free[i] = k[a];
-      c.scale_u[a] = std::sqrt(cov(i, i));
-      ++i;
-    }
-  }
-  if (kind == ModelKind::kFull) {
-    for (int a = 0; a < nm; ++a) {
-      free[i] = m[a];
-      c.misalignment_u[static_cast<size_t>(a)] = std::sqrt(cov(i, i));
-      ++i;
-    }
-  }
-  if (temperature) {
-    for (int a = 0; a < 3; ++a) {
-      free[i] = b1[a];
-      c.bias_per_c_u[a] = std::sqrt(cov(i, i));
-      ++i;
-    }
-  }
-  // u(M): law of propagation of uncertainty, JCGM 100:2008 5.1.2, with the sensitivity
-  // coefficients by central differences (M is bilinear in k and the misalignment terms).
-  Eigen::MatrixXd jm(9, cov.rows());
-  for (Eigen::Index p = 0; p < cov.rows(); ++p) {
-    const double h = 1e-6 * std::max(1e-6, std::abs(free[p]));
-    Eigen::VectorXd xp = free, xm = free;
-    xp[p] += h;
-    xm[p] -= h;
-    const Eigen::Matrix3d d =
-        (MatrixFromFree(sensor, kind, k, xp) - MatrixFromFree(sensor, kind, k, xm)) / (2 * h);
-    for (int e = 0; e < 9; ++e) jm(e, p) = d(e / 3, e % 3);
-  }
-  const Eigen::MatrixXd cm = jm * cov * jm.transpose();
-  for (int e = 0; e < 9; ++e) c.matrix_u(e / 3, e % 3) = std::sqrt(std::max(0.0, cm(e, e)));
-  for (int a = 0; a < 3; ++a) {
-    c.sensitivity[a] = 1.0 / k[a];
-    c.sensitivity_u[a] = c.scale_u[a] / (k[a] * k[a]);
-  }
+  DeriveUncertainties(&c);
   return c;
 }
 
@@ -1297,6 +1251,58 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
 }
 
 }  // namespace
+
+void DeriveUncertainties(SensorCalibration* c) {
+  const SensorModel& mo = c->model;
+  const Eigen::MatrixXd& cov = c->covariance;
+  const int nm = MisalignmentCount(mo.sensor);
+  c->bias_u.setZero();
+  c->scale_u.setZero();
+  c->bias_per_c_u.setZero();
+  c->misalignment_u.assign(static_cast<size_t>(nm), 0.0);
+  // The free parameters in FreeNames order: b(3), then k(3), m(nm), b1(3) as the model has them.
+  Eigen::VectorXd free(cov.rows());
+  Eigen::Index i = 0;
+  auto take = [&](double value, double* u) {
+    METRO_CHECK(i < cov.rows());
+    free[i] = value;
+    *u = std::sqrt(std::max(0.0, cov(i, i)));
+    ++i;
+  };
+  for (int a = 0; a < 3; ++a) take(mo.bias[a], &c->bias_u[a]);
+  if (mo.kind != ModelKind::kBias) {
+    for (int a = 0; a < 3; ++a) take(mo.scale[a], &c->scale_u[a]);
+  }
+  if (mo.kind == ModelKind::kFull) {
+    for (int a = 0; a < nm; ++a) {
+      take(mo.misalignment[static_cast<size_t>(a)], &c->misalignment_u[static_cast<size_t>(a)]);
+    }
+  }
+  if (mo.has_temperature) {
+    for (int a = 0; a < 3; ++a) take(mo.bias_per_c[a], &c->bias_per_c_u[a]);
+  }
+  METRO_CHECK(i == cov.rows());
+  // u(M): law of propagation of uncertainty, JCGM 100:2008 5.1.2, with the sensitivity
+  // coefficients by central differences (M is bilinear in k and the misalignment terms).
+  const double k[3] = {mo.scale[0], mo.scale[1], mo.scale[2]};
+  Eigen::MatrixXd jm(9, cov.rows());
+  for (Eigen::Index p = 0; p < cov.rows(); ++p) {
+    const double h = 1e-6 * std::max(1e-6, std::abs(free[p]));
+    Eigen::VectorXd xp = free, xm = free;
+    xp[p] += h;
+    xm[p] -= h;
+    const Eigen::Matrix3d d =
+        (MatrixFromFree(mo.sensor, mo.kind, k, xp) - MatrixFromFree(mo.sensor, mo.kind, k, xm)) /
+        (2 * h);
+    for (int e = 0; e < 9; ++e) jm(e, p) = d(e / 3, e % 3);
+  }
+  const Eigen::MatrixXd cm = jm * cov * jm.transpose();
+  for (int e = 0; e < 9; ++e) c->matrix_u(e / 3, e % 3) = std::sqrt(std::max(0.0, cm(e, e)));
+  for (int a = 0; a < 3; ++a) {
+    c->sensitivity[a] = 1.0 / k[a];
+    c->sensitivity_u[a] = c->scale_u[a] / (k[a] * k[a]);
+  }
+}
 
 Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,
                                     const CalibrationOptions& options) {

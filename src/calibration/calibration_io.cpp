@@ -208,6 +208,78 @@ void CheckRedundant(Reader* rd, const std::string& path, const SensorCalibration
   }
 }
 
+// The standard uncertainties in the file are derived from its covariance (DeriveUncertainties):
+// a covariance that is not a covariance, or a '*_u' field that says otherwise, is refused,
+// so a hand-edited u never reaches a certificate or a blob. On success *c holds the derived
+// values (matrix_u included, recomputed when the file has none).
+void CheckUncertainties(Reader* rd, const std::string& path, const json& j, SensorCalibration* c) {
+  const SensorModel& m = c->model;
+  const Eigen::Index expected = 3 + (m.kind != ModelKind::kBias ? 3 : 0) +
+                                (m.kind == ModelKind::kFull ? MisalignmentCount(m.sensor) : 0) +
+                                (m.has_temperature ? 3 : 0);
+  const Eigen::MatrixXd& cov = c->covariance;
+  if (cov.rows() != expected) {
+    rd->Fail(fmt::format("'{}covariance' is {} x {}; the {} model{} has {} free parameters", path,
+                         cov.rows(), cov.cols(), ModelKindName(m.kind),
+                         m.has_temperature ? " with temperature" : "", expected));
+    return;
+  }
+  for (Eigen::Index r = 0; r < cov.rows(); ++r) {
+    for (Eigen::Index k = 0; k < cov.cols(); ++k) {
+      // Symmetric to the rounding of a solver's covariance (Ceres' is not exactly symmetric:
+      // 1e-14 relative in the golden files), relative to the two variances.
+      const double a = cov(r, k), b = cov(k, r);
+      const double scale = std::sqrt(std::fabs(cov(r, r) * cov(k, k)));
+      if (!std::isfinite(a) || (r == k && a < 0.0) || std::fabs(a - b) > 1e-9 * scale) {
+        rd->Fail(fmt::format(
+            "'{}covariance'[{}][{}] is {:.17g}: expected a symmetric matrix of finite numbers "
+            "with a non-negative diagonal",
+            path, r, k, a));
+        return;
+      }
+    }
+  }
+  SensorCalibration derived = *c;
+  DeriveUncertainties(&derived);
+  // sqrt of the file's own diagonal: equal to rounding; matrix_u's central differences may
+  // differ in the last digits between builds.
+  const auto check = [&](const std::string& key, const std::string& index, double file, double want,
+                         double rel) {
+    if (rd->failed()) return;
+    if (std::fabs(file - want) <= rel * std::max(std::fabs(file), std::fabs(want)) + 1e-300) return;
+    rd->Fail(fmt::format(
+        "'{}{}'{} is {:.17g} but the covariance gives {:.17g}: a standard uncertainty must be "
+        "the square root of its variance (docs/calibration-format.md)",
+        path, key, index, file, want));
+  };
+  for (int a = 0; a < 3; ++a) {
+    check("bias_u", fmt::format("[{}]", a), c->bias_u[a], derived.bias_u[a],
+          kRedundantRelTolerance);
+    check("scale_u", fmt::format("[{}]", a), c->scale_u[a], derived.scale_u[a],
+          kRedundantRelTolerance);
+    if (m.has_temperature) {
+      check("temperature.bias_per_c_u", fmt::format("[{}]", a), c->bias_per_c_u[a],
+            derived.bias_per_c_u[a], kRedundantRelTolerance);
+    }
+  }
+  for (size_t a = 0; a < c->misalignment_u.size() && a < derived.misalignment_u.size(); ++a) {
+    check("misalignment_u", fmt::format("[{}]", a), c->misalignment_u[a], derived.misalignment_u[a],
+          kRedundantRelTolerance);
+  }
+  if (j.contains("matrix_u")) {
+    const Eigen::MatrixXd mu = rd->Matrix(j, path, "matrix_u");
+    if (!rd->failed() && mu.rows() != 3) rd->Fail(fmt::format("'{}matrix_u' must be 3 x 3", path));
+    for (int r = 0; r < 3 && !rd->failed(); ++r) {
+      for (int k = 0; k < 3; ++k) {
+        check("matrix_u", fmt::format("[{}][{}]", r, k), mu(r, k), derived.matrix_u(r, k), 1e-6);
+      }
+    }
+  }
+  if (rd->failed()) return;
+  c->matrix_u = derived.matrix_u;
+  c->sensitivity_u = derived.sensitivity_u;
+}
+
 std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const std::string& path,
                                              ImuSensor sensor) {
   SensorCalibration c;
@@ -306,10 +378,8 @@ std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const st
   c.matrix = Eigen::Matrix3d(matrix);
   CheckRedundant(rd, path, c, *c.matrix, sensitivity);
   if (rd->failed()) return std::nullopt;
-  if (j.contains("matrix_u")) {
-    const Eigen::MatrixXd mu = rd->Matrix(j, path, "matrix_u");
-    if (mu.rows() == 3) c.matrix_u = mu;
-  }
+  CheckUncertainties(rd, path, j, &c);
+  if (rd->failed()) return std::nullopt;
   if (j.contains("residual_groups") && j.at("residual_groups").is_array()) {
     for (const json& g : j.at("residual_groups")) {
       ResidualGroup rg;

@@ -1,5 +1,7 @@
 #include "metro/calibration/calibration_io.hpp"
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
@@ -237,6 +239,52 @@ TEST_CASE("calibration.json: sensitivity that disagrees with scale is refused, m
   r = CalibrationFromJson(j, "c.json");
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message == "missing key 'tags[0].gyro.matrix'");
+}
+
+TEST_CASE("calibration.json: an uncertainty that is not its covariance's is refused",
+          "[calibration][security]") {
+  // issue #20: bias_u, scale_u, ... and matrix_u were read as written, so a hand-edited u
+  // reached certificates and blobs while the covariance said otherwise.
+  nlohmann::json j = GoldenCalibrationJson();
+  const double var_b_y = j["tags"][0]["accel"]["covariance"][1][1].get<double>();
+  Result<Calibration> ok = CalibrationFromJson(j, "c.json");
+  REQUIRE(ok.ok());
+  // The derived values are sqrt of the diagonal, and matrix_u matches what the file says.
+  CHECK(ok.value().tags[0].accel->bias_u[1] == std::sqrt(var_b_y));
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) {
+      CHECK(ok.value().tags[0].accel->matrix_u(r, k) ==
+            Approx(j["tags"][0]["accel"]["matrix_u"][r][k].get<double>()).epsilon(1e-6));
+    }
+  }
+  nlohmann::json edited = j;
+  edited["tags"][0]["accel"]["bias_u"][1] = 0.5;
+  Result<Calibration> r = CalibrationFromJson(edited, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message ==
+        fmt::format("'tags[0].accel.bias_u'[1] is 0.5 but the covariance gives {:.17g}: a "
+                    "standard uncertainty must be the square root of its variance "
+                    "(docs/calibration-format.md)",
+                    std::sqrt(var_b_y)));
+  edited = j;
+  edited["tags"][0]["accel"]["matrix_u"][0][0] =
+      2.0 * j["tags"][0]["accel"]["matrix_u"][0][0].get<double>();
+  r = CalibrationFromJson(edited, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message, Catch::StartsWith("'tags[0].accel.matrix_u'[0][0] is "));
+  // Not a covariance: negative variance, asymmetric, wrong size.
+  edited = j;
+  edited["tags"][0]["accel"]["covariance"][2][2] = -1.0;
+  r = CalibrationFromJson(edited, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message,
+             Catch::StartsWith("'tags[0].accel.covariance'[2][2] is -1: expected a symmetric"));
+  edited = j;
+  edited["tags"][0]["accel"]["covariance"][0][3] =
+      1.001 * j["tags"][0]["accel"]["covariance"][0][3].get<double>();
+  r = CalibrationFromJson(edited, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message, Catch::StartsWith("'tags[0].accel.covariance'[0][3] is "));
 }
 
 }  // namespace metro

@@ -106,6 +106,14 @@ struct SensorCalibration {
   Eigen::Matrix3d M() const { return matrix ? *matrix : model.Matrix(); }
 };
 
+// Fills every value derived from c->model and c->covariance (rows in FreeNames order, as
+// c->parameter_names): bias_u, scale_u, misalignment_u, bias_per_c_u (square roots of the
+// diagonal), matrix_u (JCGM 100:2008 5.1.2, u of each element of M = T K propagated from the
+// covariance), sensitivity and sensitivity_u. The fit calls it, and the loader of
+// calibration.json checks the file's values against it.
+// Precondition: covariance is square with as many rows as the model has free parameters.
+void DeriveUncertainties(SensorCalibration* c);
+
 struct TagCalibration {
   int sensor = 1;
   std::optional<SensorCalibration> accel;
