@@ -1,5 +1,7 @@
 #include "metro/uncertainty/budget.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <algorithm>
@@ -13,6 +15,7 @@
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
 #include "uncertainty/model.hpp"
+#include "uncertainty/model_units.hpp"
 
 namespace metro {
 namespace {
@@ -151,6 +154,40 @@ Status ReadLimits(const Fields& f, BudgetInput* in) {
   return Status();
 }
 
+// A session quantity carries its own unit (the column's suffix, docs/formats.md): an input
+// without "unit" takes it; an input in another unit of the same dimension gets the mean and u
+// converted (value_to = factor * value + offset, u_to = |factor| * u); other units are refused.
+Status ConvertSessionUnit(const Fields& f, const std::string& quantity,
+                          const std::string& session_unit, BudgetInput* in) {
+  if (session_unit.empty()) return Status();
+  if (in->unit.empty()) {
+    in->unit = session_unit;
+    return Status();
+  }
+  auto from = PhysicalUnit::Parse(session_unit);
+  if (!from.ok()) return f.Fail("session quantity '" + quantity + "': " + from.error().message);
+  auto to = PhysicalUnit::Parse(in->unit);
+  if (!to.ok()) return f.Fail(to.error().message);
+  const std::optional<UnitConversion> c = from.value().ConversionTo(to.value());
+  if (!c) {
+    std::string hint;
+    if (to.value().ConvertibleTo(PhysicalUnit::Parse("kg").value()) &&
+        from.value().ConvertibleTo(PhysicalUnit::Parse("m/s^2").value())) {
+      hint = " (g is the gram; standard gravity is g_n or g0)";
+    }
+    return f.Fail("session quantity '" + quantity + "' is in " + session_unit +
+                  ", which cannot be converted to the input's unit '" + in->unit + "'" + hint);
+  }
+  if (c->IsIdentity()) return Status();
+  in->value_before_conversion = in->value;
+  in->u_before_conversion = in->u;
+  in->value = c->ConvertValue(in->value);
+  in->u = std::fabs(c->ConvertDifference(in->u));
+  in->unit_conversion = c;
+  in->note += "; converted from " + session_unit + " to " + in->unit;
+  return Status();
+}
+
 Status ReadTypeA(const Fields& f, const std::string& budget_path,
                  const SessionQuantityResolver& resolver, BudgetInput* in) {
   const json& t = f.object().at("type_a");
@@ -229,6 +266,7 @@ Status ReadTypeA(const Fields& f, const std::string& budget_path,
     in->n = s.n;
     in->note = s.note.empty() ? "Type A from session quantity " + quantity : s.note;
     in->session = ref;
+    if (auto c = ConvertSessionUnit(f, quantity, s.unit, in); !c.ok()) return c;
   } else {
     return f.Fail("'type_a' needs 'values', or 'mean', 'std' and 'n', or a session 'quantity'");
   }
@@ -639,6 +677,7 @@ Status ValidateBudget(const Budget& budget) {
             "input '" + in.name + "': missing 'sensitivity' (needed when the budget has no model)");
       }
     }
+    if (auto units = CheckBudgetUnits(budget); !units.ok()) return units.error();
     return Status();
   }
   for (const auto& in : budget.inputs) {
@@ -657,7 +696,82 @@ Status ValidateBudget(const Budget& budget) {
                      "model '" + budget.model + "' evaluates to " + std::to_string(y) +
                          " at the input estimates");
   }
+  if (auto units = CheckBudgetUnits(budget); !units.ok()) return units.error();
   return Status();
+}
+
+Result<BudgetUnits> CheckBudgetUnits(const Budget& budget) {
+  const std::string& path = budget.file;
+  BudgetUnits result;
+  std::vector<std::optional<PhysicalUnit>> units;
+  bool any = false;
+  for (const BudgetInput& in : budget.inputs) {
+    if (in.unit.empty()) {
+      units.emplace_back();
+      continue;
+    }
+    auto u = PhysicalUnit::Parse(in.unit);
+    if (!u.ok()) return MakeError(path, 0, "input '" + in.name + "': " + u.error().message);
+    units.emplace_back(u.value());
+    any = true;
+  }
+  std::optional<PhysicalUnit> measurand;
+  if (!budget.unit.empty()) {
+    auto u = PhysicalUnit::Parse(budget.unit);
+    if (!u.ok()) {
+      return MakeError(path, 0, "measurand '" + budget.measurand + "': " + u.error().message);
+    }
+    measurand = u.value();
+  }
+  if (!any) {
+    result.note = "no input states a unit: units not checked";
+    return result;
+  }
+  if (budget.model.empty()) {
+    result.note =
+        "no model: each sensitivity c_i is in (measurand unit)/(input unit); units parsed, not "
+        "compared";
+    return result;
+  }
+  std::vector<std::string> names;
+  std::vector<double> x;
+  for (const BudgetInput& in : budget.inputs) {
+    names.push_back(in.name);
+    x.push_back(in.value);
+  }
+  auto model = internal::MeasurementModel::FromExpression(budget.model, names);
+  if (!model.ok()) return MakeError(path, 0, model.error().message);
+  auto checked = internal::CheckModelUnits(budget.model, names, units, x,
+                                           model.value().Evaluate(x.data()));
+  if (!checked.ok()) return MakeError(path, 0, checked.error().message);
+  const internal::ModelUnit& m = checked.value();
+  result.checked = true;
+  result.scale_known = m.scale_known && !m.constant;
+  result.model_unit = m.constant ? std::string() : m.unit.ToString();
+  if (measurand && !m.constant && m.unit.SameAs(*measurand)) result.model_unit = budget.unit;
+  if (measurand && !m.constant) {
+    const std::optional<UnitConversion> c = m.unit.ConversionTo(*measurand);
+    if (!c) {
+      return MakeError(path, 0,
+                       "measurand '" + budget.measurand + "' is declared in '" + budget.unit +
+                           "' but the model '" + budget.model + "' gives " + m.unit.ToString() +
+                           " (" + m.unit.Definition() + "): incompatible dimensions");
+    }
+    if (m.scale_known && !c->IsIdentity()) {
+      return MakeError(path, 0,
+                       fmt::format("measurand '{}' is declared in '{}' but the model '{}' gives "
+                                   "{} (1 {} = {:.6g} {}{}): declare the measurand in the "
+                                   "model's unit or convert the model with a factor",
+                                   budget.measurand, budget.unit, budget.model, m.unit.ToString(),
+                                   m.unit.ToString(), c->factor, budget.unit,
+                                   c->offset != 0.0 ? fmt::format(" + {:.6g}", c->offset) : ""));
+    }
+  }
+  result.note = m.constant ? "the model uses no input"
+                : result.scale_known
+                    ? "model checked by unit"
+                    : "model checked by dimension (a constant factor may convert the scale)";
+  return result;
 }
 
 Result<Budget> ParseBudget(const std::string& json_text, const std::string& budget_path,

@@ -61,6 +61,16 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
       {"name", e.budget.measurand},
       {"unit", e.budget.unit},
       {"model", e.budget.model.empty() ? ordered_json() : ordered_json(e.budget.model)}};
+  // The unit check (docs/budget-format.md, "Units"); the budget was validated, so it passes.
+  const Result<BudgetUnits> units = CheckBudgetUnits(e.budget);
+  if (units.ok()) {
+    j["measurand"]["unit_check"] = {
+        {"checked", units.value().checked},
+        {"model_unit", units.value().checked ? ordered_json(units.value().model_unit)
+                                             : ordered_json()},
+        {"scale_known", units.value().scale_known},
+        {"note", units.value().note}};
+  }
   const GumResult& g = e.gum;
   ordered_json result;
   result["value"] = Number(g.value);
@@ -96,6 +106,15 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
     if (it != e.budget.inputs.end()) {
       if (!it->unit.empty()) l["unit"] = it->unit;
       if (!it->note.empty()) l["note"] = it->note;
+      if (it->unit_conversion) {
+        const UnitConversion& c = *it->unit_conversion;
+        l["unit_conversion"] = {{"from", c.from},
+                                {"to", c.to},
+                                {"factor", c.factor},
+                                {"offset", c.offset},
+                                {"value_from", it->value_before_conversion},
+                                {"u_from", it->u_before_conversion}};
+      }
       if (it->session) {
         l["session"] = {{"file", it->session->session},
                         {"sensor", it->session->sensor},
@@ -169,6 +188,14 @@ std::string BudgetReportTable(const BudgetEvaluation& e) {
         fmt::format("{:<14} {:>14} {:>12} {:<12} {:>12} {:>12} {:>8} {:>7.2f}\n", l.name,
                     Long(l.value), Short(l.u), l.distribution, Short(l.sensitivity),
                     Short(l.contribution), std::isfinite(l.dof) ? Short(l.dof) : "inf", l.percent);
+  }
+  for (const BudgetInput& in : e.budget.inputs) {
+    if (!in.unit_conversion) continue;
+    const UnitConversion& c = *in.unit_conversion;
+    out += fmt::format("unit: {} converted from {} to {}: {} {} -> {} {}, u {} -> {} (x {}{})\n",
+                       in.name, c.from, c.to, Long(in.value_before_conversion), c.from,
+                       Long(in.value), c.to, Short(in.u_before_conversion), Short(in.u),
+                       Long(c.factor), c.offset != 0.0 ? " + " + Long(c.offset) : "");
   }
   out += "\n";
   out += fmt::format("GUM (JCGM 100): y = {}{}, u_c = {}{}{}, nu_eff = {}, k = {:.3f}, U = {}{}\n",

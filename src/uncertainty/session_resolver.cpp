@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 
+#include "metro/io/columns.hpp"
 #include "metro/stats/derived_quantity.hpp"
 
 namespace metro {
@@ -24,6 +25,16 @@ Error NoQuantity(const Session& session, const SessionQuantityRef& ref) {
   return MakeError(session.path, 0, message);
 }
 
+// The quantity's unit from its column suffix (io/columns.hpp) in metro/core/units.hpp
+// syntax: io's "g" of accelerometer columns is standard gravity, which UDUNITS-2 (and a
+// budget) writes g_n ("g" there is the gram).
+std::string BudgetUnitOf(const std::string& quantity) {
+  const ColumnInfo info = ClassifyColumn(quantity);
+  if (info.unit == nullptr) return "";
+  if (info.unit->dimension == Dimension::kAcceleration && info.unit->symbol == "g") return "g_n";
+  return std::string(info.unit->symbol);
+}
+
 Result<TypeASummary> Summarize(const Session& session, const SessionQuantityRef& ref,
                                const TagTypeA& tag) {
   const std::string& path = session.path;
@@ -40,6 +51,7 @@ Result<TypeASummary> Summarize(const Session& session, const SessionQuantityRef&
   s.u = q->type_a.std_of_mean_autocorr;
   s.dof = std::max(1.0, q->type_a.n_eff - 1.0);
   s.n = q->type_a.n;
+  s.unit = BudgetUnitOf(ref.quantity);
   s.note = fmt::format("Type A of {} sensor {} {}: n = {}, n_eff = {:.1f}, u = s/sqrt(n_eff)", path,
                        ref.sensor, ref.quantity, q->type_a.n, q->type_a.n_eff);
   return s;

@@ -76,5 +76,44 @@ TEST_CASE("Budget report of an adaptive run states the half-widths that met delt
   CHECK(BudgetReportTable(e.value()).find("stable to delta = 0.05 (7.9.2)") != std::string::npos);
 }
 
+TEST_CASE("Budget report states the unit check and every session unit conversion",
+          "[uncertainty][report][units]") {
+  // pitch_deg from a session, 30 deg +- 0.5 deg, declared in rad (30 deg = pi/6 rad).
+  const SessionQuantityResolver resolver = [](const SessionQuantityRef&) -> Result<TypeASummary> {
+    return TypeASummary{30.0, 0.5, 99.0, 100, "test session", "deg"};
+  };
+  auto b = ParseBudget(R"j({"measurand": {"name": "h", "unit": "cm", "model": "R*sin(theta)"},
+      "inputs": [{"name": "R", "value": 32, "u": 0.1, "unit": "cm"},
+                 {"name": "theta", "type_a": {"quantity": "pitch_deg"}, "unit": "rad"}],
+      "monte_carlo": false})j",
+                       "b.json", resolver);
+  if (!b.ok()) FAIL(b.error().ToString());
+  auto e = EvaluateBudget(b.value());
+  REQUIRE(e.ok());
+  // h = 32 sin(pi/6) = 16 cm exactly.
+  CHECK(e.value().gum.value == Approx(16.0).epsilon(1e-14));
+  const auto j = BudgetReportJson(e.value());
+  CHECK(j["measurand"]["unit_check"]["checked"] == true);
+  CHECK(j["measurand"]["unit_check"]["model_unit"] == "cm");
+  bool found = false;
+  for (const auto& line : j["budget"]) {
+    if (line["name"] != "theta") continue;
+    found = true;
+    CHECK(line["unit"] == "rad");
+    CHECK(line["value"].get<double>() == Approx(0.5235987755982988).epsilon(1e-15));
+    const auto& c = line["unit_conversion"];
+    CHECK(c["from"] == "deg");
+    CHECK(c["to"] == "rad");
+    CHECK(c["factor"].get<double>() == Approx(0.017453292519943295).epsilon(1e-15));
+    CHECK(c["value_from"].get<double>() == 30.0);
+    CHECK(c["u_from"].get<double>() == 0.5);
+  }
+  CHECK(found);
+  const std::string table = BudgetReportTable(e.value());
+  INFO(table);
+  CHECK(table.find("unit: theta converted from deg to rad: 30 deg -> 0.5235987756 rad") !=
+        std::string::npos);
+}
+
 }  // namespace
 }  // namespace metro

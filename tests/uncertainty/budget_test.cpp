@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include "metro/uncertainty/gum.hpp"
+
 namespace metro {
 namespace {
 
@@ -82,7 +84,7 @@ TEST_CASE("Type A inputs from observations, summaries and sessions", "[uncertain
   const SessionQuantityResolver resolver =
       [&](const SessionQuantityRef& ref) -> Result<TypeASummary> {
     seen = ref;
-    return TypeASummary{0.5, 0.01, 19.45, 40, "autocorrelation-aware"};
+    return TypeASummary{0.5, 0.01, 19.45, 40, "autocorrelation-aware", ""};
   };
   auto s = ParseBudget(R"({"measurand": {"name": "y", "model": "p"}, "inputs": [
       {"name": "p", "type_a": {"session": "s.csv", "sensor": 2, "quantity": "pitch_deg"}}]})",
@@ -238,6 +240,175 @@ TEST_CASE("Example budgets in datasets parse", "[uncertainty][budget]") {
     auto b = LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/" + name);
     if (!b.ok()) FAIL(b.error().ToString());
   }
+}
+
+TEST_CASE("Bundled budgets pass the unit check and keep their published values",
+          "[uncertainty][budget][units]") {
+  struct Case {
+    const char* file;
+    const char* model_unit;  // The measurand's unit, as the check must derive it.
+    double value;            // Published (JCGM 100 H.1, JCGM 101 9.3/9.5) or closed form.
+    double value_tolerance;
+    double u;
+    double u_tolerance;
+  };
+  const double kPi = 3.14159265358979323846;
+  for (const Case& c : {
+           // H.1: l = 50 000 838 nm, u_c = 32 nm (first order, the file's model).
+           Case{"gum_h1_end_gauge.json", "nm", 50000838.0, 0.5, 32.0, 0.5},
+           // 9.3: GUF dm = 1.2340 mg, u = 0.0539 mg; 9.5: 838 nm, u = 32 nm.
+           Case{"jcgm101_9_3_mass.json", "mg", 1.2340, 5e-5, 0.0539, 5e-5},
+           Case{"jcgm101_9_5_gauge_block.json", "nm", 838.0, 0.5, 32.0, 0.5},
+           // 2 R sin(theta/2) at R = 32 cm, theta = 30 deg; R (1 - cos(theta/2)) at 2 deg.
+           Case{"fingertip_chord.json", "cm", 64.0 * std::sin(15.0 * kPi / 180.0), 1e-9, -1, 0},
+           Case{"fingertip_sagitta.json", "cm", 32.0 * (1.0 - std::cos(kPi / 180.0)), 1e-12, -1, 0},
+           // obs + res + mount + xaxis*yaw at the estimates: -0.09228 deg.
+           Case{"tag_static_angle.json", "deg", -0.09228, 1e-12, -1, 0},
+       }) {
+    INFO(c.file);
+    auto b = LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/" + c.file);
+    if (!b.ok()) FAIL(b.error().ToString());
+    auto units = CheckBudgetUnits(b.value());
+    REQUIRE(units.ok());
+    CHECK(units.value().checked);
+    CHECK(PhysicalUnit::Parse(units.value().model_unit)
+              .value()
+              .ConvertibleTo(PhysicalUnit::Parse(c.model_unit).value()));
+    auto gum = EvaluateGum(b.value());
+    REQUIRE(gum.ok());
+    CHECK(gum.value().value == Approx(c.value).margin(c.value_tolerance));
+    if (c.u > 0) CHECK(gum.value().u == Approx(c.u).margin(c.u_tolerance));
+  }
+  // No unit on any input (JCGM 101 9.2.2): nothing to compare, and said so.
+  auto additive =
+      LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/jcgm101_9_2_2_additive.json");
+  REQUIRE(additive.ok());
+  CHECK_FALSE(CheckBudgetUnits(additive.value()).value().checked);
+}
+
+Result<Budget> WithUnits(const std::string& model, const std::string& measurand_unit,
+                         const std::string& inputs) {
+  return ParseBudget(R"({"measurand": {"name": "y", "unit": ")" + measurand_unit +
+                         R"(", "model": ")" + model + R"("}, "inputs": [)" + inputs +
+                         R"(], "monte_carlo": false})",
+                     "b.json");
+}
+
+TEST_CASE("A model adding rad to deg is refused, naming both inputs",
+          "[uncertainty][budget][units]") {
+  ExpectError(WithUnits("a + b", "rad",
+                        R"({"name": "a", "value": 0.5, "u": 0.01, "unit": "rad"},
+                           {"name": "b", "value": 30, "u": 0.1, "unit": "deg"})"),
+              "b.json: model 'a + b', column 3: a sum: 'a' (rad) and 'b' (deg) are in different "
+              "units (1 rad = 57.2958 deg)");
+  ExpectError(WithUnits("a + b", "m",
+                        R"({"name": "a", "value": 1, "u": 0.01, "unit": "m"},
+                           {"name": "b", "value": 2, "u": 0.1, "unit": "s"})"),
+              "incompatible dimensions, 'a' (m) and 'b' (s)");
+}
+
+TEST_CASE("The measurand's unit must be the model's", "[uncertainty][budget][units]") {
+  const std::string kg = R"({"name": "m", "value": 0.1, "u": 1e-6, "unit": "kg"})";
+  // A kg model declared in mg: refused with the factor (1 kg = 1e6 mg), not relabelled.
+  ExpectError(WithUnits("m", "mg", kg),
+              "measurand 'y' is declared in 'mg' but the model 'm' gives kg (1 kg = 1e+06 mg)");
+  ExpectError(WithUnits("m", "m/s^2", kg), "incompatible dimensions");
+  REQUIRE(WithUnits("m", "kg", kg).ok());
+  // A constant factor converts: 1e6*m is in mg (checked by dimension).
+  auto scaled = WithUnits("1e6*m", "mg", kg);
+  REQUIRE(scaled.ok());
+  CHECK_FALSE(CheckBudgetUnits(scaled.value()).value().scale_known);
+  // Without a measurand unit the model's is reported.
+  auto bare = WithUnits("m*m", "", kg);
+  REQUIRE(bare.ok());
+  CHECK(PhysicalUnit::Parse(CheckBudgetUnits(bare.value()).value().model_unit)
+            .value()
+            .SameAs(PhysicalUnit::Parse("kg^2").value()));
+}
+
+TEST_CASE("Unknown units and inputs without one are refused by name",
+          "[uncertainty][budget][units]") {
+  ExpectError(WithUnits("a", "m", R"({"name": "a", "value": 1, "u": 0.1, "unit": "meterz"})"),
+              "b.json: input 'a': unknown unit 'meterz'");
+  ExpectError(WithUnits("a", "parsecz", R"({"name": "a", "value": 1, "u": 0.1, "unit": "m"})"),
+              "measurand 'y': unknown unit 'parsecz'");
+  ExpectError(WithUnits("a*b", "m",
+                        R"({"name": "a", "value": 1, "u": 0.1, "unit": "m"},
+                           {"name": "b", "value": 1, "u": 0.1})"),
+              "input 'b' states no unit");
+}
+
+// A resolver that answers every quantity with a fixed summary in `unit`.
+SessionQuantityResolver FixedResolver(double mean, double u, const std::string& unit) {
+  return [=](const SessionQuantityRef&) -> Result<TypeASummary> {
+    return TypeASummary{mean, u, 99.0, 100, "test session", unit};
+  };
+}
+
+Result<Budget> SessionBudget(const std::string& quantity, const std::string& input_unit,
+                             const std::string& measurand_unit,
+                             const SessionQuantityResolver& resolver) {
+  const std::string unit = input_unit.empty() ? "" : R"(, "unit": ")" + input_unit + R"(")";
+  return ParseBudget(R"({"measurand": {"name": "y", "unit": ")" + measurand_unit +
+                         R"(", "model": "p"}, "inputs": [
+      {"name": "p", "type_a": {"sensor": 2, "quantity": ")" +
+                         quantity + R"("})" + unit + R"(}], "monte_carlo": false})",
+                     "b.json", resolver);
+}
+
+TEST_CASE("Session inputs carry their unit and are converted to the declared one",
+          "[uncertainty][budget][units]") {
+  // pitch_deg = 30 deg, u 0.5 deg, used as an input in rad: 30 deg = pi/6 rad.
+  auto rad = SessionBudget("pitch_deg", "rad", "rad", FixedResolver(30.0, 0.5, "deg"));
+  if (!rad.ok()) FAIL(rad.error().ToString());
+  const BudgetInput& p = rad.value().inputs[0];
+  CHECK(p.value == Approx(0.5235987755982988).epsilon(1e-15));
+  CHECK(p.u == Approx(0.5 * 0.017453292519943295).epsilon(1e-15));
+  REQUIRE(p.unit_conversion.has_value());
+  CHECK(p.unit_conversion->from == "deg");
+  CHECK(p.unit_conversion->to == "rad");
+  CHECK(p.value_before_conversion == 30.0);
+  CHECK(p.u_before_conversion == 0.5);
+  CHECK(p.dof == 99.0);
+  // ax_g = 1 g (standard gravity, io's vocabulary) as m/s^2: 9.80665 exactly.
+  auto accel = SessionBudget("ax_g", "m/s^2", "m/s^2", FixedResolver(1.0, 0.002, "g_n"));
+  if (!accel.ok()) FAIL(accel.error().ToString());
+  CHECK(accel.value().inputs[0].value == Approx(9.80665).epsilon(1e-15));
+  CHECK(accel.value().inputs[0].u == Approx(0.0196133).epsilon(1e-14));
+  // gz_dps = -90 deg/s as rad/s; a negative factor would still give u >= 0.
+  auto rate = SessionBudget("gz_dps", "rad/s", "rad/s", FixedResolver(-90.0, 1.0, "deg/s"));
+  REQUIRE(rate.ok());
+  CHECK(rate.value().inputs[0].value == Approx(-1.5707963267948966).epsilon(1e-15));
+  // temp_c = 25 degC as K: the offset applies to the value, not to u.
+  auto temp = SessionBudget("temp_c", "K", "K", FixedResolver(25.0, 0.1, "degC"));
+  REQUIRE(temp.ok());
+  CHECK(temp.value().inputs[0].value == Approx(298.15).epsilon(1e-14));
+  CHECK(temp.value().inputs[0].u == Approx(0.1).epsilon(1e-12));
+  // The same unit: no conversion; no declared unit: the session's is taken.
+  auto same = SessionBudget("pitch_deg", "deg", "deg", FixedResolver(30.0, 0.5, "deg"));
+  REQUIRE(same.ok());
+  CHECK_FALSE(same.value().inputs[0].unit_conversion.has_value());
+  CHECK(same.value().inputs[0].value == 30.0);
+  auto adopted = SessionBudget("pitch_deg", "", "deg", FixedResolver(30.0, 0.5, "deg"));
+  REQUIRE(adopted.ok());
+  CHECK(adopted.value().inputs[0].unit == "deg");
+}
+
+TEST_CASE("A session quantity in an incompatible unit is refused, naming the input",
+          "[uncertainty][budget][units]") {
+  ExpectError(SessionBudget("pitch_deg", "s", "s", FixedResolver(30.0, 0.5, "deg")),
+              "b.json: input 'p': session quantity 'pitch_deg' is in deg, which cannot be "
+              "converted to the input's unit 's'");
+  // g is the gram: an accelerometer quantity declared in g is refused with the hint.
+  ExpectError(SessionBudget("ax_g", "g", "g", FixedResolver(1.0, 0.01, "g_n")),
+              "cannot be converted to the input's unit 'g' (g is the gram; standard gravity is "
+              "g_n or g0)");
+  // Converted to rad, the session's pitch cannot be used as deg: the model refuses rad + deg.
+  auto mixed = ParseBudget(R"({"measurand": {"name": "y", "unit": "rad", "model": "p + q"},
+      "inputs": [{"name": "p", "type_a": {"quantity": "pitch_deg"}, "unit": "rad"},
+                 {"name": "q", "type_a": {"quantity": "yaw_deg"}}], "monte_carlo": false})",
+                           "b.json", FixedResolver(30.0, 0.5, "deg"));
+  ExpectError(mixed, "'p' (rad) and 'q' (deg) are in different units");
 }
 
 }  // namespace

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "metro/core/status.hpp"
+#include "metro/core/units.hpp"
 
 namespace metro {
 
@@ -61,6 +62,9 @@ struct TypeASummary {
   double dof = 0.0;
   int64_t n = 0;
   std::string note;
+  // The quantity's unit in metro/core/units.hpp syntax ("deg", "deg/s", "g_n", "degC"); ""
+  // when the session does not say. ParseBudget converts mean and u to the input's unit.
+  std::string unit;
 };
 
 using SessionQuantityResolver = std::function<Result<TypeASummary>(const SessionQuantityRef&)>;
@@ -78,8 +82,15 @@ struct BudgetInput {
   std::optional<double> sensitivity;  // c_i, only for budgets without a model.
   int64_t n = 0;                      // Type A: number of observations.
   std::optional<SessionQuantityRef> session;  // Type A from a session quantity.
-  std::string unit;                           // Free text.
-  std::string note;                           // How u was obtained (for the report).
+  // Parsed by UDUNITS-2 (metro/core/units.hpp; docs/budget-format.md, "Units"). "" = not
+  // stated. A session quantity's value and u are converted to it (unit_conversion).
+  std::string unit;
+  std::string note;  // How u was obtained (for the report).
+  // A session quantity in another unit than `unit`: the conversion applied to its mean and u
+  // (value_before/u_before in the session's unit).
+  std::optional<UnitConversion> unit_conversion;
+  double value_before_conversion = 0.0;
+  double u_before_conversion = 0.0;
 };
 
 struct Correlation {
@@ -158,8 +169,22 @@ Result<Budget> LoadBudget(const std::string& path,
 // does any work. A file that is not a budget names none (LoadBudget reports why).
 std::vector<std::string> SessionsNamedInBudget(const std::string& budget_path);
 
-// Checks the cross-input rules (names unique, correlations, model) on a Budget built in
-// code. ParseBudget calls it.
+// Checks the cross-input rules (names unique, correlations, model, units) on a Budget built
+// in code. ParseBudget calls it.
 Status ValidateBudget(const Budget& budget);
+
+// What the unit check of a budget found (docs/budget-format.md, "Units"). Every stated unit
+// is parsed (an unknown unit is an error). With a model and a unit stated anywhere, every input
+// the model uses needs a unit, the model's terms must agree (the rules in the docs) and the
+// model's unit must be the measurand's (the same unit; only a model with a constant factor is
+// compared by dimension alone). Without a model each c_i is taken in (measurand unit)/(input
+// unit), so nothing is compared.
+struct BudgetUnits {
+  bool checked = false;     // The model's units were compared.
+  std::string model_unit;   // The unit f(x) has (UDUNITS-2 notation); "" when not checked.
+  bool scale_known = true;  // False: a constant factor; the model was checked by dimension.
+  std::string note;         // Why not checked, or how.
+};
+Result<BudgetUnits> CheckBudgetUnits(const Budget& budget);
 
 }  // namespace metro
