@@ -136,17 +136,23 @@ PhysicalUnit PhysicalUnit::One() {
                                                    std::string("1")));
 }
 
-PhysicalUnit PhysicalUnit::Multiply(const PhysicalUnit& other) const {
+Result<PhysicalUnit> PhysicalUnit::Multiply(const PhysicalUnit& other) const {
   std::lock_guard<std::mutex> lock(UdunitsMutex());
   ut_unit* product = ut_multiply(impl_->unit, other.impl_->unit);
-  METRO_CHECK(product != nullptr);
+  if (product == nullptr) {
+    return MakeError("cannot multiply " + FormatLocked(impl_->unit, 0) + " by " +
+                     FormatLocked(other.impl_->unit, 0));
+  }
   return PhysicalUnit(std::make_shared<const Impl>(product, std::string()));
 }
 
-PhysicalUnit PhysicalUnit::Divide(const PhysicalUnit& other) const {
+Result<PhysicalUnit> PhysicalUnit::Divide(const PhysicalUnit& other) const {
   std::lock_guard<std::mutex> lock(UdunitsMutex());
   ut_unit* quotient = ut_divide(impl_->unit, other.impl_->unit);
-  METRO_CHECK(quotient != nullptr);
+  if (quotient == nullptr) {
+    return MakeError("cannot divide " + FormatLocked(impl_->unit, 0) + " by " +
+                     FormatLocked(other.impl_->unit, 0));
+  }
   return PhysicalUnit(std::make_shared<const Impl>(quotient, std::string()));
 }
 

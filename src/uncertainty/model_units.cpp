@@ -119,7 +119,24 @@ class Checker {
     return Status();
   }
 
+  // Nesting (parentheses, arguments, signs, exponents) is bounded so that a hostile model
+  // cannot exhaust the stack.
+  class Depth {
+   public:
+    explicit Depth(int* depth) : depth_(depth) { ++*depth_; }
+    ~Depth() { --*depth_; }
+    Depth(const Depth&) = delete;
+    Depth& operator=(const Depth&) = delete;
+
+   private:
+    int* depth_;
+  };
+  static constexpr int kMaxDepth = 256;
+
   Result<Term> Ternary() {
+    const Depth guard(&depth_);
+    if (depth_ > kMaxDepth)
+      return Fail(pos_, "nested too deeply (parentheses, arguments and signs beyond 256 levels)");
     auto c = LogicOr();
     if (!c.ok()) return c;
     SkipSpace();
@@ -229,7 +246,7 @@ class Checker {
     }
   }
 
-  static Term Product(const Term& a, const Term& b, bool divide) {
+  Result<Term> Product(const Term& a, const Term& b, bool divide, size_t at) const {
     Term r;
     r.begin = a.begin;
     r.end = b.end;
@@ -241,7 +258,9 @@ class Checker {
     } else if (!divide && a.unit.SameAs(one)) {
       r.unit = b.unit;
     } else {
-      r.unit = divide ? a.unit.Divide(b.unit) : a.unit.Multiply(b.unit);
+      auto unit = divide ? a.unit.Divide(b.unit) : a.unit.Multiply(b.unit);
+      if (!unit.ok()) return Fail(at, unit.error().message);
+      r.unit = unit.value();
     }
     // A constant 1 (1/x, 1*x) converts nothing; any other constant factor may.
     const auto exact = [](const Term& t) {
@@ -257,16 +276,22 @@ class Checker {
     Term a = left.value();
     for (;;) {
       SkipSpace();
+      const size_t at = pos_;
       if (pos_ >= text_.size() || (text_[pos_] != '*' && text_[pos_] != '/')) return a;
       const bool divide = text_[pos_++] == '/';
       auto right = Unary();
       if (!right.ok()) return right;
-      a = Product(a, right.value(), divide);
+      auto product = Product(a, right.value(), divide, at);
+      if (!product.ok()) return product;
+      a = product.value();
     }
   }
 
   // Signs bind less tightly than ^ (muparser: -2^2 = -4).
   Result<Term> Unary() {
+    const Depth guard(&depth_);
+    if (depth_ > kMaxDepth)
+      return Fail(pos_, "nested too deeply (parentheses, arguments and signs beyond 256 levels)");
     SkipSpace();
     const size_t at = pos_;
     if (pos_ < text_.size() && (text_[pos_] == '-' || text_[pos_] == '+')) {
@@ -518,6 +543,7 @@ class Checker {
   const std::vector<std::optional<PhysicalUnit>>& units_;
   const std::vector<double>& values_;
   size_t pos_ = 0;
+  int depth_ = 0;
 };
 
 }  // namespace

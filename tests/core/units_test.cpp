@@ -62,9 +62,9 @@ TEST_CASE("Plane angles and counts are dimensionless; rad is the same unit as 1"
 }
 
 TEST_CASE("Products, powers and roots of units", "[core][units]") {
-  CHECK(U("cm").Multiply(U("cm")).SameAs(U("cm^2")));
-  CHECK(U("kg").Divide(U("m^3")).SameAs(U("kg/m^3")));
-  CHECK(U("degC").Multiply(U("1/degC")).SameAs(U("1")));
+  CHECK(U("cm").Multiply(U("cm")).value().SameAs(U("cm^2")));
+  CHECK(U("kg").Divide(U("m^3")).value().SameAs(U("kg/m^3")));
+  CHECK(U("degC").Multiply(U("1/degC")).value().SameAs(U("1")));
   auto cubed = U("m").Raise(3);
   REQUIRE(cubed.ok());
   CHECK(cubed.value().SameAs(U("m3")));

@@ -121,6 +121,14 @@ TEST_CASE("Powers: constant exponents raise the unit; a varying one needs a numb
   ExpectRefused("s^0.5", v, "has no 2nd root");
 }
 
+TEST_CASE("A deeply nested model is refused, not a stack overflow", "[uncertainty][units]") {
+  const std::vector<Var> v = {{"x", "m", 2.0}};
+  const std::string deep = std::string(300, '(') + "x" + std::string(300, ')');
+  ExpectRefused(deep, v, "nested too deeply");
+  const std::string fine = std::string(100, '(') + "x" + std::string(100, ')');
+  ExpectUnit(fine, v, "m");
+}
+
 TEST_CASE("An input without a unit is refused when it is used", "[uncertainty][units]") {
   const std::vector<Var> v = {{"a", "m", 1.0}, {"b", "", 2.0}};
   ExpectRefused("a*b", v, "input 'b' states no unit");

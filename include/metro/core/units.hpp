@@ -48,8 +48,9 @@ class PhysicalUnit {
   // The dimensionless unit 1.
   static PhysicalUnit One();
 
-  PhysicalUnit Multiply(const PhysicalUnit& other) const;
-  PhysicalUnit Divide(const PhysicalUnit& other) const;
+  // Errors when UDUNITS-2 cannot form the unit (a power beyond its range, m^200 * m^200).
+  Result<PhysicalUnit> Multiply(const PhysicalUnit& other) const;
+  Result<PhysicalUnit> Divide(const PhysicalUnit& other) const;
   // unit^power, power in [-255, 255].
   Result<PhysicalUnit> Raise(int power) const;
   // The root'th root (m^2 -> m); an error when the dimensions have no such root (m -> ?).
