@@ -496,11 +496,13 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
         const bool evaluated = q.contains("type_a") && q["type_a"].is_object();
         if (evaluated) {
           const ordered_json& a = q["type_a"];
-          const RoundedResult r = RoundForStatement(
-              JsonNumber(a, "mean"),
-              JsonNumber(a, a.contains("u_mean") ? "u_mean" : "std_of_mean_autocorr"));
+          const double u = JsonNumber(a, a.contains("u_mean") ? "u_mean" : "std_of_mean_autocorr");
+          RoundedResult r = RoundForStatement(JsonNumber(a, "mean"), u);
           const double n = JsonNumber(a, "n");
           const double n_eff = JsonNumber(a, "n_eff");
+          // Null in the report (a constant series, n <= 3): not computed, never "nan".
+          const std::string not_computed = "not computed";
+          if (!std::isfinite(u)) r.uncertainty = not_computed;
           mustache::data row;
           row.set("sensor", std::to_string(sensor));
           row.set("tag", tag_name);
@@ -510,8 +512,9 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
           row.set("mean", r.value);
           row.set("u_mean", r.uncertainty);
           row.set("std", ShortNumber(JsonNumber(a, "std"), 2));
-          row.set("n_eff", fmt::format("{:.1f}", n_eff));
-          row.set("n_eff_ratio", fmt::format("{:.3f}", n > 0 ? n_eff / n : kNaN));
+          row.set("n_eff", std::isfinite(n_eff) ? fmt::format("{:.1f}", n_eff) : not_computed);
+          row.set("n_eff_ratio",
+                  std::isfinite(n_eff) && n > 0 ? fmt::format("{:.3f}", n_eff / n) : not_computed);
           summary.push_back(row);
         }
         const bool wanted =

@@ -342,6 +342,7 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
           "std_of_mean_autocorr is optimistic; see u_mean and the Allan deviation");
     }
     if (!ta.u_mean_available) r.warnings.push_back(ta.autocorr_note);
+    if (!ta.u_mean_note.empty()) r.warnings.push_back(ta.u_mean_note);
     if (ta.drift_detected) {
       r.warnings.push_back(fmt::format(
           "drift or a random walk: the stationarity check (means of {} batches) gives u of the "

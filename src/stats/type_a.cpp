@@ -404,6 +404,16 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   // A series the AR model predicts almost exactly (innovations below 1e-6 of the variance:
   // a deterministic pattern, not noise) has no noise to test the batch means against.
   const bool deterministic = ar.ok() && ar.value().innovation_variance < 1e-6 * r.variance;
+  if (deterministic) {
+    // Its spectral density at zero is no noise model (a period-5 pattern gave u_mean 2e-17):
+    // the classical s(mean), which never understates a pattern's spread, stands instead.
+    r.u_mean = r.std_of_mean;
+    r.u_mean_dof = dn - 1.0;
+    r.u_mean_method = kUMeanClassical;
+    r.u_mean_note =
+        "the AR model predicts the series almost exactly (a deterministic pattern, not noise): "
+        "u_mean is the classical s(mean)";
+  }
   if (n >= kBatchMeansMinN && !deterministic) {
     // Stationarity check: batch means of the last b * m values (type_a.hpp).
     const size_t b = kStationarityBatches;

@@ -2,8 +2,10 @@
 // dialect, every renamed column, the time column and its unit, notes and warnings, and the
 // table for people shows the warnings.
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <string>
 
+#include "metro/report/html_report.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "support/temp_file.hpp"
 
@@ -38,6 +40,46 @@ TEST_CASE("the input block records the dialect, mapping and time", "[report][dia
   CHECK(q["mean"].get<double>() == 2.0);
   // Sample variance of 1.5, 2.5, 1.5, 2.5: 4 * 0.25 / 3.
   CHECK(q["variance"].get<double>() == Approx(1.0 / 3.0).epsilon(1e-15));
+}
+
+TEST_CASE("terms that were not computed are null with the reason, never 0 or n",
+          "[report][type_a]") {
+  // gy_dps is constant; gz_dps varies over 20 samples; a second file has n = 3.
+  std::string text = "t_s,gy_dps,gz_dps\n";
+  for (int i = 0; i < 20; ++i)
+    text += std::to_string(0.1 * i) + ",0.25," + std::to_string(i % 3) + "\n";
+  TempFile file(text);
+  SessionAnalysis a = AnalyzeSession(file.path(), SessionAnalysisOptions{});
+  REQUIRE(a.ok);
+  const auto& quantities = a.report["sensors"][0]["quantities"];
+  const auto& constant = quantities["gy_dps"]["type_a"];
+  CHECK(constant["mean"].get<double>() == 0.25);
+  for (const char* key : {"n_eff", "rho1", "autocorr_cutoff_lag", "std_of_mean_autocorr", "u_mean",
+                          "u_mean_dof", "u_mean_method"}) {
+    INFO(key);
+    CHECK(constant[key].is_null());
+  }
+  CHECK_THAT(constant["autocorr_note"].get<std::string>(), Catch::Contains("constant"));
+  const auto& varying = quantities["gz_dps"]["type_a"];
+  CHECK(varying["autocorr_note"].is_null());
+  CHECK(varying["n_eff"].is_number());
+  CHECK(varying["u_mean"].get<double>() > 0.0);
+  // The HTML says "not computed" where the report has null, never "nan".
+  Result<std::string> html = RenderSessionAnalysisHtml(a);
+  REQUIRE(html.ok());
+  CHECK_THAT(html.value(), Catch::Contains(">not computed<"));
+  CHECK_THAT(html.value(), !Catch::Contains(">nan<"));
+
+  TempFile three("t_s,gz_dps\n0,1\n0.1,2\n0.2,4\n");
+  SessionAnalysis b = AnalyzeSession(three.path(), SessionAnalysisOptions{});
+  REQUIRE(b.ok);
+  const auto& small = b.report["sensors"][0]["quantities"]["gz_dps"]["type_a"];
+  CHECK(small["n_eff"].is_null());
+  CHECK(small["rho1"].is_null());
+  CHECK(small["autocorr_note"].is_string());
+  // n <= 3: the classical s / sqrt(n) with n - 1 dof (s^2 of 1, 2, 4 is 7/3).
+  CHECK(small["u_mean"].get<double>() == Approx(std::sqrt(7.0 / 3.0 / 3.0)).epsilon(1e-12));
+  CHECK(small["u_mean_dof"].get<double>() == 2.0);
 }
 
 TEST_CASE("input warnings reach the table", "[report][dialect]") {

@@ -64,6 +64,22 @@ TEST_CASE("Type A is stable on a large offset", "[stats][type_a]") {
   CHECK(r.value().mean - 1e9 == Approx(0.1).epsilon(1e-6));
 }
 
+TEST_CASE("A deterministic pattern gets the classical u of the mean, with a note",
+          "[stats][type_a][u_mean]") {
+  // 0, 0.02, 0.04, 0.01, 0.03 repeated: an AR(4) predicts it exactly, and its spectral density
+  // at zero (about 2e-17 once) is no uncertainty; s / sqrt(n) stands, with 199 dof.
+  std::vector<double> x;
+  for (int k = 0; k < 200; ++k) x.push_back(0.01 * ((k * 7) % 5));
+  auto r = EvaluateTypeA(x.data(), x.size(), TypeAOptions{});
+  REQUIRE(r.ok());
+  // Per period: values 0..0.04 in 0.01 steps, mean 0.02, sum of squares 0.001.
+  const double s2 = 40 * 0.001 / 199.0;
+  CHECK(r.value().u_mean == Approx(std::sqrt(s2 / 200.0)).epsilon(1e-9));
+  CHECK(r.value().u_mean_dof == 199.0);
+  CHECK(r.value().u_mean_method == kUMeanClassical);
+  CHECK_THAT(r.value().u_mean_note, Catch::Contains("deterministic pattern"));
+}
+
 TEST_CASE("FFT autocorrelation equals the direct sums", "[stats][type_a]") {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal;

@@ -76,6 +76,9 @@ struct TypeAResult {
   double u_mean_dof = 0.0;
   std::string u_mean_method;  // kUMeanArSpectral, kUMeanClassical, or "" (not available).
   int ar_order = 0;           // p of the AR fit (u_mean_method ar_spectral).
+  // Why u_mean is not the AR value when the series was long enough for one (a deterministic
+  // pattern the AR model predicts almost exactly); empty otherwise. Reported as a warning.
+  std::string u_mean_note;
   // Stationarity check (n >= kBatchMeansMinN): non-overlapping batch means of b = 10
   // batches (Schmeiser, Oper. Res. 30 (1982) 556), u_batch^2 = s^2(batch means) / b with
   // b - 1 dof. A drift or random walk inflates it (a trend's spread stays in the batch
