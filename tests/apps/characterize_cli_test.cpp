@@ -231,6 +231,32 @@ TEST_CASE("characterize --allan on a simulated BLE log with 2 % packet loss", "[
   std::remove(csv.c_str());
 }
 
+TEST_CASE("characterize --allan raises u_mean where the Allan deviation shows a random walk",
+          "[apps][u_mean]") {
+  // issue #21: on the public MPU6050 static log the Allan-predicted u(mean) of gy is about 13x
+  // the autocorrelation one; the report must use the larger and say why.
+  Run r = Characterize(kDatasets +
+                       "external/mpu6050_imucalibration_static_7min/example_data_tinit_calc.csv "
+                       "--allan --quantity gy_lsb --quantity gx_lsb");
+  REQUIRE(r.exit_code == 0);
+  const auto report = nlohmann::json::parse(r.out);
+  const auto& gy = report["sensors"][0]["quantities"]["gy_lsb"];
+  const double allan_u = gy["allan_type_a_link"]["u_mean_allan"].get<double>();
+  CHECK(gy["type_a"]["u_mean_method"] == "allan_noise_model");
+  CHECK(gy["type_a"]["u_mean"].get<double>() == allan_u);
+  CHECK(allan_u > 5.0 * gy["type_a"]["std_of_mean_autocorr"].get<double>());
+  bool warned = false;
+  for (const auto& w : gy["warnings"]) {
+    warned = warned || w.get<std::string>().find("rate_random_walk") != std::string::npos;
+  }
+  CHECK(warned);
+  // gx: the Allan prediction is not 2x larger; its u_mean stays the autoregressive one.
+  const auto& gx = report["sensors"][0]["quantities"]["gx_lsb"];
+  CHECK(gx["type_a"]["u_mean_method"] == "ar_spectral");
+  CHECK(gx["allan_type_a_link"]["u_mean_allan"].get<double>() <
+        2.0 * gx["type_a"]["u_mean"].get<double>());
+}
+
 TEST_CASE("characterize --budget takes its Type A input from the session", "[apps]") {
   Run r = Characterize(kDatasets + "static_chest.csv --type-a --settle auto --quantity pitch_deg " +
                        "--quantity yaw_deg --budget " + kDatasets +
