@@ -1,9 +1,12 @@
 #include "metro/uncertainty/monte_carlo.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <algorithm>
 #include <atomic>
+#include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 #include <boost/random/normal_distribution.hpp>
 #include <cmath>
@@ -708,6 +711,43 @@ Result<McResult> RunMonteCarlo(const Budget& budget) {
   return RunMonteCarlo(budget, budget.monte_carlo);
 }
 
+namespace {
+
+// u(y) (and the mean) of a run whose inputs have none are not numbers: NaN, with the note.
+void MarkUndefinedMoments(McResult* result) {
+  if (result->u_defined) return;
+  result->u = std::nan("");
+  if (!result->mean_defined) result->value = std::nan("");
+  std::string names;
+  for (const std::string& n : result->inputs_without_variance) {
+    names += (names.empty() ? "" : ", ") + n;
+  }
+  const std::string note = fmt::format(
+      "u(y) is undefined{}: input{} {} {} drawn from a t distribution with nu <= 2, which has "
+      "no variance (JCGM 101 6.4.9.4); the coverage intervals are reported, delta rests on "
+      "the symmetric interval",
+      result->mean_defined ? "" : " and so is the mean (nu <= 1)",
+      result->inputs_without_variance.size() == 1 ? "" : "s", names,
+      result->inputs_without_variance.size() == 1 ? "is" : "are");
+  result->message = result->message.empty() ? note : result->message + "; " + note;
+}
+
+}  // namespace
+
+std::vector<std::string> InputsWithoutVariance(const Budget& budget) {
+  std::vector<std::string> out;
+  for (const BudgetInput& in : budget.inputs) {
+    const bool t_like = in.distribution == Distribution::kNormal ||
+                        in.distribution == Distribution::kTypeA ||
+                        in.distribution == Distribution::kStudentT;
+    const double scale = in.distribution == Distribution::kStudentT ? in.scale : in.u;
+    if (t_like && scale != 0.0 && std::isfinite(in.dof) && in.dof <= 2.0) {
+      out.push_back(fmt::format("{} (nu = {:g})", in.name, in.dof));
+    }
+  }
+  return out;
+}
+
 Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, bool keep_samples) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(budget.file, 0, "monte_carlo: " + why);
@@ -729,6 +769,25 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
   plan.seed = options.seed;
 
   McResult result;
+  // JCGM 101 6.4.9.4: t_nu has a variance for nu > 2, a mean for nu > 1. Named before any
+  // trial is drawn; the intervals stay defined, u (and for nu <= 1 the mean) do not.
+  result.inputs_without_variance = InputsWithoutVariance(budget);
+  result.u_defined = result.inputs_without_variance.empty();
+  for (const BudgetInput& in : budget.inputs) {
+    const bool t_like = in.distribution == Distribution::kNormal ||
+                        in.distribution == Distribution::kTypeA ||
+                        in.distribution == Distribution::kStudentT;
+    if (t_like && std::isfinite(in.dof) && in.dof <= 1.0 &&
+        (in.distribution == Distribution::kStudentT ? in.scale : in.u) != 0.0) {
+      result.mean_defined = false;
+    }
+  }
+  // The scale delta rests on when u(y) is undefined: the symmetric interval's half-width over
+  // the normal coverage factor for p (for a normal y this is u(y)).
+  const double z_p = boost::math::quantile(boost::math::normal(), 0.5 * (1.0 + options.coverage));
+  const auto tolerance_scale = [&](double u, double low, double high) {
+    return result.u_defined ? u : (high - low) / (2.0 * z_p);
+  };
   result.adaptive = options.adaptive;
   result.seed = options.seed;
   result.coverage = options.coverage;
@@ -754,12 +813,14 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
     const Moments moments = MergeChunkMoments(chunk_moments);
     result.value = moments.mean;
     result.u = moments.u;
-    result.delta = NumericalTolerance(moments.u, options.ndig);
     if (keep_samples) result.samples.assign(values.get(), values.get() + m);
     const Intervals iv = CoverageIntervals(values.get(), m, options.coverage, result.threads);
     result.symmetric = iv.symmetric;
     result.shortest = iv.shortest;
     result.shortest_discrete = iv.shortest_discrete;
+    result.delta = NumericalTolerance(
+        tolerance_scale(moments.u, iv.symmetric.low, iv.symmetric.high), options.ndig);
+    MarkUndefinedMoments(&result);
     result.ok = true;
     return result;
   } else {
@@ -799,7 +860,10 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
       for (double mean : means) between += (mean - grand) * (mean - grand);
       const double u_pooled =
           std::sqrt((pooled_ss + static_cast<double>(block) * between) / (total - 1.0));
-      const double delta = NumericalTolerance(u_pooled, options.ndig);
+      const double delta =
+          NumericalTolerance(tolerance_scale(u_pooled, MeanAndU(lows.data(), lows.size()).mean,
+                                             MeanAndU(highs.data(), highs.size()).mean),
+                             options.ndig);
       // Stage 1, JCGM 101 7.9.4 with t_0.975(h - 1) for its factor 2: the 95 % half-width
       // t s(z_1..z_h)/sqrt(h) of the pooled value of each block statistic that converges
       // like M^(-1/2) (mean, u, symmetric end points).
@@ -815,8 +879,14 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
       st.symmetric_high = half_width(highs);
       result.stability = st;
       result.delta = delta;
-      if (st.value > delta || st.u > delta || st.symmetric_low > delta ||
-          st.symmetric_high > delta || h < next_group_test || h % kGroups != 0) {
+      // An undefined mean or u is not a reported number: its block spread never settles
+      // and is not tested (McResult::inputs_without_variance).
+      if (!result.mean_defined) st.value = std::nan("");
+      if (!result.u_defined) st.u = std::nan("");
+      result.stability = st;
+      if ((result.mean_defined && st.value > delta) || (result.u_defined && st.u > delta) ||
+          st.symmetric_low > delta || st.symmetric_high > delta || h < next_group_test ||
+          h % kGroups != 0) {
         continue;
       }
       // Stage 2, the shortest end points themselves: the pooled h blocks split into G = 10
@@ -855,7 +925,6 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
   const Moments m = MeanAndU(y.data(), y.size());
   result.value = m.mean;
   result.u = m.u;
-  result.delta = NumericalTolerance(m.u, options.ndig);
   if (keep_samples) {
     std::vector<double> copy = y;
     const Intervals iv =
@@ -870,6 +939,9 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
     result.shortest = iv.shortest;
     result.shortest_discrete = iv.shortest_discrete;
   }
+  result.delta = NumericalTolerance(
+      tolerance_scale(m.u, result.symmetric.low, result.symmetric.high), options.ndig);
+  MarkUndefinedMoments(&result);
   result.ok = result.converged;
   return result;
 }

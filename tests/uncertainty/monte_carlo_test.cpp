@@ -393,6 +393,58 @@ TEST_CASE("Samplers reproduce the JCGM 101 6.4 moments", "[uncertainty][mc]") {
   }
 }
 
+TEST_CASE("An input without a variance is named and u(y) is undefined, never converged noise",
+          "[uncertainty][mc]") {
+  // issue #22: a Type A input of 3 readings is t_2(x, s^2/3) (JCGM 101 6.4.9), which has no
+  // variance; metro reported u = 330 as converged. Now: the input is named, u is NaN, and
+  // the intervals (quantiles, defined) match t_2's: x +- t_0.975(2) s / sqrt(3).
+  const Budget b = Parse(R"({"measurand": {"name": "y", "model": "x"},
+    "inputs": [{"name": "x", "type_a": {"mean": 10, "std": 0.3, "n": 3}}],
+    "monte_carlo": {"trials": 1000000, "seed": 5}})");
+  REQUIRE(InputsWithoutVariance(b) == std::vector<std::string>{"x (nu = 2)"});
+  const boost::math::students_t t2(2.0);
+  const double scale = 0.3 / std::sqrt(3.0);
+  const double half = boost::math::quantile(t2, 0.975) * scale;  // 4.3027 s / sqrt(3)
+  const int64_t m = 1000000;
+  // se of the 0.975 quantile: sqrt(p (1 - p) / M) / g(y_p), g the t_2 density scaled.
+  const double se = std::sqrt(0.975 * 0.025 / m) /
+                    (boost::math::pdf(t2, boost::math::quantile(t2, 0.975)) / scale);
+  const McResult r = Run(b, m);
+  CHECK(r.inputs_without_variance == std::vector<std::string>{"x (nu = 2)"});
+  CHECK_FALSE(r.u_defined);
+  CHECK(r.mean_defined);
+  CHECK(std::isnan(r.u));
+  CHECK(r.value == Approx(10.0).margin(0.05));  // the mean exists (nu > 1), slowly converging
+  CHECK(r.symmetric.low == Approx(10.0 - half).margin(5 * se));
+  CHECK(r.symmetric.high == Approx(10.0 + half).margin(5 * se));
+  CHECK_THAT(r.message, Catch::Contains("u(y) is undefined: input x (nu = 2) is drawn from a t"));
+
+  // Adaptive: settles on the interval alone, well before the cap, to its own delta.
+  McOptions options = b.monte_carlo;
+  options.adaptive = true;
+  options.max_trials = 20000000;
+  auto adaptive = RunMonteCarlo(b, options);
+  REQUIRE(adaptive.ok());
+  CHECK(adaptive.value().converged);
+  CHECK(adaptive.value().trials < options.max_trials);
+  CHECK(std::isnan(adaptive.value().u));
+  CHECK(std::isnan(adaptive.value().stability.u));
+  CHECK(adaptive.value().symmetric.high == Approx(10.0 + half).margin(2 * adaptive.value().delta));
+
+  // Two readings: t_1 (Cauchy) has no mean either.
+  const Budget cauchy = Parse(R"({"measurand": {"name": "y", "model": "2 * x"},
+    "inputs": [{"name": "x", "type_a": {"values": [1.0, 1.2]}}],
+    "monte_carlo": {"trials": 200000, "seed": 1}})");
+  const McResult c = Run(cauchy, 200000);
+  CHECK_FALSE(c.mean_defined);
+  CHECK(std::isnan(c.value));
+  CHECK_THAT(c.message, Catch::Contains("and so is the mean (nu <= 1)"));
+  // y = 2x: the 95 % interval of 2 (1.1 + t_1 s / sqrt(2)), s = 0.1414, t_0.975(1) = 12.706.
+  const double half1 = 2.0 * boost::math::quantile(boost::math::students_t(1.0), 0.975) *
+                       (std::sqrt(0.02) / std::sqrt(2.0));
+  CHECK(c.symmetric.high - c.symmetric.low == Approx(2 * half1).epsilon(0.05));
+}
+
 TEST_CASE("Correlated normal inputs by Cholesky", "[uncertainty][mc]") {
   // y = a - b with r(a, b) = 0.8, u = 1 and 2: Var = 1 + 4 - 2 * 0.8 * 2 = 1.8.
   const Budget b = Parse(R"({"measurand": {"name": "y", "model": "a - b"},

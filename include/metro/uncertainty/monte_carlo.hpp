@@ -82,7 +82,21 @@ struct McResult {
   double delta = std::numeric_limits<double>::quiet_NaN();  // Numerical tolerance (7.9.2).
   std::string message;                                      // Why not ok, or notes.
   std::vector<double> samples;  // The M model values (unordered), if McOptions asked.
+  // Inputs drawn from a t distribution with nu <= 2 (a Type A input of 2 or 3 readings;
+  // JCGM 101 6.4.9.4: t_nu has a variance only for nu > 2 and a mean only for nu > 1),
+  // "name (nu = 2)". With any of them u(y) is undefined: `u` is NaN and u_defined false; with
+  // nu <= 1 the mean is undefined too (`value` NaN, mean_defined false). The coverage
+  // intervals (quantiles) stay defined and are reported; delta and the adaptive stopping
+  // rule then rest on the symmetric interval alone (docs/uncertainty.md, "Inputs without a
+  // variance").
+  std::vector<std::string> inputs_without_variance;
+  bool u_defined = true;
+  bool mean_defined = true;
 };
+
+// The inputs of `budget` whose Monte Carlo distribution has no variance (t with nu <= 2,
+// JCGM 101 6.4.9.4), as "name (nu = 2)", for a caller to name before sampling.
+std::vector<std::string> InputsWithoutVariance(const Budget& budget);
 
 // Runs the Monte Carlo method with the budget's own McOptions (budget.monte_carlo).
 Result<McResult> RunMonteCarlo(const Budget& budget);
