@@ -70,8 +70,7 @@ TEST_CASE("Session HTML has every plot and no external reference", "[report][htm
   CHECK(Count(h, "<svg") == expected);
   // The summary states the mean rounded per GUM 7.2.6 to two digits of u(mean).
   const auto& gx = a.report["sensors"][0]["quantities"]["gx_dps"]["type_a"];
-  const RoundedResult r =
-      RoundForStatement(gx["mean"].get<double>(), gx["u_mean"].get<double>());
+  const RoundedResult r = RoundForStatement(gx["mean"].get<double>(), gx["u_mean"].get<double>());
   CHECK(h.find("<td class=\"num\">" + r.value + "</td><td class=\"num\">" + r.uncertainty +
                "</td>") != std::string::npos);
   // The settle window is shaded and named.
