@@ -1,13 +1,17 @@
 #include "metro/uncertainty/gum.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 
 #include "uncertainty/model.hpp"
+#include "uncertainty/symbolic_model.hpp"
 
 namespace metro {
 namespace {
@@ -81,11 +85,50 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
     return y;
   };
 
-  // Sensitivity coefficients, JCGM 100 5.1.3 (central differences, step scaled to u_i).
+  // The model's exact derivatives (symbolic_model.hpp), when GiNaC takes the expression and
+  // gives the evaluator's value at x (to 1e-12: the two read the expression alike).
+  std::optional<internal::SymbolicModel> symbolic;
+  if (budget.model.empty()) {
+    result.derivatives = "stated (no model)";
+  } else {
+    std::vector<std::string> names;
+    for (const auto& in : budget.inputs) names.push_back(in.name);
+    Result<internal::SymbolicModel> parsed = internal::SymbolicModel::Parse(budget.model, names);
+    Result<double> value = parsed.ok() ? parsed.value().Value(x.data()) : parsed.error();
+    if (value.ok() && !(std::fabs(value.value() - result.value) <=
+                        1e-12 * std::max(std::fabs(result.value), 1e-300))) {
+      value =
+          MakeError(fmt::format("GiNaC reads the model as {} at the estimates, the evaluator "
+                                "as {}",
+                                value.value(), result.value));
+    }
+    if (value.ok()) {
+      symbolic = std::move(parsed).value();
+      result.derivatives = "exact (symbolic, GiNaC)";
+    } else {
+      result.derivatives = "central differences: " + value.error().message;
+    }
+  }
+
+  // Sensitivity coefficients, JCGM 100 5.1.3: exact, else central differences (step scaled
+  // to u_i).
   std::vector<double> c(n, 0.0);
   for (size_t i = 0; i < n; ++i) {
     if (budget.model.empty()) {
       c[i] = *budget.inputs[i].sensitivity;
+      continue;
+    }
+    if (symbolic) {
+      Result<double> ci = symbolic->First(i, x.data());
+      if (ci.ok()) {
+        c[i] = ci.value();
+        continue;
+      }
+      // Every coefficient the same way: back to the start with central differences.
+      symbolic.reset();
+      result.derivatives = "central differences: sensitivity to input '" + budget.inputs[i].name +
+                           "': " + ci.error().message;
+      i = static_cast<size_t>(-1);
       continue;
     }
     const bool exact = u[i] == 0.0;
@@ -152,9 +195,14 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
                        "second-order terms (JCGM 100 5.1.2 note) assume independent inputs; "
                        "the budget has correlated inputs");
     }
-    // JCGM 100 5.1.2 note, steps h_i = u_i.
+    // JCGM 100 5.1.2 note: exact derivatives, else central differences with steps h_i = u_i.
     const double f0 = result.value;
-    const auto second = [&](size_t i, size_t j) {
+    std::string symbolic_error;
+    const auto exact = [&](Result<double> d) {
+      if (!d.ok() && symbolic_error.empty()) symbolic_error = d.error().message;
+      return d.ok() ? d.value() : std::nan("");
+    };
+    const auto second_difference = [&](size_t i, size_t j) {
       const double hi = u[i];
       const double hj = u[j];
       if (i == j) return (f_at({{i, hi}}) - 2.0 * f0 + f_at({{i, -hi}})) / (hi * hi);
@@ -162,8 +210,11 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
               f_at({{i, -hi}, {j, -hj}})) /
              (4.0 * hi * hj);
     };
+    const auto second = [&](size_t i, size_t j) {
+      return symbolic ? exact(symbolic->Second(i, j, x.data())) : second_difference(i, j);
+    };
     // d3f / (dxi dxj^2).
-    const auto third = [&](size_t i, size_t j) {
+    const auto third_difference = [&](size_t i, size_t j) {
       const double hi = u[i];
       const double hj = u[j];
       if (i == j) {
@@ -177,6 +228,9 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
       };
       return (d2j(hi) - d2j(-hi)) / (2.0 * hi);
     };
+    const auto third = [&](size_t i, size_t j) {
+      return symbolic ? exact(symbolic->Third(i, j, x.data())) : third_difference(i, j);
+    };
     double extra = 0.0;
     for (size_t i = 0; i < n; ++i) {
       if (u[i] == 0.0) continue;
@@ -185,6 +239,21 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
         const double fij = second(i, j);
         const double fijj = third(i, j);
         extra += (0.5 * fij * fij + c[i] * fijj) * u[i] * u[i] * u[j] * u[j];
+      }
+    }
+    if (!symbolic_error.empty()) {
+      // The same terms by central differences (steps u_i), and the report says so.
+      symbolic.reset();
+      result.derivatives += "; second-order terms by central differences: " + symbolic_error;
+      extra = 0.0;
+      for (size_t i = 0; i < n; ++i) {
+        if (u[i] == 0.0) continue;
+        for (size_t j = 0; j < n; ++j) {
+          if (u[j] == 0.0) continue;
+          const double fij = second(i, j);
+          const double fijj = third(i, j);
+          extra += (0.5 * fij * fij + c[i] * fijj) * u[i] * u[i] * u[j] * u[j];
+        }
       }
     }
     if (!std::isfinite(extra)) {

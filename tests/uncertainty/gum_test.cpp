@@ -1,11 +1,14 @@
 // GUM framework against the published examples of JCGM 100:2008 Annex H.
 #include "metro/uncertainty/gum.hpp"
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
 
 #include "metro/uncertainty/budget.hpp"
+#include "metro/uncertainty/budget_report.hpp"
 
 namespace metro {
 namespace {
@@ -245,6 +248,131 @@ TEST_CASE("Coverage factor from Boost students_t with fractional dof", "[uncerta
   // Fractional dof lies between its neighbours.
   CHECK(CoverageFactor(0.99, 16.75) < CoverageFactor(0.99, 16));
   CHECK(CoverageFactor(0.99, 16.75) > CoverageFactor(0.99, 17));
+}
+
+// ---------------------------------------------------------------- exact derivatives (#22)
+
+// A one-model budget with the given inputs (JSON array body) and Monte Carlo settings.
+Budget Model(const std::string& model, const std::string& inputs, int64_t trials = 0) {
+  return Parse(
+      R"({"measurand": {"name": "y", "model": ")" + model + R"("}, "inputs": [)" + inputs + "]" +
+      (trials > 0 ? R"(, "monte_carlo": {"trials": )" + std::to_string(trials) + R"(, "seed": 3})"
+                  : std::string(R"(, "monte_carlo": {"enabled": false})")) +
+      "}");
+}
+
+TEST_CASE("Sensitivity coefficients are exact where rounding erased central differences",
+          "[uncertainty][gum][derivatives]") {
+  // issue #22: steps of 1e-3 u_i vanish beside |x_i|: y = fm at 1e7 +- 1e-6 Hz gave u_c
+  // 1.86e-6 (+86 %), at 1e9 +- 1e-3 Hz c = 0.954.
+  for (const auto& [x, u] : {std::pair<double, double>{1e7, 1e-6}, {1e9, 1e-3}}) {
+    const Budget b = Model("fm", fmt::format(R"({{"name": "fm", "value": {}, "u": {}}})", x, u));
+    auto r = EvaluateGum(b);
+    REQUIRE(r.ok());
+    INFO("fm = " << x << " +- " << u);
+    CHECK(r.value().derivatives == "exact (symbolic, GiNaC)");
+    CHECK(r.value().budget[0].sensitivity == 1.0);
+    CHECK(r.value().u == Approx(u).epsilon(1e-12));
+  }
+  // y = fm (1 + dref) at 1 GHz, u(dref) = 1e-12: c(fm) = 1 + dref, c(dref) = fm.
+  const Budget ref = Model("fm*(1 + dref)",
+                           R"({"name": "fm", "value": 1e9, "u": 1e-3},
+                              {"name": "dref", "value": 2e-12, "u": 1e-12})",
+                           200000);
+  auto g = EvaluateGum(ref);
+  REQUIRE(g.ok());
+  for (const BudgetLine& line : g.value().budget) {
+    INFO(line.name);
+    CHECK(line.sensitivity == Approx(line.name == "fm" ? 1.0 + 2e-12 : 1e9).epsilon(1e-12));
+  }
+  // u_c^2 = (1 + dref)^2 u(fm)^2 + fm^2 u(dref)^2 = 1e-6 + 1e-6.
+  CHECK(g.value().u == Approx(std::sqrt(2e-6)).epsilon(1e-12));
+  // Linear in each input: the GUF is validated against the Monte Carlo (it was not).
+  auto e = EvaluateBudget(ref);
+  REQUIRE(e.ok());
+  REQUIRE(e.value().validation);
+  CHECK(e.value().validation->validated);
+  // A 50 mm gauge in nm with its thermal expansion: l = ls (1 + als dt); c(dt) = ls als.
+  const Budget gauge = Model("ls*(1 + als*dt)",
+                             R"({"name": "ls", "value": 50000623, "u": 25},
+                                {"name": "als", "value": 11.5e-6, "u": 1e-6},
+                                {"name": "dt", "value": 0.0003, "u": 1e-9})");
+  auto l = EvaluateGum(gauge);
+  REQUIRE(l.ok());
+  for (const BudgetLine& line : l.value().budget) {
+    INFO(line.name);
+    const double want = line.name == "ls"    ? 1.0 + 11.5e-6 * 0.0003
+                        : line.name == "als" ? 50000623.0 * 0.0003
+                                             : 50000623.0 * 11.5e-6;
+    CHECK(line.sensitivity == Approx(want).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("Second-order terms from exact derivatives match their closed forms",
+          "[uncertainty][gum][derivatives]") {
+  // JCGM 100 5.1.2 note: u^2 = sum c_i^2 u_i^2 + sum_ij (f_ij^2 / 2 + f_i f_ijj) u_i^2 u_j^2.
+  const auto second_order =
+      [](const std::vector<double>& f1, const std::vector<std::vector<double>>& f2,
+         const std::vector<std::vector<double>>& f3, const std::vector<double>& u) {
+        double v = 0.0;
+        for (size_t i = 0; i < u.size(); ++i) v += f1[i] * f1[i] * u[i] * u[i];
+        for (size_t i = 0; i < u.size(); ++i) {
+          for (size_t j = 0; j < u.size(); ++j) {
+            v += (0.5 * f2[i][j] * f2[i][j] + f1[i] * f3[i][j]) * u[i] * u[i] * u[j] * u[j];
+          }
+        }
+        return std::sqrt(v);
+      };
+  {
+    // P = V^2 / R, V = 10 +- 0.5 V, R = 4 +- 0.2 ohm. f3[i][j] = d3f / dx_i dx_j^2.
+    const double v = 10, r = 4, uv = 0.5, ur = 0.2;
+    Budget b = Model("V^2/R", R"({"name": "V", "value": 10, "u": 0.5},
+                                 {"name": "R", "value": 4, "u": 0.2})");
+    b.gum.second_order = true;
+    auto g = EvaluateGum(b);
+    REQUIRE(g.ok());
+    const double want = second_order(
+        {2 * v / r, -v * v / (r * r)},
+        {{2 / r, -2 * v / (r * r)}, {-2 * v / (r * r), 2 * v * v / (r * r * r)}},
+        {{0.0, 4 * v / (r * r * r)}, {-2 / (r * r), -6 * v * v / (r * r * r * r)}}, {uv, ur});
+    CHECK(g.value().u == Approx(want).epsilon(1e-12));
+  }
+  {
+    // L sin(theta) at theta = 89.9 deg (in rad): the first-order term nearly vanishes.
+    const double len = 2.0, th = 89.9 * M_PI / 180.0, ul = 0.01, ut = 0.02;
+    Budget b = Model("L*sin(th)", fmt::format(R"({{"name": "L", "value": 2, "u": 0.01}},
+                                                 {{"name": "th", "value": {:.17g}, "u": 0.02}})",
+                                              th));
+    b.gum.second_order = true;
+    auto g = EvaluateGum(b);
+    REQUIRE(g.ok());
+    const double s = std::sin(th), c = std::cos(th);
+    const double want = second_order({s, len * c}, {{0.0, c}, {c, -len * s}},
+                                     {{0.0, -s}, {0.0, -len * c}}, {ul, ut});
+    CHECK(g.value().u == Approx(want).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("A model GiNaC cannot differentiate falls back to central differences, said so",
+          "[uncertainty][gum][derivatives]") {
+  const Budget b = Model("min(a, b) + a", R"({"name": "a", "value": 1, "u": 0.1},
+                                              {"name": "b", "value": 5, "u": 0.1})");
+  auto g = EvaluateGum(b);
+  REQUIRE(g.ok());
+  CHECK(g.value().derivatives ==
+        "central differences: the model uses min(), which has no derivative everywhere or is "
+        "not known to GiNaC");
+  // d/da (min(a, b) + a) = 2 away from a = b; u = 2 * 0.1.
+  CHECK(g.value().u == Approx(0.2).epsilon(1e-9));
+  // muparser's ln, log10 and _pi are read alike by GiNaC.
+  auto logs = EvaluateGum(Model("ln(a) + log10(b) + _pi", R"({"name": "a", "value": 2, "u": 0.1},
+                                                               {"name": "b", "value": 100, "u": 1})"));
+  REQUIRE(logs.ok());
+  CHECK(logs.value().derivatives == "exact (symbolic, GiNaC)");
+  for (const BudgetLine& line : logs.value().budget) {
+    CHECK(line.sensitivity ==
+          Approx(line.name == "a" ? 0.5 : 1.0 / (100.0 * std::log(10.0))).epsilon(1e-14));
+  }
 }
 
 }  // namespace

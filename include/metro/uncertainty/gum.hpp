@@ -45,8 +45,12 @@ struct GumResult {
   double interval_high = std::numeric_limits<double>::quiet_NaN();
   bool second_order = false;
   CorrelatedDofPolicy dof_policy = CorrelatedDofPolicy::kGroup;
-  bool correlated = false;         // Non-zero correlations between contributing inputs.
-  std::string dof_note;            // How nu_eff was formed, in words.
+  bool correlated = false;  // Non-zero correlations between contributing inputs.
+  std::string dof_note;     // How nu_eff was formed, in words.
+  // How the sensitivity coefficients (and second-order terms) were taken: "exact
+  // (symbolic, GiNaC)", "stated (no model)", or "central differences: <why the model could
+  // not be differentiated symbolically>" (docs/uncertainty.md, "Derivatives").
+  std::string derivatives;
   std::vector<BudgetLine> budget;  // Sorted by contribution, largest first.
 };
 
