@@ -1,5 +1,7 @@
 #include "budget_command.hpp"
 
+#include <fmt/format.h>
+
 #include <cstdio>
 #include <memory>
 #include <utility>
@@ -60,6 +62,17 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
   if (!budget.ok()) {
     apps::PrintError(budget.error());
     return 2;
+  }
+  // Named before any trial is drawn (JCGM 101 6.4.9.4, docs/uncertainty.md).
+  if (budget.value().monte_carlo.enabled) {
+    for (const std::string& name : InputsWithoutVariance(budget.value())) {
+      apps::PrintText(
+          stderr,
+          fmt::format(
+              "warning: input {} has no variance in the Monte Carlo method (t with nu <= 2): u(y) "
+              "will be undefined, the coverage intervals are still reported\n",
+              name));
+    }
   }
   TerminalProgress progress(stderr, apps::CliProgressOptions());  // The Monte Carlo trials.
   auto evaluation = EvaluateBudget(budget.value(), &progress);

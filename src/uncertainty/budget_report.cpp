@@ -66,8 +66,8 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
   if (units.ok()) {
     j["measurand"]["unit_check"] = {
         {"checked", units.value().checked},
-        {"model_unit", units.value().checked ? ordered_json(units.value().model_unit)
-                                             : ordered_json()},
+        {"model_unit",
+         units.value().checked ? ordered_json(units.value().model_unit) : ordered_json()},
         {"scale_known", units.value().scale_known},
         {"note", units.value().note}};
   }
@@ -85,6 +85,7 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
   result["dof_policy"] = CorrelatedDofPolicyName(g.dof_policy);
   result["correlated"] = g.correlated;
   result["dof_note"] = g.dof_note;
+  result["derivatives"] = g.derivatives;  // exact (symbolic, GiNaC), stated, or differences
   const RoundedResult s = RoundForStatement(g.value, g.expanded);
   const std::string unit = e.budget.unit.empty() ? "" : " " + e.budget.unit;
   result["statement"] = fmt::format("{} = ({} +- {}){}, k = {:.2f}, p = {}", e.budget.measurand,
@@ -143,6 +144,10 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
     mc["coverage"] = m.coverage;
     mc["value"] = Number(m.value);
     mc["u"] = Number(m.u);
+    // JCGM 101 6.4.9.4: with an input of nu <= 2, u (and for nu <= 1 the mean) is undefined.
+    mc["u_defined"] = m.u_defined;
+    mc["mean_defined"] = m.mean_defined;
+    mc["inputs_without_variance"] = m.inputs_without_variance;
     mc["interval_symmetric"] = {Number(m.symmetric.low), Number(m.symmetric.high)};
     mc["interval_shortest"] = {Number(m.shortest.low), Number(m.shortest.high)};
     // JCGM 101 7.7 as written, beside the fitted minimum reported above (docs/uncertainty.md).
@@ -208,12 +213,13 @@ std::string BudgetReportTable(const BudgetEvaluation& e) {
                      e.budget.measurand, s.value, s.uncertainty, unit, g.k, Percent(g.coverage));
   if (e.monte_carlo) {
     const McResult& m = *e.monte_carlo;
-    out +=
-        fmt::format("\nMonte Carlo (JCGM 101): M = {}{}, seed {}, y = {}{}, u = {}{}\n", m.trials,
-                    m.adaptive ? fmt::format(" (adaptive, {} blocks, {})", m.blocks,
-                                             m.converged ? "settled" : "NOT settled")
-                               : "",
-                    m.seed, Long(m.value), unit, Short(m.u), unit);
+    out += fmt::format(
+        "\nMonte Carlo (JCGM 101): M = {}{}, seed {}, y = {}{}, u = {}{}\n", m.trials,
+        m.adaptive ? fmt::format(" (adaptive, {} blocks, {})", m.blocks,
+                                 m.converged ? "settled" : "NOT settled")
+                   : "",
+        m.seed, m.mean_defined ? Long(m.value) : "undefined (no mean)", m.mean_defined ? unit : "",
+        m.u_defined ? Short(m.u) : "undefined (an input has no variance)", m.u_defined ? unit : "");
     out += fmt::format("  {} interval: shortest [{}, {}], symmetric [{}, {}]{}\n",
                        Percent(m.coverage), Long(m.shortest.low), Long(m.shortest.high),
                        Long(m.symmetric.low), Long(m.symmetric.high), unit);

@@ -81,5 +81,25 @@ TEST_CASE("characterize --budget refuses a session quantity in an incompatible u
                    "converted to the input's unit 's'") != std::string::npos);
 }
 
+TEST_CASE("characterize budget names an input without a variance before sampling", "[apps][mc]") {
+  // issue #22: three readings give t_2, which has no variance (JCGM 101 6.4.9.4).
+  TempFile budget(R"({"measurand": {"name": "y", "model": "x + z"},
+    "inputs": [{"name": "x", "type_a": {"values": [1.0, 1.1, 0.95]}},
+               {"name": "z", "value": 0, "u": 0.01}],
+    "monte_carlo": {"trials": 100000, "seed": 1}})",
+                  ".json");
+  const auto r = Characterize("budget " + budget.path());
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.find("warning: input x (nu = 2) has no variance in the Monte Carlo method") == 0);
+  const auto j = nlohmann::json::parse(r.out);
+  CHECK(j["result"]["derivatives"] == "exact (symbolic, GiNaC)");
+  const auto& mc = j["monte_carlo"];
+  CHECK(mc["u"].is_null());
+  CHECK(mc["u_defined"] == false);
+  CHECK(mc["mean_defined"] == true);
+  CHECK(mc["inputs_without_variance"] == nlohmann::json::array({"x (nu = 2)"}));
+  CHECK(mc["interval_symmetric"][0].get<double>() < mc["interval_symmetric"][1].get<double>());
+}
+
 }  // namespace
 }  // namespace metro
