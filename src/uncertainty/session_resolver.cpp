@@ -46,14 +46,23 @@ Result<TypeASummary> Summarize(const Session& session, const SessionQuantityRef&
   if (!q->ok) {
     return MakeError(path, 0, fmt::format("sensor {} {}: {}", ref.sensor, ref.quantity, q->error));
   }
+  const TypeAResult& a = q->type_a;
+  if (!a.u_mean_available) {
+    return MakeError(path, 0,
+                     fmt::format("sensor {} {}: {}; expected a quantity that varies, or a Type B "
+                                 "input for the readings' resolution instead of this session one",
+                                 ref.sensor, ref.quantity, a.autocorr_note));
+  }
+  // metro's recommended u of the mean and its dof (type_a.hpp u_mean: the AR spectral
+  // density at zero, raised by the stationarity and Allan checks; docs/type-a.md).
   TypeASummary s;
-  s.mean = q->type_a.mean;
-  s.u = q->type_a.std_of_mean_autocorr;
-  s.dof = std::max(1.0, q->type_a.n_eff - 1.0);
-  s.n = q->type_a.n;
+  s.mean = a.mean;
+  s.u = a.u_mean;
+  s.dof = std::max(1.0, a.u_mean_dof);
+  s.n = a.n;
   s.unit = BudgetUnitOf(ref.quantity);
-  s.note = fmt::format("Type A of {} sensor {} {}: n = {}, n_eff = {:.1f}, u = s/sqrt(n_eff)", path,
-                       ref.sensor, ref.quantity, q->type_a.n, q->type_a.n_eff);
+  s.note = fmt::format("Type A of {} sensor {} {}: n = {}, u = u_mean ({}), {:.1f} dof", path,
+                       ref.sensor, ref.quantity, a.n, a.u_mean_method, a.u_mean_dof);
   return s;
 }
 

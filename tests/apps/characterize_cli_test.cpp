@@ -245,9 +245,16 @@ TEST_CASE("characterize --allan raises u_mean where the Allan deviation shows a 
   CHECK(gy["type_a"]["u_mean_method"] == "allan_noise_model");
   CHECK(gy["type_a"]["u_mean"].get<double>() == allan_u);
   CHECK(allan_u > 5.0 * gy["type_a"]["std_of_mean_autocorr"].get<double>());
+  // The warning names the evidence: the Allan noise model's dominant term (a random walk or
+  // ramp of the rate on this log).
+  const std::string term = gy["allan_type_a_link"]["dominant_term"].get<std::string>();
+  CHECK((term == "rate_random_walk" || term == "rate_ramp"));
   bool warned = false;
   for (const auto& w : gy["warnings"]) {
-    warned = warned || w.get<std::string>().find("rate_random_walk") != std::string::npos;
+    const std::string text = w.get<std::string>();
+    warned = warned || (text.find("the Allan deviation shows noise the autocorrelation misses") !=
+                            std::string::npos &&
+                        text.find("dominant term " + term) != std::string::npos);
   }
   CHECK(warned);
   // gx: the Allan prediction is not 2x larger; its u_mean stays the autoregressive one.
@@ -271,8 +278,9 @@ TEST_CASE("characterize --budget takes its Type A input from the session", "[app
     if (line["name"] != "obs") continue;
     found = true;
     CHECK(line["value"].get<double>() == pitch["mean"].get<double>());
-    CHECK(line["u"].get<double>() == pitch["std_of_mean_autocorr"].get<double>());
-    CHECK(line["dof"].get<double>() == Approx(pitch["n_eff"].get<double>() - 1.0));
+    // metro's u_mean and its dof (issue #21 part 2), not Zhang's.
+    CHECK(line["u"].get<double>() == pitch["u_mean"].get<double>());
+    CHECK(line["dof"].get<double>() == Approx(pitch["u_mean_dof"].get<double>()));
   }
   CHECK(found);
   // u_c combines the Type A u with the Type B terms (mounting dominates: 0.1/sqrt(3)).
