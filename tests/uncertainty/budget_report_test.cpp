@@ -18,11 +18,12 @@ TEST_CASE("Budget report JSON for GUM H.1 with Monte Carlo", "[uncertainty][repo
   const auto j = BudgetReportJson(e.value());
   CHECK(j["schema"] == "metro.budget-report/1");
   CHECK(j["result"]["u"].get<double>() == Approx(31.66388).margin(5e-4));
-  CHECK(j["result"]["dof_eff"].get<double>() == Approx(16.7519).margin(2e-3));
+  // The file truncates nu_eff = 16.75 to 16 as H.1.6 does (G.6.4): k = t_0.995(16) = 2.9208,
+  // U = 2.9208 x 31.664 = 92.48 nm -> "92" (H.1.6's 93 is 2.92 x the rounded u_c = 32 nm).
+  CHECK(j["result"]["dof_eff"].get<double>() == 16.0);
   CHECK(j["result"]["coverage"].get<double>() == 0.99);
   CHECK(j["result"]["interval"].size() == 2);
-  // nu_eff = 16.75 kept fractional: k = t_0.995(16.75) = 2.9035, U = 91.94 nm -> "92".
-  CHECK(j["result"]["statement"] == "l = (50000838 +- 92) nm, k = 2.90, p = 99 %");
+  CHECK(j["result"]["statement"] == "l = (50000838 +- 92) nm, k = 2.92, p = 99 %");
   REQUIRE(j["budget"].size() == 9);
   CHECK(j["budget"][0]["name"] == "ls");
   CHECK(j["budget"][0]["dof"].get<double>() == 18.0);
