@@ -68,7 +68,7 @@ TEST_CASE("RunBeside runs both, then rethrows the caller's exception first", "[c
   CHECK((beside == 1 && here == 1));
 }
 
-TEST_CASE("ParallelSlices covers [0, n) in contiguous slices and rethrows", "[core][parallel]") {
+TEST_CASE("ParallelSlices covers 0 to n in contiguous slices and rethrows", "[core][parallel]") {
   for (int threads : {1, 2, 3, 7}) {
     std::vector<int> seen(100, 0);
     std::vector<std::pair<int64_t, int64_t>> ranges(static_cast<size_t>(threads));
