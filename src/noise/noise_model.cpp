@@ -67,8 +67,8 @@ bool NoiseBasis(AllanEstimator estimator, NoiseTerm term, double tau_s, double* 
     case NoiseTerm::kBiasInstability:  // (2 ln2 / pi) B^2
       f = allan ? 2.0 * std::log(2.0) / kPi : (4.0 * std::log(2.0) - 1.5 * std::log(3.0)) / kPi;
       break;
-    case NoiseTerm::kRateRandomWalk:  // K^2 tau / 3
-      f = allan ? tau_s / 3.0 : tau_s / 2.0;
+    case NoiseTerm::kRateRandomWalk:  // K^2 tau / 3 (Allan), K^2 tau / 6 (Hadamard)
+      f = allan ? tau_s / 3.0 : tau_s / 6.0;
       break;
     case NoiseTerm::kRateRamp:  // R^2 tau^2 / 2; the Hadamard variance cancels a ramp.
       if (!allan) return false;

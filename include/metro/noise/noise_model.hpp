@@ -13,7 +13,7 @@
 //
 // The Hadamard variance (overlapping or not) has the same white term and different factors
 // for the others (derived from its transfer function (8/3) sin^6(pi f tau) / (pi f tau)^2):
-//   HVAR(tau) = (10/3) Q^2 / tau^2 + N^2 / tau + ((4 ln2 - 1.5 ln3) / pi) B^2 + K^2 tau / 2
+//   HVAR(tau) = (10/3) Q^2 / tau^2 + N^2 / tau + ((4 ln2 - 1.5 ln3) / pi) B^2 + K^2 tau / 6
 // and is blind to a rate ramp. The modified Allan variance has no tau-independent white-PM
 // factor, so the model is not defined for it (NoiseBasis returns false).
 #pragma once
