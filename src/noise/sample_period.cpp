@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace metro {
 namespace {
@@ -25,6 +26,12 @@ std::string LineList(const std::vector<uint32_t>& lines) {
 bool SamplePeriodOptions::IsValid(std::string* why) const {
   if (!(gap_factor > 1.0 && std::isfinite(gap_factor))) {
     if (why != nullptr) *why = fmt::format("gap_factor {} must be a number above 1", gap_factor);
+    return false;
+  }
+  if (!(max_relative_drift > 0.0)) {
+    if (why != nullptr) {
+      *why = fmt::format("max_relative_drift {} must be above 0", max_relative_drift);
+    }
     return false;
   }
   if (!(max_relative_jitter > 0.0)) {
@@ -94,6 +101,37 @@ Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
     ++regular;
   }
   period.jitter_rms_s = regular > 0 ? std::sqrt(sum_sq / static_cast<double>(regular)) : 0.0;
+  // Drift: the median interval of each tenth of the record (gaps left out). A clock that
+  // runs slow or fast through the log changes tau0 under the Allan taus, which assume one.
+  constexpr size_t kParts = 10;
+  if (n - 1 >= 10 * kParts) {
+    const size_t per = (n - 1) / kParts;
+    period.drift_min_dt_s = std::numeric_limits<double>::infinity();
+    period.drift_max_dt_s = -std::numeric_limits<double>::infinity();
+    for (size_t part = 0; part < kParts; ++part) {
+      std::vector<double> piece;
+      const size_t end = part + 1 == kParts ? n - 1 : (part + 1) * per;
+      for (size_t i = part * per; i < end; ++i) {
+        if (dt[i] <= options.gap_factor * median) piece.push_back(dt[i]);
+      }
+      if (piece.empty()) continue;
+      std::nth_element(piece.begin(), piece.begin() + static_cast<std::ptrdiff_t>(piece.size() / 2),
+                       piece.end());
+      const double part_median = piece[piece.size() / 2];
+      if (part == 0) period.drift_first_dt_s = part_median;
+      if (part + 1 == kParts) period.drift_last_dt_s = part_median;
+      period.drift_min_dt_s = std::min(period.drift_min_dt_s, part_median);
+      period.drift_max_dt_s = std::max(period.drift_max_dt_s, part_median);
+    }
+    if (period.drift_max_dt_s - period.drift_min_dt_s > options.max_relative_drift * median) {
+      period.warnings.push_back(fmt::format(
+          "sample interval drifts: the median interval of tenths of the record ranges from "
+          "{:.6g} s to {:.6g} s ({:.6g} s in the first tenth, lines {}-{}, {:.6g} s in the "
+          "last, lines {}-{}); the Allan taus assume one tau0 = {:.6g} s",
+          period.drift_min_dt_s, period.drift_max_dt_s, period.drift_first_dt_s, line[0], line[per],
+          period.drift_last_dt_s, line[(kParts - 1) * per], line[n - 1], median));
+    }
+  }
   if (!gap_lines.empty() && !options.allow_gaps) {
     return MakeError(
         "", gap_lines.front(),

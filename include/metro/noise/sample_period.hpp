@@ -7,6 +7,11 @@
 // spaced samples, so resets always refuse, gaps refuse unless allowed, and jitter above
 // max_relative_jitter * tau0 refuses. Every event names the 1-based source line of the sample
 // that ends the interval (line[i + 1]).
+//
+// Drift: the median interval of each tenth of the record (gaps left out); when these range
+// over more than max_relative_drift * tau0 a warning names the range and the first and last
+// tenths (a clock running slow or fast through the log: the Allan taus assume one tau0).
+// Records of fewer than 101 samples are not checked.
 #pragma once
 
 #include <cstdint>
@@ -21,6 +26,7 @@ struct SamplePeriodOptions {
   double gap_factor = 1.5;           // > 1.
   bool allow_gaps = false;           // false: any gap refuses.
   double max_relative_jitter = 0.1;  // RMS jitter / tau0 above this refuses; > 0.
+  double max_relative_drift = 0.01;  // Range of the tenths' medians / tau0 that warns; > 0.
 
   bool IsValid(std::string* why) const;
 };
@@ -38,7 +44,13 @@ struct SamplePeriod {
   double jitter_rms_s = 0.0;  // RMS of dt - tau0 over regular intervals.
   double max_abs_jitter_s = 0.0;
   int64_t n_samples = 0;
-  int64_t missing_samples = 0;        // Sum over gaps.
+  int64_t missing_samples = 0;  // Sum over gaps.
+  // Median interval of the first and last tenths and the range over all tenths [s]
+  // (0 when the record has fewer than 101 samples).
+  double drift_first_dt_s = 0.0;
+  double drift_last_dt_s = 0.0;
+  double drift_min_dt_s = 0.0;
+  double drift_max_dt_s = 0.0;
   std::vector<TimingGap> gaps;        // Only filled when gaps are allowed.
   std::vector<std::string> warnings;  // Human-readable, one per gap (with its line).
 };
