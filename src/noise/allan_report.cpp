@@ -37,6 +37,13 @@ Json AllanToJson(const AllanCurve& curve, const NoiseFit& fit, const std::string
   // Terms lost to missing samples at each tau (ComputeAllanWithGaps; 0 without gaps).
   j["n_terms_gap_free"] = curve.n_terms_gap_free;
   j["missing_fraction"] = NumberArray(MissingFractions(curve));
+  // Two-sided confidence level of [ci_low, ci_high] and the power-law noise type alpha
+  // (S_y ~ f^alpha) behind each tau's EDF, with where it came from (as in --allan-csv).
+  j["confidence"] = Number(curve.confidence);
+  j["alpha"] = curve.alpha;
+  Json sources = Json::array();
+  for (AlphaSource source : curve.alpha_source) sources.push_back(AlphaSourceName(source));
+  j["alpha_source"] = sources;
   Json noise = Json::object();
   for (NoiseTerm t : kAllNoiseTerms) {
     const size_t i = static_cast<size_t>(t);

@@ -58,7 +58,14 @@ TEST_CASE("Allan JSON has the report shape and white noise numbers", "[noise]") 
   for (auto it = j.begin(); it != j.end(); ++it) keys.push_back(it.key());
   CHECK(keys == std::vector<std::string>{"estimator", "tau_s", "adev", "ci_low", "ci_high", "edf",
                                          "n_terms", "n_terms_gap_free", "missing_fraction",
-                                         "noise"});
+                                         "confidence", "alpha", "alpha_source", "noise"});
+  // The level of the intervals and the noise type behind each one (white rate: alpha 0).
+  CHECK(j["confidence"].get<double>() == Approx(0.683));
+  REQUIRE(j["alpha"].size() == curve.value().size());
+  CHECK(j["alpha"][0] == 0);
+  CHECK(j["alpha"][3] == 0);
+  CHECK(j["alpha_source"][0] == "lag1_acf");
+  CHECK(j["alpha_source"].back() == "carried");  // a handful of averages at the longest tau
   // A record without gaps: every term is there.
   CHECK(j["n_terms_gap_free"] == j["n_terms"]);
   for (const auto& f : j["missing_fraction"]) CHECK(f.get<double>() == 0.0);

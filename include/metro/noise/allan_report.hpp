@@ -2,7 +2,8 @@
 //
 // AllanToJson produces the "allan" object of a characterize report (one per quantity):
 //   {"estimator": "oadev", "tau_s": [...], "adev": [...], "ci_low": [...], "ci_high": [...],
-//    "edf": [...], "n_terms": [...],
+//    "edf": [...], "n_terms": [...], "n_terms_gap_free": [...], "missing_fraction": [...],
+//    "confidence": 0.683, "alpha": [...], "alpha_source": ["lag1_acf", ...],
 //    "noise": {"quantization": T, "random_walk": T, "bias_instability": T,
 //              "rate_random_walk": T, "rate_ramp": T}}
 // "adev" holds the chosen estimator's deviation in the quantity's unit. Each T is
