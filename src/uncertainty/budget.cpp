@@ -741,8 +741,8 @@ Result<BudgetUnits> CheckBudgetUnits(const Budget& budget) {
   }
   auto model = internal::MeasurementModel::FromExpression(budget.model, names);
   if (!model.ok()) return MakeError(path, 0, model.error().message);
-  auto checked = internal::CheckModelUnits(budget.model, names, units, x,
-                                           model.value().Evaluate(x.data()));
+  auto checked =
+      internal::CheckModelUnits(budget.model, names, units, x, model.value().Evaluate(x.data()));
   if (!checked.ok()) return MakeError(path, 0, checked.error().message);
   const internal::ModelUnit& m = checked.value();
   result.checked = true;

@@ -231,30 +231,26 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
     const auto third = [&](size_t i, size_t j) {
       return symbolic ? exact(symbolic->Third(i, j, x.data())) : third_difference(i, j);
     };
-    double extra = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-      if (u[i] == 0.0) continue;
-      for (size_t j = 0; j < n; ++j) {
-        if (u[j] == 0.0) continue;
-        const double fij = second(i, j);
-        const double fijj = third(i, j);
-        extra += (0.5 * fij * fij + c[i] * fijj) * u[i] * u[i] * u[j] * u[j];
-      }
-    }
-    if (!symbolic_error.empty()) {
-      // The same terms by central differences (steps u_i), and the report says so.
-      symbolic.reset();
-      result.derivatives += "; second-order terms by central differences: " + symbolic_error;
-      extra = 0.0;
+    // sum_ij (f_ij^2 / 2 + f_i f_ijj) u_i^2 u_j^2 over the inputs with u > 0.
+    const auto second_order_terms = [&] {
+      double sum = 0.0;
       for (size_t i = 0; i < n; ++i) {
         if (u[i] == 0.0) continue;
         for (size_t j = 0; j < n; ++j) {
           if (u[j] == 0.0) continue;
           const double fij = second(i, j);
           const double fijj = third(i, j);
-          extra += (0.5 * fij * fij + c[i] * fijj) * u[i] * u[i] * u[j] * u[j];
+          sum += (0.5 * fij * fij + c[i] * fijj) * u[i] * u[i] * u[j] * u[j];
         }
       }
+      return sum;
+    };
+    double extra = second_order_terms();
+    if (!symbolic_error.empty()) {
+      // The same terms by central differences (steps u_i), and the report says so.
+      symbolic.reset();
+      result.derivatives += "; second-order terms by central differences: " + symbolic_error;
+      extra = second_order_terms();
     }
     if (!std::isfinite(extra)) {
       return MakeError(budget.file, 0, "second-order terms are not finite (model NaN near x)");
