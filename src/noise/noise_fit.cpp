@@ -4,9 +4,12 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/special_functions/erf.hpp>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 namespace metro {
@@ -15,12 +18,274 @@ namespace {
 constexpr double kThinRatio = 1.9;         // Successive fitted taus at least this far apart.
 constexpr double kRangeShare = 0.25;       // A term "rests on" taus where it is >= 25 %.
 constexpr double kReadOffSlopeTol = 0.15;  // |local slope - term slope| for a read-off.
+constexpr double kReadOffNear = 2.5;       // Points within this factor of the read-off tau.
 
 struct Point {
   double tau_s;
   double var;
   double edf;
+  size_t index;  // In the curve.
 };
+// ---- Covariance of overlapping variance estimates ------------------------------------------
+//
+// For Gaussian noise an overlapping estimate is s_a^2 = sum_i d_a(i)^2 / norm_a with
+// d_a(i) = sum_p w_p x_{i + p m_a} (Allan: w = 1, -2, 1, norm = 2 tau^2 M; Hadamard:
+// w = -1, 3, -3, 1, norm = 6 tau^2 M; M terms). Then (Isserlis)
+//   Cov(s_a^2, s_b^2) = sum_{i,j} [2 C(j - i)^2 + 4 mu_a mu_b C(j - i)] / (norm_a norm_b)
+// with C(k) = Cov(d_a(i), d_b(i + k)) = sum_{p,q} w_p w_q G(p m_a - q m_b - k), where G is the
+// generalized autocovariance of the phase (defined up to a quadratic, which the stencils
+// annihilate; Greenhall 1983) and mu = R tau^2 the second difference of a rate ramp. Per unit
+// squared coefficient, h in samples:
+//   Q (white phase):   G(0) = 1, else 0
+//   N (white rate):    G(h) = -tau0 |h| / 2
+//   B (flicker rate):  G(h) = tau0^2 h^2 ln|h| / (2 pi)      (two-sided S_y = B^2 / (2 pi f))
+//   K (random walk):   G(h) = tau0^3 |h|^3 / 12
+// C is linear in the coefficients, so Cov is a quadratic form in c, assembled from sums
+// S_tu = sum_k n(k) C_t(k) C_u(k) and S_t = sum_k n(k) C_t(k) (n(k): pairs i, j with
+// j - i = k) computed once per curve. C_N and C_K vanish outside the stencils' overlap; C_B
+// decays as k^-2 and is summed to 32 stencil spans (the rest is below 1e-4 of the sum).
+// Long smooth stretches are integrated (Gauss-Legendre plus the Euler-Maclaurin end
+// correction); stretches next to a kink are summed exactly.
+
+constexpr int kTypes = 4;  // Q, N, B, K: the noise terms (the ramp enters through mu).
+
+struct PairSums {
+  std::array<std::array<double, kTypes>, kTypes> s2{};
+  std::array<double, kTypes> s1{};
+};
+
+struct CovarianceBasis {
+  bool overlapping = true;  // false: adev, hdev (no sums are computed)
+  bool hadamard = false;
+  std::vector<double> tau_s;
+  std::vector<double> norm;       // norm_factor tau^2 M
+  std::vector<double> gap_scale;  // (gap-free terms / terms), >= 1
+  std::vector<PairSums> sums;     // n x n, row-major
+};
+
+class PairSummer {
+ public:
+  PairSummer(const std::vector<double>& w, int64_t m_a, int64_t m_b, int64_t n_a, int64_t n_b,
+             double tau0)
+      : w_(w), m_a_(m_a), m_b_(m_b), n_a_(n_a), n_b_(n_b), tau0_(tau0) {
+    for (size_t p = 0; p < w_.size(); ++p) {
+      for (size_t q = 0; q < w_.size(); ++q) {
+        const int64_t k = static_cast<int64_t>(p) * m_a_ - static_cast<int64_t>(q) * m_b_;
+        breaks_.push_back(k);
+      }
+    }
+    bp_min_ = *std::min_element(breaks_.begin(), breaks_.end());
+    bp_max_ = *std::max_element(breaks_.begin(), breaks_.end());
+  }
+
+  PairSums Run() {
+    const int64_t span = static_cast<int64_t>(w_.size() - 1) * (m_a_ + m_b_);
+    const int64_t lo = std::max(-(n_a_ - 1), bp_min_ - 32 * span);
+    const int64_t hi = std::min(n_b_ - 1, bp_max_ + 32 * span);
+    if (lo > hi) return out_;
+    std::vector<int64_t> nodes = {lo, hi + 1, 0, n_b_ - n_a_};
+    nodes.insert(nodes.end(), breaks_.begin(), breaks_.end());
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    for (size_t j = 0; j + 1 < nodes.size(); ++j) {
+      const int64_t u = std::max(nodes[j], lo), v = std::min(nodes[j + 1], hi + 1);
+      if (u < v) Segment(u, v);
+    }
+    // White phase noise: C_Q is non-zero only at the break lags.
+    std::vector<int64_t> lags = breaks_;
+    std::sort(lags.begin(), lags.end());
+    lags.erase(std::unique(lags.begin(), lags.end()), lags.end());
+    for (int64_t k : lags) {
+      const double cnt = Count(static_cast<double>(k));
+      if (!(cnt > 0.0)) continue;
+      double cq = 0.0;
+      for (size_t p = 0; p < w_.size(); ++p) {
+        for (size_t q = 0; q < w_.size(); ++q) {
+          if (static_cast<int64_t>(p) * m_a_ - static_cast<int64_t>(q) * m_b_ == k) {
+            cq += w_[p] * w_[q];
+          }
+        }
+      }
+      std::array<double, kTypes> c{};
+      Smooth(static_cast<double>(k), &c);
+      c[0] = cq;
+      for (int t = 0; t < kTypes; ++t) {
+        out_.s2[0][static_cast<size_t>(t)] += cnt * cq * c[static_cast<size_t>(t)];
+        if (t > 0) out_.s2[static_cast<size_t>(t)][0] += cnt * cq * c[static_cast<size_t>(t)];
+      }
+      out_.s1[0] += cnt * cq;
+    }
+    return out_;
+  }
+
+ private:
+  double Count(double k) const {
+    return std::min(static_cast<double>(n_a_), static_cast<double>(n_b_) - k) - std::max(0.0, -k);
+  }
+
+  // C_N, C_B, C_K at lag k (c[0], white phase, is left 0).
+  void Smooth(double k, std::array<double, kTypes>* c) const {
+    const double kPi = 3.14159265358979323846;
+    const bool inside = k > static_cast<double>(bp_min_) && k < static_cast<double>(bp_max_);
+    const double ref = std::max(1.0, std::fabs(k));  // G_B up to a quadratic: fewer digits lost
+    double cn = 0.0, cb = 0.0, ck = 0.0;
+    for (size_t p = 0; p < w_.size(); ++p) {
+      for (size_t q = 0; q < w_.size(); ++q) {
+        const double h = static_cast<double>(p) * static_cast<double>(m_a_) -
+                         static_cast<double>(q) * static_cast<double>(m_b_) - k;
+        const double ww = w_[p] * w_[q];
+        const double ah = std::fabs(h);
+        if (inside) {
+          cn += ww * ah;
+          ck += ww * ah * ah * ah;
+        }
+        if (ah > 0.0) cb += ww * h * h * std::log(ah / ref);
+      }
+    }
+    (*c)[0] = 0.0;
+    (*c)[1] = -0.5 * tau0_ * cn;
+    (*c)[2] = tau0_ * tau0_ / (2.0 * kPi) * cb;
+    (*c)[3] = tau0_ * tau0_ * tau0_ / 12.0 * ck;
+  }
+
+  void Add(double k, double weight) {
+    const double cnt = Count(k);
+    if (!(cnt > 0.0)) return;
+    std::array<double, kTypes> c{};
+    Smooth(k, &c);
+    for (size_t t = 1; t < kTypes; ++t) {
+      for (size_t u = 1; u < kTypes; ++u) out_.s2[t][u] += weight * cnt * c[t] * c[u];
+      out_.s1[t] += weight * cnt * c[t];
+    }
+  }
+
+  void GaussLegendre(double a, double b) {
+    // 8-point Gauss-Legendre nodes and weights on [-1, 1].
+    static const double x[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                                0.9602898564975363};
+    static const double w[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                                0.1012285362903763};
+    const double mid = 0.5 * (a + b), half = 0.5 * (b - a);
+    for (int i = 0; i < 4; ++i) {
+      Add(mid - half * x[i], half * w[i]);
+      Add(mid + half * x[i], half * w[i]);
+    }
+  }
+
+  // sum_{k=u}^{v-1} f(k), f smooth between the kinks at u and v.
+  void Segment(int64_t u, int64_t v) {
+    constexpr int64_t kExact = 16;
+    if (v - u <= 4 * kExact) {
+      for (int64_t k = u; k < v; ++k) Add(static_cast<double>(k), 1.0);
+      return;
+    }
+    for (int64_t k = u; k < u + kExact; ++k) Add(static_cast<double>(k), 1.0);
+    for (int64_t k = v - kExact; k < v; ++k) Add(static_cast<double>(k), 1.0);
+    const int64_t a = u + kExact, b = v - kExact;  // sum over [a, b)
+    // Midpoint rule with its Euler-Maclaurin correction: sum = int_{a-1/2}^{b-1/2} f
+    //   - (f'(b - 1/2) - f'(a - 1/2)) / 24, f' from the neighbouring integers.
+    Add(static_cast<double>(b), -1.0 / 24.0);
+    Add(static_cast<double>(b - 1), 1.0 / 24.0);
+    Add(static_cast<double>(a), 1.0 / 24.0);
+    Add(static_cast<double>(a - 1), -1.0 / 24.0);
+    double left = static_cast<double>(a) - 0.5, right = static_cast<double>(b) - 0.5;
+    double len = static_cast<double>(kExact);
+    while (right - left > 2.0 * len) {  // pieces growing geometrically away from the kinks
+      GaussLegendre(left, left + len);
+      GaussLegendre(right - len, right);
+      left += len;
+      right -= len;
+      len *= 2.0;
+    }
+    GaussLegendre(left, right);
+  }
+
+  const std::vector<double>& w_;
+  int64_t m_a_, m_b_, n_a_, n_b_;
+  double tau0_;
+  std::vector<int64_t> breaks_;
+  int64_t bp_min_ = 0, bp_max_ = 0;
+  PairSums out_;
+};
+
+struct BasisKey {
+  AllanEstimator estimator;
+  double tau0_s;
+  std::vector<int64_t> m, n_terms, n_gap_free;
+  bool operator==(const BasisKey& o) const {
+    return estimator == o.estimator && tau0_s == o.tau0_s && m == o.m && n_terms == o.n_terms &&
+           n_gap_free == o.n_gap_free;
+  }
+};
+
+// The sums for the fitted points; a few recent curves are remembered (many records of one
+// length and rate, e.g. a batch or the coverage simulations, share them).
+std::shared_ptr<const CovarianceBasis> GetCovarianceBasis(const BasisKey& key) {
+  static std::mutex mutex;
+  static std::vector<std::pair<BasisKey, std::shared_ptr<const CovarianceBasis>>> cache;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& entry : cache) {
+      if (entry.first == key) return entry.second;
+    }
+  }
+  auto basis = std::make_shared<CovarianceBasis>();
+  const EstimatorShape shape = ShapeOf(key.estimator);
+  basis->hadamard = shape.d == 3;
+  basis->overlapping = shape.overlapping;
+  const std::vector<double> w = basis->hadamard ? std::vector<double>{-1.0, 3.0, -3.0, 1.0}
+                                                : std::vector<double>{1.0, -2.0, 1.0};
+  const double norm_factor = basis->hadamard ? 6.0 : 2.0;
+  const size_t n = key.m.size();
+  for (size_t i = 0; i < n; ++i) {
+    const double tau = key.tau0_s * static_cast<double>(key.m[i]);
+    basis->tau_s.push_back(tau);
+    basis->norm.push_back(norm_factor * tau * tau * static_cast<double>(key.n_gap_free[i]));
+    basis->gap_scale.push_back(static_cast<double>(key.n_gap_free[i]) /
+                               static_cast<double>(std::max<int64_t>(1, key.n_terms[i])));
+  }
+  basis->sums.resize(n * n);
+  for (size_t a = 0; a < n && basis->overlapping; ++a) {
+    for (size_t b = a; b < n; ++b) {
+      PairSummer summer(w, key.m[a], key.m[b], key.n_gap_free[a], key.n_gap_free[b], key.tau0_s);
+      const PairSums s = summer.Run();
+      basis->sums[a * n + b] = s;
+      PairSums t;  // the transpose pair: C_ba(k) = C_ab(-k), same sums with t, u swapped
+      for (size_t x = 0; x < kTypes; ++x) {
+        for (size_t y = 0; y < kTypes; ++y) t.s2[x][y] = s.s2[y][x];
+      }
+      t.s1 = s.s1;
+      basis->sums[b * n + a] = t;
+    }
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  cache.emplace_back(key, basis);
+  if (cache.size() > 8) cache.erase(cache.begin());
+  return basis;
+}
+
+// Cov(s_a^2, s_b^2) for squared coefficients c = [Q^2, N^2, B^2, K^2, R^2].
+Eigen::MatrixXd VarianceCovariance(const CovarianceBasis& basis,
+                                   const std::array<double, kNoiseTermCount>& c) {
+  const size_t n = basis.tau_s.size();
+  Eigen::MatrixXd cov(n, n);
+  const double ramp = basis.hadamard ? 0.0 : c[4];
+  for (size_t a = 0; a < n; ++a) {
+    for (size_t b = 0; b < n; ++b) {
+      const PairSums& s = basis.sums[a * n + b];
+      double quad = 0.0, lin = 0.0;
+      for (size_t t = 0; t < kTypes; ++t) {
+        for (size_t u = 0; u < kTypes; ++u) quad += c[t] * c[u] * s.s2[t][u];
+        lin += c[t] * s.s1[t];
+      }
+      const double ta2 = basis.tau_s[a] * basis.tau_s[a], tb2 = basis.tau_s[b] * basis.tau_s[b];
+      cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) =
+          (2.0 * quad + 4.0 * ramp * ta2 * tb2 * lin) / (basis.norm[a] * basis.norm[b]) *
+          std::sqrt(basis.gap_scale[a] * basis.gap_scale[b]);
+    }
+  }
+  return 0.5 * (cov + cov.transpose());
+}
 
 struct SubsetFit {
   bool admissible = false;
@@ -31,9 +296,13 @@ struct SubsetFit {
   double bic = 0.0;
 };
 
-// IRLS for one subset of terms. var(s^2) = model^2 (2/edf + (2 floor)^2).
+// One subset of terms by generalized least squares, iterated: the covariance of the variance
+// estimates is that of the subset's own fitted model (negative coefficients count as 0), plus
+// the relative floor on the diagonal; the start is a fit weighted by the chi-squared variance
+// 2 s^4 / edf of each point alone.
 SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms,
-                    AllanEstimator estimator, const NoiseFitOptions& options) {
+                    AllanEstimator estimator, const CovarianceBasis& basis,
+                    const NoiseFitOptions& options) {
   SubsetFit out;
   out.terms = terms;
   const int n = static_cast<int>(pts.size());
@@ -50,41 +319,63 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
     }
   }
   const double floor2 = 4.0 * options.relative_floor * options.relative_floor;
-  Eigen::VectorXd model = y;
-  Eigen::VectorXd w(n);
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i) {
+    cov(i, i) = y(i) * y(i) * (2.0 / pts[static_cast<size_t>(i)].edf + floor2);
+  }
   Eigen::VectorXd c = Eigen::VectorXd::Zero(k);
-  Eigen::MatrixXd normal_inv;
-  for (int it = 0; it < options.iterations; ++it) {
-    for (int i = 0; i < n; ++i) {
-      const double ref = model(i) > 0.0 ? model(i) : y(i);
-      w(i) = 1.0 / (ref * ref * (2.0 / pts[static_cast<size_t>(i)].edf + floor2));
-    }
-    // Rows scaled by sqrt(w), columns by their norms: the basis spans many decades.
-    Eigen::MatrixXd as = w.cwiseSqrt().asDiagonal() * a;
-    Eigen::VectorXd col = as.colwise().norm().transpose();
+  Eigen::MatrixXd c_cov;
+  double chi2 = 0.0;
+  for (int it = 0; it <= options.iterations; ++it) {
+    const Eigen::LLT<Eigen::MatrixXd> llt(cov);
+    if (llt.info() != Eigen::Success) return out;
+    Eigen::MatrixXd aw = llt.matrixL().solve(a);
+    const Eigen::VectorXd yw = llt.matrixL().solve(y);
+    // Columns scaled to unit norm: the basis spans many decades.
+    Eigen::VectorXd col = aw.colwise().norm().transpose();
     for (int j = 0; j < k; ++j) {
       if (!(col(j) > 0.0)) return out;
-      as.col(j) /= col(j);
+      aw.col(j) /= col(j);
     }
-    const Eigen::VectorXd ys = w.cwiseSqrt().cwiseProduct(y);
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(as);
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(aw);
     if (qr.rank() < k) return out;
-    const Eigen::VectorXd cs = qr.solve(ys);
-    c = cs.cwiseQuotient(col);
-    const Eigen::MatrixXd normal = as.transpose() * as;
-    normal_inv =
-        col.cwiseInverse().asDiagonal() * normal.inverse() * col.cwiseInverse().asDiagonal();
-    model = a * c;
-  }
-  double chi2 = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double r = y(i) - model(i);
-    chi2 += w(i) * r * r;
+    c = qr.solve(yw).cwiseQuotient(col);
+    const Eigen::MatrixXd normal = aw.transpose() * aw;
+    c_cov = col.cwiseInverse().asDiagonal() * normal.inverse() * col.cwiseInverse().asDiagonal();
+    chi2 = llt.matrixL().solve(y - a * c).squaredNorm();
+    if (it == options.iterations) break;
+    std::array<double, kNoiseTermCount> cfull{};
+    for (int j = 0; j < k; ++j)
+      cfull[static_cast<size_t>(terms[static_cast<size_t>(j)])] = std::max(0.0, c(j));
+    std::vector<double> model(static_cast<size_t>(n), 0.0);
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < k; ++j) model[static_cast<size_t>(i)] += a(i, j) * std::max(0.0, c(j));
+    }
+    if (basis.overlapping) {
+      cov = VarianceCovariance(basis, cfull);
+    } else {  // Non-overlapping estimates: chi-squared variances of the points alone.
+      cov.setZero();
+      for (int i = 0; i < n; ++i) {
+        const double m = model[static_cast<size_t>(i)];
+        cov(i, i) = 2.0 * m * m / pts[static_cast<size_t>(i)].edf;
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      const double m = model[static_cast<size_t>(i)];
+      // The floor, and a guard of 1e-6 of the data where the model leaves a point without
+      // noise (a noiseless ramp, a term at zero).
+      cov(i, i) += floor2 * m * m + 1e-12 * y(i) * y(i);
+    }
   }
   const int dof = n - k;
-  const double scale = dof > 0 ? std::max(1.0, chi2 / dof) : 1.0;
+  double scale = 1.0;
+  if (dof > 0) {
+    // Birge ratio when the model does not describe the curve (chi2 above its 95 % quantile).
+    const boost::math::chi_squared dist(dof);
+    if (chi2 > boost::math::quantile(dist, 0.95)) scale = chi2 / dof;
+  }
   out.c = c;
-  out.cov = normal_inv * scale;
+  out.cov = c_cov * scale;
   out.chi2 = chi2;
   out.bic = chi2 + k * std::log(static_cast<double>(n));
   out.admissible = true;
@@ -95,13 +386,35 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
   return out;
 }
 
-// Local log-log slope at point i (central where possible).
-double LocalSlope(const AllanCurve& curve, size_t i) {
-  const size_t lo = i > 0 ? i - 1 : i;
-  const size_t hi = i + 1 < curve.size() ? i + 1 : i;
-  if (lo == hi) return std::nan("");
+// Log-log slope between the nearest curve points at least a factor kSlopeSpan below and above
+// tau_i (independent of the tau spacing); NaN where either is missing.
+constexpr double kSlopeSpan = 1.9;
+double SlopeBetween(const AllanCurve& curve, size_t lo, size_t hi) {
   return (std::log(curve.dev[hi]) - std::log(curve.dev[lo])) /
          (std::log(curve.tau_s[hi]) - std::log(curve.tau_s[lo]));
+}
+bool Neighbours(const AllanCurve& curve, size_t i, size_t* lo, size_t* hi) {
+  bool have_lo = false, have_hi = false;
+  for (size_t j = i; j-- > 0;) {
+    if (curve.dev[j] > 0.0 && curve.tau_s[j] * kSlopeSpan <= curve.tau_s[i] * 1.0001) {
+      *lo = j;
+      have_lo = true;
+      break;
+    }
+  }
+  for (size_t j = i + 1; j < curve.size(); ++j) {
+    if (curve.dev[j] > 0.0 && curve.tau_s[j] >= kSlopeSpan * curve.tau_s[i] * 0.9999) {
+      *hi = j;
+      have_hi = true;
+      break;
+    }
+  }
+  return have_lo && have_hi;
+}
+double LocalSlope(const AllanCurve& curve, size_t i) {
+  size_t lo = 0, hi = 0;
+  if (!Neighbours(curve, i, &lo, &hi)) return std::nan("");
+  return SlopeBetween(curve, lo, hi);
 }
 
 // Relative standard uncertainty of a deviation from its confidence interval (68 % ~ 1 sigma
@@ -156,7 +469,7 @@ Result<NoiseFit> FitNoiseTerms(const AllanCurve& curve, const NoiseFitOptions& o
     if (!(curve.dev[i] > 0.0) || tau < options.tau_min_s || tau > options.tau_max_s) continue;
     if (options.thin_to_octave && !pts.empty() && tau < kThinRatio * pts.back().tau_s) continue;
     const double edf = std::isfinite(curve.edf[i]) && curve.edf[i] > 0.0 ? curve.edf[i] : 1.0;
-    pts.push_back({tau, curve.dev[i] * curve.dev[i], edf});
+    pts.push_back({tau, curve.dev[i] * curve.dev[i], edf, i});
   }
   if (pts.size() < 2) {
     return MakeError(fmt::format(
@@ -169,6 +482,15 @@ Result<NoiseFit> FitNoiseTerms(const AllanCurve& curve, const NoiseFitOptions& o
       allowed.push_back(static_cast<int>(t));
     }
   }
+  BasisKey key{curve.estimator, curve.tau0_s, {}, {}, {}};
+  for (const Point& p : pts) {
+    key.m.push_back(curve.m[p.index]);
+    key.n_terms.push_back(curve.n_terms[p.index]);
+    key.n_gap_free.push_back(p.index < curve.n_terms_gap_free.size()
+                                 ? curve.n_terms_gap_free[p.index]
+                                 : curve.n_terms[p.index]);
+  }
+  const std::shared_ptr<const CovarianceBasis> basis = GetCovarianceBasis(key);
   SubsetFit best;
   const int n_allowed = static_cast<int>(allowed.size());
   for (int mask = 1; mask < (1 << n_allowed); ++mask) {
@@ -177,7 +499,7 @@ Result<NoiseFit> FitNoiseTerms(const AllanCurve& curve, const NoiseFitOptions& o
       if (mask & (1 << j)) terms.push_back(allowed[static_cast<size_t>(j)]);
     }
     if (terms.size() > pts.size()) continue;
-    SubsetFit fit = FitSubset(pts, terms, curve.estimator, options);
+    SubsetFit fit = FitSubset(pts, terms, curve.estimator, *basis, options);
     if (fit.admissible && (!best.admissible || fit.bic < best.bic)) best = fit;
   }
   if (!best.admissible) {
@@ -234,6 +556,30 @@ Result<NoiseFit> FitNoiseTerms(const AllanCurve& curve, const NoiseFitOptions& o
   return out;
 }
 
+Result<std::vector<std::vector<double>>> AllanVarianceCovariance(
+    const AllanCurve& curve, const std::array<double, kNoiseTermCount>& coefficients) {
+  const EstimatorShape shape = ShapeOf(curve.estimator);
+  if (!shape.overlapping || shape.modified) {
+    return MakeError(
+        fmt::format("variance covariance: defined for the overlapping oadev and ohdev, not {}",
+                    AllanEstimatorName(curve.estimator)));
+  }
+  BasisKey key{
+      curve.estimator, curve.tau0_s, curve.m, curve.n_terms,
+      curve.n_terms_gap_free.size() == curve.size() ? curve.n_terms_gap_free : curve.n_terms};
+  const std::shared_ptr<const CovarianceBasis> basis = GetCovarianceBasis(key);
+  std::array<double, kNoiseTermCount> c{};
+  for (size_t t = 0; t < c.size(); ++t) c[t] = coefficients[t] * coefficients[t];
+  const Eigen::MatrixXd cov = VarianceCovariance(*basis, c);
+  std::vector<std::vector<double>> out(curve.size(), std::vector<double>(curve.size()));
+  for (size_t a = 0; a < curve.size(); ++a) {
+    for (size_t b = 0; b < curve.size(); ++b) {
+      out[a][b] = cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+    }
+  }
+  return out;
+}
+
 double ModelVariance(const NoiseFit& fit, double tau_s) {
   if (!fit.success) return 0.0;
   double sum = 0.0;
@@ -257,23 +603,41 @@ std::array<ReadOff, kNoiseTermCount> ReadOffNoiseTerms(const AllanCurve& curve) 
     if (!NoiseBasis(curve.estimator, t, 1.0, &a)) continue;
     const double slope = NoiseTermSlope(t);
     if (t == NoiseTerm::kBiasInstability) {
+      // Only at an interior minimum that is flat: the slopes to the points a factor ~2 below
+      // and above are both within the tolerance of 0 (a V where N meets K is not B).
       const AllanMinimum min = FindAllanMinimum(curve);
       if (!min.found || min.at_end || min.tau_s <= curve.tau_s.front()) continue;
       size_t i = 0;
       while (curve.tau_s[i] != min.tau_s) ++i;
+      size_t lo = 0, hi = 0;
+      if (!Neighbours(curve, i, &lo, &hi)) continue;
+      if (!(std::fabs(SlopeBetween(curve, lo, i)) <= kReadOffSlopeTol &&
+            std::fabs(SlopeBetween(curve, i, hi)) <= kReadOffSlopeTol)) {
+        continue;
+      }
       ro.found = true;
       ro.value = min.dev / std::sqrt(a);  // IEEE 952 Annex C: B = sigma_min / 0.6643
       ro.u = ro.value * RelativeU(curve, i);
       ro.tau_read_s = ro.tau_min_s = ro.tau_max_s = min.tau_s;
       continue;
     }
-    // Read the line sigma(tau) = sqrt(a) tau^slope * coefficient where f(tau) = 1.
+    // Read the line sigma(tau) = sqrt(a) tau^slope * coefficient where f(tau) = 1, from the
+    // curve points within a factor kReadOffNear of that tau, and only when every one of them
+    // has the term's slope (within kReadOffSlopeTol): a read-off is never extrapolated from
+    // a distant stretch of the curve.
     const double tau_read = std::pow(a, -1.0 / (2.0 * slope));
     double sum_w = 0.0, sum_log = 0.0, best_u = std::numeric_limits<double>::infinity();
+    bool all_on_slope = true;
     for (size_t i = 0; i < curve.size(); ++i) {
       if (!(curve.dev[i] > 0.0)) continue;
+      if (curve.tau_s[i] < tau_read / kReadOffNear || curve.tau_s[i] > tau_read * kReadOffNear) {
+        continue;
+      }
       const double s = LocalSlope(curve, i);
-      if (!(std::fabs(s - slope) <= kReadOffSlopeTol)) continue;
+      if (!(std::fabs(s - slope) <= kReadOffSlopeTol)) {
+        all_on_slope = false;
+        break;
+      }
       const double w = std::isfinite(curve.edf[i]) && curve.edf[i] > 0.0 ? curve.edf[i] : 1.0;
       // sigma at tau_read on the line of exact slope through point i.
       const double log_sigma =
@@ -286,6 +650,7 @@ std::array<ReadOff, kNoiseTermCount> ReadOffNoiseTerms(const AllanCurve& curve) 
       ro.tau_max_s = ro.found ? std::max(ro.tau_max_s, curve.tau_s[i]) : curve.tau_s[i];
       ro.found = true;
     }
+    if (!all_on_slope) ro = ReadOff();
     if (!ro.found) continue;
     ro.tau_read_s = tau_read;
     ro.value = std::exp(sum_log / sum_w);  // sigma(tau_read) = coefficient there.

@@ -14,6 +14,9 @@ AllanCurve ModelCurve(AllanEstimator e, double q, double n, double b, double k, 
   AllanCurve c;
   c.estimator = e;
   c.tau0_s = 0.01;
+  c.n_rate_samples = int64_t{1} << 26;
+  const int64_t n_rate = int64_t{1}
+                         << 26;  // 64 averages at the longest tau: every term significant
   for (int64_t m = 1; m <= (int64_t{1} << 20); m *= 2) {
     const double tau = 0.01 * static_cast<double>(m);
     double var = 0.0;
@@ -29,7 +32,7 @@ AllanCurve ModelCurve(AllanEstimator e, double q, double n, double b, double k, 
     c.edf.push_back(1000.0);
     c.ci_low.push_back(std::sqrt(var) * 0.98);
     c.ci_high.push_back(std::sqrt(var) * 1.02);
-    c.n_terms.push_back(1000);
+    c.n_terms.push_back(n_rate + 1 - 2 * m);
     c.alpha.push_back(0);
     c.alpha_source.push_back(AlphaSource::kFixed);
   }
@@ -48,6 +51,30 @@ TEST_CASE("Noise model factors are IEEE 952 Annex C", "[noise]") {
   CHECK(f == Approx(1.0));  // R = sigma(sqrt2 s)
   CHECK_FALSE(NoiseBasis(AllanEstimator::kOhdev, NoiseTerm::kRateRamp, 1.0, &f));
   CHECK_FALSE(NoiseBasis(AllanEstimator::kMdev, NoiseTerm::kRandomWalk, 1.0, &f));
+}
+
+TEST_CASE("Hadamard factor of rate random walk is K^2 tau / 6 (simulation)", "[noise]") {
+  // Time domain: the third phase difference is the integral of y against the blocks
+  // (1, -2, 1) of length tau; for y = K W(t) its variance is K^2 tau^3, over 6 tau^2: K^2 tau / 6.
+  // Mean over 20 random walks of 2^16 samples, tau0 = 0.01 s, K = 1e-3: m = 64 and 512.
+  const double k = 1e-3, tau0 = 0.01;
+  AllanOptions o;
+  o.estimator = AllanEstimator::kOhdev;
+  o.m_list = {64, 512};
+  o.threads = 1;
+  double sum64 = 0.0, sum512 = 0.0;
+  for (uint64_t seed = 0; seed < 20; ++seed) {
+    const Result<AllanCurve> c =
+        ComputeAllan(testing::RandomWalk(1 << 16, k * std::sqrt(tau0), 90 + seed), tau0, o);
+    REQUIRE(c.ok());
+    sum64 += c.value().dev[0] * c.value().dev[0] / 20.0;
+    sum512 += c.value().dev[1] * c.value().dev[1] / 20.0;
+  }
+  double f = 0.0;
+  REQUIRE(NoiseBasis(AllanEstimator::kOhdev, NoiseTerm::kRateRandomWalk, 0.64, &f));
+  CHECK(f == Approx(0.64 / 6.0));
+  CHECK(sum64 == Approx(k * k * 0.64 / 6.0).epsilon(0.05));   // relative scatter ~1.5 %
+  CHECK(sum512 == Approx(k * k * 5.12 / 6.0).epsilon(0.15));  // ~5 %
 }
 
 TEST_CASE("Fit and read-offs recover an exact model curve", "[noise]") {
@@ -145,6 +172,41 @@ TEST_CASE("Simulated white + flicker + random-walk rate: N, B, K recovered", "[n
   CHECK(u.value().dominant == NoiseTerm::kRateRandomWalk);
   const double truth = std::sqrt(n * n / 3600 + 2 * std::log(2.0) / M_PI * b * b + k * k * 1200);
   CHECK(std::fabs(u.value().u - truth) < 0.15 * truth);
+}
+
+TEST_CASE("Read-offs are given only where the curve has the term's slope", "[noise]") {
+  // 1 h at 100 Hz. Pure white rate (N = 0.005 deg/s*sqrt(s)): over 10 records no Q, B, K or
+  // R read-off (the audit found Q = 107 arcsec read off a white curve), and N at 1 s within
+  // 3 % (its line is the curve there). Pure Q, K and R records give their own read-off near
+  // the truth: the curve has the term's slope at the read-off tau.
+  const double tau0 = 0.01, n = 0.005;
+  for (uint64_t seed = 0; seed < 10; ++seed) {
+    const Result<AllanCurve> c =
+        ComputeAllan(testing::Ieee952Rate(360000, tau0, {0, n, 0, 0, 0}, 400 + seed), tau0);
+    REQUIRE(c.ok());
+    const std::array<ReadOff, kNoiseTermCount> ro = ReadOffNoiseTerms(c.value());
+    CHECK_FALSE(ro[0].found);
+    CHECK_FALSE(ro[2].found);
+    CHECK_FALSE(ro[3].found);
+    CHECK_FALSE(ro[4].found);
+    REQUIRE(ro[1].found);
+    CHECK(ro[1].value == Approx(n).epsilon(0.03));
+  }
+  const std::array<std::array<double, 5>, 3> truths = {
+      {{6.45e-4, 0, 0, 0, 0}, {0, 0, 0, 1.1e-3, 0}, {0, 0, 0, 0, 6.5e-5}}};
+  const int term[3] = {0, 3, 4};
+  for (size_t i = 0; i < truths.size(); ++i) {
+    const Result<AllanCurve> c =
+        ComputeAllan(testing::Ieee952Rate(360000, tau0, truths[i], 500 + i), tau0);
+    REQUIRE(c.ok());
+    const std::array<ReadOff, kNoiseTermCount> ro = ReadOffNoiseTerms(c.value());
+    for (int t = 0; t < 5; ++t) {
+      INFO("case " << i << " term " << t);
+      CHECK(ro[static_cast<size_t>(t)].found == (t == term[i]));
+    }
+    const double truth = truths[i][static_cast<size_t>(term[i])];
+    CHECK(ro[static_cast<size_t>(term[i])].value == Approx(truth).epsilon(0.1));
+  }
 }
 
 TEST_CASE("Noise fit refuses bad input with a message", "[noise]") {
