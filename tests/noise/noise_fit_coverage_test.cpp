@@ -255,25 +255,28 @@ TEST_CASE("Noise-term coverage over simulated records with known terms", "[noise
 }
 
 // The quick version for every build: 8 one-hour records of white + flicker + random walk
-// (N+B+K): every term found, none invented, and the z-scores (value - truth) / u of the 24
-// estimates have an RMS near 1 (0.6 .. 1.5; the old fit, whose u ignored the correlation of
-// neighbouring taus, gave 1.4-2).
+// (N+B+K): every term found, at most one absent term reported, and the z-scores (value - truth) / u
+// of the 24 estimates have an RMS near 1 (0.6 .. 1.5; the old fit, whose u ignored the correlation
+// of neighbouring taus, gave 1.4-2).
 TEST_CASE("Noise-term u is honest on a few N+B+K records", "[noise]") {
   const Case c = Cases()[8];
   REQUIRE(std::string(c.name) == "N+B+K");
   const CaseStats s = RunCase(c, kOneHour, 8, 9000);
   CHECK(s.fit_failures == 0);
   double sum_z2 = 0.0;
-  int n = 0;
+  int n = 0, invented = 0;
   for (size_t t = 0; t < 5; ++t) {
     if (!c.present[t]) {
-      CHECK(s.terms[t].reported == 0);
+      invented += s.terms[t].reported;
       continue;
     }
     CHECK(s.terms[t].reported == 8);
     sum_z2 += s.terms[t].sum_z2;
     n += s.terms[t].reported;
   }
+  // Q and R absent in 8 records: 16 chances at the measured 1-2 % each (docs/noise.md), so at
+  // most one (P(>= 2) ~ 4 %).
+  CHECK(invented <= 1);
   const double z_rms = std::sqrt(sum_z2 / n);
   CHECK(z_rms > 0.6);
   CHECK(z_rms < 1.5);

@@ -155,11 +155,14 @@ TEST_CASE("Simulated white + flicker + random-walk rate: N, B, K recovered", "[n
   // Each term rests on its own region.
   CHECK(en.tau_max_s < 100.0);
   CHECK(ek.tau_min_s > 100.0);
-  // The classic read-off of N is within 2 % (flicker adds 3.5 % of variance at 1 s); B from
-  // sigma_min / 0.6643 is biased high because N and K still contribute at the minimum.
+  // The classic read-off of N, from the curve within a factor 2.5 of 1 s, is high by the
+  // flicker there: (2 ln2 / pi) B^2 / (N^2 / tau) is 3 % of the variance at 0.4 s, 7 % at 1 s,
+  // 18 % at 2.5 s, so 1.5-8 % of the deviation; B from sigma_min / 0.6643 is biased high
+  // because N and K still contribute at the minimum.
   const std::array<ReadOff, kNoiseTermCount> ro = ReadOffNoiseTerms(curve.value());
   REQUIRE(ro[1].found);
-  CHECK(std::fabs(ro[1].value - n) < 0.02 * n);
+  CHECK(ro[1].value > n);
+  CHECK(ro[1].value < 1.05 * n);
   REQUIRE(ro[2].found);
   CHECK(ro[2].value > b);
   CHECK(ro[2].value < 1.3 * b);
