@@ -111,26 +111,25 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
   }
 
   // Sensitivity coefficients, JCGM 100 5.1.3: exact, else central differences (step scaled
-  // to u_i).
+  // to u_i). Every coefficient is taken the same way: one the symbolic form cannot give
+  // sends them all to differences.
   std::vector<double> c(n, 0.0);
+  for (size_t i = 0; symbolic && i < n; ++i) {
+    Result<double> ci = symbolic->First(i, x.data());
+    if (ci.ok()) {
+      c[i] = ci.value();
+      continue;
+    }
+    symbolic.reset();
+    result.derivatives = "central differences: sensitivity to input '" + budget.inputs[i].name +
+                         "': " + ci.error().message;
+  }
   for (size_t i = 0; i < n; ++i) {
     if (budget.model.empty()) {
       c[i] = *budget.inputs[i].sensitivity;
       continue;
     }
-    if (symbolic) {
-      Result<double> ci = symbolic->First(i, x.data());
-      if (ci.ok()) {
-        c[i] = ci.value();
-        continue;
-      }
-      // Every coefficient the same way: back to the start with central differences.
-      symbolic.reset();
-      result.derivatives = "central differences: sensitivity to input '" + budget.inputs[i].name +
-                           "': " + ci.error().message;
-      i = static_cast<size_t>(-1);
-      continue;
-    }
+    if (symbolic) continue;  // Taken above.
     const bool exact = u[i] == 0.0;
     const double h = exact ? 1e-6 * std::max(std::fabs(x[i]), 1e-6) : options.step_fraction * u[i];
     const double plus = f_at({{i, h}});
