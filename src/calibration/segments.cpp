@@ -1,5 +1,7 @@
 #include "metro/calibration/segments.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -15,6 +17,8 @@ const char* SegmentKindName(SegmentKind kind) {
       return "table";
     case SegmentKind::kRotation:
       return "rotation";
+    case SegmentKind::kSteady:
+      return "steady_rotation";
   }
   return "static";
 }
@@ -74,10 +78,71 @@ struct Run {
   size_t begin, end;
 };
 
-Eigen::Vector3d MeanOf(const std::vector<Eigen::Vector3d>& x, const Run& r) {
+template <typename Mask>
+Eigen::Vector3d MeanOf(const std::vector<Eigen::Vector3d>& x, const Run& r, const Mask& skip) {
   Eigen::Vector3d s = Eigen::Vector3d::Zero();
-  for (size_t i = r.begin; i < r.end; ++i) s += x[i];
-  return s / static_cast<double>(r.end - r.begin);
+  size_t n = 0;
+  for (size_t i = r.begin; i < r.end; ++i) {
+    if (skip(i)) continue;
+    s += x[i];
+    ++n;
+  }
+  return n > 0 ? Eigen::Vector3d(s / static_cast<double>(n)) : s;
+}
+
+Eigen::Vector3d MeanOfRuns(const std::vector<Eigen::Vector3d>& x, const std::vector<Run>& runs) {
+  Eigen::Vector3d s = Eigen::Vector3d::Zero();
+  size_t n = 0;
+  for (const Run& r : runs) {
+    for (size_t i = r.begin; i < r.end; ++i) s += x[i];
+    n += r.end - r.begin;
+  }
+  return n > 0 ? Eigen::Vector3d(s / static_cast<double>(n)) : s;
+}
+
+double Median(std::vector<double> v) {
+  METRO_CHECK(!v.empty());
+  const size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
+  double m = v[mid];
+  if (v.size() % 2 == 0) {
+    m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid)));
+  }
+  return m;
+}
+
+// Maximal runs of samples for which still(k) holds, not crossing a time gap, at least min_n
+// samples long.
+template <typename Still>
+std::vector<Run> StillRuns(size_t n, const Still& still,
+                           const std::vector<unsigned char>& gap_before, size_t min_n) {
+  std::vector<Run> runs;
+  size_t k = 0;
+  while (k < n) {
+    if (!still(k)) {
+      ++k;
+      continue;
+    }
+    size_t e = k + 1;
+    while (e < n && still(e) && !gap_before[e]) ++e;
+    if (e - k >= min_n) runs.push_back({k, e});
+    k = e;
+  }
+  return runs;
+}
+
+// The gyroscope bias seen by the still periods (per-axis median of their means) and each
+// one's deviation from it (norm, input units).
+std::vector<double> RateDeviations(const std::vector<Eigen::Vector3d>& means) {
+  Eigen::Vector3d bias;
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> axis;
+    for (const Eigen::Vector3d& m : means) axis.push_back(m[a]);
+    bias[a] = Median(axis);
+  }
+  std::vector<double> dev;
+  for (const Eigen::Vector3d& m : means) dev.push_back((m - bias).norm());
+  return dev;
 }
 
 }  // namespace
@@ -102,14 +167,16 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
 
   std::vector<double> dt(n - 1);
   for (size_t i = 0; i + 1 < n; ++i) dt[i] = t[i + 1] - t[i];
-  const double dt_median = Percentile(dt, 0.5);
+  const double dt_median = std::max(Percentile(dt, 0.5), 1e-9);
   const double gap_s = options.max_gap_factor * dt_median;
   // gap_before[k]: a time gap between samples k-1 and k.
   std::vector<unsigned char> gap_before(n, 0);
   for (size_t i = 1; i < n; ++i) gap_before[i] = dt[i - 1] > gap_s ? 1 : 0;
 
-  const size_t h = std::max<size_t>(
-      2, static_cast<size_t>(std::lround(0.5 * options.window_s / std::max(dt_median, 1e-9))));
+  // A minimum pose shorter than the window shrinks the window with it (--min-static-s).
+  const double window_s = std::min(options.window_s, options.min_static_s);
+  const size_t h =
+      std::max<size_t>(2, static_cast<size_t>(std::lround(0.5 * window_s / dt_median)));
   const std::vector<double> va = WindowVariance(accel, h);
   std::vector<double> vg;
   summary.accel_floor = Percentile(va, 0.05);
@@ -122,58 +189,49 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
     const double r = (*input.table_rate_dps)[k];
     return std::isfinite(r) && r != 0.0;
   };
+  auto saturated = [&](size_t k) { return has_sat && (*input.saturated)[k] != 0; };
   const size_t min_static_n = static_cast<size_t>(std::ceil(options.min_static_s / dt_median));
-  const double same_pose = 3.0 * std::sqrt(summary.accel_floor);
+  const double same_accel = 3.0 * std::sqrt(summary.accel_floor);
+  const double same_rate = 3.0 * std::sqrt(summary.gyro_floor);
+  auto mean_accel = [&](const Run& r) { return MeanOf(accel, r, saturated); };
+  auto mean_gyro = [&](const Run& r) { return MeanOf(*input.gyro, r, saturated); };
 
-  auto static_runs = [&](double c) {
-    std::vector<Run> runs;
+  // Still periods for factor c, grouped into poses: neighbours with the same accelerometer
+  // and gyroscope means and no table turn or time gap between them are one pose.
+  auto poses_for = [&](double c) {
     // A floor of exactly 0 (quantised, perfectly still data) still admits equal samples.
     const double ta = std::max(c * summary.accel_floor, 1e-300);
     const double tg = has_gyro ? std::max(c * summary.gyro_floor, 1e-300) : 0.0;
-    size_t k = 0;
-    while (k < n) {
-      auto is_static = [&](size_t i) {
-        if (va[i] >= ta) return false;
-        if (has_gyro && vg[i] >= tg) return false;
-        if (has_sat && (*input.saturated)[i]) return false;
-        return !table_turning(i);
-      };
-      if (!is_static(k)) {
-        ++k;
-        continue;
-      }
-      size_t e = k + 1;
-      while (e < n && is_static(e) && !gap_before[e]) ++e;
-      if (e - k >= min_static_n) runs.push_back({k, e});
-      k = e;
-    }
-    // Neighbouring runs of one pose (same accelerometer mean, nothing turning between) merge.
-    std::vector<Run> merged;
+    auto still = [&](size_t i) {
+      if (va[i] >= ta) return false;
+      if (has_gyro && vg[i] >= tg) return false;
+      return !saturated(i) && !table_turning(i);
+    };
+    const std::vector<Run> runs = StillRuns(n, still, gap_before, min_static_n);
+    std::vector<std::vector<Run>> poses;
     for (const Run& r : runs) {
-      if (!merged.empty()) {
-        Run& last = merged.back();
-        bool clean = true;
+      if (!poses.empty()) {
+        const Run& last = poses.back().back();
+        bool clean = !gap_before[r.begin];
         for (size_t i = last.end; i < r.begin && clean; ++i) {
-          if (table_turning(i) || gap_before[i] || (has_sat && (*input.saturated)[i])) {
-            clean = false;
-          }
+          if (table_turning(i) || gap_before[i]) clean = false;
         }
-        if (clean && gap_before[r.begin]) clean = false;
-        if (clean && (MeanOf(accel, last) - MeanOf(accel, r)).norm() < same_pose) {
-          last.end = r.end;
+        if (clean && (mean_accel(last) - mean_accel(r)).norm() < same_accel &&
+            (!has_gyro || (mean_gyro(last) - mean_gyro(r)).norm() < same_rate)) {
+          poses.back().push_back(r);
           continue;
         }
       }
-      merged.push_back(r);
+      poses.push_back({r});
     }
-    return merged;
+    return poses;
   };
 
-  // Automatic threshold: the factors reaching the most static intervals, median of them.
+  // Automatic threshold: the factors reaching the most poses, median of them.
   std::vector<std::pair<double, size_t>> counts;
   size_t best = 0;
   for (double c : options.threshold_factors) {
-    const size_t count = static_runs(c).size();
+    const size_t count = poses_for(c).size();
     counts.push_back({c, count});
     best = std::max(best, count);
   }
@@ -183,7 +241,7 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
   }
   std::sort(best_factors.begin(), best_factors.end());
   summary.threshold_factor = best_factors[(best_factors.size() - 1) / 2];
-  const std::vector<Run> statics = static_runs(summary.threshold_factor);
+  std::vector<std::vector<Run>> poses = poses_for(summary.threshold_factor);
 
   std::vector<Segment> segments;
   auto make = [&](SegmentKind kind, size_t b, size_t e) {
@@ -196,12 +254,70 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
     s.end_s = t[e - 1];
     return s;
   };
-  for (const Run& r : statics) segments.push_back(make(SegmentKind::kStatic, r.begin, r.end));
+
+  // Steady rotations: poses whose gyroscope mean is not the bias.
+  double rate_limit = 0;
+  std::vector<double> deviation;
+  if (has_gyro && poses.size() >= 2) {
+    std::vector<Eigen::Vector3d> means;
+    for (const auto& p : poses) means.push_back(MeanOfRuns(*input.gyro, p));
+    deviation = RateDeviations(means);
+    rate_limit = options.gyro_units_per_dps > 0
+                     ? options.max_static_rate_dps * options.gyro_units_per_dps
+                     : std::max(10.0 * Median(deviation), 30.0 * std::sqrt(summary.gyro_floor / 3));
+  }
+  std::vector<std::vector<Run>> kept;
+  for (size_t p = 0; p < poses.size(); ++p) {
+    if (rate_limit > 0 && deviation[p] > rate_limit) {
+      Segment s = make(SegmentKind::kSteady, poses[p].front().begin, poses[p].back().end);
+      s.used = false;
+      s.steady_rate = deviation[p];
+      s.steady_rate_dps =
+          options.gyro_units_per_dps > 0 ? deviation[p] / options.gyro_units_per_dps : std::nan("");
+      const size_t mid = (s.begin + s.end) / 2;
+      const char* table_word =
+          !has_table ? " (its rate is unknown: no table_rate_dps); excluded"
+          : std::isfinite((*input.table_rate_dps)[mid])
+              ? " although table_rate_dps is 0 there; excluded"
+              : " (its rate is unknown: table_rate_dps is empty there); excluded";
+      s.note = fmt::format(
+          "steady rotation at {} ({} s): the accelerometer is still but the gyroscope turns; "
+          "not a static pose{}",
+          options.gyro_units_per_dps > 0 ? fmt::format("{:.3g} deg/s", s.steady_rate_dps)
+                                         : fmt::format("{:.4g} input units", deviation[p]),
+          fmt::format("{:.1f}", s.end_s - s.start_s), table_word);
+      segments.push_back(s);
+      ++summary.steady_count;
+      continue;
+    }
+    kept.push_back(poses[p]);
+  }
+
+  // Static segments (one per still period) and what lies between consecutive ones.
+  std::vector<Run> statics;
+  std::vector<int> pose_of;
+  for (size_t p = 0; p < kept.size(); ++p) {
+    for (const Run& r : kept[p]) {
+      Segment s = make(SegmentKind::kStatic, r.begin, r.end);
+      s.pose = static_cast<int>(p);
+      segments.push_back(s);
+      statics.push_back(r);
+      pose_of.push_back(static_cast<int>(p));
+    }
+    if (kept[p].size() > 1) ++summary.disturbed_poses;
+  }
+  summary.pose_count = static_cast<int>(kept.size());
   for (size_t i = 0; i + 1 < statics.size(); ++i) {
     const size_t b = statics[i].end;
     const size_t e = statics[i + 1].begin;
     if (e <= b) continue;
     Segment s = make(SegmentKind::kRotation, b, e);
+    if (pose_of[i] == pose_of[i + 1]) {
+      s.note = fmt::format(
+          "disturbance inside pose {} ({:.2f} s: a knock, a saturated burst or a shift between "
+          "two still periods of one orientation); not averaged into the pose",
+          pose_of[i] + 1, t[e] - t[b - 1]);
+    }
     for (size_t k = b; k <= e && k < n; ++k) {
       if (gap_before[k]) {
         s.used = false;
@@ -213,10 +329,8 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
   }
   if (has_table) {
     const std::vector<double>& rate = *input.table_rate_dps;
-    const size_t settle_n =
-        static_cast<size_t>(std::lround(options.table_settle_s / std::max(dt_median, 1e-9)));
-    const size_t min_table_n =
-        static_cast<size_t>(std::ceil(options.min_table_s / std::max(dt_median, 1e-9)));
+    const size_t settle_n = static_cast<size_t>(std::lround(options.table_settle_s / dt_median));
+    const size_t min_table_n = static_cast<size_t>(std::ceil(options.min_table_s / dt_median));
     size_t k = 0;
     while (k < n) {
       if (!table_turning(k)) {
@@ -233,6 +347,61 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
       k = e;
     }
   }
+
+  // Short poses: still periods the window and min_static_s left out, found with a short
+  // window away from every pose and steady rotation found above.
+  {
+    const double short_window_s = std::min(0.25, window_s / 4.0);
+    const size_t hs =
+        std::max<size_t>(1, static_cast<size_t>(std::lround(0.5 * short_window_s / dt_median)));
+    const std::vector<double> vas = WindowVariance(accel, hs);
+    std::vector<double> vgs;
+    const double fa = Percentile(vas, 0.05);
+    double fg = 0;
+    if (has_gyro) {
+      vgs = WindowVariance(*input.gyro, hs);
+      fg = Percentile(vgs, 0.05);
+    }
+    std::vector<unsigned char> taken(n, 0);
+    for (const Segment& s : segments) {
+      if (s.kind != SegmentKind::kStatic && s.kind != SegmentKind::kSteady) continue;
+      const size_t lo = s.begin >= h ? s.begin - h : 0;
+      for (size_t i = lo; i < std::min(n, s.end + h); ++i) taken[i] = 1;
+    }
+    const double c = summary.threshold_factor;
+    auto still = [&](size_t i) {
+      if (taken[i] || vas[i] >= std::max(c * fa, 1e-300)) return false;
+      if (has_gyro && vgs[i] >= std::max(c * fg, 1e-300)) return false;
+      return !saturated(i) && !table_turning(i);
+    };
+    const std::vector<Run> shorts = StillRuns(n, still, gap_before, 4 * hs + 1);
+    for (const Run& r : shorts) {
+      if (r.end - r.begin >= min_static_n) continue;
+      if (rate_limit > 0 && has_gyro) {
+        // Not a steady rotation either: the rate against the poses' bias.
+        std::vector<Eigen::Vector3d> means;
+        for (const auto& p : kept) means.push_back(MeanOfRuns(*input.gyro, p));
+        if (!means.empty()) {
+          means.push_back(mean_gyro(r));
+          if (RateDeviations(means).back() > rate_limit) continue;
+        }
+      }
+      // The window shortens a still stretch by a window: its dwell is about run + window.
+      const double dwell_s =
+          t[r.end - 1] - t[r.begin] + dt_median + 2.0 * static_cast<double>(hs) * dt_median;
+      summary.short_static_min_s =
+          summary.short_static_count == 0 ? dwell_s : std::min(summary.short_static_min_s, dwell_s);
+      summary.short_static_max_s = std::max(summary.short_static_max_s, dwell_s);
+      ++summary.short_static_count;
+    }
+    if (summary.short_static_count > 0) {
+      // With min_static_s = S (and the window shrunk to S) a pose of dwell D leaves a still run
+      // of about D - S, which must be >= S: S <= D / 2, in steps of 0.05 s.
+      summary.suggested_min_static_s =
+          std::max(0.05, std::floor(summary.short_static_min_s / 2.0 / 0.05) * 0.05);
+    }
+  }
+
   std::sort(segments.begin(), segments.end(),
             [](const Segment& a, const Segment& b) { return a.begin < b.begin; });
   for (const Segment& s : segments) {

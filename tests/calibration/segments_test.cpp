@@ -97,5 +97,140 @@ TEST_CASE("Segmentation options are validated", "[calibration]") {
   CHECK(why == "every threshold factor must be > 1");
 }
 
+// A record built piece by piece at 100 Hz: still stretches (accelerometer mean, gyroscope
+// rate), smooth swings between them, noise sd 0.01 on both sensors.
+struct Builder {
+  std::mt19937 rng{11};
+  std::normal_distribution<double> noise{0.0, 0.01};
+  std::vector<double> t;
+  std::vector<Eigen::Vector3d> accel, gyro;
+  double now = 0;
+  void Still(const Eigen::Vector3d& a, const Eigen::Vector3d& rate_dps, double s) {
+    for (int k = 0; k < static_cast<int>(std::lround(s * 100)); ++k, now += 0.01) {
+      t.push_back(now);
+      accel.push_back(a + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+      gyro.push_back(rate_dps + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    }
+  }
+  void Swing(const Eigen::Vector3d& a, double s) {
+    const int n = static_cast<int>(std::lround(s * 100));
+    for (int k = 0; k < n; ++k, now += 0.01) {
+      const double x = std::sin(3.14159 * k / n);
+      t.push_back(now);
+      accel.push_back(a + Eigen::Vector3d(x, -x, 0.5 * x));
+      gyro.push_back(Eigen::Vector3d(50 * x, 20 * x, -30 * x));
+    }
+  }
+  SegmentationSummary Detect(const SegmentationOptions& o) {
+    SegmentationInput in;
+    in.t_s = &t;
+    in.accel = &accel;
+    in.gyro = &gyro;
+    return DetectSegments(in, o);
+  }
+};
+
+Eigen::Vector3d PoseMean(int pose) {
+  return Eigen::Vector3d(std::cos(pose), std::sin(pose), 0.3 * pose - 1.0);
+}
+
+// Issue #23: a turntable turn at a steady -30 deg/s about the vertical keeps the accelerometer
+// as quiet as a pose; the gyroscope mean (30 deg/s from the bias of 0.5 deg/s) is not a bias.
+TEST_CASE("A steady rotation is never a static pose", "[calibration]") {
+  Builder b;
+  const Eigen::Vector3d bias(0.5, -0.2, 0.1);
+  for (int pose = 0; pose < 6; ++pose) {
+    b.Still(PoseMean(pose), bias, 4.0);
+    if (pose == 2) {  // then turn at -30 deg/s about body z for 6 s in the same orientation
+      b.Swing(PoseMean(pose), 0.5);
+      b.Still(PoseMean(pose), bias + Eigen::Vector3d(0, 0, -30), 6.0);
+    }
+    b.Swing(PoseMean(pose), 1.0);
+  }
+  for (double units : {1.0, 0.0}) {
+    INFO("gyro_units_per_dps " << units);
+    SegmentationOptions o;
+    o.gyro_units_per_dps = units;
+    const SegmentationSummary s = b.Detect(o);
+    CHECK(s.static_count == 6);
+    CHECK(s.pose_count == 6);
+    REQUIRE(s.steady_count == 1);
+    for (const Segment& seg : s.segments) {
+      if (seg.kind != SegmentKind::kSteady) continue;
+      CHECK_FALSE(seg.used);
+      CHECK(seg.steady_rate == Approx(30.0).margin(0.05));
+      // Pose 3 is still from 10 to 14 s, then swings for 0.5 s and turns from 14.5 to 20.5 s.
+      CHECK(seg.start_s >= 14.5 - 1e-9);
+      CHECK(seg.end_s <= 20.5 + 1e-9);
+      if (units > 0) CHECK(seg.steady_rate_dps == Approx(30.0).margin(0.05));
+      CHECK(seg.note.find("steady rotation") != std::string::npos);
+    }
+  }
+}
+
+// A 0.2 s knock in the middle of a 6 s pose: the two still periods are one pose but two static
+// segments, and the knock's samples are in neither.
+TEST_CASE("A knock inside a pose is cut out and named", "[calibration]") {
+  Builder b;
+  for (int pose = 0; pose < 6; ++pose) {
+    if (pose == 3) {
+      b.Still(PoseMean(pose), Eigen::Vector3d::Zero(), 3.0);
+      const double knock_start = b.now;
+      for (int k = 0; k < 20; ++k, b.now += 0.01) {  // 0.2 s, 0.5 g spikes
+        b.t.push_back(b.now);
+        b.accel.push_back(PoseMean(pose) + Eigen::Vector3d(0.5, -0.5, 0.5) * ((k % 2) ? 1 : -1));
+        b.gyro.push_back(Eigen::Vector3d(5, -5, 5) * ((k % 2) ? 1 : -1));
+      }
+      b.Still(PoseMean(pose), Eigen::Vector3d::Zero(), 3.0);
+      INFO("knock at " << knock_start);
+    } else {
+      b.Still(PoseMean(pose), Eigen::Vector3d::Zero(), 4.0);
+    }
+    b.Swing(PoseMean(pose), 1.0);
+  }
+  const SegmentationSummary s = b.Detect(SegmentationOptions());
+  CHECK(s.pose_count == 6);
+  CHECK(s.static_count == 7);
+  CHECK(s.disturbed_poses == 1);
+  const double knock_begin = 3 * 5.0 + 3.0, knock_end = knock_begin + 0.2;
+  int parts = 0;
+  bool named = false;
+  for (const Segment& seg : s.segments) {
+    if (seg.kind == SegmentKind::kStatic && seg.pose == 3) {
+      ++parts;
+      CHECK((seg.end_s < knock_begin || seg.start_s >= knock_end));
+    }
+    if (seg.kind == SegmentKind::kRotation && seg.note.find("disturbance inside pose 4") == 0) {
+      named = true;
+      CHECK(seg.start_s < knock_begin);
+      CHECK(seg.end_s >= knock_end - 0.01);
+    }
+  }
+  CHECK(parts == 2);
+  CHECK(named);
+}
+
+// Poses of 1 s among poses of 4 s: with the 1 s window they leave no still period of 1 s; they
+// are counted with their dwell, and the suggested min_static_s finds them.
+TEST_CASE("Short poses are counted with the min_static_s that accepts them", "[calibration]") {
+  Builder b;
+  for (int pose = 0; pose < 9; ++pose) {
+    b.Still(PoseMean(pose), Eigen::Vector3d::Zero(), pose < 6 ? 4.0 : 1.0);
+    b.Swing(PoseMean(pose), 1.0);
+  }
+  const SegmentationSummary s = b.Detect(SegmentationOptions());
+  CHECK(s.pose_count == 6);
+  CHECK(s.short_static_count == 3);
+  CHECK(s.short_static_min_s > 0.7);
+  CHECK(s.short_static_max_s < 1.05);
+  REQUIRE(s.suggested_min_static_s > 0.0);
+  CHECK(s.suggested_min_static_s <= 0.5);
+  SegmentationOptions shorter;
+  shorter.min_static_s = s.suggested_min_static_s;
+  const SegmentationSummary t = b.Detect(shorter);
+  CHECK(t.pose_count == 9);
+  CHECK(t.short_static_count == 0);
+}
+
 }  // namespace
 }  // namespace metro
