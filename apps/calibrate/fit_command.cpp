@@ -1,7 +1,9 @@
 // calibrate fit SESSION... -o calibration.json [--sensor N] [--model bias|scale|full] ...
 #include <fmt/format.h>
 
+#include <map>
 #include <memory>
+#include <optional>
 
 #include "cli_progress.hpp"
 #include "commands.hpp"
@@ -30,7 +32,8 @@ struct FitOptions {
   std::string loss = "none";
   double loss_scale = 3.0;
   bool accel_only = false;
-  std::string html;           // Calibration certificate (docs/reports.md).
+  std::optional<double> min_static_s;  // Shortest pose kept (default 1 s; shrinks the window).
+  std::string html;                    // Calibration certificate (docs/reports.md).
   apps::LoadCliOptions load;  // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
 };
 
@@ -56,6 +59,7 @@ int RunFit(const FitOptions& f) {
   o.gyro_fs_dps = f.gyro_fs_dps;
   o.sensor = f.sensor;
   o.fit_gyro = !f.accel_only;
+  if (f.min_static_s) o.segmentation.min_static_s = *f.min_static_s;
   o.temperature = f.temperature == "on"    ? TemperatureMode::kOn
                   : f.temperature == "off" ? TemperatureMode::kOff
                                            : TemperatureMode::kAuto;
@@ -141,10 +145,15 @@ int RunFit(const FitOptions& f) {
   }
   // The summary is a note (not under --quiet); the warnings always print.
   for (const TagCalibration& t : cal.value().tags) {
-    int counts[3] = {0, 0, 0};
-    for (const Segment& s : t.segments) ++counts[static_cast<int>(s.kind)];
-    apps::Note(fmt::format("sensor {}: {} static, {} table, {} rotation segments (factor {})\n",
-                           t.sensor, counts[0], counts[1], counts[2], t.threshold_factor));
+    std::map<SegmentKind, int> counts;
+    for (const Segment& s : t.segments) ++counts[s.kind];
+    apps::Note(fmt::format(
+        "sensor {}: {} static, {} table, {} rotation segments{} (factor {})\n", t.sensor,
+        counts[SegmentKind::kStatic], counts[SegmentKind::kTable], counts[SegmentKind::kRotation],
+        counts[SegmentKind::kSteady] > 0
+            ? fmt::format(", {} steady rotations excluded", counts[SegmentKind::kSteady])
+            : "",
+        t.threshold_factor));
     if (t.accel) {
       apps::Note(fmt::format("  accel residual rms {:.3g} {} ({:.3g} m/s^2)\n",
                              t.accel->residual_rms, t.accel->residual_unit,
@@ -199,6 +208,9 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::IsMember({"none", "huber", "cauchy"}));
   sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, in standard deviations");
   sub->add_flag("--accel-only", o->accel_only, "calibrate the accelerometer only");
+  sub->add_option("--min-static-s", o->min_static_s,
+                  "shortest still period kept as a pose [s] (default 1; below 1 s the detector's "
+                  "window shrinks with it, so poses of about twice this are found)");
   sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
   sub->callback([o, exit_code] { *exit_code = RunFit(*o); });
 }

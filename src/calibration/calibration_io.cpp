@@ -37,6 +37,10 @@ json SegmentJson(const Segment& s) {
             {"end_s", s.end_s},
             {"used", s.used}};
   if (s.kind == SegmentKind::kTable) j["table_rate_dps"] = s.table_rate_dps;
+  if (s.kind == SegmentKind::kStatic && s.pose >= 0) j["pose"] = s.pose + 1;
+  if (s.kind == SegmentKind::kSteady && std::isfinite(s.steady_rate_dps)) {
+    j["steady_rate_dps"] = s.steady_rate_dps;
+  }
   if (!s.note.empty()) j["note"] = s.note;
   return j;
 }
@@ -394,9 +398,10 @@ std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const st
     for (const json& s : j.at("segments")) {
       Segment seg;
       const std::string kind_name = s.value("kind", "static");
-      seg.kind = kind_name == "table"      ? SegmentKind::kTable
-                 : kind_name == "rotation" ? SegmentKind::kRotation
-                                           : SegmentKind::kStatic;
+      seg.kind = kind_name == "table"             ? SegmentKind::kTable
+                 : kind_name == "rotation"        ? SegmentKind::kRotation
+                 : kind_name == "steady_rotation" ? SegmentKind::kSteady
+                                                  : SegmentKind::kStatic;
       seg.piece = s.value("input", 0);
       seg.begin = s.value("begin_index", size_t{0});
       seg.end = s.value("end_index", size_t{0});
@@ -404,6 +409,8 @@ std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const st
       seg.end_s = s.value("end_s", 0.0);
       seg.used = s.value("used", true);
       seg.table_rate_dps = s.value("table_rate_dps", 0.0);
+      seg.pose = s.value("pose", 0) - 1;
+      seg.steady_rate_dps = s.value("steady_rate_dps", std::nan(""));
       seg.note = s.value("note", "");
       c.segments.push_back(seg);
     }
@@ -460,7 +467,7 @@ void ReportSensor(const SensorCalibration& c, std::string* out) {
     *out +=
         fmt::format("      {:<18} n = {:<6} rms {} {}\n", g.kind, g.count, Fixed(g.rms, 4), g.unit);
   }
-  int counts[3] = {0, 0, 0};
+  int counts[4] = {0, 0, 0, 0};  // SegmentKind order: static, table, rotation, steady
   for (const Segment& s : c.segments) ++counts[static_cast<int>(s.kind)];
   *out += fmt::format("    segments used: {} static, {} table, {} rotation\n", counts[0], counts[1],
                       counts[2]);
