@@ -7,8 +7,13 @@
 
 #include <cmath>
 
+#include "calibration/parameter_blocks.hpp"
+
 namespace metro::calibration_internal {
 namespace {
+
+using PB = ParameterBlocks;
+constexpr auto kSize = PB::kSize;
 
 // T K v for the accelerometer (3 misalignment terms, imu_model.hpp).
 template <typename T>
@@ -110,27 +115,33 @@ struct GyroTableFunctor {
   }
 };
 
-class RotationCost : public ceres::SizedCostFunction<3, 3, 3, 3, 3, 3, 3, 6, 3> {
+// The 8 blocks in ParameterBlocks order.
+class RotationCost : public ceres::SizedCostFunction<3, kSize[0], kSize[1], kSize[2], kSize[3],
+                                                     kSize[4], kSize[5], kSize[6], kSize[7]> {
  public:
   explicit RotationCost(RotationData data) : d_(std::move(data)) {}
 
   bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
     bool want_accel = false, want_gyro = false;
     if (jacobians != nullptr) {
-      for (int i = 0; i < 4; ++i) want_accel = want_accel || jacobians[i] != nullptr;
-      for (int i = 4; i < 8; ++i) want_gyro = want_gyro || jacobians[i] != nullptr;
+      for (int i = PB::kAccelBias; i <= PB::kAccelBiasPerC; ++i) {
+        want_accel = want_accel || jacobians[i] != nullptr;
+      }
+      for (int i = PB::kGyroBias; i <= PB::kGyroBiasPerC; ++i) {
+        want_gyro = want_gyro || jacobians[i] != nullptr;
+      }
     }
     // Accelerometer directions, with derivatives over its 12 parameters when wanted.
-    using JA = ceres::Jet<double, 12>;
+    using JA = ceres::Jet<double, PB::kAccelTotal>;
     double ui[3], uj[3];
     JA ui_j[3], uj_j[3];
     if (want_accel) {
       JA b[3], k[3], m[3], b1[3];
       for (int i = 0; i < 3; ++i) {
-        b[i] = JA(p[0][i], i);
-        k[i] = JA(p[1][i], 3 + i);
-        m[i] = JA(p[2][i], 6 + i);
-        b1[i] = JA(p[3][i], 9 + i);
+        b[i] = JA(p[PB::kAccelBias][i], PB::kOffset[PB::kAccelBias] + i);
+        k[i] = JA(p[PB::kAccelScale][i], PB::kOffset[PB::kAccelScale] + i);
+        m[i] = JA(p[PB::kAccelMisalignment][i], PB::kOffset[PB::kAccelMisalignment] + i);
+        b1[i] = JA(p[PB::kAccelBiasPerC][i], PB::kOffset[PB::kAccelBiasPerC] + i);
       }
       AccelDirection(b, k, m, b1, d_.accel_start, d_.dtemp_start_c, ui_j);
       AccelDirection(b, k, m, b1, d_.accel_end, d_.dtemp_end_c, uj_j);
@@ -139,22 +150,26 @@ class RotationCost : public ceres::SizedCostFunction<3, 3, 3, 3, 3, 3, 3, 6, 3> 
         uj[i] = uj_j[i].a;
       }
     } else {
-      AccelDirection(p[0], p[1], p[2], p[3], d_.accel_start, d_.dtemp_start_c, ui);
-      AccelDirection(p[0], p[1], p[2], p[3], d_.accel_end, d_.dtemp_end_c, uj);
+      const double* const* a = p + PB::kAccelBias;
+      AccelDirection(a[0], a[1], a[2], a[3], d_.accel_start, d_.dtemp_start_c, ui);
+      AccelDirection(a[0], a[1], a[2], a[3], d_.accel_end, d_.dtemp_end_c, uj);
     }
     // Integrated rotation, with derivatives over the gyroscope's 15 parameters when wanted.
-    using JG = ceres::Jet<double, 15>;
+    using JG = ceres::Jet<double, PB::kGyroTotal>;
+    constexpr int kG = PB::kOffset[PB::kGyroBias];  // Jet index of the first gyro parameter.
     double q[4];
     double pred[3];
     JG pred_j[3];
     if (want_gyro) {
       JG b[3], k[3], m[6], b1[3];
       for (int i = 0; i < 3; ++i) {
-        b[i] = JG(p[4][i], i);
-        k[i] = JG(p[5][i], 3 + i);
-        b1[i] = JG(p[7][i], 12 + i);
+        b[i] = JG(p[PB::kGyroBias][i], PB::kOffset[PB::kGyroBias] - kG + i);
+        k[i] = JG(p[PB::kGyroScale][i], PB::kOffset[PB::kGyroScale] - kG + i);
+        b1[i] = JG(p[PB::kGyroBiasPerC][i], PB::kOffset[PB::kGyroBiasPerC] - kG + i);
       }
-      for (int i = 0; i < 6; ++i) m[i] = JG(p[6][i], 6 + i);
+      for (int i = 0; i < kSize[PB::kGyroMisalignment]; ++i) {
+        m[i] = JG(p[PB::kGyroMisalignment][i], PB::kOffset[PB::kGyroMisalignment] - kG + i);
+      }
       JG qj[4];
       IntegrateRotation(d_, b, k, m, b1, qj);
       const JG u[3] = {JG(ui[0]), JG(ui[1]), JG(ui[2])};
@@ -162,21 +177,21 @@ class RotationCost : public ceres::SizedCostFunction<3, 3, 3, 3, 3, 3, 3, 6, 3> 
       for (int i = 0; i < 4; ++i) q[i] = qj[i].a;
       for (int i = 0; i < 3; ++i) pred[i] = pred_j[i].a;
     } else {
-      IntegrateRotation(d_, p[4], p[5], p[6], p[7], q);
+      const double* const* g = p + PB::kGyroBias;
+      IntegrateRotation(d_, g[0], g[1], g[2], g[3], q);
       RotateInverse(q, ui, pred);
     }
     for (int i = 0; i < 3; ++i) residuals[i] = d_.weight * (pred[i] - uj[i]);
     if (jacobians == nullptr) return true;
 
     if (want_gyro) {
-      const int offset[4] = {0, 3, 6, 12};
-      const int size[4] = {3, 3, 6, 3};
-      for (int blk = 0; blk < 4; ++blk) {
-        double* jac = jacobians[4 + blk];
+      for (int blk = PB::kGyroBias; blk <= PB::kGyroBiasPerC; ++blk) {
+        double* jac = jacobians[blk];
         if (jac == nullptr) continue;
+        const int size = kSize[blk], offset = PB::kOffset[blk] - kG;
         for (int r = 0; r < 3; ++r) {
-          for (int c = 0; c < size[blk]; ++c) {
-            jac[r * size[blk] + c] = d_.weight * pred_j[r].v[offset[blk] + c];
+          for (int c = 0; c < size; ++c) {
+            jac[r * size + c] = d_.weight * pred_j[r].v[offset + c];
           }
         }
       }
@@ -185,11 +200,11 @@ class RotationCost : public ceres::SizedCostFunction<3, 3, 3, 3, 3, 3, 3, 6, 3> 
       // d(R^T u_i - u_j) = R^T du_i - du_j, R^T as the rotation by the conjugate of q.
       const double qn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
       const double qc[4] = {q[0] / qn, -q[1] / qn, -q[2] / qn, -q[3] / qn};
-      for (int blk = 0; blk < 4; ++blk) {
+      for (int blk = PB::kAccelBias; blk <= PB::kAccelBiasPerC; ++blk) {
         double* jac = jacobians[blk];
         if (jac == nullptr) continue;
-        for (int c = 0; c < 3; ++c) {
-          const int col = 3 * blk + c;
+        for (int c = 0; c < kSize[blk]; ++c) {
+          const int col = PB::kOffset[blk] + c;
           const double dui[3] = {ui_j[0].v[col], ui_j[1].v[col], ui_j[2].v[col]};
           double rot[3];
           ceres::UnitQuaternionRotatePoint(qc, dui, rot);
@@ -212,19 +227,24 @@ class RotationCost : public ceres::SizedCostFunction<3, 3, 3, 3, 3, 3, 3, 6, 3> 
 
 ceres::CostFunction* NewAccelNormCost(const Eigen::Vector3d& raw_mean, double dtemp_c,
                                       double target_norm, double weight) {
-  return new ceres::AutoDiffCostFunction<AccelNormFunctor, 1, 3, 3, 3, 3>(
+  return new ceres::AutoDiffCostFunction<AccelNormFunctor, 1, kSize[PB::kAccelBias],
+                                         kSize[PB::kAccelScale], kSize[PB::kAccelMisalignment],
+                                         kSize[PB::kAccelBiasPerC]>(
       new AccelNormFunctor{raw_mean, dtemp_c, target_norm, weight});
 }
 
 ceres::CostFunction* NewGyroStaticCost(const Eigen::Vector3d& raw_mean, double dtemp_c,
                                        double weight) {
-  return new ceres::AutoDiffCostFunction<GyroStaticFunctor, 3, 3, 3>(
+  return new ceres::AutoDiffCostFunction<GyroStaticFunctor, 3, kSize[PB::kGyroBias],
+                                         kSize[PB::kGyroBiasPerC]>(
       new GyroStaticFunctor{raw_mean, dtemp_c, weight});
 }
 
 ceres::CostFunction* NewGyroTableCost(const Eigen::Vector3d& raw_mean, double dtemp_c,
                                       double rate_abs_dps, double weight) {
-  return new ceres::AutoDiffCostFunction<GyroTableFunctor, 1, 3, 3, 6, 3>(
+  return new ceres::AutoDiffCostFunction<GyroTableFunctor, 1, kSize[PB::kGyroBias],
+                                         kSize[PB::kGyroScale], kSize[PB::kGyroMisalignment],
+                                         kSize[PB::kGyroBiasPerC]>(
       new GyroTableFunctor{raw_mean, dtemp_c, rate_abs_dps, weight});
 }
 
@@ -234,9 +254,11 @@ ceres::CostFunction* NewRotationCost(RotationData data) {
 
 Eigen::Vector3d RotationResidual(const RotationData& data, const double* const* p) {
   double ui[3], uj[3], q[4], pred[3];
-  AccelDirection(p[0], p[1], p[2], p[3], data.accel_start, data.dtemp_start_c, ui);
-  AccelDirection(p[0], p[1], p[2], p[3], data.accel_end, data.dtemp_end_c, uj);
-  IntegrateRotation(data, p[4], p[5], p[6], p[7], q);
+  const double* const* a = p + PB::kAccelBias;
+  const double* const* g = p + PB::kGyroBias;
+  AccelDirection(a[0], a[1], a[2], a[3], data.accel_start, data.dtemp_start_c, ui);
+  AccelDirection(a[0], a[1], a[2], a[3], data.accel_end, data.dtemp_end_c, uj);
+  IntegrateRotation(data, g[0], g[1], g[2], g[3], q);
   RotateInverse(q, ui, pred);
   return Eigen::Vector3d(pred[0] - uj[0], pred[1] - uj[1], pred[2] - uj[2]);
 }

@@ -1,6 +1,7 @@
 // Private: the residual blocks of the calibration problem (model: imu_model.hpp).
 //
-// Parameter blocks, in this order wherever a residual takes them:
+// Parameter blocks, in this order wherever a residual takes them (ParameterBlocks,
+// parameter_blocks.hpp, fixes it):
 //   accel  b(3) k(3) t(3) b1(3)        gyro  b(3) k(3) t(6) b1(3)
 // Residuals are multiplied by `weight` (1 / the group's standard deviation when whitened).
 #pragma once

@@ -1,0 +1,295 @@
+// Private: the stages of one tag's calibration (CalibrateTag, calibrate.hpp), in the order
+// CalibrateTag runs them (method: docs/calibration-model.md):
+//
+//   records      ReadRecords, SummarizeRecords    inputs, units, saturation, segments
+//   poses        MeanPoses                        static and table means
+//   temperature  DecideTemperature                whether b1 is fitted, t_ref, pose span
+//   start        StartAccel, StartGyro,           ellipsoid/nominal start, sphere span check;
+//                SetScaledStart, ApplyGyroStart   gyroscope bias and isotropic scale
+//   rotations    BuildRotations, CheckGyroMotion  hand rotations between static poses
+//   solves       SolveAccel, SolveGyro            Ceres stages, rank, covariance,
+//                                                 PropagateAccelUncertainty
+//   assembly     Unscale, AssembleAccel,          input units, SensorCalibration,
+//                AssembleGyro                     groups, segments, CheckDetermined
+//
+// Every fit works on scaled parameters (TagProblemData::accel_ref, gyro_ref) held in one
+// ParameterBlocks (parameter_blocks.hpp). Errors are messages for the user, starting with
+// "sensor N: " where they name the tag.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calibration/parameter_blocks.hpp"
+#include "calibration/residuals.hpp"
+#include "metro/calibration/calibrate.hpp"
+
+namespace ceres {
+class Problem;
+}
+
+namespace metro::calibration_internal {
+
+// ---- Records ----------------------------------------------------------------------------
+
+// One tag of one input, with the columns the calibrator needs.
+struct Record {
+  int piece = 0;
+  std::vector<double> t_s;
+  std::vector<Eigen::Vector3d> accel, gyro;
+  std::string accel_unit, gyro_unit;
+  std::vector<double> temp_c, table_rate_dps;
+  bool has_table_column = false;
+  std::vector<unsigned char> accel_sat, gyro_sat, saturated;
+  int accel_sat_count = 0, gyro_sat_count = 0;
+  SegmentationSummary seg;
+};
+
+// Which axis family of the sensor a tag holds (columns.hpp): the first complete one in
+// AxisUnits order (raw counts preferred), or, when none is complete, the first the tag holds
+// part of (`unit` is nullptr then) or none at all (`family` empty).
+struct FamilyMatch {
+  const Unit* unit = nullptr;        // The complete family's unit; nullptr if none.
+  std::vector<std::string> family;   // Its columns (or the partial family's).
+  std::vector<std::string> missing;  // Of a partial family, the absent columns.
+};
+FamilyMatch FindFamily(const Tag& tag, ImuSensor sensor);
+
+// "sensor 1: the gyroscope calibration needs gx_dps, gy_dps, gz_dps; missing gx_dps, gy_dps"
+std::string IncompleteFamilyMessage(int sensor, ImuSensor imu, const FamilyMatch& match);
+
+// The families the calibrator accepts: "ax_lsb ay_lsb az_lsb (or ax_g ay_g az_g, or ax_mps2
+// ay_mps2 az_mps2)".
+std::string FamilyChoices(ImuSensor imu);
+
+// Reads one input's columns, flags saturated raw counts and segments it (piece = input index).
+Result<Record> ReadRecord(const Tag& tag, int piece, const CalibrationOptions& options);
+
+struct RecordSet {
+  std::vector<Record> records;  // One per input, in input order.
+  std::string accel_unit;       // Of every record.
+  std::string gyro_unit;        // Of every record; empty without gyroscope columns.
+  bool has_gyro = false;        // fit_gyro and gyroscope columns.
+};
+
+// Reads every input of tag `sensor` and checks that they agree on units.
+Result<RecordSet> ReadRecords(const std::vector<const Tag*>& tags, const CalibrationOptions& o,
+                              int sensor);
+
+// The record-level results of `out`: warnings (no gyroscope, saturated samples, a table column
+// without runs), saturated_samples, every segment, threshold_factor.
+void SummarizeRecords(const RecordSet& set, const CalibrationOptions& o, TagCalibration* out);
+
+// ---- Poses ------------------------------------------------------------------------------
+
+// Means over a segment (saturated samples left out).
+struct Pose {
+  const Segment* segment = nullptr;  // Into the record's segments.
+  int record = 0;
+  Eigen::Vector3d accel = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_sd = Eigen::Vector3d::Zero();  // Per-sample standard deviation.
+  double temp_c = 0;
+  size_t n = 0;
+};
+Pose MeanOver(const Record& r, int record_index, const Segment& s);
+
+struct PoseMeans {
+  std::vector<Pose> statics;  // Static poses, all records, in record then time order.
+  std::vector<Pose> tables;   // Table runs (only with_tables).
+};
+// The records must outlive the result (Pose::segment points into them).
+PoseMeans MeanPoses(const std::vector<Record>& records, bool with_tables);
+
+// ---- Temperature decision ---------------------------------------------------------------
+
+struct TemperatureDecision {
+  bool fit = false;    // Whether b1 is fitted.
+  double t_ref_c = 0;  // Mean of the static poses' temperatures when fitted, else 0.
+  // The static poses' temperature span when every input has temp_c (and there are poses).
+  std::optional<PoseTemperatureRange> pose_range;
+};
+
+bool EveryRecordHasTemperature(const std::vector<Record>& records);
+
+// kOff: never; kAuto: when every input has temp_c and the static poses span at least
+// o.min_temp_span_c; kOn: always, an error without temp_c or without any span.
+Result<TemperatureDecision> DecideTemperature(bool every_input_has_temp,
+                                              const std::vector<Pose>& statics,
+                                              const CalibrationOptions& o, int sensor);
+
+// ---- Problem data and start values ------------------------------------------------------
+
+// Everything one tag's fit needs, built once.
+struct TagProblemData {
+  std::vector<Record> records;
+  std::vector<Pose> statics;            // Static poses, all records.
+  std::vector<Pose> tables;             // Table runs.
+  std::vector<RotationData> rotations;  // Hand rotations (weight 1).
+  std::vector<const Segment*> rotation_segments;
+  bool has_gyro = false;
+  bool temperature = false;
+  double t_ref_c = 0;
+  double target_norm = 1;
+  // The fit runs on data multiplied by a reference scale (the start value of K), so that every
+  // parameter is O(1) in output units: b' = k_ref b, k' = k / k_ref, b1' = k_ref b1. Without
+  // it, biases in counts next to scales of 1e-4 make J^T J too ill-conditioned for Ceres's
+  // covariance. Rotation data are stored already scaled.
+  Eigen::Vector3d accel_ref = Eigen::Vector3d::Ones();
+  Eigen::Vector3d gyro_ref = Eigen::Vector3d::Ones();
+};
+
+// The state of the fit across stages: group standard deviations that whiten the next stage,
+// the last stage's residuals, the solver's iterations and convergence.
+struct Fit {
+  double s_accel = 1, s_static = 1, s_table = 1, s_rotation = 1;
+  std::vector<double> r_accel, r_static, r_table, r_rotation;  // Unwhitened residuals.
+  int iterations = 0;
+  bool converged = false;
+  std::string message;
+};
+
+// Closed-form start: axis-aligned ellipsoid A x^2 + B y^2 + C z^2 + D x + E y + F z = 1 through
+// the pose means (linear least squares on centred, scaled data). Returns false when the fit is
+// not an ellipsoid.
+bool EllipsoidStart(const std::vector<Eigen::Vector3d>& points, double target_norm,
+                    Eigen::Vector3d* bias, Eigen::Vector3d* scale);
+
+// Start values of one sensor in input units (scale: output units per input unit).
+struct SensorStart {
+  Eigen::Vector3d bias = Eigen::Vector3d::Zero();
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones();
+};
+
+// Checks the pose count for the accelerometer model, starts from the ellipsoid (else the
+// nominal scale, with a warning), and checks that the poses span the sphere (an error for
+// the scale and full models, a warning for bias). `accel_unit` gives the nominal scale.
+Result<SensorStart> StartAccel(const std::vector<Pose>& statics, double target_norm,
+                               const std::string& accel_unit, bool temperature,
+                               const CalibrationOptions& o, int sensor,
+                               std::vector<std::string>* warnings);
+
+// Sets a sensor's blocks to the scaled start: b' = ref b, k' = 1 (ref = start.scale).
+void SetScaledStart(ImuSensor sensor, const SensorStart& start, ParameterBlocks* x);
+
+// Group standard deviations that weight the gyroscope's first fit.
+struct GyroWeights {
+  double s_static = 1;    // Input units (unscaled).
+  double s_table = 1;     // deg/s.
+  double s_rotation = 1;  // Unit-vector difference.
+};
+struct GyroStart {
+  SensorStart start;  // Bias: mean of the static means; scale: isotropic.
+  GyroWeights weights;
+};
+
+// Bias from the static means; for the scale and full models an isotropic scale from the table
+// runs (median |rate| / |r_mean - b|), else from a log-grid and golden-section search on the
+// hand rotations (`rotations` unscaled in the gyroscope, `x` holding the accelerometer's
+// solution), which fails when no scale matches the accelerometer's gravity directions.
+Result<GyroStart> StartGyro(const std::vector<Pose>& statics, const std::vector<Pose>& tables,
+                            const std::vector<RotationData>& rotations, const ParameterBlocks& x,
+                            double gyro_nominal, ModelKind gyro_model, int sensor);
+
+// From here on the gyroscope works in scaled units: d->gyro_ref = start scale, the gyroscope's
+// blocks of x at the scaled start (SetScaledStart), fit's first weights (s_static scaled), and
+// d->rotations' samples multiplied by gyro_ref.
+void ApplyGyroStart(const GyroStart& start, TagProblemData* d, ParameterBlocks* x, Fit* fit);
+
+// ---- Rotations --------------------------------------------------------------------------
+
+struct RotationSet {
+  std::vector<RotationData> data;        // Accelerometer means scaled by accel_ref.
+  std::vector<const Segment*> segments;  // The rotation segment of each, into `segments`.
+};
+
+// The hand rotations between consecutive static poses of one record: samples from the end of
+// pose i to the start of pose j. A rotation with a saturated gyroscope sample or longer than
+// max_rotation_s is not used (its segment in `segments` says why). `segments` holds every
+// segment of every record (TagCalibration::segments); `statics` are MeanPoses' static poses.
+RotationSet BuildRotations(const std::vector<Record>& records, const std::vector<Pose>& statics,
+                           const TemperatureDecision& temperature, const Eigen::Vector3d& accel_ref,
+                           double max_rotation_s, std::vector<Segment>* segments);
+
+// Enough table runs and hand rotations for the gyroscope model.
+Status CheckGyroMotion(size_t table_runs, size_t rotations, ModelKind gyro_model, bool temperature,
+                       int sensor);
+
+// ---- Solves -----------------------------------------------------------------------------
+
+// kAccel/kGyro: unweighted start fits; kAccelFinal/kGyroFinal: whitened by the group standard
+// deviations of the start fits, with the robust loss when one is chosen. The accelerometer is
+// held in the gyroscope stages (the gravity norm alone determines it, as in imu_tk); its
+// uncertainty reaches the gyroscope through PropagateAccelUncertainty.
+enum class Stage { kAccel, kAccelFinal, kGyro, kGyroFinal };
+
+// Builds and solves one stage; residuals of every group are evaluated at the solution.
+// keep_problem: the problem to build (kept for the covariance), else a local one.
+Status SolveStage(Stage stage, const TagProblemData& d, const CalibrationOptions& o,
+                  ParameterBlocks* x, Fit* fit, ceres::Problem* keep_problem,
+                  std::vector<double*>* free_blocks, int* residual_count);
+
+// One sensor's solution in scaled parameters.
+struct SensorSolution {
+  std::vector<double*> free_blocks;  // Into the ParameterBlocks solved.
+  Eigen::MatrixXd covariance;        // Of the free parameters, FreeNames order.
+  double reduced_chi2 = 0;
+  int residuals = 0;   // m
+  int parameters = 0;  // p
+};
+
+// The accelerometer: unweighted fit, whitened final fit, rank, covariance.
+Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOptions& o, int sensor,
+                                  ParameterBlocks* x, Fit* fit);
+
+// The gyroscope with the accelerometer held: two re-weighted passes, whitened final fit, rank,
+// covariance, plus the accelerometer's uncertainty (PropagateAccelUncertainty).
+Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptions& o, int sensor,
+                                 const SensorSolution& accel, ParameterBlocks* x, Fit* fit);
+
+// cov_g += S cov_a S^T, S = -(G_g^T G_g)^-1 G_g^T G_a (JCGM 100:2008 5.2), from the whitened
+// Jacobian of the gyroscope problem over its free blocks (G_g) and the accelerometer's free
+// blocks (G_a); nothing when the gyroscope problem does not hold every accelerometer block.
+Status PropagateAccelUncertainty(ceres::Problem* gyro_problem,
+                                 const std::vector<double*>& gyro_free, int pg,
+                                 const SensorSolution& accel, Eigen::MatrixXd* cov_g);
+
+// ---- Assembly ---------------------------------------------------------------------------
+
+// Back to input units: b = b' / k_ref, k = k' k_ref, b1 = b1' / k_ref; the covariance
+// transforms with the diagonal Jacobian D of that map (JCGM 100:2008 5.1.2).
+void Unscale(const Eigen::Vector3d& ref, ImuSensor sensor, ModelKind kind, bool temperature,
+             ParameterBlocks* x, Eigen::MatrixXd* cov);
+
+// The SensorCalibration of one sensor's blocks of `x` (input units) and covariance.
+SensorCalibration MakeSensorCalibration(ImuSensor sensor, ModelKind kind, bool temperature,
+                                        double t_ref_c, const std::string& input_unit,
+                                        const ParameterBlocks& x, const Eigen::MatrixXd& cov);
+
+// A fit can be full rank and still not determine a constant: an uncertainty as large as the
+// datasheet tolerance (accel: 20 mg, 2 % scale, 0.02 rad; gyro: 1 deg/s, 2 %, 0.02 rad) is
+// refused.
+Status CheckDetermined(const SensorCalibration& c, int sensor_number);
+
+// The accelerometer's and gyroscope's results (x unscaled, covariances in input units).
+Result<SensorCalibration> AssembleAccel(const TagProblemData& d, const ParameterBlocks& x,
+                                        const SensorSolution& solution, const Fit& fit,
+                                        const TemperatureDecision& temperature,
+                                        const std::string& accel_unit, const CalibrationOptions& o,
+                                        int sensor);
+Result<SensorCalibration> AssembleGyro(const TagProblemData& d, const ParameterBlocks& x,
+                                       const SensorSolution& solution, const Fit& fit,
+                                       const TemperatureDecision& temperature,
+                                       const std::string& gyro_unit, const CalibrationOptions& o,
+                                       int sensor);
+
+// M's elements as a function of the sensor's free parameters (FreeNames order); held scales
+// are k_fixed.
+Eigen::Matrix3d MatrixFromFree(ImuSensor sensor, ModelKind kind, const double* k_fixed,
+                               const Eigen::VectorXd& free);
+
+double StudentT975(int dof);
+
+}  // namespace metro::calibration_internal
