@@ -2,8 +2,11 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <string>
 
+#include "metro/calibration/segment_file.hpp"
 #include "metro/calibration/simulate.hpp"
 
 namespace metro {
@@ -230,6 +233,78 @@ TEST_CASE("Short poses are counted with the min_static_s that accepts them", "[c
   const SegmentationSummary t = b.Detect(shorter);
   CHECK(t.pose_count == 9);
   CHECK(t.short_static_count == 0);
+}
+
+std::string WriteTemp(const std::string& name, const std::string& text) {
+  const std::string path = std::string(METRO_BINARY_DIR) + "/" + name;
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  REQUIRE(f != nullptr);
+  std::fwrite(text.data(), 1, text.size(), f);
+  std::fclose(f);
+  return path;
+}
+
+TEST_CASE("Annotated segments replace the detector", "[calibration]") {
+  Builder b;
+  for (int pose = 0; pose < 3; ++pose) {
+    b.Still(PoseMean(pose), Eigen::Vector3d::Zero(), 4.0);
+    b.Swing(PoseMean(pose), 1.0);
+  }
+  const std::string path = WriteTemp("segments_ok.csv",
+                                     "# poses of the three-pose record\n"
+                                     "kind,start_s,end_s\n"
+                                     "static,0.5,3.5\n"
+                                     "static,5.5,8.5\n"
+                                     "static,10.5,13.5\n");
+  Result<std::vector<AnnotatedSegment>> a = ReadSegmentsFile(path);
+  REQUIRE(a.ok());
+  REQUIRE(a.value().size() == 3);
+  SegmentationInput in;
+  in.t_s = &b.t;
+  in.accel = &b.accel;
+  in.gyro = &b.gyro;
+  Result<SegmentationSummary> s = SegmentsFromAnnotations(in, a.value(), path);
+  REQUIRE(s.ok());
+  CHECK(s.value().static_count == 3);
+  CHECK(s.value().pose_count == 3);
+  CHECK(s.value().rotation_count == 2);  // between the statics, as the detector makes them
+  const Segment& first = s.value().segments.front();
+  CHECK(first.kind == SegmentKind::kStatic);
+  // Samples 50 .. 350 (t = 0.50 .. 3.50 s inclusive), at 100 Hz from t = 0.
+  CHECK(first.begin == 50);
+  CHECK(first.end == 351);
+  // An annotation outside the record names its line.
+  const std::string late = WriteTemp("segments_late.csv", "kind,start_s,end_s\nstatic,90,95\n");
+  Result<SegmentationSummary> bad =
+      SegmentsFromAnnotations(in, ReadSegmentsFile(late).value(), late);
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().line == 2);
+  CHECK(bad.error().message.find("expected at least 2") != std::string::npos);
+}
+
+TEST_CASE("A segments file with a bad field names line and column", "[calibration]") {
+  struct Case {
+    const char* text;
+    int line, column;
+    const char* words;
+  };
+  const Case cases[] = {
+      {"kind,start_s,end_s\nstatic,1,x\n", 2, 3, "end_s 'x' is not a number"},
+      {"kind,start_s,end_s\npose,1,2\n", 2, 1, "expected static, rotation or table"},
+      {"kind,start_s,end_s\ntable,1,2\n", 2, 1, "needs a non-zero table_rate_dps"},
+      {"kind,begin,end_s\n", 1, 2, "unknown column 'begin'"},
+      {"kind,start_s,end_s\nstatic,2,1\n", 2, 3, "is not after start_s"},
+      {"kind,start_s,end_s,input\nstatic,1,2,0\n", 2, 4, "1-based index"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.text);
+    const std::string path = WriteTemp("segments_bad.csv", c.text);
+    Result<std::vector<AnnotatedSegment>> r = ReadSegmentsFile(path);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().line == c.line);
+    CHECK(r.error().column == c.column);
+    CHECK(r.error().message.find(c.words) != std::string::npos);
+  }
 }
 
 }  // namespace
