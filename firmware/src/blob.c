@@ -278,7 +278,8 @@ int metro_fw_cal_to_q(const void* cal, int m_frac, int m_cap_bits, int32_t q[21]
  *   b0, b1   Q16 LSB, LSB/degC, below 2^31 (|b1| < 2^15 LSB/degC: the fixed apply's range);
  *   b2       Q24 LSB/degC^2, below 2^31 (|b2| < 2^7 LSB/degC^2: the fixed apply's range);
  *   T        Q12 degC (t_ref_c, t_valid_min_c, t_valid_max_c).
- * Every step below is exact except |b2| D, truncated from Q36 to Q28 (by less than 2^-28).
+ * Every step below is exact except |b2| D, truncated from Q36 to Q28 (by less than 2^-28; in
+ * the temperature coefficient |b1| + 2 |b2| D it counts twice).
  * The decision band (where it can differ from the real-number rule) is in 3.1. */
 #define METRO_FW_ACCEL_S_Q 20084.0192 /* 9.80665 / 16384 * 2^25 */
 #define METRO_FW_GYRO_S_Q (250.0 * 4096.0 * 3.14159265358979323846 / 180.0) /* 2^27 */
@@ -291,6 +292,7 @@ static const uint32_t kNorm2Bounds[4] = {
     (uint32_t)(1.21 * METRO_FW_GYRO_S_Q * METRO_FW_GYRO_S_Q)};
 #define METRO_FW_TEMP_MIN_Q12 (-40 * 4096)
 #define METRO_FW_TEMP_MAX_Q12 (85 * 4096)
+#define METRO_FW_MIN_SPAN_Q12 (METRO_FW_T_VALID_MIN_SPAN_C * 4096)
 
 /* |x| for |x| < 2^31 (what metro_fw_cal_to_q gives with cap 31). */
 static uint32_t AbsU32(int32_t x) { return x < 0 ? 0u - (uint32_t)x : (uint32_t)x; }
@@ -302,12 +304,15 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
   const uint32_t* n2_bounds = kNorm2Bounds + 2 * kind;
   const int32_t limit_fs0 =
       kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_BIAS_LIMIT_LSB : METRO_FW_GYRO_BIAS_LIMIT_LSB;
+  const uint32_t tempco_fs0 =
+      kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_TEMPCO_LIMIT_LSB : METRO_FW_GYRO_TEMPCO_LIMIT_LSB;
   int64_t det = 0;
   int32_t d;
   int i, j;
   if (metro_fw_cal_to_q(c, (kind == METRO_FW_ACCEL ? 25 : 27) - fs_sel, 15, q) != 0) return 0;
   if (q[18] < METRO_FW_TEMP_MIN_Q12 || q[18] > METRO_FW_TEMP_MAX_Q12 ||
-      q[19] < METRO_FW_TEMP_MIN_Q12 || q[20] > METRO_FW_TEMP_MAX_Q12 || q[19] >= q[20]) {
+      q[19] < METRO_FW_TEMP_MIN_Q12 || q[20] > METRO_FW_TEMP_MAX_Q12 || q[19] >= q[20] ||
+      q[20] - q[19] < METRO_FW_MIN_SPAN_Q12) { /* no overflow: -40 <= t_min < t_max <= 85 */
     return 0;
   }
   /* D = max(|t_valid_min - t_ref|, |t_valid_max - t_ref|) = max(t_max - t_ref, t_ref - t_min)
@@ -318,7 +323,7 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
     const int k1 = i == 2 ? 0 : i + 1; /* (i + 1) mod 3 without a libgcc division */
     const int k2 = i == 0 ? 2 : i - 1; /* (i + 2) mod 3 */
     uint32_t n2 = 0u, minor;
-    uint64_t c_q28;
+    uint64_t b2d_q28, c_q28;
     for (j = 0; j < 3; ++j) n2 += (uint32_t)(q[3 * i + j] * q[3 * i + j]); /* <= 3 * 2^30 */
     if (n2 < n2_bounds[0] || n2 > n2_bounds[1]) return 0;
     /* det(M) = row0 . (row1 x row2). The minor fits int32 once rows 1 and 2 pass their norms
@@ -327,11 +332,13 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
     minor = (uint32_t)q[3 + k1] * (uint32_t)q[6 + k2] - (uint32_t)q[3 + k2] * (uint32_t)q[6 + k1];
     det += metro_fw_mul(q[i], (int32_t)minor);
     /* |b0| + (|b1| + |b2| D) D <= limit: c = |b1| + |b2| D in Q28 (< 2^44), the sum in Q40
-     * (< 2^63); all terms are not negative, so unsigned 64-bit. */
-    c_q28 =
-        (uint64_t)AbsU32(q[12 + i]) * 4096u + ((uint64_t)metro_fw_mul(AbsU32(q[15 + i]), d) >> 8);
+     * (< 2^63); all terms are not negative, so unsigned 64-bit. The temperature coefficient
+     * |b1| + 2 |b2| D = c + |b2| D (Q28) <= tempco limit (Q28, < 2^35). */
+    b2d_q28 = (uint64_t)metro_fw_mul(AbsU32(q[15 + i]), d) >> 8;
+    c_q28 = (uint64_t)AbsU32(q[12 + i]) * 4096u + b2d_q28;
     if (((uint64_t)AbsU32(q[9 + i]) << 24) + (uint64_t)metro_fw_mul((int64_t)c_q28, d) >
-        ((uint64_t)(uint32_t)(limit_fs0 >> fs_sel) << 40)) {
+            ((uint64_t)(uint32_t)(limit_fs0 >> fs_sel) << 40) ||
+        c_q28 + b2d_q28 > ((uint64_t)(tempco_fs0 >> fs_sel) << 28)) {
       return 0;
     }
   }

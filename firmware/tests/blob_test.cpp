@@ -380,6 +380,47 @@ TEST_CASE("Absurd constants of a declared sensor refuse the blob", "[fw][blob][l
   auto hot = fwtest::GoodAccel();
   hot.t_valid_max_c = 90.0f;
   CHECK(AccelStatus(WithAccel(hot)) == METRO_FW_SENSOR_LIMITS);
+}
+
+TEST_CASE("Implausible temperature terms and validity ranges refuse the blob",
+          "[fw][blob][limits]") {
+  // issue #23: |b1| near 2^15 LSB/degC over a 0.01 degC range passed the bias bound
+  // (32767 * 0.01 = 328 LSB) and the fixed apply then erred by up to 8 LSB.
+  auto steep = fwtest::GoodAccel();
+  steep.t_ref_c = 25.0f;
+  steep.t_valid_min_c = 25.0f;
+  steep.t_valid_max_c = 25.01f;
+  steep.b1 = {32767.0f, -32767.0f, 32767.0f};
+  steep.b2 = {0.0f, 0.0f, 0.0f};
+  CHECK(AccelStatus(WithAccel(steep)) == METRO_FW_SENSOR_LIMITS);
+  // The same range with a plausible b1: refused for the range alone (narrower than 2 degC).
+  steep.b1 = {1.0f, 1.0f, 1.0f};
+  CHECK(AccelStatus(WithAccel(steep)) == METRO_FW_SENSOR_LIMITS);
+  steep.t_valid_max_c = 27.0f;  // 2 degC wide: accepted
+  CHECK(AccelStatus(WithAccel(steep)) == METRO_FW_SENSOR_OK);
+  // b1 at the temperature-coefficient limit (80 LSB/degC at fs_sel 0, 4.9 mg/degC) passes,
+  // above it not; b2 counts with 2 |b2| D (D = 25 degC for 0 ... 50 around 25).
+  auto tempco = fwtest::GoodAccel();
+  tempco.b1 = {80.0f, 0.0f, 0.0f};
+  tempco.b2 = {0.0f, 0.0f, 0.0f};
+  CHECK(AccelStatus(WithAccel(tempco)) == METRO_FW_SENSOR_OK);
+  tempco.b1[0] = 80.5f;
+  CHECK(AccelStatus(WithAccel(tempco)) == METRO_FW_SENSOR_LIMITS);
+  tempco.b1[0] = 70.0f;
+  tempco.b2[0] = -0.2f;  // 70 + 2 * 0.2 * 25 = 80
+  CHECK(AccelStatus(WithAccel(tempco)) == METRO_FW_SENSOR_OK);
+  tempco.b2[0] = -0.21f;  // 80.5
+  CHECK(AccelStatus(WithAccel(tempco)) == METRO_FW_SENSOR_LIMITS);
+  // The gyroscope's limit is 88 LSB/degC (0.67 deg/s/degC) at fs_sel 0, 11 at fs_sel 3.
+  auto gyro = fwtest::GoodGyro();
+  gyro.b1 = {0.0f, -88.0f, 0.0f};
+  gyro.b2 = {0.0f, 0.0f, 0.0f};
+  Blob b = StandardBlob(1);
+  b.sections[2].body = fwtest::SensorBody(gyro);
+  CHECK(Validate(Build(b)) == METRO_FW_OK);
+  gyro.b1[1] = -88.5f;
+  b.sections[2].body = fwtest::SensorBody(gyro);
+  CHECK(Validate(Build(b)) == METRO_FW_E_SENSOR);
   auto bits = fwtest::GoodAccel();
   bits.model_bits = 0x1F;
   CHECK(AccelStatus(WithAccel(bits)) == METRO_FW_SENSOR_BAD_MODEL);

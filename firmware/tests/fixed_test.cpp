@@ -219,3 +219,191 @@ TEST_CASE("The 64 x 32 multiply equals the product modulo 2^64", "[fw][fixed]") 
     REQUIRE(static_cast<uint64_t>(metro_fw_mul(sa, sb)) == expected(sa, sb));
   }
 }
+
+namespace {
+
+// The nominal sensitivity s_nom, SI per LSB (PS-MPU-6000A rev 3.4 sections 6.1, 6.2).
+double Nominal(metro_fw_sensor_kind kind, int fs_sel) {
+  return kind == METRO_FW_ACCEL ? fwtest::kStandardGravity_mps2 / (16384 >> fs_sel)
+                                : (250 << fs_sel) / 32768.0 * fwtest::kPi / 180.0;
+}
+
+// Decodes a section the way the validator does (its own fs_sel and dlpf_cfg).
+metro_fw_sensor_cal DecodeSection(const fwtest::Sensor& s, metro_fw_sensor_kind kind) {
+  std::vector<uint8_t> body(4, 0);  // body offset 0 would mean "absent"
+  const std::vector<uint8_t> section = fwtest::SensorBody(s);
+  body.insert(body.end(), section.begin(), section.end());
+  metro_fw_buffer buf{body.data(), static_cast<uint32_t>(body.size())};
+  metro_fw_blob_info info{};
+  info.accel_off = info.gyro_off = 4;
+  info.accel_len = info.gyro_len = 176;
+  info.accel_version = info.gyro_version = METRO_FW_SEC_VERSION_1_0;
+  metro_fw_sensor_cal out{};
+  REQUIRE(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, kind, nullptr, &out) ==
+          METRO_FW_OK);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("The 3.2 bound at the worst section 3.1 admits is below 0.1 LSB", "[fw][fixed]") {
+  // Every term of the bound at its largest under 3.1: row norm <= 1.1 s_nom, so
+  // sum_j |M_ij| <= sqrt(3) 1.1 s_nom; |r| <= 32768; |bias| <= the bias limit; |dT| <= 125 degC;
+  // |b1| + 2 |b2| |dT| <= the temperature-coefficient limit; |b2| < 2^7. An LSB-equivalent is
+  // the row norm, at least 0.9 s_nom.
+  for (int k = 0; k < 2; ++k) {
+    const auto kind = static_cast<metro_fw_sensor_kind>(k);
+    for (int fs = 0; fs < 4; ++fs) {
+      const double s = Nominal(kind, fs);
+      const double bias = (k == 0 ? 4096 : 7864) >> fs;
+      const double tempco =
+          (k == 0 ? METRO_FW_ACCEL_TEMPCO_LIMIT_LSB : METRO_FW_GYRO_TEMPCO_LIMIT_LSB) >> fs;
+      const double d = 125.0;
+      const double bound =
+          std::ldexp(3.0 * (32768.0 + bias + 1.0), -37) +
+          std::sqrt(3.0) * 1.1 * s *
+              (std::ldexp(1.0, -11) + std::ldexp(1.0 + d, -16) + std::ldexp(d * d, -25) +
+               std::ldexp(tempco + 2.0 * 128.0 / 4096.0, -12)) +
+          std::ldexp(1.0, -21);
+      const double lsb = bound / (0.9 * s);
+      INFO("kind " << k << " fs_sel " << fs << " bound " << lsb << " LSB");
+      CHECK(lsb < 0.1);
+    }
+  }
+}
+
+// issue #23: for every section the firmware accepts, its fixed-point and float applies stay
+// within 0.1 LSB of the model evaluated exactly (double) on the section's constants, below,
+// across and above the validity range. Sections are drawn at the edges 3.1 allows: random
+// rotations at +-10 % scale, biases up to the bias limit, temperature coefficients up to the
+// limit split between b1 and b2, validity ranges from 2 degC to the whole operating range
+// with t_ref anywhere in -40 ... 85; those the firmware refuses are counted and skipped.
+TEST_CASE("Every accepted section applies within 0.1 LSB of the exact model", "[fw][fixed]") {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> raw(-32768, 32767);
+  const int16_t corners[] = {-32768, -32767, -1, 0, 1, 32766, 32767};
+  int accepted = 0, refused = 0;
+  double worst_fixed = 0.0, worst_float = 0.0;
+  for (int iter = 0; iter < 600; ++iter) {
+    const auto kind = static_cast<metro_fw_sensor_kind>(iter % 2);
+    const int fs = (iter / 2) % 4;
+    const double sn = Nominal(kind, fs);
+    const double bias_limit = (kind == METRO_FW_ACCEL ? 4096 : 7864) >> fs;
+    const double tempco = (kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_TEMPCO_LIMIT_LSB
+                                                  : METRO_FW_GYRO_TEMPCO_LIMIT_LSB) >>
+                          fs;
+    fwtest::Sensor s = kind == METRO_FW_ACCEL ? fwtest::GoodAccel() : fwtest::GoodGyro();
+    s.fs_sel = static_cast<uint8_t>(fs);
+    s.model_bits = 0x0F;
+    // Temperatures: t_ref anywhere, a range 2 ... 125 degC wide inside -40 ... 85.
+    const double width = 2.0 + 123.0 * std::pow(std::fabs(unit(rng)), 2.0);
+    const double lo = -40.0 + (125.0 - width) * std::fabs(unit(rng));
+    s.t_valid_min_c = static_cast<float>(lo);
+    s.t_valid_max_c = static_cast<float>(lo + width);
+    s.t_ref_c = static_cast<float>(-40.0 + 125.0 * std::fabs(unit(rng)));
+    const double d = std::max(std::fabs(double{s.t_valid_min_c} - s.t_ref_c),
+                              std::fabs(double{s.t_valid_max_c} - s.t_ref_c));
+    // A rotation about a random axis (Rodrigues) times a scale within +-10 % per row.
+    double axis[3] = {unit(rng), unit(rng), unit(rng)};
+    const double n = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    for (double& a : axis) a /= n;
+    const double angle = fwtest::kPi * unit(rng), c = std::cos(angle), sa = std::sin(angle);
+    for (int i = 0; i < 3; ++i) {
+      const double k = sn * (1.0 + 0.0999 * unit(rng));
+      for (int j = 0; j < 3; ++j) {
+        const double cross = i == j ? 0.0 : (((j - i + 3) % 3 == 1) ? -1.0 : 1.0) * axis[3 - i - j];
+        const double r = (i == j ? c : 0.0) + (1.0 - c) * axis[i] * axis[j] + sa * cross;
+        s.m[3 * i + j] = static_cast<float>(k * r);
+      }
+      // The temperature coefficient at up to its limit, shared between b1 and b2; the bias
+      // bound at up to its limit.
+      const double coef =
+          std::min(tempco, 0.999 * bias_limit / d) * std::pow(std::fabs(unit(rng)), 0.1);
+      const double share = std::fabs(unit(rng));
+      s.b1[i] = static_cast<float>((unit(rng) < 0 ? -1 : 1) * share * coef);
+      s.b2[i] = static_cast<float>((unit(rng) < 0 ? -1 : 1) * (1.0 - share) * coef / (2.0 * d));
+      const double rest = (std::fabs(s.b1[i]) + std::fabs(s.b2[i]) * d) * d;
+      s.b0[i] = static_cast<float>(unit(rng) * std::max(0.0, bias_limit - rest));
+    }
+    const metro_fw_sensor_cal cal = DecodeSection(s, kind);
+    if (cal.status != METRO_FW_SENSOR_OK) {
+      ++refused;
+      continue;
+    }
+    ++accepted;
+    metro_fw_sensor_fixed fx;
+    REQUIRE(metro_fw_fixed_from_cal(&cal, &fx) == METRO_FW_OK);
+    const auto check = [&](const int16_t r[3], int32_t temp_q12) {
+      const double t = std::min<double>(std::max<double>(temp_q12 / 4096.0, cal.t_valid_min_c),
+                                        cal.t_valid_max_c);
+      const double dt = t - cal.t_ref_c;
+      int32_t y_q20[3];
+      REQUIRE(metro_fw_apply_fixed(&fx, r, temp_q12, y_q20) == METRO_FW_OK);
+      float y_f[3];
+      REQUIRE(metro_fw_apply(&cal, r, static_cast<float>(temp_q12 / 4096.0), y_f) == METRO_FW_OK);
+      for (int i = 0; i < 3; ++i) {
+        double exact = 0.0, row = 0.0;
+        for (int j = 0; j < 3; ++j) {
+          const double m = cal.m[3 * i + j];
+          exact += m * (r[j] - cal.b0[j] - (double{cal.b1[j]} + double{cal.b2[j]} * dt) * dt);
+          row += m * m;
+        }
+        row = std::sqrt(row);  // one LSB of the output, SI
+        worst_fixed = std::max(worst_fixed, std::fabs(std::ldexp(y_q20[i], -20) - exact) / row);
+        worst_float = std::max(worst_float, std::fabs(y_f[i] - exact) / row);
+      }
+    };
+    const int32_t q_min = static_cast<int32_t>(std::lround(cal.t_valid_min_c * 4096.0));
+    const int32_t q_max = static_cast<int32_t>(std::lround(cal.t_valid_max_c * 4096.0));
+    const int32_t q_ref = static_cast<int32_t>(std::lround(cal.t_ref_c * 4096.0));
+    const int32_t temps[] = {-60 * 4096,          q_min - 1, q_min,     q_ref,
+                             (q_min + q_max) / 2, q_max,     q_max + 1, 100 * 4096};
+    for (int16_t a : corners) {
+      for (int16_t b : corners) {
+        for (int16_t e : corners) {
+          const int16_t r[3] = {a, b, e};
+          for (int32_t t : temps) check(r, t);
+        }
+      }
+    }
+    std::uniform_int_distribution<int32_t> temp_q12(-60 * 4096, 100 * 4096);
+    for (int k = 0; k < 300; ++k) {
+      const int16_t r[3] = {static_cast<int16_t>(raw(rng)), static_cast<int16_t>(raw(rng)),
+                            static_cast<int16_t>(raw(rng))};
+      check(r, temp_q12(rng));
+    }
+  }
+  INFO("accepted " << accepted << ", refused " << refused << "; worst fixed " << worst_fixed
+                   << " LSB, float " << worst_float << " LSB");
+  CHECK(accepted >= 500);
+  CHECK(worst_fixed < 0.1);
+  CHECK(worst_float < 0.1);
+  WARN("fixed apply within " << worst_fixed << " LSB, float apply within " << worst_float
+                             << " LSB of the exact model over " << accepted << " sections");
+}
+
+TEST_CASE("The section issue #23 found is refused and would err by LSBs", "[fw][fixed]") {
+  // |b1| = 32767 LSB/degC over a 0.01 degC validity range passed the bias bound (328 LSB)
+  // before the temperature-coefficient and span limits. The Q12 roundings of t_ref and the
+  // clamp ends move dT by up to 2^-12 degC: 32767 * 2^-12 = 8 LSB.
+  fwtest::Sensor s = fwtest::GoodAccel();
+  s.t_ref_c = 25.0f + 0.3f / 4096.0f;
+  s.t_valid_min_c = 25.0f - 0.4f / 4096.0f;
+  s.t_valid_max_c = s.t_valid_min_c + 0.01f;
+  s.b1 = {32767.0f, -32767.0f, 32767.0f};
+  s.b2 = {0.0f, 0.0f, 0.0f};
+  CHECK(DecodeSection(s, METRO_FW_ACCEL).status == METRO_FW_SENSOR_LIMITS);
+  const metro_fw_sensor_cal cal = fwtest::CalOf(s);
+  metro_fw_sensor_fixed fx;
+  REQUIRE(metro_fw_fixed_from_cal(&cal, &fx) == METRO_FW_OK);
+  const int16_t r[3] = {1000, -2000, 300};
+  int32_t y_q20[3];
+  REQUIRE(metro_fw_apply_fixed(&fx, r, 0, y_q20) == METRO_FW_OK);  // 0 degC: clamped to min
+  const double dt = double{cal.t_valid_min_c} - cal.t_ref_c;
+  double exact = 0.0;
+  for (int j = 0; j < 3; ++j) exact += double{cal.m[j]} * (r[j] - cal.b0[j] - cal.b1[j] * dt);
+  const double err_lsb = std::fabs(std::ldexp(y_q20[0], -20) - exact) / cal.m[0];
+  INFO("fixed apply error " << err_lsb << " LSB");
+  CHECK(err_lsb > 1.0);
+}

@@ -29,6 +29,12 @@ double BiasLimit(metro_fw_sensor_kind kind, int fs_sel) {
   return (kind == METRO_FW_ACCEL ? 4096 : 7864) >> fs_sel;  // 0.25 g, 60 deg/s in counts
 }
 
+// The temperature coefficient limit of 3.1, LSB/degC: 4.9 mg/degC, 0.67 deg/s/degC in counts.
+double TempcoLimit(metro_fw_sensor_kind kind, int fs_sel) {
+  return (kind == METRO_FW_ACCEL ? 80 : 88) >> fs_sel;
+}
+constexpr double kMinSpan_c = 2.0;  // the narrowest validity range of 3.1
+
 // Half-units of the formats of 3.1: M in Q(k - fs_sel), k = 25 / 27; b0, b1 in Q16, b2 in
 // Q24; T in Q12.
 double RowNormBand(metro_fw_sensor_kind kind, int fs_sel) {
@@ -43,6 +49,15 @@ double BiasBand(double d, double b1, double b2) {
   const double dp = d + kTempStep_c;
   return std::ldexp(1.0 + dp + dp * dp, -17) +
          std::ldexp(std::fabs(b1) + 2 * std::fabs(b2) * dp, -12);
+}
+
+// The band of the temperature coefficient |b1| + 2 |b2| D: the Q16 rounding of b1 (2^-17), the
+// Q24 rounding of b2 times 2 D' (2^-24 D'), D within 2^-12 degC times 2 |b2|, and the floor of
+// |b2| D to Q28 counted twice (2^-27); D' = D + 2^-12.
+double TempcoBand(double d, double b2) {
+  const double dp = d + kTempStep_c;
+  return std::ldexp(1.0, -17) + std::ldexp(dp, -24) + std::ldexp(std::fabs(b2), -11) +
+         std::ldexp(1.0, -27);
 }
 
 enum class Real { kAccept, kReject, kNear };
@@ -80,12 +95,8 @@ Real RealRule(const fwtest::Sensor& in, metro_fw_sensor_kind kind, int fs_sel) {
     t.AtMost(x, 85.0, kTempBand_c);
     t.AtMost(-x, 40.0, kTempBand_c);
   }
-  // t_min < t_max: exact when they differ by more than 2^-12 (and t_min >= t_max always fails).
-  if (t_min >= t_max) {
-    t.fail = true;
-  } else if (t_max - t_min <= kTempStep_c) {
-    t.near = true;
-  }
+  // t_max - t_min >= 2 degC: the difference of two Q12 roundings is within 2^-12 degC of it.
+  t.AtMost(kMinSpan_c - (t_max - t_min), 0.0, kTempStep_c);
   const double d = std::max(std::fabs(t_min - t_ref), std::fabs(t_max - t_ref));
   const double band_n = RowNormBand(kind, fs_sel);
   double r_max = 1.1 * s;
@@ -98,6 +109,8 @@ Real RealRule(const fwtest::Sensor& in, metro_fw_sensor_kind kind, int fs_sel) {
     t.Exact(std::fabs(b1[i]) < 32768.0 && std::fabs(b2[i]) < 128.0);  // fixed-apply ranges
     t.AtMost(std::fabs(b0[i]) + std::fabs(b1[i]) * d + std::fabs(b2[i]) * d * d,
              BiasLimit(kind, fs_sel), BiasBand(d, b1[i], b2[i]));
+    t.AtMost(std::fabs(b1[i]) + 2.0 * std::fabs(b2[i]) * d, TempcoLimit(kind, fs_sel),
+             TempcoBand(d, b2[i]));
   }
   const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
                      m[2] * (m[3] * m[7] - m[4] * m[6]);
@@ -211,9 +224,10 @@ TEST_CASE("Integer limit checks decide as the real-number rule outside the band"
         family = 0;
         const double ends[] = {-40.0, 85.0};
         float* t[] = {&s.t_ref_c, &s.t_valid_min_c, &s.t_valid_max_c};
-        if (pick(3) == 0) {
+        if (pick(3) == 0) {  // the narrowest range, 2 degC +- 2 bands
           s.t_valid_min_c = static_cast<float>(10.0 + 40.0 * unit(rng));
-          s.t_valid_max_c = static_cast<float>(s.t_valid_min_c + 2.0 * kTempStep_c * unit(rng));
+          s.t_valid_max_c =
+              static_cast<float>(s.t_valid_min_c + kMinSpan_c + bands() * kTempStep_c);
         } else {
           const int e = pick(2);
           *t[pick(3)] = static_cast<float>(ends[e] + (e == 0 ? -1 : 1) * bands() * kTempBand_c);
@@ -244,8 +258,11 @@ TEST_CASE("Integer limit checks decide as the real-number rule outside the band"
         s.b0 = {0.0f, 0.0f, 0.0f};
         s.b1 = {0.0f, 0.0f, 0.0f};
         s.b2 = {0.0f, 0.0f, 0.0f};
-        s.b1[row] = static_cast<float>(unit(rng) * 0.5 * limit / d);
-        s.b2[row] = static_cast<float>(unit(rng) * 0.4 * limit / (d * d));
+        // The temperature coefficient well inside its limit (at most 0.9 of it) and the
+        // temperature terms at most 0.63 of the bias limit.
+        const double tempco = std::min(TempcoLimit(kind, fs_sel), 0.9 * limit / d);
+        s.b1[row] = static_cast<float>(unit(rng) * 0.5 * tempco);
+        s.b2[row] = static_cast<float>(unit(rng) * 0.2 * tempco / d);
         const double rest = (std::fabs(s.b1[row]) + std::fabs(s.b2[row]) * d) * d;
         const double b0 = limit - rest + bands() * BiasBand(d, s.b1[row], s.b2[row]);
         s.b0[row] = static_cast<float>(pick(2) ? -b0 : b0);
@@ -264,20 +281,26 @@ TEST_CASE("Integer limit checks decide as the real-number rule outside the band"
         s.model_bits |= 0x02;
         break;
       }
-      case 6: {  // fixed-apply ranges |b1| < 2^15, |b2| < 2^7 with a narrow validity range
+      case 6: {  // the temperature coefficient |b1| + 2 |b2| D at its limit +- 2 bands
         family = 4;
-        s.t_ref_c = 25.0f;
-        s.t_valid_min_c = 25.0f;
-        s.t_valid_max_c = 25.0f + 1.0f / 1024.0f;
-        const int ulps = pick(5) - 2;
-        float v = pick(2) == 0 ? 32768.0f : 128.0f;
-        for (int k = 0; k < std::abs(ulps); ++k) v = std::nextafter(v, ulps > 0 ? inf : 0.0f);
-        if (v > 200.0f) {
-          s.b1[row] = pick(2) ? -v : v;
-        } else {
-          s.b2[row] = pick(2) ? -v : v;
-        }
-        s.b0[row] = 0.0f;
+        const double t_ref = 45.0 * std::fabs(unit(rng));
+        const double below = 1.0 + 39.0 * std::fabs(unit(rng));
+        const double above = 1.0 + 39.0 * std::fabs(unit(rng));
+        s.t_ref_c = static_cast<float>(t_ref);
+        s.t_valid_min_c = static_cast<float>(t_ref - below);
+        s.t_valid_max_c = static_cast<float>(t_ref + above);
+        const double d = std::max(std::fabs(double{s.t_valid_min_c} - s.t_ref_c),
+                                  std::fabs(double{s.t_valid_max_c} - s.t_ref_c));
+        // D <= 40 degC keeps the bias bound (<= 40 x limit x 2^-fs_sel) below the bias limit.
+        const double share = std::fabs(unit(rng));  // of the coefficient carried by b1
+        const double b2_mag = (1.0 - share) * TempcoLimit(kind, fs_sel) / (2.0 * d);
+        s.b0 = {0.0f, 0.0f, 0.0f};
+        s.b1 = {0.0f, 0.0f, 0.0f};
+        s.b2 = {0.0f, 0.0f, 0.0f};
+        s.b2[row] = static_cast<float>(pick(2) ? -b2_mag : b2_mag);
+        const double b1_mag = TempcoLimit(kind, fs_sel) - 2.0 * std::fabs(s.b2[row]) * d +
+                              bands() * TempcoBand(d, s.b2[row]);
+        s.b1[row] = static_cast<float>(pick(2) ? -b1_mag : b1_mag);
         s.model_bits = 0x0F;
         break;
       }
@@ -404,6 +427,29 @@ TEST_CASE("Limit checks accept and reject just beyond the stated band", "[fw][bl
           s.b1 = {0.0f, 0.0f, 0.0f};
           s.b2 = {0.0f, 0.0f, 0.0f};
           INFO("kind " << k << " fs_sel " << fs_sel << " temperature side " << side);
+          CHECK(Decode(s, kind, fs_sel) ==
+                (side > 0 ? METRO_FW_SENSOR_LIMITS : METRO_FW_SENSOR_OK));
+        }
+        // The narrowest validity range: 2 degC -+ 1.05 bands (2^-12 degC).
+        {
+          fwtest::Sensor s = Base(kind, fs_sel);
+          s.t_valid_min_c = 24.0f;
+          s.t_valid_max_c = static_cast<float>(24.0 + kMinSpan_c - side * 1.05 * kTempStep_c);
+          INFO("kind " << k << " fs_sel " << fs_sel << " span side " << side);
+          CHECK(Decode(s, kind, fs_sel) ==
+                (side > 0 ? METRO_FW_SENSOR_LIMITS : METRO_FW_SENSOR_OK));
+        }
+        // Temperature coefficient: |b1| + 2 |b2| D at the limit +- 1.05 bands, D = 25 degC.
+        for (double b2 : {0.0, 0.03125}) {
+          fwtest::Sensor s = Base(kind, fs_sel);
+          const double d = 25.0;  // t_ref 25, valid 0 ... 50
+          s.b2 = {0.0f, static_cast<float>(-b2), 0.0f};
+          s.b1 = {0.0f,
+                  static_cast<float>(TempcoLimit(kind, fs_sel) - 2.0 * b2 * d +
+                                     side * 1.05 * TempcoBand(d, b2)),
+                  0.0f};
+          s.b0 = {0.0f, 0.0f, 0.0f};
+          INFO("kind " << k << " fs_sel " << fs_sel << " tempco side " << side << " b2 " << b2);
           CHECK(Decode(s, kind, fs_sel) ==
                 (side > 0 ? METRO_FW_SENSOR_LIMITS : METRO_FW_SENSOR_OK));
         }

@@ -55,6 +55,22 @@ extern "C" {
 
 #define METRO_FW_SLOT_NONE (-1)
 
+/* Plausibility limits of a sensor section (section 3.1), which the host tools also apply when
+ * they build a blob.
+ * - The temperature coefficient of the bias anywhere in the validity range, |b1| + 2 |b2| D
+ *   (D = max |t_valid - t_ref_c|), in LSB/degC at fs_sel 0 (halved per fs_sel step): twice the
+ *   steepest slope around 25 degC that the MPU6050 datasheet (PS-MPU-6000A rev 3.4 sections
+ *   6.1, 6.2) allows, rounded up to a multiple of 8 LSB. Accelerometer: zero-g level change
+ *   +-60 mg (z; x, y +-35 mg) over 0..70 degC, 60 mg / 25 degC = 2.4 mg/degC, twice that is
+ *   78.6 LSB/degC -> 80 (4.9 mg/degC). Gyroscope: ZRO variation +-20 deg/s over -40..85 degC,
+ *   20 deg/s / 60 degC = 0.33 deg/s/degC, twice that is 87.4 LSB/degC -> 88 (0.67 deg/s/degC).
+ * - The narrowest validity range, degC: twice the +-1 degC linearity of the MPU6050
+ *   temperature sensor (section 6.3).
+ * With these the fixed-point apply stays within 0.1 LSB of the exact model (section 3.2). */
+#define METRO_FW_ACCEL_TEMPCO_LIMIT_LSB 80
+#define METRO_FW_GYRO_TEMPCO_LIMIT_LSB 88
+#define METRO_FW_T_VALID_MIN_SPAN_C 2
+
 /* Reads len bytes at offset of a blob into dst; 0 on success, negative on failure. The
  * validator reads through this so a slot is never copied whole into RAM. */
 typedef int (*metro_fw_read_fn)(void* ctx, uint32_t offset, uint8_t* dst, uint32_t len);
