@@ -1,7 +1,9 @@
-// calibrate apply calibration.json SESSION -o calibrated.csv
+// calibrate apply calibration.json SESSION -o calibrated.csv [--t-valid-min-c C]
+//   [--t-valid-max-c C]
 #include <fmt/format.h>
 
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
 #include "metro/calibration/calibration_io.hpp"
@@ -17,6 +19,8 @@ struct ApplyOptions {
   std::vector<std::string> inputs;  // SESSION, or ACC GYRO with --imutk.
   std::string output;
   bool imutk = false;
+  std::optional<double> t_valid_min_c;  // As given to `calibrate blob`.
+  std::optional<double> t_valid_max_c;
 };
 
 int RunApply(const ApplyOptions& a) {
@@ -46,10 +50,25 @@ int RunApply(const ApplyOptions& a) {
     return kExitUsage;
   }
   Session s = std::move(session).value();
-  Result<ApplySummary> summary = ApplyCalibration(cal.value(), &s);
+  ApplyCalibrationOptions options;
+  options.validity.t_valid_min_c = a.t_valid_min_c;
+  options.validity.t_valid_max_c = a.t_valid_max_c;
+  Result<ApplySummary> summary = ApplyCalibration(cal.value(), &s, options);
   if (!summary.ok()) {
     apps::PrintError(summary.error());
     return kExitUsage;
+  }
+  // The validity ranges' warnings and the samples outside a range always print; a session
+  // entirely within its ranges is a note.
+  for (const std::string& w : summary.value().warnings) {
+    apps::PrintText(stderr, fmt::format("warning: {}\n", w));
+  }
+  for (const SensorTemperatureCount& t : summary.value().temperature) {
+    if (t.outside() > 0 || t.missing > 0) {
+      apps::PrintText(stderr, t.Describe() + "\n");
+    } else {
+      apps::Note(t.Describe() + "\n");
+    }
   }
   if (Status w = apps::WriteOutput(a.output, FormatSessionCsv(s, true)); !w.ok()) {
     apps::PrintError(w.error());
@@ -78,6 +97,12 @@ void AddApplyCommand(CLI::App& app, int* exit_code) {
   sub->add_option("-o,--output", o->output, "calibrated session.csv to write (- for stdout)")
       ->required();
   sub->add_flag("--imutk", o->imutk, "the session is an imu_tk pair: ACC GYRO");
+  sub->add_option("--t-valid-min-c", o->t_valid_min_c,
+                  "lower end of the temperature validity range, as given to calibrate blob "
+                  "(default: the fitted span - 5 degC)");
+  sub->add_option("--t-valid-max-c", o->t_valid_max_c,
+                  "upper end of the temperature validity range (default: the fitted span + 5 "
+                  "degC)");
   sub->callback([o, exit_code] { *exit_code = RunApply(*o); });
 }
 

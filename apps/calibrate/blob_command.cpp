@@ -1,8 +1,11 @@
 // calibrate blob calibration.json --sensor N --device-id HEX16 [--seq N] -o tag.bin
-//   [--hex tag.hex] [--slot-address ADDR] [--dlpf-cfg N]
+//   [--hex tag.hex] [--slot-address ADDR] [--dlpf-cfg N] [--t-valid-min-c C] [--t-valid-max-c C]
 #include <fmt/format.h>
 
 #include <memory>
+#include <optional>
+#include <utility>
+#include <vector>
 
 #include "commands.hpp"
 #include "metro/blob/from_calibration.hpp"
@@ -78,10 +81,15 @@ int RunBlob(const BlobOptions& b) {
   o.t_valid_max_c = b.t_valid_max_c;
   o.seq = b.seq;
   o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
-  Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal.value(), o);
+  std::vector<std::string> warnings;
+  Result<blob::BlobContents> contents =
+      blob::BlobContentsFromCalibration(cal.value(), o, &warnings);
   if (!contents.ok()) {
     apps::PrintErrorText(fmt::format("{}: {}", b.calibration, contents.error().ToString()));
     return kExitUsage;
+  }
+  for (const std::string& w : warnings) {
+    apps::PrintText(stderr, fmt::format("warning: {}\n", w));
   }
   Result<std::vector<uint8_t>> bytes = blob::WriteBlob(contents.value());
   if (!bytes.ok()) {
@@ -109,6 +117,13 @@ int RunBlob(const BlobOptions& b) {
   apps::Note(fmt::format("wrote {}: {} bytes, sensor {}, device {}, seq {}, CRC-32 0x{:08X}\n",
                          apps::IsStdio(b.output) ? "stdout" : b.output, v.size(), b.sensor,
                          blob::FormatDeviceId(id.value()), b.seq, crc));
+  for (const auto& [sensor, name] :
+       {std::pair{&contents.value().accel, "accel"}, std::pair{&contents.value().gyro, "gyro"}}) {
+    if (*sensor) {
+      apps::Note(fmt::format("{}: the tag clamps the temperature to {:.2f} .. {:.2f} degC\n", name,
+                             (*sensor)->t_valid_min_c, (*sensor)->t_valid_max_c));
+    }
+  }
   if (!b.hex.empty()) {
     apps::Note(fmt::format("wrote {}: blob at 0x{:05X} (slot A), tombstone at 0x{:05X} (slot B)\n",
                            apps::IsStdio(b.hex) ? "stdout" : b.hex, slot_a.value(),
@@ -146,9 +161,11 @@ void AddBlobCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")
       ->check(CLI::Range(0, 6));
   sub->add_option("--t-valid-min-c", o->t_valid_min_c,
-                  "lower end of the temperature validity range the tag clamps to (default -40)");
+                  "lower end of the temperature validity range the tag clamps to (default: the "
+                  "fitted span - 5 degC; lower is extrapolation, with a warning)");
   sub->add_option("--t-valid-max-c", o->t_valid_max_c,
-                  "upper end of the temperature validity range (default 85)");
+                  "upper end of the temperature validity range (default: the fitted span + 5 "
+                  "degC)");
   sub->callback([o, exit_code] { *exit_code = RunBlob(*o); });
 }
 

@@ -81,6 +81,9 @@ int RunPush(const PushCliOptions& c) {
   blob::PushSummary s =
       blob::PushCalibration(port.value().get(), cal.value(), bo, expect, po, progress);
   bar.Finish();
+  for (const std::string& w : s.warnings) {
+    apps::PrintText(stderr, fmt::format("warning: {}\n", EscapeControlChars(w)));
+  }
   // What the tag and the link did: notes (not under --quiet), except on failure.
   const bool notes = !s.ok || !apps::Quiet();
   if (s.tag_answered && notes) {
@@ -136,9 +139,11 @@ void AddPushCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")
       ->check(CLI::Range(0, 6));
   sub->add_option("--t-valid-min-c", o->t_valid_min_c,
-                  "lower end of the temperature validity range the tag clamps to (default -40)");
+                  "lower end of the temperature validity range the tag clamps to (default: the "
+                  "fitted span - 5 degC; lower is extrapolation, with a warning)");
   sub->add_option("--t-valid-max-c", o->t_valid_max_c,
-                  "upper end of the temperature validity range (default 85)");
+                  "upper end of the temperature validity range (default: the fitted span + 5 "
+                  "degC)");
   sub->add_option("--timeout-ms", o->timeout_ms, "wait for each answer (default 1000)")
       ->check(CLI::Range(1, 60000));
   sub->add_option("--retries", o->retries, "resends of one request (default 5)")

@@ -15,6 +15,12 @@
 #include "metro_fw/crc.h"
 
 namespace metro::blob {
+
+static_assert(kAccelTempcoLimitLsbPerCFs0 == METRO_FW_ACCEL_TEMPCO_LIMIT_LSB &&
+                  kGyroTempcoLimitLsbPerCFs0 == METRO_FW_GYRO_TEMPCO_LIMIT_LSB &&
+                  kTValidMinSpanC == METRO_FW_T_VALID_MIN_SPAN_C,
+              "blob.hpp's plausibility limits are the firmware's (docs/calibration-blob.md 3.1)");
+
 namespace {
 
 constexpr size_t kHeaderLen = 32;
@@ -308,7 +314,9 @@ Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
           SensorStatusName(cal.status),
           cal.status == METRO_FW_SENSOR_LIMITS
               ? "row norms of M within 10 % of the nominal sensitivity, det(M) > 0, bias within "
-                "0.25 g / 60 deg/s and -40 <= t_valid_min_c < t_valid_max_c <= 85 are required"
+                "0.25 g / 60 deg/s, temperature coefficient |b1| + 2 |b2| D within 4.9 mg/degC "
+                "/ 0.67 deg/s/degC and -40 <= t_valid_min_c, t_valid_min_c + 2 <= "
+                "t_valid_max_c <= 85 are required"
               : "see docs/calibration-blob.md section 3.1"));
     }
   }

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <ctime>
 
+#include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 
 namespace metro::blob {
@@ -90,14 +91,9 @@ bool BlobFromCalibrationOptions::IsValid(std::string* why) const {
   if (sensor < 1) return fail(fmt::format("sensor {} must be >= 1", sensor));
   if (seq < 1 || seq > kSeqMax) return fail(fmt::format("seq {} is outside 1..{}", seq, kSeqMax));
   if (dlpf_cfg > 6) return fail(fmt::format("dlpf_cfg {} is not 0..6", dlpf_cfg));
-  const double lo = t_valid_min_c.value_or(-40.0);
-  const double hi = t_valid_max_c.value_or(85.0);
-  if (!(lo >= -40.0 && lo < hi && hi <= 85.0)) {
-    return fail(
-        fmt::format("the temperature validity range {} .. {} degC must satisfy -40 <= "
-                    "min < max <= 85",
-                    lo, hi));
-  }
+  ValidityOptions validity{t_valid_min_c, t_valid_max_c};
+  std::string range_why;
+  if (!validity.IsValid(&range_why)) return fail(range_why);
   if (reference_id.size() > 16 || !PrintableAscii(reference_id)) {
     return fail(fmt::format("reference_id '{}' must be printable ASCII of at most 16 characters",
                             reference_id));
@@ -119,7 +115,8 @@ Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m) {
 }
 
 Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& c,
-                                                       const BlobFromCalibrationOptions& options) {
+                                                       const BlobFromCalibrationOptions& options,
+                                                       std::vector<std::string>* warnings) {
   const SensorModel& model = c.model;
   const char* name = ImuSensorName(model.sensor);
   if (model.input_unit != "LSB") {
@@ -145,6 +142,23 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   s.model_bits = kModelBias;
   if (model.kind == ModelKind::kFull) s.model_bits |= kModelFullMatrix;
   if (model.has_temperature) s.model_bits |= kModelLinearT;
+  // Plausibility (docs/calibration-blob.md 3.1): the calibrator fits no b2, so the temperature
+  // coefficient is |b1| on each axis.
+  const bool accel = model.sensor == ImuSensor::kAccel;
+  const double tempco_limit = TempcoLimitLsbPerC(accel, s.fs_sel);
+  for (int i = 0; i < 3 && model.has_temperature; ++i) {
+    const double b1 = model.bias_per_c[i];
+    if (std::fabs(b1) <= tempco_limit) continue;
+    const double per_unit = accel ? 1000.0 * NominalOutPerLsb(model.sensor, s.fs_sel)
+                                  : NominalOutPerLsb(model.sensor, s.fs_sel);
+    const char* unit = accel ? "mg/degC" : "deg/s/degC";
+    return MakeError(fmt::format(
+        "{}: the temperature coefficient b1_{} = {:.6g} LSB/degC ({:.3g} {}) exceeds the "
+        "plausibility limit {} LSB/degC ({:.3g} {} at fs_sel {}; docs/calibration-blob.md "
+        "3.1); expected |b1| <= {} LSB/degC: no MPU6050 drifts that fast, check the fit",
+        name, "xyz"[i], b1, b1 * per_unit, unit, tempco_limit, tempco_limit * per_unit, unit,
+        s.fs_sel, tempco_limit));
+  }
   s.t_ref_c = model.has_temperature ? model.t_ref_c : 25.0;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
@@ -168,15 +182,23 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
     if (g.kind == group && g.unit == unit) s.resid_rms_si = si * g.rms;
   }
   if (s.resid_rms_si == 0.0 && c.residual_unit == unit) s.resid_rms_si = si * c.residual_rms;
-  s.t_valid_min_c = options.t_valid_min_c.value_or(-40.0);
-  s.t_valid_max_c = options.t_valid_max_c.value_or(85.0);
+  Result<TemperatureValidity> validity =
+      TemperatureValidityRange(c, ValidityOptions{options.t_valid_min_c, options.t_valid_max_c});
+  if (!validity.ok()) return validity.error();  // names the sensor
+  s.t_valid_min_c = validity.value().min_c;
+  s.t_valid_max_c = validity.value().max_c;
+  if (warnings != nullptr) {
+    warnings->insert(warnings->end(), validity.value().warnings.begin(),
+                     validity.value().warnings.end());
+  }
   std::string why;
   if (!s.IsValid(&why)) return MakeError(fmt::format("{}: {}", name, why));
   return s;
 }
 
 Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
-                                                 const BlobFromCalibrationOptions& o) {
+                                                 const BlobFromCalibrationOptions& o,
+                                                 std::vector<std::string>* warnings) {
   std::string why;
   if (!o.IsValid(&why)) return MakeError("blob options: " + why);
   const TagCalibration* tag = cal.FindTag(o.sensor);
@@ -197,9 +219,13 @@ Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
   for (const auto& [src, dst] :
        {std::pair{&tag->accel, &b.accel}, std::pair{&tag->gyro, &b.gyro}}) {
     if (!*src) continue;
-    Result<SensorConstants> s = SensorConstantsFromCalibration(**src, o);
+    std::vector<std::string> sensor_warnings;
+    Result<SensorConstants> s = SensorConstantsFromCalibration(**src, o, &sensor_warnings);
     if (!s.ok()) return MakeError(fmt::format("sensor {} {}", o.sensor, s.error().message));
     *dst = s.value();
+    for (const std::string& w : sensor_warnings) {
+      if (warnings != nullptr) warnings->push_back(fmt::format("sensor {} {}", o.sensor, w));
+    }
   }
 
   MetaConstants& m = b.meta;

@@ -34,8 +34,9 @@ const char* StatusReason(int status) {
       return "fs_sel above 3 or dlpf_cfg above 6, a configuration no tag has";
     case METRO_FW_SENSOR_LIMITS:
       return "expected row norms of M within 10 % of the nominal sensitivity, det(M) > 0, bias "
-             "within 0.25 g / 60 deg/s and -40 <= t_valid_min_c < t_valid_max_c <= 85 "
-             "(section 3.1)";
+             "within 0.25 g / 60 deg/s, temperature coefficient |b1| + 2 |b2| D within 4.9 "
+             "mg/degC / 0.67 deg/s/degC and -40 <= t_valid_min_c, t_valid_min_c + 2 <= "
+             "t_valid_max_c <= 85 (section 3.1)";
     default:
       return "see docs/calibration-blob.md section 3.1";
   }

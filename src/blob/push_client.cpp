@@ -424,7 +424,8 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
     blob_options.seq = s.tag.active_seq + 1;
   }
   s.seq = blob_options.seq;
-  Result<BlobContents> contents = BlobContentsFromCalibration(calibration, blob_options);
+  Result<BlobContents> contents =
+      BlobContentsFromCalibration(calibration, blob_options, &s.warnings);
   Result<std::vector<uint8_t>> blob =
       contents.ok() ? WriteBlob(contents.value()) : Result<std::vector<uint8_t>>(contents.error());
   if (!blob.ok()) {

@@ -499,7 +499,11 @@ const Quantity* FindColumn(const Tag& tag, const std::string& name) {
   return nullptr;
 }
 
-Status ApplySensor(const SensorCalibration& c, const std::string& file, Tag* tag) {
+// Applies one sensor calibration to `tag`; with a temp_c column, *count receives how its
+// temperatures met the validity range.
+Status ApplySensor(const SensorCalibration& c, const TemperatureValidity& validity,
+                   const std::string& file, Tag* tag,
+                   std::optional<SensorTemperatureCount>* count) {
   const ImuSensor sensor = c.model.sensor;
   const std::vector<std::string> in_names = InputColumns(sensor, c.model.input_unit);
   if (in_names.empty()) {
@@ -532,9 +536,28 @@ Status ApplySensor(const SensorCalibration& c, const std::string& file, Tag* tag
   std::vector<double> out[3];
   for (auto& o : out) o.resize(n);
   const Eigen::Matrix3d m = c.M();
+  SensorTemperatureCount tc;
+  tc.sensor = tag->sensor;
+  tc.imu = sensor;
+  tc.temperature_term = c.model.has_temperature;
+  tc.t_ref_c = c.model.t_ref_c;
+  tc.validity = validity;
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d raw(in[0]->values[i], in[1]->values[i], in[2]->values[i]);
-    const double t = temp != nullptr ? temp->values[i] : 0.0;
+    double t = 0.0;
+    if (temp != nullptr) {
+      t = temp->values[i];
+      ++tc.samples;
+      if (std::isnan(t)) {
+        ++tc.missing;
+      } else if (t < validity.min_c) {
+        ++tc.below;
+      } else if (t > validity.max_c) {
+        ++tc.above;
+      }
+      // The tag's rule (firmware metro_fw_apply): NaN -> t_ref_c, then clamped to the range.
+      t = validity.Clamp(t, c.model.t_ref_c);
+    }
     const Eigen::Vector3d y = m * (raw - c.model.BiasAt(t));
     for (int a = 0; a < 3; ++a) out[a][i] = y[a];
   }
@@ -543,7 +566,18 @@ Status ApplySensor(const SensorCalibration& c, const std::string& file, Tag* tag
   for (int a = 0; a < 3; ++a) {
     SetColumn(tag, out_names[static_cast<size_t>(a)], c.model.output_unit, std::move(out[a]));
   }
+  if (temp != nullptr) *count = tc;
   return Status::Ok();
+}
+
+std::string Degc(double t) { return fmt::format("{:.2f}", t); }
+
+// The temperature term M_c b1 (t - t_ref_c) at t, largest axis, in mg (accelerometer) or deg/s.
+std::string TermAt(const SensorCalibration& c, double t_c) {
+  const Eigen::Vector3d term = c.M() * (c.model.bias_per_c * (t_c - c.model.t_ref_c));
+  const double largest = term.cwiseAbs().maxCoeff();
+  if (c.model.sensor == ImuSensor::kAccel) return fmt::format("{:.1f} mg", 1000.0 * largest);
+  return fmt::format("{:.2f} deg/s", largest);
 }
 
 }  // namespace
@@ -657,8 +691,150 @@ std::string FormatCalibrationReport(const Calibration& cal) {
   return out;
 }
 
-Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* session) {
+bool ValidityOptions::IsValid(std::string* why) const {
+  const auto fail = [&](std::string msg) {
+    if (why != nullptr) *why = std::move(msg);
+    return false;
+  };
+  for (const auto& [end, name] :
+       {std::pair{t_valid_min_c, "t_valid_min_c"}, std::pair{t_valid_max_c, "t_valid_max_c"}}) {
+    if (end && !(*end >= kOperatingMinC && *end <= kOperatingMaxC)) {
+      return fail(
+          fmt::format("{} {} degC is outside the MPU6050 operating range; expected {} .. {}", name,
+                      *end, kOperatingMinC, kOperatingMaxC));
+    }
+  }
+  if (t_valid_min_c && t_valid_max_c) {
+    if (!(*t_valid_min_c < *t_valid_max_c)) {
+      return fail(fmt::format(
+          "the temperature validity range {} .. {} degC must satisfy -40 <= min < max <= 85",
+          *t_valid_min_c, *t_valid_max_c));
+    }
+    if (*t_valid_max_c - *t_valid_min_c < kMinValiditySpanC) {
+      return fail(fmt::format(
+          "the temperature validity range {} .. {} degC is {:.3g} degC wide; expected at least {} "
+          "degC (twice the +-1 degC linearity of the MPU6050 temperature sensor)",
+          *t_valid_min_c, *t_valid_max_c, *t_valid_max_c - *t_valid_min_c, kMinValiditySpanC));
+    }
+  }
+  return true;
+}
+
+double TemperatureValidity::Clamp(double temp_c, double t_ref_c) const {
+  const double t = std::isnan(temp_c) ? t_ref_c : temp_c;
+  return std::clamp(t, min_c, max_c);
+}
+
+std::string TemperatureValidity::Describe() const {
+  std::string from;
+  if (span) {
+    from = fmt::format("the static poses' span {} .. {} degC + {} degC", Degc(span->min_c),
+                       Degc(span->max_c), kValidityMarginC);
+  } else {
+    from = "the MPU6050 operating range: no temperature span recorded";
+  }
+  if (explicit_min && explicit_max) return "as given; the default is " + from;
+  if (explicit_min || explicit_max) {
+    return fmt::format("{} as given, the other end from {}", explicit_min ? "minimum" : "maximum",
+                       from);
+  }
+  return "from " + from;
+}
+
+Result<TemperatureValidity> TemperatureValidityRange(const SensorCalibration& c,
+                                                     const ValidityOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(why);
+  const char* name = ImuSensorName(c.model.sensor);
+  TemperatureValidity v;
+  v.span = c.static_pose_temperature;
+  if (v.span) {
+    v.default_min_c = std::max(kOperatingMinC, v.span->min_c - kValidityMarginC);
+    v.default_max_c = std::min(kOperatingMaxC, v.span->max_c + kValidityMarginC);
+  }
+  v.explicit_min = options.t_valid_min_c.has_value();
+  v.explicit_max = options.t_valid_max_c.has_value();
+  v.min_c = options.t_valid_min_c.value_or(v.default_min_c);
+  v.max_c = options.t_valid_max_c.value_or(v.default_max_c);
+  if (!(v.min_c < v.max_c && v.max_c - v.min_c >= kMinValiditySpanC)) {
+    return MakeError(fmt::format(
+        "{}: the temperature validity range {} .. {} degC ({}) is not a range of at least {} "
+        "degC within {} .. {} degC; expected t_valid_min_c + {} <= t_valid_max_c",
+        name, Degc(v.min_c), Degc(v.max_c), v.Describe(), kMinValiditySpanC, kOperatingMinC,
+        kOperatingMaxC, kMinValiditySpanC));
+  }
+  const bool term = c.model.has_temperature;
+  if (!v.span) {
+    const std::string range = fmt::format("{} .. {} degC", Degc(v.min_c), Degc(v.max_c));
+    if (term) {
+      v.warnings.push_back(fmt::format(
+          "{}: calibration.json records no static_pose_temperature, so the span the temperature "
+          "term was fitted on is unknown; the validity range is {} ({}), where the term may be "
+          "extrapolated (refit with temp_c to record the span, or give --t-valid-min-c and "
+          "--t-valid-max-c)",
+          name, range, v.Describe()));
+    } else if (!(v.explicit_min && v.explicit_max)) {
+      v.warnings.push_back(fmt::format(
+          "{}: no temperature of the static poses recorded (no temp_c in the calibration data): "
+          "the validity range is the MPU6050 operating range {}; the calibration has no "
+          "temperature term, so the tag applies the same bias at every temperature",
+          name, range));
+    }
+    return v;
+  }
+  const bool below = v.min_c<v.default_min_c, above = v.max_c> v.default_max_c;
+  if (below || above) {
+    std::string at;
+    if (term) {
+      std::vector<std::string> ends;
+      if (below) ends.push_back(fmt::format("{} at {} degC", TermAt(c, v.min_c), Degc(v.min_c)));
+      if (above) ends.push_back(fmt::format("{} at {} degC", TermAt(c, v.max_c), Degc(v.max_c)));
+      at = fmt::format(
+          "; the temperature term is extrapolated there: the tag applies {} (largest axis, 0 at "
+          "t_ref_c {} degC)",
+          fmt::join(ends, " and "), Degc(c.model.t_ref_c));
+    } else {
+      at = "; the calibration has no temperature term: its bias was measured at the fitted span "
+           "only";
+    }
+    v.warnings.push_back(fmt::format(
+        "{}: the validity range {} .. {} degC reaches beyond the fitted span {} .. {} degC plus "
+        "the {} degC margin ({} .. {} degC){}",
+        name, Degc(v.min_c), Degc(v.max_c), Degc(v.span->min_c), Degc(v.span->max_c),
+        kValidityMarginC, Degc(v.default_min_c), Degc(v.default_max_c), at));
+  }
+  return v;
+}
+
+std::string SensorTemperatureCount::Describe() const {
+  const std::string who = fmt::format("sensor {} {}", sensor, ImuSensorName(imu));
+  const std::string range =
+      fmt::format("the validity range {} .. {} degC", Degc(validity.min_c), Degc(validity.max_c));
+  std::string line;
+  if (outside() == 0) {
+    line = fmt::format("{}: all {} samples with a temperature within {} ({})", who,
+                       samples - missing, range, validity.Describe());
+  } else {
+    line = fmt::format("{}: {} of {} samples outside {} ({} below, {} above; {})", who, outside(),
+                       samples, range, below, above, validity.Describe());
+    line += temperature_term ? ": their temperature clamped to the range, as the tag does"
+                             : ": the calibration has no temperature term, so the same bias "
+                               "applies; it was measured within the range's span only";
+  }
+  if (missing > 0) {
+    line += fmt::format(
+        "; {} samples without a temperature (NaN temp_c){}", missing,
+        temperature_term ? fmt::format(": t_ref_c {} degC applied, as the tag does", Degc(t_ref_c))
+                         : "");
+  }
+  return line;
+}
+
+Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* session,
+                                      const ApplyCalibrationOptions& options) {
   METRO_CHECK(session != nullptr);
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(why);
   ApplySummary summary;
   for (Tag& tag : session->tags) {
     const TagCalibration* tc = calibration.FindTag(tag.sensor);
@@ -672,13 +848,20 @@ Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* s
                                    "sensors {})",
                                    tag.sensor, have));
     }
-    if (tc->accel) {
-      Status s = ApplySensor(*tc->accel, session->path, &tag);
+    for (const std::optional<SensorCalibration>* c : {&tc->accel, &tc->gyro}) {
+      if (!*c) continue;
+      Result<TemperatureValidity> validity = TemperatureValidityRange(**c, options.validity);
+      if (!validity.ok()) {
+        return MakeError(session->path, 0,
+                         fmt::format("sensor {} {}", tag.sensor, validity.error().message));
+      }
+      for (const std::string& w : validity.value().warnings) {
+        summary.warnings.push_back(fmt::format("sensor {} {}", tag.sensor, w));
+      }
+      std::optional<SensorTemperatureCount> count;
+      Status s = ApplySensor(**c, validity.value(), session->path, &tag, &count);
       if (!s.ok()) return s.error();
-    }
-    if (tc->gyro) {
-      Status s = ApplySensor(*tc->gyro, session->path, &tag);
-      if (!s.ok()) return s.error();
+      if (count) summary.temperature.push_back(*count);
     }
     ++summary.tags_calibrated;
     summary.rows += static_cast<int64_t>(tag.size());

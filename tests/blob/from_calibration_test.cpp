@@ -2,6 +2,8 @@
 // the tag firmware's own loader and apply, and firmware (float32) vs calibrate apply (double).
 #include "metro/blob/from_calibration.hpp"
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
@@ -10,7 +12,11 @@
 
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/simulate.hpp"
+#include "metro/core/file.hpp"
+#include "metro/io/session_io.hpp"
 #include "metro_fw/blob.h"
+#include "metro_fw/fixed.h"
+#include "support/run_program.hpp"
 #include "tests/test_support.hpp"
 
 namespace metro::blob {
@@ -216,6 +222,38 @@ TEST_CASE("Mapping: bad input is refused with its reason", "[blob]") {
             .message.rfind("sensor 2 accel: the accel sensitivity", 0) == 0);
 }
 
+TEST_CASE("Mapping: an implausible temperature coefficient is refused with the limit", "[blob]") {
+  SensorCalibration a = MakeSensor(ImuSensor::kAccel, 1.0 / 16384.0);
+  a.model.bias_per_c = {0.5, 80.0, -1.0};  // 80 LSB/degC: the limit at fs_sel 0, accepted
+  CHECK(SensorConstantsFromCalibration(a, Options()).ok());
+  a.model.bias_per_c[1] = -81.0;
+  CHECK(SensorConstantsFromCalibration(a, Options()).error().message ==
+        "accel: the temperature coefficient b1_y = -81 LSB/degC (-4.94 mg/degC) exceeds the "
+        "plausibility limit 80 LSB/degC (4.88 mg/degC at fs_sel 0; docs/calibration-blob.md "
+        "3.1); expected |b1| <= 80 LSB/degC: no MPU6050 drifts that fast, check the fit");
+  // The gyroscope at +-1000 deg/s (fs_sel 2): 88 >> 2 = 22 LSB/degC = 0.67 deg/s/degC.
+  SensorCalibration g = MakeSensor(ImuSensor::kGyro, 1.0 / 32.8);
+  g.model.bias_per_c = {0.0, 0.0, 22.5};
+  CHECK(SensorConstantsFromCalibration(g, Options()).error().message ==
+        "gyro: the temperature coefficient b1_z = 22.5 LSB/degC (0.687 deg/s/degC) exceeds the "
+        "plausibility limit 22 LSB/degC (0.671 deg/s/degC at fs_sel 2; docs/calibration-blob.md "
+        "3.1); expected |b1| <= 22 LSB/degC: no MPU6050 drifts that fast, check the fit");
+  // A validity range narrower than 2 degC is refused before the firmware would refuse it.
+  BlobFromCalibrationOptions o = Options();
+  o.t_valid_min_c = 25.0;
+  o.t_valid_max_c = 25.01;
+  Calibration cal;
+  cal.date_utc = "2024-05-01T12:00:00Z";
+  TagCalibration t;
+  t.sensor = 2;
+  t.accel = MakeSensor(ImuSensor::kAccel, 1.0 / 16384.0);
+  cal.tags.push_back(t);
+  CHECK(BlobContentsFromCalibration(cal, o).error().message ==
+        "blob options: the temperature validity range 25 .. 25.01 degC is 0.01 degC wide; "
+        "expected at least 2 degC (twice the +-1 degC linearity of the MPU6050 temperature "
+        "sensor)");
+}
+
 TEST_CASE("Mapping: META carries time and version and inputs and coverage factor", "[blob]") {
   Calibration cal;
   cal.date_utc = "2024-05-01T12:00:00Z";
@@ -247,7 +285,7 @@ TEST_CASE("Mapping: META carries time and version and inputs and coverage factor
   CHECK(WriteBlob(r.value()).ok());
 }
 
-TEST_CASE("Mapping: META temperatures are the static poses' and the validity range an option",
+TEST_CASE("Mapping: META temperatures are the static poses' and the validity range their span",
           "[blob]") {
   // The fitted ramp tag: its calibration.json records the temperatures of its poses.
   const Fitted& f = FitOnce();
@@ -265,15 +303,44 @@ TEST_CASE("Mapping: META temperatures are the static poses' and the validity ran
   CHECK(r.value().meta.temp_min_c == range.min_c);
   CHECK(r.value().meta.temp_mean_c == range.mean_c);
   CHECK(r.value().meta.temp_max_c == range.max_c);
-  CHECK(r.value().accel->t_valid_min_c == -40.0);  // The default: the operating range.
-  CHECK(r.value().accel->t_valid_max_c == 85.0);
+  // issue #23: the default is the span the fit used, 5 degC wider on each side.
+  CHECK(r.value().accel->t_valid_min_c == range.min_c - 5.0);
+  CHECK(r.value().accel->t_valid_max_c == range.max_c + 5.0);
+  CHECK(r.value().gyro->t_valid_min_c == range.min_c - 5.0);
   BlobFromCalibrationOptions o = Options();
   o.t_valid_min_c = 20.0;
   o.t_valid_max_c = 36.0;
-  r = BlobContentsFromCalibration(f.cal, o);
+  std::vector<std::string> warnings;
+  r = BlobContentsFromCalibration(f.cal, o, &warnings);
   REQUIRE(r.ok());
   CHECK(r.value().accel->t_valid_min_c == 20.0);
   CHECK(r.value().gyro->t_valid_max_c == 36.0);
+  CHECK(warnings.empty());  // within the span + 5 degC
+  // The operating range: accepted, with the temperature term the tag then applies at the
+  // ends, M b1 (T - t_ref) on the largest axis, in mg and deg/s.
+  o.t_valid_min_c = -40.0;
+  o.t_valid_max_c = 85.0;
+  r = BlobContentsFromCalibration(f.cal, o, &warnings);
+  REQUIRE(r.ok());
+  REQUIRE(warnings.size() == 2);
+  const SensorCalibration& gyro = *f.cal.FindTag(2)->gyro;
+  const auto term = [](const SensorCalibration& c, double t) {
+    return (c.M() * c.model.bias_per_c * (t - c.model.t_ref_c)).cwiseAbs().maxCoeff();
+  };
+  CHECK(warnings[0] ==
+        fmt::format("sensor 2 accel: the validity range -40.00 .. 85.00 degC reaches beyond the "
+                    "fitted span {:.2f} .. {:.2f} degC plus the 5 degC margin ({:.2f} .. {:.2f} "
+                    "degC); the temperature term is extrapolated there: the tag applies {:.1f} mg "
+                    "at -40.00 degC and {:.1f} mg at 85.00 degC (largest axis, 0 at t_ref_c "
+                    "{:.2f} degC)",
+                    range.min_c, range.max_c, range.min_c - 5, range.max_c + 5,
+                    1000 * term(accel, -40.0), 1000 * term(accel, 85.0), accel.model.t_ref_c));
+  CHECK_THAT(warnings[1],
+             Catch::StartsWith("sensor 2 gyro: the validity range -40.00 .. 85.00 degC") &&
+                 Catch::Contains(fmt::format("the tag applies {:.2f} deg/s at -40.00 degC",
+                                             term(gyro, -40.0))));
+  CHECK(r.value().accel->t_valid_min_c == -40.0);
+  CHECK(r.value().accel->t_valid_max_c == 85.0);
   // And the range survives the calibration.json round trip.
   Result<Calibration> back = CalibrationFromJson(CalibrationToJson(f.cal), "cal.json");
   REQUIRE(back.ok());
@@ -416,6 +483,169 @@ TEST_CASE("Firmware apply equals calibrate apply within the binary32 bound", "[b
     CHECK(worst_rel < 1e-6);
   }
 }
+
+// issue #23: `calibrate apply` (ApplyCalibration, double, on calibration.json) and the tag's own
+// applies (metro_fw_apply_fixed, metro_fw_apply on the blob the firmware loaded) on one session
+// whose temperature sweeps -40 ... 85 degC, far beyond the fitted 22 ... 34 degC: the host clamps
+// to the validity range as the tag does, so they agree within 0.1 LSB at every sample. The
+// temperatures are Q12 values (what the tag reads, metro_fw_mpu6050_temp_q12), so both sides
+// see the same temperature. Before the clamp, the host extrapolated the temperature term where
+// the tag held it at the range's end.
+TEST_CASE("calibrate apply agrees with the firmware across and beyond the validity range",
+          "[blob][slow]") {
+  const Fitted& f = FitOnce();
+  for (const bool wide : {false, true}) {
+    BlobFromCalibrationOptions o = Options();
+    ApplyCalibrationOptions ao;
+    if (wide) {  // the same explicit ends on both sides
+      o.t_valid_min_c = ao.validity.t_valid_min_c = -10.0;
+      o.t_valid_max_c = ao.validity.t_valid_max_c = 60.0;
+    }
+    Result<BlobContents> contents = BlobContentsFromCalibration(f.cal, o);
+    REQUIRE(contents.ok());
+    const metro_fw_calibration fw = LoadOnTag(WriteBlob(contents.value()).value(), 0, 0, 3);
+    REQUIRE(fw.accel.status == METRO_FW_SENSOR_OK);
+    REQUIRE(fw.gyro.status == METRO_FW_SENSOR_OK);
+    metro_fw_sensor_fixed fx_accel, fx_gyro;
+    REQUIRE(metro_fw_fixed_from_cal(&fw.accel, &fx_accel) == METRO_FW_OK);
+    REQUIRE(metro_fw_fixed_from_cal(&fw.gyro, &fx_gyro) == METRO_FW_OK);
+
+    Session session = f.sim.session;
+    Tag& tag = session.tags.front();
+    Quantity* temp = tag.Find("temp_c");
+    REQUIRE(temp != nullptr);
+    const size_t n = tag.size();
+    std::vector<int32_t> temp_q12(n);
+    int64_t below = 0, above = 0;
+    const double lo = contents.value().accel->t_valid_min_c,
+                 hi = contents.value().accel->t_valid_max_c;
+    for (size_t k = 0; k < n; ++k) {
+      const double t = -40.0 + 125.0 * static_cast<double>(k) / static_cast<double>(n - 1);
+      temp_q12[k] = static_cast<int32_t>(std::lround(t * 4096.0));
+      temp->values[k] = temp_q12[k] / 4096.0;
+      below += temp->values[k] < lo;
+      above += temp->values[k] > hi;
+    }
+    Result<ApplySummary> summary = ApplyCalibration(f.cal, &session, ao);
+    REQUIRE(summary.ok());
+    REQUIRE(summary.value().temperature.size() == 2);
+    for (const SensorTemperatureCount& c : summary.value().temperature) {
+      CHECK(c.samples == static_cast<int64_t>(n));
+      CHECK(c.below == below);
+      CHECK(c.above == above);
+      CHECK(c.validity.min_c == lo);
+      CHECK(c.validity.max_c == hi);
+    }
+    CHECK(below > static_cast<int64_t>(n) / 10);  // the sweep reaches well beyond both ends
+    CHECK(above > static_cast<int64_t>(n) / 10);
+    for (const auto& [prefix, out_suffix, si, fwcal, fx] :
+         {std::tuple{'a', "_g", 9.80665, &fw.accel, &fx_accel},
+          std::tuple{'g', "_dps", kPi / 180.0, &fw.gyro, &fx_gyro}}) {
+      const Quantity* raw[3];
+      const Quantity* host[3];
+      double row[3];
+      for (int a = 0; a < 3; ++a) {
+        raw[a] = tag.Find(std::string(1, prefix) + "xyz"[a] + "_lsb");
+        host[a] = tag.Find(std::string(1, prefix) + "xyz"[a] + out_suffix);
+        REQUIRE(raw[a] != nullptr);
+        REQUIRE(host[a] != nullptr);
+        row[a] = std::sqrt(double{fwcal->m[3 * a]} * fwcal->m[3 * a] +
+                           double{fwcal->m[3 * a + 1]} * fwcal->m[3 * a + 1] +
+                           double{fwcal->m[3 * a + 2]} * fwcal->m[3 * a + 2]);  // SI per LSB
+      }
+      double worst_fixed = 0, worst_float = 0;
+      for (size_t k = 0; k < n; ++k) {
+        int16_t r[3];
+        for (int a = 0; a < 3; ++a) r[a] = static_cast<int16_t>(raw[a]->values[k]);
+        int32_t y_q20[3];
+        float y_f[3];
+        REQUIRE(metro_fw_apply_fixed(fx, r, temp_q12[k], y_q20) == METRO_FW_OK);
+        REQUIRE(metro_fw_apply(fwcal, r, static_cast<float>(temp->values[k]), y_f) == METRO_FW_OK);
+        for (int i = 0; i < 3; ++i) {
+          const double y_host = si * host[i]->values[k];
+          worst_fixed =
+              std::max(worst_fixed, std::fabs(std::ldexp(y_q20[i], -20) - y_host) / row[i]);
+          worst_float = std::max(worst_float, std::fabs(y_f[i] - y_host) / row[i]);
+        }
+      }
+      INFO(prefix << (wide ? " wide" : " default") << " range: worst fixed " << worst_fixed
+                  << " LSB, float " << worst_float << " LSB");
+      CHECK(worst_fixed < 0.1);
+      CHECK(worst_float < 0.1);
+      WARN(prefix << (wide ? " -10 .. 60 degC" : " default") << " range " << lo << " .. " << hi
+                  << ": calibrate apply vs firmware fixed " << worst_fixed << " LSB, float "
+                  << worst_float << " LSB");
+    }
+  }
+  // What the clamp changes: at -40 degC the extrapolated term exceeds the clamped one by
+  // M b1 (t_valid_min - (-40)) (the disagreement before issue #23 when the blob held the span).
+  const SensorCalibration& accel = *f.cal.FindTag(2)->accel;
+  const SensorCalibration& gyro = *f.cal.FindTag(2)->gyro;
+  const double lo = accel.static_pose_temperature->min_c - 5.0;
+  const double da = (accel.M() * accel.model.bias_per_c * (lo + 40.0)).cwiseAbs().maxCoeff();
+  const double dg = (gyro.M() * gyro.model.bias_per_c * (lo + 40.0)).cwiseAbs().maxCoeff();
+  WARN("without the clamp calibrate apply would differ from the tag at -40 degC by "
+       << 1000 * da << " mg and " << dg << " deg/s");
+  CHECK(1000 * da > 1.0);  // a real difference, far above 0.1 LSB (0.006 mg)
+}
+
+#ifdef METRO_CALIBRATE_EXE
+TEST_CASE("calibrate blob and apply say the validity range and the samples outside it",
+          "[blob][apps][slow]") {
+  const Fitted& f = FitOnce();
+  const std::string cal = "metro_validity_cal.json", csv = "metro_validity_session.csv";
+  REQUIRE(WriteFileAtomically(cal, FormatCalibrationJson(f.cal)).ok());
+  Session session = f.sim.session;
+  Quantity* temp = session.tags.front().Find("temp_c");
+  REQUIRE(temp != nullptr);
+  const size_t n = temp->values.size();
+  for (size_t k = 0; k < n; ++k) temp->values[k] = k < n / 4 ? 0.0 : 30.0;  // a quarter at 0
+  REQUIRE(WriteFileAtomically(csv, FormatSessionCsv(session, false)).ok());
+  const PoseTemperatureRange& span = *f.cal.FindTag(2)->accel->static_pose_temperature;
+
+  testing::ProgramRun b = testing::RunProgram(
+      METRO_CALIBRATE_EXE,
+      "blob " + cal + " --sensor 2 --device-id 0011223344556677 -o metro_validity.bin");
+  REQUIRE(b.exit_code == 0);
+  CHECK_THAT(b.err, Catch::Contains(fmt::format("accel: the tag clamps the temperature to {:.2f} "
+                                                "..",
+                                                span.min_c - 5)));
+  CHECK(b.err.find("warning") == std::string::npos);
+  testing::ProgramRun w = testing::RunProgram(
+      METRO_CALIBRATE_EXE, "blob " + cal +
+                               " --sensor 2 --device-id 0011223344556677 -o metro_validity.bin "
+                               "--t-valid-min-c -40");
+  REQUIRE(w.exit_code == 0);
+  CHECK_THAT(w.err, Catch::Contains("warning: sensor 2 accel: the validity range -40.00 .. ") &&
+                        Catch::Contains("mg at -40.00 degC") &&
+                        Catch::Contains("warning: sensor 2 gyro: the validity range -40.00 .. ") &&
+                        Catch::Contains("deg/s at -40.00 degC"));
+
+  testing::ProgramRun a = testing::RunProgram(
+      METRO_CALIBRATE_EXE, "apply " + cal + " " + csv + " -o metro_validity_out.csv");
+  REQUIRE(a.exit_code == 0);
+  CHECK_THAT(a.err, Catch::Contains(fmt::format(
+                        "sensor 2 accel: {} of {} samples outside the validity range {:.2f} .. "
+                        "{:.2f} degC ({} below, 0 above; from the static poses' span",
+                        n / 4, n, span.min_c - 5, span.max_c + 5, n / 4)));
+  CHECK_THAT(a.err, Catch::Contains("their temperature clamped to the range, as the tag does"));
+  testing::ProgramRun same = testing::RunProgram(
+      METRO_CALIBRATE_EXE,
+      "apply " + cal + " " + csv + " -o metro_validity_out.csv --t-valid-min-c -40 --quiet");
+  REQUIRE(same.exit_code == 0);
+  CHECK_THAT(same.err, Catch::Contains("warning: sensor 2 accel: the validity range -40.00 .. "));
+  CHECK(same.err.find("outside") == std::string::npos);
+  testing::ProgramRun bad = testing::RunProgram(
+      METRO_CALIBRATE_EXE, "apply " + cal + " " + csv +
+                               " -o metro_validity_out.csv --t-valid-min-c 20 --t-valid-max-c 21");
+  CHECK(bad.exit_code == 2);
+  CHECK_THAT(bad.err, Catch::Contains("is 1 degC wide; expected at least 2 degC"));
+  for (const std::string& p :
+       {cal, csv, std::string("metro_validity.bin"), std::string("metro_validity_out.csv")}) {
+    std::remove(p.c_str());
+  }
+}
+#endif
 
 }  // namespace metro::blob
 

@@ -288,3 +288,228 @@ TEST_CASE("calibration.json: an uncertainty that is not its covariance's is refu
 }
 
 }  // namespace metro
+
+namespace metro {
+namespace {
+
+// A hand-made accelerometer calibration of known constants (LSB in, g out) with a temperature
+// term b1 and, when `span` is set, the static poses' temperatures.
+SensorCalibration HandAccel(std::optional<PoseTemperatureRange> span, bool temperature = true) {
+  SensorCalibration c;
+  c.model.sensor = ImuSensor::kAccel;
+  c.model.kind = ModelKind::kBias;
+  c.model.input_unit = "LSB";
+  c.model.output_unit = "g";
+  c.model.bias = {100.0, -50.0, 25.0};
+  c.model.scale = Eigen::Vector3d::Constant(1.0 / 16384.0);
+  c.model.has_temperature = temperature;
+  c.model.t_ref_c = 28.0;
+  if (temperature) c.model.bias_per_c = {2.0, -4.0, 8.0};  // 0.12, 0.24, 0.49 mg/degC
+  c.static_pose_temperature = span;
+  return c;
+}
+
+PoseTemperatureRange Span(double lo, double hi) { return {lo, (lo + hi) / 2, hi, 26}; }
+
+}  // namespace
+
+TEST_CASE("Validity range: the fitted span plus 5 degC within the operating range",
+          "[calibration][validity]") {
+  const auto range = [](double lo, double hi) {
+    Result<TemperatureValidity> v = TemperatureValidityRange(HandAccel(Span(lo, hi)));
+    REQUIRE(v.ok());
+    CHECK(v.value().warnings.empty());
+    return std::pair{v.value().min_c, v.value().max_c};
+  };
+  CHECK(range(22.0, 34.0) == std::pair{17.0, 39.0});
+  CHECK(range(-38.0, -30.0) == std::pair{-40.0, -25.0});  // cut at the operating range
+  CHECK(range(82.0, 84.5) == std::pair{77.0, 85.0});
+  CHECK(range(25.0, 25.0) == std::pair{20.0, 30.0});  // one temperature: 10 degC wide
+  // Without a temperature term the range is the poses' span plus the margin too.
+  Result<TemperatureValidity> bias_only =
+      TemperatureValidityRange(HandAccel(Span(20.0, 21.0), false));
+  REQUIRE(bias_only.ok());
+  CHECK(bias_only.value().min_c == 15.0);
+  CHECK(bias_only.value().max_c == 26.0);
+  CHECK(bias_only.value().warnings.empty());
+  // Poses recorded far above the operating range give no range of 2 degC within it.
+  CHECK(TemperatureValidityRange(HandAccel(Span(90.0, 95.0))).error().message ==
+        "accel: the temperature validity range 85.00 .. 85.00 degC (from the static poses' span "
+        "90.00 .. 95.00 degC + 5 degC) is not a range of at least 2 degC within -40 .. 85 degC; "
+        "expected t_valid_min_c + 2 <= t_valid_max_c");
+  // Poses at 88 degC: 83 .. 85 is still 2 degC wide.
+  Result<TemperatureValidity> hot = TemperatureValidityRange(HandAccel(Span(88.0, 88.0)));
+  REQUIRE(hot.ok());
+  CHECK(hot.value().min_c == 83.0);
+}
+
+TEST_CASE("Validity range: no recorded span gives the operating range with a warning",
+          "[calibration][validity]") {
+  Result<TemperatureValidity> v = TemperatureValidityRange(HandAccel(std::nullopt));
+  REQUIRE(v.ok());
+  CHECK(v.value().min_c == -40.0);
+  CHECK(v.value().max_c == 85.0);
+  REQUIRE(v.value().warnings.size() == 1);
+  CHECK(v.value().warnings[0] ==
+        "accel: calibration.json records no static_pose_temperature, so the span the "
+        "temperature term was fitted on is unknown; the validity range is -40.00 .. 85.00 degC "
+        "(from the MPU6050 operating range: no temperature span recorded), where the term may be "
+        "extrapolated (refit with temp_c to record the span, or give --t-valid-min-c and "
+        "--t-valid-max-c)");
+  Result<TemperatureValidity> plain = TemperatureValidityRange(HandAccel(std::nullopt, false));
+  REQUIRE(plain.ok());
+  REQUIRE(plain.value().warnings.size() == 1);
+  CHECK(plain.value().warnings[0] ==
+        "accel: no temperature of the static poses recorded (no temp_c in the calibration data): "
+        "the validity range is the MPU6050 operating range -40.00 .. 85.00 degC; the calibration "
+        "has no temperature term, so the tag applies the same bias at every temperature");
+  // Both ends given: the range is the user's; the unknown span is still said.
+  ValidityOptions both;
+  both.t_valid_min_c = 10.0;
+  both.t_valid_max_c = 40.0;
+  Result<TemperatureValidity> given = TemperatureValidityRange(HandAccel(std::nullopt), both);
+  REQUIRE(given.ok());
+  CHECK(given.value().min_c == 10.0);
+  REQUIRE(given.value().warnings.size() == 1);
+  CHECK_THAT(given.value().warnings[0],
+             Catch::Contains("the validity range is 10.00 .. 40.00 degC (as given; the default"));
+  CHECK(TemperatureValidityRange(HandAccel(std::nullopt, false), both).value().warnings.empty());
+}
+
+TEST_CASE("Validity range: explicit ends, narrower silently, wider with the extrapolated bias",
+          "[calibration][validity]") {
+  const SensorCalibration c = HandAccel(Span(22.0, 34.0));  // default 17 .. 39
+  ValidityOptions narrow;
+  narrow.t_valid_min_c = 20.0;
+  Result<TemperatureValidity> n = TemperatureValidityRange(c, narrow);
+  REQUIRE(n.ok());
+  CHECK(n.value().min_c == 20.0);
+  CHECK(n.value().max_c == 39.0);
+  CHECK(n.value().warnings.empty());
+  CHECK(n.value().Describe() ==
+        "minimum as given, the other end from the static poses' span 22.00 .. 34.00 degC + 5 "
+        "degC");
+
+  ValidityOptions wide;
+  wide.t_valid_min_c = -40.0;
+  wide.t_valid_max_c = 85.0;
+  Result<TemperatureValidity> w = TemperatureValidityRange(c, wide);
+  REQUIRE(w.ok());
+  // The temperature term M b1 (T - t_ref) on its largest axis z: 8 LSB/degC / 16384 LSB/g
+  // times (85 - 28) = 27.83 mg, times (-40 - 28) = -33.20 mg.
+  REQUIRE(w.value().warnings.size() == 1);
+  CHECK(w.value().warnings[0] ==
+        fmt::format("accel: the validity range -40.00 .. 85.00 degC reaches beyond the fitted "
+                    "span 22.00 .. 34.00 degC plus the 5 degC margin (17.00 .. 39.00 degC); the "
+                    "temperature term is extrapolated there: the tag applies {:.1f} mg at -40.00 "
+                    "degC and {:.1f} mg at 85.00 degC (largest axis, 0 at t_ref_c 28.00 degC)",
+                    8.0 * 68.0 / 16.384, 8.0 * 57.0 / 16.384));
+  CHECK(w.value().warnings[0].find("33.2 mg at -40.00 degC and 27.8 mg at 85.00") !=
+        std::string::npos);
+
+  // Only the end that reaches beyond is named; a gyroscope term in deg/s.
+  SensorCalibration g = c;
+  g.model.sensor = ImuSensor::kGyro;
+  g.model.output_unit = "deg/s";
+  g.model.scale = Eigen::Vector3d::Constant(1.0 / 131.072);
+  g.model.misalignment.clear();
+  ValidityOptions hot;
+  hot.t_valid_max_c = 60.0;
+  Result<TemperatureValidity> gw = TemperatureValidityRange(g, hot);
+  REQUIRE(gw.ok());
+  REQUIRE(gw.value().warnings.size() == 1);
+  CHECK_THAT(gw.value().warnings[0],
+             Catch::EndsWith(fmt::format("the tag applies {:.2f} deg/s at 60.00 degC (largest "
+                                         "axis, 0 at t_ref_c 28.00 degC)",
+                                         8.0 * 32.0 / 131.072)));
+
+  // Errors say what was expected.
+  ValidityOptions inverted;
+  inverted.t_valid_min_c = 45.0;  // above the default maximum 39
+  CHECK(TemperatureValidityRange(c, inverted).error().message ==
+        "accel: the temperature validity range 45.00 .. 39.00 degC (minimum as given, the other "
+        "end from the static poses' span 22.00 .. 34.00 degC + 5 degC) is not a range of at "
+        "least 2 degC within -40 .. 85 degC; expected t_valid_min_c + 2 <= t_valid_max_c");
+  ValidityOptions thin;
+  thin.t_valid_min_c = 25.0;
+  thin.t_valid_max_c = 25.01;
+  std::string why;
+  CHECK_FALSE(thin.IsValid(&why));
+  CHECK(why ==
+        "the temperature validity range 25 .. 25.01 degC is 0.01 degC wide; expected at least 2 "
+        "degC (twice the +-1 degC linearity of the MPU6050 temperature sensor)");
+  ValidityOptions cold;
+  cold.t_valid_min_c = -50.0;
+  CHECK_FALSE(cold.IsValid(&why));
+  CHECK(why == "t_valid_min_c -50 degC is outside the MPU6050 operating range; expected -40 .. 85");
+}
+
+TEST_CASE("Apply clamps the temperature to the validity range as the tag does and counts",
+          "[calibration][validity]") {
+  Calibration cal;
+  TagCalibration t;
+  t.sensor = 3;
+  t.accel = HandAccel(Span(22.0, 34.0));  // validity 17 .. 39 degC
+  cal.tags.push_back(t);
+  Session session;
+  session.path = "s.csv";
+  Tag tag;
+  tag.sensor = 3;
+  const std::vector<double> temps = {-40.0, 0.0, 16.9, 17.0, 28.0, 39.0, 39.5, 85.0, std::nan("")};
+  for (size_t k = 0; k < temps.size(); ++k) tag.t_s.push_back(0.01 * static_cast<double>(k));
+  for (const char* name : {"ax_lsb", "ay_lsb", "az_lsb"}) {
+    tag.quantities.push_back({name, "LSB", QuantityOrigin::kFile, std::vector<double>(9, 1000.0)});
+  }
+  tag.quantities.push_back({"temp_c", "degC", QuantityOrigin::kFile, temps});
+  session.tags.push_back(tag);
+  Result<ApplySummary> r = ApplyCalibration(cal, &session);
+  REQUIRE(r.ok());
+  const Tag& out = session.tags.front();
+  const Quantity* az = out.Find("az_g");
+  REQUIRE(az != nullptr);
+  // Closed form on z: (1000 - 25 - 8 (T' - 28)) / 16384, T' = clamp(T, 17, 39), NaN -> 28.
+  const double clamped[] = {17.0, 17.0, 17.0, 17.0, 28.0, 39.0, 39.0, 39.0, 28.0};
+  for (size_t k = 0; k < temps.size(); ++k) {
+    INFO("sample " << k);
+    CHECK(az->values[k] == Approx((975.0 - 8.0 * (clamped[k] - 28.0)) / 16384.0).epsilon(1e-14));
+  }
+  REQUIRE(r.value().temperature.size() == 1);
+  const SensorTemperatureCount& c = r.value().temperature.front();
+  CHECK(c.samples == 9);
+  CHECK(c.below == 3);
+  CHECK(c.above == 2);
+  CHECK(c.missing == 1);
+  CHECK(c.Describe() ==
+        "sensor 3 accel: 5 of 9 samples outside the validity range 17.00 .. 39.00 degC (3 "
+        "below, 2 above; from the static poses' span 22.00 .. 34.00 degC + 5 degC): their "
+        "temperature clamped to the range, as the tag does; 1 samples without a temperature "
+        "(NaN temp_c): t_ref_c 28.00 degC applied, as the tag does");
+  CHECK(r.value().warnings.empty());
+
+  // The same ends as `calibrate blob --t-valid-min-c -40 --t-valid-max-c 85`: no clamp inside,
+  // and the warning of the wider range, naming the sensor.
+  Session again = session;
+  ApplyCalibrationOptions wide;
+  wide.validity.t_valid_min_c = -40.0;
+  wide.validity.t_valid_max_c = 85.0;
+  Result<ApplySummary> w = ApplyCalibration(cal, &again, wide);
+  REQUIRE(w.ok());
+  CHECK(again.tags.front().Find("az_g")->values[0] ==
+        Approx((975.0 - 8.0 * (-40.0 - 28.0)) / 16384.0).epsilon(1e-14));
+  CHECK(w.value().temperature.front().outside() == 0);
+  CHECK(w.value().temperature.front().Describe() ==
+        "sensor 3 accel: all 8 samples with a temperature within the validity range -40.00 .. "
+        "85.00 degC (as given; the default is the static poses' span 22.00 .. 34.00 degC + 5 "
+        "degC); 1 samples without a temperature (NaN temp_c): t_ref_c 28.00 degC applied, as the "
+        "tag does");
+  REQUIRE(w.value().warnings.size() == 1);
+  CHECK(w.value().warnings[0].rfind("sensor 3 accel: the validity range -40.00 .. 85.00", 0) == 0);
+  ApplyCalibrationOptions bad;
+  bad.validity.t_valid_min_c = 30.0;
+  bad.validity.t_valid_max_c = 31.0;
+  CHECK(ApplyCalibration(cal, &again, bad).error().message ==
+        "the temperature validity range 30 .. 31 degC is 1 degC wide; expected at least 2 degC "
+        "(twice the +-1 degC linearity of the MPU6050 temperature sensor)");
+}
+
+}  // namespace metro

@@ -38,6 +38,21 @@ inline constexpr uint8_t kModelLinearT = 0x04;
 inline constexpr uint8_t kModelQuadraticT = 0x08;
 inline constexpr uint8_t kModelHwOffsets = 0x80;
 
+// Plausibility limits of section 3.1 that the firmware's validator applies (the same values as
+// firmware/include/metro_fw/blob.h, checked at compile time): the temperature coefficient of
+// the bias, |b1| + 2 |b2| D (D = max |t_valid - t_ref_c|), at most this many LSB/degC at
+// fs_sel 0, halved per fs_sel step (4.9 mg/degC, 0.67 deg/s/degC: twice the steepest slope
+// the MPU6050 datasheet allows around 25 degC); a validity range at least 2 degC wide.
+inline constexpr int kAccelTempcoLimitLsbPerCFs0 = 80;
+inline constexpr int kGyroTempcoLimitLsbPerCFs0 = 88;
+inline constexpr double kTValidMinSpanC = 2.0;
+
+// The temperature-coefficient limit in LSB/degC of the accelerometer (accel) or gyroscope at
+// fs_sel 0..3.
+inline double TempcoLimitLsbPerC(bool accel, int fs_sel) {
+  return (accel ? kAccelTempcoLimitLsbPerCFs0 : kGyroTempcoLimitLsbPerCFs0) >> fs_sel;
+}
+
 // Constants of one sensor (ACCEL or GYRO section body, 176 bytes).
 struct SensorConstants {
   uint8_t fs_sel = 0;      // MPU6050 FS_SEL, 0..3

@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "metro/blob/blob.hpp"
 #include "metro/calibration/calibrate.hpp"
@@ -41,17 +42,19 @@ struct BlobFromCalibrationOptions {
   uint8_t dlpf_cfg = 3;    // The tag firmware's MPU6050 DLPF_CFG (0..6); the tag refuses a
                            // section whose value differs from its own configuration.
   // Temperature validity range: the firmware clamps T to it before the temperature terms.
-  // Unset: the MPU6050 operating range, -40 .. 85 degC, which is also what `calibrate apply`
-  // uses (it does not clamp). The span the temperature term was fitted on is in
-  // calibration.json `static_pose_temperature` and in the blob's META temp_min/max_c.
+  // Unset: per sensor, the span the fit used (calibration.json `static_pose_temperature`)
+  // widened by 5 degC each side, within -40 .. 85 degC; without a recorded span the operating
+  // range -40 .. 85 degC, with a warning (metro::TemperatureValidityRange, calibration_io.hpp,
+  // which `calibrate apply` uses too, so host and tag clamp alike). Set: replaces that end; a
+  // range beyond the default is accepted with a warning.
   std::optional<double> t_valid_min_c;
   std::optional<double> t_valid_max_c;
   uint32_t due_after_s = 365u * 86400u;  // due_time_utc = cal_time_utc + due_after_s.
   std::string reference_id;              // ASCII, at most 16 characters.
   bool provisional = false;              // Header flag b3.
 
-  // sensor >= 1, seq in 1..kSeqMax, dlpf_cfg <= 6, -40 <= t_valid_min_c < t_valid_max_c <= 85
-  // (each when set),
+  // sensor >= 1, seq in 1..kSeqMax, dlpf_cfg <= 6, each t_valid end that is set within
+  // -40 .. 85 and, both set, t_valid_min_c + 2 <= t_valid_max_c (ValidityOptions::IsValid),
   // reference_id printable ASCII of at most 16 characters.
   bool IsValid(std::string* why) const;
 };
@@ -64,20 +67,26 @@ Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m_out_per_ls
 
 // The blob section of one sensor calibration (mapping above). Errors: an input unit other than
 // "LSB" (the tag applies the constants to raw counts), no matching full-scale setting, a
-// model with free scale terms but no `matrix_u`.
-Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& calibration,
-                                                       const BlobFromCalibrationOptions& options);
+// model with free scale terms but no `matrix_u`, a temperature coefficient |b1| above the
+// plausibility limit (TempcoLimitLsbPerC at the inferred fs_sel), a validity range the rule
+// cannot give (TemperatureValidityRange). The validity range's warnings, each starting with the
+// sensor's name, are appended to *warnings when it is not null.
+Result<SensorConstants> SensorConstantsFromCalibration(
+    const SensorCalibration& calibration, const BlobFromCalibrationOptions& options,
+    std::vector<std::string>* warnings = nullptr);
 
 // Everything the blob of options.sensor holds: both sensor sections and META
 // (cal_time_utc from date_utc, tool_version from "metro X.Y.Z", raw_data_sha256 = the input's
 // SHA-256, or the SHA-256 of the inputs' hex digests joined by '\n' for several inputs,
 // session_uuid = RFC 9562 version-8 UUID from SHA-256(date_utc '\n' sensor '\n'
-// raw_data_sha256 hex), g_local_mps2 = gravity_mps2, temp_mean/min/max_c = t_ref_c of the
-// temperature model (0 without one), procedure_id 1 (calibrate fit), unc_k_x10 =
-// round(10 * coverage_factor_95), tag_label "tag<N>"). Errors name the file's key; WriteBlob
-// then checks the firmware's limits.
+// raw_data_sha256 hex), g_local_mps2 = gravity_mps2, temp_mean/min/max_c = the first sensor's
+// static_pose_temperature (without one t_ref_c of a temperature model, else 0), procedure_id 1
+// (calibrate fit), unc_k_x10 = round(10 * coverage_factor_95), tag_label "tag<N>"). Errors name
+// the file's key; WriteBlob then checks the firmware's limits. Warnings (the validity ranges',
+// "sensor N accel: ...") are appended to *warnings when it is not null.
 Result<BlobContents> BlobContentsFromCalibration(const Calibration& calibration,
-                                                 const BlobFromCalibrationOptions& options);
+                                                 const BlobFromCalibrationOptions& options,
+                                                 std::vector<std::string>* warnings = nullptr);
 
 // The procedure_id META carries for `calibrate fit` (multi-pose static + rotations).
 inline constexpr uint16_t kProcedureCalibrateFit = 1;

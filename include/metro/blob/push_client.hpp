@@ -148,6 +148,8 @@ struct PushSummary {
   int slot = -1;     // Written by the tag.
   std::vector<uint8_t> blob;
   PushStats stats;
+  // The blob's validity-range warnings ("sensor N accel: ...", BlobContentsFromCalibration).
+  std::vector<std::string> warnings;
 };
 
 // calibrate push: GET_INFO, then the blob of blob_options.sensor built for the tag's device id

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "metro/calibration/calibrate.hpp"
 #include "metro/core/status.hpp"
@@ -35,17 +37,102 @@ Result<Calibration> LoadCalibration(const std::string& path);
 // residuals and the segments.
 std::string FormatCalibrationReport(const Calibration& calibration);
 
+// ---- Temperature validity range ----------------------------------------------------------
+//
+// The tag clamps the die temperature to [t_valid_min_c, t_valid_max_c] before it evaluates the
+// temperature term b1 (T - t_ref_c) (docs/calibration-blob.md section 3); `calibrate blob`
+// writes the range into the blob and `calibrate apply` clamps to the same range, so the PC and
+// the tag agree at every temperature (docs/calibration-format.md, "Temperature validity
+// range"). Default, per sensor calibration:
+//
+//   [max(-40, min_c - 5), min(85, max_c + 5)] degC
+//
+// where min_c .. max_c is its `static_pose_temperature` (the static poses' temperatures: the
+// span a temperature term was fitted on) and 5 degC is kValidityMarginC. Without a recorded span
+// (no temp_c in the data, or a file written before metro recorded it) the default is the MPU6050
+// operating range -40 .. 85 degC, with a warning saying why. Explicit ends replace either end
+// of the default; a range that reaches beyond the default is accepted with a warning that names
+// the span and the temperature term the tag then applies at the ends (mg or deg/s).
+
+inline constexpr double kOperatingMinC = -40.0;  // MPU6050 operating range, degC
+inline constexpr double kOperatingMaxC = 85.0;   // (PS-MPU-6000A rev 3.4)
+inline constexpr double kValidityMarginC = 5.0;  // beyond the fitted span, each side
+// The narrowest range the tag accepts: twice the +-1 degC linearity of the MPU6050
+// temperature sensor (METRO_FW_T_VALID_MIN_SPAN_C, docs/calibration-blob.md section 3.1).
+inline constexpr double kMinValiditySpanC = 2.0;
+
+struct ValidityOptions {
+  std::optional<double> t_valid_min_c;  // degC; unset: the default's end
+  std::optional<double> t_valid_max_c;
+
+  // Each end that is set finite within -40 .. 85; both set: min < max and max - min >= 2.
+  bool IsValid(std::string* why) const;
+};
+
+struct TemperatureValidity {
+  double min_c = kOperatingMinC;  // The range the tag clamps to.
+  double max_c = kOperatingMaxC;
+  double default_min_c = kOperatingMinC;  // The default above (the data's).
+  double default_max_c = kOperatingMaxC;
+  std::optional<PoseTemperatureRange> span;  // static_pose_temperature, when recorded
+  bool explicit_min = false;                 // min_c / max_c came from the options
+  bool explicit_max = false;
+  std::vector<std::string> warnings;  // Each starts with the sensor's name: "accel: ...".
+
+  // The temperature the tag evaluates the temperature term at: a NaN temperature counts as
+  // t_ref_c (the firmware's metro_fw_apply), then clamped to [min_c, max_c].
+  double Clamp(double temp_c, double t_ref_c) const;
+  // "from the static poses' span 22.4 .. 33.8 degC + 5 degC", "as given", ...
+  std::string Describe() const;
+};
+
+// The validity range of one sensor calibration (rule above). Errors: invalid options, or a
+// resulting range that is not within -40 .. 85 degC, has min >= max or is narrower than
+// 2 degC (e.g. an explicit minimum above the default maximum, or poses recorded above 85 degC).
+Result<TemperatureValidity> TemperatureValidityRange(const SensorCalibration& calibration,
+                                                     const ValidityOptions& options = {});
+
+struct ApplyCalibrationOptions {
+  ValidityOptions validity;  // The same ends as given to `calibrate blob`.
+
+  bool IsValid(std::string* why) const { return validity.IsValid(why); }
+};
+
+// How a session's temperatures met one sensor calibration's validity range.
+struct SensorTemperatureCount {
+  int sensor = 0;  // Tag number.
+  ImuSensor imu = ImuSensor::kAccel;
+  bool temperature_term = false;  // Only then does the clamp change the result.
+  double t_ref_c = 0.0;
+  TemperatureValidity validity;
+  int64_t samples = 0;  // Rows of the tag (all have temp_c).
+  int64_t below = 0;    // temp_c < min_c: clamped up
+  int64_t above = 0;    // temp_c > max_c: clamped down
+  int64_t missing = 0;  // temp_c NaN: t_ref_c applied
+
+  int64_t outside() const { return below + above; }
+  // One line for stderr: "sensor 2 accel: 120 of 13100 samples outside the validity range
+  // 17.36 .. 38.84 degC (100 below, 20 above; from ...): clamped to the range, as the tag does".
+  std::string Describe() const;
+};
+
 struct ApplySummary {
   int tags_calibrated = 0;
   int64_t rows = 0;
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings;  // "sensor 2 accel: ...": the validity ranges' warnings
+  // Per tag and sensor calibration, for tags whose session has a temp_c column.
+  std::vector<SensorTemperatureCount> temperature;
 };
 
 // Adds (or overwrites) ax_g ay_g az_g and gx_dps gy_dps gz_dps in every tag of `session` with
 // the calibrated values of the tag's calibration (matched by sensor number); every other
-// column and every row is kept. Errors: a tag without a calibration, a tag without the
-// calibration's input columns (e.g. ax_lsb for input_unit "LSB"), or a temperature model and
-// no temp_c column.
-Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* session);
+// column and every row is kept. A temperature term follows the tag's rule: temp_c is clamped
+// to the sensor's validity range (TemperatureValidityRange with options.validity) and a NaN
+// temp_c counts as t_ref_c; summary.temperature counts the samples outside the range. Errors:
+// invalid options or validity range, a tag without a calibration, a tag without the
+// calibration's input columns (e.g. ax_lsb for input_unit "LSB"), or a temperature model and no
+// temp_c column.
+Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* session,
+                                      const ApplyCalibrationOptions& options = {});
 
 }  // namespace metro
