@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 #include <tuple>
 
 #include "metro/blob/intel_hex.hpp"
@@ -256,6 +257,53 @@ std::string Hex(const uint8_t* p, size_t n) {
   return s;
 }
 
+// A binary32 field as its shortest round-trip decimal (the blob stores binary32, so this is
+// exactly what the tag holds).
+std::string F32(double v) { return fmt::format("{}", static_cast<float>(v)); }
+
+template <size_t N>
+std::string F32s(const std::array<double, N>& v) {
+  std::string out = "[";
+  for (size_t i = 0; i < N; ++i) out += (i ? " " : "") + F32(v[i]);
+  return out + "]";
+}
+
+// Seconds since 1970-01-01 UTC as ISO 8601, e.g. 2026-05-28T20:26:40Z.
+std::string IsoDateUtc(uint32_t t_s) {
+  const std::time_t t = static_cast<std::time_t>(t_s);
+  std::tm tm{};
+  if (::gmtime_r(&t, &tm) == nullptr) return fmt::format("{} s", t_s);
+  return fmt::format("{:04d}-{:02d}-{:02d}T{:02d}:{:02d}:{:02d}Z", tm.tm_year + 1900, tm.tm_mon + 1,
+                     tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+}
+
+// The whole sensor section, as the tag holds it (docs/calibration-blob.md 2.4 and 3).
+std::string SensorText(const SensorConstants& s, bool accel) {
+  const char* si = accel ? "m/s^2" : "rad/s";
+  std::string out = fmt::format("    M [{} per LSB], row-major, and u(M) (k = 1):\n", si);
+  for (size_t r = 0; r < 3; ++r) {
+    out += fmt::format("      [{:>15} {:>15} {:>15}]  u [{} {} {}]\n", F32(s.m[3 * r]),
+                       F32(s.m[3 * r + 1]), F32(s.m[3 * r + 2]), F32(s.u_m[3 * r]),
+                       F32(s.u_m[3 * r + 1]), F32(s.u_m[3 * r + 2]));
+  }
+  const auto used = [&](uint8_t bit) {
+    return (s.model_bits & bit) ? "" : " (bit clear: not applied)";
+  };
+  out += fmt::format("    b0 {} LSB, u {}{}\n", F32s(s.b0_lsb), F32s(s.u_b0_lsb), used(kModelBias));
+  out += fmt::format("    b1 {} LSB/degC, u {}{}\n", F32s(s.b1_lsb_per_c), F32s(s.u_b1_lsb_per_c),
+                     used(kModelLinearT));
+  out += fmt::format("    b2 {} LSB/degC^2, u {}{}\n", F32s(s.b2_lsb_per_c2),
+                     F32s(s.u_b2_lsb_per_c2), used(kModelQuadraticT));
+  out += fmt::format(
+      "    t_ref {} degC; validity range {} .. {} degC (the tag clamps the temperature to it)\n",
+      F32(s.t_ref_c), F32(s.t_valid_min_c), F32(s.t_valid_max_c));
+  out += fmt::format("    resid_rms {} {}; hw_offs [{} {} {}]{}\n", F32(s.resid_rms_si), si,
+                     s.hw_offs[0], s.hw_offs[1], s.hw_offs[2],
+                     (s.model_bits & kModelHwOffsets) ? " (written to the MPU6050)"
+                                                      : " (bit 0x80 clear: not written)");
+  return out;
+}
+
 nlohmann::json SensorJson(const SensorConstants& s) {
   nlohmann::json j;
   j["fs_sel"] = s.fs_sel;
@@ -411,9 +459,19 @@ std::string FormatInspect(const InspectReport& report) {
     out += fmt::format("  format {}.{}  seq {}  device {}  flags 0x{:02X}{}  crc32 0x{:08X}\n",
                        c.fmt_major, c.fmt_minor, c.seq, FormatDeviceId(c.device_id), c.flags,
                        c.provisional ? " (provisional)" : "", c.crc32);
+    const MetaConstants& m = c.meta;
     out += fmt::format("  meta: reference '{}', tag '{}', g_local {:.6f} m/s^2, cal_time {}\n",
-                       c.meta.reference_id, c.meta.tag_label, c.meta.g_local_mps2,
-                       c.meta.cal_time_utc_s);
+                       m.reference_id, m.tag_label, m.g_local_mps2, m.cal_time_utc_s);
+    out += fmt::format(
+        "    calibrated {}, due {}; tool {}.{}.{} commit {}; procedure {}, k = {:.1f}\n",
+        IsoDateUtc(m.cal_time_utc_s), IsoDateUtc(m.due_time_utc_s), m.tool_version >> 16,
+        (m.tool_version >> 8) & 0xFF, m.tool_version & 0xFF,
+        Hex(m.tool_commit.data(), m.tool_commit.size()), m.procedure_id, m.unc_k_x10 / 10.0);
+    out += fmt::format("    temperature of the calibration: mean {}, min {}, max {} degC\n",
+                       F32(m.temp_mean_c), F32(m.temp_min_c), F32(m.temp_max_c));
+    out += fmt::format("    session_uuid {}  raw_data_sha256 {}\n",
+                       Hex(m.session_uuid.data(), m.session_uuid.size()),
+                       Hex(m.raw_data_sha256.data(), m.raw_data_sha256.size()));
     for (const auto& v : s.sensors) {
       const auto& sensor = v.name == std::string("accel") ? c.accel : c.gyro;
       out += fmt::format("  {}: {}", v.name, v.status_name);
@@ -425,6 +483,7 @@ std::string FormatInspect(const InspectReport& report) {
             sensor->b0_lsb[1], sensor->b0_lsb[2], sensor->t_valid_min_c, sensor->t_valid_max_c);
       }
       out += "\n";
+      if (sensor) out += SensorText(*sensor, v.name == std::string("accel"));
     }
   }
   for (const std::string& why : report.refusals) out += "refused: " + why + "\n";
@@ -465,6 +524,8 @@ nlohmann::json InspectToJson(const InspectReport& report) {
       nlohmann::json meta;
       meta["cal_time_utc_s"] = c.meta.cal_time_utc_s;
       meta["due_time_utc_s"] = c.meta.due_time_utc_s;
+      meta["cal_time_utc"] = IsoDateUtc(c.meta.cal_time_utc_s);  // ISO 8601, beside the seconds
+      meta["due_time_utc"] = IsoDateUtc(c.meta.due_time_utc_s);
       meta["tool_version"] = c.meta.tool_version;
       meta["tool_commit"] = Hex(c.meta.tool_commit.data(), c.meta.tool_commit.size());
       meta["session_uuid"] = Hex(c.meta.session_uuid.data(), c.meta.session_uuid.size());

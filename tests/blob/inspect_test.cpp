@@ -51,6 +51,40 @@ TEST_CASE("Inspect of a valid .bin reports the blob and its sensors", "[blob][in
   CHECK(j["slots"][0]["meta"]["reference_id"] == "LAB-REF-0042");
 }
 
+TEST_CASE("Inspect text shows the whole blob with dates in UTC", "[blob][inspect]") {
+  // issue #23: M, the temperature terms, t_ref, the validity range and the times as dates.
+  auto blob = WriteBlob(testing::Contents());
+  REQUIRE(blob.ok());
+  auto r = InspectFile(WriteTemp("whole.bin", Bytes(blob.value())), InspectOptions{});
+  REQUIRE(r.ok());
+  const std::string text = FormatInspect(r.value());
+  // 1780000000 s and 1811536000 s after 1970-01-01T00:00:00Z (Python's datetime.utcfromtimestamp).
+  CHECK_THAT(text, Catch::Contains("    calibrated 2026-05-28T20:26:40Z, due 2027-05-28T20:26:40Z; "
+                                   "tool 0.1.0 commit a0a1a2a3a4a5a6a7a8a9aaabacadaeafb0b1b2b3; "
+                                   "procedure 3, k = 2.0\n"));
+  CHECK_THAT(text, Catch::Contains("    temperature of the calibration: mean 24, min 6, max 44 "
+                                   "degC\n"));
+  // Row 0 of the accelerometer's M, 1.012 k, 0.003 k, -0.002 k with k = 9.80665 / 16384, as the
+  // shortest decimals of their binary32 values (each checked to round-trip in Python).
+  CHECK_THAT(text, Catch::Contains("    M [m/s^2 per LSB], row-major, and u(M) (k = 1):\n"
+                                   "      [    0.000605733   1.7956512e-06  -1.1971008e-06]  u "
+                                   "[2e-07 1e-08 1e-08]\n"));
+  CHECK_THAT(text, Catch::Contains("    b1 [1.25 -0.75 2.5] LSB/degC, u [0.05 0.05 0.08]\n"));
+  CHECK_THAT(text, Catch::Contains("    b2 [0.0125 0 -0.025] LSB/degC^2, u [0.001 0.001 0.002]\n"));
+  CHECK_THAT(text, Catch::Contains("    t_ref 24.5 degC; validity range 5 .. 45 degC (the tag "
+                                   "clamps the temperature to it)\n"));
+  CHECK_THAT(text, Catch::Contains("    resid_rms 0.0081 m/s^2; hw_offs [-1234 567 8901] (bit 0x80 "
+                                   "clear: not written)\n"));
+  // The gyroscope has no quadratic term: its b2 is not applied.
+  CHECK_THAT(text, Catch::Contains("    M [rad/s per LSB]"));
+  CHECK_THAT(text, Catch::Contains("LSB/degC^2, u [0 0 0] (bit clear: not applied)\n"));
+  // JSON: the dates beside the seconds, every key kept.
+  const auto j = InspectToJson(r.value());
+  CHECK(j["slots"][0]["meta"]["cal_time_utc"] == "2026-05-28T20:26:40Z");
+  CHECK(j["slots"][0]["meta"]["cal_time_utc_s"] == 1780000000u);
+  CHECK(j["slots"][0]["meta"]["due_time_utc"] == "2027-05-28T20:26:40Z");
+}
+
 TEST_CASE("Inspect of a corrupt .bin names the firmware's reason", "[blob][inspect]") {
   auto blob = WriteBlob(testing::Contents());
   REQUIRE(blob.ok());
