@@ -376,7 +376,7 @@ TEST_CASE("Validity range: no recorded span gives the operating range with a war
   CHECK(TemperatureValidityRange(HandAccel(std::nullopt, false), both).value().warnings.empty());
 }
 
-TEST_CASE("Validity range: explicit ends, narrower silently, wider with the extrapolated bias",
+TEST_CASE("Validity range: explicit ends narrower silently and wider with the extrapolated bias",
           "[calibration][validity]") {
   const SensorCalibration c = HandAccel(Span(22.0, 34.0));  // default 17 .. 39
   ValidityOptions narrow;
