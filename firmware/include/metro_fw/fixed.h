@@ -20,7 +20,9 @@
  *                             + 2^-12 * (|b1_j| + 2 * |b2_j| * (|dT| + 2^-12)))
  *           + 2^-21                                                            [SI]
  * about 0.002 LSB-equivalent for an MPU6050 calibration, below 0.02 LSB for any section
- * that passes section 3.1 with |b1| <= 8 LSB/degC and |b2| <= 0.05 LSB/degC^2. */
+ * that passes section 3.1 with |b1| <= 8 LSB/degC and |b2| <= 0.05 LSB/degC^2, and at most
+ * 0.063 LSB for every section that passes 3.1 (its temperature-coefficient limit bounds
+ * |b1| + 2 |b2| |dT|; docs/calibration-blob.md 3.2). */
 #ifndef METRO_FW_FIXED_H_
 #define METRO_FW_FIXED_H_
 
