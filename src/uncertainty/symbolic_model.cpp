@@ -32,22 +32,6 @@ constexpr int kMaxNesting = 32;
 constexpr int kMaxPowers = 32;
 constexpr size_t kMaxNodes = 200000;
 
-GiNaC::ex Ln(const GiNaC::exvector& a) { return GiNaC::log(a[0]); }
-GiNaC::ex Log10(const GiNaC::exvector& a) { return GiNaC::log(a[0]) / GiNaC::log(10); }
-GiNaC::ex Log2(const GiNaC::exvector& a) { return GiNaC::log(a[0]) / GiNaC::log(2); }
-
-// The default GiNaC reader (sin, cos, ..., exp, log, sqrt, pow, abs) plus muparser's names.
-const GiNaC::prototype_table& Reader() {
-  static const GiNaC::prototype_table table = [] {
-    GiNaC::prototype_table t = GiNaC::get_default_reader();
-    t[GiNaC::prototype("ln", 1)] = Ln;
-    t[GiNaC::prototype("log10", 1)] = Log10;
-    t[GiNaC::prototype("log2", 1)] = Log2;
-    return t;
-  }();
-  return table;
-}
-
 // The functions a model may use; GiNaC's default reader knows many more (zeta, tgamma, ...)
 // that muparser does not, and muparser never reaches here with them anyway.
 bool KnownFunction(const std::string& name) {
@@ -58,6 +42,82 @@ bool KnownFunction(const std::string& name) {
     if (name == n) return true;
   }
   return false;
+}
+
+// Rewritten for GiNaC's lexer, identifier by identifier: an input becomes x<index>_ (GiNaC
+// takes no leading '_' and reserves I, Pi, Euler, Catalan), _pi and _e become Pi and
+// exp(1), a function stays if it is differentiable everywhere it is defined; muparser's ln,
+// log10 and log2 become GiNaC's log (GiNaC's parser takes no reader functions of ours: its
+// prototype table holds function serial numbers, not pointers). Recursion is bounded by the
+// nesting limit checked before.
+Result<std::string> RewriteForGinac(const std::string& expression,
+                                    const std::map<std::string, size_t>& index) {
+  std::string rewritten;
+  for (size_t k = 0; k < expression.size();) {
+    const unsigned char ch = static_cast<unsigned char>(expression[k]);
+    if (std::isdigit(ch) || ch == '.') {
+      // A number, its exponent (1e-3) included, is copied as it is.
+      size_t end = k;
+      while (end < expression.size() &&
+             (std::isalnum(static_cast<unsigned char>(expression[end])) || expression[end] == '.' ||
+              ((expression[end] == '+' || expression[end] == '-') &&
+               (expression[end - 1] == 'e' || expression[end - 1] == 'E')))) {
+        ++end;
+      }
+      rewritten += expression.substr(k, end - k);
+      k = end;
+      continue;
+    }
+    if (!(std::isalpha(ch) || ch == '_')) {
+      rewritten += expression[k++];
+      continue;
+    }
+    size_t end = k;
+    while (end < expression.size() &&
+           (std::isalnum(static_cast<unsigned char>(expression[end])) || expression[end] == '_')) {
+      ++end;
+    }
+    const std::string word = expression.substr(k, end - k);
+    size_t next = end;
+    while (next < expression.size() && std::isspace(static_cast<unsigned char>(expression[next]))) {
+      ++next;
+    }
+    if (next < expression.size() && expression[next] == '(') {
+      if (!KnownFunction(word)) {
+        return MakeError(fmt::format(
+            "the model uses {}(), which has no derivative everywhere or is not known to GiNaC",
+            word));
+      }
+      if (word == "log10" || word == "log2") {
+        // log10(u) = log(u) / log(10): the argument (rewritten on its own) in parentheses, so
+        // that a^log10(u) and x / log10(u) keep muparser's precedence.
+        int depth = 0;
+        size_t close = next;
+        for (; close < expression.size(); ++close) {
+          if (expression[close] == '(') ++depth;
+          if (expression[close] == ')' && --depth == 0) break;
+        }
+        if (close >= expression.size()) return MakeError("the model has an unclosed '('");
+        Result<std::string> inner =
+            RewriteForGinac(expression.substr(next + 1, close - next - 1), index);
+        if (!inner.ok()) return inner.error();
+        rewritten += fmt::format("(log({})/log({}))", inner.value(), word == "log10" ? 10 : 2);
+        k = close + 1;
+        continue;
+      }
+      rewritten += word == "ln" ? "log" : word;
+    } else if (auto it = index.find(word); it != index.end()) {
+      rewritten += fmt::format("x{}_", it->second);
+    } else if (word == "_pi") {
+      rewritten += "Pi";
+    } else if (word == "_e") {
+      rewritten += "exp(1)";
+    } else {
+      return MakeError(fmt::format("the model uses '{}', which is not an input", word));
+    }
+    k = end;
+  }
+  return rewritten;
 }
 
 }  // namespace
@@ -146,54 +206,9 @@ Result<SymbolicModel> SymbolicModel::Parse(const std::string& expression,
   // exp(1), a function stays if it is differentiable everywhere it is defined.
   std::map<std::string, size_t> index;
   for (size_t i = 0; i < names.size(); ++i) index[names[i]] = i;
-  std::string rewritten;
-  for (size_t k = 0; k < expression.size();) {
-    const unsigned char ch = static_cast<unsigned char>(expression[k]);
-    if (std::isdigit(ch) || ch == '.') {
-      // A number, its exponent (1e-3) included, is copied as it is.
-      size_t end = k;
-      while (end < expression.size() &&
-             (std::isalnum(static_cast<unsigned char>(expression[end])) || expression[end] == '.' ||
-              ((expression[end] == '+' || expression[end] == '-') &&
-               (expression[end - 1] == 'e' || expression[end - 1] == 'E')))) {
-        ++end;
-      }
-      rewritten += expression.substr(k, end - k);
-      k = end;
-      continue;
-    }
-    if (!(std::isalpha(ch) || ch == '_')) {
-      rewritten += expression[k++];
-      continue;
-    }
-    size_t end = k;
-    while (end < expression.size() &&
-           (std::isalnum(static_cast<unsigned char>(expression[end])) || expression[end] == '_')) {
-      ++end;
-    }
-    const std::string word = expression.substr(k, end - k);
-    size_t next = end;
-    while (next < expression.size() && std::isspace(static_cast<unsigned char>(expression[next]))) {
-      ++next;
-    }
-    if (next < expression.size() && expression[next] == '(') {
-      if (!KnownFunction(word)) {
-        return MakeError(fmt::format(
-            "the model uses {}(), which has no derivative everywhere or is not known to GiNaC",
-            word));
-      }
-      rewritten += word;
-    } else if (auto it = index.find(word); it != index.end()) {
-      rewritten += fmt::format("x{}_", it->second);
-    } else if (word == "_pi") {
-      rewritten += "Pi";
-    } else if (word == "_e") {
-      rewritten += "exp(1)";
-    } else {
-      return MakeError(fmt::format("the model uses '{}', which is not an input", word));
-    }
-    k = end;
-  }
+  Result<std::string> written = RewriteForGinac(expression, index);
+  if (!written.ok()) return written.error();
+  const std::string rewritten = std::move(written).value();
   std::lock_guard<std::mutex> lock(GinacMutex());
   try {
     auto impl = std::make_shared<Impl>();
@@ -202,7 +217,7 @@ Result<SymbolicModel> SymbolicModel::Parse(const std::string& expression,
       impl->symbols.emplace_back(names[i]);
       table[fmt::format("x{}_", i)] = impl->symbols.back();
     }
-    GiNaC::parser reader(table, true, Reader());
+    GiNaC::parser reader(table, true);
     impl->f = reader(rewritten);
     return SymbolicModel(std::move(impl));
   } catch (const std::exception& error) {

@@ -376,6 +376,21 @@ TEST_CASE("A model GiNaC cannot differentiate falls back to central differences,
     CHECK(line.sensitivity ==
           Approx(line.name == "a" ? 0.5 : 1.0 / (100.0 * std::log(10.0))).epsilon(1e-14));
   }
+  // log10 and log2 inside powers and quotients keep muparser's precedence:
+  // y = a^log10(b) / log2(b): at a = 2, b = 100, dy/da = 2 * 2 / log2(100) and
+  // dy/db = [4 ln 2 / (100 ln 10)] / log2(100) - 4 / log2(100)^2 / (100 ln 2).
+  auto prec = EvaluateGum(Model("a^log10(b) / log2(b)", R"({"name": "a", "value": 2, "u": 0.1},
+                                                          {"name": "b", "value": 100, "u": 1})"));
+  REQUIRE(prec.ok());
+  CHECK(prec.value().derivatives == "exact (symbolic, GiNaC)");
+  const double l2 = std::log2(100.0);
+  CHECK(prec.value().value == Approx(4.0 / l2).epsilon(1e-14));
+  for (const BudgetLine& line : prec.value().budget) {
+    const double want = line.name == "a" ? 4.0 / l2
+                                         : 4.0 * std::log(2.0) / (100.0 * std::log(10.0)) / l2 -
+                                               4.0 / (l2 * l2) / (100.0 * std::log(2.0));
+    CHECK(line.sensitivity == Approx(want).epsilon(1e-13));
+  }
 }
 
 }  // namespace
