@@ -72,7 +72,12 @@ CaseStats RunCase(const Case& c, size_t n_samples, int records, uint64_t seed0) 
       AllanOptions options;
       options.threads = 1;
       const Result<AllanCurve> curve = ComputeAllan(y, kTau0, options);
-      REQUIRE(curve.ok());
+      // No Catch assertion off the main thread (Catch2 v2 is not thread-safe): a failed curve
+      // counts as a failed fit, which the callers check.
+      if (!curve.ok()) {
+        ++s.fit_failures;
+        continue;
+      }
       const Result<NoiseFit> fit = FitNoiseTerms(curve.value());
       if (!fit.ok()) {
         ++s.fit_failures;

@@ -120,15 +120,18 @@ inline std::vector<double> FlickerAveragedFftw(size_t n, double tau0_s, double b
   while (size < 4 * n || (size < 16 * n && size < (size_t{1} << 23))) size *= 2;
   const size_t bins = size / 2 + 1;
   static std::mutex mutex;
-  static std::map<size_t, std::pair<fftw_plan, std::shared_ptr<std::vector<double>>>> plans;
+  // Never destroyed (as src/stats/type_a.cpp's plans): the plans stay reachable until the
+  // process ends, so the leak checker does not report FFTW's allocations behind them.
+  static auto* plans =
+      new std::map<size_t, std::pair<fftw_plan, std::shared_ptr<std::vector<double>>>>();
   fftw_complex* spec = fftw_alloc_complex(bins);
   double* real = reinterpret_cast<double*>(spec);  // in place: 2 * bins doubles
   fftw_plan plan = nullptr;
   std::shared_ptr<std::vector<double>> amp;
   {
     std::lock_guard<std::mutex> lock(mutex);  // FFTW planning is not thread-safe
-    auto it = plans.find(size);
-    if (it == plans.end()) {
+    auto it = plans->find(size);
+    if (it == plans->end()) {
       const fftw_plan p = fftw_plan_dft_c2r_1d(static_cast<int>(size), spec, real,
                                                FFTW_ESTIMATE | FFTW_DESTROY_INPUT);
       // a_j = sqrt(2 S(f_j) df) per unit B, f_j = j / (size tau0), as a fraction of 1 / tau0.
@@ -142,7 +145,7 @@ inline std::vector<double> FlickerAveragedFftw(size_t n, double tau0_s, double b
         const double psd = sin_u * sin_u / (2.0 * M_PI * M_PI * M_PI) * zeta;  // S / (B^2 tau0)
         (*a)[j] = std::sqrt(2.0 * psd / static_cast<double>(size));  // df = 1 / (size tau0)
       }
-      it = plans.emplace(size, std::make_pair(p, a)).first;
+      it = plans->emplace(size, std::make_pair(p, a)).first;
     }
     plan = it->second.first;
     amp = it->second.second;
