@@ -33,6 +33,7 @@ struct FitOptions {
   double loss_scale = 3.0;
   bool accel_only = false;
   std::optional<double> min_static_s;  // Shortest pose kept (default 1 s; shrinks the window).
+  std::string segments;                // Annotated segments instead of the detector.
   std::string html;                    // Calibration certificate (docs/reports.md).
   apps::LoadCliOptions load;  // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
 };
@@ -60,6 +61,15 @@ int RunFit(const FitOptions& f) {
   o.sensor = f.sensor;
   o.fit_gyro = !f.accel_only;
   if (f.min_static_s) o.segmentation.min_static_s = *f.min_static_s;
+  if (!f.segments.empty()) {
+    Result<std::vector<AnnotatedSegment>> given = ReadSegmentsFile(f.segments);
+    if (!given.ok()) {
+      apps::PrintError(given.error());
+      return kExitUsage;
+    }
+    o.annotated_segments = std::move(given).value();
+    o.segments_path = f.segments;
+  }
   o.temperature = f.temperature == "on"    ? TemperatureMode::kOn
                   : f.temperature == "off" ? TemperatureMode::kOff
                                            : TemperatureMode::kAuto;
@@ -80,7 +90,8 @@ int RunFit(const FitOptions& f) {
     apps::PrintError(s.error());
     return kExitUsage;
   }
-  std::vector<apps::NamedPath> inputs = {{"--columns-file", f.load.columns_file}};
+  std::vector<apps::NamedPath> inputs = {{"--columns-file", f.load.columns_file},
+                                         {"--segments", f.segments}};
   for (const std::string& in : f.inputs) inputs.push_back({"SESSION", in});
   if (Status s = apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs); !s.ok()) {
     apps::PrintError(s.error());
@@ -211,6 +222,10 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--min-static-s", o->min_static_s,
                   "shortest still period kept as a pose [s] (default 1; below 1 s the detector's "
                   "window shrinks with it, so poses of about twice this are found)");
+  sub->add_option("--segments", o->segments,
+                  "CSV of annotated segments used instead of the static detector: "
+                  "kind,start_s,end_s[,table_rate_dps][,input] (docs/calibration-model.md)")
+      ->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
   sub->callback([o, exit_code] { *exit_code = RunFit(*o); });
 }

@@ -110,8 +110,9 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
   d.t_ref_c = temperature.t_ref_c;
 
   // Accelerometer: start, fit.
-  Result<ci::SensorStart> accel_start = ci::StartAccel(d.statics, d.target_norm, records.accel_unit,
-                                                       d.temperature, o, out.sensor, &out.warnings);
+  Result<ci::SensorStart> accel_start =
+      ci::StartAccel(d.statics, d.target_norm, records.accel_unit, d.temperature, o, out.sensor,
+                     &out.warnings, ci::PoseShortfallHint(d.records));
   if (!accel_start.ok()) return accel_start.error();
   ci::ParameterBlocks x;
   d.accel_ref = accel_start.value().scale;

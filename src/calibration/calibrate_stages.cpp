@@ -290,7 +290,21 @@ Result<Record> ReadRecord(const Tag& tag, int piece, const CalibrationOptions& o
   in.table_rate_dps = r.table_rate_dps.empty() ? nullptr : &r.table_rate_dps;
   in.saturated = &r.saturated;
   in.piece = piece;
-  r.seg = DetectSegments(in, options.segmentation);
+  if (!options.annotated_segments.empty()) {
+    Result<SegmentationSummary> given =
+        SegmentsFromAnnotations(in, options.annotated_segments, options.segments_path);
+    if (!given.ok()) return given.error();
+    r.seg = std::move(given).value();
+    return r;
+  }
+  SegmentationOptions seg = options.segmentation;
+  if (!r.gyro_unit.empty() && seg.gyro_units_per_dps == 0) {
+    // The steady-rotation limit in the record's own units (nominal scale: deg/s per unit).
+    const std::optional<double> dps_per_unit =
+        NominalScale(ImuSensor::kGyro, r.gyro_unit, options.gyro_fs_dps);
+    if (dps_per_unit && *dps_per_unit > 0) seg.gyro_units_per_dps = 1.0 / *dps_per_unit;
+  }
+  r.seg = DetectSegments(in, seg);
   return r;
 }
 
@@ -322,6 +336,36 @@ Result<RecordSet> ReadRecords(const std::vector<const Tag*>& tags, const Calibra
   return set;
 }
 
+std::string PoseShortfallHint(const std::vector<Record>& records) {
+  int shorts = 0, steady = 0;
+  double shortest = 0, longest = 0, suggested = 0;
+  for (const Record& r : records) {
+    const SegmentationSummary& s = r.seg;
+    steady += s.steady_count;
+    if (s.short_static_count == 0) continue;
+    shortest = shorts == 0 ? s.short_static_min_s : std::min(shortest, s.short_static_min_s);
+    longest = std::max(longest, s.short_static_max_s);
+    suggested =
+        suggested == 0 ? s.suggested_min_static_s : std::min(suggested, s.suggested_min_static_s);
+    shorts += s.short_static_count;
+  }
+  std::string hint;
+  if (shorts > 0) {
+    hint += fmt::format(
+        ". {} shorter still periods were recorded ({:.2f} .. {:.2f} s) and left out: "
+        "--min-static-s {:.2f} accepts them",
+        shorts, shortest, longest, suggested);
+  }
+  if (steady > 0) {
+    hint += fmt::format(
+        ". {} steady rotations (the gyroscope turning at a constant rate) are not "
+        "static poses; give their rate in a table_rate_dps column to use them as "
+        "table runs",
+        steady);
+  }
+  return hint;
+}
+
 void SummarizeRecords(const RecordSet& set, const CalibrationOptions& o, TagCalibration* out) {
   if (o.fit_gyro && set.gyro_unit.empty()) {
     out->warnings.push_back(fmt::format(
@@ -351,7 +395,22 @@ void SummarizeRecords(const RecordSet& set, const CalibrationOptions& o, TagCali
           "runs at a known constant rate",
           out->sensor, o.segmentation.min_table_s + 2 * o.segmentation.table_settle_s));
     }
-    for (Segment s : r.seg.segments) out->segments.push_back(s);
+    for (const Segment& s : r.seg.segments) {
+      const bool disturbance =
+          s.kind == SegmentKind::kRotation && s.note.rfind("disturbance inside pose", 0) == 0;
+      if (s.kind == SegmentKind::kSteady || disturbance) {
+        out->warnings.push_back(fmt::format("sensor {}: input {}, t = {:.2f} .. {:.2f} s: {}",
+                                            out->sensor, r.piece + 1, s.start_s, s.end_s, s.note));
+      }
+    }
+    if (r.seg.short_static_count > 0) {
+      out->warnings.push_back(fmt::format(
+          "sensor {}: input {}: {} still periods of {:.2f} .. {:.2f} s are shorter than the "
+          "--min-static-s of {} s and were left out; --min-static-s {:.2f} accepts them",
+          out->sensor, r.piece + 1, r.seg.short_static_count, r.seg.short_static_min_s,
+          r.seg.short_static_max_s, o.segmentation.min_static_s, r.seg.suggested_min_static_s));
+    }
+    for (const Segment& s : r.seg.segments) out->segments.push_back(s);
   }
   out->threshold_factor = set.records.front().seg.threshold_factor;
 }
@@ -483,7 +542,7 @@ bool EllipsoidStart(const std::vector<Eigen::Vector3d>& points, double target_no
 Result<SensorStart> StartAccel(const std::vector<Pose>& statics, double target_norm,
                                const std::string& accel_unit, bool temperature,
                                const CalibrationOptions& o, int sensor,
-                               std::vector<std::string>* warnings) {
+                               std::vector<std::string>* warnings, const std::string& hint) {
   // Too few poses for the accelerometer model.
   const int pa = PB::FreeCount(ImuSensor::kAccel, o.accel_model, temperature);
   const int need = pa + 3;
@@ -491,10 +550,12 @@ Result<SensorStart> StartAccel(const std::vector<Pose>& statics, double target_n
     return MakeError(fmt::format(
         "sensor {}: {} static poses found; the accelerometer '{}' model{} has {} parameters and "
         "needs at least {} poses for a fit with an uncertainty. Collect more static poses (hold "
-        "each still for at least {} s), e.g. the 6 faces, 8 corners and 12 edges of a cube",
+        "each still for at least {} s), e.g. the 6 faces, 8 corners and 12 edges of a cube{}",
         sensor, statics.size(), ModelKindName(o.accel_model),
         temperature ? " with temperature term" : "", pa, need,
-        o.segmentation.min_static_s + o.segmentation.window_s));
+        o.segmentation.min_static_s +
+            std::min(o.segmentation.window_s, o.segmentation.min_static_s),
+        hint));
   }
   // Ellipsoid fit, else nominal.
   const double accel_nominal = NominalScale(ImuSensor::kAccel, accel_unit, o.accel_fs_g).value();

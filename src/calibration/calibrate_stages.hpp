@@ -78,6 +78,11 @@ struct RecordSet {
 Result<RecordSet> ReadRecords(const std::vector<const Tag*>& tags, const CalibrationOptions& o,
                               int sensor);
 
+// What the detector left out that the user recorded: shorter still periods (how many, how
+// long, the --min-static-s that accepts them) and steady rotations; "" when nothing. Appended
+// to a refusal for too few poses.
+std::string PoseShortfallHint(const std::vector<Record>& records);
+
 // The record-level results of `out`: warnings (no gyroscope, saturated samples, a table column
 // without runs), saturated_samples, every segment, threshold_factor.
 void SummarizeRecords(const RecordSet& set, const CalibrationOptions& o, TagCalibration* out);
@@ -166,10 +171,11 @@ struct SensorStart {
 // Checks the pose count for the accelerometer model, starts from the ellipsoid (else the
 // nominal scale, with a warning), and checks that the poses span the sphere (an error for
 // the scale and full models, a warning for bias). `accel_unit` gives the nominal scale.
+// `hint` (PoseShortfallHint) ends the too-few-poses error.
 Result<SensorStart> StartAccel(const std::vector<Pose>& statics, double target_norm,
                                const std::string& accel_unit, bool temperature,
                                const CalibrationOptions& o, int sensor,
-                               std::vector<std::string>* warnings);
+                               std::vector<std::string>* warnings, const std::string& hint = "");
 
 // Sets a sensor's blocks to the scaled start: b' = ref b, k' = 1 (ref = start.scale).
 void SetScaledStart(ImuSensor sensor, const SensorStart& start, ParameterBlocks* x);

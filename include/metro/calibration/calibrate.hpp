@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "metro/calibration/imu_model.hpp"
+#include "metro/calibration/segment_file.hpp"
 #include "metro/calibration/segments.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/session.hpp"
@@ -52,6 +53,10 @@ struct CalibrationOptions {
   int max_iterations = 200;
   double max_rotation_s = 60.0;  // Longer hand rotations are not integrated (drift).
   SegmentationOptions segmentation;
+  // Annotated segments (--segments FILE, segment_file.hpp) used instead of the detector when
+  // not empty; segments_path names the file in errors.
+  std::vector<AnnotatedSegment> annotated_segments;
+  std::string segments_path;
 
   bool IsValid(std::string* why) const;
 };
