@@ -121,6 +121,7 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
   Result<ci::SensorSolution> accel_solved = ci::SolveAccel(d, o, out.sensor, &x, &fit);
   if (!accel_solved.ok()) return accel_solved.error();
   ci::SensorSolution accel = std::move(accel_solved).value();
+  for (const std::string& w : accel.warnings) out.warnings.push_back(w);
 
   // Gyroscope: rotations, start, fit with the accelerometer held.
   ci::SensorSolution gyro;

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <memory>
@@ -545,7 +546,10 @@ Result<SensorStart> StartAccel(const std::vector<Pose>& statics, double target_n
                                std::vector<std::string>* warnings, const std::string& hint) {
   // Too few poses for the accelerometer model.
   const int pa = PB::FreeCount(ImuSensor::kAccel, o.accel_model, temperature);
-  const int need = pa + 3;
+  // With the trivial loss u comes from each pose's noise (HonestAccelCovariance), so as many
+  // poses as parameters determine the model (the 6-position protocol for bias and scale); a
+  // robust loss scales by the residuals and needs 3 more.
+  const int need = o.loss == LossKind::kTrivial ? pa : pa + 3;
   if (static_cast<int>(statics.size()) < need) {
     return MakeError(fmt::format(
         "sensor {}: {} static poses found; the accelerometer '{}' model{} has {} parameters and "
@@ -922,7 +926,175 @@ Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOpti
   Status rc =
       RankAndCovariance(&problem, ImuSensor::kAccel, o.accel_model, d.temperature, sensor, &out);
   if (!rc.ok()) return rc.error();
+  if (o.loss == LossKind::kTrivial) {
+    Status honest = HonestAccelCovariance(d, *x, o, sensor, *fit, &problem, &out);
+    if (!honest.ok()) return honest.error();
+  }
   return out;
+}
+
+namespace {
+
+// Noise of a pose's mean along the unit direction u (scaled accelerometer units, ~g): sample
+// variance times (1 + rho) / (1 - rho) / n, rho the lag-1 autocorrelation clamped to
+// [0, 0.9] (AR(1) effective sample size).
+double PoseMeanNoise(const Record& r, const Segment& s, const Eigen::Vector3d& ref,
+                     const Eigen::Vector3d& u) {
+  std::vector<double> z;
+  for (size_t i = s.begin; i < s.end; ++i) {
+    if (r.saturated[i]) continue;
+    z.push_back(u.dot(ref.cwiseProduct(r.accel[i])));
+  }
+  const size_t n = z.size();
+  if (n < 3) return 0.0;
+  double mean = 0;
+  for (double v : z) mean += v;
+  mean /= static_cast<double>(n);
+  double c0 = 0, c1 = 0;
+  for (size_t i = 0; i < n; ++i) {
+    c0 += (z[i] - mean) * (z[i] - mean);
+    if (i + 1 < n) c1 += (z[i] - mean) * (z[i + 1] - mean);
+  }
+  if (!(c0 > 0)) return 0.0;
+  const double rho = std::clamp(c1 / c0, 0.0, 0.9);
+  const double var = c0 / static_cast<double>(n - 1);
+  return std::sqrt(var / static_cast<double>(n) * (1 + rho) / (1 - rho));
+}
+
+}  // namespace
+
+Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
+                             const CalibrationOptions& o, int sensor, const Fit& fit,
+                             ceres::Problem* problem, SensorSolution* solution) {
+  const size_t m = d.statics.size();
+  const int p = solution->parameters;
+  if (fit.r_accel.size() != m || m == 0) return Status::Ok();
+  const double* b = x.Get(ImuSensor::kAccel, PB::kBias);
+  const Eigen::Vector3d bias(b[0], b[1], b[2]);
+  // Noise and gravity direction of each pose.
+  std::vector<double> sigma(m);
+  std::vector<Eigen::Vector3d> dir(m);
+  for (size_t i = 0; i < m; ++i) {
+    const Pose& pose = d.statics[i];
+    const Eigen::Vector3d v = d.accel_ref.cwiseProduct(pose.accel) - bias;
+    dir[i] = v.normalized();
+    sigma[i] = PoseMeanNoise(d.records[static_cast<size_t>(pose.record)], *pose.segment,
+                             d.accel_ref, dir[i]);
+    if (!(sigma[i] > 0)) return Status::Ok();  // Quantised to one value: keep the scaled form.
+  }
+  // Orientation clusters (greedy, in pose order).
+  const double cos_same = std::cos(kSameOrientationDeg * kPi / 180.0);
+  std::vector<int> cluster(m, -1);
+  std::vector<size_t> first_of;
+  for (size_t i = 0; i < m; ++i) {
+    for (size_t c = 0; c < first_of.size(); ++c) {
+      const size_t j = first_of[c];
+      const bool same_temp =
+          !d.temperature || std::abs(d.statics[i].temp_c - d.statics[j].temp_c) < 1.0;
+      if (dir[i].dot(dir[j]) >= cos_same && same_temp) {
+        cluster[i] = static_cast<int>(c);
+        break;
+      }
+    }
+    if (cluster[i] < 0) {
+      cluster[i] = static_cast<int>(first_of.size());
+      first_of.push_back(i);
+    }
+  }
+  const int clusters = static_cast<int>(first_of.size());
+  if (clusters < p) {
+    return MakeError(fmt::format(
+        "sensor {}: degenerate calibration: the {} static poses hold {} distinct orientations "
+        "(gravity directions more than {} deg apart); the accelerometer '{}' model{} has {} "
+        "parameters, and repeated stops at one orientation do not determine more constants. Add "
+        "poses in new orientations (the corners and edges of a cube), or use a simpler --model",
+        sensor, m, clusters, kSameOrientationDeg, ModelKindName(o.accel_model),
+        d.temperature ? " with temperature term" : "", p));
+  }
+  // Within-cluster excess and between-orientation variance (method of moments).
+  std::vector<double> sum_r(static_cast<size_t>(clusters), 0.0), sum_s2(sum_r), count(sum_r);
+  for (size_t i = 0; i < m; ++i) {
+    const size_t c = static_cast<size_t>(cluster[i]);
+    sum_r[c] += fit.r_accel[i];
+    sum_s2[c] += sigma[i] * sigma[i];
+    count[c] += 1;
+  }
+  double chi2_within = 0, chi2_all = 0;
+  for (size_t i = 0; i < m; ++i) {
+    const size_t c = static_cast<size_t>(cluster[i]);
+    const double e = fit.r_accel[i] - sum_r[c] / count[c];
+    chi2_within += e * e / (sigma[i] * sigma[i]);
+    chi2_all += fit.r_accel[i] * fit.r_accel[i] / (sigma[i] * sigma[i]);
+  }
+  const int dof_within = static_cast<int>(m) - clusters;
+  const double f = dof_within >= 3 ? std::max(1.0, chi2_within / dof_within) : 1.0;
+  double between = 0, noise_of_means = 0;
+  for (size_t c = 0; c < static_cast<size_t>(clusters); ++c) {
+    const double mean = sum_r[c] / count[c];
+    between += mean * mean;
+    noise_of_means += f * sum_s2[c] / (count[c] * count[c]);
+  }
+  // tau^2 only when the cluster means are significantly larger than their noise (their
+  // chi-square above its 95 % quantile with C - p degrees of freedom); with C = p the model
+  // cannot be checked and u rests on the noise alone (a warning says so).
+  double chi2_between = 0;
+  for (size_t c = 0; c < static_cast<size_t>(clusters); ++c) {
+    const double mean = sum_r[c] / count[c];
+    chi2_between += mean * mean / (f * sum_s2[c] / (count[c] * count[c]));
+  }
+  double tau2 = 0;
+  if (clusters > p &&
+      chi2_between > boost::math::quantile(boost::math::chi_squared(clusters - p), 0.95)) {
+    tau2 = std::max(
+        0.0, (between * clusters / static_cast<double>(clusters - p) - noise_of_means) / clusters);
+  }
+  if (clusters == p) {
+    solution->warnings.push_back(fmt::format(
+        "sensor {}: the accelerometer '{}' model has as many parameters as the {} distinct "
+        "orientations: the fit is exact and cannot show whether the model describes the data; "
+        "u comes from the noise of the poses alone",
+        sensor, ModelKindName(o.accel_model), clusters));
+  }
+  // Sandwich covariance over the free parameters (unwhitened Jacobian).
+  std::optional<Eigen::MatrixXd> jw = DenseJacobian(problem, solution->free_blocks);
+  if (!jw || jw->rows() != static_cast<Eigen::Index>(m)) return Status::Ok();
+  const Eigen::MatrixXd j = *jw * fit.s_accel;
+  Eigen::MatrixXd v =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
+  for (size_t a = 0; a < m; ++a) {
+    for (size_t bb = 0; bb < m; ++bb) {
+      double e = cluster[a] == cluster[bb] ? tau2 : 0.0;
+      if (a == bb) e += f * sigma[a] * sigma[a];
+      v(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(bb)) = e;
+    }
+  }
+  const Eigen::MatrixXd jtj = j.transpose() * j;
+  const Eigen::MatrixXd a_inv = jtj.ldlt().solve(Eigen::MatrixXd::Identity(jtj.rows(), jtj.cols()));
+  const Eigen::MatrixXd cov = a_inv * j.transpose() * v * j * a_inv;
+  if (!cov.allFinite()) return Status::Ok();
+  solution->covariance = 0.5 * (cov + cov.transpose());
+  const int dof = static_cast<int>(m) - p;
+  solution->reduced_chi2 = dof > 0 ? chi2_all / dof : 0.0;
+  solution->dof = tau2 > 0 ? clusters - p : std::max(dof, 0);
+  solution->u_from_noise = tau2 == 0;
+  if (dof > 0) {
+    const boost::math::chi_squared dist(dof);
+    if (chi2_all > boost::math::quantile(dist, 0.99)) {
+      solution->warnings.push_back(fmt::format(
+          "sensor {}: the accelerometer residuals are {:.3g} times their noise (reduced "
+          "chi-square {:.3g} over {} poses in {} orientations, 99 % limit {:.3g}): the '{}' model "
+          "does not describe the data to its noise, or poses were disturbed; u includes a "
+          "between-orientation component of {:.3g} mg{}",
+          sensor, std::sqrt(solution->reduced_chi2), solution->reduced_chi2, m, clusters,
+          boost::math::quantile(dist, 0.99) / dof, ModelKindName(o.accel_model),
+          1000.0 * std::sqrt(tau2),
+          f > 1.0 ? fmt::format(" and scatter within orientations "
+                                "{:.3g} times the noise",
+                                std::sqrt(f))
+                  : std::string()));
+    }
+  }
+  return Status::Ok();
 }
 
 Status PropagateAccelUncertainty(ceres::Problem* gyro_problem,
@@ -1106,9 +1278,11 @@ Result<SensorCalibration> AssembleAccel(const TagProblemData& d, const Parameter
                                         int sensor) {
   SensorCalibration accel = MakeSensorCalibration(ImuSensor::kAccel, o.accel_model, d.temperature,
                                                   d.t_ref_c, accel_unit, x, solution.covariance);
-  accel.dof = solution.residuals - solution.parameters;
+  accel.dof = solution.dof >= 0 ? solution.dof : solution.residuals - solution.parameters;
   accel.reduced_chi2 = solution.reduced_chi2;
-  accel.coverage_factor_95 = StudentT975(accel.dof);
+  // u from the poses' noise alone (hundreds of samples each): the normal 1.96 (JCGM 100:2008
+  // G.6.6); with a between-orientation component, Student t with C - p degrees of freedom.
+  accel.coverage_factor_95 = solution.u_from_noise ? 1.959963984540054 : StudentT975(accel.dof);
   accel.residual_rms = Rms(fit.r_accel);
   accel.residual_unit = "g";
   accel.groups.push_back(

@@ -242,9 +242,33 @@ struct SensorSolution {
   std::vector<double*> free_blocks;  // Into the ParameterBlocks solved.
   Eigen::MatrixXd covariance;        // Of the free parameters, FreeNames order.
   double reduced_chi2 = 0;
-  int residuals = 0;   // m
-  int parameters = 0;  // p
+  int residuals = 0;          // m
+  int parameters = 0;         // p
+  int dof = -1;               // Residual degrees of freedom when not m - p (distinct orientations).
+  bool u_from_noise = false;  // The covariance rests on the poses' noise alone (k = 1.96).
+  std::vector<std::string> warnings;
 };
+
+// The accelerometer's covariance from the noise of each pose and the number of distinct
+// orientations (issue #23; docs/calibration-model.md "Uncertainty"), replacing the covariance
+// scaled by the residuals' own scatter. Each pose residual r_i (gravity norm, g) has the noise
+// sigma_i of its mean along gravity (the samples' variance with the AR(1) factor
+// (1 + rho) / (1 - rho) of their lag-1 autocorrelation). Poses whose gravity directions lie
+// within kSameOrientationDeg (and, with a temperature term, 1 degC) are one orientation
+// cluster: repeated stops there share any error the model leaves, so
+//   V = f diag(sigma_i^2) + tau^2 B   (B_ij = 1 within a cluster)
+// with f = max(1, within-cluster chi-square / (m - C)) and tau^2 the between-orientation
+// variance by the method of moments on the cluster means (0 when the model fits to the
+// noise). The fit is least squares with equal weights (J the Jacobian of the residuals), so
+//   cov = (J^T J)^-1 J^T V J (J^T J)^-1            (sandwich; JCGM 100:2008 5.2, C.3.4)
+// reduced_chi2 = sum r_i^2 / sigma_i^2 / (m - p): about 1 when the model describes the data to
+// its noise, larger when it does not (a warning names it). Fewer clusters than p + 1 is an
+// error: repeated stops at one orientation do not determine more constants.
+// Only for the trivial loss (a robust loss keeps the scaled covariance).
+constexpr double kSameOrientationDeg = 10.0;
+Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
+                             const CalibrationOptions& o, int sensor, const Fit& fit,
+                             ceres::Problem* problem, SensorSolution* solution);
 
 // The accelerometer: unweighted fit, whitened final fit, rank, covariance.
 Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOptions& o, int sensor,

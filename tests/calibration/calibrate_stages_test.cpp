@@ -332,13 +332,23 @@ TEST_CASE("StartAccel: the ellipsoid's centre and radii give bias and scale",
     CHECK(x[PB::kGyroBias][a] == 0.0);
   }
 
-  // Too few poses for the full model with a temperature term: 12 parameters + 3.
-  const std::vector<ci::Pose> few(poses.begin(), poses.begin() + 14);
+  // Too few poses for the full model with a temperature term: 12 parameters (u from the
+  // poses' noise), 3 more with a robust loss (u from the residuals' scatter).
+  const std::vector<ci::Pose> few(poses.begin(), poses.begin() + 11);
   s = ci::StartAccel(few, 1.0, "LSB", true, o, 1, &warnings);
   REQUIRE_FALSE(s.ok());
-  CHECK(s.error().message.find("sensor 1: 14 static poses found; the accelerometer 'full' model "
-                               "with temperature term has 12 parameters and needs at least 15") ==
+  CHECK(s.error().message.find("sensor 1: 11 static poses found; the accelerometer 'full' model "
+                               "with temperature term has 12 parameters and needs at least 12") ==
         0);
+  const std::vector<ci::Pose> fourteen(poses.begin(), poses.begin() + 14);
+  // (Enough poses with the trivial loss; these 14 have no +X pose, which is the next refusal.)
+  s = ci::StartAccel(fourteen, 1.0, "LSB", true, o, 1, &warnings);
+  REQUIRE_FALSE(s.ok());
+  CHECK(s.error().message.find("do not span the sphere") != std::string::npos);
+  o.loss = LossKind::kCauchy;
+  s = ci::StartAccel(fourteen, 1.0, "LSB", true, o, 1, &warnings);
+  REQUIRE_FALSE(s.ok());
+  CHECK(s.error().message.find("needs at least 15") != std::string::npos);
 }
 
 TEST_CASE("StartAccel: poses that do not span the sphere", "[calibration][stages]") {

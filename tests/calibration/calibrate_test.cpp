@@ -1,9 +1,12 @@
 // Recovery of simulated truth, coverage of the reported uncertainties, and bad input.
 #include "metro/calibration/calibrate.hpp"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
 #include <map>
+#include <string>
 
 #include "metro/calibration/simulate.hpp"
 
@@ -231,7 +234,7 @@ TEST_CASE("Too few static poses is an error that says what to collect", "[calibr
   REQUIRE_FALSE(r.ok());
   CHECK_THAT(r.error().message,
              Catch::Contains("8 static poses found; the accelerometer 'full' model has 9 "
-                             "parameters and needs at least 12 poses"));
+                             "parameters and needs at least 9 poses"));
   CHECK_THAT(r.error().message, Catch::Contains("Collect more static poses"));
 }
 
@@ -350,6 +353,119 @@ TEST_CASE("Calibration options are validated", "[calibration]") {
   o.gyro_fs_dps = 0;
   CHECK_FALSE(o.IsValid(&why));
   CHECK_THAT(why, Catch::Contains("gyro_fs_dps must be > 0"));
+}
+
+// Issue #23: the accelerometer's u rests on the noise of each pose and on the number of distinct
+// orientations. Over simulated tags per case (accelerometer only), the truth lies within 2u of
+// every constant 93-97 % of the time (pooled over axes; with 100 tags x 3 axes the binomial
+// standard deviation is 1.3 points, so the band asserted is 0.91 .. 0.985). Cases: the 26 cube
+// directions (full model); 1 s poses (--min-static-s 0.4); 3x noise; the 6 faces three times
+// each (scale model, truth without misalignment); 9 orientations twice (full model: as many
+// orientations as parameters); the bias model (truth with the nominal scale). Prints the table
+// of docs/calibration-model.md (run with -s).
+struct AccelCase {
+  const char* name;
+  ModelKind model;
+  int poses = 26;
+  PoseSet set = PoseSet::kCube;
+  double dwell_s = 2.0;
+  double noise_ug_rthz = 400.0;
+  int records = 1;
+  double min_static_s = 1.0;
+};
+
+std::map<std::string, std::pair<int, int>> AccelCoverage(const AccelCase& c, int tags,
+                                                         int* warned) {
+  std::map<std::string, std::pair<int, int>> inside;
+  for (int tag = 0; tag < tags; ++tag) {
+    ImuTruth truth = DrawImuTruth(5000 + static_cast<uint64_t>(tag), 2.0, 250.0, false);
+    if (c.model != ModelKind::kFull) {
+      std::fill(truth.accel.misalignment.begin(), truth.accel.misalignment.end(), 0.0);
+    }
+    if (c.model == ModelKind::kBias) truth.accel.scale.setConstant(1.0 / 16384.0);
+    std::vector<SimulatedSession> sims;
+    for (int r = 0; r < c.records; ++r) {
+      SimulationOptions so;
+      so.seed = 7000 + static_cast<uint64_t>(100 * tag + r);
+      so.poses = c.poses;
+      so.pose_set = c.set;
+      so.dwell_s = c.dwell_s;
+      so.move_s = 1.5;
+      so.accel_noise_ug_rthz = c.noise_ug_rthz;
+      so.random_truth = false;
+      so.truth = truth;
+      sims.push_back(SimulateCalibrationSession(so).value());
+    }
+    std::vector<const Tag*> tags_in;
+    for (const SimulatedSession& s : sims) tags_in.push_back(&s.session.tags.front());
+    CalibrationOptions o;
+    o.fit_gyro = false;
+    o.accel_model = c.model;
+    o.segmentation.min_static_s = c.min_static_s;
+    Result<TagCalibration> r = CalibrateTag(tags_in, o);
+    if (!r.ok()) FAIL(c.name << ": " << r.error().ToString());
+    const SensorCalibration& a = *r.value().accel;
+    *warned += r.value().warnings.empty() ? 0 : 1;
+    for (const Deviation& d : Deviations(a, truth.accel)) {
+      auto& [in, total] = inside[d.name.substr(0, 1)];
+      in += std::abs(d.error) <= 2.0 * d.u ? 1 : 0;
+      ++total;
+    }
+  }
+  return inside;
+}
+
+TEST_CASE("Accelerometer u holds over simulated tags in every case", "[calibration]") {
+  const AccelCase cases[] = {
+      {"26 cube directions, full", ModelKind::kFull},
+      {"1 s poses, full", ModelKind::kFull, 26, PoseSet::kCube, 1.0, 400.0, 1, 0.4},
+      {"3x noise, full", ModelKind::kFull, 26, PoseSet::kCube, 2.0, 1200.0},
+      {"6 faces x3, scale", ModelKind::kScale, 18, PoseSet::kFaces},
+      {"9 orientations x2, full", ModelKind::kFull, 9, PoseSet::kCube, 2.0, 400.0, 2},
+      {"26 cube directions, bias", ModelKind::kBias},
+  };
+  for (const AccelCase& c : cases) {
+    int warned = 0;
+    const int tags = 100;
+    const auto inside = AccelCoverage(c, tags, &warned);
+    std::string line = std::string(c.name) + ":";
+    for (const auto& [key, counts] : inside) {
+      const double rate = static_cast<double>(counts.first) / counts.second;
+      line += " " + key + " " +
+              std::to_string(static_cast<int>(std::lround(1000 * rate)) / 10.0).substr(0, 4) + " %";
+      INFO(c.name << " " << key << " within 2u: " << rate << " of " << counts.second);
+      CHECK(rate >= 0.91);
+      CHECK(rate <= 0.985);
+    }
+    std::printf("%s (warnings in %d of %d tags)\n", line.c_str(), warned, tags);
+  }
+}
+
+// A model that does not fit: the scale model on tags with 2 % cross-axis terms leaves
+// gravity-norm residuals far above the noise; the reduced chi-square shows it, a warning names
+// it, and u grows with a between-orientation component.
+TEST_CASE("A model that does not fit shows a reduced chi-square above 1 and a warning",
+          "[calibration]") {
+  SimulationOptions so;
+  so.seed = 31;
+  so.random_truth = false;
+  so.truth = DrawImuTruth(31, 2.0, 250.0, false);
+  so.truth.accel.misalignment = {0.02, -0.015, 0.018};
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  CalibrationOptions o;
+  o.fit_gyro = false;
+  o.accel_model = ModelKind::kScale;
+  const TagCalibration scale = Fit(sim, o);
+  o.accel_model = ModelKind::kFull;
+  const TagCalibration full = Fit(sim, o);
+  CHECK(full.accel->reduced_chi2 == Approx(1.0).margin(0.6));
+  CHECK(scale.accel->reduced_chi2 > 20.0);
+  bool warned = false;
+  for (const std::string& w : scale.warnings) {
+    warned = warned || w.find("does not describe the data to its noise") != std::string::npos;
+  }
+  CHECK(warned);
+  for (int a = 0; a < 3; ++a) CHECK(scale.accel->bias_u[a] > 3.0 * full.accel->bias_u[a]);
 }
 
 }  // namespace
