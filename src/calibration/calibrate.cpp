@@ -141,6 +141,20 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
     ci::ApplyGyroStart(start.value(), &d, &x, &fit);
     Result<ci::SensorSolution> gyro_solved = ci::SolveGyro(d, o, out.sensor, accel, &x, &fit);
     if (!gyro_solved.ok()) return gyro_solved.error();
+    // Rotations that contradict the rest are excluded one at a time (the worst first) and the
+    // gyroscope solved again, while the rest still determine the model.
+    for (int round = 0; round < 5 && o.loss == LossKind::kTrivial; ++round) {
+      const std::optional<size_t> bad = ci::ContradictingRotation(fit, d.rotations.size());
+      if (!bad) break;
+      if (!ci::CheckGyroMotion(d.tables.size(), d.rotations.size() - 1, o.gyro_model, d.temperature,
+                               out.sensor)
+               .ok()) {
+        break;
+      }
+      out.warnings.push_back(ci::ExcludeRotation(*bad, fit, &d, &out.segments, out.sensor));
+      gyro_solved = ci::SolveGyro(d, o, out.sensor, accel, &x, &fit);
+      if (!gyro_solved.ok()) return gyro_solved.error();
+    }
     gyro = std::move(gyro_solved).value();
   }
 

@@ -1097,6 +1097,62 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
   return Status::Ok();
 }
 
+namespace {
+double RotationAngleDeg(const Fit& fit, size_t i) {
+  const double chord = std::sqrt(fit.r_rotation[3 * i] * fit.r_rotation[3 * i] +
+                                 fit.r_rotation[3 * i + 1] * fit.r_rotation[3 * i + 1] +
+                                 fit.r_rotation[3 * i + 2] * fit.r_rotation[3 * i + 2]);
+  return 2.0 * std::asin(std::min(1.0, chord / 2.0)) * 180.0 / kPi;
+}
+}  // namespace
+
+std::optional<size_t> ContradictingRotation(const Fit& fit, size_t rotations) {
+  if (rotations < 6 || fit.r_rotation.size() != 3 * rotations) return std::nullopt;
+  std::vector<double> angles(rotations);
+  for (size_t i = 0; i < rotations; ++i) angles[i] = RotationAngleDeg(fit, i);
+  std::vector<double> sorted = angles;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(rotations / 2),
+                   sorted.end());
+  const double sigma = sorted[rotations / 2] / 1.1774;  // Rayleigh median = sqrt(2 ln 2) sigma
+  const size_t worst =
+      static_cast<size_t>(std::max_element(angles.begin(), angles.end()) - angles.begin());
+  if (angles[worst] > std::max(6.0 * sigma, 1.0)) return worst;
+  return std::nullopt;
+}
+
+std::string ExcludeRotation(size_t index, const Fit& fit, TagProblemData* d,
+                            std::vector<Segment>* segments, int sensor) {
+  const Segment* gone = d->rotation_segments[index];
+  const double angle = RotationAngleDeg(fit, index);
+  std::string note = fmt::format(
+      "excluded: after this rotation gravity is {:.2f} deg away from where the integrated "
+      "gyroscope puts it (the other rotations: {:.2f} deg rms); an orientation change the "
+      "gyroscope did not see (the tag re-seated), a knock or a burst",
+      angle, [&] {
+        double ss = 0;
+        size_t n = 0;
+        for (size_t i = 0; i < d->rotations.size(); ++i) {
+          if (i == index) continue;
+          const double a = RotationAngleDeg(fit, i);
+          ss += a * a;
+          ++n;
+        }
+        return n > 0 ? std::sqrt(ss / static_cast<double>(n)) : 0.0;
+      }());
+  for (Segment& s : *segments) {
+    if (s.piece == gone->piece && s.begin == gone->begin && s.kind == gone->kind) {
+      s.used = false;
+      s.note = note;
+    }
+  }
+  const std::string warning =
+      fmt::format("sensor {}: input {}, rotation t = {:.2f} .. {:.2f} s {}", sensor,
+                  gone->piece + 1, gone->start_s, gone->end_s, note);
+  d->rotations.erase(d->rotations.begin() + static_cast<std::ptrdiff_t>(index));
+  d->rotation_segments.erase(d->rotation_segments.begin() + static_cast<std::ptrdiff_t>(index));
+  return warning;
+}
+
 Status PropagateAccelUncertainty(ceres::Problem* gyro_problem,
                                  const std::vector<double*>& gyro_free, int pg,
                                  const SensorSolution& accel, Eigen::MatrixXd* cov_g) {

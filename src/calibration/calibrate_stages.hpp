@@ -279,6 +279,18 @@ Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOpti
 Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptions& o, int sensor,
                                  const SensorSolution& accel, ParameterBlocks* x, Fit* fit);
 
+// Rotations that contradict the rest (issue #23): an orientation change the gyroscope did not
+// see (the tag re-seated between poses), a knock, a burst. Their gravity-direction residual
+// angle is far outside the others': the angles of consistent rotations follow a Rayleigh law
+// (a two-dimensional residual), whose median is 1.1774 sigma; the worst rotation above
+// max(6 sigma, 1 deg) is returned (index into d.rotations), none with fewer than 6 rotations.
+std::optional<size_t> ContradictingRotation(const Fit& fit, size_t rotations);
+
+// Marks rotation `index` of d unused in `segments` (note: its residual angle and why) and
+// removes it from d; returns the warning that names it.
+std::string ExcludeRotation(size_t index, const Fit& fit, TagProblemData* d,
+                            std::vector<Segment>* segments, int sensor);
+
 // cov_g += S cov_a S^T, S = -(G_g^T G_g)^-1 G_g^T G_a (JCGM 100:2008 5.2), from the whitened
 // Jacobian of the gyroscope problem over its free blocks (G_g) and the accelerometer's free
 // blocks (G_a); nothing when the gyroscope problem does not hold every accelerometer block.
