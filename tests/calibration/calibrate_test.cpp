@@ -557,5 +557,40 @@ TEST_CASE("Coverage with an unseen re-seat on 60 simulated tags", "[calibration]
   }
 }
 
+// The 6-position protocol (ArduPilot/PX4 accelerometer calibration): one pose per face. It
+// determines the accelerometer's scale model exactly (6 parameters, 6 orientations; u from
+// the noise of the poses, with the warning that the model cannot be checked) and the
+// gyroscope's bias; the truth lies within 4.5 u.
+TEST_CASE("The 6-position protocol calibrates the models it determines", "[calibration]") {
+  SimulationOptions so;
+  so.seed = 51;
+  so.poses = 6;
+  so.pose_set = PoseSet::kFaces;
+  so.dwell_s = 4.0;
+  so.random_truth = false;
+  so.truth = DrawImuTruth(51, 2.0, 250.0, false);
+  std::fill(so.truth.accel.misalignment.begin(), so.truth.accel.misalignment.end(), 0.0);
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  CalibrationOptions o;
+  o.accel_model = ModelKind::kScale;
+  o.gyro_model = ModelKind::kBias;
+  const TagCalibration t = Fit(sim, o);
+  REQUIRE(t.accel.has_value());
+  REQUIRE(t.gyro.has_value());
+  CHECK(t.accel->segments.size() == 6);
+  CHECK(t.accel->coverage_factor_95 == Approx(1.96).margin(0.001));
+  CheckRecovered(*t.accel, sim.truth.accel, 4.5);
+  CheckRecovered(*t.gyro, sim.truth.gyro, 4.5);
+  bool exact = false;
+  for (const std::string& w : t.warnings)
+    exact = exact || w.find("the fit is exact") != std::string::npos;
+  CHECK(exact);
+  // The full model is not determined by six orientations: refused, naming them.
+  o.accel_model = ModelKind::kFull;
+  Result<TagCalibration> full = CalibrateTag({&sim.session.tags.front()}, o);
+  REQUIRE_FALSE(full.ok());
+  CHECK_THAT(full.error().message, Catch::Contains("6 static poses found"));
+}
+
 }  // namespace
 }  // namespace metro
