@@ -375,16 +375,17 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
       return !saturated(i) && !table_turning(i);
     };
     const std::vector<Run> shorts = StillRuns(n, still, gap_before, 4 * hs + 1);
+    std::vector<Eigen::Vector3d> pose_rates;  // The poses' gyroscope means, for the bias.
+    if (rate_limit > 0 && has_gyro) {
+      for (const auto& p : kept) pose_rates.push_back(MeanOfRuns(*input.gyro, p));
+    }
     for (const Run& r : shorts) {
       if (r.end - r.begin >= min_static_n) continue;
-      if (rate_limit > 0 && has_gyro) {
+      if (!pose_rates.empty()) {
         // Not a steady rotation either: the rate against the poses' bias.
-        std::vector<Eigen::Vector3d> means;
-        for (const auto& p : kept) means.push_back(MeanOfRuns(*input.gyro, p));
-        if (!means.empty()) {
-          means.push_back(mean_gyro(r));
-          if (RateDeviations(means).back() > rate_limit) continue;
-        }
+        std::vector<Eigen::Vector3d> means = pose_rates;
+        means.push_back(mean_gyro(r));
+        if (RateDeviations(means).back() > rate_limit) continue;
       }
       // The window shortens a still stretch by a window: its dwell is about run + window.
       const double dwell_s =
