@@ -493,7 +493,7 @@ void Reseat(SimulatedSession* sim, double t0_s, double angle_deg) {
   }
 }
 
-// Issue #23: a 20 deg re-seat the gyroscope did not see, in the middle of pose 11. The still
+// Issue #23: a 20 deg re-seat the gyroscope did not see, in the middle of pose 10. The still
 // period splits in two; the "rotation" between them turns gravity by about 20 deg with the
 // gyroscope still, is excluded and named, and the rest calibrates both sensors.
 TEST_CASE("An orientation change the gyroscope did not see is excluded and named",
@@ -501,7 +501,9 @@ TEST_CASE("An orientation change the gyroscope did not see is excluded and named
   SimulationOptions so;
   so.seed = 41;
   SimulatedSession sim = SimulateCalibrationSession(so).value();
-  const double t0 = 10 * (so.dwell_s + so.move_s) + 0.5 * so.dwell_s;
+  // The simulator holds pose 0 for 2 dwells, then moves and holds each pose k >= 1 from
+  // 2 dwell + k move + (k - 1) dwell: the middle of pose 10.
+  const double t0 = 2 * so.dwell_s + 10 * so.move_s + 9.5 * so.dwell_s;
   Reseat(&sim, t0, 20.0);
   const TagCalibration t = Fit(sim);
   int named = 0;
@@ -533,8 +535,11 @@ TEST_CASE("Coverage with an unseen re-seat on 60 simulated tags", "[calibration]
     SimulationOptions so;
     so.seed = seed;
     SimulatedSession sim = SimulateCalibrationSession(so).value();
-    const int pose = 3 + static_cast<int>(seed % 20);
-    Reseat(&sim, pose * (so.dwell_s + so.move_s) + 0.5 * so.dwell_s, 20.0);
+    // Half in the middle of a pose (the still period splits), half in the middle of a hand
+    // rotation (the rotation is off by the re-seat).
+    const double pose = 3 + static_cast<double>(seed % 20);
+    const double mid_pose = 2 * so.dwell_s + pose * so.move_s + (pose - 0.5) * so.dwell_s;
+    Reseat(&sim, seed % 2 == 0 ? mid_pose : mid_pose - 0.5 * (so.dwell_s + so.move_s), 20.0);
     const TagCalibration t = Fit(sim);
     for (const std::string& w : t.warnings) named += w.find("did not see") != std::string::npos;
     for (const auto& [c, truth] :

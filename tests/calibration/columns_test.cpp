@@ -205,6 +205,34 @@ TEST_CASE("calibrate fit exits 2 naming the missing columns of a partial family"
   CHECK_FALSE(ReadFile(out).ok());
   std::remove(path.c_str());
 }
+TEST_CASE("calibrate fit --segments: annotated poses, and a bad file named by line and column",
+          "[calibration][apps]") {
+  // The simulator's poses: pose 0 still for 6 s, then 2 s of hand rotation and 3 s still
+  // for each of the other 25 (pose i >= 1 still from 5 i + 3 to 5 i + 6 s).
+  const std::string path = "metro_cal_segments_session.csv";
+  const std::string segments = "metro_cal_segments.csv";
+  const std::string out = "metro_cal_segments.json";
+  REQUIRE(WriteFileAtomically(path, FormatSessionCsv(Simulated(7))).ok());
+  std::string text = "kind,start_s,end_s\n";
+  text += "static,0.5,5.5\n";
+  for (int i = 1; i < 26; ++i) text += fmt::format("static,{},{}\n", 5 * i + 3.5, 5 * i + 5.5);
+  REQUIRE(WriteFileAtomically(segments, text).ok());
+  testing::ProgramRun r = testing::RunProgram(
+      METRO_CALIBRATE_EXE, "fit " + path + " --segments " + segments + " -o " + out);
+  CHECK(r.exit_code == 0);
+  INFO(r.err);
+  Result<std::string> json = ReadFile(out);
+  REQUIRE(json.ok());
+  CHECK(json.value().find("annotated (" + segments + " line 2)") != std::string::npos);
+
+  REQUIRE(WriteFileAtomically(segments, "kind,start_s,end_s\nstatic,0.5,later\n").ok());
+  r = testing::RunProgram(METRO_CALIBRATE_EXE,
+                          "fit " + path + " --segments " + segments + " -o " + out + ".2");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains(segments + ":2:3: end_s 'later' is not a number"));
+  CHECK_FALSE(ReadFile(out + ".2").ok());
+  for (const std::string& f : {path, segments, out}) std::remove(f.c_str());
+}
 #endif
 
 }  // namespace
