@@ -597,5 +597,34 @@ TEST_CASE("The 6-position protocol calibrates the models it determines", "[calib
   CHECK_THAT(full.error().message, Catch::Contains("6 static poses found"));
 }
 
+// A Ferraris-style session (Ferraris et al. 1995): the six faces, and at each a turn of the
+// rate table at a known 60 deg/s about the vertical (so about each body axis, both ways), with
+// table_rate_dps. The accelerometer's scale model (6 orientations; the stops after the turns
+// repeat them) and the gyroscope's full model are calibrated; the truth lies within 4.5 u.
+TEST_CASE("A Ferraris-style six-face and rate-table session calibrates", "[calibration]") {
+  SimulationOptions so;
+  so.seed = 61;
+  so.poses = 6;
+  so.pose_set = PoseSet::kFaces;
+  so.dwell_s = 4.0;
+  so.table_rates_dps = {60.0};
+  so.table_run_s = 6.0;
+  so.random_truth = false;
+  so.truth = DrawImuTruth(61, 2.0, 250.0, false);
+  std::fill(so.truth.accel.misalignment.begin(), so.truth.accel.misalignment.end(), 0.0);
+  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  CalibrationOptions o;
+  o.accel_model = ModelKind::kScale;
+  const TagCalibration t = Fit(sim, o);
+  REQUIRE(t.accel.has_value());
+  REQUIRE(t.gyro.has_value());
+  CHECK(t.accel->segments.size() == 12);  // each face before and after its turn
+  int tables = 0;
+  for (const Segment& s : t.gyro->segments) tables += s.kind == SegmentKind::kTable ? 1 : 0;
+  CHECK(tables == 6);
+  CheckRecovered(*t.accel, sim.truth.accel, 4.5);
+  CheckRecovered(*t.gyro, sim.truth.gyro, 4.5);
+}
+
 }  // namespace
 }  // namespace metro
