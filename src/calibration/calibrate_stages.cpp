@@ -980,7 +980,16 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
     dir[i] = v.normalized();
     sigma[i] = PoseMeanNoise(d.records[static_cast<size_t>(pose.record)], *pose.segment,
                              d.accel_ref, dir[i]);
-    if (!(sigma[i] > 0)) return Status::Ok();  // Quantised to one value: keep the scaled form.
+    if (!(sigma[i] > 0)) {
+      // Every sample of the pose alike (quantised data, or fewer than 3): no noise to rest u
+      // on; the covariance scaled by the residuals stays, and says so.
+      solution->warnings.push_back(fmt::format(
+          "sensor {}: static pose {} (t = {:.2f} .. {:.2f} s) shows no noise along gravity; the "
+          "accelerometer's u is scaled by the residuals' own scatter, not by the poses' noise "
+          "and orientations",
+          sensor, i + 1, pose.segment->start_s, pose.segment->end_s));
+      return Status::Ok();
+    }
   }
   // Orientation clusters (greedy, in pose order).
   const double cos_same = std::cos(kSameOrientationDeg * kPi / 180.0);
