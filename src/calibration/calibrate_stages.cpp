@@ -1107,6 +1107,7 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
 }
 
 namespace {
+// Rotation i's residual as an angle: |R^T u_i - u_j| is the chord of the angle between them.
 double RotationAngleDeg(const Fit& fit, size_t i) {
   const double chord = std::sqrt(fit.r_rotation[3 * i] * fit.r_rotation[3 * i] +
                                  fit.r_rotation[3 * i + 1] * fit.r_rotation[3 * i + 1] +
@@ -1396,11 +1397,8 @@ Result<SensorCalibration> AssembleGyro(const TagProblemData& d, const ParameterB
   }
   // Rotation residuals as angles: |R^T u_i - u_j| is the chord of the angle between them.
   std::vector<double> angles_deg;
-  for (size_t i = 0; i + 2 < fit.r_rotation.size(); i += 3) {
-    const double chord = std::sqrt(fit.r_rotation[i] * fit.r_rotation[i] +
-                                   fit.r_rotation[i + 1] * fit.r_rotation[i + 1] +
-                                   fit.r_rotation[i + 2] * fit.r_rotation[i + 2]);
-    angles_deg.push_back(2.0 * std::asin(std::min(1.0, chord / 2.0)) * 180.0 / kPi);
+  for (size_t i = 0; 3 * i + 2 < fit.r_rotation.size(); ++i) {
+    angles_deg.push_back(RotationAngleDeg(fit, i));
   }
   if (!d.rotations.empty()) {
     gyro.groups.push_back(

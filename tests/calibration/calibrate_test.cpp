@@ -566,16 +566,24 @@ TEST_CASE("Coverage with an unseen re-seat on 60 simulated tags", "[calibration]
 // determines the accelerometer's scale model exactly (6 parameters, 6 orientations; u from
 // the noise of the poses, with the warning that the model cannot be checked) and the
 // gyroscope's bias; the truth lies within 4.5 u.
-TEST_CASE("The 6-position protocol calibrates the models it determines", "[calibration]") {
+// One 4 s pose per face of a cube, with a datasheet truth whose accelerometer has no
+// cross-axis terms (what six orientations can determine), and table turns at each face.
+SimulatedSession SixFaceSession(uint64_t seed, std::vector<double> table_rates_dps) {
   SimulationOptions so;
-  so.seed = 51;
+  so.seed = seed;
   so.poses = 6;
   so.pose_set = PoseSet::kFaces;
   so.dwell_s = 4.0;
+  so.table_rates_dps = std::move(table_rates_dps);
+  so.table_run_s = 6.0;
   so.random_truth = false;
-  so.truth = DrawImuTruth(51, 2.0, 250.0, false);
+  so.truth = DrawImuTruth(seed, 2.0, 250.0, false);
   std::fill(so.truth.accel.misalignment.begin(), so.truth.accel.misalignment.end(), 0.0);
-  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  return SimulateCalibrationSession(so).value();
+}
+
+TEST_CASE("The 6-position protocol calibrates the models it determines", "[calibration]") {
+  const SimulatedSession sim = SixFaceSession(51, {});
   CalibrationOptions o;
   o.accel_model = ModelKind::kScale;
   o.gyro_model = ModelKind::kBias;
@@ -590,7 +598,7 @@ TEST_CASE("The 6-position protocol calibrates the models it determines", "[calib
   for (const std::string& w : t.warnings)
     exact = exact || w.find("the fit is exact") != std::string::npos;
   CHECK(exact);
-  // The full model is not determined by six orientations: refused, naming them.
+  // The full model (9 parameters) is not determined by six poses: refused, naming the count.
   o.accel_model = ModelKind::kFull;
   Result<TagCalibration> full = CalibrateTag({&sim.session.tags.front()}, o);
   REQUIRE_FALSE(full.ok());
@@ -602,17 +610,7 @@ TEST_CASE("The 6-position protocol calibrates the models it determines", "[calib
 // table_rate_dps. The accelerometer's scale model (6 orientations; the stops after the turns
 // repeat them) and the gyroscope's full model are calibrated; the truth lies within 4.5 u.
 TEST_CASE("A Ferraris-style six-face and rate-table session calibrates", "[calibration]") {
-  SimulationOptions so;
-  so.seed = 61;
-  so.poses = 6;
-  so.pose_set = PoseSet::kFaces;
-  so.dwell_s = 4.0;
-  so.table_rates_dps = {60.0};
-  so.table_run_s = 6.0;
-  so.random_truth = false;
-  so.truth = DrawImuTruth(61, 2.0, 250.0, false);
-  std::fill(so.truth.accel.misalignment.begin(), so.truth.accel.misalignment.end(), 0.0);
-  const SimulatedSession sim = SimulateCalibrationSession(so).value();
+  const SimulatedSession sim = SixFaceSession(61, {60.0});
   CalibrationOptions o;
   o.accel_model = ModelKind::kScale;
   const TagCalibration t = Fit(sim, o);
