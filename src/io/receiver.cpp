@@ -40,6 +40,60 @@ constexpr double kQuaternionNormTolerance = 0.05;
 
 }  // namespace
 
+bool DecodeReceiverLine(std::string_view line, ReceiverLine* out, ReceiverLineProblem* problem) {
+  auto fail = [&](int64_t column, std::string message) {
+    if (problem != nullptr) *problem = ReceiverLineProblem{column, std::move(message)};
+    return false;
+  };
+  if (line.size() != static_cast<size_t>(kReceiverLineHexChars)) {
+    return fail(0, fmt::format("receiver line has {} characters: expected {} hex characters "
+                               "(sensor, NewData flag, {} payload bytes)",
+                               line.size(), kReceiverLineHexChars, kReceiverPayloadBytes));
+  }
+  uint8_t bytes[2 + kReceiverPayloadBytes];
+  for (size_t i = 0; i < line.size(); i += 2) {
+    const int hi = HexValue(line[i]);
+    const int lo = HexValue(line[i + 1]);
+    if (hi < 0 || lo < 0) {
+      const size_t bad = hi < 0 ? i : i + 1;
+      const unsigned char c = static_cast<unsigned char>(line[bad]);
+      return fail(static_cast<int64_t>(bad) + 1,
+                  fmt::format("non-hex character '{}' at column {}: expected 0-9 or a-f",
+                              std::isprint(c) ? std::string(1, static_cast<char>(c))
+                                              : fmt::format("\\x{:02x}", c),
+                              bad + 1));
+    }
+    bytes[i / 2] = static_cast<uint8_t>(hi * 16 + lo);
+  }
+  const int sensor = bytes[0];
+  const int flag = bytes[1];
+  if (sensor == 0) return fail(1, "sensor number 00: expected a tag number 01..ff");
+  if (flag != 0x00 && flag != 0x01 && flag != 0xFF) {
+    return fail(
+        3,
+        fmt::format("NewData flag {:02x}: expected 01 (fresh), 00 (stale) or ff (never received)",
+                    flag));
+  }
+  ReceiverLine r;
+  r.sensor = sensor;
+  r.flag = static_cast<NewDataFlag>(flag);
+  if (flag == 0x01) {
+    r.q.w = FloatFromLittleEndian(bytes + 2);
+    r.q.x = FloatFromLittleEndian(bytes + 6);
+    r.q.y = FloatFromLittleEndian(bytes + 10);
+    r.q.z = FloatFromLittleEndian(bytes + 14);
+    const double norm = std::sqrt(r.q.w * r.q.w + r.q.x * r.q.x + r.q.y * r.q.y + r.q.z * r.q.z);
+    if (!std::isfinite(norm) || std::abs(norm - 1.0) > kQuaternionNormTolerance) {
+      return fail(
+          5, fmt::format("fresh row with quaternion norm {}: expected a unit quaternion (w, x, y, "
+                         "z as float32 little-endian in payload bytes 1..16)",
+                         norm));
+    }
+  }
+  if (out != nullptr) *out = r;
+  return true;
+}
+
 void EncodeQuaternion(const Quaternion& q, ReceiverPayload* payload) {
   FloatToLittleEndian(static_cast<float>(q.w), payload->data() + 0);
   FloatToLittleEndian(static_cast<float>(q.x), payload->data() + 4);
@@ -117,68 +171,20 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
       continue;
     }
 
-    if (line.size() != static_cast<size_t>(kReceiverLineHexChars)) {
-      const std::string message = fmt::format(
-          "receiver line has {} characters: expected {} hex characters (sensor, NewData flag, "
-          "{} payload bytes){}",
-          line.size(), kReceiverLineHexChars, kReceiverPayloadBytes,
-          first_line ? "; the first line of a capture may be a terminal program's banner: "
-                       "remove it, or pass --lenient to skip it"
-                     : "");
-      if (Status s = reject(0, message); !s.ok()) return s.error();
-      continue;
-    }
-    uint8_t bytes[2 + kReceiverPayloadBytes];
-    int64_t bad_column = 0;
-    for (size_t i = 0; i < line.size(); i += 2) {
-      const int hi = HexValue(line[i]);
-      const int lo = HexValue(line[i + 1]);
-      if (hi < 0 || lo < 0) {
-        bad_column = static_cast<int64_t>(i) + (hi < 0 ? 1 : 2);
-        break;
+    ReceiverLine decoded;
+    ReceiverLineProblem problem;
+    if (!DecodeReceiverLine(line, &decoded, &problem)) {
+      if (problem.column == 0 && first_line) {
+        problem.message +=
+            "; the first line of a capture may be a terminal program's banner: remove it, or "
+            "pass --lenient to skip it";
       }
-      bytes[i / 2] = static_cast<uint8_t>(hi * 16 + lo);
-    }
-    if (bad_column > 0) {
-      const std::string message = fmt::format(
-          "non-hex character '{}' at column {}: expected 0-9 or a-f",
-          std::isprint(static_cast<unsigned char>(line[bad_column - 1]))
-              ? std::string(1, line[bad_column - 1])
-              : fmt::format("\\x{:02x}", static_cast<unsigned char>(line[bad_column - 1])),
-          bad_column);
-      if (Status s = reject(bad_column, message); !s.ok()) return s.error();
+      if (Status s = reject(problem.column, problem.message); !s.ok()) return s.error();
       continue;
     }
-    const int sensor = bytes[0];
-    const int flag = bytes[1];
-    if (sensor == 0) {
-      if (Status s = reject(1, "sensor number 00: expected a tag number 01..ff"); !s.ok()) {
-        return s.error();
-      }
-      continue;
-    }
-    if (flag != 0x00 && flag != 0x01 && flag != 0xFF) {
-      const std::string message = fmt::format(
-          "NewData flag {:02x}: expected 01 (fresh), 00 (stale) or ff (never received)", flag);
-      if (Status s = reject(3, message); !s.ok()) return s.error();
-      continue;
-    }
-    Quaternion q;
-    if (flag == 0x01) {
-      q.w = FloatFromLittleEndian(bytes + 2);
-      q.x = FloatFromLittleEndian(bytes + 6);
-      q.y = FloatFromLittleEndian(bytes + 10);
-      q.z = FloatFromLittleEndian(bytes + 14);
-      const double norm = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-      if (!std::isfinite(norm) || std::abs(norm - 1.0) > kQuaternionNormTolerance) {
-        const std::string message = fmt::format(
-            "fresh row with quaternion norm {}: expected a unit quaternion (w, x, y, z as "
-            "float32 little-endian in payload bytes 1..16)",
-            norm);
-        if (Status s = reject(5, message); !s.ok()) return s.error();
-        continue;
-      }
-    }
+    const int sensor = decoded.sensor;
+    const int flag = static_cast<int>(decoded.flag);
+    const Quaternion& q = decoded.q;
     // A new frame starts when the sensor number does not increase.
     if (sensor <= previous_sensor) ++frame;
     previous_sensor = sensor;

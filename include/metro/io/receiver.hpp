@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "metro/core/angles.hpp"
 
@@ -31,5 +32,26 @@ void EncodeQuaternion(const Quaternion& q, ReceiverPayload* payload);
 
 // One receiver line without the line terminator.
 std::string FormatReceiverLine(int sensor, NewDataFlag flag, const ReceiverPayload& payload);
+
+// One decoded receiver line.
+struct ReceiverLine {
+  int sensor = 0;  // 1..255
+  NewDataFlag flag = NewDataFlag::kNever;
+  Quaternion q;  // w, x, y, z from payload bytes 1..16; fresh rows only (else identity).
+};
+
+// Why a line is not a receiver line: the 1-based column of the offending character (0 when
+// the line as a whole is wrong) and what was expected.
+struct ReceiverLineProblem {
+  int64_t column = 0;
+  std::string message;
+};
+
+// Decodes `line` (without its terminator; a trailing CR must already be removed) with the
+// receiver loader's rules (docs/formats.md, "Receiver capture"): 54 hex characters, sensor
+// 01..ff, NewData 00/01/ff, a fresh row's quaternion norm within 0.05 of 1. Returns false and
+// fills `problem` (when not null) for anything else. The capture loader and `characterize
+// capture` share it, so a line the capture keeps is a line the loader reads.
+bool DecodeReceiverLine(std::string_view line, ReceiverLine* out, ReceiverLineProblem* problem);
 
 }  // namespace metro
