@@ -15,5 +15,7 @@ void AddSimulateCommand(CLI::App& app, int* exit_code);
 // `characterize batch` and `characterize report REPORT.json --html FILE` (docs/reports.md).
 void AddBatchCommand(CLI::App& app, int* exit_code);
 void AddReportCommand(CLI::App& app, int* exit_code);
+// `characterize capture --port DEV -o capture.txt` (docs/capture.md).
+void AddCaptureCommand(CLI::App& app, int* exit_code);
 
 }  // namespace metro::apps

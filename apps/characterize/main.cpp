@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   metro::apps::AddBudgetCommand(app, &exit_code);
   metro::apps::AddBatchCommand(app, &exit_code);
   metro::apps::AddReportCommand(app, &exit_code);
+  metro::apps::AddCaptureCommand(app, &exit_code);
   metro::apps::AddVersionFlag(app, "characterize");
   metro::apps::AddQuietFlag(app);  // On the app and every subcommand (docs/unix.md).
   // Budget files may name sessions; they are evaluated in full (no window).

@@ -1,0 +1,231 @@
+// characterize capture --port DEV [--baud 230400] [--duration-s S] -o capture.txt [--force]
+//   [--reconnect|--no-reconnect] [--analyze -o REPORT.json --capture capture.txt]
+// Records the central receiver's serial stream (docs/capture.md).
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "analysis_options.hpp"
+#include "commands.hpp"
+#include "metro/capture/capture.hpp"
+#include "metro/core/json_text.hpp"
+#include "metro/core/version.hpp"
+#include "metro/report/session_analysis.hpp"
+#include "unix_cli.hpp"
+
+namespace metro::apps {
+namespace {
+
+volatile std::sig_atomic_t g_capture_stop = 0;
+void OnCaptureSignal(int) { g_capture_stop = 1; }
+
+struct CaptureCliOptions {
+  std::string port;
+  int baud = 230400;
+  double duration_s = 0.0;
+  std::string output;
+  std::string capture;
+  bool force = false;
+  bool reconnect = false;
+  bool no_reconnect = false;
+  double frame_period_s = kReceiverFramePeriodS;
+  bool analyze = false;
+};
+
+// The live view (a terminal) or a plain summary every 10 s (a log), on stderr. Counts and
+// rates are fresh on every drawing; the settle and Type A statistics are recomputed when
+// their last computation took less than 5 % of the time since (a long capture's series
+// grow, so they are redone less often rather than costing more of the core).
+class LiveView {
+ public:
+  LiveView() : terminal_(::isatty(STDERR_FILENO) == 1 && !Quiet()) {}
+  void Tick(const capture::CaptureTally& tally, double elapsed_s) {
+    rates_.Sample(tally, elapsed_s);
+    if (Quiet()) return;
+    const double every_s = terminal_ ? 0.5 : 10.0;
+    if (elapsed_s - last_draw_s_ < every_s) return;
+    last_draw_s_ = elapsed_s;
+    const std::vector<capture::TagLiveRow>& rows = Rows(tally, elapsed_s);
+    if (!terminal_) {
+      PrintText(stderr, capture::FormatSummaryLines(rows, elapsed_s));
+      std::fflush(stderr);
+      return;
+    }
+    const std::string table =
+        fmt::format("capture {:.0f} s, {} frames\n", elapsed_s, tally.frames()) +
+        capture::FormatLiveTable(rows, true);
+    std::string out;
+    if (drawn_lines_ > 0) out = fmt::format("\x1b[{}A\x1b[J", drawn_lines_);
+    out += table;
+    drawn_lines_ = static_cast<int>(std::count(table.begin(), table.end(), '\n'));
+    std::fwrite(out.data(), 1, out.size(), stderr);
+    std::fflush(stderr);
+  }
+  void Event(const std::string& text) {
+    drawn_lines_ = 0;  // The event stays above the next drawing.
+    PrintText(stderr, "note: " + text + "\n");
+  }
+  std::map<int, double> rates() const { return rates_.RatesHz(); }
+
+ private:
+  const std::vector<capture::TagLiveRow>& Rows(const capture::CaptureTally& tally,
+                                               double elapsed_s) {
+    const std::map<int, double> rates = rates_.RatesHz();
+    if (elapsed_s >= stats_due_s_ || rows_.size() != tally.tags().size()) {
+      const auto t0 = std::chrono::steady_clock::now();
+      rows_ = capture::LiveRows(tally, rates);
+      const double cost_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      stats_due_s_ = elapsed_s + 20.0 * cost_s;
+      return rows_;
+    }
+    for (capture::TagLiveRow& r : rows_) {
+      r.counts = tally.tags().at(r.sensor).counts;
+      auto it = rates.find(r.sensor);
+      r.rate_hz = it == rates.end() ? -1.0 : it->second;
+    }
+    return rows_;
+  }
+
+  bool terminal_;
+  double last_draw_s_ = 0.0;
+  double stats_due_s_ = 0.0;
+  int drawn_lines_ = 0;
+  capture::FreshRates rates_;
+  std::vector<capture::TagLiveRow> rows_;
+};
+
+int RunCaptureCommand(const CaptureCliOptions& c) {
+  const std::string capture_path =
+      c.analyze ? c.capture : (c.output.empty() ? c.capture : c.output);
+  if (c.analyze && c.capture.empty()) {
+    PrintErrorText("--analyze: name the capture with --capture FILE (-o then names the report)");
+    return kExitUsage;
+  }
+  if (!c.analyze && !c.output.empty() && !c.capture.empty()) {
+    PrintErrorText("-o and --capture both name the capture; give one (or add --analyze)");
+    return kExitUsage;
+  }
+  if (capture_path.empty() || IsStdio(capture_path)) {
+    PrintErrorText("capture: name the capture file with -o FILE");
+    return kExitUsage;
+  }
+  if (c.analyze && c.output == capture_path) {
+    PrintErrorText("-o and --capture name the same file");
+    return kExitUsage;
+  }
+  if (OutputExists(capture_path) && !c.force) {
+    PrintErrorText(fmt::format(
+        "{}: exists: a capture is never replaced; pass --force to replace it", capture_path));
+    return kExitUsage;
+  }
+  capture::CaptureOptions o;
+  o.port = c.port;
+  o.baud = c.baud;
+  o.duration_s = c.duration_s;
+  o.output = capture_path;
+  o.force = c.force;
+  o.reconnect = c.reconnect || (!c.no_reconnect && c.duration_s == 0.0);
+  o.frame_period_s = c.frame_period_s;
+  o.version = fmt::format("metro characterize {}", kVersion);
+  o.stop = &g_capture_stop;
+  if (std::string why; !o.IsValid(&why)) {
+    PrintErrorText(why);
+    return kExitUsage;
+  }
+
+  struct sigaction sa {};
+  sa.sa_handler = OnCaptureSignal;
+  sigemptyset(&sa.sa_mask);
+  ::sigaction(SIGINT, &sa, nullptr);
+  ::sigaction(SIGTERM, &sa, nullptr);
+
+  Note(fmt::format("capturing {} at {} baud to {}{}; Ctrl-C ends the capture\n", c.port, c.baud,
+                   capture_path, c.duration_s > 0 ? fmt::format(" for {:g} s", c.duration_s) : ""));
+  LiveView view;
+  capture::CaptureObserver observer;
+  observer.on_tick = [&](const capture::CaptureTally& t, double s) { view.Tick(t, s); };
+  observer.on_event = [&](const std::string& e) { view.Event(e); };
+  capture::CaptureTally tally(c.frame_period_s);
+  const capture::CaptureSummary sum = capture::RunCapture(o, observer, &tally);
+  if (sum.input_error) {
+    PrintErrorText(sum.message);
+    return kExitUsage;
+  }
+  const std::string notes = fmt::format(
+      "{}{}{}\n", sum.message,
+      sum.cut_lines > 0 ? fmt::format(", {} cut first line(s) dropped", sum.cut_lines) : "",
+      sum.other_lines > 0
+          ? fmt::format(", {} line(s) that are not receiver lines kept as # comments",
+                        sum.other_lines)
+          : "");
+  if (!Quiet()) {
+    PrintText(stdout, capture::FormatLiveTable(capture::LiveRows(tally, view.rates()), false));
+    std::fflush(stdout);
+  }
+  if (!sum.ok) {
+    PrintErrorText(sum.message);
+    return kExitFailed;
+  }
+  Note("wrote " + notes);
+  if (!c.analyze) return kExitOk;
+
+  AnalysisCliOptions a;
+  a.settle = "auto";
+  a.load.frame_period_s = c.frame_period_s;
+  SessionAnalysisOptions options;
+  if (Status s = MakeSessionAnalysisOptions(a, 0, &options); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
+  SessionAnalysis analysis = AnalyzeSession(capture_path, options);
+  if (!analysis.ok) {
+    PrintError(analysis.error);
+    return analysis.input_error ? kExitUsage : kExitFailed;
+  }
+  const std::string json = JsonText(analysis.report, 2) + "\n";
+  if (Status s = WriteOutputs({{c.output.empty() ? "-" : c.output, json}}); !s.ok()) {
+    PrintError(s.error());
+    return kExitFailed;
+  }
+  if (!c.output.empty()) PrintTable(analysis.table, c.output);
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddCaptureCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<CaptureCliOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "capture", "record the central receiver's serial stream, with a live per-tag view");
+  sub->add_option("--port", o->port, "the receiver's serial port, e.g. /dev/ttyACM0")->required();
+  sub->add_option("--baud", o->baud, "baud rate (8N1, raw)")->capture_default_str();
+  sub->add_option("--duration-s", o->duration_s, "stop after this many seconds (0: at Ctrl-C)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("-o,--output", o->output,
+                  "the capture file (never replaced without --force); with --analyze: the "
+                  "JSON report");
+  sub->add_option("--capture", o->capture, "the capture file when -o names the report");
+  sub->add_flag("--force", o->force, "replace an existing capture file");
+  CLI::Option* on = sub->add_flag(
+      "--reconnect", o->reconnect,
+      "reopen the port when it returns after an unplug (default without --duration-s)");
+  sub->add_flag("--no-reconnect", o->no_reconnect,
+                "finish the capture when the port disappears (default with --duration-s)")
+      ->excludes(on);
+  sub->add_option("--frame-period-s", o->frame_period_s,
+                  "the receiver's frame period for the live statistics and --analyze")
+      ->capture_default_str();
+  sub->add_flag("--analyze", o->analyze,
+                "then the full Type A report of the capture (--settle auto)");
+  sub->callback([o, exit_code] { *exit_code = RunCaptureCommand(*o); });
+}
+
+}  // namespace metro::apps
