@@ -64,6 +64,15 @@ void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
                  "largest reference change within a plateau")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  app.add_option("--assumed-hysteresis-deg", o->assumed_hysteresis_deg,
+                 "hysteresis the corrected U assumes when no angle was visited both ways")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--lag-tau-s", o->lag_tau_s,
+                 "the tag's response time in s (default: estimated from the motion)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--no-lag-model", o->no_lag_model,
+               "do not model the tag's lag: plateaus settle by --settle-s alone");
 }
 
 int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
@@ -117,6 +126,9 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   options.plateaus.settle_auto = in.settle == "auto";
   options.window = in.window;
   options.alignment.offset_s = a.reference_offset_s;
+  options.assumed_hysteresis_deg = a.assumed_hysteresis_deg;
+  options.lag_tau_s = a.lag_tau_s;
+  options.model_lag = !a.no_lag_model;
   auto reference_u = ParseReferenceU(a.reference_u);
   if (!reference_u.ok()) {
     PrintError(reference_u.error());

@@ -24,6 +24,9 @@ struct AccuracyCliOptions {
   double min_dwell_s = 3.0;
   double settle_s = 2.0;
   double plateau_tolerance_deg = 0.005;
+  double assumed_hysteresis_deg = 0.2;
+  std::optional<double> lag_tau_s;  // Given response time; default: estimated.
+  bool no_lag_model = false;
 };
 
 // What the accuracy run shares with the main job's options.

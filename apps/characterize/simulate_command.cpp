@@ -24,6 +24,8 @@ struct SimulateOptions {
   std::string kind = "static";
   std::string table_axis = "yaw";
   std::string reference_output;
+  std::string truth_output;  // Default: <output>.truth.json when -o names a file.
+  std::string table_readout = "continuous";
   TableSimulationOptions table;
 };
 
@@ -42,6 +44,8 @@ int RunTableSimulate(SimulateOptions o) {
   o.table.seed = o.sim.seed;
   o.table.rate_hz = o.sim.rate_hz;
   o.table.packet_loss = o.sim.packet_loss;
+  o.table.readout_wrap_180 = o.table_readout == "wrap180";
+  if (o.truth_output.empty() && !IsStdio(o.output)) o.truth_output = o.output + ".truth.json";
   std::string why;
   if (!o.table.IsValid(&why)) {
     PrintError(MakeError(why));
@@ -52,34 +56,45 @@ int RunTableSimulate(SimulateOptions o) {
     PrintError(MakeError("a receiver capture has no table column: give --reference-output"));
     return kExitUsage;
   }
-  if (Status s = CheckOutputs({{"-o", o.output}, {"--reference-output", o.reference_output}}, {});
+  if (Status s = CheckOutputs({{"-o", o.output},
+                               {"--reference-output", o.reference_output},
+                               {"--truth-output", o.truth_output}},
+                              {});
       !s.ok()) {
     PrintError(s.error());
     return kExitUsage;
   }
   StreamedOutput writer(o.output);
-  std::optional<StreamedOutput> ref_writer;
+  std::optional<StreamedOutput> ref_writer, truth_writer;
   if (!o.reference_output.empty()) ref_writer.emplace(o.reference_output);
+  if (!o.truth_output.empty()) truth_writer.emplace(o.truth_output);
   Status s = writer.Open();
   if (s.ok() && ref_writer) s = ref_writer->Open();
+  if (s.ok() && truth_writer) s = truth_writer->Open();
+  TableTruth truth;
   if (s.ok()) {
     TextSink ref_sink = nullptr;
     if (ref_writer) ref_sink = [&](std::string_view chunk) { return ref_writer->Write(chunk); };
     s = SimulateTableSession(
         o.table, receiver ? SessionFormat::kReceiver : SessionFormat::kCsv,
-        [&](std::string_view chunk) { return writer.Write(chunk); }, ref_sink);
+        [&](std::string_view chunk) { return writer.Write(chunk); }, ref_sink, &truth);
   }
-  // The session and its reference log are replaced together or not at all.
+  if (s.ok() && truth_writer) s = truth_writer->Write(TableTruthJson(o.table, truth));
+  // The session, its reference log and its truth are replaced together or not at all.
   if (s.ok()) s = writer.Finish();
   if (s.ok() && ref_writer) s = ref_writer->Finish();
+  if (s.ok() && truth_writer) s = truth_writer->Finish();
   if (s.ok()) s = writer.Publish();
   if (s.ok() && ref_writer) s = ref_writer->Publish();
+  if (s.ok() && truth_writer) s = truth_writer->Publish();
   if (!s.ok()) {
     PrintError(s.error());
     return kExitFailed;
   }
-  Note(fmt::format("wrote {} (table, {}, seed {})\n", IsStdio(o.output) ? "stdout" : o.output,
-                   o.format, o.table.seed));
+  Note(fmt::format("wrote {} (table, {}, seed {}){}\n", IsStdio(o.output) ? "stdout" : o.output,
+                   o.format, o.table.seed,
+                   o.truth_output.empty() ? "; no truth written (give --truth-output)"
+                                          : "; truth in " + o.truth_output));
   return kExitOk;
 }
 
@@ -190,6 +205,17 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
                   "table: write the reference as a separate log (t_s, table_angle_deg) here");
   sub->add_option("--reference-offset-s", o->table.reference_clock_offset_s,
                   "table: the reference log's clock runs this far ahead")
+      ->capture_default_str();
+  sub->add_option("--truth-output", o->truth_output,
+                  "table: the truth as JSON (default: OUTPUT.truth.json when -o is a file)");
+  sub->add_option("--table-readout", o->table_readout,
+                  "table: continuous (0..360 as turned) or wrap180 (signed, (-180, 180])")
+      ->check(CLI::IsMember({"continuous", "wrap180"}))
+      ->capture_default_str();
+  sub->add_flag("--table-pitch-through-90", o->table.pitch_through_90,
+                "table: let a pitch table pass +-90 deg (the tag's Euler pitch folds there)");
+  sub->add_option("--noise-ar1", o->table.noise_ar1,
+                  "table truth: lag-1 correlation of the noise per frame")
       ->capture_default_str();
   sub->callback([o, exit_code] { *exit_code = RunSimulate(*o); });
 }

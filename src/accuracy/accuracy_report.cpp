@@ -39,13 +39,13 @@ Json FitJson(const HarmonicFit& fit) {
   return j;
 }
 
-Json BudgetJson(const ReadingBudget& b, const std::vector<std::string>& order) {
+Json BudgetJson(const ReadingBudget& b) {
   const GumResult& g = b.gum;
   Json inputs = Json::array();
   for (const BudgetLine& line : g.budget) {
     std::string note;
-    for (size_t i = 0; i < order.size() && i < b.notes.size(); ++i) {
-      if (order[i] == line.name) note = b.notes[i];
+    for (size_t i = 0; i < b.input_names.size() && i < b.notes.size(); ++i) {
+      if (b.input_names[i] == line.name) note = b.notes[i];
     }
     inputs.push_back({{"name", line.name},
                       {"u_deg", line.u},
@@ -89,7 +89,10 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
                             {"overlap_samples", a.overlap_samples},
                             {"outside_samples", a.outside_samples},
                             {"tag_t_s", {a.tag_t_first_s, a.tag_t_last_s}},
-                            {"reference_t_s", {a.reference_t_first_s, a.reference_t_last_s}}}}};
+                            {"reference_t_s", {a.reference_t_first_s, a.reference_t_last_s}},
+                            {"delay_s", a.delay_s},
+                            {"lag_modelled", a.lag_modelled},
+                            {"lag_tau_s", a.lag_modelled ? Json(a.lag_tau_s) : Json(nullptr)}}}};
   } else {
     input["reference"] = {{"file", nullptr}, {"column", "table_angle_deg"}};
   }
@@ -115,7 +118,11 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
                   {"reference_u_deg", o.reference.u_deg},
                   {"reference_dof", Num(o.reference.dof)},
                   {"reference_u_source", o.reference.source},
-                  {"coverage", o.coverage}};
+                  {"coverage", o.coverage},
+                  {"assumed_hysteresis_deg", o.assumed_hysteresis_deg},
+                  {"model_lag", o.model_lag},
+                  {"lag_tau_s", o.lag_tau_s ? Json(*o.lag_tau_s) : Json(nullptr)},
+                  {"settle_lag_residual_deg", o.plateaus.settle_lag_residual_deg}};
   const Segmentation& s = r.segmentation;
   Json excluded = Json::array();
   for (const ExcludedSpan& e : s.excluded) {
@@ -124,15 +131,21 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
                         {"samples", e.end - e.begin},
                         {"reason", e.reason}});
   }
-  j["segmentation"] = {{"plateaus", s.plateaus.size()},
-                       {"excluded_samples", s.motion_samples},
-                       {"excluded_s", s.motion_s},
-                       {"settle_samples", s.settle_samples},
-                       {"excluded", excluded}};
+  j["segmentation"] = {
+      {"plateaus", s.plateaus.size()},  {"excluded_samples", s.motion_samples},
+      {"excluded_s", s.motion_s},       {"settle_samples", s.settle_samples},
+      {"excluded", excluded},           {"lag_tau_s", r.lag_tau_s},
+      {"lag_method", r.lag_method},     {"lag_settled_plateaus", r.lag_settled_plateaus},
+      {"max_settle_s", r.max_settle_s}, {"reference_unwrapped", r.reference_unwrapped}};
   Json points = Json::array();
   for (const AccuracyPoint& p : r.points) {
-    Json other;
-    for (int k = 0; k < 2; ++k) other[r.cross_axis[k].quantity] = p.other_mean_deg[k];
+    Json other, other_u;
+    for (int k = 0; k < 2; ++k) {
+      other[r.cross_axis[k].quantity] =
+          r.cross_axis_available ? Json(p.other_mean_deg[k]) : Json(nullptr);
+      other_u[r.cross_axis[k].quantity] =
+          r.cross_axis_available ? Json(p.other_u_deg[k]) : Json(nullptr);
+    }
     points.push_back({{"reference_deg", p.reference_deg},
                       {"mean_deg", p.mean_deg},
                       {"error_deg", p.error_deg},
@@ -147,9 +160,18 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
                       {"t_start_s", p.t_start_s},
                       {"t_end_s", p.t_end_s},
                       {"settle_samples", p.settle_samples},
-                      {"other_axes_mean_deg", other}});
+                      {"other_axes_mean_deg", other},
+                      {"other_axes_u_deg", other_u}});
   }
   j["points"] = points;
+  j["noise"] = {{"sigma_deg", r.noise.sigma_deg},
+                {"phi_per_observation", r.noise.phi},
+                {"dof", r.noise.dof},
+                {"plateaus", r.noise.plateaus},
+                {"method",
+                 "one AR(1) process over all plateaus, each plateau's mean removed, fitted by the "
+                 "method of moments (exact expectations of the lag-0 and lag-1 sums); u of a "
+                 "plateau mean = sigma sqrt(F(n, phi))"}};
   const SystematicError& se = r.systematic;
   j["systematic"] = {{"mean_error_deg", se.mean_deg},
                      {"std_error_deg", se.std_deg},
@@ -159,7 +181,8 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
   Json fit = {{"model", ErrorModelName(r.model)},
               {"equation",
                "e(theta) = c0 + s theta + a1 cos(theta) + b1 sin(theta) + a2 cos(2 theta) + b2 "
-               "sin(2 theta), theta in deg"},
+               "sin(2 theta) (+ h d / 2, d = +1 up, -1 down, 0 first), theta in deg"},
+              {"hysteresis_term", r.fit_hysteresis_term},
               {"order_rule", kErrorModelOrderRule},
               {"weights", "1/u_i^2, u_i the plateau Type A u"}};
   fit.update(FitJson(r.fit));
@@ -172,7 +195,8 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
                     {"percent_of_span", l.percent_of_span},
                     {"line_offset_deg", l.line_offset_deg},
                     {"line_slope", l.line_slope},
-                    {"angles", l.angles}};
+                    {"angles", l.angles},
+                    {"u_max_abs_deviation_deg", l.u_max_abs_deviation_deg}};
   const Hysteresis& h = r.hysteresis;
   Json pairs = Json::array();
   for (const HysteresisPair& p : h.pairs) {
@@ -197,12 +221,24 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
   j["repeatability"] = {{"available", rp.available},
                         {"s_r_deg", rp.available ? Json(rp.s_r_deg) : Json(nullptr)},
                         {"dof", rp.dof},
+                        {"u_s_r_deg", rp.available ? Json(rp.u_s_r_deg) : Json(nullptr)},
                         {"groups", rp.groups},
                         {"sweeps", rp.sweeps},
                         {"note", rp.note}};
   Json cross;
   for (const CrossAxis& x : r.cross_axis) {
-    Json c = {{"mean_deg", x.mean_deg}, {"span_deg", x.span_deg}, {"fitted", x.fitted}};
+    if (!r.cross_axis_available) {
+      cross[x.quantity] = {{"evaluated", false},
+                           {"mean_deg", nullptr},
+                           {"span_deg", nullptr},
+                           {"fitted", false},
+                           {"note", r.cross_axis_note}};
+      continue;
+    }
+    Json c = {{"evaluated", true},
+              {"mean_deg", x.mean_deg},
+              {"span_deg", x.span_deg},
+              {"fitted", x.fitted}};
     if (x.fitted) {
       c["amplitude_deg"] = x.amplitude_deg;
       c["u_amplitude_deg"] = x.u_amplitude_deg;
@@ -211,11 +247,8 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
     cross[x.quantity] = c;
   }
   j["cross_axis"] = cross;
-  j["budget"] = {
-      {"corrected", BudgetJson(r.corrected, {"reading_noise", "fit_prediction", "fit_residual",
-                                             "reference", "resolution"})},
-      {"uncorrected", BudgetJson(r.uncorrected, {"systematic_error", "reading_noise", "reference",
-                                                 "resolution"})}};
+  j["budget"] = {{"corrected", BudgetJson(r.corrected)},
+                 {"uncorrected", BudgetJson(r.uncorrected)}};
   j["result"] = {
       {"ok", true},
       {"U_corrected_deg", r.corrected.gum.expanded},
@@ -224,6 +257,8 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
       {"k_uncorrected", r.uncorrected.gum.k},
       {"U_random_deg", r.random_expanded_deg},
       {"U_uncorrected_max_abs_deg", r.uncorrected_max_abs_expanded_deg},
+      {"U_uncorrected_gum_deg", r.uncorrected_gum_expanded_deg},
+      {"which_U_to_quote", r.which_u},
       {"coverage", r.corrected.gum.coverage},
       {"statement_corrected",
        "a single " + r.quantity + " reading corrected by the fitted curve: error within " +
@@ -265,9 +300,10 @@ std::string AccuracyReportTable(const AccuracyResult& r) {
                    r.fit.u[i]);
   }
   out += '\n';
-  fmt::format_to(it, "linearity: max deviation {:.4f} deg at {:.6g} deg ({:.3g} % of span)\n",
-                 r.linearity.max_abs_deviation_deg, r.linearity.at_reference_deg,
-                 r.linearity.percent_of_span);
+  fmt::format_to(it,
+                 "linearity: max deviation {:.4f} +- {:.4f} deg at {:.6g} deg ({:.3g} % of span)\n",
+                 r.linearity.max_abs_deviation_deg, r.linearity.u_max_abs_deviation_deg,
+                 r.linearity.at_reference_deg, r.linearity.percent_of_span);
   if (r.hysteresis.available) {
     fmt::format_to(it, "hysteresis (up - down): mean {:.4f} +- {:.4f} deg, max |h| {:.4f} deg\n",
                    r.hysteresis.mean_deg, r.hysteresis.u_mean_deg, r.hysteresis.max_abs_deg);
@@ -280,7 +316,9 @@ std::string AccuracyReportTable(const AccuracyResult& r) {
   } else {
     fmt::format_to(it, "repeatability: {}\n", r.repeatability.note);
   }
+  if (!r.cross_axis_available) out += "cross-axis: " + r.cross_axis_note + "\n";
   for (const CrossAxis& x : r.cross_axis) {
+    if (!r.cross_axis_available) break;
     fmt::format_to(it, "cross-axis {}: span {:.4f} deg", x.quantity, x.span_deg);
     if (x.fitted) {
       fmt::format_to(it, ", first harmonic {:.4f} +- {:.4f} deg", x.amplitude_deg,

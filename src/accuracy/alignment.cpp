@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -49,7 +50,83 @@ double ResidualStd(const std::vector<double>& tag_a, const std::vector<double>& 
   return k >= 2 ? std::sqrt(m2 / static_cast<double>(k - 1)) : kNaN;
 }
 
+// Standard deviation of WrapDeg180(tag - L_tau[r]) (FirstOrderLag), `gain` precomputed.
+double LaggedResidualStd(const std::vector<double>& tag_a, const std::vector<double>& r,
+                         const std::vector<double>& gain, size_t* count) {
+  double y = kNaN, mean = 0.0, m2 = 0.0;
+  size_t k = 0;
+  for (size_t i = 0; i < r.size(); ++i) {
+    if (std::isnan(r[i])) {
+      y = kNaN;
+      continue;
+    }
+    y = std::isnan(y) ? r[i] : y + gain[i] * WrapDeg180(r[i] - y);
+    const double d = WrapDeg180(tag_a[i] - y);
+    ++k;
+    const double delta = d - mean;
+    mean += delta / static_cast<double>(k);
+    m2 += delta * (d - mean);
+  }
+  *count = k;
+  return k >= 2 ? std::sqrt(m2 / static_cast<double>(k - 1)) : kNaN;
+}
+
+// g_k = 1 - exp(-(t_k - t_{k-1}) / tau), the exact discrete first-order response to an input
+// held over the step (1 for tau = 0).
+void LagGains(const std::vector<double>& t, double tau_s, std::vector<double>* gain) {
+  gain->assign(t.size(), 1.0);
+  if (tau_s <= 0.0) return;
+  for (size_t i = 1; i < t.size(); ++i) (*gain)[i] = -std::expm1(-(t[i] - t[i - 1]) / tau_s);
+}
+
+// Parabola through three equally spaced costs: the vertex's shift in steps, in [-1, 1].
+double ParabolaShift(double c0, double c1, double c2) {
+  const double curvature = c0 - 2.0 * c1 + c2;
+  return curvature > 0.0 ? std::clamp(0.5 * (c0 - c2) / curvature, -1.0, 1.0) : 0.0;
+}
+
 }  // namespace
+
+void FirstOrderLag(const std::vector<double>& t_s, const std::vector<double>& input_deg,
+                   double tau_s, std::vector<double>* out_deg) {
+  std::vector<double> gain;
+  LagGains(t_s, tau_s, &gain);
+  out_deg->assign(input_deg.size(), kNaN);
+  double y = kNaN;
+  for (size_t i = 0; i < input_deg.size(); ++i) {
+    if (std::isnan(input_deg[i])) {
+      y = kNaN;
+      continue;
+    }
+    y = std::isnan(y) ? input_deg[i] : y + gain[i] * WrapDeg180(input_deg[i] - y);
+    (*out_deg)[i] = y;
+  }
+}
+
+LagEstimate EstimateLag(const std::vector<double>& t_s, const std::vector<double>& tag_deg,
+                        const std::vector<double>& reference_deg, double max_tau_s, double step_s) {
+  LagEstimate e;
+  std::vector<double> gain;
+  size_t count = 0;
+  const int steps = static_cast<int>(std::lround(max_tau_s / step_s));
+  std::vector<double> cost(static_cast<size_t>(steps + 1), kNaN);
+  int best = 0;
+  for (int g = 0; g <= steps; ++g) {
+    LagGains(t_s, g * step_s, &gain);
+    cost[static_cast<size_t>(g)] = LaggedResidualStd(tag_deg, reference_deg, gain, &count);
+    if (cost[static_cast<size_t>(g)] < cost[static_cast<size_t>(best)]) best = g;
+  }
+  e.residual_std_at_zero_deg = cost[0];
+  e.residual_std_deg = cost[static_cast<size_t>(best)];
+  double shift = 0.0;
+  if (best > 0 && best < steps) {
+    shift = ParabolaShift(cost[static_cast<size_t>(best - 1)], cost[static_cast<size_t>(best)],
+                          cost[static_cast<size_t>(best + 1)]);
+  }
+  e.tau_s = std::max(0.0, (best + shift) * step_s);
+  e.at_limit = best == steps;
+  return e;
+}
 
 bool AlignmentOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
@@ -60,6 +137,7 @@ bool AlignmentOptions::IsValid(std::string* why) const {
   if (!(max_offset_s > 0.0) || !std::isfinite(max_offset_s)) {
     return fail("max_offset_s must be > 0");
   }
+  if (!(max_lag_s >= 0.0) || !std::isfinite(max_lag_s)) return fail("max_lag_s must be >= 0");
   if (!(step_s > 0.0) || !(step_s < max_offset_s)) {
     return fail("step_s must be > 0 and below max_offset_s");
   }
@@ -141,6 +219,48 @@ Result<Alignment> AlignReference(const std::vector<double>& tag_t_s,
     const double curvature = c0 - 2.0 * c1 + c2;
     const double shift = curvature > 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
     a.offset_s = (best - half + shift) * options.step_s;
+    a.delay_s = a.offset_s;
+    if (options.model_lag) {
+      // The pure delay d0 is the clock offset less the tag's response delay (a first-order
+      // lag of tau delays a ramp by tau). Fit both: tag(t) = L_tau[r(. + offset)](t) + e,
+      // minimising the standard deviation of the residual over (offset, tau), coarse grid
+      // around offset = d0 + tau, then a fine one around the coarse minimum.
+      std::vector<double> gain;
+      auto cost_at = [&](double offset, double tau) {
+        LagGains(tag_t_s, tau, &gain);
+        Interpolate(tag_t_s, reference_t_s, reference_angle_deg, offset, &r);
+        size_t n = 0;
+        const double c = LaggedResidualStd(tag_angle_deg, r, gain, &n);
+        return n * 2 < tag_t_s.size() ? kNaN : c;
+      };
+      double best_offset = a.offset_s, best_tau = 0.0;
+      double best_cost = cost_at(best_offset, 0.0);
+      auto search = [&](double tau_lo, double tau_hi, double tau_step, double off_half,
+                        double off_step, bool relative) {
+        const double centre_offset = best_offset;
+        for (double tau = tau_lo; tau <= tau_hi + 1e-12; tau += tau_step) {
+          if (tau < 0.0) continue;
+          const double mid = relative ? a.delay_s + tau : centre_offset;
+          for (double off = mid - off_half; off <= mid + off_half + 1e-12; off += off_step) {
+            const double c = cost_at(off, tau);
+            if (c < best_cost) {
+              best_cost = c;
+              best_offset = off;
+              best_tau = tau;
+            }
+          }
+        }
+      };
+      search(0.0, options.max_lag_s, 0.1, 0.3, 0.02, true);
+      search(best_tau - 0.1, best_tau + 0.1, 0.01, 0.04, 0.005, false);
+      a.offset_s = best_offset;
+      a.lag_tau_s = best_tau;
+      a.lag_modelled = true;
+      a.method =
+          "linear interpolation of the reference at the tag's t_s + offset; offset and the tag's "
+          "first-order response time tau estimated together by minimising the standard "
+          "deviation of tag - L_tau[reference] (coarse then fine grid)";
+    }
   }
   Interpolate(tag_t_s, reference_t_s, reference_angle_deg, a.offset_s, &r);
   a.residual_std_deg = ResidualStd(tag_angle_deg, r, &count);

@@ -44,11 +44,13 @@ const char* ErrorTermName(ErrorTerm term) {
       return "a2_deg";
     case ErrorTerm::kSin2:
       return "b2_deg";
+    case ErrorTerm::kHysteresis:
+      return "h_deg";
   }
   return "?";
 }
 
-double ErrorTermBasis(ErrorTerm term, double theta_deg) {
+double ErrorTermBasis(ErrorTerm term, double theta_deg, int direction) {
   const double th = theta_deg * kRadPerDeg;
   switch (term) {
     case ErrorTerm::kOffset:
@@ -63,6 +65,8 @@ double ErrorTermBasis(ErrorTerm term, double theta_deg) {
       return std::cos(2.0 * th);
     case ErrorTerm::kSin2:
       return std::sin(2.0 * th);
+    case ErrorTerm::kHysteresis:
+      return 0.5 * direction;
   }
   return 0.0;
 }
@@ -146,19 +150,21 @@ Result<ErrorModel> ChooseErrorModel(const std::vector<FitPoint>& points, ErrorMo
   return need(ErrorModel::kLinear);
 }
 
-double HarmonicFit::Predict(double theta_deg) const {
+double HarmonicFit::Predict(double theta_deg, int direction) const {
   double y = 0.0;
-  for (size_t j = 0; j < terms.size(); ++j) y += params[j] * ErrorTermBasis(terms[j], theta_deg);
+  for (size_t j = 0; j < terms.size(); ++j) {
+    y += params[j] * ErrorTermBasis(terms[j], theta_deg, direction);
+  }
   return y;
 }
 
-double HarmonicFit::PredictionU(double theta_deg) const {
+double HarmonicFit::PredictionU(double theta_deg, int direction) const {
   // JCGM 100 5.2.2 with the fitted parameters' covariance: u^2 = g^T C g.
   double v = 0.0;
   for (size_t i = 0; i < terms.size(); ++i) {
     for (size_t j = 0; j < terms.size(); ++j) {
-      v += ErrorTermBasis(terms[i], theta_deg) * covariance[i][j] *
-           ErrorTermBasis(terms[j], theta_deg);
+      v += ErrorTermBasis(terms[i], theta_deg, direction) * covariance[i][j] *
+           ErrorTermBasis(terms[j], theta_deg, direction);
     }
   }
   return std::sqrt(std::max(v, 0.0));
@@ -182,7 +188,7 @@ Result<HarmonicFit> FitHarmonicModel(const std::vector<FitPoint>& points,
     }
     for (size_t j = 0; j < p; ++j) {
       a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
-          ErrorTermBasis(terms[j], pt.theta_deg) / pt.u_deg;
+          ErrorTermBasis(terms[j], pt.theta_deg, pt.direction) / pt.u_deg;
     }
     b(static_cast<Eigen::Index>(i)) = pt.value_deg / pt.u_deg;
   }
@@ -224,7 +230,7 @@ Result<HarmonicFit> FitHarmonicModel(const std::vector<FitPoint>& points,
   }
   double ss = 0.0;
   for (size_t i = 0; i < m; ++i) {
-    const double r = points[i].value_deg - fit.Predict(points[i].theta_deg);
+    const double r = points[i].value_deg - fit.Predict(points[i].theta_deg, points[i].direction);
     fit.residuals_deg.push_back(r);
     ss += r * r;
   }

@@ -22,17 +22,22 @@ bool PlateauOptions::IsValid(std::string* why) const {
   }
   if (min_samples < 2) return fail("plateau min_samples must be >= 2");
   if (!(settle_s >= 0.0) || !std::isfinite(settle_s)) return fail("settle_s must be >= 0");
+  if (!(settle_lag_residual_deg > 0.0) || !std::isfinite(settle_lag_residual_deg)) {
+    return fail("settle_lag_residual_deg must be > 0");
+  }
   return true;
 }
 
 Result<Segmentation> FindPlateaus(const std::vector<double>& t_s,
                                   const std::vector<double>& reference_deg,
                                   const std::vector<double>& tag_error_deg,
-                                  const PlateauOptions& options) {
+                                  const PlateauOptions& options,
+                                  const std::vector<double>* transient_deg) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
   const size_t n = t_s.size();
-  if (reference_deg.size() != n || tag_error_deg.size() != n) {
+  if (reference_deg.size() != n || tag_error_deg.size() != n ||
+      (transient_deg != nullptr && transient_deg->size() != n)) {
     return MakeError("plateaus: the time, reference and error series differ in length");
   }
   Segmentation seg;
@@ -72,6 +77,13 @@ Result<Segmentation> FindPlateaus(const std::vector<double>& t_s,
     p.t_rest_s = t_s[i];
     size_t begin = i;
     while (begin < j && t_s[begin] < t_s[i] + options.settle_s) ++begin;
+    if (transient_deg != nullptr) {
+      const size_t fixed = begin;
+      while (begin < j && std::fabs((*transient_deg)[begin]) > options.settle_lag_residual_deg) {
+        ++begin;
+      }
+      p.settled_by_lag = begin > fixed;
+    }
     if (options.settle_auto && j - begin >= 10) {
       const SettleResult settle = DetectSettleMser5(tag_error_deg.data() + begin, j - begin);
       begin += settle.samples;

@@ -91,7 +91,7 @@ Curve ParseCurve(const ordered_json& fit) {
     const std::string name = JsonString(p, "name");
     bool found = false;
     for (ErrorTerm t : {ErrorTerm::kOffset, ErrorTerm::kScale, ErrorTerm::kCos1, ErrorTerm::kSin1,
-                        ErrorTerm::kCos2, ErrorTerm::kSin2}) {
+                        ErrorTerm::kCos2, ErrorTerm::kSin2, ErrorTerm::kHysteresis}) {
       if (name == ErrorTermName(t)) {
         c.terms.push_back(t);
         found = true;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <pcg_random.hpp>
 #include <random>
 
@@ -63,52 +64,28 @@ std::vector<Stop> Schedule(const TableSimulationOptions& o) {
 }
 
 // Table angle and the direction of its last move at time t_s (`hint` speeds up the search).
+// During [t_move_s, t_arrive_s) of stop i > 0 the table turns at move_rate_dps from stop
+// i - 1 towards stop i; from t_arrive_s to the next stop's t_move_s it rests at stop i.
 double TableAngle(const std::vector<Stop>& stops, double t_s, size_t* hint, int* direction) {
   size_t& i = *hint;
   while (i + 1 < stops.size() && t_s >= stops[i + 1].t_move_s) ++i;
-  if (i + 1 < stops.size() && t_s >= stops[i].t_leave_s) {
-    // Moving towards stop i + 1.
-    const Stop& next = stops[i + 1];
-    *direction = next.direction;
-    const double frac = (t_s - next.t_move_s) / (next.t_arrive_s - next.t_move_s);
-    return stops[i].angle_deg + frac * (next.angle_deg - stops[i].angle_deg);
+  const Stop& s = stops[i];
+  *direction = s.direction;
+  if (i > 0 && t_s < s.t_arrive_s) {
+    const double frac = (t_s - s.t_move_s) / (s.t_arrive_s - s.t_move_s);
+    return stops[i - 1].angle_deg + frac * (s.angle_deg - stops[i - 1].angle_deg);
   }
-  *direction = stops[i].direction;
-  return stops[i].angle_deg;
+  return s.angle_deg;
+}
+
+// The table's readout of theta: its encoder resolution, wrapped into (-180, 180] when the
+// table reports signed angles.
+double Readout(const TableSimulationOptions& o, double theta_deg) {
+  return Quantize(o.readout_wrap_180 ? WrapDeg180(theta_deg) : theta_deg,
+                  o.reference_resolution_deg);
 }
 
 }  // namespace
-
-const char* TableAxisName(TableAxis axis) {
-  switch (axis) {
-    case TableAxis::kYaw:
-      return "yaw";
-    case TableAxis::kPitch:
-      return "pitch";
-    case TableAxis::kRoll:
-      return "roll";
-  }
-  return "?";
-}
-
-const char* TableAxisQuantity(TableAxis axis) {
-  switch (axis) {
-    case TableAxis::kYaw:
-      return "yaw_deg";
-    case TableAxis::kPitch:
-      return "pitch_deg";
-    case TableAxis::kRoll:
-      return "roll_deg";
-  }
-  return "?";
-}
-
-Result<TableAxis> ParseTableAxis(const std::string& name) {
-  if (name == "yaw") return TableAxis::kYaw;
-  if (name == "pitch") return TableAxis::kPitch;
-  if (name == "roll") return TableAxis::kRoll;
-  return MakeError("unknown table axis '" + name + "' (expected yaw, pitch or roll)");
-}
 
 bool TableSimulationOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
@@ -169,7 +146,7 @@ bool TableSimulationOptions::IsValid(std::string* why) const {
                    base_deg[0], base_deg[1]}) {
     if (!std::isfinite(v)) return fail("the error model's parameters must be finite");
   }
-  if (axis == TableAxis::kPitch) {
+  if (axis == TableAxis::kPitch && !pitch_through_90) {
     // Pitch is an Euler angle in [-90, 90]: the sweep must stay clear of gimbal lock.
     const double margin = std::fabs(offset_deg) + std::fabs(scale_error) * 90.0 +
                           std::hypot(cos1_deg, sin1_deg) + std::fabs(hysteresis_deg);
@@ -209,9 +186,17 @@ Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat
   if (truth != nullptr) {
     truth->plateaus.clear();
     for (const Stop& s : stops) {
-      truth->plateaus.push_back({s.angle_deg, s.direction,
-                                 TableErrorModelDeg(options, s.angle_deg, s.direction),
-                                 s.t_arrive_s, s.t_leave_s});
+      TablePlateauTruth p;
+      p.reference_deg = s.angle_deg;
+      p.direction = s.direction;
+      p.error_deg = TableErrorModelDeg(options, s.angle_deg, s.direction);
+      p.t_start_s = s.t_arrive_s;
+      p.t_end_s = s.t_leave_s;
+      p.t_move_s = s.t_move_s;
+      const double th = s.angle_deg * kRadPerDeg;
+      p.other_deg[0] = options.base_deg[0] + options.tilt_deg * std::sin(th);
+      p.other_deg[1] = options.base_deg[1] + options.tilt_deg * std::cos(th);
+      truth->plateaus.push_back(p);
     }
     truth->duration_s = duration_s;
   }
@@ -285,7 +270,7 @@ Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat
       fmt::format_to(it, "{:.6f},{},{:.8f},{:.8f},{:.8f},{:.8f}", t, options.sensor, q.w, q.x, q.y,
                      q.z);
       if (table_column) {
-        fmt::format_to(it, ",{:.6f}", Quantize(theta, options.reference_resolution_deg));
+        fmt::format_to(it, ",{:.6f}", Readout(options, theta));
       }
       out += '\n';
     }
@@ -313,9 +298,60 @@ Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat
     int direction = 0;
     const double theta = TableAngle(stops, t, &hint, &direction);
     fmt::format_to(rit, "{:.6f},{:.6f}\n", t + options.reference_clock_offset_s,
-                   Quantize(theta, options.reference_resolution_deg));
+                   Readout(options, theta));
   }
   return reference_sink(ref);
+}
+
+std::string TableTruthJson(const TableSimulationOptions& o, const TableTruth& truth) {
+  using Json = nlohmann::ordered_json;
+  Json plateaus = Json::array();
+  for (const TablePlateauTruth& p : truth.plateaus) {
+    plateaus.push_back({{"reference_deg", p.reference_deg},
+                        {"direction", p.direction > 0   ? "up"
+                                      : p.direction < 0 ? "down"
+                                                        : "first"},
+                        {"error_deg", p.error_deg},
+                        {"t_move_s", p.t_move_s},
+                        {"t_start_s", p.t_start_s},
+                        {"t_end_s", p.t_end_s},
+                        {"other_axes_deg", {p.other_deg[0], p.other_deg[1]}}});
+  }
+  const int turned = static_cast<int>(o.axis);
+  Json others = Json::array();
+  for (int a = 0; a < 3; ++a) {
+    if (a != turned) others.push_back(TableAxisQuantity(static_cast<TableAxis>(a)));
+  }
+  Json j = {{"schema", "metro.table-truth/1"},
+            {"seed", o.seed},
+            {"sensor", o.sensor},
+            {"table_axis", TableAxisName(o.axis)},
+            {"quantity", TableAxisQuantity(o.axis)},
+            {"error_model",
+             "e(theta, d) = offset_deg + scale_error theta + cos1_deg cos(theta) + sin1_deg "
+             "sin(theta) + d hysteresis_deg / 2, d = +1 up, -1 down, 0 first"},
+            {"offset_deg", o.offset_deg},
+            {"scale_error", o.scale_error},
+            {"cos1_deg", o.cos1_deg},
+            {"sin1_deg", o.sin1_deg},
+            {"hysteresis_deg", o.hysteresis_deg},
+            {"tilt_deg", o.tilt_deg},
+            {"other_axes", others},
+            {"other_axes_base_deg", {o.base_deg[0], o.base_deg[1]}},
+            {"lag_tau_s", o.lag_tau_s},
+            {"noise_std_deg", o.noise_std_deg},
+            {"noise_ar1_per_frame", o.noise_ar1},
+            {"frame_period_s", o.frame_period_s},
+            {"quantization_deg", o.quantization_deg},
+            {"reference_resolution_deg", o.reference_resolution_deg},
+            {"readout_wrap_180", o.readout_wrap_180},
+            {"reference_clock_offset_s", o.reference_clock_offset_s},
+            {"table_rate_dps", o.move_rate_dps},
+            {"dwell_s", o.dwell_s},
+            {"packet_loss", o.packet_loss},
+            {"duration_s", truth.duration_s},
+            {"plateaus", plateaus}};
+  return j.dump(2) + "\n";
 }
 
 }  // namespace metro

@@ -11,6 +11,7 @@
 #include "metro/accuracy/accuracy_report.hpp"
 #include "metro/core/angles.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/sim/table_session.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
@@ -133,9 +134,13 @@ TEST_CASE("Accuracy budgets combine their inputs and cover single readings", "[a
   const AccuracyResult r = Evaluate(sim.session, opt);
   // u_c^2 = sum of the squared inputs (all sensitivities 1, independent; JCGM 100 5.1.2).
   const double q = 0.01 * 0.01 / 12.0;
-  const double corrected2 = r.reading_std_deg * r.reading_std_deg +
-                            r.max_prediction_u_deg * r.max_prediction_u_deg +
-                            r.fit.residual_rms_deg * r.fit.residual_rms_deg + 0.02 * 0.02 + q;
+  // The hysteresis term: +-h/2 for a reading of unknown direction, u = sqrt(h^2 + u(h)^2)/2.
+  REQUIRE(r.fit_hysteresis_term);
+  REQUIRE(r.fit.terms.back() == ErrorTerm::kHysteresis);
+  const double h = r.fit.params.back(), uh = r.fit.u.back();
+  const double corrected2 =
+      r.reading_std_deg * r.reading_std_deg + r.max_prediction_u_deg * r.max_prediction_u_deg +
+      r.fit.residual_rms_deg * r.fit.residual_rms_deg + 0.02 * 0.02 + q + (h * h + uh * uh) / 4.0;
   CHECK(r.corrected.gum.u == Approx(std::sqrt(corrected2)).epsilon(1e-9));
   const double uncorrected2 = r.systematic.rms_deg * r.systematic.rms_deg +
                               r.reading_std_deg * r.reading_std_deg + 0.02 * 0.02 + q;
@@ -231,14 +236,16 @@ TEST_CASE("Accuracy report JSON layout", "[accuracy]") {
     CHECK(j["points"][0].contains(key));
   }
   CHECK(j["points"][0]["type_a"].contains("n_eff"));
-  CHECK(j["fit"]["params"].size() == 6);
-  CHECK(j["fit"]["covariance"].size() == 6);
+  // harmonic2 and the hysteresis term h_deg (the sweep goes up and down).
+  CHECK(j["fit"]["params"].size() == 7);
+  CHECK(j["fit"]["params"][6]["name"] == "h_deg");
+  CHECK(j["fit"]["covariance"].size() == 7);
   for (const char* key : {"linearity", "hysteresis", "repeatability", "budget", "result",
                           "cross_axis", "segmentation", "systematic"}) {
     CHECK(j.contains(key));
   }
   CHECK(j["result"]["U_corrected_deg"] == r.corrected.gum.expanded);
-  CHECK(j["budget"]["corrected"]["inputs"].size() == 5);
+  CHECK(j["budget"]["corrected"]["inputs"].size() == 6);
   CHECK(AccuracyReportTable(r).find("hysteresis (up - down)") != std::string::npos);
 }
 
@@ -275,7 +282,7 @@ TEST_CASE("Accuracy bad input names what to collect", "[accuracy]") {
     REQUIRE(!r.ok());
     CHECK(r.error().message ==
           "tag 1 has no yaw_deg (nor a quaternion qw..qz to derive it from): the accuracy "
-          "evaluation needs the tag's yaw_deg, pitch_deg and roll_deg");
+          "evaluation of the yaw table needs the tag's yaw_deg");
   }
   SECTION("part of the quaternion") {
     Session s = Load("t_s,table_angle_deg\n0,1\n0.1,1\n");
@@ -286,8 +293,7 @@ TEST_CASE("Accuracy bad input names what to collect", "[accuracy]") {
     REQUIRE(!r.ok());
     CHECK(r.error().message ==
           "tag 1 has no yaw_deg (yaw_deg is derived from qw, qx, qy, qz; the session has qw, qx; "
-          "missing qy, qz): the accuracy evaluation needs the tag's yaw_deg, pitch_deg and "
-          "roll_deg");
+          "missing qy, qz): the accuracy evaluation of the yaw table needs the tag's yaw_deg");
   }
   SECTION("several tags without --sensor, and an unknown one") {
     const Session s = Load("t_s,sensor,yaw_deg,pitch_deg,roll_deg\n0,1,0,0,0\n0,2,0,0,0\n");

@@ -31,9 +31,9 @@
 #include "metro/accuracy/alignment.hpp"
 #include "metro/accuracy/error_fit.hpp"
 #include "metro/accuracy/plateaus.hpp"
+#include "metro/accuracy/table_axis.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/session.hpp"
-#include "metro/sim/table_session.hpp"
 #include "metro/stats/session_type_a.hpp"
 #include "metro/stats/type_a.hpp"
 #include "metro/uncertainty/gum.hpp"
@@ -59,6 +59,13 @@ struct AccuracyOptions {
   ErrorModel model = ErrorModel::kAuto;
   double angle_match_deg = 0.05;  // Reference angles closer than this are the same angle.
   ReferenceUncertainty reference;
+  // The hysteresis a reading may carry when the sweep never visited an angle both ways (the
+  // corrected U then adds a rectangular input of this half-width, and says so).
+  double assumed_hysteresis_deg = 0.2;
+  // The tag's first-order response time: estimated from the motion (false: not modelled, the
+  // plateaus settle by settle_s alone); a given value is used as is.
+  bool model_lag = true;
+  std::optional<double> lag_tau_s;
   double resolution_deg = 0.01;  // The packets' quantisation step.
   double coverage = 0.95;
   AlignmentOptions alignment;  // With a separate reference log.
@@ -88,6 +95,15 @@ struct AccuracyPoint {
   double t_start_s = 0.0, t_end_s = 0.0;
   size_t settle_samples = 0;
   double other_mean_deg[2] = {0.0, 0.0};  // The two axes not turned (yaw, pitch, roll order).
+  double other_u_deg[2] = {0.0, 0.0};     // Their u (the same AR(1) method as the error).
+};
+
+// The tag's reading noise on the plateaus (accuracy_stages.hpp, PlateauNoiseOf).
+struct PlateauNoise {
+  double sigma_deg = 0.0;
+  double phi = 0.0;  // Lag-1 correlation per observation, in [0, 0.999].
+  double dof = 0.0;  // sigma^2's degrees of freedom.
+  size_t plateaus = 0;
 };
 
 struct SystematicError {
@@ -106,6 +122,9 @@ struct Linearity {
   double line_offset_deg = 0.0;  // The least-squares straight line through the angle means.
   double line_slope = 0.0;
   size_t angles = 0;
+  // u of the deviation at at_reference_deg: d = (I - H) m over the per-angle means m with
+  // their u (JCGM 100 5.1.2 for the linear map; H the straight line's hat matrix).
+  double u_max_abs_deviation_deg = 0.0;
 };
 
 struct HysteresisPair {
@@ -131,9 +150,10 @@ struct Hysteresis {
 
 struct Repeatability {
   bool available = false;
-  double s_r_deg = 0.0;  // Pooled repeatability standard deviation.
-  double dof = 0.0;      // sum (m_j - 1)
-  int groups = 0;        // (angle, direction) groups with >= 2 plateaus.
+  double s_r_deg = 0.0;    // Pooled repeatability standard deviation.
+  double dof = 0.0;        // sum (m_j - 1)
+  double u_s_r_deg = 0.0;  // s_r / sqrt(2 dof) (JCGM 100 E.4.3).
+  int groups = 0;          // (angle, direction) groups with >= 2 plateaus.
   int sweeps = 0;
   std::string note;
 };
@@ -151,7 +171,8 @@ struct CrossAxis {
 struct ReadingBudget {
   std::string name;  // "corrected", "uncorrected"
   GumResult gum;
-  std::vector<std::string> notes;  // How each input's u was formed, by input name order.
+  std::vector<std::string> notes;        // How each input's u was formed, per input.
+  std::vector<std::string> input_names;  // The inputs' names, in the order of `notes`.
 };
 
 struct AccuracyResult {
@@ -166,6 +187,15 @@ struct AccuracyResult {
   SystematicError systematic;
   ErrorModel model = ErrorModel::kLinear;
   HarmonicFit fit;
+  bool fit_hysteresis_term = false;  // The curve has the h d / 2 term.
+  PlateauNoise noise;                // Reading noise (the error's AR(1) over the plateaus).
+  double lag_tau_s = 0.0;            // The tag's response time used for settling.
+  std::string lag_method;            // "estimated ...", "given", "not modelled".
+  int lag_settled_plateaus = 0;      // Plateaus whose start was trimmed by the lag rule.
+  double max_settle_s = 0.0;         // The longest settling dropped at a plateau's start.
+  bool reference_unwrapped = false;  // The readout wrapped and was unwrapped.
+  bool cross_axis_available = true;  // The session has the two other angles.
+  std::string cross_axis_note;
   double max_prediction_u_deg = 0.0;  // max over the points of u_fit(theta_i)
   Linearity linearity;
   Hysteresis hysteresis;
@@ -177,6 +207,8 @@ struct AccuracyResult {
   ReadingBudget uncorrected;
   double random_expanded_deg = 0.0;               // U of {reading noise, reference, resolution}
   double uncorrected_max_abs_expanded_deg = 0.0;  // random U + max |e_i|
+  double uncorrected_gum_expanded_deg = 0.0;      // k u_c of the uncorrected budget.
+  std::string which_u;                            // Which U to quote, and why.
   std::vector<std::string> warnings;
   AccuracyOptions options;
 };

@@ -29,12 +29,16 @@
 
 namespace metro {
 
-enum class ErrorTerm { kOffset, kScale, kCos1, kSin1, kCos2, kSin2 };
+// kHysteresis: h d / 2 with d = +1 on a plateau reached turning up, -1 turning down, 0 for the
+// first (direction unknown); h = up minus down. With it the curve's other parameters are
+// those of the mean of the up and down curves (unbiased when the turning points are visited
+// in one direction only), and Predict(theta) (d = 0) is that mean curve.
+enum class ErrorTerm { kOffset, kScale, kCos1, kSin1, kCos2, kSin2, kHysteresis };
 
-// Parameter names "c0_deg", "scale", "a1_deg", "b1_deg", "a2_deg", "b2_deg".
+// Parameter names "c0_deg", "scale", "a1_deg", "b1_deg", "a2_deg", "b2_deg", "h_deg".
 const char* ErrorTermName(ErrorTerm term);
-// Basis function of a term at theta_deg (1, theta_deg, cos theta, ...).
-double ErrorTermBasis(ErrorTerm term, double theta_deg);
+// Basis function of a term at theta_deg (1, theta_deg, cos theta, ..., d / 2).
+double ErrorTermBasis(ErrorTerm term, double theta_deg, int direction = 0);
 
 enum class ErrorModel {
   kAuto,
@@ -53,6 +57,7 @@ struct FitPoint {
   double theta_deg = 0.0;
   double value_deg = 0.0;
   double u_deg = 0.0;  // > 0
+  int direction = 0;   // For kHysteresis: +1 reached turning up, -1 down, 0 unknown.
 };
 
 // Distinct reference angles (closer than match_deg count as one) and the angular span.
@@ -80,8 +85,8 @@ struct HarmonicFit {
   std::vector<double> residuals_deg;  // e_i - fit, per point.
   double residual_rms_deg = 0.0;      // sqrt(sum r_i^2 / (m - p)), unweighted; 0 when m = p.
 
-  double Predict(double theta_deg) const;
-  double PredictionU(double theta_deg) const;  // u_fit(theta)
+  double Predict(double theta_deg, int direction = 0) const;
+  double PredictionU(double theta_deg, int direction = 0) const;  // u_fit(theta)
 };
 
 // Fits `terms` to the points. Errors: fewer points than parameters, a non-positive u, a

@@ -29,6 +29,9 @@ struct PlateauOptions {
   // correlated DMP output without a transient, MSER-5 truncates noise excursions and leaves
   // an optimistic u of the mean (docs/accuracy.md, "Settling").
   bool settle_auto = false;
+  // With a modelled lag (FindPlateaus' transient_deg): observations are also dropped until
+  // the tag's modelled lag behind the table is within this (deg).
+  double settle_lag_residual_deg = 0.002;
 
   bool IsValid(std::string* why) const;
 };
@@ -39,11 +42,12 @@ struct Plateau {
   size_t end = 0;             // One past the last observation used (= end of the rest).
   size_t settle_samples = 0;  // begin - rest_begin.
   bool settle_at_limit = false;
-  double t_rest_s = 0.0;       // Time the table stopped (first observation at rest).
-  double t_start_s = 0.0;      // First used observation.
-  double t_end_s = 0.0;        // Last used observation.
-  double reference_deg = 0.0;  // Mean reference angle over the used observations (unwrapped
-                               // about the run's first value, so 359.99/0.01 average to 0).
+  bool settled_by_lag = false;  // The lag rule dropped more than settle_s.
+  double t_rest_s = 0.0;        // Time the table stopped (first observation at rest).
+  double t_start_s = 0.0;       // First used observation.
+  double t_end_s = 0.0;         // Last used observation.
+  double reference_deg = 0.0;   // Mean reference angle over the used observations (unwrapped
+                                // about the run's first value, so 359.99/0.01 average to 0).
   size_t n() const { return end - begin; }
 };
 
@@ -68,9 +72,13 @@ struct Segmentation {
 // `t_s` strictly increasing; `reference_deg` (NaN = unknown) and `tag_error_deg` (the tag's
 // error against the reference, used for MSER-5) of the same length. Errors: mismatched
 // lengths, invalid options, and no plateau found (the message says what to collect).
+// `transient_deg` (optional, same length): the tag's modelled lag behind the reference
+// (ResponseTransient, accuracy_stages.hpp); a plateau starts no earlier than where it has
+// decayed to settle_lag_residual_deg.
 Result<Segmentation> FindPlateaus(const std::vector<double>& t_s,
                                   const std::vector<double>& reference_deg,
                                   const std::vector<double>& tag_error_deg,
-                                  const PlateauOptions& options = {});
+                                  const PlateauOptions& options = {},
+                                  const std::vector<double>* transient_deg = nullptr);
 
 }  // namespace metro

@@ -6,7 +6,8 @@
 // (the down pass, the turning point visited once); `sweeps` such up-and-down passes. It
 // dwells `dwell_s` on each plateau and moves between them at `move_rate_dps`. The table's
 // own angle theta(t) [deg] is written as `table_angle_deg`, rounded to
-// reference_resolution_deg (an encoder), continuously (also while moving).
+// reference_resolution_deg (an encoder), continuously (also while moving: the table turns at
+// move_rate_dps from one plateau to the next), wrapped into (-180, 180] with readout_wrap_180.
 //
 // The tag's angle of the turned axis (what its DMP reports), with d = +1 on a plateau reached
 // by turning up (theta increasing), -1 when reached turning down, and 0 for the first one:
@@ -32,21 +33,13 @@
 #include <string>
 #include <vector>
 
+#include "metro/accuracy/table_axis.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/receiver.hpp"
 #include "metro/io/session.hpp"
 #include "metro/sim/static_session.hpp"
 
 namespace metro {
-
-enum class TableAxis { kYaw = 0, kPitch = 1, kRoll = 2 };
-
-// "yaw", "pitch", "roll".
-const char* TableAxisName(TableAxis axis);
-// The session quantity of an axis: "yaw_deg", "pitch_deg", "roll_deg".
-const char* TableAxisQuantity(TableAxis axis);
-// Parses "yaw" | "pitch" | "roll"; the error names the three valid axes.
-Result<TableAxis> ParseTableAxis(const std::string& name);
 
 struct TableSimulationOptions {
   uint64_t seed = 1;
@@ -77,6 +70,10 @@ struct TableSimulationOptions {
   // Separate reference log (SimulateTableSession's reference_sink).
   double reference_rate_hz = 20.0;
   double reference_clock_offset_s = 0.0;
+  // The table reports signed angles, wrapped into (-180, 180] (many readouts do).
+  bool readout_wrap_180 = false;
+  // A pitch table may pass +-90 deg (the tag's Euler pitch then folds over); off: refused.
+  bool pitch_through_90 = false;
 
   bool IsValid(std::string* why) const;
 };
@@ -88,6 +85,8 @@ struct TablePlateauTruth {
   double error_deg = 0.0;  // Systematic error of the turned axis on this plateau.
   double t_start_s = 0.0;  // Table stopped.
   double t_end_s = 0.0;    // Table starts moving again.
+  double t_move_s = 0.0;   // The table left the previous plateau (= t_start_s for the first).
+  double other_deg[2] = {0.0, 0.0};  // The two axes not turned (base + tilt), settled.
 };
 
 struct TableTruth {
@@ -97,6 +96,10 @@ struct TableTruth {
 
 // Systematic error of the tag's turned axis at table angle theta_deg (the model above).
 double TableErrorModelDeg(const TableSimulationOptions& options, double theta_deg, int direction);
+
+// The truth as the sidecar JSON "metro.table-truth/1" (docs/simulator.md): the error model's
+// parameters, lag, noise, clock offset, readout and every plateau with its true error.
+std::string TableTruthJson(const TableSimulationOptions& options, const TableTruth& truth);
 
 // Writes the tag session in `format` (kCsv: with `table_angle_deg` unless reference_sink is
 // given; kReceiver: the capture, which has no room for the table) to `sink`, and the
