@@ -267,7 +267,11 @@ struct Streamer {
     }
     pty.Drain();
     if (!pty.Write(text)) return false;
-    if (record != nullptr) std::fwrite(text.data(), 1, text.size(), record);
+    if (record != nullptr) {
+      // Flushed per frame: a test reads it while the receiver is unplugged or running.
+      std::fwrite(text.data(), 1, text.size(), record);
+      std::fflush(record);
+    }
     if (!lines.empty())
       first_line_tail = std::string(lines.back().substr(0, lines.back().size() - 1));
     ++frame;

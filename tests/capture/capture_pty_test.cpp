@@ -300,6 +300,25 @@ TEST_CASE("pty capture: an unplugged receiver is reopened when it returns", "[ca
   std::remove(cap.c_str());
 }
 
+TEST_CASE("pty capture: with --duration-s an unplug ends the capture with exit 1",
+          "[capture][pty]") {
+  Receiver rx({"--tags", "2", "--frame-period-s", "0.02", "--unplug-at-s", "0.4",
+               "--replug-after-s", "30", "--seed", "4"});
+  const std::string cap = Unique("capture") + ".txt";
+  auto capture = StartCapture({"--port", rx.link, "-o", cap, "--duration-s", "60"});
+  // No reconnect by default with a duration: the capture ends on its own when the port goes.
+  CHECK(capture->Stop(0, 60.0) == 1);
+  const std::string text = Slurp(cap);
+  // 0.4 s / 0.02 s = 20 frames of 2 tags were sent before the unplug, all of them kept.
+  CHECK(Body(text) == Lines(Slurp(rx.record)));
+  CHECK(Body(text).size() == 40);
+  CHECK(text.find("# port lost at ") != std::string::npos);
+  CHECK(text.find("# end_utc: ") != std::string::npos);
+  CHECK(capture->err().find("error: " + rx.link + ": the port disappeared after ") !=
+        std::string::npos);
+  std::remove(cap.c_str());
+}
+
 TEST_CASE("pty capture: SIGINT and --duration-s finish the file cleanly", "[capture][pty]") {
   Receiver rx({"--tags", "2", "--frame-period-s", "0.02", "--seed", "5"});
   const std::string cap = Unique("capture") + ".txt";
