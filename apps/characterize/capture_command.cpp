@@ -126,6 +126,7 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
         "{}: exists: a capture is never replaced; pass --force to replace it", capture_path));
     return kExitUsage;
   }
+  const bool replacing = c.force && OutputExists(capture_path);
   capture::CaptureOptions o;
   o.port = c.port;
   o.baud = c.baud;
@@ -147,8 +148,9 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
   ::sigaction(SIGINT, &sa, nullptr);
   ::sigaction(SIGTERM, &sa, nullptr);
 
-  Note(fmt::format("capturing {} at {} baud to {}{}; Ctrl-C ends the capture\n", c.port, c.baud,
-                   capture_path, c.duration_s > 0 ? fmt::format(" for {:g} s", c.duration_s) : ""));
+  Note(fmt::format("capturing {} at {} baud to {}{}{}; Ctrl-C ends the capture\n", c.port, c.baud,
+                   capture_path, replacing ? " (--force: replacing the existing file)" : "",
+                   c.duration_s > 0 ? fmt::format(" for {:g} s", c.duration_s) : ""));
   LiveView view;
   capture::CaptureObserver observer;
   observer.on_tick = [&](const capture::CaptureTally& t, double s) { view.Tick(t, s); };

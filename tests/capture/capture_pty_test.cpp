@@ -345,6 +345,7 @@ TEST_CASE("pty capture: SIGINT and --duration-s finish the file cleanly", "[capt
       testing::RunProgram(METRO_CHARACTERIZE_EXE,
                           "capture --port " + rx.link + " -o " + cap + " --duration-s 1 --force");
   CHECK(timed.exit_code == 0);
+  CHECK(timed.err.find("(--force: replacing the existing file)") != std::string::npos);
   text = Slurp(cap);
   CHECK(text.find("# end_utc: ") != std::string::npos);
   for (const std::string& l : Body(text)) REQUIRE(WholeReceiverLine(l));
