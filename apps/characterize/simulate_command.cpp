@@ -214,6 +214,8 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   sub->add_flag("--table-pitch-through-90", o->table.pitch_through_90,
                 "table: let a pitch table pass +-90 deg (the tag's Euler pitch folds there)");
+  sub->add_flag("--table-up-only", o->table.up_only,
+                "table: one pass up, no down pass (hysteresis not measured; --sweeps 1)");
   sub->add_option("--noise-ar1", o->table.noise_ar1,
                   "table truth: lag-1 correlation of the noise per frame")
       ->capture_default_str();

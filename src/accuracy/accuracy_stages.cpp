@@ -214,8 +214,11 @@ PlateauNoise PlateauNoiseOf(const std::vector<double>& series_deg,
   expected(noise.phi, &e0, &e1);
   noise.sigma_deg = std::sqrt(s0 / e0);
   double dof = 0.0;
+  // Each plateau's share of sigma^2's dof: Var(s^2) ~ 2 sigma^4 (1 + phi^2) / (n (1 - phi^2))
+  // (Bartlett 1946 for AR(1)), less the mean removed, at least 1 per plateau.
+  const double phi2 = noise.phi * noise.phi;
   for (size_t n : sizes) {
-    dof += static_cast<double>(n) * (1.0 - noise.phi) / (1.0 + noise.phi) - 1.0;
+    dof += std::max(1.0, static_cast<double>(n) * (1.0 - phi2) / (1.0 + phi2) - 1.0);
   }
   noise.dof = std::max(dof, 1.0);
   return noise;
@@ -328,9 +331,14 @@ Linearity LinearityOf(const std::vector<AccuracyPoint>& points, double angle_mat
   for (size_t i = 0; i < points.size(); ++i) groups[cluster[i]].push_back(&points[i]);
   Eigen::VectorXd mean(static_cast<Eigen::Index>(angles)), u2(static_cast<Eigen::Index>(angles));
   for (size_t c = 0; c < angles; ++c) {
+    // The angle's mean error and its u from the plateaus' own u (up and down plateaus differ
+    // by the hysteresis, a systematic effect that is part of the mean, not its uncertainty).
     const GroupMean g = MeanOfGroup(groups[c]);
+    double sum_u2 = 0.0;
+    for (const AccuracyPoint* p : groups[c]) sum_u2 += p->type_a.u_deg * p->type_a.u_deg;
+    const double m = static_cast<double>(groups[c].size());
     mean(static_cast<Eigen::Index>(c)) = g.mean;
-    u2(static_cast<Eigen::Index>(c)) = g.u * g.u;
+    u2(static_cast<Eigen::Index>(c)) = sum_u2 / (m * m);
   }
   lin.angles = angles;
   // Least-squares straight line through the angle means: d = (I - H) m, H = X (X^T X)^-1 X^T.
@@ -541,10 +549,19 @@ Status ReadingBudgets(const AccuracyOptions& options, AccuracyResult* r) {
   const BudgetInput prediction =
       NormalInput("fit_prediction", r->max_prediction_u_deg, fit_dof,
                   "u of the fitted correction, max over the plateaus of sqrt(g^T C g) (dof m - p)");
-  const BudgetInput residual =
-      NormalInput("fit_residual", r->fit.residual_rms_deg, fit_dof,
-                  "scatter of the plateau errors about the curve (repeatability, lack of fit): "
-                  "sqrt(sum r_i^2 / (m - p))");
+  // The plateau errors' scatter about the curve beyond their own noise (a fresh reading has
+  // its own noise, counted by reading_noise): sqrt(max(0, s_res^2 - mean u_i^2)).
+  double mean_u2 = 0.0;
+  for (const AccuracyPoint& p : r->points) mean_u2 += p.type_a.u_deg * p.type_a.u_deg;
+  mean_u2 /= static_cast<double>(std::max<size_t>(r->points.size(), 1));
+  const double lack_of_fit =
+      std::sqrt(std::max(0.0, r->fit.residual_rms_deg * r->fit.residual_rms_deg - mean_u2));
+  const BudgetInput residual = NormalInput(
+      "fit_residual", lack_of_fit, fit_dof,
+      fmt::format("scatter of the plateau errors about the curve beyond their own Type A u "
+                  "(lack of fit, repeatability): sqrt(max(0, s_res^2 - mean u_i^2)), s_res = "
+                  "sqrt(sum r_i^2 / (m - p)) = {:.3g} deg",
+                  r->fit.residual_rms_deg));
   std::vector<BudgetInput> corrected = {reading, prediction, residual};
   if (r->fit_hysteresis_term) {
     // The correction is the mean of the up and down curves; a reading of unknown direction is
@@ -569,6 +586,24 @@ Status ReadingBudgets(const AccuracyOptions& options, AccuracyResult* r) {
   auto c = EvaluateReadingBudget("corrected", corrected, options.coverage);
   if (!c.ok()) return c.error();
   r->corrected = std::move(c).value();
+  if (r->fit_hysteresis_term) {
+    // The +-h/2 part is two-valued, not normal: U from the distribution of +-h/2 plus the
+    // rest (normal with the other inputs' u), k = U / u_c (UncorrectedMixtureU's method).
+    size_t h = 0;
+    while (r->fit.terms[h] != ErrorTerm::kHysteresis) ++h;
+    GumResult& g = r->corrected.gum;
+    const double half = 0.5 * r->fit.params[h];
+    const double rest = std::sqrt(std::max(0.0, g.u * g.u - half * half));
+    AccuracyPoint up, down;
+    up.error_deg = half;
+    down.error_deg = -half;
+    const double expanded = UncorrectedMixtureU({up, down}, rest, options.coverage);
+    g.expanded = expanded;
+    g.k = g.u > 0.0 ? expanded / g.u : g.k;
+    g.dof_note =
+        "U from the distribution of +-h/2 (the reading's unknown direction of approach) plus "
+        "the other inputs as a normal; k = U / u_c";
+  }
 
   const BudgetInput systematic =
       NormalInput("systematic_error", r->systematic.rms_deg, static_cast<double>(r->points.size()),

@@ -37,6 +37,7 @@ std::vector<double> PlateauAngles(const TableSimulationOptions& o) {
   for (int s = 0; s < o.sweeps; ++s) {
     // Up pass (the start is not repeated after the first sweep's down pass), then down.
     for (size_t i = (s == 0 ? 0 : 1); i < up.size(); ++i) all.push_back(up[i]);
+    if (o.up_only) break;
     for (size_t i = up.size() - 1; i-- > 0;) all.push_back(up[i]);
   }
   return all;
@@ -54,6 +55,8 @@ std::vector<Stop> Schedule(const TableSimulationOptions& o) {
       s.direction = angle > previous ? 1 : -1;
       t += std::fabs(angle - previous) / o.move_rate_dps;
     }
+    // An up-only sweep approaches its first plateau from below too.
+    if (o.up_only) s.direction = 1;
     s.t_arrive_s = t;
     t += o.dwell_s;
     s.t_leave_s = t;
@@ -109,6 +112,7 @@ bool TableSimulationOptions::IsValid(std::string* why) const {
                     plateaus, kSimMaxTablePlateaus));
   }
   if (sweeps < 1 || sweeps > 100) return fail("sweeps must be in 1..100");
+  if (up_only && sweeps != 1) return fail("an up-only sweep is one pass: sweeps must be 1");
   if (!(dwell_s > 0.0) || !std::isfinite(dwell_s)) return fail("dwell_s must be > 0");
   if (!(move_rate_dps > 0.0) || !std::isfinite(move_rate_dps)) {
     return fail("move_rate_dps must be > 0");
@@ -345,6 +349,7 @@ std::string TableTruthJson(const TableSimulationOptions& o, const TableTruth& tr
             {"quantization_deg", o.quantization_deg},
             {"reference_resolution_deg", o.reference_resolution_deg},
             {"readout_wrap_180", o.readout_wrap_180},
+            {"up_only", o.up_only},
             {"reference_clock_offset_s", o.reference_clock_offset_s},
             {"table_rate_dps", o.move_rate_dps},
             {"dwell_s", o.dwell_s},

@@ -134,18 +134,35 @@ TEST_CASE("Accuracy budgets combine their inputs and cover single readings", "[a
   const AccuracyResult r = Evaluate(sim.session, opt);
   // u_c^2 = sum of the squared inputs (all sensitivities 1, independent; JCGM 100 5.1.2).
   const double q = 0.01 * 0.01 / 12.0;
-  // The hysteresis term: +-h/2 for a reading of unknown direction, u = sqrt(h^2 + u(h)^2)/2.
+  // The hysteresis term: +-h/2 for a reading of unknown direction, u = sqrt(h^2 + u(h)^2)/2;
+  // the fit residual beyond the plateaus' own u: sqrt(max(0, s_res^2 - mean u_i^2)).
   REQUIRE(r.fit_hysteresis_term);
   REQUIRE(r.fit.terms.back() == ErrorTerm::kHysteresis);
   const double h = r.fit.params.back(), uh = r.fit.u.back();
-  const double corrected2 =
-      r.reading_std_deg * r.reading_std_deg + r.max_prediction_u_deg * r.max_prediction_u_deg +
-      r.fit.residual_rms_deg * r.fit.residual_rms_deg + 0.02 * 0.02 + q + (h * h + uh * uh) / 4.0;
+  double mean_u2 = 0.0;
+  for (const AccuracyPoint& p : r.points) mean_u2 += p.type_a.u_deg * p.type_a.u_deg;
+  mean_u2 /= static_cast<double>(r.points.size());
+  const double lack2 = std::max(0.0, std::pow(r.fit.residual_rms_deg, 2) - mean_u2);
+  const double corrected2 = r.reading_std_deg * r.reading_std_deg +
+                            r.max_prediction_u_deg * r.max_prediction_u_deg + lack2 + 0.02 * 0.02 +
+                            q + (h * h + uh * uh) / 4.0;
   CHECK(r.corrected.gum.u == Approx(std::sqrt(corrected2)).epsilon(1e-9));
+  // U: P(|h/2 + N(0, s^2)| <= U) = 0.95 with s^2 = u_c^2 - h^2/4 (the +-h/2 two-point part
+  // and a normal rest; symmetric, so one side suffices), solved here by bisection.
+  {
+    const double s = std::sqrt(corrected2 - h * h / 4.0);
+    auto p_in = [&](double u) {
+      return 0.5 * (std::erfc(-(u - h / 2) / s / std::sqrt(2.0)) -
+                    std::erfc(-(-u - h / 2) / s / std::sqrt(2.0)));
+    };
+    double lo = 0.0, hi = 10.0;
+    for (int i = 0; i < 200; ++i) (p_in(0.5 * (lo + hi)) < 0.95 ? lo : hi) = 0.5 * (lo + hi);
+    CHECK(r.corrected.gum.expanded == Approx(hi).epsilon(1e-6));
+    CHECK(r.corrected.gum.k == Approx(hi / r.corrected.gum.u).epsilon(1e-6));
+  }
   const double uncorrected2 = r.systematic.rms_deg * r.systematic.rms_deg +
                               r.reading_std_deg * r.reading_std_deg + 0.02 * 0.02 + q;
   CHECK(r.uncorrected.gum.u == Approx(std::sqrt(uncorrected2)).epsilon(1e-9));
-  CHECK(r.corrected.gum.k == Approx(CoverageFactor(0.95, r.corrected.gum.dof_eff)));
   CHECK(r.uncorrected_max_abs_expanded_deg ==
         Approx(r.random_expanded_deg + r.systematic.max_abs_deg));
   // Coverage of single readings on the plateaus (the simulated reference is exact): at

@@ -32,7 +32,8 @@ double Ar1MeanVarianceFactor(size_t n, double phi);
 // (S0 = sum (x_k - xbar)^2, S1 = sum (x_k - xbar)(x_{k+1} - xbar), expectations exact for
 // unit variance), which removes the downward bias of each short plateau's own r1; then
 // sigma^2 = sum S0_i / sum E[S0_i | phi]. u of plateau i's mean = sigma sqrt(F(n_i, phi))
-// (Ar1MeanVarianceFactor). Each plateau's slice is unwrapped before use.
+// (Ar1MeanVarianceFactor); dof = sum_i max(1, n_i (1 - phi^2)/(1 + phi^2) - 1) (Bartlett's
+// variance of s^2 for AR(1)). Each plateau's slice is unwrapped before use.
 PlateauNoise PlateauNoiseOf(const std::vector<double>& series_deg,
                             const std::vector<Plateau>& plateaus);
 

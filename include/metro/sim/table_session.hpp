@@ -74,6 +74,8 @@ struct TableSimulationOptions {
   bool readout_wrap_180 = false;
   // A pitch table may pass +-90 deg (the tag's Euler pitch then folds over); off: refused.
   bool pitch_through_90 = false;
+  // One pass up only (no down pass: hysteresis is not measured); needs sweeps = 1.
+  bool up_only = false;
 
   bool IsValid(std::string* why) const;
 };
