@@ -354,8 +354,8 @@ TEST_CASE("pty capture: SIGINT and --duration-s finish the file cleanly", "[capt
 
 TEST_CASE("pty capture: bad ports exit 2 naming the port", "[capture][pty]") {
   const std::string cap = Unique("capture") + ".txt";
-  testing::ProgramRun r =
-      testing::RunProgram(METRO_CHARACTERIZE_EXE, "capture --port metro_no_such_tty -o " + cap);
+  testing::ProgramRun r = testing::RunProgram(
+      METRO_CHARACTERIZE_EXE, "capture --port metro_no_such_tty --duration-s 5 -o " + cap);
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("error: metro_no_such_tty: cannot open: No such file or directory") !=
         std::string::npos);
@@ -364,7 +364,8 @@ TEST_CASE("pty capture: bad ports exit 2 naming the port", "[capture][pty]") {
   if (f != nullptr) std::fclose(f);
   const std::string plain = Unique("plain") + ".txt";
   { std::ofstream(plain) << "x"; }
-  r = testing::RunProgram(METRO_CHARACTERIZE_EXE, "capture --port " + plain + " -o " + cap);
+  r = testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                          "capture --port " + plain + " -o " + cap + " --duration-s 5");
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("error: " + plain + ": not a serial port (tcgetattr)") != std::string::npos);
   std::remove(plain.c_str());
@@ -372,7 +373,8 @@ TEST_CASE("pty capture: bad ports exit 2 naming the port", "[capture][pty]") {
     Receiver rx({"--tags", "1", "--frame-period-s", "0.05"});
     Result<std::unique_ptr<blob::SerialPort>> held = blob::SerialPort::Open(rx.link);
     REQUIRE(held.ok());
-    r = testing::RunProgram(METRO_CHARACTERIZE_EXE, "capture --port " + rx.link + " -o " + cap);
+    r = testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                            "capture --port " + rx.link + " -o " + cap + " --duration-s 5");
     CHECK(r.exit_code == 2);
     CHECK(r.err.find("error: " + rx.link + ": in use by another program (flock)") !=
           std::string::npos);
