@@ -76,7 +76,7 @@ struct GroupMean {
   double mean = 0.0, u = 0.0, dof = 0.0;
   int count = 0;
 };
-GroupMean MeanOfGroup(const std::vector<const AccuracyPoint*>& group) {
+GroupMean MeanOfGroup(const std::vector<const AccuracyPoint*>& group, bool with_between = true) {
   GroupMean g;
   g.count = static_cast<int>(group.size());
   if (group.empty()) return g;
@@ -91,7 +91,7 @@ GroupMean MeanOfGroup(const std::vector<const AccuracyPoint*>& group) {
   const double within = sum_u2 / (m * m);
   g.u = std::sqrt(within);
   g.dof = min_dof;
-  if (group.size() >= 2) {
+  if (with_between && group.size() >= 2) {
     double ss = 0.0;
     for (const AccuracyPoint* p : group) ss += (p->error_deg - g.mean) * (p->error_deg - g.mean);
     const double between = ss / (m - 1.0) / m;
@@ -388,7 +388,10 @@ Hysteresis HysteresisOf(const std::vector<AccuracyPoint>& points, double angle_m
       if (points[i].direction < 0) down.push_back(&points[i]);
     }
     if (up.empty() || down.empty()) continue;
-    const GroupMean gu = MeanOfGroup(up), gd = MeanOfGroup(down);
+    // Each side's u from its plateaus' own u: a between-plateau s of 2 or 3 plateaus is too
+    // noisy to be taken as the larger (it made u(h) conservative, 40 of 40 covering); scatter
+    // beyond the plateaus' u across angles enlarges the mean's u by the Birge ratio below.
+    const GroupMean gu = MeanOfGroup(up, false), gd = MeanOfGroup(down, false);
     HysteresisPair pair;
     pair.reference_deg = centres[c];
     pair.up_error_deg = gu.mean;

@@ -111,8 +111,8 @@ TEST_CASE("Repeatability and hysteresis stages against hand-computed groups", "[
   const Hysteresis h = HysteresisOf(pts, 0.05);
   REQUIRE(h.pairs.size() == 1);
   CHECK(h.pairs[0].hysteresis_deg == Approx(0.1));
-  // Each side: between-plateau s / sqrt(2) = 0.1 beats the within 0.01 / sqrt(2).
-  CHECK(h.pairs[0].u_deg == Approx(std::sqrt(0.02)));
+  // Each side's u from its plateaus' u: 0.01 / sqrt(2); u(h) = sqrt(2) 0.01 / sqrt(2).
+  CHECK(h.pairs[0].u_deg == Approx(0.01));
 }
 
 TEST_CASE("The hysteresis term leaves the curve's parameters unbiased", "[accuracy]") {
