@@ -156,6 +156,7 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
       if (!gyro_solved.ok()) return gyro_solved.error();
     }
     gyro = std::move(gyro_solved).value();
+    for (const std::string& w : gyro.warnings) out.warnings.push_back(w);
   }
 
   // Back to input units, and the results.

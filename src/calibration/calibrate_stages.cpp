@@ -125,23 +125,6 @@ double Rms(const std::vector<double>& r) {
   return std::sqrt(ss / static_cast<double>(r.size()));
 }
 
-// The (whitened, robustified) Jacobian over `blocks`, dense.
-std::optional<Eigen::MatrixXd> DenseJacobian(ceres::Problem* problem,
-                                             const std::vector<double*>& blocks) {
-  ceres::Problem::EvaluateOptions eo;
-  eo.parameter_blocks = blocks;
-  ceres::CRSMatrix crs;
-  double cost = 0;
-  if (!problem->Evaluate(eo, &cost, nullptr, nullptr, &crs)) return std::nullopt;
-  Eigen::MatrixXd j = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-  for (int r = 0; r < crs.num_rows; ++r) {
-    for (int k = crs.rows[static_cast<size_t>(r)]; k < crs.rows[static_cast<size_t>(r) + 1]; ++k) {
-      j(r, crs.cols[static_cast<size_t>(k)]) = crs.values[static_cast<size_t>(k)];
-    }
-  }
-  return j;
-}
-
 // Rank of the whitened Jacobian over the free blocks; names the null direction on failure.
 Status CheckRank(ceres::Problem* problem, const std::vector<double*>& free_blocks,
                  const std::vector<std::string>& names) {
@@ -175,14 +158,40 @@ Status CheckRank(ceres::Problem* problem, const std::vector<double*>& free_block
 
 // Covariance of the free parameters from Ceres's Covariance API, scaled by the residual
 // variance s^2 = 2 cost / (m - p) (Type A, JCGM 100:2008 4.2.3 and G.4; the groups are
-// whitened, so s^2 is the reduced chi-square).
+// whitened, so s^2 is the reduced chi-square). robust_scale > 0 (a robust loss of that scale):
+// s^2 from the blocks the loss keeps (below).
 Result<Eigen::MatrixXd> ScaledCovariance(ceres::Problem* problem,
                                          const std::vector<double*>& free_blocks, int p, int m,
-                                         double* reduced_chi2) {
+                                         double robust_scale, double* reduced_chi2) {
   double cost = 0;
   problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
-  const int dof = m - p;
-  const double s2 = dof > 0 ? 2.0 * cost / static_cast<double>(dof) : 0.0;
+  int dof = m - p;
+  double s2 = dof > 0 ? 2.0 * cost / static_cast<double>(dof) : 0.0;
+  if (robust_scale > 0) {
+    // With a robust loss the outlying blocks (where the loss has cut the weight below half:
+    // squared whitened norm above robust_scale^2) would dominate 2 cost; s^2 comes from the
+    // rest, each block counting its degrees of freedom (2 for a rotation's 3 components).
+    std::vector<ceres::ResidualBlockId> ids;
+    problem->GetResidualBlocks(&ids);
+    double ss = 0;
+    int count = 0;
+    for (ceres::ResidualBlockId id : ids) {
+      const int size = problem->GetCostFunctionForResidualBlock(id)->num_residuals();
+      std::vector<double> r(static_cast<size_t>(size));
+      double block_cost = 0;
+      if (!problem->EvaluateResidualBlock(id, false, &block_cost, r.data(), nullptr)) continue;
+      double n2 = 0;
+      for (double v : r) n2 += v * v;
+      if (n2 > robust_scale * robust_scale) continue;
+      ss += n2;
+      std::vector<double*> blocks;
+      problem->GetParameterBlocksForResidualBlock(id, &blocks);
+      const bool rotation = size == 3 && blocks.size() == PB::kBlockCount;  // R^T u_i - u_j
+      count += rotation ? 2 : size;
+    }
+    dof = count - p;
+    s2 = dof > 0 ? ss / static_cast<double>(dof) : 0.0;
+  }
   *reduced_chi2 = s2;
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
@@ -206,21 +215,37 @@ Result<Eigen::MatrixXd> ScaledCovariance(ceres::Problem* problem,
 
 // Rank and covariance of a final stage's problem; errors name the tag.
 Status RankAndCovariance(ceres::Problem* problem, ImuSensor imu, ModelKind kind, bool temperature,
-                         int sensor, SensorSolution* s) {
+                         int sensor, double robust_scale, SensorSolution* s) {
   std::vector<std::string> names;
   for (const std::string& n : PB::FreeNames(imu, kind, temperature)) {
     names.push_back(std::string(ImuSensorName(imu)) + "." + n);
   }
   Status rank = CheckRank(problem, s->free_blocks, names);
   if (!rank.ok()) return MakeError(fmt::format("sensor {}: {}", sensor, rank.error().message));
-  Result<Eigen::MatrixXd> c =
-      ScaledCovariance(problem, s->free_blocks, s->parameters, s->residuals, &s->reduced_chi2);
+  Result<Eigen::MatrixXd> c = ScaledCovariance(problem, s->free_blocks, s->parameters, s->residuals,
+                                               robust_scale, &s->reduced_chi2);
   if (!c.ok()) return MakeError(fmt::format("sensor {}: {}", sensor, c.error().message));
   s->covariance = c.value();
   return Status::Ok();
 }
 
 }  // namespace
+
+std::optional<Eigen::MatrixXd> DenseJacobian(ceres::Problem* problem,
+                                             const std::vector<double*>& blocks) {
+  ceres::Problem::EvaluateOptions eo;
+  eo.parameter_blocks = blocks;
+  ceres::CRSMatrix crs;
+  double cost = 0;
+  if (!problem->Evaluate(eo, &cost, nullptr, nullptr, &crs)) return std::nullopt;
+  Eigen::MatrixXd j = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int k = crs.rows[static_cast<size_t>(r)]; k < crs.rows[static_cast<size_t>(r) + 1]; ++k) {
+      j(r, crs.cols[static_cast<size_t>(k)]) = crs.values[static_cast<size_t>(k)];
+    }
+  }
+  return j;
+}
 
 // ---- Records ----------------------------------------------------------------------------
 
@@ -744,6 +769,8 @@ RotationSet BuildRotations(const std::vector<Record>& records, const std::vector
             ps->note = fmt::format("longer than {} s", max_rotation_s);
           } else {
             RotationData rd;
+            rd.pose_start = static_cast<int>(prev - statics.data());
+            rd.pose_end = static_cast<int>(cur - statics.data());
             rd.accel_start = accel_ref.cwiseProduct(prev->accel);
             rd.accel_end = accel_ref.cwiseProduct(cur->accel);
             rd.dtemp_start_c = temp ? prev->temp_c - t_ref_c : 0.0;
@@ -909,201 +936,31 @@ Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOpti
   SensorSolution out;
   out.parameters = PB::FreeCount(ImuSensor::kAccel, o.accel_model, d.temperature);
   const int pa = out.parameters;
-  // Unweighted fit.
-  {
+  // Unweighted fit; with a robust loss a robust pass follows, so that the scatter comes from a
+  // fit that outlying poses did not drag.
+  const bool robust = o.loss != LossKind::kTrivial;
+  for (int pass = 0; pass < (robust ? 2 : 1); ++pass) {
     std::vector<double*> free_blocks;
     int m = 0;
-    Status s = SolveStage(Stage::kAccel, d, o, x, fit, nullptr, &free_blocks, &m);
+    Status s = SolveStage(pass > 0 ? Stage::kAccelFinal : Stage::kAccel, d, o, x, fit, nullptr,
+                          &free_blocks, &m);
     if (!s.ok()) return s.error();
-    fit->s_accel = GroupSigma(fit->r_accel, static_cast<double>(m - pa) / static_cast<double>(m),
-                              o.loss != LossKind::kTrivial);
+    fit->s_accel =
+        GroupSigma(fit->r_accel, static_cast<double>(m - pa) / static_cast<double>(m), robust);
   }
   // Final: whitened (robust loss if chosen), rank, covariance.
   ceres::Problem problem;
   Status s =
       SolveStage(Stage::kAccelFinal, d, o, x, fit, &problem, &out.free_blocks, &out.residuals);
   if (!s.ok()) return s.error();
-  Status rc =
-      RankAndCovariance(&problem, ImuSensor::kAccel, o.accel_model, d.temperature, sensor, &out);
+  Status rc = RankAndCovariance(&problem, ImuSensor::kAccel, o.accel_model, d.temperature, sensor,
+                                o.loss == LossKind::kTrivial ? 0.0 : o.loss_scale, &out);
   if (!rc.ok()) return rc.error();
   if (o.loss == LossKind::kTrivial) {
     Status honest = HonestAccelCovariance(d, *x, o, sensor, *fit, &problem, &out);
     if (!honest.ok()) return honest.error();
   }
   return out;
-}
-
-namespace {
-
-// Noise of a pose's mean along the unit direction u (scaled accelerometer units, ~g): sample
-// variance times (1 + rho) / (1 - rho) / n, rho the lag-1 autocorrelation clamped to
-// [0, 0.9] (AR(1) effective sample size).
-double PoseMeanNoise(const Record& r, const Segment& s, const Eigen::Vector3d& ref,
-                     const Eigen::Vector3d& u) {
-  std::vector<double> z;
-  for (size_t i = s.begin; i < s.end; ++i) {
-    if (r.saturated[i]) continue;
-    z.push_back(u.dot(ref.cwiseProduct(r.accel[i])));
-  }
-  const size_t n = z.size();
-  if (n < 3) return 0.0;
-  double mean = 0;
-  for (double v : z) mean += v;
-  mean /= static_cast<double>(n);
-  double c0 = 0, c1 = 0;
-  for (size_t i = 0; i < n; ++i) {
-    c0 += (z[i] - mean) * (z[i] - mean);
-    if (i + 1 < n) c1 += (z[i] - mean) * (z[i + 1] - mean);
-  }
-  if (!(c0 > 0)) return 0.0;
-  const double rho = std::clamp(c1 / c0, 0.0, 0.9);
-  const double var = c0 / static_cast<double>(n - 1);
-  return std::sqrt(var / static_cast<double>(n) * (1 + rho) / (1 - rho));
-}
-
-}  // namespace
-
-Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
-                             const CalibrationOptions& o, int sensor, const Fit& fit,
-                             ceres::Problem* problem, SensorSolution* solution) {
-  const size_t m = d.statics.size();
-  const int p = solution->parameters;
-  if (fit.r_accel.size() != m || m == 0) return Status::Ok();
-  const double* b = x.Get(ImuSensor::kAccel, PB::kBias);
-  const Eigen::Vector3d bias(b[0], b[1], b[2]);
-  // Noise and gravity direction of each pose.
-  std::vector<double> sigma(m);
-  std::vector<Eigen::Vector3d> dir(m);
-  for (size_t i = 0; i < m; ++i) {
-    const Pose& pose = d.statics[i];
-    const Eigen::Vector3d v = d.accel_ref.cwiseProduct(pose.accel) - bias;
-    dir[i] = v.normalized();
-    sigma[i] = PoseMeanNoise(d.records[static_cast<size_t>(pose.record)], *pose.segment,
-                             d.accel_ref, dir[i]);
-    if (!(sigma[i] > 0)) {
-      // Every sample of the pose alike (quantised data, or fewer than 3): no noise to rest u
-      // on; the covariance scaled by the residuals stays, and says so.
-      solution->warnings.push_back(fmt::format(
-          "sensor {}: static pose {} (t = {:.2f} .. {:.2f} s) shows no noise along gravity; the "
-          "accelerometer's u is scaled by the residuals' own scatter, not by the poses' noise "
-          "and orientations",
-          sensor, i + 1, pose.segment->start_s, pose.segment->end_s));
-      return Status::Ok();
-    }
-  }
-  // Orientation clusters (greedy, in pose order).
-  const double cos_same = std::cos(kSameOrientationDeg * kPi / 180.0);
-  std::vector<int> cluster(m, -1);
-  std::vector<size_t> first_of;
-  for (size_t i = 0; i < m; ++i) {
-    for (size_t c = 0; c < first_of.size(); ++c) {
-      const size_t j = first_of[c];
-      const bool same_temp =
-          !d.temperature || std::abs(d.statics[i].temp_c - d.statics[j].temp_c) < 1.0;
-      if (dir[i].dot(dir[j]) >= cos_same && same_temp) {
-        cluster[i] = static_cast<int>(c);
-        break;
-      }
-    }
-    if (cluster[i] < 0) {
-      cluster[i] = static_cast<int>(first_of.size());
-      first_of.push_back(i);
-    }
-  }
-  const int clusters = static_cast<int>(first_of.size());
-  if (clusters < p) {
-    return MakeError(fmt::format(
-        "sensor {}: degenerate calibration: the {} static poses hold {} distinct orientations "
-        "(gravity directions more than {} deg apart); the accelerometer '{}' model{} has {} "
-        "parameters, and repeated stops at one orientation do not determine more constants. Add "
-        "poses in new orientations (the corners and edges of a cube), or use a simpler --model",
-        sensor, m, clusters, kSameOrientationDeg, ModelKindName(o.accel_model),
-        d.temperature ? " with temperature term" : "", p));
-  }
-  // Within-cluster excess and between-orientation variance (method of moments).
-  std::vector<double> sum_r(static_cast<size_t>(clusters), 0.0), sum_s2(sum_r), count(sum_r);
-  for (size_t i = 0; i < m; ++i) {
-    const size_t c = static_cast<size_t>(cluster[i]);
-    sum_r[c] += fit.r_accel[i];
-    sum_s2[c] += sigma[i] * sigma[i];
-    count[c] += 1;
-  }
-  double chi2_within = 0, chi2_all = 0;
-  for (size_t i = 0; i < m; ++i) {
-    const size_t c = static_cast<size_t>(cluster[i]);
-    const double e = fit.r_accel[i] - sum_r[c] / count[c];
-    chi2_within += e * e / (sigma[i] * sigma[i]);
-    chi2_all += fit.r_accel[i] * fit.r_accel[i] / (sigma[i] * sigma[i]);
-  }
-  const int dof_within = static_cast<int>(m) - clusters;
-  const double f = dof_within >= 3 ? std::max(1.0, chi2_within / dof_within) : 1.0;
-  double between = 0, noise_of_means = 0;
-  for (size_t c = 0; c < static_cast<size_t>(clusters); ++c) {
-    const double mean = sum_r[c] / count[c];
-    between += mean * mean;
-    noise_of_means += f * sum_s2[c] / (count[c] * count[c]);
-  }
-  // tau^2 only when the cluster means are significantly larger than their noise (their
-  // chi-square above its 95 % quantile with C - p degrees of freedom); with C = p the model
-  // cannot be checked and u rests on the noise alone (a warning says so).
-  double chi2_between = 0;
-  for (size_t c = 0; c < static_cast<size_t>(clusters); ++c) {
-    const double mean = sum_r[c] / count[c];
-    chi2_between += mean * mean / (f * sum_s2[c] / (count[c] * count[c]));
-  }
-  double tau2 = 0;
-  if (clusters > p &&
-      chi2_between > boost::math::quantile(boost::math::chi_squared(clusters - p), 0.95)) {
-    tau2 = std::max(
-        0.0, (between * clusters / static_cast<double>(clusters - p) - noise_of_means) / clusters);
-  }
-  if (clusters == p) {
-    solution->warnings.push_back(fmt::format(
-        "sensor {}: the accelerometer '{}' model has as many parameters as the {} distinct "
-        "orientations: the fit is exact and cannot show whether the model describes the data; "
-        "u comes from the noise of the poses alone",
-        sensor, ModelKindName(o.accel_model), clusters));
-  }
-  // Sandwich covariance over the free parameters (unwhitened Jacobian).
-  std::optional<Eigen::MatrixXd> jw = DenseJacobian(problem, solution->free_blocks);
-  if (!jw || jw->rows() != static_cast<Eigen::Index>(m)) return Status::Ok();
-  const Eigen::MatrixXd j = *jw * fit.s_accel;
-  Eigen::MatrixXd v =
-      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
-  for (size_t a = 0; a < m; ++a) {
-    for (size_t bb = 0; bb < m; ++bb) {
-      double e = cluster[a] == cluster[bb] ? tau2 : 0.0;
-      if (a == bb) e += f * sigma[a] * sigma[a];
-      v(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(bb)) = e;
-    }
-  }
-  const Eigen::MatrixXd jtj = j.transpose() * j;
-  const Eigen::MatrixXd a_inv = jtj.ldlt().solve(Eigen::MatrixXd::Identity(jtj.rows(), jtj.cols()));
-  const Eigen::MatrixXd cov = a_inv * j.transpose() * v * j * a_inv;
-  if (!cov.allFinite()) return Status::Ok();
-  solution->covariance = 0.5 * (cov + cov.transpose());
-  const int dof = static_cast<int>(m) - p;
-  solution->reduced_chi2 = dof > 0 ? chi2_all / dof : 0.0;
-  solution->dof = tau2 > 0 ? clusters - p : std::max(dof, 0);
-  solution->u_from_noise = tau2 == 0;
-  if (dof > 0) {
-    const boost::math::chi_squared dist(dof);
-    if (chi2_all > boost::math::quantile(dist, 0.99)) {
-      solution->warnings.push_back(fmt::format(
-          "sensor {}: the accelerometer residuals are {:.3g} times their noise (reduced "
-          "chi-square {:.3g} over {} poses in {} orientations, 99 % limit {:.3g}): the '{}' model "
-          "does not describe the data to its noise, or poses were disturbed; u includes a "
-          "between-orientation component of {:.3g} mg{}",
-          sensor, std::sqrt(solution->reduced_chi2), solution->reduced_chi2, m, clusters,
-          boost::math::quantile(dist, 0.99) / dof, ModelKindName(o.accel_model),
-          1000.0 * std::sqrt(tau2),
-          f > 1.0 ? fmt::format(" and scatter within orientations "
-                                "{:.3g} times the noise",
-                                std::sqrt(f))
-                  : std::string()));
-    }
-  }
-  return Status::Ok();
 }
 
 namespace {
@@ -1194,14 +1051,16 @@ Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptio
   SensorSolution out;
   out.parameters = PB::FreeCount(ImuSensor::kGyro, o.gyro_model, d.temperature);
   const int pg = out.parameters;
-  // Twice, re-weighting the groups.
-  for (int pass = 0; pass < 2; ++pass) {
+  // Twice, re-weighting the groups; with a robust loss the later passes use it, so that the
+  // groups' robust scatter comes from a fit that outliers did not drag (three passes).
+  const bool robust = o.loss != LossKind::kTrivial;
+  for (int pass = 0; pass < (robust ? 3 : 2); ++pass) {
     std::vector<double*> free_blocks;
     int m_gyro = 0;
-    Status s = SolveStage(Stage::kGyro, d, o, x, fit, nullptr, &free_blocks, &m_gyro);
+    Status s = SolveStage(pass > 0 && robust ? Stage::kGyroFinal : Stage::kGyro, d, o, x, fit,
+                          nullptr, &free_blocks, &m_gyro);
     if (!s.ok()) return s.error();
     const double ratio = static_cast<double>(m_gyro - pg) / static_cast<double>(m_gyro);
-    const bool robust = o.loss != LossKind::kTrivial;
     fit->s_static = GroupSigma(fit->r_static, ratio, robust);
     if (!fit->r_table.empty()) fit->s_table = GroupSigma(fit->r_table, ratio, robust);
     if (!fit->r_rotation.empty()) {
@@ -1214,9 +1073,13 @@ Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptio
   Status s =
       SolveStage(Stage::kGyroFinal, d, o, x, fit, &problem, &out.free_blocks, &out.residuals);
   if (!s.ok()) return s.error();
-  Status rc =
-      RankAndCovariance(&problem, ImuSensor::kGyro, o.gyro_model, d.temperature, sensor, &out);
+  Status rc = RankAndCovariance(&problem, ImuSensor::kGyro, o.gyro_model, d.temperature, sensor,
+                                o.loss == LossKind::kTrivial ? 0.0 : o.loss_scale, &out);
   if (!rc.ok()) return rc.error();
+  if (o.loss == LossKind::kTrivial) {
+    Status chi2 = GyroNoiseChiSquare(d, *x, o, sensor, *fit, &problem, &out);
+    if (!chi2.ok()) return chi2.error();
+  }
   // ... plus the accelerometer's uncertainty carried by the rotations.
   Status pr = PropagateAccelUncertainty(&problem, out.free_blocks, pg, accel, &out.covariance);
   if (!pr.ok()) return pr.error();
@@ -1385,9 +1248,9 @@ Result<SensorCalibration> AssembleGyro(const TagProblemData& d, const ParameterB
                                        int sensor) {
   SensorCalibration gyro = MakeSensorCalibration(ImuSensor::kGyro, o.gyro_model, d.temperature,
                                                  d.t_ref_c, gyro_unit, x, solution.covariance);
-  gyro.dof = solution.residuals - solution.parameters;
+  gyro.dof = solution.dof >= 0 ? solution.dof : solution.residuals - solution.parameters;
   gyro.reduced_chi2 = solution.reduced_chi2;
-  gyro.coverage_factor_95 = StudentT975(gyro.dof);
+  gyro.coverage_factor_95 = solution.u_from_noise ? 1.959963984540054 : StudentT975(gyro.dof);
   gyro.groups.push_back(
       {"static_rate", static_cast<int>(fit.r_static.size() / 3), Rms(fit.r_static), "deg/s"});
   std::vector<double> table_dps = fit.r_table;

@@ -225,6 +225,11 @@ Status CheckGyroMotion(size_t table_runs, size_t rotations, ModelKind gyro_model
 
 // ---- Solves -----------------------------------------------------------------------------
 
+// The (whitened, robustified) Jacobian of `problem` over `blocks`, dense; rows in the order the
+// residual blocks were added.
+std::optional<Eigen::MatrixXd> DenseJacobian(ceres::Problem* problem,
+                                             const std::vector<double*>& blocks);
+
 // kAccel/kGyro: unweighted start fits; kAccelFinal/kGyroFinal: whitened by the group standard
 // deviations of the start fits, with the robust loss when one is chosen. The accelerometer is
 // held in the gyroscope stages (the gravity norm alone determines it, as in imu_tk); its
@@ -269,6 +274,28 @@ constexpr double kSameOrientationDeg = 10.0;
 Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
                              const CalibrationOptions& o, int sensor, const Fit& fit,
                              ceres::Problem* problem, SensorSolution* solution);
+
+// The gyroscope's residuals against the noise of the data (issue #23; docs/calibration-model.md
+// "Uncertainty"), so that a model that does not fit shows. The residuals, each rotation's
+// projected on the plane normal to gravity at its end pose (2 of its 3 components carry
+// information), have the noise covariance S:
+//   static pose, per axis: the variance of the pose's mean rate (AR(1) factor as above);
+//   table run: that variance along the rate direction;
+//   rotation i -> j: R^T du_i - du_j + [v]x dphi, du the noise of a pose's gravity direction
+//     (its mean's noise normal to gravity / |a|), shared by the two rotations that meet at a
+//     pose, and dphi the integrated rate noise, variance s_w^2 sum dt_k^2 (s_w^2 the rate
+//     samples' long-run variance at the static poses).
+// The fit is weighted least squares (W: 1 / each group's scatter), so group g's chi-square
+// r_g^T S_gg^-1 r_g has the expectation E_g = tr(S_gg^-1 (M S M^T)_gg), M = I - J A^-1 J^T W,
+// A = J^T W J. reduced_chi2 = sum chi2_g / sum E_g: about 1 when the model describes the data
+// to its noise; above the 99 % point of the chi-square law with sum E_g degrees of freedom a
+// warning names each group's ratio. The covariance stays the one scaled by each group's own
+// scatter (JCGM 100:2008 4.2.3), which holds any excess over the noise: u grows with it.
+// Only for the trivial loss; a pose without measurable noise leaves reduced_chi2 as the
+// scaled fit's, with a warning.
+Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
+                          const CalibrationOptions& o, int sensor, const Fit& fit,
+                          ceres::Problem* problem, SensorSolution* solution);
 
 // The accelerometer: unweighted fit, whitened final fit, rank, covariance.
 Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOptions& o, int sensor,

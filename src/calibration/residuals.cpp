@@ -263,4 +263,18 @@ Eigen::Vector3d RotationResidual(const RotationData& data, const double* const* 
   return Eigen::Vector3d(pred[0] - uj[0], pred[1] - uj[1], pred[2] - uj[2]);
 }
 
+Eigen::Matrix3d PredictionMatrix(const RotationData& data, const double* const* p) {
+  const double* const* g = p + PB::kGyroBias;
+  double q[4];
+  IntegrateRotation(data, g[0], g[1], g[2], g[3], q);
+  Eigen::Matrix3d out;
+  for (int c = 0; c < 3; ++c) {
+    const double e[3] = {c == 0 ? 1.0 : 0.0, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0};
+    double col[3];
+    RotateInverse(q, e, col);
+    out.col(c) = Eigen::Vector3d(col[0], col[1], col[2]);
+  }
+  return out;
+}
+
 }  // namespace metro::calibration_internal

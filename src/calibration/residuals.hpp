@@ -45,6 +45,7 @@ struct RotationData {
   std::vector<double> dt_s;           // t_k - t_{k-1}.
   std::vector<double> dtemp_c;        // temp_k - t_ref (0 without temperature).
   double weight = 1;
+  int pose_start = -1, pose_end = -1;  // Indices of poses i and j (for the noise model).
 };
 ceres::CostFunction* NewRotationCost(RotationData data);
 
@@ -52,6 +53,9 @@ ceres::CostFunction* NewRotationCost(RotationData data);
 // used for the initial scale search and for reporting. gyro_scale_rad multiplies M_g to give
 // rad/s.
 Eigen::Vector3d RotationResidual(const RotationData& data, const double* const* params);
+
+// R(q)^T, the matrix that carries u_i to its predicted u_j, for given parameters (doubles).
+Eigen::Matrix3d PredictionMatrix(const RotationData& data, const double* const* params);
 
 // Degrees to radians as the gyroscope residuals use it.
 inline constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
