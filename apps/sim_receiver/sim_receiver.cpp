@@ -98,7 +98,7 @@ double Now() {
 void SleepUntil(double t) {
   timespec ts{};
   ts.tv_sec = static_cast<time_t>(std::floor(t));
-  ts.tv_nsec = static_cast<long>((t - std::floor(t)) * 1e9);
+  ts.tv_nsec = std::min(999999999L, static_cast<long>((t - std::floor(t)) * 1e9));
   // EINTR (a signal) returns early; the caller checks g_stop.
   ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
 }

@@ -241,7 +241,7 @@ std::vector<TagLiveRow> LiveRows(const CaptureTally& tally, const std::map<int, 
       if (r.n == INT64_MAX) r.n = 0;
       if (tag.size() < 20) {
         r.settle = "settling";
-      } else if (t.window.settle_at_limit) {
+      } else if (t.window.settle_at_limit || t.window.settle_samples >= tag.size()) {
         r.settle = "settling";
       } else if (t.window.settle_samples == 0) {
         r.settle = "no transient";
