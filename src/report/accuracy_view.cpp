@@ -352,6 +352,9 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
   data.set("U_random", U2(JsonNumber(result, "U_random_deg")));
   data.set("U_max_abs", U2(JsonNumber(result, "U_uncorrected_max_abs_deg")));
   data.set("coverage", ShortNumber(100.0 * coverage, 3));
+  const std::string which_u = JsonString(result, "which_U_to_quote");
+  data.set("has_which_u", !which_u.empty());
+  data.set("which_u", which_u);
 
   // The error plot and the fit.
   const ordered_json& fit = report["fit"];
