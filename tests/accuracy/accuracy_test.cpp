@@ -218,15 +218,11 @@ TEST_CASE("Accuracy with a receiver capture and a separate reference log", "[acc
     const Session reference = Load(ref_text);
     const AccuracyResult r = Evaluate(session, {}, &reference);
     REQUIRE(r.alignment.has_value());
-    // Without lag the estimate is the clock offset; with it, the offset less up to the
-    // response delay (a first-order lag of tau delays a long ramp by tau: the tag reads the
-    // table angle of t - tau, matched by r(t + offset) at offset = 2 - tau).
-    if (lag == 0.0) {
-      CHECK(r.alignment->offset_s == Approx(2.0).margin(0.05));
-    } else {
-      CHECK(r.alignment->offset_s > 2.0 - lag - 0.05);
-      CHECK(r.alignment->offset_s < 2.0);
-    }
+    // The clock offset, with or without the tag's lag: the lag is estimated with it (a pure
+    // delay would land up to tau early, 2 - tau), and the pure delay is kept as delay_s.
+    CHECK(r.alignment->offset_s == Approx(2.0).margin(0.05));
+    CHECK(r.alignment->lag_tau_s == Approx(lag).margin(0.05));
+    if (lag > 0.0) CHECK(r.alignment->delay_s < 2.0 - 0.1);
     CHECK(r.alignment->residual_std_deg < r.alignment->residual_std_at_zero_deg);
     REQUIRE(r.points.size() == truth.plateaus.size());
     for (size_t i = 0; i < r.points.size(); ++i) {
