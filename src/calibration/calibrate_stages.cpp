@@ -1077,7 +1077,7 @@ Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptio
                                 o.loss == LossKind::kTrivial ? 0.0 : o.loss_scale, &out);
   if (!rc.ok()) return rc.error();
   if (o.loss == LossKind::kTrivial) {
-    Status chi2 = GyroNoiseChiSquare(d, *x, o, sensor, *fit, &problem, &out);
+    Status chi2 = GyroNoiseChiSquare(d, *x, o, sensor, *fit, accel, &problem, &out);
     if (!chi2.ok()) return chi2.error();
   }
   // ... plus the accelerometer's uncertainty carried by the rotations.

@@ -284,7 +284,8 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
 //   rotation i -> j: R^T du_i - du_j + [v]x dphi, du the noise of a pose's gravity direction
 //     (its mean's noise normal to gravity / |a|), shared by the two rotations that meet at a
 //     pose, and dphi the integrated rate noise, variance s_w^2 sum dt_k^2 (s_w^2 the rate
-//     samples' long-run variance at the static poses).
+//     samples' long-run variance at the static poses); plus G_a cov_a G_a^T, the
+//     accelerometer's parameter error (G_a the rotations' Jacobian over its parameters).
 // The fit is weighted least squares (W: 1 / each group's scatter), so group g's chi-square
 // r_g^T S_gg^-1 r_g has the expectation E_g = tr(S_gg^-1 (M S M^T)_gg), M = I - J A^-1 J^T W,
 // A = J^T W J. reduced_chi2 = sum chi2_g / sum E_g: about 1 when the model describes the data
@@ -295,7 +296,8 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
 // scaled fit's, with a warning.
 Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
                           const CalibrationOptions& o, int sensor, const Fit& fit,
-                          ceres::Problem* problem, SensorSolution* solution);
+                          const SensorSolution& accel, ceres::Problem* problem,
+                          SensorSolution* solution);
 
 // The accelerometer: unweighted fit, whitened final fit, rank, covariance.
 Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOptions& o, int sensor,

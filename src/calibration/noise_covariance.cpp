@@ -200,7 +200,8 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
 
 Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
                           const CalibrationOptions& o, int sensor, const Fit& fit,
-                          ceres::Problem* problem, SensorSolution* solution) {
+                          const SensorSolution& accel, ceres::Problem* problem,
+                          SensorSolution* solution) {
   const size_t ns = d.statics.size(), nt = d.tables.size(), nr = d.rotations.size();
   if (ns == 0 || fit.r_static.size() != 3 * ns || fit.r_table.size() != nt ||
       fit.r_rotation.size() != 3 * nr) {
@@ -325,6 +326,26 @@ Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
       const Eigen::Index ra = m3 + mt + static_cast<Eigen::Index>(2 * a);
       const Eigen::Index rb = m3 + mt + static_cast<Eigen::Index>(2 * b);
       s.block(ra, rb, 2, 2) += basis[a].transpose() * c * basis[b];
+    }
+  }
+  // The accelerometer's parameter error moves every gravity direction at once:
+  // + G_a cov_a G_a^T, G_a the rotations' Jacobian over the accelerometer's free parameters.
+  std::vector<double*> held;
+  for (double* b : accel.free_blocks) {
+    if (problem->HasParameterBlock(b)) held.push_back(b);
+  }
+  if (nr > 0 && !held.empty() && held.size() == accel.free_blocks.size()) {
+    for (double* b : held) problem->SetParameterBlockVariable(b);
+    const std::optional<Eigen::MatrixXd> ga = DenseJacobian(problem, held);
+    for (double* b : held) problem->SetParameterBlockConstant(b);
+    if (ga && ga->rows() == jw->rows() && ga->cols() == accel.covariance.rows()) {
+      Eigen::MatrixXd gp(mr, ga->cols());
+      for (size_t a = 0; a < nr; ++a) {
+        gp.middleRows(static_cast<Eigen::Index>(2 * a), 2) =
+            basis[a].transpose() * ga->middleRows(m3 + mt + static_cast<Eigen::Index>(3 * a), 3) *
+            fit.s_rotation;
+      }
+      s.block(m3 + mt, m3 + mt, mr, mr) += gp * accel.covariance * gp.transpose();
     }
   }
   // Weighted least squares: A = J^T W J; residuals r = M e, M = I - J A^-1 J^T W, so each
