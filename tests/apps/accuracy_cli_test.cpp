@@ -57,6 +57,7 @@ TEST_CASE("characterize --accuracy with a receiver capture and a reference log",
   CHECK(a["offset_s"].get<double>() == Approx(1.0).margin(0.4));
   CHECK(a.contains("residual_std_deg"));
   std::remove(cap.c_str());
+  std::remove((cap + ".truth.json").c_str());  // The simulator's truth sidecar.
   std::remove(ref.c_str());
 }
 
