@@ -16,26 +16,13 @@
 #include "metro/io/session_io.hpp"
 #include "metro/sim/table_session.hpp"
 #include "metro/uncertainty/gum.hpp"
-#include "support/temp_file.hpp"
+#include "support/session_text.hpp"
 
 namespace metro {
 namespace {
 
-using testing::TempFile;
-
-TextSink Into(std::string* text) {
-  return [text](std::string_view chunk) {
-    text->append(chunk);
-    return Status::Ok();
-  };
-}
-
-Session Load(const std::string& text) {
-  TempFile file(text);
-  auto s = LoadSession(file.path());
-  if (!s.ok()) FAIL(s.error().ToString());
-  return s.value();
-}
+using testing::Into;
+using testing::Load;
 
 // Hits and trials of one stated uncertainty.
 struct Tally {

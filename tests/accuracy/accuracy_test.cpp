@@ -12,26 +12,15 @@
 #include "metro/core/angles.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/sim/table_session.hpp"
+#include "support/session_text.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
 
+using testing::Into;
+using testing::Load;
 using testing::TempFile;
-
-TextSink Into(std::string* text) {
-  return [text](std::string_view chunk) {
-    text->append(chunk);
-    return Status::Ok();
-  };
-}
-
-Session Load(const std::string& text) {
-  TempFile file(text);
-  auto s = LoadSession(file.path());
-  if (!s.ok()) FAIL(s.error().ToString());
-  return s.value();
-}
 
 struct Simulated {
   Session session;

@@ -7,19 +7,14 @@
 
 #include "metro/core/angles.hpp"
 #include "metro/io/session_io.hpp"
+#include "support/session_text.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
 
+using testing::Into;
 using testing::TempFile;
-
-TextSink Into(std::string* text) {
-  return [text](std::string_view chunk) {
-    text->append(chunk);
-    return Status::Ok();
-  };
-}
 
 TEST_CASE("Table simulator schedule and error model", "[sim][accuracy]") {
   TableSimulationOptions o;  // 0..330 by 30, two up-and-down sweeps
