@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "metro/blob/intel_hex.hpp"
+#include "metro/core/utc_time.hpp"
 #include "metro_fw/blob.h"
 
 namespace metro::blob {
@@ -270,11 +271,8 @@ std::string F32s(const std::array<double, N>& v) {
 
 // Seconds since 1970-01-01 UTC as ISO 8601, e.g. 2026-05-28T20:26:40Z.
 std::string IsoDateUtc(uint32_t t_s) {
-  const std::time_t t = static_cast<std::time_t>(t_s);
-  std::tm tm{};
-  if (::gmtime_r(&t, &tm) == nullptr) return fmt::format("{} s", t_s);
-  return fmt::format("{:04d}-{:02d}-{:02d}T{:02d}:{:02d}:{:02d}Z", tm.tm_year + 1900, tm.tm_mon + 1,
-                     tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+  const std::string text = UtcIso8601(static_cast<std::time_t>(t_s));
+  return text.empty() ? fmt::format("{} s", t_s) : text;
 }
 
 // The whole sensor section, as the tag holds it (docs/calibration-blob.md 2.4 and 3).

@@ -11,6 +11,7 @@
 
 #include "calibration/calibrate_stages.hpp"
 #include "calibration/parameter_blocks.hpp"
+#include "metro/core/utc_time.hpp"
 #include "metro/core/version.hpp"
 
 namespace metro {
@@ -295,14 +296,7 @@ Result<Calibration> CalibrateSessions(const std::vector<const Session*>& session
   Calibration cal;
   cal.gravity_mps2 = options.gravity_mps2;
   cal.tool_version = std::string(kToolName) + " " + kVersion;
-  {
-    const std::time_t now = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&now, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof(buf), "%Y-%m-%dT%H:%M:%SZ", &tm);
-    cal.date_utc = buf;
-  }
+  cal.date_utc = UtcIso8601Now();
   std::map<int, std::vector<const Tag*>> by_sensor;
   for (const Session* s : sessions) {
     cal.inputs.push_back({s->path, s->sha256});

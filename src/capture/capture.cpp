@@ -17,6 +17,7 @@
 
 #include "metro/blob/serial_port.hpp"
 #include "metro/core/angles.hpp"
+#include "metro/core/utc_time.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro::capture {
@@ -26,15 +27,6 @@ using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-std::string UtcNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  ::gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 // A line that is not data, shown in a `#` comment: control bytes as \xNN, at most 200 bytes.
@@ -356,7 +348,7 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
   out.Append(fmt::format(
       "# metro capture of the central receiver (docs/capture.md)\n# port: {}\n# baud: {}\n"
       "# start_utc: {}\n# version: {}\n",
-      options.port, options.baud, UtcNow(), options.version));
+      options.port, options.baud, UtcIso8601Now(), options.version));
 
   LineSorter sorter;
   Status write_status = Status::Ok();
@@ -411,7 +403,7 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
         port.reset();
         const size_t partial = sorter.pending_bytes();
         sorter.Restart();
-        out.Append(fmt::format("# port lost at {}: {}{}\n", UtcNow(), got.error().message,
+        out.Append(fmt::format("# port lost at {}: {}{}\n", UtcIso8601Now(), got.error().message,
                                partial > 0 ? fmt::format(" ({} bytes of an unfinished line "
                                                          "dropped)",
                                                          partial)
@@ -436,7 +428,7 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
         if (again.ok()) {
           port = std::move(again).value();
           ++sum.reopened;
-          out.Append(fmt::format("# port reopened at {}\n", UtcNow()));
+          out.Append(fmt::format("# port reopened at {}\n", UtcIso8601Now()));
           event(fmt::format("{}: the port is back; capturing again", options.port));
         }
       }
@@ -465,7 +457,7 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
   out.Append(
       fmt::format("# end_utc: {}\n# receiver_lines: {}, cut_first_lines: {}, other_lines: {}, "
                   "unfinished_line_bytes: {}, port_lost: {}, reopened: {}\n",
-                  UtcNow(), sum.receiver_lines, sum.cut_lines, sum.other_lines,
+                  UtcIso8601Now(), sum.receiver_lines, sum.cut_lines, sum.other_lines,
                   sorter.pending_bytes(), sum.port_lost, sum.reopened));
   for (const auto& [sensor, c] : sum.counts) {
     out.Append(fmt::format("# sensor {}: frames {}, fresh {}, stale {}, never {}\n", sensor,

@@ -5,6 +5,7 @@
 #include <ctime>
 #include <map>
 
+#include "metro/core/utc_time.hpp"
 #include "metro/core/version.hpp"
 
 namespace metro::report_internal {
@@ -15,15 +16,6 @@ const std::map<std::string, std::string, std::less<>>& Templates() {
 #include "metro/report/templates_data.inc"
   };
   return templates;
-}
-
-std::string NowUtc() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  ::gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 }  // namespace
@@ -62,7 +54,7 @@ Result<std::string> RenderPage(const std::string& title, const std::string& subt
   data.set("subtitle", subtitle);
   data.set("body", body_html);
   data.set("tool", fmt::format("metro {}", kVersion));
-  data.set("generated_utc", NowUtc());
+  data.set("generated_utc", UtcIso8601Now());
   return RenderTemplate("page", std::move(data));
 }
 
