@@ -1248,9 +1248,9 @@ Result<SensorCalibration> AssembleGyro(const TagProblemData& d, const ParameterB
                                        int sensor) {
   SensorCalibration gyro = MakeSensorCalibration(ImuSensor::kGyro, o.gyro_model, d.temperature,
                                                  d.t_ref_c, gyro_unit, x, solution.covariance);
-  gyro.dof = solution.dof >= 0 ? solution.dof : solution.residuals - solution.parameters;
+  gyro.dof = solution.residuals - solution.parameters;
   gyro.reduced_chi2 = solution.reduced_chi2;
-  gyro.coverage_factor_95 = solution.u_from_noise ? 1.959963984540054 : StudentT975(gyro.dof);
+  gyro.coverage_factor_95 = StudentT975(gyro.dof);
   gyro.groups.push_back(
       {"static_rate", static_cast<int>(fit.r_static.size() / 3), Rms(fit.r_static), "deg/s"});
   std::vector<double> table_dps = fit.r_table;

@@ -348,12 +348,21 @@ Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
       s.block(m3 + mt, m3 + mt, mr, mr) += gp * accel.covariance * gp.transpose();
     }
   }
-  // Weighted least squares: A = J^T W J; residuals r = M e, M = I - J A^-1 J^T W, so each
-  // group's chi-square has the expectation tr(S_gg^-1 (M S M^T)_gg).
+  // Weighted least squares: A = J^T W J; residuals r = M e, M = I - H, H = J A^-1 J^T W, so
+  // each group's chi-square has the expectation tr(S_gg^-1 (M S M^T)_gg). H has rank p, so the
+  // diagonal blocks come from K = A^-1 J^T W S (p x m) and L = K W J A^-1 (p x p):
+  //   (M S M^T)_gg = S_gg - J_g K_g - (J_g K_g)^T + J_g L J_g^T,
+  // O(p m^2) rather than the O(m^3) of forming M.
   const Eigen::MatrixXd wj = w2.asDiagonal() * j;
   const Eigen::MatrixXd a_inv = (j.transpose() * wj).ldlt().solve(Eigen::MatrixXd::Identity(p, p));
-  const Eigen::MatrixXd m_mat = Eigen::MatrixXd::Identity(mp, mp) - j * a_inv * wj.transpose();
-  const Eigen::MatrixXd msm = m_mat * s * m_mat.transpose();
+  const Eigen::MatrixXd k_mat = a_inv * wj.transpose() * s;
+  const Eigen::MatrixXd l_mat = k_mat * wj * a_inv;
+  const auto msm_block = [&](Eigen::Index begin, Eigen::Index size) {
+    const Eigen::MatrixXd jg = j.middleRows(begin, size);
+    const Eigen::MatrixXd jk = jg * k_mat.middleCols(begin, size);
+    return Eigen::MatrixXd(s.block(begin, begin, size, size) - jk - jk.transpose() +
+                           jg * l_mat * jg.transpose());
+  };
   struct Group {
     const char* name;
     Eigen::Index begin, size;
@@ -367,7 +376,7 @@ Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
     const Eigen::LDLT<Eigen::MatrixXd> sgg(s.block(g.begin, g.begin, g.size, g.size));
     const Eigen::VectorXd rg = r.segment(g.begin, g.size);
     g.chi2 = rg.dot(sgg.solve(rg));
-    g.expected = sgg.solve(msm.block(g.begin, g.begin, g.size, g.size)).trace();
+    g.expected = sgg.solve(msm_block(g.begin, g.size)).trace();
     if (!std::isfinite(g.chi2) || !(g.expected > 0)) return Status::Ok();
     chi2 += g.chi2;
     expected += g.expected;
