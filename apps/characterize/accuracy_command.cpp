@@ -73,6 +73,9 @@ void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--no-lag-model", o->no_lag_model,
                "do not model the tag's lag: plateaus settle by --settle-s alone");
+  app.add_flag("--keep-departures", o->keep_departures,
+               "keep a plateau's start and end where the tag's error departs from its level "
+               "(default: trimmed and said so)");
 }
 
 int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
@@ -129,6 +132,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   options.assumed_hysteresis_deg = a.assumed_hysteresis_deg;
   options.lag_tau_s = a.lag_tau_s;
   options.model_lag = !a.no_lag_model;
+  options.plateaus.trim_departures = !a.keep_departures;
   auto reference_u = ParseReferenceU(a.reference_u);
   if (!reference_u.ok()) {
     PrintError(reference_u.error());

@@ -27,6 +27,7 @@ struct AccuracyCliOptions {
   double assumed_hysteresis_deg = 0.2;
   std::optional<double> lag_tau_s;  // Given response time; default: estimated.
   bool no_lag_model = false;
+  bool keep_departures = false;
 };
 
 // What the accuracy run shares with the main job's options.

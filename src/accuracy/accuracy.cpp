@@ -276,6 +276,22 @@ Result<AccuracyResult> EvaluateAccuracy(const Session& session, const Session* r
         result.lag_tau_s, result.lag_settled_plateaus, options.plateaus.settle_lag_residual_deg,
         result.max_settle_s));
   }
+  const Segmentation& seg_done = result.segmentation;
+  if (seg_done.departure_trimmed_plateaus > 0) {
+    result.warnings.push_back(fmt::format(
+        "the tag moved while the reference was still: {} of {} plateaus had a departing start "
+        "or end trimmed ({} observations; the longest trimmed end {:.3g} s){}",
+        seg_done.departure_trimmed_plateaus, seg_done.plateaus.size(),
+        seg_done.departure_trimmed_samples, seg_done.max_end_trimmed_s,
+        result.separate_reference ? "; check the reference clock offset (--reference-offset-s)"
+                                  : ""));
+  }
+  if (seg_done.departure_kept_plateaus > 0) {
+    result.warnings.push_back(fmt::format(
+        "{} plateau(s): the tag's error drifts away from the plateau's level over more than {} "
+        "% of the plateau; kept (drift, not motion), it widens the plateau's u",
+        seg_done.departure_kept_plateaus, 100.0 * options.plateaus.max_departure_fraction));
+  }
   for (const ExcludedSpan& e : result.segmentation.excluded) {
     if (e.reason == "too short after settling" && result.lag_tau_s > 0.0) {
       result.warnings.push_back(

@@ -122,7 +122,9 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
                   {"assumed_hysteresis_deg", o.assumed_hysteresis_deg},
                   {"model_lag", o.model_lag},
                   {"lag_tau_s", o.lag_tau_s ? Json(*o.lag_tau_s) : Json(nullptr)},
-                  {"settle_lag_residual_deg", o.plateaus.settle_lag_residual_deg}};
+                  {"settle_lag_residual_deg", o.plateaus.settle_lag_residual_deg},
+                  {"trim_departures", o.plateaus.trim_departures},
+                  {"departure_sigmas", o.plateaus.departure_sigmas}};
   const Segmentation& s = r.segmentation;
   Json excluded = Json::array();
   for (const ExcludedSpan& e : s.excluded) {
@@ -131,12 +133,20 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
                         {"samples", e.end - e.begin},
                         {"reason", e.reason}});
   }
-  j["segmentation"] = {
-      {"plateaus", s.plateaus.size()},  {"excluded_samples", s.motion_samples},
-      {"excluded_s", s.motion_s},       {"settle_samples", s.settle_samples},
-      {"excluded", excluded},           {"lag_tau_s", r.lag_tau_s},
-      {"lag_method", r.lag_method},     {"lag_settled_plateaus", r.lag_settled_plateaus},
-      {"max_settle_s", r.max_settle_s}, {"reference_unwrapped", r.reference_unwrapped}};
+  j["segmentation"] = {{"plateaus", s.plateaus.size()},
+                       {"excluded_samples", s.motion_samples},
+                       {"excluded_s", s.motion_s},
+                       {"settle_samples", s.settle_samples},
+                       {"excluded", excluded},
+                       {"lag_tau_s", r.lag_tau_s},
+                       {"lag_method", r.lag_method},
+                       {"lag_settled_plateaus", r.lag_settled_plateaus},
+                       {"max_settle_s", r.max_settle_s},
+                       {"reference_unwrapped", r.reference_unwrapped},
+                       {"departure_trimmed_plateaus", s.departure_trimmed_plateaus},
+                       {"departure_trimmed_samples", s.departure_trimmed_samples},
+                       {"max_end_trimmed_s", s.max_end_trimmed_s},
+                       {"departure_kept_plateaus", s.departure_kept_plateaus}};
   Json points = Json::array();
   for (const AccuracyPoint& p : r.points) {
     Json other, other_u;

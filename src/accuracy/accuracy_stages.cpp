@@ -16,24 +16,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Expected S0 and S1 (PlateauNoiseOf) of n unit-variance AR(1) observations about their mean:
-//   E[S0] = n - n F,  E[S1] = (n - 1)(phi + F) - sum_{k=1}^{n-1} (c_k + c_{k+1}),
-//   c_k = Cov(x_k, xbar) = (1/n) sum_j phi^|k - j|,  F = Ar1MeanVarianceFactor(n, phi).
-void ExpectedMoments(size_t n, double phi, double* s0, double* s1) {
-  const double nn = static_cast<double>(n);
-  const double f = Ar1MeanVarianceFactor(n, phi);
-  *s0 = nn - nn * f;
-  // sum_j phi^|k-j| = (1 - phi^k)/(1 - phi) + (phi - phi^(n-k+1))/(1 - phi), k = 1..n.
-  auto c = [&](size_t k) {
-    if (phi == 0.0) return 1.0 / nn;
-    const double kk = static_cast<double>(k);
-    return ((1.0 - std::pow(phi, kk)) + (phi - std::pow(phi, nn - kk + 1.0))) / (1.0 - phi) / nn;
-  };
-  double sum_c = 0.0;
-  for (size_t k = 1; k < n; ++k) sum_c += c(k) + c(k + 1);
-  *s1 = (nn - 1.0) * (phi + f) - sum_c;
-}
-
 std::vector<double> Slice(const std::vector<double>& v, size_t begin, size_t end) {
   std::vector<double> s(v.begin() + static_cast<std::ptrdiff_t>(begin),
                         v.begin() + static_cast<std::ptrdiff_t>(end));
@@ -169,58 +151,121 @@ double Ar1MeanVarianceFactor(size_t n, double phi) {
 PlateauNoise PlateauNoiseOf(const std::vector<double>& series_deg,
                             const std::vector<Plateau>& plateaus) {
   PlateauNoise noise;
-  double s0 = 0.0, s1 = 0.0;
+  // Per plateau (centred on its own mean; REML does not depend on the means): the sums the
+  // restricted likelihood needs.
+  struct Sums {
+    double n = 0.0, xx = 0.0, ends2 = 0.0, lag = 0.0, ends = 0.0, inner = 0.0;
+  };
+  std::vector<Sums> sums;
   std::vector<size_t> sizes;
+  double total_xx = 0.0;
   for (const Plateau& p : plateaus) {
     if (p.n() < 3) continue;
-    const std::vector<double> x = Slice(series_deg, p.begin, p.end);
+    std::vector<double> x = Slice(series_deg, p.begin, p.end);
     const double m = Mean(x);
+    for (double& v : x) v -= m;
+    Sums q;
+    q.n = static_cast<double>(x.size());
     for (size_t k = 0; k < x.size(); ++k) {
-      s0 += (x[k] - m) * (x[k] - m);
-      if (k + 1 < x.size()) s1 += (x[k] - m) * (x[k + 1] - m);
+      q.xx += x[k] * x[k];
+      if (k + 1 < x.size()) q.lag += x[k] * x[k + 1];
+      if (k > 0 && k + 1 < x.size()) q.inner += x[k];
     }
+    q.ends = x.front() + x.back();
+    q.ends2 = x.front() * x.front() + x.back() * x.back();
+    total_xx += q.xx;
+    sums.push_back(q);
     sizes.push_back(x.size());
   }
   noise.plateaus = sizes.size();
-  if (sizes.empty() || !(s0 > 0.0)) return noise;
-  auto expected = [&](double phi, double* e0, double* e1) {
-    *e0 = 0.0;
-    *e1 = 0.0;
-    for (size_t n : sizes) {
-      double a, b;
-      ExpectedMoments(n, phi, &a, &b);
-      *e0 += a;
-      *e1 += b;
+  if (sizes.empty() || !(total_xx > 0.0)) return noise;
+  // Restricted (REML) likelihood of a stationary AR(1) with one unknown mean per plateau
+  // (Patterson & Thompson, Biometrika 58 (1971) 545; Cooper & Thompson, Biometrika 64 (1977)
+  // 625 for AR(1)). With innovation variance s_e^2 the inverse covariance of n observations
+  // is Q / s_e^2, Q tridiagonal (diagonal 1, 1 + phi^2, ..., 1 + phi^2, 1; off-diagonal
+  // -phi), |Q| = 1 - phi^2 and 1'Q1 = (1 - phi)(n - (n - 2) phi). Per plateau
+  //   -2 l_i = (n_i - 1) ln s_e^2 - ln(1 - phi^2) + ln(1'Q1) + RSS_i / s_e^2,
+  //   RSS_i = x'Qx - (1'Qx)^2 / 1'Q1 (the residual about the GLS mean),
+  // s_e^2 profiled out as sum RSS_i / sum (n_i - 1). Unlike the moments of short plateaus
+  // (whose r1 is biased by about -(1 + 4 phi)/n and whose expectations flatten near phi = 1),
+  // the restricted likelihood accounts for each removed mean exactly.
+  auto objective = [&](double phi, double* se2) {
+    const double p2 = phi * phi;
+    double rss = 0.0, dof = 0.0, logs = 0.0;
+    for (const Sums& q : sums) {
+      const double xqx = q.xx * (1.0 + p2) - p2 * q.ends2 - 2.0 * phi * q.lag;
+      const double oqx = (1.0 - phi) * q.ends + (1.0 - phi) * (1.0 - phi) * q.inner;
+      const double oqo = (1.0 - phi) * (q.n - (q.n - 2.0) * phi);
+      rss += xqx - oqx * oqx / oqo;
+      dof += q.n - 1.0;
+      logs += -std::log(1.0 - p2) + std::log(oqo);
     }
+    *se2 = rss / dof;
+    return dof * std::log(*se2) + logs;
   };
-  const double observed = s1 / s0;
-  double lo = 0.0, hi = 0.999, e0, e1;
-  expected(lo, &e0, &e1);
-  if (observed <= e1 / e0) {
-    hi = 0.0;
-  } else {
-    expected(hi, &e0, &e1);
-    if (observed >= e1 / e0) {
-      lo = hi;
-    } else {
-      for (int it = 0; it < 60; ++it) {  // The expected ratio increases with phi.
-        const double mid = 0.5 * (lo + hi);
-        expected(mid, &e0, &e1);
-        (e1 / e0 < observed ? lo : hi) = mid;
-      }
+  // Grid over [0, 0.999] then golden-section refinement about the best grid point.
+  constexpr double kPhiMax = 0.999;
+  constexpr int kGrid = 200;
+  double se2 = 0.0, best = kInf, best_phi = 0.0;
+  for (int g = 0; g <= kGrid; ++g) {
+    const double phi = kPhiMax * g / kGrid;
+    const double f = objective(phi, &se2);
+    if (f < best) {
+      best = f;
+      best_phi = phi;
     }
   }
-  noise.phi = 0.5 * (lo + hi);
-  expected(noise.phi, &e0, &e1);
-  noise.sigma_deg = std::sqrt(s0 / e0);
-  double dof = 0.0;
-  // Each plateau's share of sigma^2's dof: Var(s^2) ~ 2 sigma^4 (1 + phi^2) / (n (1 - phi^2))
-  // (Bartlett 1946 for AR(1)), less the mean removed, at least 1 per plateau.
-  const double phi2 = noise.phi * noise.phi;
-  for (size_t n : sizes) {
-    dof += std::max(1.0, static_cast<double>(n) * (1.0 - phi2) / (1.0 + phi2) - 1.0);
+  double a = std::max(0.0, best_phi - kPhiMax / kGrid),
+         b = std::min(kPhiMax, best_phi + kPhiMax / kGrid);
+  const double r = 0.5 * (std::sqrt(5.0) - 1.0);
+  double c = b - r * (b - a), d = a + r * (b - a);
+  double fc = objective(c, &se2), fd = objective(d, &se2);
+  for (int it = 0; it < 60; ++it) {
+    if (fc < fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - r * (b - a);
+      fc = objective(c, &se2);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + r * (b - a);
+      fd = objective(d, &se2);
+    }
   }
-  noise.dof = std::max(dof, 1.0);
+  double phi = 0.5 * (a + b);
+  if (objective(phi, &se2) > best) phi = best_phi;
+  objective(phi, &se2);
+  noise.phi = phi;
+  noise.sigma_deg = std::sqrt(se2 / (1.0 - phi * phi));
+  // The dof of a plateau's u^2 = sigma^2 F(n, phi) (JCGM 100 G.4.2: nu = 2 / var(ln u^2) for
+  // a variance estimate), at the median plateau length: the innovation variance carries
+  // sum (n_i - 1) dof given phi, and phi's own uncertainty (from the curvature of the profile
+  // likelihood, var(phi) = 2 / f'' for f = -2 l) moves u^2 along the profile. Short plateaus
+  // of strongly correlated output leave phi poorly known, and u with few dof.
+  std::vector<size_t> sorted = sizes;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<ptrdiff_t>(sorted.size() / 2),
+                   sorted.end());
+  const size_t n_mid = sorted[sorted.size() / 2];
+  double n_resid = 0.0;
+  for (size_t n : sizes) n_resid += static_cast<double>(n) - 1.0;
+  double var_log_u2 = 2.0 / n_resid;
+  const double h = 1e-3;
+  if (phi - h > 0.0 && phi + h < kPhiMax) {
+    double se2_lo = 0.0, se2_hi = 0.0;
+    const double f0 = objective(phi, &se2);
+    const double f_lo = objective(phi - h, &se2_lo), f_hi = objective(phi + h, &se2_hi);
+    const double curvature = (f_hi - 2.0 * f0 + f_lo) / (h * h);
+    auto log_u2 = [&](double p, double e2) {
+      return std::log(e2 / (1.0 - p * p) * Ar1MeanVarianceFactor(n_mid, p));
+    };
+    const double slope = (log_u2(phi + h, se2_hi) - log_u2(phi - h, se2_lo)) / (2.0 * h);
+    if (curvature > 0.0) var_log_u2 += slope * slope * 2.0 / curvature;
+    objective(phi, &se2);
+  }
+  noise.dof = std::clamp(2.0 / var_log_u2, 1.0, n_resid);
   return noise;
 }
 

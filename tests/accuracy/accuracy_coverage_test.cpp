@@ -259,8 +259,8 @@ void Report(const std::string& name, const CaseTally& t) {
 // p within sampling error of 0.95 for n trials: at least 0.95 - 3 sqrt(0.95 0.05 / n_eff)
 // (trials of one session are correlated, so n_eff is the trial count capped at 10 per
 // session), and at most the larger of 99.5 % and 95 % + 3 standard errors (conservative,
-// but not grossly: at 4 s dwell the pooled AR(1)
-// noise is over-estimated in about 1 session of 8 and the fit parameters cover 98.9 %).
+// but not grossly: at 4 s dwell the fit parameters cover 98.2 %, their points' u resting on a
+// noise estimate of about 11 dof that the Birge ratio only enlarges).
 void CheckCoverage(const Tally& t, int sessions, const char* what, const std::string& name) {
   if (t.n == 0) return;
   const double n_eff = std::min<double>(t.n, 10.0 * sessions);

@@ -42,7 +42,7 @@ TEST_CASE("AR(1) variance of the mean against its closed forms", "[accuracy]") {
 
 TEST_CASE("Pooled plateau noise recovers sigma and phi of short AR(1) plateaus", "[accuracy]") {
   // 200 plateaus of 20 observations, sigma 0.05, phi 0.9: each plateau's own r1 is biased
-  // low by about (1 + 4 phi)/n = 0.23; the pooled moments are not.
+  // low by about (1 + 4 phi)/n = 0.23; the pooled restricted likelihood is not.
   pcg64 rng(7);
   std::normal_distribution<double> normal;
   const double phi = 0.9, sigma = 0.05;
@@ -63,6 +63,48 @@ TEST_CASE("Pooled plateau noise recovers sigma and phi of short AR(1) plateaus",
   CHECK(noise.plateaus == 200);
   CHECK(noise.phi == Approx(0.9).margin(0.03));
   CHECK(noise.sigma_deg == Approx(0.05).epsilon(0.1));
+}
+
+// The dof of the pooled noise: 45 plateaus of 20 observations at phi = 0.9 (a 4 s dwell at
+// 5 Hz) leave phi poorly known, so u^2 = sigma^2 F(20, phi) scatters far more than the
+// innovations' 855 dof say. Over 300 simulated sweeps the variance of ln u^2 must match
+// 2 / dof (JCGM 100 G.4.2) within 25 % (sampling scatter of a variance from 300 draws: 8 %),
+// and the stated dof must lie far below the count of observations.
+TEST_CASE("Pooled plateau noise states the dof its u has", "[accuracy]") {
+  pcg64 rng(11);
+  std::normal_distribution<double> normal;
+  const double phi = 0.9, sigma = 0.05;
+  std::vector<double> log_u2;
+  double sum_inv_dof = 0.0;
+  for (int rep = 0; rep < 300; ++rep) {
+    std::vector<double> series;
+    std::vector<Plateau> plateaus;
+    for (int i = 0; i < 45; ++i) {
+      Plateau p;
+      p.begin = series.size();
+      double x = sigma * normal(rng);
+      for (int k = 0; k < 20; ++k) {
+        series.push_back(x + 5.0 * i);
+        x = phi * x + sigma * std::sqrt(1.0 - phi * phi) * normal(rng);
+      }
+      p.end = series.size();
+      plateaus.push_back(p);
+    }
+    const PlateauNoise noise = PlateauNoiseOf(series, plateaus);
+    log_u2.push_back(
+        std::log(noise.sigma_deg * noise.sigma_deg * Ar1MeanVarianceFactor(20, noise.phi)));
+    sum_inv_dof += 1.0 / noise.dof;
+  }
+  double mean = 0.0;
+  for (double v : log_u2) mean += v / log_u2.size();
+  double var = 0.0;
+  for (double v : log_u2) var += (v - mean) * (v - mean) / (log_u2.size() - 1.0);
+  const double stated = 2.0 * sum_inv_dof / log_u2.size();
+  CHECK(var == Approx(stated).epsilon(0.25));
+  CHECK(2.0 / stated < 40.0);
+  // And u^2 is unbiased in the log within its scatter: the truth's ln u^2 near the mean.
+  const double truth = std::log(sigma * sigma * Ar1MeanVarianceFactor(20, phi));
+  CHECK(std::fabs(mean - truth) < 0.5 * std::sqrt(var));
 }
 
 TEST_CASE("Uncorrected mixture U against closed forms", "[accuracy]") {
@@ -185,6 +227,67 @@ TEST_CASE("A reference log 0.1 s ahead of a lagging tag: offset and lag apart", 
   // The pure delay alone lands early by most of the lag (the whole lag on a long ramp).
   CHECK(a.delay_s < 0.1 - 0.2);
   CHECK(r.value().lag_tau_s == a.lag_tau_s);
+}
+
+// A reference offset given 0.3 s wrong (the reference seems to stop and start 0.3 s late):
+// the tag is already moving for the last 0.3 s of every plateau by the reference's clock.
+// The departing ends are trimmed and said so; the plateau errors and the hysteresis then match
+// the simulation's truth within their u, and the noise and U are those of the right offset.
+// Kept, they inflate the pooled reading noise and every u built on it.
+TEST_CASE("A tag moving before the reference stops has its plateau ends trimmed", "[accuracy]") {
+  TableSimulationOptions o;
+  o.seed = 27;
+  o.sweeps = 1;
+  o.reference_clock_offset_s = 0.1;
+  std::string text, ref_text;
+  TableTruth truth;
+  REQUIRE(SimulateTableSession(o, SessionFormat::kCsv, Into(&text), Into(&ref_text), &truth).ok());
+  const Session session = Load(text), reference = Load(ref_text);
+  auto evaluate = [&](bool trim) {
+    AccuracyOptions a;
+    a.alignment.offset_s = 0.1 - 0.3;
+    a.plateaus.trim_departures = trim;
+    auto r = EvaluateAccuracy(session, &reference, a);
+    REQUIRE(r.ok());
+    return std::move(r).value();
+  };
+  // Plateau errors more than 3 u from the truth, and the hysteresis's z.
+  auto misses = [&](const AccuracyResult& r) {
+    REQUIRE(r.points.size() == truth.plateaus.size());
+    int n = 0;
+    for (size_t i = 0; i < r.points.size(); ++i) {
+      const double z =
+          (r.points[i].error_deg - truth.plateaus[i].error_deg) / r.points[i].type_a.u_deg;
+      if (std::fabs(z) > 3.0) ++n;
+    }
+    return n;
+  };
+  const AccuracyResult trimmed = evaluate(true);
+  CHECK(trimmed.segmentation.departure_trimmed_plateaus >= 20);
+  CHECK(trimmed.segmentation.max_end_trimmed_s > 0.2);
+  CHECK(trimmed.segmentation.max_end_trimmed_s < 0.6);
+  CHECK(misses(trimmed) <= 2);
+  CHECK(std::fabs(trimmed.hysteresis.mean_deg - o.hysteresis_deg) <
+        3.0 * trimmed.hysteresis.u_mean_deg);
+  bool said = false;
+  for (const std::string& w : trimmed.warnings) {
+    said = said || w.find("the tag moved while the reference was still") == 0;
+  }
+  CHECK(said);
+  // As with the right offset: the same reading noise and corrected U.
+  AccuracyOptions right;
+  right.alignment.offset_s = 0.1;
+  auto reference_case = EvaluateAccuracy(session, &reference, right);
+  REQUIRE(reference_case.ok());
+  const AccuracyResult& good = reference_case.value();
+  CHECK(good.segmentation.departure_trimmed_plateaus == 0);
+  CHECK(trimmed.noise.sigma_deg == Approx(good.noise.sigma_deg).epsilon(0.03));
+  CHECK(trimmed.corrected.gum.expanded == Approx(good.corrected.gum.expanded).epsilon(0.03));
+  // Kept, the moving ends make the pooled reading noise (and every u built on it) many times
+  // too large: measured sigma 2.4 deg instead of 0.049, U 6.1 deg instead of 0.17.
+  const AccuracyResult kept = evaluate(false);
+  CHECK(kept.noise.sigma_deg > 10.0 * good.noise.sigma_deg);
+  CHECK(kept.corrected.gum.expanded > 10.0 * good.corrected.gum.expanded);
 }
 
 TEST_CASE("An up-only sweep says hysteresis was not measured and widens U", "[accuracy]") {

@@ -104,6 +104,63 @@ TEST_CASE("MSER-5 settling removes a decaying transient", "[accuracy]") {
   CHECK_FALSE(p.settle_at_limit);
 }
 
+TEST_CASE("A departing end is trimmed and listed and a drift is kept", "[accuracy]") {
+  // Two 20 s plateaus at 10 Hz, error +-0.02 alternating about 0.3 deg. On the first the tag
+  // starts to move 0.3 s before the reference does (errors 0.3 + 0.1, 0.4, 0.9 at its last
+  // three observations); on the second the error steps up by 0.5 deg for its last 30 %.
+  std::vector<double> t, ref, err;
+  for (int i = 0; i < 200; ++i) {
+    t.push_back(0.1 * static_cast<double>(t.size()));
+    ref.push_back(0.0);
+    const double move = i == 197 ? 0.1 : i == 198 ? 0.4 : i == 199 ? 0.9 : 0.0;
+    err.push_back(0.3 + (i % 2 == 0 ? 0.02 : -0.02) + move);
+  }
+  for (int i = 1; i <= 10; ++i) {
+    t.push_back(0.1 * static_cast<double>(t.size()));
+    ref.push_back(3.0 * i);
+    err.push_back(0.3);
+  }
+  for (int i = 0; i < 200; ++i) {
+    t.push_back(0.1 * static_cast<double>(t.size()));
+    ref.push_back(30.0);
+    err.push_back(0.3 + (i >= 140 ? 0.5 : 0.0) + (i % 2 == 0 ? 0.02 : -0.02));
+  }
+  PlateauOptions o;
+  o.settle_s = 0.0;
+  auto seg = FindPlateaus(t, ref, err, o);
+  REQUIRE(seg.ok());
+  const Segmentation& g = seg.value();
+  REQUIRE(g.plateaus.size() == 2);
+  // The median is 0.32 (one of the two levels), the MAD 0.04, the limit 5 x 1.4826 x 0.04 =
+  // 0.30 deg: the last two depart, and one more observation (0.1 above its level) goes too.
+  CHECK(g.plateaus[0].end_trimmed == 3);
+  CHECK(g.plateaus[0].n() == 197);
+  CHECK(g.plateaus[0].rest_end == 200);
+  CHECK(g.plateaus[0].start_trimmed == 0);
+  CHECK(g.plateaus[0].t_end_s == Approx(19.6));
+  CHECK(g.departure_trimmed_plateaus == 1);
+  CHECK(g.departure_trimmed_samples == 3);
+  CHECK(g.max_end_trimmed_s == Approx(0.4));  // From 19.6 s to the first moving sample at 20 s.
+  bool listed = false;
+  for (const ExcludedSpan& e : g.excluded) {
+    if (e.reason == "tag moving at the plateau's end") {
+      listed = true;
+      CHECK(e.end - e.begin == 3);
+    }
+  }
+  CHECK(listed);
+  // The step departs for longer than a quarter of the plateau: drift, kept and counted.
+  CHECK(g.plateaus[1].n() == 201);  // The ramp's last sample (30 deg) starts the rest.
+  CHECK(g.plateaus[1].end_trimmed == 0);
+  CHECK(g.plateaus[1].departure_kept);
+  CHECK(g.departure_kept_plateaus == 1);
+  // Off: nothing trimmed.
+  o.trim_departures = false;
+  auto kept = FindPlateaus(t, ref, err, o);
+  REQUIRE(kept.ok());
+  CHECK(kept.value().plateaus[0].n() == 200);
+}
+
 TEST_CASE("No plateau is an error naming what to collect", "[accuracy]") {
   std::vector<double> t, ref, err;
   for (int i = 0; i < 300; ++i) {  // A table turning at 10 deg/s throughout.

@@ -26,14 +26,13 @@ namespace metro {
 double Ar1MeanVarianceFactor(size_t n, double phi);
 
 // The tag's reading noise on the plateaus as one stationary AR(1) process (lag-1 correlation
-// phi per observation, standard deviation sigma), fitted to all plateaus at once by the
-// method of moments with each plateau's own mean removed: phi solves
-//   sum_i S1_i / sum_i S0_i = sum_i E[S1_i | phi] / sum_i E[S0_i | phi]
-// (S0 = sum (x_k - xbar)^2, S1 = sum (x_k - xbar)(x_{k+1} - xbar), expectations exact for
-// unit variance), which removes the downward bias of each short plateau's own r1; then
-// sigma^2 = sum S0_i / sum E[S0_i | phi]. u of plateau i's mean = sigma sqrt(F(n_i, phi))
-// (Ar1MeanVarianceFactor); dof = sum_i max(1, n_i (1 - phi^2)/(1 + phi^2) - 1) (Bartlett's
-// variance of s^2 for AR(1)). Each plateau's slice is unwrapped before use.
+// phi per observation, standard deviation sigma), fitted to all plateaus at once by restricted
+// maximum likelihood (REML) with one unknown mean per plateau, which accounts exactly for the
+// removed means (a short plateau's own r1 is biased low by about (1 + 4 phi)/n). u of plateau
+// i's mean = sigma sqrt(F(n_i, phi)) (Ar1MeanVarianceFactor); dof = 2 / var(ln u^2) at the
+// median plateau length (JCGM 100 G.4.2), with var(ln u^2) from the innovations' sum (n_i - 1)
+// dof and phi's variance from the curvature of the profile likelihood. Each plateau's slice is
+// unwrapped before use.
 PlateauNoise PlateauNoiseOf(const std::vector<double>& series_deg,
                             const std::vector<Plateau>& plateaus);
 
