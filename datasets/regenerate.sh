@@ -28,3 +28,7 @@ calibrate="${2:-build/apps/calibrate/calibrate}"
 # Rotation-table sweep (accuracy, docs/accuracy.md): yaw 0..315 deg by 45, two sweeps.
 "$characterize" simulate --kind table --seed 8 --sensor 2 --table-step-deg 45 --table-end-deg 315 \
   -o "$here/table_sweep.csv"
+# Multi-pose calibration session in raw LSB (docs/simulator.md "Calibration sessions"): 26 poses,
+# hand rotations, a 90 deg/s table run at every pose, 22 -> 34 degC; truth in the .truth.json.
+"$characterize" simulate --kind calibration --seed 25 --sensor 2 \
+  -o "$here/calibration_session.csv"

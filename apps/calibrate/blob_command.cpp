@@ -1,5 +1,6 @@
 // calibrate blob calibration.json --sensor N --device-id HEX16 [--seq N] -o tag.bin
 //   [--hex tag.hex] [--slot-address ADDR] [--dlpf-cfg N] [--t-valid-min-c C] [--t-valid-max-c C]
+//   [--profile mpu6050|generic] [--accel-fs-g G] [--gyro-fs-dps D]
 #include <fmt/format.h>
 
 #include <memory>
@@ -28,6 +29,9 @@ struct BlobOptions {
   int dlpf_cfg = 3;
   std::optional<double> t_valid_min_c;
   std::optional<double> t_valid_max_c;
+  std::string profile = "mpu6050";
+  std::optional<double> accel_fs_g;
+  std::optional<double> gyro_fs_dps;
 };
 
 // "0x3B000" or "241664" -> address; a page-aligned slot A whose slot B (the next page) lies
@@ -81,6 +85,9 @@ int RunBlob(const BlobOptions& b) {
   o.t_valid_max_c = b.t_valid_max_c;
   o.seq = b.seq;
   o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
+  o.profile = *blob::ParseSensorProfile(b.profile);  // CLI11 checked the name
+  o.accel_fs_g = b.accel_fs_g;
+  o.gyro_fs_dps = b.gyro_fs_dps;
   std::vector<std::string> warnings;
   Result<blob::BlobContents> contents =
       blob::BlobContentsFromCalibration(cal.value(), o, &warnings);
@@ -166,6 +173,7 @@ void AddBlobCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--t-valid-max-c", o->t_valid_max_c,
                   "upper end of the temperature validity range (default: the fitted span + 5 "
                   "degC)");
+  AddSensorProfileOptions(sub, &o->profile, &o->accel_fs_g, &o->gyro_fs_dps);
   sub->callback([o, exit_code] { *exit_code = RunBlob(*o); });
 }
 

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
 
 #include "exit_codes.hpp"
 
@@ -18,5 +20,23 @@ void AddReportCommand(CLI::App& app, int* exit_code);
 void AddBlobCommand(CLI::App& app, int* exit_code);
 void AddInspectCommand(CLI::App& app, int* exit_code);
 void AddPushCommand(CLI::App& app, int* exit_code);
+
+// --profile mpu6050|generic, --accel-fs-g G, --gyro-fs-dps D of `blob` and `push`: the nominal
+// sensitivity a blob section declares (metro::blob::SensorProfile, docs/calibration-blob.md 10).
+inline void AddSensorProfileOptions(CLI::App* sub, std::string* profile,
+                                    std::optional<double>* accel_fs_g,
+                                    std::optional<double>* gyro_fs_dps) {
+  sub->add_option("--profile", *profile,
+                  "the IMU: mpu6050 (its datasheet sensitivity at the declared or matching "
+                  "full-scale setting) or generic (another IMU: 32768 / the declared full scale, "
+                  "else the calibration's own); default mpu6050")
+      ->check(CLI::IsMember({"mpu6050", "generic"}));
+  sub->add_option("--accel-fs-g", *accel_fs_g,
+                  "declared accelerometer full scale [g] (mpu6050: 2, 4, 8 or 16; default: the "
+                  "setting M matches)");
+  sub->add_option("--gyro-fs-dps", *gyro_fs_dps,
+                  "declared gyroscope full scale [deg/s] (mpu6050: 250, 500, 1000 or 2000; "
+                  "default: the setting M matches)");
+}
 
 }  // namespace metro::calibrate_app

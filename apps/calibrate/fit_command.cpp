@@ -41,8 +41,10 @@ struct FitOptions {
 int RunFit(const FitOptions& f) {
   CalibrationOptions o;
   const std::optional<ModelKind> model = ParseModelKind(f.model);
+  // --accel-model none: no accelerometer calibration (the gyroscope's bias at rest).
+  const bool accel_none = f.accel_model == "none";
   const std::optional<ModelKind> am =
-      ParseModelKind(f.accel_model.empty() ? f.model : f.accel_model);
+      ParseModelKind(f.accel_model.empty() || accel_none ? f.model : f.accel_model);
   const std::optional<ModelKind> gm = ParseModelKind(f.gyro_model.empty() ? f.model : f.gyro_model);
   const std::optional<LossKind> loss = ParseLossKind(f.loss);
   if (!model || !am || !gm || !loss) {
@@ -60,6 +62,24 @@ int RunFit(const FitOptions& f) {
   o.gyro_fs_dps = f.gyro_fs_dps;
   o.sensor = f.sensor;
   o.fit_gyro = !f.accel_only;
+  o.fit_accel = !accel_none;
+  if (accel_none && f.accel_only) {
+    apps::PrintErrorText("--accel-model none and --accel-only leave nothing to calibrate");
+    return kExitUsage;
+  }
+  if (accel_none && (f.gyro_model.empty() ? f.model : f.gyro_model) != "bias") {
+    apps::PrintErrorText(
+        "--accel-model none evaluates the gyroscope's bias at rest from one static record: give "
+        "--gyro-model bias (a scale or misalignment needs poses, rotations and the "
+        "accelerometer)");
+    return kExitUsage;
+  }
+  if (accel_none && !f.segments.empty()) {
+    apps::PrintErrorText(
+        "--segments does not apply to --accel-model none (the whole record is "
+        "the static pose)");
+    return kExitUsage;
+  }
   if (f.min_static_s) o.segmentation.min_static_s = *f.min_static_s;
   if (!f.segments.empty()) {
     Result<std::vector<AnnotatedSegment>> given = ReadSegmentsFile(f.segments);
@@ -173,6 +193,18 @@ int RunFit(const FitOptions& f) {
     if (t.gyro) {
       apps::Note(fmt::format("  gyro residual rms {:.3g} {}\n", t.gyro->residual_rms,
                              t.gyro->residual_unit));
+      if (!o.fit_accel) {
+        // The bias at rest: value, u (k = 1) and the 95 % coverage factor, per axis.
+        const SensorCalibration& g = *t.gyro;
+        for (int a = 0; a < 3; ++a) {
+          apps::Note(fmt::format(
+              "  gyro bias at rest {}: {:.6g} {} u {:.3g} {} ({:.4g} u {:.2g} deg/s; k95 {:.3g}, "
+              "dof {})\n",
+              "xyz"[a], g.model.bias[a], g.model.input_unit, g.bias_u[a], g.model.input_unit,
+              g.model.bias[a] * g.model.scale[a], g.bias_u[a] * g.model.scale[a],
+              g.coverage_factor_95, g.dof));
+        }
+      }
     }
     for (const std::string& w : t.warnings) {
       if (apps::Quiet()) {
@@ -205,9 +237,12 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--sensor", o->sensor, "calibrate only this tag (0 = every tag)");
   sub->add_option("--model", o->model, "bias | scale | full, for both sensors")
       ->check(CLI::IsMember({"bias", "scale", "full"}));
-  sub->add_option("--accel-model", o->accel_model, "override --model for the accelerometer")
-      ->check(CLI::IsMember({"bias", "scale", "full"}));
-  sub->add_option("--gyro-model", o->gyro_model, "override --model for the gyroscope")
+  sub->add_option("--accel-model", o->accel_model,
+                  "override --model for the accelerometer: bias | scale | full, or none (with "
+                  "--gyro-model bias: the gyroscope's bias at rest from one static record)")
+      ->check(CLI::IsMember({"bias", "scale", "full", "none"}));
+  sub->add_option("--gyro-model", o->gyro_model,
+                  "override --model for the gyroscope: bias | scale | full")
       ->check(CLI::IsMember({"bias", "scale", "full"}));
   sub->add_option("--gravity-mps2", o->gravity_mps2, "local gravity [m/s^2]");
   sub->add_option("--accel-fs-g", o->accel_fs_g, "accelerometer full scale of raw counts [g]");

@@ -1,5 +1,5 @@
 // calibrate push --port /dev/ttyX calibration.json --sensor N [--device-id HEX16] [--seq N]
-//   [--timeout-ms MS] [--retries N]
+//   [--timeout-ms MS] [--retries N] [--profile mpu6050|generic] [--accel-fs-g G] [--gyro-fs-dps D]
 #include <fmt/format.h>
 
 #include <memory>
@@ -8,6 +8,7 @@
 
 #include "cli_progress.hpp"
 #include "commands.hpp"
+#include "metro/blob/from_calibration.hpp"
 #include "metro/blob/push_client.hpp"
 #include "metro/blob/serial_port.hpp"
 #include "metro/calibration/calibration_io.hpp"
@@ -26,6 +27,9 @@ struct PushCliOptions {
   std::optional<double> t_valid_max_c;
   int timeout_ms = 1000;
   int retries = 5;
+  std::string profile = "mpu6050";
+  std::optional<double> accel_fs_g;
+  std::optional<double> gyro_fs_dps;
 };
 
 int RunPush(const PushCliOptions& c) {
@@ -48,17 +52,36 @@ int RunPush(const PushCliOptions& c) {
         stderr, fmt::format("error: {}: calibration has no sensor {}\n", c.calibration, c.sensor));
     return kExitUsage;
   }
-  Result<std::unique_ptr<blob::SerialPort>> port = blob::SerialPort::Open(c.port);
-  if (!port.ok()) {
-    apps::PrintErrorText(port.error().ToString());
-    return kExitFailed;
-  }
   blob::BlobFromCalibrationOptions bo;
   bo.sensor = c.sensor;
   bo.seq = c.seq;
   bo.dlpf_cfg = static_cast<uint8_t>(c.dlpf_cfg);
   bo.t_valid_min_c = c.t_valid_min_c;
   bo.t_valid_max_c = c.t_valid_max_c;
+  bo.profile = *blob::ParseSensorProfile(c.profile);  // CLI11 checked the name
+  bo.accel_fs_g = c.accel_fs_g;
+  bo.gyro_fs_dps = c.gyro_fs_dps;
+  // Whether the blob format can represent the constants does not depend on the tag's device
+  // id or seq: checked here, with the firmware's own rules (WriteBlob), before any port is
+  // opened. The push builds the blob again for the tag that answers.
+  {
+    blob::BlobFromCalibrationOptions trial = bo;
+    trial.seq = 1;
+    Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal.value(), trial);
+    Result<std::vector<uint8_t>> bytes = contents.ok()
+                                             ? blob::WriteBlob(contents.value())
+                                             : Result<std::vector<uint8_t>>(contents.error());
+    if (!bytes.ok()) {
+      apps::PrintErrorText(fmt::format("{}: {} (nothing sent; {} not opened)", c.calibration,
+                                       bytes.error().ToString(), c.port));
+      return kExitUsage;
+    }
+  }
+  Result<std::unique_ptr<blob::SerialPort>> port = blob::SerialPort::Open(c.port);
+  if (!port.ok()) {
+    apps::PrintErrorText(port.error().ToString());
+    return kExitFailed;
+  }
   blob::PushOptions po;
   po.timeout_ms = c.timeout_ms;
   po.execute_timeout_ms = 3 * c.timeout_ms;  // CAL_EXECUTE erases and programs a page
@@ -148,6 +171,7 @@ void AddPushCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(1, 60000));
   sub->add_option("--retries", o->retries, "resends of one request (default 5)")
       ->check(CLI::Range(0, 100));
+  AddSensorProfileOptions(sub, &o->profile, &o->accel_fs_g, &o->gyro_fs_dps);
   sub->callback([o, exit_code] { *exit_code = RunPush(*o); });
 }
 

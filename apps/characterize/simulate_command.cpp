@@ -6,7 +6,9 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "metro/calibration/simulate.hpp"
 #include "metro/core/file.hpp"
+#include "metro/io/session_io.hpp"
 #include "metro/sim/static_session.hpp"
 #include "metro/sim/table_session.hpp"
 #include "output.hpp"
@@ -27,7 +29,71 @@ struct SimulateOptions {
   std::string truth_output;  // Default: <output>.truth.json when -o names a file.
   std::string table_readout = "continuous";
   TableSimulationOptions table;
+  // --kind calibration: a multi-pose calibration session (docs/simulator.md, "Calibration
+  // sessions"); --seed, --sensor and --rate-hz are shared.
+  SimulationOptions calibration = DefaultCalibrationSimulation();
+  bool no_temperature = false;
+
+  static SimulationOptions DefaultCalibrationSimulation() {
+    SimulationOptions c;
+    c.table_rates_dps = {90.0};
+    c.temperature = true;
+    c.temp_start_c = 22.0;
+    c.temp_end_c = 34.0;
+    return c;
+  }
 };
+
+int RunCalibrationSimulate(SimulateOptions o) {
+  if (o.format != "csv") {
+    PrintError(MakeError("--kind calibration writes session.csv (raw LSB columns): drop --format " +
+                         o.format));
+    return kExitUsage;
+  }
+  if (o.sim.sensors.size() != 1) {
+    PrintError(MakeError("--kind calibration simulates one tag: give one --sensor"));
+    return kExitUsage;
+  }
+  SimulationOptions& c = o.calibration;
+  c.sensor = o.sim.sensors.front();
+  c.seed = o.sim.seed;
+  if (o.sim.rate_hz > 0) c.rate_hz = o.sim.rate_hz;
+  c.temperature = !o.no_temperature;
+  if (o.truth_output.empty() && !IsStdio(o.output)) o.truth_output = o.output + ".truth.json";
+  std::string why;
+  if (!c.IsValid(&why)) {
+    PrintError(MakeError(why));
+    return kExitUsage;
+  }
+  if (Status s = CheckOutputs({{"-o", o.output}, {"--truth-output", o.truth_output}}, {});
+      !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
+  Result<SimulatedSession> sim = SimulateCalibrationSession(c);
+  if (!sim.ok()) {
+    PrintError(sim.error());
+    return kExitFailed;
+  }
+  // The session and its truth are replaced together or not at all.
+  Status s = WriteOutputs({{o.output, FormatSessionCsv(sim.value().session)},
+                           {o.truth_output, CalibrationTruthJson(c, sim.value())}});
+  if (!s.ok()) {
+    PrintError(s.error());
+    return kExitFailed;
+  }
+  if (sim.value().saturated_samples > 0) {
+    PrintText(stderr,
+              fmt::format("warning: {} samples saturated (raw counts at the int16 limits)\n",
+                          sim.value().saturated_samples));
+  }
+  Note(fmt::format("wrote {} (calibration, {} rows, {} poses, seed {}){}\n",
+                   IsStdio(o.output) ? "stdout" : o.output, sim.value().session.rows, c.poses,
+                   c.seed,
+                   o.truth_output.empty() ? "; no truth written (give --truth-output)"
+                                          : "; truth in " + o.truth_output));
+  return kExitOk;
+}
 
 int RunTableSimulate(SimulateOptions o) {
   auto axis = ParseTableAxis(o.table_axis);
@@ -100,6 +166,7 @@ int RunTableSimulate(SimulateOptions o) {
 
 int RunSimulate(SimulateOptions o) {
   if (o.kind == "table") return RunTableSimulate(std::move(o));
+  if (o.kind == "calibration") return RunCalibrationSimulate(std::move(o));
   if (o.tags > 0) {
     o.sim.sensors.resize(static_cast<size_t>(o.tags));
     std::iota(o.sim.sensors.begin(), o.sim.sensors.end(), 1);
@@ -170,9 +237,33 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
                   "time constant of the start-up transient")
       ->capture_default_str();
   sub->add_option("--yaw-drift-dps", o->sim.yaw_drift_dps, "yaw drift rate")->capture_default_str();
-  sub->add_option("--kind", o->kind, "static, or table: a rotation-table sweep (docs/simulator.md)")
-      ->check(CLI::IsMember({"static", "table"}))
+  sub->add_option("--kind", o->kind,
+                  "static; table: a rotation-table sweep; calibration: a multi-pose calibration "
+                  "session in raw LSB (docs/simulator.md)")
+      ->check(CLI::IsMember({"static", "table", "calibration"}))
       ->capture_default_str();
+  sub->add_option("--poses", o->calibration.poses,
+                  "calibration: static poses (cube faces, corners, edges, cycled)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  sub->add_option("--pose-dwell-s", o->calibration.dwell_s,
+                  "calibration: still time per pose (the first twice as long)")
+      ->capture_default_str();
+  sub->add_option("--move-s", o->calibration.move_s,
+                  "calibration: duration of each hand rotation between poses")
+      ->capture_default_str();
+  sub->add_option("--run-rate-dps", o->calibration.table_rates_dps,
+                  "calibration: a rate-table run at every pose, logger running (repeatable; "
+                  "default 90)");
+  sub->add_option("--run-s", o->calibration.table_run_s, "calibration: length of each table run")
+      ->capture_default_str();
+  sub->add_option("--temp-start-c", o->calibration.temp_start_c,
+                  "calibration: temperature ramp start")
+      ->capture_default_str();
+  sub->add_option("--temp-end-c", o->calibration.temp_end_c, "calibration: temperature ramp end")
+      ->capture_default_str();
+  sub->add_flag("--no-temperature", o->no_temperature,
+                "calibration: no temp_c column and no temperature terms in the truth");
   sub->add_option("--table-axis", o->table_axis, "table: the tag axis turned (yaw, pitch, roll)")
       ->capture_default_str();
   sub->add_option("--table-start-deg", o->table.start_deg, "table: first plateau angle")
@@ -207,7 +298,8 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
                   "table: the reference log's clock runs this far ahead")
       ->capture_default_str();
   sub->add_option("--truth-output", o->truth_output,
-                  "table: the truth as JSON (default: OUTPUT.truth.json when -o is a file)");
+                  "table, calibration: the truth as JSON (default: OUTPUT.truth.json when -o is a "
+                  "file)");
   sub->add_option("--table-readout", o->table_readout,
                   "table: continuous (0..360 as turned) or wrap180 (signed, (-180, 180])")
       ->check(CLI::IsMember({"continuous", "wrap180"}))

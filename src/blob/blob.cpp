@@ -11,6 +11,7 @@
 #include <tuple>
 #include <utility>
 
+#include "metro/core/device_id.hpp"
 #include "metro_fw/blob.h"
 #include "metro_fw/crc.h"
 
@@ -360,17 +361,9 @@ Result<BlobContents> DecodeBlob(const std::vector<uint8_t>& bytes,
   return c;
 }
 
-Result<uint64_t> ParseDeviceId(std::string_view hex16) {
-  if (hex16.size() != 16 || !std::all_of(hex16.begin(), hex16.end(), [](char ch) {
-        return std::isxdigit(static_cast<unsigned char>(ch)) != 0;
-      })) {
-    return MakeError(
-        fmt::format("device id '{}': expected 16 hex digits, DEVICEID[1] then DEVICEID[0]", hex16));
-  }
-  return static_cast<uint64_t>(std::stoull(std::string(hex16), nullptr, 16));
-}
+Result<uint64_t> ParseDeviceId(std::string_view text) { return ParseDeviceIdText(text); }
 
-std::string FormatDeviceId(uint64_t device_id) { return fmt::format("{:016X}", device_id); }
+std::string FormatDeviceId(uint64_t device_id) { return FormatDeviceIdText(device_id); }
 
 std::string FirmwareErrorName(int code) {
   switch (code) {

@@ -6,8 +6,10 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <tuple>
 
 #include "metro/calibration/calibration_io.hpp"
+#include "metro/core/check.hpp"
 #include "metro/core/file.hpp"
 
 namespace metro::blob {
@@ -25,6 +27,15 @@ double SiPerOutputUnit(ImuSensor sensor) {
 double NominalOutPerLsb(ImuSensor sensor, int fs_sel) {
   return sensor == ImuSensor::kAccel ? static_cast<double>(1 << fs_sel) / 16384.0
                                      : static_cast<double>(250 << fs_sel) / 32768.0;
+}
+
+// The MPU6050 setting (fs_sel) of a full scale in g or deg/s, or -1.
+int Mpu6050FsSel(ImuSensor sensor, double full_scale) {
+  for (int fs = 0; fs < 4; ++fs) {
+    const double setting = sensor == ImuSensor::kAccel ? 2.0 * (1 << fs) : 250.0 * (1 << fs);
+    if (full_scale == setting) return fs;
+  }
+  return -1;
 }
 
 bool PrintableAscii(const std::string& s) {
@@ -94,11 +105,82 @@ bool BlobFromCalibrationOptions::IsValid(std::string* why) const {
   ValidityOptions validity{t_valid_min_c, t_valid_max_c};
   std::string range_why;
   if (!validity.IsValid(&range_why)) return fail(range_why);
+  for (const auto& [fs, imu, flag, settings] :
+       {std::tuple{accel_fs_g, ImuSensor::kAccel, "accel_fs_g", "2, 4, 8 or 16 g"},
+        std::tuple{gyro_fs_dps, ImuSensor::kGyro, "gyro_fs_dps", "250, 500, 1000 or 2000 deg/s"}}) {
+    if (!fs) continue;
+    if (!(*fs > 0) || !std::isfinite(*fs)) return fail(fmt::format("{} {} must be > 0", flag, *fs));
+    if (profile == SensorProfile::kMpu6050 && Mpu6050FsSel(imu, *fs) < 0) {
+      return fail(
+          fmt::format("{} {:g} is not an MPU6050 full-scale setting ({}); another IMU's "
+                      "full scale takes profile generic",
+                      flag, *fs, settings));
+    }
+  }
   if (reference_id.size() > 16 || !PrintableAscii(reference_id)) {
     return fail(fmt::format("reference_id '{}' must be printable ASCII of at most 16 characters",
                             reference_id));
   }
   return true;
+}
+
+const char* SensorProfileName(SensorProfile profile) {
+  return profile == SensorProfile::kGeneric ? "generic" : "mpu6050";
+}
+
+std::optional<SensorProfile> ParseSensorProfile(std::string_view name) {
+  if (name == "mpu6050") return SensorProfile::kMpu6050;
+  if (name == "generic") return SensorProfile::kGeneric;
+  return std::nullopt;
+}
+
+Result<uint8_t> NominalFsSel(ImuSensor sensor, const Eigen::Matrix3d& m,
+                             const BlobFromCalibrationOptions& o) {
+  const bool accel = sensor == ImuSensor::kAccel;
+  const std::optional<double> declared = accel ? o.accel_fs_g : o.gyro_fs_dps;
+  const char* flag = accel ? "--accel-fs-g" : "--gyro-fs-dps";
+  const char* lsb_unit = accel ? "LSB/g" : "LSB/(deg/s)";
+  const double row_norm = m.rowwise().norm().mean();  // output unit per LSB
+  if (o.profile == SensorProfile::kMpu6050 && !declared) return InferFsSel(sensor, m);
+  // The nominal (output unit per LSB) and the fs_sel that declares it.
+  double nominal = row_norm;
+  std::string source = "the calibration's own (mean row norm of M)";
+  int fs_sel = -1;
+  if (declared) {
+    nominal = *declared / 32768.0;
+    source = fmt::format("{} {:g}", flag, *declared);
+    if (o.profile == SensorProfile::kMpu6050) {
+      fs_sel = Mpu6050FsSel(sensor, *declared);
+      METRO_CHECK(fs_sel >= 0);  // IsValid
+      nominal = NominalOutPerLsb(sensor, fs_sel);
+    }
+  }
+  if (fs_sel < 0) {  // generic: the nearest setting, on a log scale
+    double best = 1e300;
+    for (int fs = 0; fs < 4; ++fs) {
+      const double d = std::fabs(std::log(nominal / NominalOutPerLsb(sensor, fs)));
+      if (d < best) {
+        best = d;
+        fs_sel = fs;
+      }
+    }
+  }
+  const double s_nom = NominalOutPerLsb(sensor, fs_sel);
+  const double ratio = row_norm / s_nom;
+  if (std::fabs(ratio - 1.0) <= kSensitivityTolerance) return static_cast<uint8_t>(fs_sel);
+  std::string ranges;
+  for (int fs = 0; fs < 4; ++fs) {
+    const double lsb = 1.0 / NominalOutPerLsb(sensor, fs);
+    ranges += fmt::format("{}{:.4g} .. {:.4g}", fs == 0 ? "" : ", ",
+                          lsb / (1.0 + kSensitivityTolerance), lsb / (1.0 - kSensitivityTolerance));
+  }
+  return MakeError(fmt::format(
+      "the {} sensitivity {:.4g} {} is {:+.1f} % from the nominal {:.4g} {} of fs_sel {} "
+      "(nominal from {}, profile {}); the blob format v1 cannot represent it: a section declares "
+      "its nominal sensitivity as an MPU6050 FS_SEL and the tag uses M only within +-10 % of it "
+      "(docs/calibration-blob.md 3.1), i.e. {} {}",
+      ImuSensorName(sensor), 1.0 / row_norm, lsb_unit, 100.0 * (1.0 / ratio - 1.0), 1.0 / s_nom,
+      lsb_unit, fs_sel, source, SensorProfileName(o.profile), ranges, lsb_unit));
 }
 
 Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m) {
@@ -128,7 +210,7 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   // docs/calibration-blob.md section 10: M is calibration.json's `matrix` (the reader checked it
   // against `scale` and `misalignment`); a calibration straight from a fit has model.Matrix().
   const Eigen::Matrix3d m_c = c.M();
-  Result<uint8_t> fs = InferFsSel(model.sensor, m_c);
+  Result<uint8_t> fs = NominalFsSel(model.sensor, m_c, options);
   if (!fs.ok()) return MakeError(fmt::format("{}: {}", name, fs.error().message));
   if (model.kind != ModelKind::kBias && c.matrix_u.isZero(0.0)) {
     return MakeError(fmt::format(

@@ -11,6 +11,7 @@
 
 #include "calibration/calibrate_stages.hpp"
 #include "calibration/parameter_blocks.hpp"
+#include "metro/calibration/gyro_bias.hpp"
 #include "metro/core/utc_time.hpp"
 #include "metro/core/version.hpp"
 
@@ -55,6 +56,16 @@ bool CalibrationOptions::IsValid(std::string* why) const {
   if (sensor < 0) return fail("sensor must be >= 0 (0 = every tag)");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(max_rotation_s > 0)) return fail("max_rotation_s must be > 0");
+  if (!fit_accel && (!fit_gyro || gyro_model != ModelKind::kBias)) {
+    return fail(
+        "without the accelerometer (accel model none) only the gyroscope's bias at rest is "
+        "evaluated: give the gyroscope model bias");
+  }
+  if (!fit_accel && temperature == TemperatureMode::kOn) {
+    return fail(
+        "a temperature term needs poses at several temperatures: not with accel model "
+        "none (a bias at rest is one pose)");
+  }
   std::string seg_why;
   if (!segmentation.IsValid(&seg_why)) return fail("segmentation: " + seg_why);
   return true;
@@ -249,6 +260,7 @@ Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,
 
 Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
                                const CalibrationOptions& options) {
+  if (!options.fit_accel) return CheckGyroRestRecords(sessions, options);
   // Sensors with a gyroscope family in some session.
   std::map<int, std::string> gyro_seen;  // sensor -> a session that has it
   for (const Session* s : sessions) {
@@ -310,7 +322,8 @@ Result<Calibration> CalibrateSessions(const std::vector<const Session*>& session
                          : std::string("the input has no tags"));
   }
   for (const auto& [sensor, tags] : by_sensor) {
-    Result<TagCalibration> t = CalibrateTag(tags, options);
+    Result<TagCalibration> t =
+        options.fit_accel ? CalibrateTag(tags, options) : CalibrateGyroBiasAtRest(tags, options);
     if (!t.ok()) {
       Error e = t.error();
       if (e.file.empty() && sessions.size() == 1) e.file = sessions.front()->path;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <exception>
 
+#include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
@@ -595,6 +596,7 @@ json CalibrationToJson(const Calibration& cal) {
   for (const TagCalibration& t : cal.tags) {
     json tj;
     tj["sensor"] = t.sensor;
+    if (t.device_id) tj["device_id"] = FormatDeviceIdText(*t.device_id);
     tj["threshold_factor"] = t.threshold_factor;
     tj["saturated_samples"] = t.saturated_samples;
     tj["iterations"] = t.iterations;
@@ -638,6 +640,15 @@ Result<Calibration> CalibrationFromJson(const json& j, const std::string& file) 
     TagCalibration t;
     t.sensor = static_cast<int>(rd.Number(tj, path, "sensor"));
     if (rd.failed()) return rd.error();
+    if (tj.contains("device_id")) {
+      const json& d = tj.at("device_id");
+      Result<uint64_t> id = d.is_string() ? ParseDeviceIdText(d.get<std::string>())
+                                          : Result<uint64_t>(MakeError("expected a string"));
+      if (!id.ok()) {
+        return MakeError(file, 0, fmt::format("'{}device_id': {}", path, id.error().message));
+      }
+      t.device_id = id.value();
+    }
     if (!tj.contains("accel") && !tj.contains("gyro")) {
       return MakeError(file, 0, fmt::format("'{}' has neither 'accel' nor 'gyro'", path));
     }

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <pcg_random.hpp>
 #include <random>
 
@@ -269,6 +270,62 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
   }
   s.tags.push_back(std::move(tag));
   return out;
+}
+
+namespace {
+
+nlohmann::ordered_json Vec(const Eigen::Vector3d& v) { return {v[0], v[1], v[2]}; }
+
+nlohmann::ordered_json TruthSensorJson(const SensorModel& m) {
+  using Json = nlohmann::ordered_json;
+  const Eigen::Matrix3d matrix = m.Matrix();
+  Json rows = Json::array();
+  for (int r = 0; r < 3; ++r) rows.push_back({matrix(r, 0), matrix(r, 1), matrix(r, 2)});
+  Json j = {{"model", ModelKindName(m.kind)},
+            {"input_unit", m.input_unit},
+            {"output_unit", m.output_unit},
+            {"bias", Vec(m.bias)},
+            {"scale", Vec(m.scale)},
+            {"misalignment", m.misalignment},
+            {"matrix", rows},
+            {"sensitivity", Vec(m.scale.cwiseInverse())}};
+  if (m.has_temperature) {
+    j["temperature"] = {{"t_ref_c", m.t_ref_c}, {"bias_per_c", Vec(m.bias_per_c)}};
+  }
+  return j;
+}
+
+}  // namespace
+
+std::string CalibrationTruthJson(const SimulationOptions& o, const SimulatedSession& sim) {
+  using Json = nlohmann::ordered_json;
+  Json j = {{"schema", "metro.calibration-truth/1"},
+            {"model_equation",
+             "calibrated = T K (raw - b0 - b1 (temp_c - t_ref_c)), bias removed before scaling "
+             "(docs/calibration-model.md)"},
+            {"seed", o.seed},
+            {"sensor", o.sensor},
+            {"rate_hz", o.rate_hz},
+            {"poses", o.poses},
+            {"dwell_s", o.dwell_s},
+            {"move_s", o.move_s},
+            {"table_rates_dps", o.table_rates_dps},
+            {"table_run_s", o.table_run_s},
+            {"accel_fs_g", o.accel_fs_g},
+            {"gyro_fs_dps", o.gyro_fs_dps},
+            {"gravity_mps2", o.gravity_mps2},
+            {"accel_noise_ug_rthz", o.accel_noise_ug_rthz},
+            {"gyro_noise_dps_rthz", o.gyro_noise_dps_rthz},
+            {"bandwidth_hz", o.bandwidth_hz},
+            {"rows", sim.session.rows},
+            {"saturated_samples", sim.saturated_samples}};
+  if (o.temperature) {
+    j["temp_start_c"] = o.temp_start_c;
+    j["temp_end_c"] = o.temp_end_c;
+  }
+  j["accel"] = TruthSensorJson(sim.truth.accel);
+  j["gyro"] = TruthSensorJson(sim.truth.gyro);
+  return j.dump(2) + "\n";
 }
 
 }  // namespace metro

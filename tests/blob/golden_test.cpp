@@ -115,7 +115,9 @@ TEST_CASE("calibrate blob and inspect refuse bad input with the reason", "[blob]
   CHECK(r.exit_code == 2);
   CHECK(r.err ==
         "error: --device-id: device id '12345': expected 16 hex digits, DEVICEID[1] then "
-        "DEVICEID[0]\n");
+        "DEVICEID[0] (e.g. 9ABCDEF012345678), or the two words `nrfjprog --memrd 0x10000060 "
+        "--n 8` prints, DEVICEID[0] then DEVICEID[1] (e.g. 12345678 9ABCDEF0), with or without "
+        "0x\n");
   r = Calibrate("blob " + cal + " --sensor 7 --device-id 9ABCDEF012345678 -o x.bin");
   CHECK(r.exit_code == 2);
   CHECK(r.err == "error: " + cal + ": calibration has no sensor 7 (it has: 2)\n");

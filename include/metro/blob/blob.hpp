@@ -124,8 +124,10 @@ Result<BlobContents> DecodeBlob(const std::vector<uint8_t>& bytes,
 // CRC-32/ISO-HDLC (zlib's) computed with Boost.CRC, independent of the firmware's.
 uint32_t Crc32(const uint8_t* data, size_t size);
 
-// "0123456789ABCDEF" (16 hex digits, case-insensitive) <-> device id.
-Result<uint64_t> ParseDeviceId(std::string_view hex16);
+// Device id text <-> device id: metro::ParseDeviceIdText (core/device_id.hpp: 16 hex digits
+// DEVICEID[1] then DEVICEID[0], or nrfjprog --memrd's two words DEVICEID[0] DEVICEID[1], with
+// or without 0x) and "0123456789ABCDEF".
+Result<uint64_t> ParseDeviceId(std::string_view text);
 std::string FormatDeviceId(uint64_t device_id);
 
 // Name and description of a firmware error code, e.g. "METRO_FW_E_CRC", "CRC-32 mismatch".

@@ -18,15 +18,16 @@
 //   u(M_ij) = c * u(M_c,ij),  u(b0) = u(b0_c),  u(b1) = u(b1_c)       (k = 1)
 //
 // c is a defined constant, so the uncertainties scale exactly (JCGM 100:2008 5.1.2 with a
-// sensitivity coefficient c and no uncertainty of its own). fs_sel is the full-scale setting
-// whose nominal sensitivity the mean row norm of M_c matches within 10 % (settings are a factor
-// 2 apart, so at most one can match).
+// sensitivity coefficient c and no uncertainty of its own). fs_sel is the declared full-scale
+// setting's, or the setting whose nominal sensitivity the mean row norm of M_c matches within
+// 10 % (settings are a factor 2 apart, so at most one can match); see SensorProfile.
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "metro/blob/blob.hpp"
@@ -34,6 +35,19 @@
 #include "metro/core/status.hpp"
 
 namespace metro::blob {
+
+// The IMU a blob is for (`calibrate blob --profile`), which sets the nominal sensitivity the
+// section's fs_sel declares (docs/calibration-blob.md section 10, "Nominal sensitivity"):
+//   kMpu6050  the MPU6050 datasheet's sensitivity of the declared full-scale setting (+-2, 4,
+//             8, 16 g; +-250, 500, 1000, 2000 deg/s), or without one the setting M matches;
+//   kGeneric  another IMU: 32768 / the declared full scale (any value), or without one M's own
+//             mean row norm; the section declares the MPU6050 fs_sel nearest to it.
+// Either way the blob format v1 represents the constants only when every row norm of M lies
+// within +-10 % of the declared fs_sel's nominal and the firmware's limits of section 3.1 hold;
+// otherwise the blob is refused, saying which constant the format cannot hold.
+enum class SensorProfile { kMpu6050, kGeneric };
+const char* SensorProfileName(SensorProfile profile);  // "mpu6050", "generic"
+std::optional<SensorProfile> ParseSensorProfile(std::string_view name);
 
 struct BlobFromCalibrationOptions {
   int sensor = 0;          // The tag in calibration.json (`tags[].sensor`), >= 1.
@@ -52,12 +66,24 @@ struct BlobFromCalibrationOptions {
   uint32_t due_after_s = 365u * 86400u;  // due_time_utc = cal_time_utc + due_after_s.
   std::string reference_id;              // ASCII, at most 16 characters.
   bool provisional = false;              // Header flag b3.
+  SensorProfile profile = SensorProfile::kMpu6050;
+  // Declared full-scale settings (`--accel-fs-g`, `--gyro-fs-dps`); unset: from M (above).
+  std::optional<double> accel_fs_g;
+  std::optional<double> gyro_fs_dps;
 
   // sensor >= 1, seq in 1..kSeqMax, dlpf_cfg <= 6, each t_valid end that is set within
   // -40 .. 85 and, both set, t_valid_min_c + 2 <= t_valid_max_c (ValidityOptions::IsValid),
-  // reference_id printable ASCII of at most 16 characters.
+  // reference_id printable ASCII of at most 16 characters, a declared full scale > 0 and, for
+  // kMpu6050, one of the MPU6050's settings.
   bool IsValid(std::string* why) const;
 };
+
+// fs_sel of the section for sensor calibration matrix `m_out_per_lsb` under options.profile and
+// the declared full scale (above). Errors say why the format cannot represent M: a declared
+// setting the MPU6050 does not have, or a sensitivity more than 10 % from the nominal of every
+// fs_sel the format can declare (naming the nearest and the representable ranges).
+Result<uint8_t> NominalFsSel(ImuSensor sensor, const Eigen::Matrix3d& m_out_per_lsb,
+                             const BlobFromCalibrationOptions& options);
 
 // fs_sel (0..3) of the MPU6050 full-scale setting whose nominal sensitivity, in the
 // calibrator's output unit per LSB (accelerometer (1 << fs_sel) / 16384 g, gyroscope
@@ -66,9 +92,9 @@ struct BlobFromCalibrationOptions {
 Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m_out_per_lsb);
 
 // The blob section of one sensor calibration (mapping above). Errors: an input unit other than
-// "LSB" (the tag applies the constants to raw counts), no matching full-scale setting, a
-// model with free scale terms but no `matrix_u`, a temperature coefficient |b1| above the
-// plausibility limit (TempcoLimitLsbPerC at the inferred fs_sel), a validity range the rule
+// "LSB" (the tag applies the constants to raw counts), no representable fs_sel
+// (NominalFsSel), a model with free scale terms but no `matrix_u`, a temperature coefficient
+// |b1| above the plausibility limit (TempcoLimitLsbPerC at that fs_sel), a validity range the rule
 // cannot give (TemperatureValidityRange). The validity range's warnings, each starting with the
 // sensor's name, are appended to *warnings when it is not null.
 Result<SensorConstants> SensorConstantsFromCalibration(

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +51,9 @@ struct CalibrationOptions {
   double loss_scale = 3.0;  // Of the robust loss, in units of the whitened residual.
   int sensor = 0;           // Calibrate only this tag; 0 = every tag.
   bool fit_gyro = true;     // False: accelerometer only.
+  // False (`--accel-model none`): no accelerometer calibration; with gyro_model kBias the
+  // gyroscope's bias at rest from one static record (gyro_bias.hpp).
+  bool fit_accel = true;
   int max_iterations = 200;
   double max_rotation_s = 60.0;  // Longer hand rotations are not integrated (drift).
   SegmentationOptions segmentation;
@@ -121,6 +125,9 @@ void DeriveUncertainties(SensorCalibration* c);
 
 struct TagCalibration {
   int sensor = 1;
+  // The tag's FICR device ID when known (`calibrate fit --tags FILE`), (DEVICEID[1] << 32) |
+  // DEVICEID[0]; calibration.json's `device_id`.
+  std::optional<uint64_t> device_id;
   std::optional<SensorCalibration> accel;
   std::optional<SensorCalibration> gyro;
   std::vector<Segment> segments;  // Every segment found, in every input.
@@ -164,7 +171,8 @@ Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,
                                     const CalibrationOptions& options);
 
 // Calibrates every tag (or options.sensor) found in the sessions; a tag's records from several
-// sessions are fitted together. Fills inputs, tool version and date.
+// sessions are fitted together (with fit_accel false: CalibrateGyroBiasAtRest, one record per
+// tag). Fills inputs, tool version and date.
 Result<Calibration> CalibrateSessions(const std::vector<const Session*>& sessions,
                                       const CalibrationOptions& options);
 

@@ -81,4 +81,12 @@ ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool
 
 Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& options);
 
+// The truth of a simulated session as JSON text ("metro.calibration-truth/1",
+// docs/simulator.md "Calibration sessions"): the options that shaped the record and, per
+// sensor, the constants the simulation used under calibration.json's keys (`bias` [LSB],
+// `scale` [g/LSB, deg/s/LSB], `misalignment` [rad], `matrix` = T K, `sensitivity` = 1/k,
+// `temperature` {`t_ref_c`, `bias_per_c` [LSB/degC]}), so a fit compares key by key.
+// 2-space indent, trailing newline; the same options give the same bytes.
+std::string CalibrationTruthJson(const SimulationOptions& options, const SimulatedSession& sim);
+
 }  // namespace metro

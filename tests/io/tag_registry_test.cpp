@@ -1,0 +1,72 @@
+// The tags file (io/tag_registry.hpp): names as before, and per tag the device ID and the IMU
+// profile; each class of bad input refused with the file and the tag.
+#include "metro/io/tag_registry.hpp"
+
+#include <catch2/catch.hpp>
+#include <string>
+
+#include "support/temp_file.hpp"
+
+namespace metro {
+
+TEST_CASE("Tags file: names, device IDs in both orders and profiles", "[io]") {
+  testing::TempFile file(
+      R"({"2": {"name": "Chest", "device_id": "12345678 9ABCDEF0", "profile": "generic"},
+          "3": "Left Arm",
+          "16": {"name": "Spare", "device_id": "0x0011223344556677"}})",
+      ".json");
+  Result<TagRegistry> r = TagRegistry::Load(file.path());
+  REQUIRE(r.ok());
+  const TagRegistry& t = r.value();
+  CHECK(t.Name(1) == "Forehead");  // thesis Table 5.2, kept
+  CHECK(t.Name(2) == "Chest");
+  CHECK(t.Name(3) == "Left Arm");
+  CHECK(t.Name(16) == "Spare");
+  CHECK(t.Name(40) == "tag 40");
+  REQUIRE(t.Find(2) != nullptr);
+  // nrfjprog's words: DEVICEID[0] = 0x12345678, DEVICEID[1] = 0x9ABCDEF0.
+  CHECK(t.Find(2)->device_id == 0x9ABCDEF012345678ull);
+  CHECK(t.Find(2)->profile == "generic");
+  CHECK_FALSE(t.Find(3)->device_id.has_value());
+  CHECK(t.Find(3)->profile.empty());
+  CHECK(t.Find(16)->device_id == 0x0011223344556677ull);
+  CHECK(t.SensorOfDevice(0x9ABCDEF012345678ull) == 2);
+  CHECK_FALSE(t.SensorOfDevice(1).has_value());
+  CHECK(t.Entries().size() == 16);
+}
+
+TEST_CASE("Tags file: bad input names the file and the tag", "[io]") {
+  struct Case {
+    const char* json;
+    const char* message;
+  };
+  const Case cases[] = {
+      {R"([1])",
+       R"(expected a JSON object {"1": "Forehead", "2": {"name": "Chest", "device_id": "12345678 9ABCDEF0", "profile": "mpu6050"}, ...})"},
+      {R"({"0": "x"})", "key '0': expected a tag number 1..255"},
+      {R"({"2": 5})", "tag 2: expected a name string or an object with name, device_id, profile"},
+      {R"({"2": {"device_id": "9ABCDEF012345678"}})", "tag 2: expected a name"},
+      {R"({"2": {"name": "C", "serial": "x"}})",
+       "tag 2: unknown key 'serial'; expected name, device_id, profile"},
+      {R"({"2": {"name": "C", "device_id": 5}})", "tag 2: device_id: expected a string"},
+      {R"({"2": {"name": "C", "device_id": "123"}})",
+       "tag 2: device_id: device id '123': expected 16 hex digits, DEVICEID[1] then DEVICEID[0] "
+       "(e.g. 9ABCDEF012345678), or the two words `nrfjprog --memrd 0x10000060 --n 8` prints, "
+       "DEVICEID[0] then DEVICEID[1] (e.g. 12345678 9ABCDEF0), with or without 0x"},
+      {R"({"2": {"name": "C", "profile": "bmi160"}})",
+       "tag 2: profile 'bmi160': expected mpu6050 or generic"},
+      {R"({"2": {"name": "C", "device_id": "9ABCDEF012345678"},
+           "3": {"name": "D", "device_id": "12345678 9abcdef0"}})",
+       "tag 3: device_id 9ABCDEF012345678 is tag 2's already"},
+  };
+  for (const Case& c : cases) {
+    testing::TempFile file(c.json, ".json");
+    Result<TagRegistry> r = TagRegistry::Load(file.path());
+    INFO(c.json);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().file == file.path());
+    CHECK(r.error().message == c.message);
+  }
+}
+
+}  // namespace metro

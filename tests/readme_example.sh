@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Runs one README "Worked examples" section as written: the first ```sh block under the
+# heading "### HEADING", in a scratch directory, with the README's `build/` and `datasets/`
+# paths pointing at this build and this checkout. Fails when a command fails.
+# Usage: tests/readme_example.sh SOURCE_DIR BUILD_DIR HEADING
+set -euo pipefail
+source_dir="$1"
+build_dir="$2"
+heading="$3"
+block="$(awk -v h="### $heading" '
+  $0 == h { inside = 1; next }
+  inside && /^##/ { exit }
+  inside && /^```sh$/ { code = 1; next }
+  inside && code && /^```$/ { exit }
+  inside && code { print }
+' "$source_dir/README.md")"
+if [ -z "$block" ]; then
+  echo "readme_example: no \`\`\`sh block under '### $heading' in README.md" >&2
+  exit 1
+fi
+scratch="$(mktemp -d "$build_dir/readme_example.XXXXXX")"
+trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$scratch"' EXIT
+cd "$scratch"
+ln -s "$build_dir" build
+ln -s "$source_dir/datasets" datasets
+printf '%s\n' "== README: $heading" "$block"
+bash -euo pipefail -c "$block"
+echo "== README example '$heading': all commands succeeded"
