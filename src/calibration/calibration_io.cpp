@@ -609,6 +609,10 @@ json CalibrationToJson(const Calibration& cal) {
     tags.push_back(tj);
   }
   j["tags"] = tags;
+  if (cal.conformity) {
+    j["conformity_rule"] = ConformityRuleToJson(*cal.conformity);
+    j["conformity"] = ConformityEntriesToJson(*cal.conformity);
+  }
   return j;
 }
 
@@ -669,11 +673,21 @@ Result<Calibration> CalibrationFromJson(const json& j, const std::string& file) 
     }
     cal.tags.push_back(std::move(t));
   }
+  if (j.contains("conformity") || j.contains("conformity_rule")) {
+    Result<ConformityStatement> c =
+        ConformityFromJson(j.value("conformity", json()), j.value("conformity_rule", json()), file);
+    if (!c.ok()) return c.error();
+    cal.conformity = std::move(c).value();
+  }
   return cal;
 }
 
 std::string FormatCalibrationJson(const Calibration& calibration) {
   return JsonText(CalibrationToJson(calibration), 2) + "\n";
+}
+
+std::string CalibrationCertificateId(const Calibration& calibration) {
+  return Sha256Hex(FormatCalibrationJson(calibration)).substr(0, 16);
 }
 
 Result<Calibration> LoadCalibration(const std::string& path) {

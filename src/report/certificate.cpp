@@ -43,6 +43,38 @@ mustache::data ResultRow(const std::string& constant, const std::string& unit, d
 
 const char* kAxes[3] = {"x", "y", "z"};
 
+// Section 6, the statement of conformity with its decision rule (ISO/IEC 17025:2017 7.8.6.2),
+// when calibration.json carries one (docs/conformity.md).
+void SetConformity(const Calibration& cal, double k, mustache::data* data) {
+  if (!cal.conformity) return;
+  const ConformityStatement& st = *cal.conformity;
+  mustache::data rows{mustache::data::type::list};
+  int pass = 0, fail = 0, inconclusive = 0;
+  auto limit = [](const std::optional<double>& v) { return v ? Short(*v, 8) : std::string("-"); };
+  for (const ConformityEntry& e : st.entries) {
+    mustache::data row = ResultRow(e.constant, e.unit, e.value, e.u, k);
+    row.set("sensor", std::to_string(e.sensor));
+    row.set("lower", limit(e.lower));
+    row.set("upper", limit(e.upper));
+    row.set("acceptance", e.acceptance_lower || e.acceptance_upper
+                              ? limit(e.acceptance_lower) + " .. " + limit(e.acceptance_upper)
+                              : std::string("p_c rule"));
+    row.set("p_c", fmt::format("{:.4f}", e.p_conformance));
+    row.set("decision", ConformityDecisionName(e.decision));
+    rows.push_back(row);
+    (e.decision == ConformityDecision::kPass   ? pass
+     : e.decision == ConformityDecision::kFail ? fail
+                                               : inconclusive) += 1;
+  }
+  mustache::data c;
+  c.set("rule", st.DescribeRule());
+  c.set("rows", rows);
+  c.set("summary", fmt::format("{} of {} constants pass, {} fail, {} inconclusive.", pass,
+                               st.entries.size(), fail, inconclusive));
+  c.set("all_pass", fail == 0 && inconclusive == 0 ? mustache::data(true) : mustache::data(false));
+  data->set("conformity", c);
+}
+
 const Quantity* FindColumn(const Tag& tag, const std::string& name) { return tag.Find(name); }
 
 Result<std::string> ResidualPlot(const SensorCalibration& c, int sensor,
@@ -227,8 +259,7 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     return MakeError(fmt::format("certificate: {} sessions given for {} calibration inputs",
                                  sessions.size(), cal.inputs.size()));
   }
-  const std::string json = FormatCalibrationJson(cal);
-  const std::string certificate_id = Sha256Hex(json).substr(0, 16);
+  const std::string certificate_id = CalibrationCertificateId(cal);
   mustache::data data;
   data.set("certificate_id",
            fmt::format("{} (first 16 hex digits of the SHA-256 of the calibration JSON)",
@@ -343,6 +374,7 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       "Uncertainties are Type A from the fit residuals; they do not include the reference "
       "(local gravity, table rate) uncertainty or long-term drift of the tag."));
   data.set("validity", validity);
+  SetConformity(cal, options.coverage_factor, &data);
 
   Result<std::string> body = report_internal::RenderTemplate("certificate", std::move(data));
   if (!body.ok()) return body;

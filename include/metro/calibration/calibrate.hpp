@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "metro/calibration/conformity.hpp"
 #include "metro/calibration/imu_model.hpp"
 #include "metro/calibration/segment_file.hpp"
 #include "metro/calibration/segments.hpp"
@@ -149,6 +150,9 @@ struct Calibration {
   std::string tool_version;
   std::string date_utc;  // ISO 8601, e.g. "2024-05-01T12:00:00Z".
   std::vector<TagCalibration> tags;
+  // Statements of conformity with a spec (`calibrate fit --spec`, docs/conformity.md); absent
+  // when no spec was given.
+  std::optional<ConformityStatement> conformity;
 
   const TagCalibration* FindTag(int sensor) const;
 };

@@ -32,6 +32,9 @@ Result<Calibration> CalibrationFromJson(const nlohmann::json& json, const std::s
 // Pretty-printed JSON text (2-space indent, trailing newline).
 std::string FormatCalibrationJson(const Calibration& calibration);
 Result<Calibration> LoadCalibration(const std::string& path);
+// The certificate id: the first 16 hex digits of the SHA-256 of FormatCalibrationJson (the
+// certificate's section 1 and the registry's `certificate_id`).
+std::string CalibrationCertificateId(const Calibration& calibration);
 
 // A readable summary: per tag and sensor the constants with their standard uncertainties, the
 // residuals and the segments.

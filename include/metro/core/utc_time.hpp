@@ -3,6 +3,7 @@
 #pragma once
 
 #include <ctime>
+#include <optional>
 #include <string>
 
 namespace metro {
@@ -12,5 +13,8 @@ std::string UtcIso8601(std::time_t t);
 
 // The current time as ISO 8601 UTC.
 std::string UtcIso8601Now();
+
+// "2026-05-28T20:26:40Z" -> seconds since 1970-01-01 UTC; nullopt for any other form.
+std::optional<std::time_t> ParseUtcIso8601(const std::string& text);
 
 }  // namespace metro

@@ -1,0 +1,471 @@
+#include "metro/calibration/conformity.hpp"
+
+#include <fmt/format.h>
+
+#include <boost/math/distributions/normal.hpp>
+#include <cmath>
+#include <set>
+
+#include "metro/calibration/named_constants.hpp"
+#include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
+#include "metro/core/units.hpp"
+
+namespace metro {
+namespace {
+
+using nlohmann::json;
+
+// Where the index'th object of the top-level array `key` begins in `text` (1-based line and
+// column of its '{'); {0, 0} when not found. nlohmann_json keeps no positions, so the text is
+// scanned: strings are skipped, depth is counted.
+std::pair<int64_t, int64_t> LocateArrayElement(const std::string& text, const std::string& key,
+                                               size_t index) {
+  const std::string quoted = "\"" + key + "\"";
+  size_t pos = text.find(quoted);
+  if (pos == std::string::npos) return {0, 0};
+  pos = text.find('[', pos + quoted.size());
+  if (pos == std::string::npos) return {0, 0};
+  int depth = 0;
+  size_t seen = 0;
+  bool in_string = false;
+  for (size_t i = pos + 1; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '{' || c == '[') {
+      if (depth == 0 && c == '{') {
+        if (seen == index) {
+          int64_t line = 1;
+          int64_t column = 1;
+          for (size_t k = 0; k < i; ++k) {
+            if (text[k] == '\n') {
+              ++line;
+              column = 1;
+            } else {
+              ++column;
+            }
+          }
+          return {line, column};
+        }
+        ++seen;
+      }
+      ++depth;
+    } else if (c == '}' || c == ']') {
+      if (depth == 0) break;
+      --depth;
+    }
+  }
+  return {0, 0};
+}
+
+Error SpecError(const std::string& path, int64_t line, int64_t column, std::string message) {
+  return MakeError(path, line, column, std::move(message));
+}
+
+const char* const kSpecShape =
+    "expected {\"tolerances\": [{\"constant\": \"accel.b_x\", \"lower\": -300, \"upper\": 300, "
+    "\"unit\": \"LSB\"}], \"decision_rule\": \"simple\"|\"guarded\"|\"risk\"[, "
+    "\"coverage_factor\": 2][, \"max_consumer_risk\": 0.023]}";
+
+bool IsLsbUnit(const std::string& unit) {
+  return unit.find("LSB") != std::string::npos || unit.find("lsb") != std::string::npos;
+}
+
+}  // namespace
+
+const char* DecisionRuleName(DecisionRule rule) {
+  switch (rule) {
+    case DecisionRule::kSimple:
+      return "simple";
+    case DecisionRule::kGuarded:
+      return "guarded";
+    case DecisionRule::kRisk:
+      return "risk";
+  }
+  return "simple";
+}
+
+std::optional<DecisionRule> ParseDecisionRule(const std::string& name) {
+  if (name == "simple") return DecisionRule::kSimple;
+  if (name == "guarded") return DecisionRule::kGuarded;
+  if (name == "risk") return DecisionRule::kRisk;
+  return std::nullopt;
+}
+
+const char* ConformityDecisionName(ConformityDecision decision) {
+  switch (decision) {
+    case ConformityDecision::kPass:
+      return "pass";
+    case ConformityDecision::kFail:
+      return "fail";
+    case ConformityDecision::kInconclusive:
+      return "inconclusive";
+  }
+  return "fail";
+}
+
+std::optional<ConformityDecision> ParseConformityDecision(const std::string& name) {
+  if (name == "pass") return ConformityDecision::kPass;
+  if (name == "fail") return ConformityDecision::kFail;
+  if (name == "inconclusive") return ConformityDecision::kInconclusive;
+  return std::nullopt;
+}
+
+bool ConformitySpec::IsValid(std::string* why) const {
+  if (!(coverage_factor > 0.0) || !std::isfinite(coverage_factor)) {
+    *why = "coverage_factor must be a finite number > 0";
+    return false;
+  }
+  if (rule == DecisionRule::kRisk && !(max_consumer_risk > 0.0 && max_consumer_risk < 0.5)) {
+    *why = "the risk rule needs max_consumer_risk in (0, 0.5)";
+    return false;
+  }
+  for (const Tolerance& t : tolerances) {
+    if (!t.lower && !t.upper) {
+      *why = "tolerance of '" + t.constant + "' has no limit";
+      return false;
+    }
+    if (t.lower && t.upper && *t.lower > *t.upper) {
+      *why = "tolerance of '" + t.constant + "' has lower > upper";
+      return false;
+    }
+  }
+  return true;
+}
+
+Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::string& path) {
+  Result<json> parsed = ParseJsonText(text, path);
+  if (!parsed.ok()) return parsed.error();
+  const json& j = parsed.value();
+  if (!j.is_object())
+    return SpecError(path, 1, 1, std::string("a spec is an object; ") + kSpecShape);
+  static const std::set<std::string> kTop = {"tolerances", "decision_rule", "coverage_factor",
+                                             "max_consumer_risk", "description"};
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    if (!kTop.count(it.key())) {
+      return SpecError(path, 0, 0,
+                       fmt::format("unknown key '{}'; the spec keys are tolerances, "
+                                   "decision_rule, coverage_factor, max_consumer_risk, "
+                                   "description",
+                                   it.key()));
+    }
+  }
+  ConformitySpec spec;
+  spec.path = path;
+  if (!j.contains("decision_rule") || !j["decision_rule"].is_string()) {
+    return SpecError(path, 0, 0, std::string("missing 'decision_rule'; ") + kSpecShape);
+  }
+  const std::optional<DecisionRule> rule = ParseDecisionRule(j["decision_rule"].get<std::string>());
+  if (!rule) {
+    return SpecError(path, 0, 0,
+                     fmt::format("decision_rule '{}' is not simple, guarded or risk",
+                                 j["decision_rule"].get<std::string>()));
+  }
+  spec.rule = *rule;
+  if (j.contains("coverage_factor")) {
+    if (!j["coverage_factor"].is_number()) {
+      return SpecError(path, 0, 0, "'coverage_factor' must be a number (e.g. 2)");
+    }
+    spec.coverage_factor = j["coverage_factor"].get<double>();
+  }
+  if (j.contains("max_consumer_risk")) {
+    if (!j["max_consumer_risk"].is_number()) {
+      return SpecError(path, 0, 0, "'max_consumer_risk' must be a number (e.g. 0.023)");
+    }
+    spec.max_consumer_risk = j["max_consumer_risk"].get<double>();
+  }
+  if (!j.contains("tolerances") || !j["tolerances"].is_array() || j["tolerances"].empty()) {
+    return SpecError(path, 0, 0,
+                     std::string("'tolerances' must be a non-empty array; ") + kSpecShape);
+  }
+  static const std::set<std::string> kEntry = {"constant", "lower", "upper", "unit"};
+  std::set<std::string> names;
+  for (size_t i = 0; i < j["tolerances"].size(); ++i) {
+    const json& e = j["tolerances"][i];
+    const auto [line, column] = LocateArrayElement(text, "tolerances", i);
+    auto fail = [&](const std::string& what) {
+      return SpecError(path, line, column, fmt::format("tolerances[{}]: {}", i, what));
+    };
+    if (!e.is_object()) {
+      return fail("expected an object {\"constant\", \"lower\", \"upper\", \"unit\"}");
+    }
+    for (auto it = e.begin(); it != e.end(); ++it) {
+      if (!kEntry.count(it.key())) {
+        return fail(
+            fmt::format("unknown key '{}'; an entry has constant, lower, upper, unit", it.key()));
+      }
+    }
+    Tolerance t;
+    t.line = line;
+    t.column = column;
+    if (!e.contains("constant") || !e["constant"].is_string()) {
+      return fail("missing 'constant' (a name such as \"accel.b_x\")");
+    }
+    t.constant = e["constant"].get<std::string>();
+    if (!names.insert(t.constant).second)
+      return fail(fmt::format("'{}' is given twice", t.constant));
+    if (!e.contains("unit") || !e["unit"].is_string()) {
+      return fail(
+          fmt::format("'{}': missing 'unit' (e.g. \"LSB\", \"g_n/LSB\", \"rad\")", t.constant));
+    }
+    t.unit = e["unit"].get<std::string>();
+    for (const char* key : {"lower", "upper"}) {
+      if (!e.contains(key) || e[key].is_null()) continue;
+      if (!e[key].is_number() || !std::isfinite(e[key].get<double>())) {
+        return fail(fmt::format("'{}': '{}' must be a finite number", t.constant, key));
+      }
+      (std::string(key) == "lower" ? t.lower : t.upper) = e[key].get<double>();
+    }
+    if (!t.lower && !t.upper) {
+      return fail(fmt::format("'{}' has neither 'lower' nor 'upper'", t.constant));
+    }
+    if (t.lower && t.upper && *t.lower > *t.upper) {
+      return fail(fmt::format("'{}': lower {} > upper {}", t.constant, *t.lower, *t.upper));
+    }
+    spec.tolerances.push_back(std::move(t));
+  }
+  std::string why;
+  if (!spec.IsValid(&why)) return SpecError(path, 0, 0, why);
+  return spec;
+}
+
+Result<ConformitySpec> LoadConformitySpec(const std::string& path) {
+  Result<std::string> text = ReadFile(path);
+  if (!text.ok()) return text.error();
+  return ParseConformitySpec(text.value(), path);
+}
+
+double ConformanceProbability(double value, double u, std::optional<double> lower,
+                              std::optional<double> upper) {
+  METRO_CHECK(u >= 0.0);
+  if (u == 0.0) {
+    return (!lower || value >= *lower) && (!upper || value <= *upper) ? 1.0 : 0.0;
+  }
+  // JCGM 106:2012 7.3: p_c = Phi((T_U - y)/u) - Phi((T_L - y)/u), written with the upper tail
+  // where it is small so that a p_c near 1 keeps its digits.
+  const boost::math::normal n;
+  const double below = lower ? boost::math::cdf(n, (*lower - value) / u) : 0.0;
+  const double above =
+      upper ? boost::math::cdf(boost::math::complement(n, (*upper - value) / u)) : 0.0;
+  return std::max(0.0, 1.0 - below - above);
+}
+
+ConformityEntry DecideConformity(const std::string& constant, double value, double u,
+                                 std::optional<double> lower, std::optional<double> upper,
+                                 DecisionRule rule, double coverage_factor,
+                                 double max_consumer_risk) {
+  ConformityEntry e;
+  e.constant = constant;
+  e.value = value;
+  e.u = u;
+  e.lower = lower;
+  e.upper = upper;
+  e.p_conformance = ConformanceProbability(value, u, lower, upper);
+  const bool inside = (!lower || value >= *lower) && (!upper || value <= *upper);
+  switch (rule) {
+    case DecisionRule::kSimple:
+      // JCGM 106:2012 8.2: acceptance limits = tolerance limits.
+      e.acceptance_lower = lower;
+      e.acceptance_upper = upper;
+      e.decision = inside ? ConformityDecision::kPass : ConformityDecision::kFail;
+      break;
+    case DecisionRule::kGuarded: {
+      // JCGM 106:2012 8.3.2, guarded acceptance: A_L = T_L + w, A_U = T_U - w, w = U = k u
+      // (ILAC G8:09/2019 4.2.2). Between an acceptance and a tolerance limit the statement is
+      // inconclusive (ILAC G8 4.2.3, non-binary); outside the tolerance interval, fail.
+      const double w = coverage_factor * u;
+      if (lower) e.acceptance_lower = *lower + w;
+      if (upper) e.acceptance_upper = *upper - w;
+      const bool accepted = (!e.acceptance_lower || value >= *e.acceptance_lower) &&
+                            (!e.acceptance_upper || value <= *e.acceptance_upper) &&
+                            (!e.acceptance_lower || !e.acceptance_upper ||
+                             *e.acceptance_lower <= *e.acceptance_upper);
+      e.decision = accepted ? ConformityDecision::kPass
+                   : inside ? ConformityDecision::kInconclusive
+                            : ConformityDecision::kFail;
+      break;
+    }
+    case DecisionRule::kRisk:
+      // JCGM 106:2012 9.3: the specific consumer's risk of accepting this item is 1 - p_c.
+      if (1.0 - e.p_conformance <= max_consumer_risk) {
+        e.decision = ConformityDecision::kPass;
+      } else if (e.p_conformance <= max_consumer_risk) {
+        e.decision = ConformityDecision::kFail;
+      } else {
+        e.decision = ConformityDecision::kInconclusive;
+      }
+      break;
+  }
+  return e;
+}
+
+bool ConformityStatement::AnyFail() const {
+  for (const ConformityEntry& e : entries) {
+    if (e.decision == ConformityDecision::kFail) return true;
+  }
+  return false;
+}
+
+std::string ConformityStatement::DescribeRule() const {
+  switch (rule) {
+    case DecisionRule::kSimple:
+      return "simple acceptance: the acceptance limits are the tolerance limits (binary "
+             "statement, shared risk; JCGM 106:2012 8.2, ILAC G8:09/2019 4.2.1)";
+    case DecisionRule::kGuarded:
+      return fmt::format(
+          "guarded acceptance with guard band w = U = {} u: pass inside the tolerance interval "
+          "narrowed by w, fail outside the tolerance interval, inconclusive between (JCGM "
+          "106:2012 8.3.2, ILAC G8:09/2019 4.2.2)",
+          coverage_factor);
+    case DecisionRule::kRisk:
+      return fmt::format(
+          "specific risk: pass when the specific consumer's risk 1 - p_c is at most {}, fail "
+          "when p_c is at most {}, inconclusive otherwise (JCGM 106:2012 9.3)",
+          max_consumer_risk, max_consumer_risk);
+  }
+  return "";
+}
+
+Result<ConformityStatement> EvaluateConformity(const Calibration& calibration,
+                                               const ConformitySpec& spec) {
+  std::string why;
+  if (!spec.IsValid(&why)) return MakeError(spec.path, 0, why);
+  ConformityStatement out;
+  out.rule = spec.rule;
+  out.coverage_factor = spec.coverage_factor;
+  out.max_consumer_risk = spec.max_consumer_risk;
+  for (const TagCalibration& tag : calibration.tags) {
+    const std::vector<NamedConstant> constants = NamedConstants(tag);
+    for (const Tolerance& t : spec.tolerances) {
+      auto fail = [&](const std::string& what) {
+        return SpecError(spec.path, t.line, t.column, what);
+      };
+      const NamedConstant* c = nullptr;
+      for (const NamedConstant& n : constants) {
+        if (n.name == t.constant) c = &n;
+      }
+      if (c == nullptr) {
+        std::string have;
+        for (const NamedConstant& n : constants) have += (have.empty() ? "" : " ") + n.name;
+        return fail(fmt::format("sensor {} has no constant '{}'; it has: {}", tag.sensor,
+                                t.constant, have));
+      }
+      Result<PhysicalUnit> from = PhysicalUnit::Parse(c->unit);
+      Result<PhysicalUnit> to = PhysicalUnit::Parse(t.unit);
+      if (!to.ok()) return fail(fmt::format("'{}': unit: {}", t.constant, to.error().message));
+      if (!from.ok()) return from.error();
+      const std::optional<UnitConversion> conv = from.value().ConversionTo(to.value());
+      if (!conv || IsLsbUnit(c->unit) != IsLsbUnit(t.unit)) {
+        return fail(fmt::format("'{}': unit '{}' does not match the constant's unit '{}'",
+                                t.constant, t.unit, c->unit));
+      }
+      ConformityEntry e = DecideConformity(
+          t.constant, conv->ConvertValue(c->value), std::abs(conv->ConvertDifference(c->u)),
+          t.lower, t.upper, spec.rule, spec.coverage_factor, spec.max_consumer_risk);
+      e.sensor = tag.sensor;
+      e.unit = t.unit;
+      out.entries.push_back(std::move(e));
+    }
+  }
+  return out;
+}
+
+nlohmann::json ConformityEntriesToJson(const ConformityStatement& statement) {
+  json list = json::array();
+  for (const ConformityEntry& e : statement.entries) {
+    json j;
+    j["sensor"] = e.sensor;
+    j["constant"] = e.constant;
+    j["value"] = e.value;
+    j["u"] = e.u;
+    j["lower"] = e.lower ? json(*e.lower) : json(nullptr);
+    j["upper"] = e.upper ? json(*e.upper) : json(nullptr);
+    j["unit"] = e.unit;
+    j["acceptance_lower"] = e.acceptance_lower ? json(*e.acceptance_lower) : json(nullptr);
+    j["acceptance_upper"] = e.acceptance_upper ? json(*e.acceptance_upper) : json(nullptr);
+    j["p_conformance"] = e.p_conformance;
+    j["decision"] = ConformityDecisionName(e.decision);
+    list.push_back(std::move(j));
+  }
+  return list;
+}
+
+nlohmann::json ConformityRuleToJson(const ConformityStatement& statement) {
+  json j;
+  j["decision_rule"] = DecisionRuleName(statement.rule);
+  j["coverage_factor"] = statement.coverage_factor;
+  if (statement.rule == DecisionRule::kRisk) j["max_consumer_risk"] = statement.max_consumer_risk;
+  j["statement"] = statement.DescribeRule();
+  return j;
+}
+
+Result<ConformityStatement> ConformityFromJson(const nlohmann::json& entries,
+                                               const nlohmann::json& rule,
+                                               const std::string& file) {
+  ConformityStatement s;
+  auto bad = [&](const std::string& key) {
+    return MakeError(file, 0, fmt::format("missing or malformed key '{}'", key));
+  };
+  if (!rule.is_object() || !rule.contains("decision_rule") || !rule["decision_rule"].is_string() ||
+      !ParseDecisionRule(rule["decision_rule"].get<std::string>())) {
+    return bad("conformity_rule.decision_rule");
+  }
+  s.rule = *ParseDecisionRule(rule["decision_rule"].get<std::string>());
+  if (rule.contains("coverage_factor") && rule["coverage_factor"].is_number()) {
+    s.coverage_factor = rule["coverage_factor"].get<double>();
+  }
+  if (rule.contains("max_consumer_risk") && rule["max_consumer_risk"].is_number()) {
+    s.max_consumer_risk = rule["max_consumer_risk"].get<double>();
+  }
+  if (!entries.is_array()) return bad("conformity");
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const json& j = entries[i];
+    const std::string at = fmt::format("conformity[{}]", i);
+    if (!j.is_object()) return bad(at);
+    ConformityEntry e;
+    auto number = [&](const char* key, double* v) {
+      if (!j.contains(key) || !j[key].is_number()) return false;
+      *v = j[key].get<double>();
+      return true;
+    };
+    auto optional_number = [&](const char* key, std::optional<double>* v) {
+      if (!j.contains(key) || j[key].is_null()) return true;
+      if (!j[key].is_number()) return false;
+      *v = j[key].get<double>();
+      return true;
+    };
+    if (!j.contains("sensor") || !j["sensor"].is_number_integer()) return bad(at + ".sensor");
+    e.sensor = j["sensor"].get<int>();
+    if (!j.contains("constant") || !j["constant"].is_string()) return bad(at + ".constant");
+    e.constant = j["constant"].get<std::string>();
+    if (!j.contains("unit") || !j["unit"].is_string()) return bad(at + ".unit");
+    e.unit = j["unit"].get<std::string>();
+    if (!number("value", &e.value)) return bad(at + ".value");
+    if (!number("u", &e.u)) return bad(at + ".u");
+    if (!number("p_conformance", &e.p_conformance)) return bad(at + ".p_conformance");
+    if (!optional_number("lower", &e.lower)) return bad(at + ".lower");
+    if (!optional_number("upper", &e.upper)) return bad(at + ".upper");
+    if (!optional_number("acceptance_lower", &e.acceptance_lower))
+      return bad(at + ".acceptance_lower");
+    if (!optional_number("acceptance_upper", &e.acceptance_upper))
+      return bad(at + ".acceptance_upper");
+    if (!j.contains("decision") || !j["decision"].is_string() ||
+        !ParseConformityDecision(j["decision"].get<std::string>())) {
+      return bad(at + ".decision");
+    }
+    e.decision = *ParseConformityDecision(j["decision"].get<std::string>());
+    s.entries.push_back(std::move(e));
+  }
+  return s;
+}
+
+}  // namespace metro
