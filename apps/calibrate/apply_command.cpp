@@ -9,6 +9,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
+#include "registry_hooks.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -21,6 +22,7 @@ struct ApplyOptions {
   bool imutk = false;
   std::optional<double> t_valid_min_c;  // As given to `calibrate blob`.
   std::optional<double> t_valid_max_c;
+  RegistryCliOptions registry;  // --registry: records the calibration applied (docs/registry.md)
 };
 
 int RunApply(const ApplyOptions& a) {
@@ -43,6 +45,8 @@ int RunApply(const ApplyOptions& a) {
     apps::PrintError(cal.error());
     return kExitUsage;
   }
+  OpenedRegistry registry = OpenRegistryOption(a.registry);
+  if (registry.exit_code != 0) return registry.exit_code;
   Result<Session> session =
       a.imutk ? LoadImuTk(a.inputs[0], a.inputs[1]) : LoadSession(a.inputs[0]);
   if (!session.ok()) {
@@ -77,7 +81,7 @@ int RunApply(const ApplyOptions& a) {
   apps::Note(fmt::format("wrote {}: {} tags, {} rows calibrated\n",
                          apps::IsStdio(a.output) ? "stdout" : a.output,
                          summary.value().tags_calibrated, summary.value().rows));
-  return kExitOk;
+  return RecordAppliedCalibration(registry.registry.get(), cal.value(), a.calibration, a.registry);
 }
 
 }  // namespace
@@ -103,6 +107,7 @@ void AddApplyCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--t-valid-max-c", o->t_valid_max_c,
                   "upper end of the temperature validity range (default: the fitted span + 5 "
                   "degC)");
+  AddRegistryOptions(sub, &o->registry);
   sub->callback([o, exit_code] { *exit_code = RunApply(*o); });
 }
 

@@ -13,6 +13,7 @@
 #include "metro/blob/intel_hex.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
+#include "registry_hooks.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -32,6 +33,7 @@ struct BlobOptions {
   std::string profile = "mpu6050";
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
+  RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
 };
 
 // "0x3B000" or "241664" -> address; a page-aligned slot A whose slot B (the next page) lies
@@ -78,6 +80,8 @@ int RunBlob(const BlobOptions& b) {
     apps::PrintErrorText(cal.error().ToString());
     return kExitUsage;
   }
+  OpenedRegistry registry = OpenRegistryOption(b.registry);
+  if (registry.exit_code != 0) return registry.exit_code;
   blob::BlobFromCalibrationOptions o;
   o.sensor = b.sensor;
   o.device_id = id.value();
@@ -139,7 +143,8 @@ int RunBlob(const BlobOptions& b) {
       apps::Note(fmt::format("program with: {}\n", blob::NrfjprogCommand(b.hex)));
     }
   }
-  return kExitOk;
+  return RecordBlobResult(registry.registry.get(), cal.value(), b.calibration, b.sensor,
+                          contents.value(), id.value(), b.seq, crc, b.output, b.registry);
 }
 
 }  // namespace
@@ -174,6 +179,7 @@ void AddBlobCommand(CLI::App& app, int* exit_code) {
                   "upper end of the temperature validity range (default: the fitted span + 5 "
                   "degC)");
   AddSensorProfileOptions(sub, &o->profile, &o->accel_fs_g, &o->gyro_fs_dps);
+  AddRegistryOptions(sub, &o->registry);
   sub->callback([o, exit_code] { *exit_code = RunBlob(*o); });
 }
 

@@ -20,6 +20,7 @@ void AddReportCommand(CLI::App& app, int* exit_code);
 void AddBlobCommand(CLI::App& app, int* exit_code);
 void AddInspectCommand(CLI::App& app, int* exit_code);
 void AddPushCommand(CLI::App& app, int* exit_code);
+void AddRegistryCommand(CLI::App& app, int* exit_code);
 
 // --profile mpu6050|generic, --accel-fs-g G, --gyro-fs-dps D of `blob` and `push`: the nominal
 // sensitivity a blob section declares (metro::blob::SensorProfile, docs/calibration-blob.md 10).

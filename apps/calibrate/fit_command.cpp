@@ -1,17 +1,20 @@
 // calibrate fit SESSION... -o calibration.json [--sensor N] [--model bias|scale|full] ...
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <optional>
 
 #include "cli_progress.hpp"
 #include "commands.hpp"
+#include "conformity_cli.hpp"
 #include "load_cli.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/certificate.hpp"
+#include "registry_hooks.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -35,7 +38,9 @@ struct FitOptions {
   std::optional<double> min_static_s;  // Shortest pose kept (default 1 s; shrinks the window).
   std::string segments;                // Annotated segments instead of the detector.
   std::string html;                    // Calibration certificate (docs/reports.md).
-  apps::LoadCliOptions load;  // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
+  apps::LoadCliOptions load;    // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
+  SpecCliOptions spec;          // --spec, --fail-on-nonconformity (docs/conformity.md)
+  RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
 };
 
 int RunFit(const FitOptions& f) {
@@ -110,13 +115,17 @@ int RunFit(const FitOptions& f) {
     apps::PrintError(s.error());
     return kExitUsage;
   }
-  std::vector<apps::NamedPath> inputs = {{"--columns-file", f.load.columns_file},
-                                         {"--segments", f.segments}};
+  std::vector<apps::NamedPath> inputs = {
+      {"--columns-file", f.load.columns_file}, {"--segments", f.segments}, {"--spec", f.spec.spec}};
   for (const std::string& in : f.inputs) inputs.push_back({"SESSION", in});
   if (Status s = apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs); !s.ok()) {
     apps::PrintError(s.error());
     return kExitUsage;
   }
+  const LoadedSpec spec = LoadSpecOption(f.spec);
+  if (spec.exit_code != 0) return spec.exit_code;
+  OpenedRegistry registry = OpenRegistryOption(f.registry);
+  if (registry.exit_code != 0) return registry.exit_code;
   std::vector<Session> sessions;
   const size_t step = f.imutk ? 2 : 1;
   TerminalProgress progress(stderr, apps::CliProgressOptions());  // Loads (bytes), then the fit.
@@ -153,6 +162,7 @@ int RunFit(const FitOptions& f) {
     apps::PrintError(cal.error());
     return kExitFailed;
   }
+  if (int rc = ApplySpec(spec.spec, &cal.value()); rc != kExitOk) return rc;
   std::string html;
   if (!f.html.empty()) {
     CertificateOptions certificate;
@@ -216,7 +226,14 @@ int RunFit(const FitOptions& f) {
   }
   apps::Note(fmt::format("wrote {}\n", apps::IsStdio(f.output) ? "stdout" : f.output));
   if (!f.html.empty()) apps::Note(fmt::format("wrote {}\n", f.html));
-  return kExitOk;
+  int rc = ConformityExitCode(f.spec, cal.value());
+  if (registry.registry) {
+    const Result<std::vector<int64_t>> ids = registry.registry->RecordCalibration(
+        cal.value(), CalibrationCertificateId(cal.value()), f.registry.Context());
+    rc = std::max(rc, RegistryResult(ids.status(), fmt::format("{} tag calibration(s)",
+                                                               cal.value().tags.size())));
+  }
+  return rc;
 }
 
 }  // namespace
@@ -262,6 +279,8 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
                   "kind,start_s,end_s[,table_rate_dps][,input] (docs/calibration-model.md)")
       ->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
+  AddSpecOptions(sub, &o->spec);
+  AddRegistryOptions(sub, &o->registry);
   sub->callback([o, exit_code] { *exit_code = RunFit(*o); });
 }
 

@@ -12,6 +12,7 @@
 #include "metro/blob/push_client.hpp"
 #include "metro/blob/serial_port.hpp"
 #include "metro/calibration/calibration_io.hpp"
+#include "registry_hooks.hpp"
 
 namespace metro::calibrate_app {
 namespace {
@@ -30,6 +31,7 @@ struct PushCliOptions {
   std::string profile = "mpu6050";
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
+  RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
 };
 
 int RunPush(const PushCliOptions& c) {
@@ -77,6 +79,8 @@ int RunPush(const PushCliOptions& c) {
       return kExitUsage;
     }
   }
+  OpenedRegistry registry = OpenRegistryOption(c.registry);
+  if (registry.exit_code != 0) return registry.exit_code;
   Result<std::unique_ptr<blob::SerialPort>> port = blob::SerialPort::Open(c.port);
   if (!port.ok()) {
     apps::PrintErrorText(port.error().ToString());
@@ -124,9 +128,11 @@ int RunPush(const PushCliOptions& c) {
   }
   // The result is one line: a newline in the message (from a port or file name) is escaped.
   const std::string message = EscapeControlChars(s.message);
+  const int recorded = RecordPushResult(registry.registry.get(), cal.value(), c.calibration,
+                                        c.sensor, s, expect, c.port, c.registry);
   if (s.ok) {
     apps::Note(fmt::format("OK: {}\n", message));
-    return kExitOk;
+    return recorded;
   }
   // An unknown outcome or a live but unchecked calibration is not a failure to write: the
   // message says what the tag may hold (docs/calibration-blob.md section 11).
@@ -172,6 +178,7 @@ void AddPushCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--retries", o->retries, "resends of one request (default 5)")
       ->check(CLI::Range(0, 100));
   AddSensorProfileOptions(sub, &o->profile, &o->accel_fs_g, &o->gyro_fs_dps);
+  AddRegistryOptions(sub, &o->registry);
   sub->callback([o, exit_code] { *exit_code = RunPush(*o); });
 }
 

@@ -1,0 +1,261 @@
+// calibrate registry history|drift|due|export: queries over the calibration registry
+// (docs/registry.md). The work is metro/registry/registry.hpp.
+#include <fmt/format.h>
+#include <sys/stat.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "metro/blob/blob.hpp"
+#include "metro/core/json_text.hpp"
+#include "metro/core/utc_time.hpp"
+#include "metro/registry/registry.hpp"
+#include "unix_cli.hpp"
+
+namespace metro::calibrate_app {
+namespace {
+
+using nlohmann::json;
+
+struct RegistryQueryOptions {
+  std::string url;
+  std::string device_id;
+  bool json = false;
+  double interval_days = kDefaultRecalibrationIntervalDays;
+  std::string at_utc;  // `due`: the time to judge at (default now)
+  bool all = false;    // `due`: every device, due or not
+  std::string format = "csv";
+  std::string output = "-";
+};
+
+// A query never creates a registry: a SQLite file must exist.
+Result<std::unique_ptr<Registry>> OpenForQuery(const std::string& flag) {
+  const std::string url = Registry::UrlFromFlagOrEnvironment(flag);
+  if (url.empty()) return MakeError("no registry: give --registry URL or set METRO_REGISTRY");
+  struct stat st {};
+  if (url.find("://") == std::string::npos && ::stat(url.c_str(), &st) != 0) {
+    return MakeError(url, 0, "no such registry file");
+  }
+  return Registry::Open(url);
+}
+
+Result<uint64_t> DeviceId(const std::string& text) {
+  Result<uint64_t> id = blob::ParseDeviceId(text);
+  if (!id.ok()) return MakeError("--device-id: " + id.error().message);
+  return id;
+}
+
+std::string Csv(const std::string& field) {
+  if (field.find_first_of(",\"\n\r") == std::string::npos) return field;
+  std::string out = "\"";
+  for (char c : field) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+int Fail(const Error& e, int code) {
+  apps::PrintError(e);
+  return code;
+}
+
+int RunHistory(const RegistryQueryOptions& o) {
+  Result<uint64_t> id = DeviceId(o.device_id);
+  if (!id.ok()) return Fail(id.error(), kExitUsage);
+  Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
+  if (!r.ok()) return Fail(r.error(), kExitUsage);
+  Result<std::vector<RegistryCalibration>> h = r.value()->History(id.value());
+  if (!h.ok()) return Fail(h.error(), kExitUsage);
+  if (o.json) {
+    json j;
+    j["device_id"] = blob::FormatDeviceId(id.value());
+    j["calibrations"] = json::array();
+    for (const RegistryCalibration& c : h.value()) {
+      j["calibrations"].push_back(RegistryCalibrationToJson(c));
+    }
+    apps::PrintText(stdout, JsonText(j, 2) + "\n");
+    return kExitOk;
+  }
+  std::string out = fmt::format("device {}: {} calibration(s)\n", blob::FormatDeviceId(id.value()),
+                                h.value().size());
+  for (const RegistryCalibration& c : h.value()) {
+    out += fmt::format("  {} certificate {} sensor {} (registry id {}){}{}\n", c.date_utc,
+                       c.certificate_id, c.sensor, c.id,
+                       c.station.empty() ? "" : ", station " + c.station,
+                       c.operator_name.empty() ? "" : ", operator " + c.operator_name);
+    for (const RegistryBlob& b : c.blobs) {
+      out += fmt::format("    blob seq {} CRC-32 0x{:08X} -> {} ({})\n", b.seq, b.crc, b.file,
+                         b.recorded_utc);
+    }
+    for (const RegistryPush& p : c.pushes) {
+      out += fmt::format("    push {} via {}: {} ({})\n", p.ok ? "OK" : "FAILED", p.port, p.result,
+                         p.recorded_utc);
+    }
+    if (c.conformity) {
+      int fails = 0;
+      for (const ConformityEntry& e : c.conformity->entries) {
+        fails += e.decision == ConformityDecision::kFail ? 1 : 0;
+      }
+      out += fmt::format("    conformity ({}): {} constant(s), {} fail\n",
+                         DecisionRuleName(c.conformity->rule), c.conformity->entries.size(), fails);
+    }
+  }
+  apps::PrintText(stdout, out);
+  return kExitOk;
+}
+
+int RunDrift(const RegistryQueryOptions& o) {
+  Result<uint64_t> id = DeviceId(o.device_id);
+  if (!id.ok()) return Fail(id.error(), kExitUsage);
+  Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
+  if (!r.ok()) return Fail(r.error(), kExitUsage);
+  Result<DriftResult> d = r.value()->Drift(id.value());
+  if (!d.ok()) return Fail(d.error(), kExitUsage);
+  if (d.value().shared_inputs) {
+    apps::PrintText(stderr,
+                    "warning: the two calibrations share an input record (same SHA-256): their "
+                    "covariance is not 0, so u_change is overstated and |E_n| understated\n");
+  }
+  if (o.json) {
+    apps::PrintText(stdout, JsonText(DriftToJson(d.value()), 2) + "\n");
+    return kExitOk;
+  }
+  std::string out = fmt::format("device {}: {} ({}) -> {} ({})\n", blob::FormatDeviceId(id.value()),
+                                d.value().from.date_utc, d.value().from.certificate_id,
+                                d.value().to.date_utc, d.value().to.certificate_id);
+  out += fmt::format("  {:<12} {:>14} {:>14} {:>12} {:>10} {:>8}  {}\n", "constant", "from", "to",
+                     "change", "u_change", "E_n", "unit");
+  for (const DriftConstant& k : d.value().constants) {
+    out += fmt::format("  {:<12} {:>14.7g} {:>14.7g} {:>12.4g} {:>10.3g} {:>8.3g}  {}{}\n", k.name,
+                       k.from, k.to, k.change, k.u_change, k.en, k.unit,
+                       k.flagged ? "  |E_n| > 1" : "");
+  }
+  apps::PrintText(stdout, out);
+  return kExitOk;
+}
+
+int RunDue(const RegistryQueryOptions& o) {
+  if (!(o.interval_days > 0) || !std::isfinite(o.interval_days)) {
+    apps::PrintErrorText("--interval-days must be a number > 0");
+    return kExitUsage;
+  }
+  const std::string now = o.at_utc.empty() ? UtcIso8601Now() : o.at_utc;
+  if (!ParseUtcIso8601(now)) {
+    apps::PrintErrorText(
+        fmt::format("--at '{}': expected ISO 8601 UTC, e.g. 2026-05-01T12:00:00Z", now));
+    return kExitUsage;
+  }
+  Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
+  if (!r.ok()) return Fail(r.error(), kExitUsage);
+  Result<std::vector<DueDevice>> due = r.value()->Due(o.interval_days, now, o.all);
+  if (!due.ok()) return Fail(due.error(), kExitFailed);
+  if (o.json) {
+    json j;
+    j["at_utc"] = now;
+    j["interval_days"] = o.interval_days;
+    j["devices"] = json::array();
+    for (const DueDevice& d : due.value()) {
+      j["devices"].push_back({{"device_id", blob::FormatDeviceId(d.device_id)},
+                              {"calibration_id", d.calibration_id},
+                              {"certificate_id", d.certificate_id},
+                              {"last_date_utc", d.last_date_utc},
+                              {"due_utc", d.due_utc},
+                              {"overdue_days", d.overdue_days},
+                              {"due", d.overdue_days > 0}});
+    }
+    apps::PrintText(stdout, JsonText(j, 2) + "\n");
+    return kExitOk;
+  }
+  std::string out = fmt::format("{} device(s) {} at {} (interval {} days)\n", due.value().size(),
+                                o.all ? "listed" : "due", now, o.interval_days);
+  for (const DueDevice& d : due.value()) {
+    out += fmt::format("  {}  last {}  due {}  {}\n", blob::FormatDeviceId(d.device_id),
+                       d.last_date_utc, d.due_utc,
+                       d.overdue_days > 0 ? fmt::format("overdue {:.1f} days", d.overdue_days)
+                                          : fmt::format("in {:.1f} days", -d.overdue_days));
+  }
+  apps::PrintText(stdout, out);
+  return kExitOk;
+}
+
+int RunExport(const RegistryQueryOptions& o) {
+  if (Status s = apps::CheckOutputs({{"-o", o.output}}, {}); !s.ok()) {
+    return Fail(s.error(), kExitUsage);
+  }
+  Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
+  if (!r.ok()) return Fail(r.error(), kExitUsage);
+  Result<std::vector<RegistryCalibration>> all = r.value()->All();
+  if (!all.ok()) return Fail(all.error(), kExitFailed);
+  std::string text;
+  if (o.format == "json") {
+    json j;
+    j["schema_version"] = r.value()->schema_version();
+    j["calibrations"] = json::array();
+    for (const RegistryCalibration& c : all.value()) {
+      j["calibrations"].push_back(RegistryCalibrationToJson(c));
+    }
+    text = JsonText(j, 2) + "\n";
+  } else {
+    // One row per constant of each calibration (docs/registry.md "Export").
+    text =
+        "registry_id,certificate_id,sensor,date_utc,recorded_utc,station,operator,devices,"
+        "constant,value,u,unit\n";
+    for (const RegistryCalibration& c : all.value()) {
+      std::string devices;
+      for (uint64_t d : c.devices)
+        devices += (devices.empty() ? "" : " ") + blob::FormatDeviceId(d);
+      for (const RegistryConstant& k : c.constants) {
+        text += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{}\n", c.id, Csv(c.certificate_id),
+                            c.sensor, Csv(c.date_utc), Csv(c.recorded_utc), Csv(c.station),
+                            Csv(c.operator_name), devices, Csv(k.name), k.value, k.u, Csv(k.unit));
+      }
+    }
+  }
+  if (Status w = apps::WriteOutput(o.output, text); !w.ok()) return Fail(w.error(), kExitFailed);
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddRegistryCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<RegistryQueryOptions>();
+  CLI::App* reg = app.add_subcommand(
+      "registry", "query the calibration registry: history, drift, due, export (docs/registry.md)");
+  reg->require_subcommand(1);
+  auto url = [&](CLI::App* sub) {
+    sub->add_option("--registry", o->url,
+                    "the registry: a SQLite file or postgresql://... (default: $METRO_REGISTRY)");
+  };
+  CLI::App* history = reg->add_subcommand("history", "every calibration of a device, oldest first");
+  url(history);
+  history->add_option("--device-id", o->device_id, "the tag's device ID (16 hex digits)")
+      ->required();
+  history->add_flag("--json", o->json, "JSON: {\"device_id\", \"calibrations\": [...]}");
+  history->callback([o, exit_code] { *exit_code = RunHistory(*o); });
+
+  CLI::App* drift = reg->add_subcommand(
+      "drift", "change of each constant between a device's last two calibrations, with E_n");
+  url(drift);
+  drift->add_option("--device-id", o->device_id, "the tag's device ID (16 hex digits)")->required();
+  drift->add_flag("--json", o->json, "JSON: {\"device_id\", \"constants\": [...]}");
+  drift->callback([o, exit_code] { *exit_code = RunDrift(*o); });
+
+  CLI::App* due = reg->add_subcommand("due", "devices whose recalibration interval has run out");
+  url(due);
+  due->add_option("--interval-days", o->interval_days,
+                  "recalibration interval [days] (default 365)");
+  due->add_option("--at", o->at_utc, "judge at this ISO 8601 UTC time (default now)");
+  due->add_flag("--all", o->all, "list every device with its due date");
+  due->add_flag("--json", o->json, "JSON output");
+  due->callback([o, exit_code] { *exit_code = RunDue(*o); });
+
+  CLI::App* exported = reg->add_subcommand("export",
+                                           "every calibration as CSV (one row per constant) "
+                                           "or JSON");
+  url(exported);
+  exported->add_option("--format", o->format, "csv or json")->check(CLI::IsMember({"csv", "json"}));
+  exported->add_option("-o,--output", o->output, "file to write (default - : stdout)");
+  exported->callback([o, exit_code] { *exit_code = RunExport(*o); });
+}
+
+}  // namespace metro::calibrate_app

@@ -1,0 +1,595 @@
+#include "metro/registry/registry.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <random>
+#include <set>
+#include <thread>
+
+#include "metro/blob/blob.hpp"
+#include "metro/calibration/calibration_io.hpp"
+#include "metro/calibration/named_constants.hpp"
+#include "metro/core/json_text.hpp"
+#include "metro/core/utc_time.hpp"
+#include "schema.hpp"
+#include "sql_backend.hpp"
+
+namespace metro {
+
+using nlohmann::json;
+using registry_internal::SqlBackend;
+using registry_internal::SqlRow;
+using registry_internal::SqlValue;
+
+namespace {
+
+bool IsPostgresUrl(const std::string& url) {
+  return url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0;
+}
+
+SqlValue Opt(const std::optional<double>& v) { return v ? SqlValue(*v) : SqlValue(nullptr); }
+
+std::optional<double> OptNumber(const std::optional<std::string>& s) {
+  if (!s) return std::nullopt;
+  return std::strtod(s->c_str(), nullptr);
+}
+
+double Number(const std::optional<std::string>& s) {
+  return s ? std::strtod(s->c_str(), nullptr) : 0.0;
+}
+int64_t Integer(const std::optional<std::string>& s) {
+  return s ? std::strtoll(s->c_str(), nullptr, 10) : 0;
+}
+std::string Text(const std::optional<std::string>& s) { return s ? *s : std::string(); }
+
+json SensorCovarianceJson(const SensorCalibration& c) {
+  json cov = json::array();
+  for (Eigen::Index r = 0; r < c.covariance.rows(); ++r) {
+    json row = json::array();
+    for (Eigen::Index k = 0; k < c.covariance.cols(); ++k) row.push_back(c.covariance(r, k));
+    cov.push_back(row);
+  }
+  return {{"parameters", c.parameter_names}, {"covariance", cov}};
+}
+
+}  // namespace
+
+struct Registry::Impl {
+  std::unique_ptr<SqlBackend> db;
+  std::string url;
+
+  // Runs `body` in one transaction, retried (with a random pause) while other writers hold the
+  // lock or a concurrent transaction conflicts. Nothing of a failed body stays behind.
+  template <typename F>
+  Status Transaction(F&& body) {
+    std::minstd_rand jitter(
+        static_cast<unsigned>(std::chrono::steady_clock::now().time_since_epoch().count()));
+    for (int attempt = 0;; ++attempt) {
+      Status s = db->Begin(/*exclusive=*/false);
+      if (s.ok()) s = body();
+      if (s.ok()) s = db->Commit();
+      if (s.ok()) return s;
+      const bool retry = db->LastErrorRetryable();
+      db->Rollback();
+      if (!retry || attempt >= 500) return s;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1 + jitter() % 20));
+    }
+  }
+
+  // The registry id of tag `sensor` of `cal`, inserting it (with everything it carries) when
+  // absent. Inside a transaction.
+  Result<int64_t> EnsureCalibration(const Calibration& cal, const std::string& certificate_id,
+                                    const TagCalibration& tag, const RecordContext& ctx) {
+    std::vector<SqlRow> rows;
+    json cov = json::object();
+    if (tag.accel) cov["accel"] = SensorCovarianceJson(*tag.accel);
+    if (tag.gyro) cov["gyro"] = SensorCovarianceJson(*tag.gyro);
+    const std::string recorded = ctx.recorded_utc.empty() ? UtcIso8601Now() : ctx.recorded_utc;
+    if (Status s = db->Execute(
+            "INSERT INTO calibrations (certificate_id, sensor, date_utc, recorded_utc, "
+            "tool_version, covariance_json, station, operator_name) VALUES (?, ?, ?, ?, ?, ?, ?, "
+            "?) ON CONFLICT (certificate_id, sensor) DO NOTHING RETURNING id",
+            {certificate_id, int64_t{tag.sensor}, cal.date_utc, recorded, cal.tool_version,
+             JsonText(cov), ctx.station, ctx.operator_name},
+            &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    if (rows.empty()) {  // Recorded before: the same certificate and tag.
+      if (Status s =
+              db->Execute("SELECT id FROM calibrations WHERE certificate_id = ? AND sensor = ?",
+                          {certificate_id, int64_t{tag.sensor}}, &rows);
+          !s.ok()) {
+        return s.error();
+      }
+      if (rows.empty()) return MakeError(url, 0, "calibration vanished while recording");
+      return Integer(rows[0][0]);
+    }
+    const int64_t id = Integer(rows[0][0]);
+    for (size_t i = 0; i < cal.inputs.size(); ++i) {
+      if (Status s = db->Execute(
+              "INSERT INTO calibration_inputs (calibration_id, position, path, sha256) VALUES "
+              "(?, ?, ?, ?)",
+              {id, static_cast<int64_t>(i), cal.inputs[i].path, cal.inputs[i].sha256});
+          !s.ok()) {
+        return s.error();
+      }
+    }
+    const std::vector<NamedConstant> constants = NamedConstants(tag);
+    for (size_t i = 0; i < constants.size(); ++i) {
+      const NamedConstant& c = constants[i];
+      if (Status s = db->Execute(
+              "INSERT INTO constants (calibration_id, position, name, value, u, unit) VALUES "
+              "(?, ?, ?, ?, ?, ?)",
+              {id, static_cast<int64_t>(i), c.name, c.value, c.u, c.unit});
+          !s.ok()) {
+        return s.error();
+      }
+    }
+    if (cal.conformity) {
+      const ConformityStatement& st = *cal.conformity;
+      int64_t position = 0;
+      for (const ConformityEntry& e : st.entries) {
+        if (e.sensor != tag.sensor) continue;
+        if (Status s = db->Execute(
+                "INSERT INTO conformity (calibration_id, position, constant, value, u, "
+                "lower_limit, upper_limit, unit, acceptance_lower, acceptance_upper, "
+                "p_conformance, decision, decision_rule, coverage_factor, max_consumer_risk) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                {id, position++, e.constant, e.value, e.u, Opt(e.lower), Opt(e.upper), e.unit,
+                 Opt(e.acceptance_lower), Opt(e.acceptance_upper), e.p_conformance,
+                 std::string(ConformityDecisionName(e.decision)),
+                 std::string(DecisionRuleName(st.rule)), st.coverage_factor, st.max_consumer_risk});
+            !s.ok()) {
+          return s.error();
+        }
+      }
+    }
+    return id;
+  }
+
+  Status Attach(const std::string& device, int64_t calibration_id, const char* source,
+                const std::string& recorded) {
+    return db->Execute(
+        "INSERT INTO device_calibrations (device_id, calibration_id, source, recorded_utc) "
+        "VALUES (?, ?, ?, ?) ON CONFLICT (device_id, calibration_id) DO NOTHING",
+        {device, calibration_id, std::string(source), recorded});
+  }
+
+  Result<RegistryCalibration> Load(int64_t id, std::optional<uint64_t> device) {
+    std::vector<SqlRow> rows;
+    if (Status s =
+            db->Execute("SELECT id, certificate_id, sensor, date_utc, recorded_utc, tool_version, "
+                        "covariance_json, station, operator_name FROM calibrations WHERE id = ?",
+                        {id}, &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    if (rows.empty()) return MakeError(url, 0, fmt::format("no calibration {}", id));
+    RegistryCalibration c;
+    const SqlRow& r = rows[0];
+    c.id = Integer(r[0]);
+    c.certificate_id = Text(r[1]);
+    c.sensor = static_cast<int>(Integer(r[2]));
+    c.date_utc = Text(r[3]);
+    c.recorded_utc = Text(r[4]);
+    c.tool_version = Text(r[5]);
+    c.covariance_json = Text(r[6]);
+    c.station = Text(r[7]);
+    c.operator_name = Text(r[8]);
+    rows.clear();
+    if (Status s = db->Execute("SELECT path, sha256 FROM calibration_inputs WHERE calibration_id = "
+                               "? ORDER BY position",
+                               {id}, &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    for (const SqlRow& x : rows) c.inputs.push_back({Text(x[0]), Text(x[1])});
+    rows.clear();
+    if (Status s = db->Execute(
+            "SELECT name, value, u, unit FROM constants WHERE calibration_id = ? ORDER BY position",
+            {id}, &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    for (const SqlRow& x : rows)
+      c.constants.push_back({Text(x[0]), Number(x[1]), Number(x[2]), Text(x[3])});
+    rows.clear();
+    if (Status s = db->Execute(
+            "SELECT constant, value, u, lower_limit, upper_limit, unit, acceptance_lower, "
+            "acceptance_upper, p_conformance, decision, decision_rule, coverage_factor, "
+            "max_consumer_risk FROM conformity WHERE calibration_id = ? ORDER BY position",
+            {id}, &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    for (const SqlRow& x : rows) {
+      if (!c.conformity) {
+        c.conformity = ConformityStatement{};
+        c.conformity->rule = ParseDecisionRule(Text(x[10])).value_or(DecisionRule::kSimple);
+        c.conformity->coverage_factor = Number(x[11]);
+        c.conformity->max_consumer_risk = Number(x[12]);
+      }
+      ConformityEntry e;
+      e.sensor = c.sensor;
+      e.constant = Text(x[0]);
+      e.value = Number(x[1]);
+      e.u = Number(x[2]);
+      e.lower = OptNumber(x[3]);
+      e.upper = OptNumber(x[4]);
+      e.unit = Text(x[5]);
+      e.acceptance_lower = OptNumber(x[6]);
+      e.acceptance_upper = OptNumber(x[7]);
+      e.p_conformance = Number(x[8]);
+      e.decision = ParseConformityDecision(Text(x[9])).value_or(ConformityDecision::kFail);
+      c.conformity->entries.push_back(std::move(e));
+    }
+    rows.clear();
+    if (Status s = db->Execute(
+            "SELECT device_id FROM device_calibrations WHERE calibration_id = ? ORDER BY device_id",
+            {id}, &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    for (const SqlRow& x : rows)
+      c.devices.push_back(std::strtoull(Text(x[0]).c_str(), nullptr, 16));
+    if (!device) return c;
+    const std::string dev = blob::FormatDeviceId(*device);
+    rows.clear();
+    if (Status s = db->Execute(
+            "SELECT seq, crc, accel_t_valid_min_c, accel_t_valid_max_c, gyro_t_valid_min_c, "
+            "gyro_t_valid_max_c, file, recorded_utc FROM blobs WHERE calibration_id = ? AND "
+            "device_id = ? ORDER BY id",
+            {id, dev}, &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    for (const SqlRow& x : rows) {
+      RegistryBlob b;
+      b.device_id = *device;
+      b.seq = static_cast<uint32_t>(Integer(x[0]));
+      b.crc = static_cast<uint32_t>(Integer(x[1]));
+      b.accel_t_valid_min_c = OptNumber(x[2]);
+      b.accel_t_valid_max_c = OptNumber(x[3]);
+      b.gyro_t_valid_min_c = OptNumber(x[4]);
+      b.gyro_t_valid_max_c = OptNumber(x[5]);
+      b.file = Text(x[6]);
+      b.recorded_utc = Text(x[7]);
+      c.blobs.push_back(b);
+    }
+    rows.clear();
+    if (Status s = db->Execute(
+            "SELECT port, ok, result, readback, recorded_utc FROM pushes WHERE calibration_id = "
+            "? AND device_id = ? ORDER BY id",
+            {id, dev}, &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    for (const SqlRow& x : rows) {
+      RegistryPush p;
+      p.device_id = *device;
+      p.port = Text(x[0]);
+      p.ok = Integer(x[1]) != 0;
+      p.result = Text(x[2]);
+      p.readback = Text(x[3]);
+      p.recorded_utc = Text(x[4]);
+      c.pushes.push_back(p);
+    }
+    return c;
+  }
+
+  Result<std::vector<int64_t>> DeviceCalibrationIds(uint64_t device) {
+    std::vector<SqlRow> rows;
+    if (Status s =
+            db->Execute("SELECT c.id FROM device_calibrations d JOIN calibrations c ON c.id = "
+                        "d.calibration_id WHERE d.device_id = ? ORDER BY c.date_utc, c.id",
+                        {blob::FormatDeviceId(device)}, &rows);
+        !s.ok()) {
+      return s.error();
+    }
+    if (rows.empty()) {
+      return MakeError(url, 0,
+                       fmt::format("device {} is not in the registry (no blob or push was "
+                                   "recorded for it)",
+                                   blob::FormatDeviceId(device)));
+    }
+    std::vector<int64_t> ids;
+    for (const SqlRow& r : rows) ids.push_back(Integer(r[0]));
+    return ids;
+  }
+};
+
+Registry::Registry(std::unique_ptr<Impl> impl, int version)
+    : impl_(std::move(impl)), version_(version) {}
+Registry::~Registry() = default;
+
+const char* Registry::kind() const { return impl_->db->Kind(); }
+
+std::string Registry::UrlFromFlagOrEnvironment(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  const char* env = std::getenv("METRO_REGISTRY");
+  return env != nullptr ? std::string(env) : std::string();
+}
+
+namespace registry_internal {
+
+Result<std::unique_ptr<SqlBackend>> OpenBackend(const std::string& url) {
+  if (url.empty()) return MakeError("the registry URL is empty");
+  if (IsPostgresUrl(url)) return registry_internal::OpenPostgres(url);
+  if (url.find("://") != std::string::npos) {
+    return MakeError(url, 0,
+                     "unsupported registry URL; expected a file path (SQLite) or "
+                     "postgresql://user@host/db");
+  }
+  return registry_internal::OpenSqlite(url, /*busy_timeout_ms=*/10000);
+}
+
+}  // namespace registry_internal
+
+Result<std::unique_ptr<Registry>> Registry::Open(const std::string& url) {
+  Result<std::unique_ptr<SqlBackend>> db = registry_internal::OpenBackend(url);
+  if (!db.ok()) return db.error();
+  auto impl = std::make_unique<Impl>();
+  impl->db = std::move(db).value();
+  impl->url = url;
+  Result<int> v = registry_internal::Migrate(impl->db.get(), kRegistrySchemaVersion, url);
+  if (!v.ok()) return v.error();
+  return std::unique_ptr<Registry>(new Registry(std::move(impl), kRegistrySchemaVersion));
+}
+
+Result<std::vector<int64_t>> Registry::RecordCalibration(const Calibration& calibration,
+                                                         const std::string& certificate,
+                                                         const RecordContext& context) {
+  std::vector<int64_t> ids;
+  Status s = impl_->Transaction([&]() -> Status {
+    ids.clear();
+    for (const TagCalibration& tag : calibration.tags) {
+      Result<int64_t> id = impl_->EnsureCalibration(calibration, certificate, tag, context);
+      if (!id.ok()) return id.error();
+      ids.push_back(id.value());
+    }
+    return Status::Ok();
+  });
+  if (!s.ok()) return s.error();
+  return ids;
+}
+
+Status Registry::RecordBlob(const Calibration& calibration, const std::string& certificate,
+                            int sensor, const RegistryBlob& blob, const RecordContext& context) {
+  const TagCalibration* tag = calibration.FindTag(sensor);
+  if (tag == nullptr) return MakeError(fmt::format("no tag sensor {} in the calibration", sensor));
+  const std::string recorded =
+      context.recorded_utc.empty() ? UtcIso8601Now() : context.recorded_utc;
+  const std::string dev = blob::FormatDeviceId(blob.device_id);
+  return impl_->Transaction([&]() -> Status {
+    Result<int64_t> id = impl_->EnsureCalibration(calibration, certificate, *tag, context);
+    if (!id.ok()) return id.error();
+    if (Status s = impl_->db->Execute(
+            "INSERT INTO blobs (device_id, calibration_id, seq, crc, accel_t_valid_min_c, "
+            "accel_t_valid_max_c, gyro_t_valid_min_c, gyro_t_valid_max_c, file, recorded_utc) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            {dev, id.value(), int64_t{blob.seq}, int64_t{blob.crc}, Opt(blob.accel_t_valid_min_c),
+             Opt(blob.accel_t_valid_max_c), Opt(blob.gyro_t_valid_min_c),
+             Opt(blob.gyro_t_valid_max_c), blob.file, recorded});
+        !s.ok()) {
+      return s;
+    }
+    return impl_->Attach(dev, id.value(), "blob", recorded);
+  });
+}
+
+Status Registry::RecordPush(const Calibration& calibration, const std::string& certificate,
+                            int sensor, const RegistryPush& push, const RecordContext& context) {
+  const TagCalibration* tag = calibration.FindTag(sensor);
+  if (tag == nullptr) return MakeError(fmt::format("no tag sensor {} in the calibration", sensor));
+  const std::string recorded =
+      context.recorded_utc.empty() ? UtcIso8601Now() : context.recorded_utc;
+  const std::string dev = blob::FormatDeviceId(push.device_id);
+  return impl_->Transaction([&]() -> Status {
+    Result<int64_t> id = impl_->EnsureCalibration(calibration, certificate, *tag, context);
+    if (!id.ok()) return id.error();
+    if (Status s = impl_->db->Execute(
+            "INSERT INTO pushes (device_id, calibration_id, port, ok, result, readback, "
+            "recorded_utc) VALUES (?, ?, ?, ?, ?, ?, ?)",
+            {dev, id.value(), push.port, int64_t{push.ok ? 1 : 0}, push.result, push.readback,
+             recorded});
+        !s.ok()) {
+      return s;
+    }
+    // Only a push the tag accepted puts the calibration on it.
+    return push.ok ? impl_->Attach(dev, id.value(), "push", recorded) : Status::Ok();
+  });
+}
+
+Result<std::vector<RegistryCalibration>> Registry::History(uint64_t device_id) {
+  Result<std::vector<int64_t>> ids = impl_->DeviceCalibrationIds(device_id);
+  if (!ids.ok()) return ids.error();
+  std::vector<RegistryCalibration> out;
+  for (int64_t id : ids.value()) {
+    Result<RegistryCalibration> c = impl_->Load(id, device_id);
+    if (!c.ok()) return c.error();
+    out.push_back(std::move(c).value());
+  }
+  return out;
+}
+
+Result<DriftResult> Registry::Drift(uint64_t device_id) {
+  Result<std::vector<int64_t>> ids = impl_->DeviceCalibrationIds(device_id);
+  if (!ids.ok()) return ids.error();
+  if (ids.value().size() < 2) {
+    return MakeError(impl_->url, 0,
+                     fmt::format("device {} has {} calibration; drift needs two",
+                                 blob::FormatDeviceId(device_id), ids.value().size()));
+  }
+  const size_t n = ids.value().size();
+  Result<RegistryCalibration> from = impl_->Load(ids.value()[n - 2], std::nullopt);
+  if (!from.ok()) return from.error();
+  Result<RegistryCalibration> to = impl_->Load(ids.value()[n - 1], std::nullopt);
+  if (!to.ok()) return to.error();
+  DriftResult d;
+  d.device_id = device_id;
+  d.from = std::move(from).value();
+  d.to = std::move(to).value();
+  std::set<std::string> hashes;
+  for (const InputFile& f : d.from.inputs) hashes.insert(f.sha256);
+  for (const InputFile& f : d.to.inputs)
+    d.shared_inputs = d.shared_inputs || hashes.count(f.sha256) > 0;
+  std::map<std::string, const RegistryConstant*> before;
+  for (const RegistryConstant& c : d.from.constants) before[c.name] = &c;
+  for (const RegistryConstant& c : d.to.constants) {
+    auto it = before.find(c.name);
+    if (it == before.end() || it->second->unit != c.unit) continue;  // Not comparable.
+    DriftConstant k;
+    k.name = c.name;
+    k.unit = c.unit;
+    k.from = it->second->value;
+    k.to = c.value;
+    k.change = k.to - k.from;
+    // Two calibrations from separate records are independent: cov = 0 (docs/registry.md).
+    k.u_change = std::sqrt(it->second->u * it->second->u + c.u * c.u);
+    // E_n with standard (k = 1) uncertainties: |E_n| > 1 is a change larger than its u.
+    k.en = k.u_change > 0 ? k.change / k.u_change : (k.change == 0 ? 0.0 : HUGE_VAL);
+    k.flagged = std::abs(k.en) > 1.0;
+    d.constants.push_back(k);
+  }
+  return d;
+}
+
+Result<std::vector<DueDevice>> Registry::Due(double interval_days, const std::string& now_utc,
+                                             bool all) {
+  const std::optional<std::time_t> now = ParseUtcIso8601(now_utc);
+  if (!now) return MakeError(fmt::format("'{}' is not an ISO 8601 UTC time", now_utc));
+  std::vector<SqlRow> rows;
+  if (Status s = impl_->db->Execute(
+          "SELECT d.device_id, c.id, c.certificate_id, c.date_utc FROM device_calibrations d "
+          "JOIN calibrations c ON c.id = d.calibration_id ORDER BY d.device_id, c.date_utc, c.id",
+          {}, &rows);
+      !s.ok()) {
+    return s.error();
+  }
+  std::map<std::string, const SqlRow*> last;
+  for (const SqlRow& r : rows) last[Text(r[0])] = &r;
+  std::vector<DueDevice> out;
+  for (const auto& [dev, r] : last) {
+    DueDevice d;
+    d.device_id = std::strtoull(dev.c_str(), nullptr, 16);
+    d.calibration_id = Integer((*r)[1]);
+    d.certificate_id = Text((*r)[2]);
+    d.last_date_utc = Text((*r)[3]);
+    const std::optional<std::time_t> last_t = ParseUtcIso8601(d.last_date_utc);
+    if (!last_t) {
+      return MakeError(impl_->url, 0,
+                       fmt::format("calibration {} has date_utc '{}', not ISO 8601 UTC",
+                                   d.calibration_id, d.last_date_utc));
+    }
+    const double due_s = static_cast<double>(*last_t) + interval_days * 86400.0;
+    d.due_utc = UtcIso8601(static_cast<std::time_t>(std::llround(due_s)));
+    d.overdue_days = (static_cast<double>(*now) - due_s) / 86400.0;
+    if (all || d.overdue_days > 0) out.push_back(d);
+  }
+  return out;
+}
+
+Result<std::vector<RegistryCalibration>> Registry::All() {
+  std::vector<SqlRow> rows;
+  if (Status s = impl_->db->Execute("SELECT id FROM calibrations ORDER BY date_utc, id", {}, &rows);
+      !s.ok()) {
+    return s.error();
+  }
+  std::vector<RegistryCalibration> out;
+  for (const SqlRow& r : rows) {
+    Result<RegistryCalibration> c = impl_->Load(Integer(r[0]), std::nullopt);
+    if (!c.ok()) return c.error();
+    out.push_back(std::move(c).value());
+  }
+  return out;
+}
+
+json RegistryCalibrationToJson(const RegistryCalibration& c) {
+  json j;
+  j["id"] = c.id;
+  j["certificate_id"] = c.certificate_id;
+  j["sensor"] = c.sensor;
+  j["date_utc"] = c.date_utc;
+  j["recorded_utc"] = c.recorded_utc;
+  j["tool_version"] = c.tool_version;
+  j["station"] = c.station;
+  j["operator"] = c.operator_name;
+  json devices = json::array();
+  for (uint64_t d : c.devices) devices.push_back(blob::FormatDeviceId(d));
+  j["devices"] = devices;
+  json inputs = json::array();
+  for (const InputFile& f : c.inputs) inputs.push_back({{"path", f.path}, {"sha256", f.sha256}});
+  j["inputs"] = inputs;
+  json constants = json::array();
+  for (const RegistryConstant& k : c.constants) {
+    constants.push_back({{"name", k.name}, {"value", k.value}, {"u", k.u}, {"unit", k.unit}});
+  }
+  j["constants"] = constants;
+  Result<json> cov = ParseJsonText(c.covariance_json, "covariance_json");
+  j["covariance"] = cov.ok() ? cov.value() : json::object();
+  if (c.conformity) {
+    j["conformity_rule"] = ConformityRuleToJson(*c.conformity);
+    j["conformity"] = ConformityEntriesToJson(*c.conformity);
+  } else {
+    j["conformity"] = json::array();
+  }
+  json blobs = json::array();
+  for (const RegistryBlob& b : c.blobs) {
+    json x;
+    x["device_id"] = blob::FormatDeviceId(b.device_id);
+    x["seq"] = b.seq;
+    x["crc32"] = fmt::format("0x{:08X}", b.crc);
+    auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+    x["accel_t_valid_min_c"] = opt(b.accel_t_valid_min_c);
+    x["accel_t_valid_max_c"] = opt(b.accel_t_valid_max_c);
+    x["gyro_t_valid_min_c"] = opt(b.gyro_t_valid_min_c);
+    x["gyro_t_valid_max_c"] = opt(b.gyro_t_valid_max_c);
+    x["file"] = b.file;
+    x["recorded_utc"] = b.recorded_utc;
+    blobs.push_back(x);
+  }
+  j["blobs"] = blobs;
+  json pushes = json::array();
+  for (const RegistryPush& p : c.pushes) {
+    pushes.push_back({{"device_id", blob::FormatDeviceId(p.device_id)},
+                      {"port", p.port},
+                      {"ok", p.ok},
+                      {"result", p.result},
+                      {"readback", p.readback},
+                      {"recorded_utc", p.recorded_utc}});
+  }
+  j["pushes"] = pushes;
+  return j;
+}
+
+json DriftToJson(const DriftResult& d) {
+  json j;
+  j["device_id"] = blob::FormatDeviceId(d.device_id);
+  auto ref = [](const RegistryCalibration& c) {
+    return json{{"id", c.id}, {"certificate_id", c.certificate_id}, {"date_utc", c.date_utc}};
+  };
+  j["from"] = ref(d.from);
+  j["to"] = ref(d.to);
+  j["shared_inputs"] = d.shared_inputs;
+  json constants = json::array();
+  for (const DriftConstant& k : d.constants) {
+    constants.push_back({{"name", k.name},
+                         {"unit", k.unit},
+                         {"from", k.from},
+                         {"to", k.to},
+                         {"change", k.change},
+                         {"u_change", k.u_change},
+                         {"en", std::isfinite(k.en) ? json(k.en) : json(nullptr)},
+                         {"flagged", k.flagged}});
+  }
+  j["constants"] = constants;
+  return j;
+}
+
+}  // namespace metro

@@ -1,0 +1,174 @@
+// calibrate fit --spec / --registry, calibrate blob --registry and calibrate registry ...
+// through the program (docs/conformity.md, docs/registry.md).
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "metro/calibration/simulate.hpp"
+#include "metro/io/session_io.hpp"
+#include "support/run_program.hpp"
+
+namespace metro {
+namespace {
+
+namespace fs = std::filesystem;
+
+testing::ProgramRun Calibrate(const std::string& args) {
+  return testing::RunProgram(METRO_CALIBRATE_EXE, args);
+}
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// A working directory of its own, removed at the end.
+struct Dir {
+  Dir() : path(fmt::format("metro_registry_cli_{}_{}", ::getpid(), counter++)) {
+    fs::create_directory(path);
+  }
+  ~Dir() { fs::remove_all(path); }
+  std::string operator/(const std::string& name) const { return path + "/" + name; }
+  std::string path;
+  static inline int counter = 0;
+};
+
+// A simulated static-pose session of tag 4 (accelerometer only is fitted).
+std::string WriteSession(const Dir& d) {
+  SimulationOptions so;
+  so.seed = 21;
+  so.sensor = 4;
+  Result<SimulatedSession> sim = SimulateCalibrationSession(so);
+  REQUIRE(sim.ok());
+  const std::string path = d / "session.csv";
+  std::ofstream(path) << FormatSessionCsv(sim.value().session);
+  return path;
+}
+
+TEST_CASE(
+    "calibrate fit --spec: conformity in calibration.json and the certificate, exit 1 on fail",
+    "[registry][conformity][apps]") {
+  Dir d;
+  const std::string session = WriteSession(d);
+  // b_x within +-2000 LSB: passes; k_x above 1 g/LSB: impossible, fails.
+  std::ofstream(d / "spec.json") << R"({"decision_rule": "guarded", "tolerances": [
+  {"constant": "accel.b_x", "lower": -2000, "upper": 2000, "unit": "LSB"},
+  {"constant": "accel.k_x", "lower": 1, "unit": "g_n/LSB"}]})";
+  const std::string common = fmt::format(
+      "fit {} -o {} --accel-only --spec {} --registry {} --station line-2 --operator ops --html {}",
+      session, d / "cal.json", d / "spec.json", d / "reg.sqlite", d / "cert.html");
+  testing::ProgramRun r = Calibrate(common);
+  INFO(r.err);
+  CHECK(r.exit_code == 0);  // A fail without --fail-on-nonconformity is reported, not fatal.
+  CHECK(r.err.find("accel.k_x") != std::string::npos);
+  const nlohmann::json cal = nlohmann::json::parse(Slurp(d / "cal.json"));
+  REQUIRE(cal["conformity"].size() == 2);
+  CHECK(cal["conformity"][0]["constant"] == "accel.b_x");
+  CHECK(cal["conformity"][0]["decision"] == "pass");
+  CHECK(cal["conformity"][1]["decision"] == "fail");
+  CHECK(cal["conformity"][1]["p_conformance"].get<double>() == 0.0);
+  CHECK(cal["conformity_rule"]["decision_rule"] == "guarded");
+  const std::string html = Slurp(d / "cert.html");
+  CHECK(html.find("6. Statement of conformity") != std::string::npos);
+  CHECK(html.find("guarded acceptance with guard band w = U = 2 u") != std::string::npos);
+  // calibrate report renders the statement from calibration.json alone.
+  r = Calibrate(fmt::format("report {} --html {}", d / "cal.json", d / "cert2.html"));
+  CHECK(r.exit_code == 0);
+  CHECK(Slurp(d / "cert2.html").find("6. Statement of conformity") != std::string::npos);
+
+  r = Calibrate(common + " --fail-on-nonconformity");
+  CHECK(r.exit_code == 1);
+  CHECK(r.err.find("1 constant(s) do not conform") != std::string::npos);
+
+  // The registry holds the calibration (recorded twice, once: same certificate) with station
+  // and operator; it belongs to a device once a blob is made.
+  r = Calibrate(fmt::format("blob {} --sensor 4 --device-id 9ABCDEF012345678 -o {} --registry {}",
+                            d / "cal.json", d / "tag.bin", d / "reg.sqlite"));
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  r = Calibrate(fmt::format("registry history --device-id 9ABCDEF012345678 --json --registry {}",
+                            d / "reg.sqlite"));
+  CHECK(r.exit_code == 0);
+  const nlohmann::json h = nlohmann::json::parse(r.out);
+  CHECK(h["device_id"] == "9ABCDEF012345678");
+  REQUIRE(h["calibrations"].size() == 1);
+  CHECK(h["calibrations"][0]["station"] == "line-2");
+  CHECK(h["calibrations"][0]["operator"] == "ops");
+  CHECK(h["calibrations"][0]["conformity"].size() == 2);
+  CHECK(h["calibrations"][0]["blobs"][0]["seq"] == 1);
+  // Drift needs two calibrations: exit 2 with the reason.
+  r = Calibrate(
+      fmt::format("registry drift --device-id 9ABCDEF012345678 --registry {}", d / "reg.sqlite"));
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("drift needs two") != std::string::npos);
+  // Unknown device: exit 2.
+  r = Calibrate(
+      fmt::format("registry history --device-id 0000000000000001 --registry {}", d / "reg.sqlite"));
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("device 0000000000000001 is not in the registry") != std::string::npos);
+  // Export as CSV: a header with units' column, one row per constant (9: accel b, k, m).
+  r = Calibrate(fmt::format("registry export --format csv --registry {}", d / "reg.sqlite"));
+  CHECK(r.exit_code == 0);
+  CHECK(r.out.rfind("registry_id,certificate_id,sensor,date_utc,recorded_utc,station,operator,"
+                    "devices,constant,value,u,unit\n",
+                    0) == 0);
+  CHECK(std::count(r.out.begin(), r.out.end(), '\n') == 1 + 9);
+  // Due, judged 400 days on: listed.
+  r = Calibrate(
+      fmt::format("registry due --registry {} --at 2099-01-01T00:00:00Z --json", d / "reg.sqlite"));
+  CHECK(r.exit_code == 0);
+  CHECK(nlohmann::json::parse(r.out)["devices"].size() == 1);
+  // METRO_REGISTRY in the environment.
+  r = testing::RunProgram("METRO_REGISTRY=" + d / "reg.sqlite" + " " + METRO_CALIBRATE_EXE,
+                          "registry due --all");
+  CHECK(r.exit_code == 0);
+  CHECK(r.out.find("9ABCDEF012345678") != std::string::npos);
+}
+
+TEST_CASE("calibrate fit --spec and --registry: bad input exits 2 and writes nothing",
+          "[registry][conformity][apps]") {
+  Dir d;
+  const std::string session = WriteSession(d);
+  std::ofstream(d / "bad.json") << "{\"decision_rule\": \"simple\",\n  \"tolerances\": [\n"
+                                   "  {\"constant\": \"accel.b_x\", \"lower\": 3, \"upper\": 1, "
+                                   "\"unit\": \"LSB\"}]}";
+  testing::ProgramRun r = Calibrate(
+      fmt::format("fit {} -o {} --accel-only --spec {}", session, d / "cal.json", d / "bad.json"));
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("bad.json:3:3: tolerances[0]: 'accel.b_x': lower 3 > upper 1") !=
+        std::string::npos);
+  CHECK_FALSE(fs::exists(d / "cal.json"));
+  // A constant the fit does not have (no gyroscope with --accel-only): after the fit, still
+  // exit 2 and nothing written.
+  std::ofstream(d / "gyro.json") << R"({"decision_rule": "simple", "tolerances": [
+  {"constant": "gyro.b_x", "upper": 1, "unit": "LSB"}]})";
+  r = Calibrate(
+      fmt::format("fit {} -o {} --accel-only --spec {}", session, d / "cal.json", d / "gyro.json"));
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("sensor 4 has no constant 'gyro.b_x'") != std::string::npos);
+  CHECK_FALSE(fs::exists(d / "cal.json"));
+  // A registry that cannot be opened: exit 2 before any work.
+  std::ofstream(d / "text.sqlite") << "this is not a database at all, it is plain text\n";
+  r = Calibrate(fmt::format("fit {} -o {} --accel-only --registry {}", session, d / "cal.json",
+                            d / "text.sqlite"));
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("cannot open the SQLite registry") != std::string::npos);
+  CHECK_FALSE(fs::exists(d / "cal.json"));
+  r = Calibrate(fmt::format("registry history --device-id 9ABCDEF012345678 --registry {}",
+                            d / "missing.sqlite"));
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("no such registry file") != std::string::npos);
+  CHECK_FALSE(fs::exists(d / "missing.sqlite"));
+}
+
+}  // namespace
+}  // namespace metro
