@@ -4,6 +4,7 @@
 
 #include "metro/core/rounding.hpp"
 #include "metro/core/version.hpp"
+#include "metro/report/console_text.hpp"
 
 namespace metro {
 namespace {
@@ -178,8 +179,9 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
       fmt::format_to(it, "  note: {}\n", note.get<std::string>());
     }
   }
-  fmt::format_to(it, "{:>6} {:<16} {:<18} {:>8} {:>14} {:>10} {:>10} {:>10} {:>10}\n", "sensor",
-                 "name", "quantity", "n", "mean", "s", "s(mean)", "n_eff", "u(mean)");
+  fmt::format_to(it, "{:>6} {:<16} {:<18} {:<6} {:>8} {:>14} {:>10} {:>10} {:>10} {:>10}\n",
+                 "sensor", "name", "quantity", "unit", "n", "mean", "s", "s(mean)", "n_eff",
+                 "u(mean)");
   for (const auto& s : report["sensors"]) {
     const int sensor = s["sensor"].get<int>();
     const std::string name = s["name"].get<std::string>();
@@ -189,8 +191,12 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
                      s["never"].get<int64_t>());
     }
     for (const auto& [qname, q] : s["quantities"].items()) {
+      // The unit as the report states it ("1" for the quaternion's dimensionless components).
+      std::string unit = q.contains("unit") && q["unit"].is_string() ? q["unit"].get<std::string>()
+                                                                     : std::string();
+      if (unit.empty()) unit = "1";
       if (q["type_a"].is_null()) {
-        fmt::format_to(it, "{:>6} {:<16} {:<18} {}\n", sensor, name, qname,
+        fmt::format_to(it, "{:>6} {:<16} {:<18} {:<6} {}\n", sensor, name, qname, unit,
                        q["error"].get<std::string>());
         continue;
       }
@@ -202,15 +208,16 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
           a["n_eff"].is_number() ? fmt::format("{:.1f}", a["n_eff"].get<double>()) : "-";
       std::string value, uncertainty = "-";
       if (a[u_key].is_number()) {
-        const RoundedResult r = RoundForStatement(a["mean"].get<double>(), a[u_key].get<double>());
+        const RoundedResult r = RoundForTable(a["mean"].get<double>(), a[u_key].get<double>());
         value = r.value;
         uncertainty = r.uncertainty;
       } else {
         value = fmt::format("{:.6g}", a["mean"].get<double>());
       }
-      fmt::format_to(it, "{:>6} {:<16} {:<18} {:>8} {:>14} {:>10.3g} {:>10.2g} {:>10} {:>10}\n",
-                     sensor, name, qname, a["n"].get<int64_t>(), value, a["std"].get<double>(),
-                     a["std_of_mean"].get<double>(), n_eff, uncertainty);
+      fmt::format_to(it,
+                     "{:>6} {:<16} {:<18} {:<6} {:>8} {:>14} {:>10.3g} {:>10.2g} {:>10} {:>10}\n",
+                     sensor, name, qname, unit, a["n"].get<int64_t>(), value,
+                     a["std"].get<double>(), a["std_of_mean"].get<double>(), n_eff, uncertainty);
     }
   }
   out += TypeAReportWarnings(report);
@@ -218,32 +225,24 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
 }
 
 std::string TypeAReportWarnings(const nlohmann::ordered_json& report) {
-  std::string out;
-  auto it = std::back_inserter(out);
-  bool any_warning = false;
+  std::vector<WarningLine> lines;
   if (report["input"].contains("warnings")) {
     for (const auto& wmsg : report["input"]["warnings"]) {
-      if (!any_warning) out += "\nwarnings:\n";
-      any_warning = true;
-      fmt::format_to(it, "  input: {}\n", wmsg.get<std::string>());
+      lines.push_back({"input", wmsg.get<std::string>()});
     }
   }
   for (const auto& s : report["sensors"]) {
-    for (const auto& wmsg : s["warnings"]) {
-      if (!any_warning) out += "\nwarnings:\n";
-      any_warning = true;
-      fmt::format_to(it, "  sensor {}: {}\n", s["sensor"].get<int>(), wmsg.get<std::string>());
-    }
+    const std::string sensor = fmt::format("sensor {}", s["sensor"].get<int>());
+    for (const auto& wmsg : s["warnings"]) lines.push_back({sensor, wmsg.get<std::string>()});
     for (const auto& [qname, q] : s["quantities"].items()) {
       for (const auto& wmsg : q["warnings"]) {
-        if (!any_warning) out += "\nwarnings:\n";
-        any_warning = true;
-        fmt::format_to(it, "  sensor {} {}: {}\n", s["sensor"].get<int>(), qname,
-                       wmsg.get<std::string>());
+        lines.push_back({sensor + " " + qname, wmsg.get<std::string>()});
       }
     }
   }
-  return out;
+  // Near-identical warnings (the same message but for its numbers) are grouped with a count.
+  if (lines.empty()) return {};
+  return "\nwarnings:\n" + GroupedWarnings(lines);
 }
 
 }  // namespace metro
