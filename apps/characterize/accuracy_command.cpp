@@ -78,6 +78,22 @@ void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
                "(default: trimmed and said so)");
 }
 
+const std::vector<std::string>& AccuracyOnlyOptionNames() {
+  static const std::vector<std::string> names = {"--table-axis",
+                                                 "--reference",
+                                                 "--reference-u",
+                                                 "--reference-offset-s",
+                                                 "--error-model",
+                                                 "--min-dwell-s",
+                                                 "--settle-s",
+                                                 "--plateau-tolerance-deg",
+                                                 "--assumed-hysteresis-deg",
+                                                 "--lag-tau-s",
+                                                 "--no-lag-model",
+                                                 "--keep-departures"};
+  return names;
+}
+
 int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   if (in.type_a) {
     PrintError(MakeError("--accuracy and --type-a are separate analyses: give one"));

@@ -44,6 +44,8 @@ struct AccuracyRunInputs {
 };
 
 void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* options);
+// The options AddAccuracyOptions adds that only --accuracy uses (refused without it).
+const std::vector<std::string>& AccuracyOnlyOptionNames();
 int RunAccuracy(const AccuracyCliOptions& options, const AccuracyRunInputs& inputs);
 
 }  // namespace metro::apps

@@ -33,6 +33,37 @@ struct AnalyzeOptions {
   std::string html;
 };
 
+// Options that do nothing in the chosen mode are refused, never silently ignored: the
+// accuracy evaluation's own options without --accuracy; the Allan options without --allan;
+// with --accuracy, the options only the Type A analysis uses.
+Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
+  auto given = [&](const std::string& name) { return app.count(name) > 0; };
+  if (o.accuracy.enabled) {
+    for (const char* name : {"--allan", "--taus", "--estimator", "--gaps", "--allan-csv",
+                             "--budget", "--quantity", "--settle-scope"}) {
+      if (given(name)) {
+        return MakeError(fmt::format(
+            "{} does nothing with --accuracy (the accuracy evaluation takes the table axis's "
+            "angle: --table-axis); run the Type A analysis separately for it",
+            name));
+      }
+    }
+    return {};
+  }
+  for (const std::string& name : AccuracyOnlyOptionNames()) {
+    if (given(name)) {
+      return MakeError(
+          fmt::format("{} applies to the accuracy evaluation only: add --accuracy", name));
+    }
+  }
+  if (!o.analysis.allan) {
+    for (const char* name : {"--taus", "--estimator", "--gaps", "--allan-csv"}) {
+      if (given(name)) return MakeError(fmt::format("{} needs --allan", name));
+    }
+  }
+  return {};
+}
+
 int RunAnalyze(const AnalyzeOptions& o) {
   if (o.accuracy.enabled) {
     const AnalysisCliOptions& a = o.analysis;
@@ -153,6 +184,11 @@ void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
     if (!app.get_subcommands().empty()) return;
     if (o->session.empty()) {
       apps::PrintText(stderr, fmt::format("error: no session given\n{}", app.help()));
+      *exit_code = kExitUsage;
+      return;
+    }
+    if (Status s = CheckModeOptions(app, *o); !s.ok()) {
+      PrintError(s.error());
       *exit_code = kExitUsage;
       return;
     }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/parallel.hpp"
 #include "metro/core/angles.hpp"
@@ -124,6 +125,49 @@ bool SessionTypeAOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace {
+
+// An explicit window (skip, from, to) that leaves no observation of any tag is an input
+// error naming the span the tags have; one that empties some tags but not others is a
+// warning on those tags.
+Status CheckWindowNotEmpty(const Session& session, const WindowOptions& window,
+                           const std::vector<const Tag*>& tags, SessionTypeA* out) {
+  const bool explicit_window = window.skip_samples > 0 || window.skip_seconds > 0.0 ||
+                               window.from_s.has_value() || window.to_s.has_value();
+  if (!explicit_window) return {};
+  bool any_left = false, any_data = false;
+  double t_min = std::numeric_limits<double>::infinity(), t_max = -t_min;
+  for (size_t k = 0; k < tags.size(); ++k) {
+    const Tag& tag = *tags[k];
+    if (tag.size() == 0) continue;
+    any_data = true;
+    t_min = std::min(t_min, tag.t_s.front());
+    t_max = std::max(t_max, tag.t_s.back());
+    if (out->tags[k].window.n() > 0) {
+      any_left = true;
+    } else {
+      out->tags[k].warnings.push_back(fmt::format(
+          "the window leaves no observations of this tag (its observations span t_s {:.6g} .. "
+          "{:.6g}, {} of them)",
+          tag.t_s.front(), tag.t_s.back(), tag.size()));
+    }
+  }
+  if (!any_data || any_left) return {};
+  std::string given;
+  if (window.skip_samples > 0) given += fmt::format(" --skip-samples {}", window.skip_samples);
+  if (window.skip_seconds > 0.0) given += fmt::format(" --skip-seconds {:g}", window.skip_seconds);
+  if (window.from_s) given += fmt::format(" --from-s {:g}", *window.from_s);
+  if (window.to_s) given += fmt::format(" --to-s {:g}", *window.to_s);
+  Error e = MakeError(fmt::format(
+      "the window ({}) leaves no observations of any tag: the session's observations span t_s "
+      "{:.6g} .. {:.6g}; choose a window inside that span",
+      given.empty() ? std::string() : given.substr(1), t_min, t_max));
+  e.file = session.path;
+  return e;
+}
+
+}  // namespace
+
 Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
                                           const SessionTypeAOptions& options) {
   std::string why;
@@ -189,6 +233,9 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
       t.quantities.push_back(std::move(r));
     }
     out.tags.push_back(std::move(t));
+  }
+  if (Status s = CheckWindowNotEmpty(session, options.window, tags, &out); !s.ok()) {
+    return s.error();
   }
 
   // Settle detection (stats/settle.hpp): each quantity's own cut; the tag window takes the

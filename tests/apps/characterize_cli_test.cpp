@@ -289,3 +289,43 @@ TEST_CASE("characterize --budget takes its Type A input from the session", "[app
 
 }  // namespace
 }  // namespace metro
+
+namespace metro {
+namespace {
+
+// Issue #25 point 6: an option that does nothing in the chosen mode is refused (exit 2),
+// and so is a window that leaves no observation; no report is written.
+TEST_CASE("Options without effect in the mode and an empty window are refused", "[apps]") {
+  const std::string chest = std::string(METRO_SOURCE_DIR) + "/datasets/static_chest.csv";
+  const std::string table = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
+  const std::string out = "metro_test_mode_" + std::to_string(::getpid()) + ".json";
+  struct Refusal {
+    std::string args, message;
+  };
+  const std::vector<Refusal> refusals = {
+      {table + " --accuracy --allan", "--allan does nothing with --accuracy"},
+      {table + " --accuracy --quantity yaw_deg", "--quantity does nothing with --accuracy"},
+      {chest + " --type-a --min-dwell-s 3", "--min-dwell-s applies to the accuracy evaluation"},
+      {chest + " --type-a --keep-departures", "--keep-departures applies to the accuracy"},
+      {chest + " --type-a --taus all", "--taus needs --allan"},
+      {chest + " --type-a --allan-csv x.csv", "--allan-csv needs --allan"},
+      {chest + " --type-a --from-s 10000",
+       "leaves no observations of any tag: the session's observations span t_s 0 .. 499.84"},
+      {chest + " --type-a --skip-samples 100000", "(--skip-samples 100000) leaves no"},
+  };
+  for (const Refusal& r : refusals) {
+    INFO(r.args);
+    const Run run = Characterize(r.args + " -o " + out);
+    CHECK(run.exit_code == 2);
+    CHECK(run.err.find(r.message) != std::string::npos);
+    CHECK_FALSE(std::ifstream(out).good());
+  }
+  // The same options in their own mode are accepted.
+  const std::string imu = std::string(METRO_SOURCE_DIR) + "/datasets/static_imu_100hz.csv";
+  CHECK(Characterize(imu + " --type-a --allan --taus octave -o " + out).exit_code == 0);
+  CHECK(Characterize(table + " --accuracy --min-dwell-s 3 -o " + out).exit_code == 0);
+  std::remove(out.c_str());
+}
+
+}  // namespace
+}  // namespace metro
