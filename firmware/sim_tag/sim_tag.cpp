@@ -17,13 +17,15 @@
 //   --flash-write-error N the N-th flash write fails (CAL_EXECUTE answers FLASH_ERROR)
 //   --flash FILE          the two 1024-byte slot pages (A then B): loaded when the file exists,
 //                         saved after each committed update and at exit.
-// Exit status: 0 after a signal or the hang-up, 2 for bad arguments, 1 for a system error.
+// Exit status: 0 after a signal or the hang-up (and --help), 2 for bad arguments, 1 for a
+// system error. The options are parsed by CLI11; --help lists them with their defaults.
 #include <fcntl.h>
 #include <poll.h>
 #include <pty.h>
 #include <termios.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
@@ -115,15 +117,6 @@ bool SaveFlash(const Sim& s) {
   return std::rename(tmp.c_str(), s.opt.flash_file.c_str()) == 0;
 }
 
-bool ParseLong(const char* text, long* out) {
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(text, &end, 10);
-  if (errno != 0 || end == text || *end != '\0' || v < 1) return false;
-  *out = v;
-  return true;
-}
-
 int Usage(const char* why) {
   std::fprintf(stderr, "metro_sim_tag: %s\n", why);
   return 2;
@@ -134,38 +127,50 @@ int Usage(const char* why) {
 int main(int argc, char** argv) {
   Sim sim;
   Options& o = sim.opt;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (i + 1 >= argc) return Usage(("missing value after " + a).c_str());
-    const char* v = argv[++i];
-    long n = 0;
-    if (a == "--device-id") {
-      if (std::strlen(v) != 16 || std::strspn(v, "0123456789abcdefABCDEF") != 16) {
-        return Usage("--device-id takes 16 hex digits");
-      }
-      const unsigned long long id = std::strtoull(v, nullptr, 16);
-      o.device_id[0] = static_cast<uint32_t>(id & 0xFFFFFFFFu);
-      o.device_id[1] = static_cast<uint32_t>(id >> 32);
-    } else if (a == "--flash") {
-      o.flash_file = v;
-    } else if (!ParseLong(v, &n)) {
-      return Usage((a + " takes a positive integer").c_str());
-    } else if (a == "--drop-frame") {
-      o.drop_frames.insert(n);
-    } else if (a == "--dup-frame") {
-      o.dup_frames.insert(n);
-    } else if (a == "--corrupt-frame") {
-      o.corrupt_frames.insert(n);
-    } else if (a == "--drop-response") {
-      o.drop_responses.insert(n);
-    } else if (a == "--hangup-after") {
-      o.hangup_after = n;
-    } else if (a == "--flash-write-error") {
-      o.flash_write_error = n;
-    } else {
-      return Usage(("unknown option " + a).c_str());
-    }
+  CLI::App app{
+      "metro_sim_tag: the tag's push receiver and power-fail-safe update (firmware/src) on a "
+      "RAM flash, on a pseudo-terminal (raw, 230400 baud) as the BLE central's serial port. "
+      "Prints \"pty: /dev/pts/N\" once ready and serves until SIGTERM/SIGINT or the hang-up "
+      "fault. Frames count the SLIP frames received from the PC (1-based); the fault options "
+      "may be repeated. Exit status: 0 after a signal or the hang-up, 2 for bad arguments, 1 "
+      "for a system error."};
+  std::string device_id = "9ABCDEF012345678";
+  std::vector<long> drop, dup, corrupt, drop_response;
+  app.add_option("--device-id", device_id,
+                 "the tag's FICR device ID as 16 hex digits (DEVICEID[1] then DEVICEID[0])")
+      ->capture_default_str();
+  app.add_option("--flash", o.flash_file,
+                 "the two 1024-byte slot pages (A then B): loaded when the file exists, saved "
+                 "after each committed update and at exit (default: RAM only)");
+  app.add_option("--drop-frame", drop, "frame K is lost (never reaches the receiver)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--dup-frame", dup, "frame K arrives twice")->check(CLI::PositiveNumber);
+  app.add_option("--corrupt-frame", corrupt,
+                 "one byte of frame K is changed (the receiver answers NAK)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--drop-response", drop_response, "the tag's K-th answer is lost on the way back")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--hangup-after", o.hangup_after,
+                 "after answering frame N the tag closes the link and exits (default: never)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--flash-write-error", o.flash_write_error,
+                 "the N-th flash write fails: CAL_EXECUTE answers FLASH_ERROR (default: never)")
+      ->check(CLI::PositiveNumber);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
+  if (device_id.size() != 16 || std::strspn(device_id.c_str(), "0123456789abcdefABCDEF") != 16) {
+    return Usage("--device-id takes 16 hex digits");
+  }
+  const unsigned long long id = std::strtoull(device_id.c_str(), nullptr, 16);
+  o.device_id[0] = static_cast<uint32_t>(id & 0xFFFFFFFFu);
+  o.device_id[1] = static_cast<uint32_t>(id >> 32);
+  o.drop_frames.insert(drop.begin(), drop.end());
+  o.dup_frames.insert(dup.begin(), dup.end());
+  o.corrupt_frames.insert(corrupt.begin(), corrupt.end());
+  o.drop_responses.insert(drop_response.begin(), drop_response.end());
   if (!o.flash_file.empty()) {
     std::ifstream in(o.flash_file, std::ios::binary);
     if (in.good()) {
