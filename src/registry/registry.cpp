@@ -111,6 +111,13 @@ struct Registry::Impl {
       return Integer(rows[0][0]);
     }
     const int64_t id = Integer(rows[0][0]);
+    // A tags file named the tag's device (`calibrate fit --tags`, calibration.json's
+    // `device_id`): the calibration belongs to that device from now on.
+    if (tag.device_id) {
+      if (Status s = Attach(blob::FormatDeviceId(*tag.device_id), id, "tags", recorded); !s.ok()) {
+        return s.error();
+      }
+    }
     for (size_t i = 0; i < cal.inputs.size(); ++i) {
       if (Status s = db->Execute(
               "INSERT INTO calibration_inputs (calibration_id, position, path, sha256) VALUES "

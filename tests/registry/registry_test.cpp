@@ -150,6 +150,21 @@ TEST_CASE("Registry: a calibration and its blob, recorded and read back", "[regi
   });
 }
 
+TEST_CASE("Registry: a calibration whose tag names its device belongs to it", "[registry]") {
+  OnBothBackends([](const std::string& url) {
+    Result<std::unique_ptr<Registry>> r = Registry::Open(url);
+    REQUIRE(r.ok());
+    Calibration cal = Golden();
+    cal.tags[0].device_id = kDevice;  // As `calibrate fit --tags FILE` writes it.
+    REQUIRE(r.value()->RecordCalibration(cal, Id(cal), {}).ok());
+    Result<std::vector<RegistryCalibration>> h = r.value()->History(kDevice);
+    REQUIRE(h.ok());
+    REQUIRE(h.value().size() == 1);
+    CHECK(h.value()[0].devices == std::vector<uint64_t>{kDevice});
+    CHECK(h.value()[0].blobs.empty());
+  });
+}
+
 TEST_CASE("Registry: conformity decisions are stored with their rule", "[registry]") {
   OnBothBackends([](const std::string& url) {
     Result<std::unique_ptr<Registry>> r = Registry::Open(url);
