@@ -6,8 +6,10 @@
 #include <cmath>
 #include <cstdint>
 
+#include "metro/core/rounding.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/noise/allan_report.hpp"
+#include "metro/report/console_text.hpp"
 
 namespace metro {
 namespace {
@@ -203,6 +205,44 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
                      "window; name one with --quantity");
   }
   return summary;
+}
+
+std::string AllanSummaryTable(const nlohmann::ordered_json& report) {
+  std::string out;
+  auto term = [](const nlohmann::ordered_json& noise, const char* key) -> std::string {
+    if (!noise.contains(key)) return "-";
+    const auto& t = noise[key];
+    if (!t.value("supported", false) || !t["value"].is_number() || !t["u"].is_number()) {
+      return "-";
+    }
+    return ConciseNotation(t["value"].get<double>(), t["u"].get<double>()) + " " +
+           t.value("unit", std::string());
+  };
+  for (const auto& s : report["sensors"]) {
+    for (const auto& [qname, q] : s["quantities"].items()) {
+      if (!q.contains("allan") || !q["allan"].contains("noise")) continue;
+      if (out.empty()) {
+        out = fmt::format(
+            "\nAllan deviation ({}; IEEE 952 terms fitted, value(u)):\n{:>6} {:<18} {:<28} "
+            "{:<28} {:<28} {}\n",
+            q["allan"].value("estimator", std::string("oadev")), "sensor", "quantity",
+            "N (white noise)", "B (bias instability)", "K (rate random walk)", "minimum");
+      }
+      const auto& noise = q["allan"]["noise"];
+      std::string minimum = "-";
+      if (q.contains("allan_type_a_link") && q["allan_type_a_link"]["allan_min_dev"].is_number()) {
+        const auto& link = q["allan_type_a_link"];
+        minimum =
+            fmt::format("{} {} at {:.3g} s{}", ShortNumber(link["allan_min_dev"].get<double>()),
+                        q.value("unit", std::string()), link["allan_min_tau_s"].get<double>(),
+                        link.value("allan_min_at_end", false) ? " (last tau)" : "");
+      }
+      out += fmt::format("{:>6} {:<18} {:<28} {:<28} {:<28} {}\n", s["sensor"].get<int>(), qname,
+                         term(noise, "random_walk"), term(noise, "bias_instability"),
+                         term(noise, "rate_random_walk"), minimum);
+    }
+  }
+  return out;
 }
 
 }  // namespace metro

@@ -4,6 +4,7 @@
 
 #include "metro/core/rounding.hpp"
 #include "metro/core/version.hpp"
+#include "metro/report/allan_section.hpp"
 #include "metro/report/console_text.hpp"
 
 namespace metro {
@@ -220,6 +221,7 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
                      a["std"].get<double>(), a["std_of_mean"].get<double>(), n_eff, uncertainty);
     }
   }
+  out += AllanSummaryTable(report);
   out += TypeAReportWarnings(report);
   return out;
 }

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "metro/core/rounding.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 
@@ -325,6 +326,36 @@ TEST_CASE("Options without effect in the mode and an empty window are refused", 
   CHECK(Characterize(imu + " --type-a --allan --taus octave -o " + out).exit_code == 0);
   CHECK(Characterize(table + " --accuracy --min-dwell-s 3 -o " + out).exit_code == 0);
   std::remove(out.c_str());
+}
+
+// The console's Allan summary states what the JSON has: N of every rate quantity in the
+// concise notation with its unit, and the minimum.
+TEST_CASE("The Allan summary on the console equals the report", "[apps]") {
+  const std::string imu = std::string(METRO_SOURCE_DIR) + "/datasets/static_imu_100hz.csv";
+  const std::string out = "metro_test_allan_" + std::to_string(::getpid()) + ".json";
+  const Run run = Characterize(imu + " --type-a --allan -o " + out);
+  REQUIRE(run.exit_code == 0);
+  std::ifstream in(out);
+  const nlohmann::json report = nlohmann::json::parse(in);
+  std::remove(out.c_str());
+  const size_t at = run.out.find("\nAllan deviation (oadev");
+  REQUIRE(at != std::string::npos);
+  const std::string summary = run.out.substr(at);
+  int rows = 0;
+  for (const auto& [name, q] : report["sensors"][0]["quantities"].items()) {
+    if (!q.contains("allan")) continue;
+    const auto& n = q["allan"]["noise"]["random_walk"];
+    REQUIRE(n["supported"].get<bool>());
+    const std::string cell = ConciseNotation(n["value"].get<double>(), n["u"].get<double>()) + " " +
+                             n["unit"].get<std::string>();
+    INFO(name << ": " << cell);
+    const size_t line = summary.find(" " + name + " ");
+    REQUIRE(line != std::string::npos);
+    CHECK(summary.compare(summary.find_first_not_of(' ', line + name.size() + 1), cell.size(),
+                          cell) == 0);
+    ++rows;
+  }
+  CHECK(rows == 6);  // ax, ay, az, gx, gy, gz
 }
 
 }  // namespace

@@ -49,5 +49,14 @@ TEST_CASE("Table rounding switches to exponent notation past six decimals", "[re
   CHECK(r.uncertainty == "3.7e-08");
 }
 
+TEST_CASE("Short numbers use exponent notation below 0.001", "[report]") {
+  CHECK(ShortNumber(0.000122) == "1.22e-04");
+  CHECK(ShortNumber(0.0122) == "0.0122");
+  CHECK(ShortNumber(-3.9e-13) == "-3.90e-13");
+  CHECK(ShortNumber(12.345) == "12.3");
+  CHECK(ShortNumber(2.5e7) == "2.50e+07");
+  CHECK(ShortNumber(0.0) == "0");
+}
+
 }  // namespace
 }  // namespace metro

@@ -63,4 +63,10 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
                                              const SessionAllanOptions& options,
                                              nlohmann::ordered_json* report, std::string* csv);
 
+// The console summary of a report's Allan sections (empty when there is none): per tag and
+// quantity the fitted IEEE 952 N, B and K (IEEE Std 952-1997 Annex C) in the JCGM 100 7.2.2
+// concise notation with their units ("-" where the fit found none) and the Allan minimum with
+// its tau ("end" when the curve is still falling at its last tau).
+std::string AllanSummaryTable(const nlohmann::ordered_json& report);
+
 }  // namespace metro
