@@ -1,7 +1,9 @@
-// calibrate blob calibration.json --sensor N --device-id HEX16 [--seq N] -o tag.bin
+// calibrate blob calibration.json --sensor N [--device-id ID] [--tags FILE] [--seq N] -o tag.bin
+// calibrate blob calibration.json --all --tags FILE -o DIR   (every tag: DIR/tag<N>.bin, .hex)
 //   [--hex tag.hex] [--slot-address ADDR] [--dlpf-cfg N] [--t-valid-min-c C] [--t-valid-max-c C]
 //   [--profile mpu6050|generic] [--accel-fs-g G] [--gyro-fs-dps D]
 #include <fmt/format.h>
+#include <sys/stat.h>
 
 #include <memory>
 #include <optional>
@@ -14,6 +16,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "registry_hooks.hpp"
+#include "tags_cli.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -30,7 +33,9 @@ struct BlobOptions {
   int dlpf_cfg = 3;
   std::optional<double> t_valid_min_c;
   std::optional<double> t_valid_max_c;
-  std::string profile = "mpu6050";
+  std::string profile;  // "" = the tags file's, else mpu6050
+  std::string tags;     // --tags FILE
+  bool all = false;     // --all: every tag of calibration.json into the directory -o
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
   RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
@@ -56,10 +61,17 @@ Result<uint32_t> ParseSlotAddress(const std::string& text) {
   return static_cast<uint32_t>(v);
 }
 
+int RunBlobAll(const BlobOptions& b);
+
 int RunBlob(const BlobOptions& b) {
-  Result<uint64_t> id = blob::ParseDeviceId(b.device_id);
-  if (!id.ok()) {
-    apps::PrintErrorText(fmt::format("--device-id: {}", id.error().message));
+  if (b.all) return RunBlobAll(b);
+  if (b.sensor < 1) {
+    apps::PrintErrorText("--sensor N names the tag in calibration.json (or --all for every tag)");
+    return kExitUsage;
+  }
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(b.tags);
+  if (!tags.ok()) {
+    apps::PrintError(tags.error());
     return kExitUsage;
   }
   Result<uint32_t> slot_a = ParseSlotAddress(b.slot_address);
@@ -80,6 +92,20 @@ int RunBlob(const BlobOptions& b) {
     apps::PrintErrorText(cal.error().ToString());
     return kExitUsage;
   }
+  Result<std::optional<uint64_t>> resolved =
+      ResolveDeviceId(b.device_id, tags.value(), cal.value(), b.sensor);
+  if (!resolved.ok()) {
+    apps::PrintErrorText(resolved.error().message);
+    return kExitUsage;
+  }
+  if (!resolved.value()) {
+    apps::PrintErrorText(fmt::format(
+        "no device ID for sensor {}: give --device-id, or --tags FILE with its device_id (the "
+        "blob is bound to one chip, docs/calibration-blob.md 1.1)",
+        b.sensor));
+    return kExitUsage;
+  }
+  const Result<uint64_t> id = *resolved.value();
   OpenedRegistry registry = OpenRegistryOption(b.registry);
   if (registry.exit_code != 0) return registry.exit_code;
   blob::BlobFromCalibrationOptions o;
@@ -89,7 +115,7 @@ int RunBlob(const BlobOptions& b) {
   o.t_valid_max_c = b.t_valid_max_c;
   o.seq = b.seq;
   o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
-  o.profile = *blob::ParseSensorProfile(b.profile);  // CLI11 checked the name
+  o.profile = ResolveProfile(b.profile, tags.value(), b.sensor);
   o.accel_fs_g = b.accel_fs_g;
   o.gyro_fs_dps = b.gyro_fs_dps;
   std::vector<std::string> warnings;
@@ -147,6 +173,85 @@ int RunBlob(const BlobOptions& b) {
                           contents.value(), id.value(), b.seq, crc, b.output, b.registry);
 }
 
+// --all: every tag of calibration.json, each with its device ID (tags file or calibration.json),
+// checked together before any file is written, then one blob and HEX per tag in the directory.
+int RunBlobAll(const BlobOptions& b) {
+  if (b.sensor != 0 || !b.device_id.empty() || !b.hex.empty()) {
+    apps::PrintErrorText(
+        "--all writes every tag: drop --sensor, --device-id and --hex (DIR/tag<N>.hex is "
+        "written beside each DIR/tag<N>.bin)");
+    return kExitUsage;
+  }
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(b.tags);
+  if (!tags.ok()) {
+    apps::PrintError(tags.error());
+    return kExitUsage;
+  }
+  struct stat st {};
+  if (apps::IsStdio(b.output) || ::stat(b.output.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    apps::PrintErrorText(
+        fmt::format("-o {}: --all writes into a directory; expected an existing "
+                    "directory",
+                    b.output));
+    return kExitUsage;
+  }
+  Result<Calibration> cal = LoadCalibration(b.calibration);
+  if (!cal.ok()) {
+    apps::PrintErrorText(cal.error().ToString());
+    return kExitUsage;
+  }
+  // Every tag resolvable and representable before anything is written.
+  std::vector<BlobOptions> each;
+  for (const TagCalibration& t : cal.value().tags) {
+    Result<std::optional<uint64_t>> id = ResolveDeviceId("", tags.value(), cal.value(), t.sensor);
+    if (!id.ok() || !id.value()) {
+      apps::PrintErrorText(
+          id.ok() ? fmt::format("sensor {}: no device ID in the tags file or calibration.json "
+                                "(nothing written)",
+                                t.sensor)
+                  : fmt::format("sensor {}: {} (nothing written)", t.sensor, id.error().message));
+      return kExitUsage;
+    }
+    blob::BlobFromCalibrationOptions o;
+    o.sensor = t.sensor;
+    o.device_id = *id.value();
+    o.seq = b.seq;
+    o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
+    o.t_valid_min_c = b.t_valid_min_c;
+    o.t_valid_max_c = b.t_valid_max_c;
+    o.profile = ResolveProfile(b.profile, tags.value(), t.sensor);
+    o.accel_fs_g = b.accel_fs_g;
+    o.gyro_fs_dps = b.gyro_fs_dps;
+    Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal.value(), o);
+    Result<std::vector<uint8_t>> bytes = contents.ok()
+                                             ? blob::WriteBlob(contents.value())
+                                             : Result<std::vector<uint8_t>>(contents.error());
+    if (!bytes.ok()) {
+      apps::PrintErrorText(
+          fmt::format("{}: {} (nothing written)", b.calibration, bytes.error().ToString()));
+      return kExitUsage;
+    }
+    BlobOptions one = b;
+    one.all = false;
+    one.sensor = t.sensor;
+    one.device_id = blob::FormatDeviceId(*id.value());
+    one.output = fmt::format("{}/tag{}.bin", b.output, t.sensor);
+    one.hex = fmt::format("{}/tag{}.hex", b.output, t.sensor);
+    each.push_back(one);
+  }
+  std::string table =
+      fmt::format("{:>6}  {:<16}  {:<16}  {}\n", "sensor", "name", "device", "blob");
+  for (const BlobOptions& one : each) {
+    if (int rc = RunBlob(one); rc != kExitOk) return rc;
+    table += fmt::format(
+        "{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
+        tags.value() ? tags.value()->Name(one.sensor) : TagRegistry::Default().Name(one.sensor),
+        one.device_id, one.output);
+  }
+  apps::Note(table);
+  return kExitOk;
+}
+
 }  // namespace
 
 void AddBlobCommand(CLI::App& app, int* exit_code) {
@@ -158,13 +263,19 @@ void AddBlobCommand(CLI::App& app, int* exit_code) {
   sub->add_option("calibration", o->calibration, "calibration.json")
       ->required()
       ->check(CLI::ExistingFile);
-  sub->add_option("--sensor", o->sensor, "the tag in calibration.json")->required();
+  sub->add_option("--sensor", o->sensor, "the tag in calibration.json (or --all)");
   sub->add_option("--device-id", o->device_id,
-                  "the tag's FICR DEVICEID, 16 hex digits: DEVICEID[1] then DEVICEID[0]")
-      ->required();
+                  "the tag's FICR DEVICEID: 16 hex digits DEVICEID[1] then DEVICEID[0], or the "
+                  "two words nrfjprog --memrd 0x10000060 --n 8 prints (DEVICEID[0] DEVICEID[1]), "
+                  "with or without 0x (default: the tags file's, else calibration.json's)");
+  AddTagsOption(sub, &o->tags);
+  sub->add_flag("--all", o->all,
+                "every tag of calibration.json: -o names a directory, DIR/tag<N>.bin and .hex, "
+                "device IDs from --tags or calibration.json");
   sub->add_option("--seq", o->seq, "blob sequence number, 1..4294967294 (default 1)")
       ->check(CLI::Range(1u, 0xFFFFFFFEu));
-  sub->add_option("-o,--output", o->output, "tag.bin to write (- for stdout, not a terminal)")
+  sub->add_option("-o,--output", o->output,
+                  "tag.bin to write (- for stdout, not a terminal); with --all a directory")
       ->required();
   sub->add_option("--hex", o->hex,
                   "also write this Intel HEX: blob at slot A, tombstone at B (- for stdout)");

@@ -30,7 +30,7 @@ inline void AddSensorProfileOptions(CLI::App* sub, std::string* profile,
   sub->add_option("--profile", *profile,
                   "the IMU: mpu6050 (its datasheet sensitivity at the declared or matching "
                   "full-scale setting) or generic (another IMU: 32768 / the declared full scale, "
-                  "else the calibration's own); default mpu6050")
+                  "else the calibration's own); default: the tags file's, else mpu6050")
       ->check(CLI::IsMember({"mpu6050", "generic"}));
   sub->add_option("--accel-fs-g", *accel_fs_g,
                   "declared accelerometer full scale [g] (mpu6050: 2, 4, 8 or 16; default: the "

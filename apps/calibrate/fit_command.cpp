@@ -15,6 +15,7 @@
 #include "metro/io/session_io.hpp"
 #include "metro/report/certificate.hpp"
 #include "registry_hooks.hpp"
+#include "tags_cli.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -38,6 +39,7 @@ struct FitOptions {
   std::optional<double> min_static_s;  // Shortest pose kept (default 1 s; shrinks the window).
   std::string segments;                // Annotated segments instead of the detector.
   std::string html;                    // Calibration certificate (docs/reports.md).
+  std::string tags;                    // --tags FILE: device IDs into calibration.json.
   apps::LoadCliOptions load;    // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
   SpecCliOptions spec;          // --spec, --fail-on-nonconformity (docs/conformity.md)
   RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
@@ -118,8 +120,14 @@ int RunFit(const FitOptions& f) {
   std::vector<apps::NamedPath> inputs = {
       {"--columns-file", f.load.columns_file}, {"--segments", f.segments}, {"--spec", f.spec.spec}};
   for (const std::string& in : f.inputs) inputs.push_back({"SESSION", in});
+  inputs.push_back({"--tags", f.tags});
   if (Status s = apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs); !s.ok()) {
     apps::PrintError(s.error());
+    return kExitUsage;
+  }
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(f.tags);
+  if (!tags.ok()) {
+    apps::PrintError(tags.error());
     return kExitUsage;
   }
   const LoadedSpec spec = LoadSpecOption(f.spec);
@@ -161,6 +169,11 @@ int RunFit(const FitOptions& f) {
   if (!cal.ok()) {
     apps::PrintError(cal.error());
     return kExitFailed;
+  }
+  // calibration.json carries each tag's device ID when the tags file knows it.
+  for (TagCalibration& t : cal.value().tags) {
+    const TagEntry* entry = tags.value() ? tags.value()->Find(t.sensor) : nullptr;
+    if (entry != nullptr) t.device_id = entry->device_id;
   }
   if (int rc = ApplySpec(spec.spec, &cal.value()); rc != kExitOk) return rc;
   std::string html;
@@ -279,6 +292,7 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
                   "kind,start_s,end_s[,table_rate_dps][,input] (docs/calibration-model.md)")
       ->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
+  AddTagsOption(sub, &o->tags);
   AddSpecOptions(sub, &o->spec);
   AddRegistryOptions(sub, &o->registry);
   sub->callback([o, exit_code] { *exit_code = RunFit(*o); });

@@ -67,7 +67,8 @@ void AddInspectCommand(CLI::App& app, int* exit_code) {
       "firmware's rules; exit 0 valid, 1 no valid calibration, 2 unreadable");
   sub->add_option("file", o->input, "tag.bin or tag.hex")->required()->check(CLI::ExistingFile);
   sub->add_option("--device-id", o->device_id,
-                  "check against this tag (16 hex digits); default: each blob's own id");
+                  "check against this tag (16 hex digits DEVICEID[1] DEVICEID[0], or nrfjprog "
+                  "--memrd's words DEVICEID[0] DEVICEID[1]); default: each blob's own id");
   sub->add_option("--slot-address", o->slot_address,
                   "slot A address in a .hex (default 0x3B000); slot B is the next page");
   sub->add_flag("--json", o->json, "print JSON instead of text");

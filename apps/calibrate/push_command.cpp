@@ -2,9 +2,11 @@
 //   [--timeout-ms MS] [--retries N] [--profile mpu6050|generic] [--accel-fs-g G] [--gyro-fs-dps D]
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "cli_progress.hpp"
 #include "commands.hpp"
@@ -13,6 +15,7 @@
 #include "metro/blob/serial_port.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "registry_hooks.hpp"
+#include "tags_cli.hpp"
 
 namespace metro::calibrate_app {
 namespace {
@@ -28,21 +31,28 @@ struct PushCliOptions {
   std::optional<double> t_valid_max_c;
   int timeout_ms = 1000;
   int retries = 5;
-  std::string profile = "mpu6050";
+  std::string profile;  // "" = the tags file's, else mpu6050
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
+  std::string tags;             // --tags FILE
+  bool any_device = false;      // --any-device: write to whichever tag answers
+  bool all = false;             // --all: every tag of calibration.json, one after another
   RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
 };
 
-int RunPush(const PushCliOptions& c) {
-  std::optional<uint64_t> expect;
-  if (!c.device_id.empty()) {
-    Result<uint64_t> id = blob::ParseDeviceId(c.device_id);
-    if (!id.ok()) {
-      apps::PrintErrorText(fmt::format("--device-id: {}", id.error().message));
-      return kExitUsage;
-    }
-    expect = id.value();
+int RunPushAll(const PushCliOptions& c);
+
+// `outcome`, when not null, receives the final line's verdict for --all's table.
+int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
+  if (c.all) return RunPushAll(c);
+  if (c.sensor < 1) {
+    apps::PrintErrorText("--sensor N names the tag in calibration.json (or --all for every tag)");
+    return kExitUsage;
+  }
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(c.tags);
+  if (!tags.ok()) {
+    apps::PrintError(tags.error());
+    return kExitUsage;
   }
   Result<Calibration> cal = LoadCalibration(c.calibration);
   if (!cal.ok()) {
@@ -54,13 +64,34 @@ int RunPush(const PushCliOptions& c) {
         stderr, fmt::format("error: {}: calibration has no sensor {}\n", c.calibration, c.sensor));
     return kExitUsage;
   }
+  // The tag the push must reach (docs/calibration-blob.md 1.1): a push to a tag whose device ID
+  // is not known is refused unless --any-device.
+  Result<std::optional<uint64_t>> resolved =
+      ResolveDeviceId(c.device_id, tags.value(), cal.value(), c.sensor);
+  if (!resolved.ok()) {
+    apps::PrintErrorText(resolved.error().message);
+    return kExitUsage;
+  }
+  if (c.any_device && !c.device_id.empty()) {
+    apps::PrintErrorText("--any-device and --device-id contradict each other: give one");
+    return kExitUsage;
+  }
+  // --any-device: whichever tag answers, whatever the tags file or calibration.json say.
+  const std::optional<uint64_t> expect = c.any_device ? std::nullopt : resolved.value();
+  if (!expect && !c.any_device) {
+    apps::PrintErrorText(fmt::format(
+        "no device ID known for sensor {}: give --device-id, --tags FILE with its device_id, or "
+        "--any-device to write to whichever tag answers (nothing sent; {} not opened)",
+        c.sensor, c.port));
+    return kExitUsage;
+  }
   blob::BlobFromCalibrationOptions bo;
   bo.sensor = c.sensor;
   bo.seq = c.seq;
   bo.dlpf_cfg = static_cast<uint8_t>(c.dlpf_cfg);
   bo.t_valid_min_c = c.t_valid_min_c;
   bo.t_valid_max_c = c.t_valid_max_c;
-  bo.profile = *blob::ParseSensorProfile(c.profile);  // CLI11 checked the name
+  bo.profile = ResolveProfile(c.profile, tags.value(), c.sensor);
   bo.accel_fs_g = c.accel_fs_g;
   bo.gyro_fs_dps = c.gyro_fs_dps;
   // Whether the blob format can represent the constants does not depend on the tag's device
@@ -132,7 +163,16 @@ int RunPush(const PushCliOptions& c) {
                                         c.sensor, s, expect, c.port, c.registry);
   if (s.ok) {
     apps::Note(fmt::format("OK: {}\n", message));
+    if (outcome != nullptr) {
+      *outcome =
+          fmt::format("OK: seq {} in slot {}, read back identical", s.seq, s.slot == 0 ? "A" : "B");
+    }
     return recorded;
+  }
+  if (outcome != nullptr) {
+    *outcome = s.commit == blob::CommitState::kUnknown     ? "outcome unknown"
+               : s.commit == blob::CommitState::kCommitted ? "UNVERIFIED"
+                                                           : "FAILED";
   }
   // An unknown outcome or a live but unchecked calibration is not a failure to write: the
   // message says what the tag may hold (docs/calibration-blob.md section 11).
@@ -145,6 +185,63 @@ int RunPush(const PushCliOptions& c) {
   }
   apps::PrintText(stderr, blob::PushRecoveryAdvice(s, c.port, c.calibration, c.sensor));
   return s.input_error ? kExitUsage : kExitFailed;
+}
+
+// --all: every tag of calibration.json over the one port, in sensor order, each to its own
+// device (the central must have that tag selected, docs/calibration-blob.md 1.1; another tag
+// on the link is refused before anything is written), each read back; then a table. Tags
+// without a device ID stop the run before the port is opened.
+int RunPushAll(const PushCliOptions& c) {
+  if (c.sensor != 0 || !c.device_id.empty() || c.any_device || c.seq != 0) {
+    apps::PrintErrorText(
+        "--all pushes every tag to its own device: drop --sensor, --device-id, --any-device and "
+        "--seq (each tag gets its active seq + 1)");
+    return kExitUsage;
+  }
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(c.tags);
+  if (!tags.ok()) {
+    apps::PrintError(tags.error());
+    return kExitUsage;
+  }
+  Result<Calibration> cal = LoadCalibration(c.calibration);
+  if (!cal.ok()) {
+    apps::PrintErrorText(cal.error().ToString());
+    return kExitUsage;
+  }
+  std::vector<PushCliOptions> each;
+  for (const TagCalibration& t : cal.value().tags) {
+    Result<std::optional<uint64_t>> id = ResolveDeviceId("", tags.value(), cal.value(), t.sensor);
+    if (!id.ok() || !id.value()) {
+      apps::PrintErrorText(
+          id.ok() ? fmt::format("sensor {}: no device ID in the tags file or calibration.json "
+                                "(nothing sent; {} not opened)",
+                                t.sensor, c.port)
+                  : fmt::format("sensor {}: {} (nothing sent)", t.sensor, id.error().message));
+      return kExitUsage;
+    }
+    PushCliOptions one = c;
+    one.all = false;
+    one.sensor = t.sensor;
+    one.device_id = blob::FormatDeviceId(*id.value());
+    each.push_back(one);
+  }
+  int worst = kExitOk;
+  std::string table =
+      fmt::format("{:>6}  {:<16}  {:<16}  {}\n", "sensor", "name", "device", "result");
+  for (const PushCliOptions& one : each) {
+    apps::Note(fmt::format("== sensor {}, device {}\n", one.sensor, one.device_id));
+    std::string outcome;
+    const int rc = RunPush(one, &outcome);
+    if (outcome.empty()) outcome = rc == kExitUsage ? "refused (see above)" : "failed (see above)";
+    worst = std::max(worst, rc);
+    table += fmt::format(
+        "{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
+        tags.value() ? tags.value()->Name(one.sensor) : TagRegistry::Default().Name(one.sensor),
+        one.device_id, outcome);
+  }
+  // The table is the result: on stdout.
+  apps::PrintText(stdout, table);
+  return worst;
 }
 
 }  // namespace
@@ -160,9 +257,17 @@ void AddPushCommand(CLI::App& app, int* exit_code) {
   sub->add_option("calibration", o->calibration, "calibration.json")
       ->required()
       ->check(CLI::ExistingFile);
-  sub->add_option("--sensor", o->sensor, "the tag in calibration.json")->required();
+  sub->add_option("--sensor", o->sensor, "the tag in calibration.json (or --all)");
   sub->add_option("--device-id", o->device_id,
-                  "refuse a tag with another FICR DEVICEID (16 hex digits)");
+                  "the tag's FICR DEVICEID (16 hex digits DEVICEID[1] DEVICEID[0], or nrfjprog "
+                  "--memrd's two words DEVICEID[0] DEVICEID[1]); another tag is refused. "
+                  "Default: the tags file's, else calibration.json's");
+  AddTagsOption(sub, &o->tags);
+  sub->add_flag("--all", o->all,
+                "every tag of calibration.json, each to its device (--tags or calibration.json), "
+                "read back, then a table (sensor, name, device, result)");
+  sub->add_flag("--any-device", o->any_device,
+                "no device ID is known: write to whichever tag answers (else refused)");
   sub->add_option("--seq", o->seq, "blob seq (default: the tag's active seq + 1)")
       ->check(CLI::Range(1u, 0xFFFFFFFEu));
   sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")

@@ -25,8 +25,9 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o) {
       ->capture_default_str();
   app->add_option("--sensor", o->sensors, "only this tag (repeatable)");
   app->add_option("--quantity", o->quantities, "only this quantity, e.g. pitch_deg (repeatable)");
-  app->add_option("--tag-registry", o->tag_registry,
-                  R"(JSON {"1": "Forehead", ...} naming the tags (default: thesis Table 5.2))")
+  app->add_option("--tags,--tag-registry", o->tag_registry,
+                  R"(tags file, JSON {"1": "Forehead", "2": {"name": "Chest", "device_id": ...}} )"
+                  R"(naming the tags (docs/formats.md "Tags file"; default: thesis Table 5.2))")
       ->check(CLI::ExistingFile);
   app->add_flag("--allan", o->allan,
                 "Allan deviation and IEEE 952 noise terms of the rate quantities (docs/noise.md)");

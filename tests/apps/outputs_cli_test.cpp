@@ -526,8 +526,8 @@ TEST_CASE("Terminal: calibrate push and blob escape port and file names",
   const std::string cal = kDatasets + "golden/calibration_sensor2.json";
   // A port name with an OSC title sequence and a newline that forges a second line.
   const std::string port = d / "tty\x1b]0;owned\x07\nOK: pushed";
-  Run r =
-      testing::RunProgram(METRO_CALIBRATE_EXE, "push " + cal + " --sensor 2 --port '" + port + "'");
+  Run r = testing::RunProgram(METRO_CALIBRATE_EXE,
+                              "push " + cal + " --sensor 2 --any-device --port '" + port + "'");
   INFO(r.err);
   CHECK(r.exit_code != 0);
   CHECK_FALSE(HasRawControl(r.err));

@@ -165,13 +165,13 @@ TEST_CASE("calibrate blob and push --profile; push refuses before opening the po
   auto run = [](const std::string& args) { return testing::RunProgram(METRO_CALIBRATE_EXE, args); };
   const std::string port = "/nonexistent/metro-tty";
   testing::ProgramRun r =
-      run("push --port " + port + " " + cal_path + " --sensor 2 --profile generic");
+      run("push --port " + port + " " + cal_path + " --sensor 2 --any-device --profile generic");
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("cannot represent it") != std::string::npos);
   CHECK(r.err.find("(nothing sent; " + port + " not opened)") != std::string::npos);
   // A representable calibration gets as far as the port (which does not exist): exit 1.
   r = run("push --port " + port + " " + kGolden + "calibration_sensor2.json --sensor 2 " +
-          "--profile generic --accel-fs-g 2 --gyro-fs-dps 250");
+          "--any-device --profile generic --accel-fs-g 2 --gyro-fs-dps 250");
   CHECK(r.exit_code == 1);
   CHECK(r.err.find(port) != std::string::npos);
   CHECK(r.err.find("not opened") == std::string::npos);

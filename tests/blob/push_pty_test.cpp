@@ -17,7 +17,9 @@
 
 #include "metro/blob/push_client.hpp"
 #include "metro/blob/serial_port.hpp"
+#include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
+#include "support/run_program.hpp"
 
 extern char** environ;
 
@@ -139,8 +141,13 @@ Run Push(const std::string& pty, const std::string& extra = "") {
   static int counter = 0;
   const std::string err_path =
       "metro_pty_err_" + std::to_string(::getpid()) + "_" + std::to_string(++counter) + ".txt";
+  // The simulated tag's device (its default, the golden blob's): push refuses a tag whose
+  // device ID is not known (issue #25), so the cases name it unless they give their own.
+  const std::string device =
+      extra.find("--device-id") == std::string::npos ? "--device-id 9ABCDEF012345678 " : "";
   const std::string cmd = std::string(METRO_CALIBRATE_EXE) + " push --port " + pty + " " + kGolden +
-                          "calibration_sensor2.json --sensor 2 " + extra + " 2>" + err_path;
+                          "calibration_sensor2.json --sensor 2 " + device + extra + " 2>" +
+                          err_path;
   const int status = std::system(cmd.c_str());
   Run r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, ""};
   std::ifstream err(err_path);
@@ -329,6 +336,119 @@ TEST_CASE("pty: calibrate push on an exhausted seq advises seq 1 over the wire p
   sim.Stop();
   std::remove(flash.c_str());
 }
+// issue #25: which tag a push may reach. The simulated tag's FICR holds DEVICEID[0] 0x12345678
+// and DEVICEID[1] 0x9ABCDEF0 (nrfjprog --memrd prints "12345678 9ABCDEF0").
+TEST_CASE("pty: calibrate push reaches only a known device", "[blob][push][apps]") {
+  const std::string flash = "metro_pty_known_flash.bin";
+  const std::string tags = "metro_pty_tags.json";
+  auto write_tags = [&](const std::string& json) { std::ofstream(tags) << json; };
+  SECTION("no device ID known: refused before the port is opened") {
+    std::remove(flash.c_str());
+    SimTag sim(flash, {});
+    Run r = Push(sim.pty(), "--device-id ''");
+    CHECK(r.exit_code == 2);
+    CHECK(Has(r.err,
+              "error: no device ID known for sensor 2: give --device-id, --tags FILE with "
+              "its device_id, or --any-device to write to whichever tag answers (nothing "
+              "sent; " +
+                  sim.pty() + " not opened)"));
+    CHECK(sim.Stop() == 0);
+    const std::vector<uint8_t> img = Bytes(flash);  // both slots still erased
+    CHECK(Slot(img, 0, kPageSize) == std::vector<uint8_t>(kPageSize, 0xFF));
+    CHECK(Slot(img, 1, kPageSize) == std::vector<uint8_t>(kPageSize, 0xFF));
+  }
+  SECTION("--any-device writes to whichever tag answers") {
+    std::remove(flash.c_str());
+    SimTag sim(flash, {});
+    Run r = Push(sim.pty(), "--device-id '' --any-device --seq 3");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(Has(r.err, "OK: tag 9ABCDEF012345678 calibrated: seq 3 in slot A"));
+  }
+  SECTION("the device ID in nrfjprog's word order, and from a tags file") {
+    std::remove(flash.c_str());
+    SimTag sim(flash, {});
+    Run r = Push(sim.pty(), "--device-id '0x12345678 0x9ABCDEF0' --seq 3");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    write_tags(R"({"2": {"name": "Chest", "device_id": "12345678 9ABCDEF0"}})");
+    r = Push(sim.pty(), "--device-id '' --tags " + tags + " --seq 4");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(Has(r.err, "OK: tag 9ABCDEF012345678 calibrated: seq 4 in slot B"));
+  }
+  SECTION("the tags file names another device for the sensor: nothing written") {
+    std::remove(flash.c_str());
+    SimTag sim(flash, {});
+    write_tags(R"({"2": {"name": "Chest", "device_id": "0000000100000000"}})");
+    Run r = Push(sim.pty(), "--device-id '' --tags " + tags);
+    CHECK(r.exit_code == 2);
+    CHECK(Has(r.err,
+              "FAILED: the tag on the link is 9ABCDEF012345678, not 0000000100000000: "
+              "nothing was written"));
+    // --device-id against the tags file's ID for the sensor: refused before the port.
+    r = Push(sim.pty(), "--device-id 9ABCDEF012345678 --tags " + tags);
+    CHECK(r.exit_code == 2);
+    CHECK(Has(r.err,
+              "error: --device-id 9ABCDEF012345678 is not sensor 2's device "
+              "0000000100000000 in the tags file"));
+  }
+  std::remove(flash.c_str());
+  std::remove(tags.c_str());
+}
+
+// --all: every tag of calibration.json, each to its own device. On the simulated tag's port
+// only sensor 2's device answers: sensor 2 is written and read back, sensor 3 is refused (the
+// tag on the link is not its device) with nothing written, and the table says so.
+TEST_CASE("pty: calibrate push --all pushes each tag to its own device", "[blob][push][apps]") {
+  const std::string flash = "metro_pty_all_flash.bin";
+  const std::string tags = "metro_pty_all_tags.json";
+  const std::string cal = "metro_pty_all_cal.json";
+  std::remove(flash.c_str());
+  std::ofstream(tags) << R"({"2": {"name": "Chest", "device_id": "12345678 9ABCDEF0"},
+                             "3": {"name": "Left Arm", "device_id": "0011223344556677"}})";
+  Result<Calibration> golden = LoadCalibration(kGolden + "calibration_sensor2.json");
+  REQUIRE(golden.ok());
+  Calibration two = golden.value();
+  two.tags.push_back(two.tags.front());
+  two.tags.back().sensor = 3;
+  REQUIRE(WriteFileAtomically(cal, FormatCalibrationJson(two)).ok());
+  {
+    SimTag sim(flash, {});
+    testing::ProgramRun r = testing::RunProgram(
+        METRO_CALIBRATE_EXE, "push --port " + sim.pty() + " " + cal + " --all --tags " + tags);
+    INFO(r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(Has(r.err,
+              "OK: tag 9ABCDEF012345678 calibrated: seq 1 in slot A, 540 bytes read back "
+              "identical"));
+    CHECK(Has(r.err,
+              "FAILED: the tag on the link is 9ABCDEF012345678, not 0011223344556677: "
+              "nothing was written"));
+    CHECK(r.out ==
+          "sensor  name              device            result\n"
+          "     2  Chest             9ABCDEF012345678  OK: seq 1 in slot A, read back identical\n"
+          "     3  Left Arm          0011223344556677  FAILED\n");
+    CHECK(sim.Stop() == 0);
+  }
+  // The tag holds sensor 2's blob (seq 1), as calibrate blob writes it for that device.
+  const std::vector<uint8_t> img = Bytes(flash);
+  Result<BlobContents> held = DecodeBlob(Slot(img, 0, 540), 0x9ABCDEF012345678ull);
+  REQUIRE(held.ok());
+  CHECK(held.value().seq == 1);
+  // A tag without a device ID stops --all before the port is opened.
+  std::ofstream(tags) << R"({"2": {"name": "Chest", "device_id": "12345678 9ABCDEF0"}})";
+  testing::ProgramRun r = testing::RunProgram(
+      METRO_CALIBRATE_EXE, "push --port /nonexistent/tty " + cal + " --all --tags " + tags);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err ==
+        "error: sensor 3: no device ID in the tags file or calibration.json (nothing "
+        "sent; /nonexistent/tty not opened)\n");
+  std::remove(flash.c_str());
+  std::remove(tags.c_str());
+  std::remove(cal.c_str());
+}
+
 #endif  // METRO_CALIBRATE_EXE
 
 }  // namespace metro::blob

@@ -1,0 +1,81 @@
+// The tags file on the calibrate commands (`--tags FILE`, also `--tag-registry FILE`;
+// docs/formats.md "Tags file"): which device ID and IMU profile a tag has, for blob and push.
+#pragma once
+
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
+
+#include "metro/blob/blob.hpp"
+#include "metro/blob/from_calibration.hpp"
+#include "metro/calibration/calibrate.hpp"
+#include "metro/core/status.hpp"
+#include "metro/io/tag_registry.hpp"
+
+namespace metro::calibrate_app {
+
+inline void AddTagsOption(CLI::App* sub, std::string* tags) {
+  sub->add_option("--tags,--tag-registry", *tags,
+                  "tags file: per sensor its name, device_id (either word order) and profile "
+                  "(docs/formats.md \"Tags file\")")
+      ->check(CLI::ExistingFile);
+}
+
+// The tags file, or nullopt when none was given.
+inline Result<std::optional<TagRegistry>> LoadTagsOption(const std::string& path) {
+  if (path.empty()) return std::optional<TagRegistry>();
+  Result<TagRegistry> r = TagRegistry::Load(path);
+  if (!r.ok()) return r.error();
+  return std::optional<TagRegistry>(std::move(r).value());
+}
+
+// The device ID a command addresses for `sensor`: --device-id when given, else the tags file's,
+// else calibration.json's tag `device_id`; nullopt when none is known. Errors: a --device-id
+// that does not parse, and a --device-id or calibration.json ID the tags file gives another tag
+// or that disagrees with the file's ID for the sensor.
+inline Result<std::optional<uint64_t>> ResolveDeviceId(const std::string& flag_text,
+                                                       const std::optional<TagRegistry>& tags,
+                                                       const Calibration& cal, int sensor) {
+  std::optional<uint64_t> id;
+  std::string source;
+  if (!flag_text.empty()) {
+    Result<uint64_t> parsed = blob::ParseDeviceId(flag_text);
+    if (!parsed.ok()) return MakeError("--device-id: " + parsed.error().message);
+    id = parsed.value();
+    source = "--device-id";
+  }
+  const TagEntry* entry = tags ? tags->Find(sensor) : nullptr;
+  if (entry != nullptr && entry->device_id) {
+    if (id && *id != *entry->device_id) {
+      return MakeError(fmt::format("{} {} is not sensor {}'s device {} in the tags file", source,
+                                   blob::FormatDeviceId(*id), sensor,
+                                   blob::FormatDeviceId(*entry->device_id)));
+    }
+    id = entry->device_id;
+    if (source.empty()) source = "the tags file";
+  }
+  const TagCalibration* t = cal.FindTag(sensor);
+  if (!id && t != nullptr && t->device_id) id = t->device_id;
+  if (id && tags) {
+    const std::optional<int> owner = tags->SensorOfDevice(*id);
+    if (owner && *owner != sensor) {
+      return MakeError(fmt::format("device {} is sensor {}'s in the tags file, not sensor {}'s",
+                                   blob::FormatDeviceId(*id), *owner, sensor));
+    }
+  }
+  return id;
+}
+
+// --profile when given, else the tags file's for `sensor`, else mpu6050.
+inline blob::SensorProfile ResolveProfile(const std::string& flag,
+                                          const std::optional<TagRegistry>& tags, int sensor) {
+  std::string name = flag;
+  const TagEntry* entry = tags ? tags->Find(sensor) : nullptr;
+  if (name.empty() && entry != nullptr) name = entry->profile;
+  const std::optional<blob::SensorProfile> p = blob::ParseSensorProfile(name);
+  return p ? *p : blob::SensorProfile::kMpu6050;  // names were checked by CLI11 and the loader
+}
+
+}  // namespace metro::calibrate_app
