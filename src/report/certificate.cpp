@@ -259,7 +259,8 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     return MakeError(fmt::format("certificate: {} sessions given for {} calibration inputs",
                                  sessions.size(), cal.inputs.size()));
   }
-  const std::string certificate_id = CalibrationCertificateId(cal);
+  const std::string certificate_id =
+      options.certificate_id.empty() ? CalibrationCertificateId(cal) : options.certificate_id;
   mustache::data data;
   data.set("certificate_id",
            fmt::format("{} (first 16 hex digits of the SHA-256 of the calibration JSON)",

@@ -704,9 +704,13 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
     ReloadedInputs inputs = ReloadCalibrationInputs(cal.value(), json_path);
     std::vector<const Session*> ptrs;
     for (const Session& s : inputs.sessions) ptrs.push_back(&s);
+    // The id of the file's own bytes: what `fit` printed and the registry recorded.
+    CertificateOptions certificate;
+    Result<std::string> sha = Sha256File(json_path);
+    if (sha.ok()) certificate.certificate_id = sha.value().substr(0, 16);
     return RenderCalibrationCertificate(cal.value(),
                                         inputs.complete ? ptrs : std::vector<const Session*>{},
-                                        inputs.note, CertificateOptions{});
+                                        inputs.note, certificate);
   }
   if (schema == report_internal::kAccuracyReportSchema) {
     Result<std::string> html = report_internal::RenderAccuracyHtml(document, json_path);

@@ -105,6 +105,10 @@ TEST_CASE(
   CHECK(h["device_id"] == "9ABCDEF012345678");
   REQUIRE(h["calibrations"].size() == 1);
   CHECK(h["calibrations"][0]["station"] == "line-2");
+  // One certificate id everywhere: fit's certificate, report's certificate, the registry.
+  const std::string id = h["calibrations"][0]["certificate_id"];
+  CHECK(Slurp(d / "cert.html").find("certificate " + id) != std::string::npos);
+  CHECK(Slurp(d / "cert2.html").find("certificate " + id) != std::string::npos);
   CHECK(h["calibrations"][0]["operator"] == "ops");
   CHECK(h["calibrations"][0]["conformity"].size() == 2);
   CHECK(h["calibrations"][0]["blobs"][0]["seq"] == 1);

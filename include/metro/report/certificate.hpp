@@ -23,6 +23,10 @@ struct CertificateOptions {
   // the nominal MPU6050 sensitivity at these ranges (imu_model.hpp NominalScale).
   double accel_fs_g = 2.0;
   double gyro_fs_dps = 250.0;
+  // The certificate id shown in section 1; empty: CalibrationCertificateId(calibration), the
+  // hash of the JSON as `fit` writes it. A certificate rendered from a file passes the file's
+  // own hash, so it carries the id the registry records (docs/registry.md).
+  std::string certificate_id;
 
   bool IsValid(std::string* why) const;
 };
