@@ -1,4 +1,6 @@
-// calibrate inspect tag.bin|tag.hex [--device-id HEX16] [--slot-address ADDR] [--json]
+// calibrate inspect tag.bin|tag.hex [--device-id ID] [--tags FILE [--sensor N]] [--slot-address
+// ADDR]
+//   [--json]
 #include <fmt/format.h>
 
 #include <memory>
@@ -6,6 +8,7 @@
 #include "commands.hpp"
 #include "metro/blob/inspect.hpp"
 #include "metro/core/json_text.hpp"
+#include "tags_cli.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -16,20 +19,43 @@ struct InspectCliOptions {
   std::string device_id;
   std::string slot_address = "0x3B000";
   bool json = false;
+  std::string tags;  // --tags FILE: name the tag of each blob's device
+  int sensor = 0;    // with --tags: check against this tag's device
 };
 
 // Exit codes: 0 a valid calibration (the .bin validates; in a .hex a slot is active), 1 none,
 // 2 unreadable file, HEX syntax or bad options.
 int RunInspect(const InspectCliOptions& c) {
   blob::InspectOptions o;
-  if (!c.device_id.empty()) {
-    Result<uint64_t> id = blob::ParseDeviceId(c.device_id);
-    if (!id.ok()) {
-      apps::PrintErrorText(fmt::format("--device-id: {}", id.error().message));
-      return kExitUsage;
-    }
-    o.device_id = id.value();
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(c.tags);
+  if (!tags.ok()) {
+    apps::PrintError(tags.error());
+    return kExitUsage;
   }
+  if (c.sensor != 0 && !tags.value()) {
+    apps::PrintErrorText("--sensor N names a tag of the tags file: give --tags FILE");
+    return kExitUsage;
+  }
+  // The device to check against: --device-id, else the tags file's for --sensor.
+  Result<std::optional<uint64_t>> resolved =
+      c.sensor != 0 ? ResolveDeviceId(c.device_id, tags.value(), Calibration{}, c.sensor)
+                    : Result<std::optional<uint64_t>>(std::optional<uint64_t>());
+  if (c.sensor == 0 && !c.device_id.empty()) {
+    Result<uint64_t> id = blob::ParseDeviceId(c.device_id);
+    resolved =
+        id.ok() ? Result<std::optional<uint64_t>>(std::optional<uint64_t>(id.value()))
+                : Result<std::optional<uint64_t>>(MakeError("--device-id: " + id.error().message));
+  }
+  if (!resolved.ok()) {
+    apps::PrintErrorText(resolved.error().message);
+    return kExitUsage;
+  }
+  if (c.sensor != 0 && !resolved.value()) {
+    apps::PrintErrorText(
+        fmt::format("sensor {} has no device_id in {} (or give --device-id)", c.sensor, c.tags));
+    return kExitUsage;
+  }
+  o.device_id = resolved.value();
   size_t used = 0;
   unsigned long long a = 0;
   try {
@@ -54,6 +80,22 @@ int RunInspect(const InspectCliOptions& c) {
   } else {
     apps::PrintText(stdout, blob::FormatInspect(r.value()));  // Blob metadata is data.
   }
+  // Which tag of the fleet each valid blob is for (a note), or a warning when none.
+  if (tags.value()) {
+    for (const blob::SlotReport& slot : r.value().slots) {
+      if (!slot.contents) continue;
+      const uint64_t id = slot.contents->device_id;
+      const std::optional<int> sensor = tags.value()->SensorOfDevice(id);
+      if (sensor) {
+        apps::Note(fmt::format("slot {}: device {} is sensor {} ({}) in {}\n", slot.label,
+                               blob::FormatDeviceId(id), *sensor, tags.value()->Name(*sensor),
+                               c.tags));
+      } else {
+        apps::PrintText(stderr, fmt::format("warning: slot {}: device {} is no tag's in {}\n",
+                                            slot.label, blob::FormatDeviceId(id), c.tags));
+      }
+    }
+  }
   return r.value().ok() ? kExitOk : kExitFailed;
 }
 
@@ -69,6 +111,9 @@ void AddInspectCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--device-id", o->device_id,
                   "check against this tag (16 hex digits DEVICEID[1] DEVICEID[0], or nrfjprog "
                   "--memrd's words DEVICEID[0] DEVICEID[1]); default: each blob's own id");
+  AddTagsOption(sub, &o->tags);
+  sub->add_option("--sensor", o->sensor,
+                  "with --tags: check the blob against this tag's device_id");
   sub->add_option("--slot-address", o->slot_address,
                   "slot A address in a .hex (default 0x3B000); slot B is the next page");
   sub->add_flag("--json", o->json, "print JSON instead of text");

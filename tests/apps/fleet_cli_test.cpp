@@ -101,6 +101,17 @@ TEST_CASE("Fleet: a tags file gives calibrate fit and blob each tag's device ID"
     std::remove(bin.c_str());
     std::remove((dir + "/tag" + std::to_string(sensor) + ".hex").c_str());
   }
+  // inspect --tags: which tag a blob is for, and a check against a tag's device.
+  const std::string golden_bin = kDatasets + "golden/tag_sensor2.bin";  // device 9ABC...5678
+  r = run("inspect " + golden_bin + " --tags " + tags);
+  CHECK(r.exit_code == 0);
+  CHECK(r.err == "slot file: device 9ABCDEF012345678 is sensor 2 (Chest) in " + tags + "\n");
+  r = run("inspect " + golden_bin + " --tags " + tags + " --sensor 3");
+  CHECK(r.exit_code == 1);
+  CHECK(r.out.find("METRO_FW_E_FOREIGN") != std::string::npos);
+  r = run("inspect " + golden_bin + " --tags " + tags + " --sensor 4");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: sensor 4 has no device_id in " + tags + " (or give --device-id)\n");
   // Usage errors.
   r = run("blob " + fleet_cal + " --all --sensor 2 -o " + dir);
   CHECK(r.exit_code == 2);
