@@ -9,6 +9,7 @@
 #include <string>
 
 #include "metro/calibration/calibrate.hpp"
+#include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
 #include "support/run_program.hpp"
@@ -78,7 +79,17 @@ TEST_CASE("calibrate fit recovers the bundled session's truth within 3 u", "[cal
   REQUIRE(truth["accel_fs_g"].get<double>() == o.accel_fs_g);
   REQUIRE(truth["gyro_fs_dps"].get<double>() == o.gyro_fs_dps);
   REQUIRE(truth["gravity_mps2"].get<double>() == o.gravity_mps2);
+#ifdef METRO_CALIBRATE_EXE
+  // `calibrate fit` itself, as the README runs it.
+  const std::string out = "metro_bundled_calibration.json";
+  testing::ProgramRun run =
+      testing::RunProgram(METRO_CALIBRATE_EXE, "fit " + kSession + " -o " + out + " -q");
+  REQUIRE(run.exit_code == 0);
+  Result<Calibration> cal = LoadCalibration(out);
+  std::remove(out.c_str());
+#else
   Result<Calibration> cal = CalibrateSessions({&session.value()}, o);
+#endif
   if (!cal.ok()) FAIL(cal.error().ToString());
   const TagCalibration& t = cal.value().tags.at(0);
   REQUIRE(t.accel.has_value());
