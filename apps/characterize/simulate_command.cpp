@@ -248,14 +248,17 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   sub->add_option("--pose-dwell-s", o->calibration.dwell_s,
                   "calibration: still time per pose (the first twice as long)")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--move-s", o->calibration.move_s,
                   "calibration: duration of each hand rotation between poses")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--run-rate-dps", o->calibration.table_rates_dps,
                   "calibration: a rate-table run at every pose, logger running (repeatable; "
                   "default 90)");
   sub->add_option("--run-s", o->calibration.table_run_s, "calibration: length of each table run")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--temp-start-c", o->calibration.temp_start_c,
                   "calibration: temperature ramp start")

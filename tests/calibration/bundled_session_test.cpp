@@ -124,6 +124,22 @@ TEST_CASE("The bundled calibration session regenerates byte for byte", "[calibra
     CHECK(bundled.value() == fresh.value());
     std::remove((out + suffix).c_str());
   }
+  // What --kind calibration cannot write is refused, nothing written.
+  r = testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                          "simulate --kind calibration --format receiver -o " + out);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err ==
+        "error: --kind calibration writes session.csv (raw LSB columns): drop --format receiver\n");
+  r = testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                          "simulate --kind calibration --sensor 1 --sensor 2 -o " + out);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: --kind calibration simulates one tag: give one --sensor\n");
+  r = testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                          "simulate --kind calibration --pose-dwell-s 0 -o " + out);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("--pose-dwell-s") != std::string::npos);
+  CHECK_FALSE(ReadFile(out).ok());
+  CHECK_FALSE(ReadFile(out + ".truth.json").ok());
   // The regenerate script holds the same command.
   Result<std::string> script = ReadFile(std::string(METRO_SOURCE_DIR) + "/datasets/regenerate.sh");
   REQUIRE(script.ok());
