@@ -13,6 +13,7 @@
 
 #include "metro/calibration/simulate.hpp"
 #include "metro/io/session_io.hpp"
+#include "registry/postgres_server.hpp"
 #include "support/run_program.hpp"
 
 namespace metro {
@@ -175,6 +176,39 @@ TEST_CASE("calibrate fit --spec and --registry: bad input exits 2 and writes not
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("no such registry file") != std::string::npos);
   CHECK_FALSE(fs::exists(d / "missing.sqlite"));
+}
+
+}  // namespace
+}  // namespace metro
+
+namespace metro {
+namespace {
+
+TEST_CASE("calibrate blob --registry postgresql://... and registry history on PostgreSQL",
+          "[registry][apps]") {
+  std::string why;
+  testing::PostgresServer* pg = testing::PostgresServer::Get(&why);
+  if (pg == nullptr) {
+    if (testing::PostgresServer::Required()) FAIL(why);
+    WARN(why);
+    return;
+  }
+  const std::string url = pg->NewDatabase();
+  Dir d;
+  const std::string golden =
+      std::string(METRO_SOURCE_DIR) + "/datasets/golden/calibration_sensor2.json";
+  testing::ProgramRun r =
+      Calibrate(fmt::format("blob {} --sensor 2 --device-id 9ABCDEF012345678 -o {} --registry '{}'",
+                            golden, d / "tag.bin", url));
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  r = testing::RunProgram("METRO_REGISTRY='" + url + "' " + METRO_CALIBRATE_EXE,
+                          "registry history --device-id 9ABCDEF012345678 --json");
+  CHECK(r.exit_code == 0);
+  const nlohmann::json h = nlohmann::json::parse(r.out);
+  REQUIRE(h["calibrations"].size() == 1);
+  CHECK(h["calibrations"][0]["blobs"].size() == 1);
+  CHECK(h["calibrations"][0]["constants"].size() == 27);
 }
 
 }  // namespace
