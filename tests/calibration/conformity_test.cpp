@@ -18,11 +18,11 @@ const std::string kGolden =
 // The standard normal CDF written independently of the code under test (Boost.Math there).
 double Phi(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
 
-TEST_CASE("Conformity: one-sided p_c matches the JCGM 106 7.3 table of z",
+TEST_CASE("Conformity: one-sided p_c is Phi of z at the standard normal quantiles",
           "[calibration][conformity]") {
-  // JCGM 106:2012 7.3, Table 1: for a normal PDF and a single upper limit the conformance
-  // probability is p_c = Phi(z), z = (T_U - y)/u; the table pairs p_c = 0.80, 0.90, 0.95, 0.99,
-  // 0.999 with z = 0.84, 1.28, 1.64, 2.33, 3.09 (two decimals, so within 0.005 in z).
+  // JCGM 106:2012 7.3 (Table 1 gives z = (T_U - y)/u for one-sided intervals and normal
+  // PDFs): p_c = Phi(z). The standard normal quantiles to two decimals: p_c = 0.80, 0.90, 0.95,
+  // 0.99, 0.999 at z = 0.84, 1.28, 1.64, 2.33, 3.09 (so p_c within Phi'(z) * 0.005).
   const double pc[] = {0.80, 0.90, 0.95, 0.99, 0.999};
   const double z[] = {0.84, 1.28, 1.64, 2.33, 3.09};
   for (int i = 0; i < 5; ++i) {
