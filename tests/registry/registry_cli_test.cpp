@@ -130,6 +130,15 @@ TEST_CASE(
                     "devices,constant,value,u,unit\n",
                     0) == 0);
   CHECK(std::count(r.out.begin(), r.out.end(), '\n') == 1 + 9);
+  // Export as JSON to a file: every calibration as history gives it.
+  r = Calibrate(fmt::format("registry export --format json -o {} --registry {}", d / "all.json",
+                            d / "reg.sqlite"));
+  CHECK(r.exit_code == 0);
+  const nlohmann::json all = nlohmann::json::parse(Slurp(d / "all.json"));
+  CHECK(all["schema_version"] == 2);
+  REQUIRE(all["calibrations"].size() == 1);
+  CHECK(all["calibrations"][0]["certificate_id"] == id);
+  CHECK(all["calibrations"][0]["constants"].size() == 9);
   // Due, judged 400 days on: listed.
   r = Calibrate(
       fmt::format("registry due --registry {} --at 2099-01-01T00:00:00Z --json", d / "reg.sqlite"));
