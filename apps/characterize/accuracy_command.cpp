@@ -43,7 +43,7 @@ void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
                "accuracy against a rotation table: plateaus, error curve, hysteresis, budget "
                "(docs/accuracy.md)");
   app.add_option("--table-axis", o->table_axis, "the tag axis the table turns")
-      ->check(CLI::IsMember({"yaw", "pitch", "roll"}))
+      ->type_name("TEXT:{yaw,pitch,roll}")
       ->capture_default_str();
   app.add_option("--reference", o->reference,
                  "separate reference log (t_s, table_angle_deg), aligned on t_s; - reads stdin")
@@ -55,7 +55,7 @@ void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
                  "reference clock minus tag clock in s (default: estimated)");
   app.add_option("--error-model", o->model,
                  "the fitted error curve (auto: the order the data support; docs/accuracy.md)")
-      ->check(CLI::IsMember({"auto", "linear", "harmonic1", "harmonic2"}))
+      ->type_name("TEXT:{auto,linear,harmonic1,harmonic2}")
       ->capture_default_str();
   app.add_option("--min-dwell-s", o->min_dwell_s, "shortest table rest that is a plateau")
       ->check(CLI::PositiveNumber)
