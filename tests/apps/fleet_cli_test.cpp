@@ -131,4 +131,26 @@ TEST_CASE("Fleet: a tags file gives calibrate fit and blob each tag's device ID"
 }
 #endif
 
+#ifdef METRO_CHARACTERIZE_EXE
+TEST_CASE("Fleet: characterize names the tags from a tags file with device IDs", "[apps]") {
+  const std::string tags = "metro_fleet_characterize_tags.json";
+  std::ofstream(tags) << R"({"2": {"name": "Sternum", "device_id": "12345678 9ABCDEF0",
+                                   "profile": "mpu6050"}})";
+  for (const char* flag : {"--tags", "--tag-registry"}) {
+    testing::ProgramRun r =
+        testing::RunProgram(METRO_CHARACTERIZE_EXE,
+                            kDatasets + "static_chest.csv --type-a -q -o - " + flag + " " + tags);
+    INFO(flag << ": " << r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.out.find("\"name\": \"Sternum\"") != std::string::npos);
+  }
+  std::ofstream(tags) << R"({"2": {"name": "Sternum", "device_id": "12345678"}})";
+  testing::ProgramRun r = testing::RunProgram(
+      METRO_CHARACTERIZE_EXE, kDatasets + "static_chest.csv --type-a -q -o - --tags " + tags);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: " + tags + ": tag 2: device_id: device id '12345678': expected") == 0);
+  std::remove(tags.c_str());
+}
+#endif
+
 }  // namespace metro
