@@ -58,6 +58,14 @@ TEST_CASE("Fleet: a tags file gives calibrate fit and blob each tag's device ID"
               .exit_code == 0);
   CHECK(Bytes("metro_fleet_a.bin") == Bytes("metro_fleet_c.bin"));
   CHECK(Bytes("metro_fleet_b.bin") == Bytes("metro_fleet_c.bin"));
+  // calibration.json's device is sensor 3's in another tags file: refused, not bound to it.
+  const std::string moved = "metro_fleet_moved.json";
+  std::ofstream(moved) << R"({"3": {"name": "Left Arm", "device_id": "9ABCDEF012345678"}})";
+  r = run("blob " + cal + " --sensor 2 --tags " + moved + " -o metro_fleet_d.bin");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: device 9ABCDEF012345678 is sensor 3's in the tags file, not sensor 2's\n");
+  CHECK_FALSE(std::ifstream("metro_fleet_d.bin").good());
+  std::remove(moved.c_str());
 
   // --all: a calibration of sensors 2, 3 and 4 (the golden tag under three numbers).
   Result<Calibration> golden = LoadCalibration(kDatasets + "golden/calibration_sensor2.json");
