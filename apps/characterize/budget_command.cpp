@@ -10,6 +10,7 @@
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/core/progress.hpp"
+#include "metro/report/budget_page.hpp"
 #include "metro/uncertainty/budget_report.hpp"
 #include "output.hpp"
 
@@ -37,6 +38,10 @@ void AddBudgetCommand(CLI::App& app, int* exit_code) {
   sub->add_option("-o,--output", options->output_path,
                   "Write the metro.budget-report/1 JSON here and print the table; -o - "
                   "writes it to stdout and the table to stderr");
+  sub->add_option("--html", options->html_path,
+                  "Also write the budget page here: the statement, both coverage intervals, the "
+                  "GUF validation, the Monte Carlo histogram with the GUF density, the "
+                  "contributions (docs/reports.md, \"Budget page\"); - for stdout");
   sub->callback([options, exit_code]() {
     const int code = RunBudget(*options);
     if (exit_code != nullptr) {
@@ -54,7 +59,14 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
   for (std::string& session : SessionsNamedInBudget(options.budget_path)) {
     inputs.push_back({"a session of BUDGET", std::move(session)});
   }
-  if (Status s = apps::CheckOutputs({{"-o", options.output_path}}, inputs); !s.ok()) {
+  if (options.html_path == "-" && (options.output_path.empty() || options.output_path == "-")) {
+    apps::PrintError(
+        MakeError("--html - and the JSON both go to stdout: name a file with -o or with --html"));
+    return 2;
+  }
+  if (Status s =
+          apps::CheckOutputs({{"-o", options.output_path}, {"--html", options.html_path}}, inputs);
+      !s.ok()) {
     apps::PrintError(s.error());
     return 2;
   }
@@ -82,10 +94,21 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
     apps::PrintError(evaluation.error());
     return 2;
   }
-  const std::string json = JsonText(BudgetReportJson(evaluation.value()), 2) + "\n";
+  const nlohmann::ordered_json report = BudgetReportJson(evaluation.value());
+  const std::string json = JsonText(report, 2) + "\n";
   // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.
   const std::string output = options.output_path.empty() ? "-" : options.output_path;
-  const Status written = apps::WriteOutput(output, json);
+  std::string html;
+  if (!options.html_path.empty()) {
+    Result<std::string> page = RenderBudgetReportHtml(report);
+    if (!page.ok()) {
+      apps::PrintError(page.error());
+      return 1;
+    }
+    html = std::move(page).value();
+  }
+  // The JSON and the page are replaced together or not at all.
+  const Status written = apps::WriteOutputs({{output, json}, {options.html_path, html}});
   if (!written.ok()) {
     apps::PrintError(written.error());
     return 1;

@@ -54,6 +54,16 @@ RoundedResult RoundForStatement(double value, double u, int significant) {
           fmt::format("{:.{}f}", u_rounded, decimals)};
 }
 
+RoundedInterval RoundInterval(double low, double high, int significant) {
+  const double width = high - low;
+  if (!std::isfinite(low) || !std::isfinite(high) || !(width > 0.0)) {
+    return {fmt::format("{:.6g}", low), fmt::format("{:.6g}", high)};
+  }
+  const RoundedResult a = RoundForStatement(low, width, significant);
+  const RoundedResult b = RoundForStatement(high, width, significant);
+  return {a.value, b.value};
+}
+
 std::string ConciseNotation(double value, double u, int significant) {
   if (significant < 1) significant = 1;
   if (!std::isfinite(value)) {

@@ -19,6 +19,7 @@
 #include "metro/io/session_io.hpp"
 #include "metro/noise/allan.hpp"
 #include "metro/noise/noise_model.hpp"
+#include "metro/report/budget_page.hpp"
 #include "metro/report/certificate.hpp"
 #include "metro/report/svg_plot.hpp"
 #include "metro/report/type_a_report.hpp"
@@ -720,6 +721,21 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
       return e;
     }
     return html;
+  }
+  if (schema == kBudgetReportSchema) {
+    Result<std::string> html = RenderBudgetReportHtml(document);
+    if (!html.ok() && html.error().file.empty()) {
+      Error e = html.error();
+      e.file = json_path;
+      return e;
+    }
+    return html;
+  }
+  if (IsBudgetDefinition(document)) {
+    return MakeError(json_path, 0,
+                     "this is a budget definition (docs/budget-format.md), not a report: run "
+                     "`characterize budget " +
+                         json_path + " --html PAGE.html` to evaluate it and write its page");
   }
   return report_internal::RenderGenericHtml(document, json_path, schema);
 }

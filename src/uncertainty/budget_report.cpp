@@ -28,6 +28,43 @@ std::string Long(double x) {
 
 std::string Percent(double p) { return fmt::format("{:g} %", std::round(p * 1e6) / 1e4); }
 
+// See McHistogram. `values` is reordered (partially sorted for the quantiles).
+std::optional<McHistogram> BinValues(std::vector<double>* values, double include_low,
+                                     double include_high) {
+  const size_t m = values->size();
+  if (m < 2) return std::nullopt;
+  const auto quantile = [&](double p) {
+    const size_t k = std::min(m - 1, static_cast<size_t>(p * static_cast<double>(m)));
+    std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(k),
+                     values->end());
+    return (*values)[k];
+  };
+  const double q_low = quantile(0.0005);
+  const double q_high = quantile(0.9995);
+  if (!std::isfinite(q_low) || !std::isfinite(q_high) || !(q_high > q_low)) return std::nullopt;
+  double low = q_low - 0.05 * (q_high - q_low);
+  double high = q_high + 0.05 * (q_high - q_low);
+  if (std::isfinite(include_low)) low = std::min(low, include_low);
+  if (std::isfinite(include_high)) high = std::max(high, include_high);
+  const int bins =
+      static_cast<int>(std::clamp(std::round(std::sqrt(static_cast<double>(m))), 10.0, 60.0));
+  McHistogram h;
+  h.edges.resize(static_cast<size_t>(bins) + 1);
+  for (int i = 0; i <= bins; ++i) h.edges[i] = low + (high - low) * i / bins;
+  h.counts.assign(static_cast<size_t>(bins), 0);
+  const double scale = bins / (high - low);
+  for (double y : *values) {
+    if (y < low) {
+      ++h.below;
+    } else if (y > high) {
+      ++h.above;
+    } else {
+      h.counts[std::min(bins - 1, static_cast<int>((y - low) * scale))] += 1;
+    }
+  }
+  return h;
+}
+
 }  // namespace
 
 Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* progress) {
@@ -44,9 +81,15 @@ Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* prog
       progress->BeginPhase("Monte Carlo", options.adaptive ? 0 : options.trials, "trials");
       options.on_trials_done = [progress](int64_t n) { progress->Advance(n); };
     }
-    auto mc = RunMonteCarlo(budget, options);
+    auto mc = RunMonteCarlo(budget, options, /*keep_samples=*/true);
     if (!mc.ok()) return mc.error();
     e.monte_carlo = std::move(mc).value();
+    std::vector<double> samples = std::move(e.monte_carlo->samples);
+    e.monte_carlo->samples = {};
+    const McResult& m = *e.monte_carlo;
+    e.histogram =
+        BinValues(&samples, std::min({e.gum.interval_low, m.symmetric.low, m.shortest.low}),
+                  std::max({e.gum.interval_high, m.symmetric.high, m.shortest.high}));
     e.validation = ValidateGuf(e.gum, *e.monte_carlo, budget.monte_carlo.ndig);
     e.ok = e.monte_carlo->ok;
   }
@@ -169,6 +212,12 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
       mc["d_low"] = Number(e.validation->d_low);
       mc["d_high"] = Number(e.validation->d_high);
       mc["guf_validated"] = e.validation->validated;
+    }
+    if (e.histogram) {
+      mc["histogram"] = {{"edges", e.histogram->edges},
+                         {"counts", e.histogram->counts},
+                         {"below", e.histogram->below},
+                         {"above", e.histogram->above}};
     }
     if (!m.message.empty()) mc["message"] = m.message;
     j["monte_carlo"] = mc;

@@ -27,6 +27,26 @@ TEST_CASE("GUM 7.2.6 rounding keeps two significant digits of u", "[core][roundi
   CHECK(e.uncertainty == "0");
 }
 
+TEST_CASE("Coverage interval ends are printed to digits that tell them apart", "[core][rounding]") {
+  // Issue #25: "{:.6g}" printed the H.1 end gauge's 99 % interval as [5.00007e+07, 5.00009e+07].
+  // Width 185.5 nm: two significant digits put the last digit at the tens.
+  const RoundedInterval a = RoundInterval(50000745.3, 50000930.8);
+  CHECK(a.low == "50000750");
+  CHECK(a.high == "50000930");
+  // Width 0.01229 (0.012 to two digits): the last digit at 10^-3, the high end carries.
+  const RoundedInterval b = RoundInterval(0.98764, 0.99993);
+  CHECK(b.low == "0.988");
+  CHECK(b.high == "1.000");
+  // Three significant digits of the width (0.0123): one digit further.
+  const RoundedInterval c = RoundInterval(0.98764, 0.99993, 3);
+  CHECK(c.low == "0.9876");
+  CHECK(c.high == "0.9999");
+  // Nothing to tell apart: plain.
+  const RoundedInterval d = RoundInterval(2.0, 2.0);
+  CHECK(d.low == "2");
+  CHECK(d.high == "2");
+}
+
 TEST_CASE("JCGM 100 7.2.2 concise notation", "[core][rounding]") {
   // The GUM's own example (7.2.2): m_S = 100.021 47(35) g.
   CHECK(ConciseNotation(100.02147, 0.00035) == "100.02147(35)");

@@ -118,3 +118,42 @@ TEST_CASE("Budget report states the unit check and every session unit conversion
 
 }  // namespace
 }  // namespace metro
+
+namespace metro {
+namespace {
+
+TEST_CASE("Budget report histogram of the Monte Carlo values follows the known distribution",
+          "[uncertainty][report]") {
+  // JCGM 101 9.2.2: Y = X1 + X2 + X3 + X4 with standard normal inputs, so Y ~ N(0, 2^2).
+  auto b =
+      LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/jcgm101_9_2_2_additive.json");
+  REQUIRE(b.ok());
+  Budget budget = b.value();
+  budget.monte_carlo.adaptive = false;
+  budget.monte_carlo.trials = 200000;
+  auto e = EvaluateBudget(budget);
+  REQUIRE(e.ok());
+  REQUIRE(e.value().histogram.has_value());
+  const McHistogram& h = *e.value().histogram;
+  REQUIRE(h.edges.size() == h.counts.size() + 1);
+  CHECK(h.counts.size() == 60);  // sqrt(200000) = 447, clamped to 60.
+  int64_t total = h.below + h.above;
+  for (int64_t c : h.counts) total += c;
+  CHECK(total == 200000);
+  // The central 99.9 % of N(0, 4) is +-3.29 sigma = +-6.58, widened by 5 % of the span.
+  CHECK(h.edges.front() == Approx(-6.58 - 0.658).margin(0.1));
+  CHECK(h.edges.back() == Approx(6.58 + 0.658).margin(0.1));
+  const auto cdf = [](double y) { return 0.5 * std::erfc(-y / (2.0 * std::sqrt(2.0))); };
+  for (size_t i = 0; i < h.counts.size(); ++i) {
+    const double expected = 200000.0 * (cdf(h.edges[i + 1]) - cdf(h.edges[i]));
+    // Binomial counts: within 5 standard deviations.
+    CHECK(std::fabs(static_cast<double>(h.counts[i]) - expected) <= 5.0 * std::sqrt(expected) + 1);
+  }
+  const auto j = BudgetReportJson(e.value());
+  CHECK(j["monte_carlo"]["histogram"]["counts"].size() == 60);
+  CHECK(j["monte_carlo"]["histogram"]["edges"].size() == 61);
+  CHECK(j["monte_carlo"]["histogram"]["below"].get<int64_t>() == h.below);
+}
+
+}  // namespace
+}  // namespace metro

@@ -32,4 +32,15 @@ RoundedResult RoundForStatement(double value, double u, int significant = 2);
 // "y (u = nan)"; y non-finite: "nan (u = ...)" with u to 2 significant digits.
 std::string ConciseNotation(double value, double u, int significant = 2);
 
+// A coverage interval [low, high] printed so that its ends tell apart: both rounded to the
+// decimal place of the `significant`-th significant digit of the width high - low (the
+// rounding of RoundForStatement with the width in place of u), so the ends differ in at
+// least `significant` digits: [50000745.3, 50000930.8] -> "50000750", "50000930" where
+// "{:.6g}" printed 5.00007e+07 twice. A width <= 0 or a non-finite end: "{:.6g}" each.
+struct RoundedInterval {
+  std::string low;
+  std::string high;
+};
+RoundedInterval RoundInterval(double low, double high, int significant = 2);
+
 }  // namespace metro

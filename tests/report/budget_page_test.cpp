@@ -1,0 +1,111 @@
+// The budget page: its statement and intervals equal the report JSON rounded per JCGM 100
+// 7.2.6, and for GUM H.1 the published result.
+#include "metro/report/budget_page.hpp"
+
+#include <catch2/catch.hpp>
+#include <regex>
+#include <string>
+
+#include "metro/core/rounding.hpp"
+#include "metro/report/html_report.hpp"
+#include "metro/uncertainty/budget_report.hpp"
+
+namespace metro {
+namespace {
+
+using nlohmann::ordered_json;
+
+ordered_json EvaluatedReport(const std::string& name, int64_t trials) {
+  auto b = LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/" + name);
+  REQUIRE(b.ok());
+  Budget budget = b.value();
+  budget.monte_carlo.adaptive = false;
+  budget.monte_carlo.trials = trials;
+  auto e = EvaluateBudget(budget);
+  REQUIRE(e.ok());
+  return BudgetReportJson(e.value());
+}
+
+// The text of the element with id `id` (no nested tags).
+std::string ElementText(const std::string& html, const std::string& id) {
+  std::smatch m;
+  const std::regex re("id=\"" + id + "\"[^>]*>([^<]*)<");
+  if (!std::regex_search(html, m, re)) return "";
+  return m[1].str();
+}
+
+TEST_CASE("Budget page statement equals the JSON rounded per GUM 7.2.6", "[report][budget]") {
+  const ordered_json report = EvaluatedReport("gum_h1_end_gauge.json", 200000);
+  Result<std::string> html = RenderBudgetReportHtml(report);
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  // The statement comes before everything else on the page.
+  CHECK(h.find("id=\"statement\"") < h.find("<svg"));
+  const std::string statement = ElementText(h, "statement");
+  std::smatch m;
+  REQUIRE(std::regex_match(statement, m, std::regex("(\\S+) = \\((\\S+) \u00b1 (\\S+)\\) (\\S+)")));
+  const RoundedResult r = RoundForStatement(report["result"]["value"].get<double>(),
+                                            report["result"]["U"].get<double>());
+  CHECK(m[1].str() == "l");
+  CHECK(m[2].str() == r.value);
+  CHECK(m[3].str() == r.uncertainty);
+  CHECK(m[4].str() == "nm");
+  // JCGM 100:2008 H.1: l = 50000838 nm; U99 = t_0.995(16) x 31.66 nm = 92.5 nm at two digits
+  // (H.1.6 prints 93 from the rounded u_c = 32 nm).
+  CHECK(m[2].str() == "50000838");
+  CHECK(m[3].str() == "92");
+  CHECK(h.find("k = 2.92") != std::string::npos);
+  CHECK(h.find("nu_eff = 16 ") != std::string::npos);
+  CHECK(h.find("coverage probability of 99 %") != std::string::npos);
+  CHECK(ElementText(h, "concise") == "l = 50000838(32) nm");
+}
+
+TEST_CASE("Budget page prints both intervals to digits that tell their ends apart",
+          "[report][budget]") {
+  const ordered_json report = EvaluatedReport("gum_h1_end_gauge.json", 200000);
+  Result<std::string> html = RenderBudgetReportHtml(report);
+  REQUIRE(html.ok());
+  const auto& g = report["result"]["interval"];
+  const auto& s = report["monte_carlo"]["interval_shortest"];
+  const RoundedInterval gi = RoundInterval(g[0].get<double>(), g[1].get<double>());
+  const RoundedInterval si = RoundInterval(s[0].get<double>(), s[1].get<double>());
+  CHECK(html.value().find("[" + gi.low + ", " + gi.high + "]") != std::string::npos);
+  CHECK(html.value().find("[" + si.low + ", " + si.high + "]") != std::string::npos);
+  // The ends of the 99 % interval (width about 185 nm) differ in their last two digits.
+  CHECK(gi.low.size() == 8);
+  CHECK(gi.low.substr(0, 6) == gi.high.substr(0, 6));
+  CHECK(gi.low.substr(6) != gi.high.substr(6));
+  CHECK(html.value().find("e+07") == std::string::npos);
+  // The verdict is the JSON's.
+  const bool validated = report["monte_carlo"]["guf_validated"].get<bool>();
+  CHECK(html.value().find(validated ? "GUF validated" : "GUF NOT validated") != std::string::npos);
+  CHECK(html.value().find("Monte Carlo histogram and GUF density") != std::string::npos);
+}
+
+TEST_CASE("Budget page of JCGM 101 9.2.2 states the exact result", "[report][budget]") {
+  // Y ~ N(0, 4): y = 0, U = 1.96 x 2 = 3.92, validated.
+  const ordered_json report = EvaluatedReport("jcgm101_9_2_2_additive.json", 200000);
+  Result<std::string> html = RenderBudgetReportHtml(report);
+  REQUIRE(html.ok());
+  CHECK(ElementText(html.value(), "statement") == "Y = (0.0 \u00b1 3.9)");
+  CHECK(html.value().find("from the normal distribution") != std::string::npos);
+  CHECK(html.value().find("GUF validated") != std::string::npos);
+}
+
+TEST_CASE("A saved budget report renders as the budget page and a definition is refused",
+          "[report][budget]") {
+  const ordered_json report = EvaluatedReport("jcgm101_9_2_2_additive.json", 20000);
+  Result<std::string> html = RenderJsonHtml(report, "b.report.json");
+  REQUIRE(html.ok());
+  CHECK(html.value().find("<title>Uncertainty budget: Y</title>") != std::string::npos);
+  const ordered_json definition = ordered_json::parse(
+      R"({"measurand": {"name": "Y"}, "inputs": [{"name": "X", "value": 1, "u": 1}]})");
+  CHECK(IsBudgetDefinition(definition));
+  CHECK_FALSE(IsBudgetDefinition(report));
+  Result<std::string> refused = RenderJsonHtml(definition, "B.json");
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().ToString().find("characterize budget B.json --html") != std::string::npos);
+}
+
+}  // namespace
+}  // namespace metro
