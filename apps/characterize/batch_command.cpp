@@ -1,7 +1,8 @@
-// characterize batch DIR|GLOB|FILE... --type-a [--allan] -o OUTDIR [--jobs N]
+// characterize batch DIR|GLOB|FILE... --type-a [--allan] -o OUTDIR [--jobs N] [--html PAGE]
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <optional>
 
@@ -9,14 +10,18 @@
 #include "commands.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/report/batch.hpp"
+#include "metro/report/batch_page.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
 namespace {
 
+namespace fs = std::filesystem;
+
 struct BatchCommandOptions {
   std::vector<std::string> inputs;
   std::string output_dir;
+  std::string html;  // The batch page; each session's page goes beside its JSON report.
   int jobs = 0;
   bool type_a = false;
   AnalysisCliOptions analysis;  // Input, window, tag names, Allan (analysis_options.hpp).
@@ -30,8 +35,13 @@ int RunBatchCommand(const BatchCommandOptions& o) {
     PrintError(s.error());
     return kExitUsage;
   }
+  if (Status s = CheckOutputs({{"--html", o.html}}, {}); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   BatchOptions options;
   options.output_dir = o.output_dir;
+  options.session_pages = !o.html.empty();
   options.jobs = o.jobs;
   // One thread inside each session: the sessions themselves run in parallel.
   if (Status s = MakeSessionAnalysisOptions(o.analysis, 1, &options.analysis); !s.ok()) {
@@ -65,6 +75,26 @@ int RunBatchCommand(const BatchCommandOptions& o) {
   for (const BatchItem& item : summary.items) {
     if (!item.ok) PrintError(item.error);
   }
+  if (!o.html.empty()) {
+    // Links from the page's folder to the session pages in the output directory.
+    BatchPageOptions page;
+    if (!IsStdio(o.html)) {
+      std::error_code ec;
+      const fs::path from = fs::weakly_canonical(fs::absolute(o.html).parent_path(), ec);
+      const fs::path to = fs::weakly_canonical(fs::absolute(o.output_dir), ec);
+      const fs::path relative = to.lexically_relative(from);
+      page.link_prefix = relative.empty() || relative == "." ? "" : relative.generic_string();
+    }
+    const Result<std::string> html = RenderBatchSummaryHtml(summary.summary, page);
+    if (!html.ok()) {
+      PrintError(html.error());
+      return kExitFailed;
+    }
+    if (Status s = WriteOutput(o.html, html.value()); !s.ok()) {
+      PrintError(s.error());
+      return kExitFailed;
+    }
+  }
   PrintTable(summary.table, o.output_dir);
   Note(fmt::format("{} of {} sessions analysed; reports and summary.json in {}\n",
                    summary.items.size() - summary.failed, summary.items.size(), o.output_dir));
@@ -86,6 +116,10 @@ void AddBatchCommand(CLI::App& app, int* exit_code) {
       ->required();
   sub->add_option("--jobs", o->jobs, "sessions in parallel (default: all cores)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--html", o->html,
+                  "also write the batch page here (- for stdout): a row per session and tag with "
+                  "dead tags marked, spread plots per quantity, links to each session's page, "
+                  "written beside its JSON report (docs/reports.md, \"Batch page\")");
   sub->add_flag("--type-a", o->type_a, "GUM Type A evaluation (always done)");
   AddAnalysisCliOptions(sub, &o->analysis);
   sub->callback([o, exit_code] { *exit_code = RunBatchCommand(*o); });

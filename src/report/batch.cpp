@@ -25,6 +25,7 @@
 #include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
 #include "metro/io/columns.hpp"
+#include "metro/report/html_report.hpp"
 
 namespace metro {
 
@@ -101,6 +102,12 @@ SessionResults ExtractResults(const ordered_json& report, const std::string& inp
     }
   }
   return results;
+}
+
+// "x.report.json" -> "x.report.html".
+std::string BatchPagePath(const std::string& report_path) {
+  fs::path p(report_path);
+  return p.replace_extension(".html").string();
 }
 
 // Angles are pooled on the circle: a unit of dimension angle (deg, rad).
@@ -373,10 +380,27 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
       item.input_error = a.input_error;
     } else {
       item.report_path = report_path;
-      if (Status s = WriteFileAtomically(item.report_path, JsonText(a.report, 2) + "\n"); !s.ok()) {
+      std::string page;
+      if (options.session_pages) {
+        item.page_path = BatchPagePath(report_path);
+        Result<std::string> html = RenderSessionAnalysisHtml(a);
+        if (html.ok()) {
+          page = std::move(html).value();
+        } else {
+          item.error = html.error();
+          item.input_error = false;
+        }
+      }
+      const std::string json = JsonText(a.report, 2) + "\n";
+      Status s = !item.error.message.empty() ? Status(item.error)
+                 : options.session_pages
+                     ? WriteFilesAtomically({{item.report_path, json}, {item.page_path, page}})
+                     : WriteFileAtomically(item.report_path, json);
+      if (!s.ok()) {
         item.error = s.error();
         item.input_error = false;
         item.report_path.clear();
+        item.page_path.clear();
       } else {
         item.ok = true;
         hashes[i] = a.session.sha256;
@@ -450,6 +474,32 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
     if (item.ok) {
       s["sha256"] = hashes[i];
       s["report"] = names[i];
+      if (!item.page_path.empty()) s["page"] = fs::path(item.page_path).filename().string();
+      ordered_json tags_i = ordered_json::array();
+      for (const TagResult& t : results[i].tags) {
+        tags_i.push_back({{"sensor", t.sensor},
+                          {"name", t.tag_name},
+                          {"frames", t.frames},
+                          {"fresh", t.fresh},
+                          {"stale", t.stale},
+                          {"never", t.never},
+                          {"dead", t.frames > 0 && t.fresh == 0}});
+      }
+      s["tags"] = tags_i;
+      ordered_json quantities_i = ordered_json::array();
+      const auto number = [](double x) {
+        return std::isfinite(x) ? ordered_json(x) : ordered_json();
+      };
+      for (const QuantityResult& r : results[i].quantities) {
+        quantities_i.push_back({{"sensor", r.sensor},
+                                {"name", r.tag_name},
+                                {"quantity", r.quantity},
+                                {"unit", r.unit},
+                                {"mean", number(r.mean)},
+                                {"u_mean", number(r.u_mean)},
+                                {"n", number(r.n)}});
+      }
+      s["quantities"] = quantities_i;
     } else {
       ++out.failed;
       s["error"] = item.error.ToString();

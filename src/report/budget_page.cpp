@@ -78,23 +78,13 @@ Result<std::string> HistogramSvg(const ordered_json& report, const std::string& 
     return MakeError("the report has no finite GUF value and u_c to draw against");
   }
   const double lo = NumberAt(edges, 0), hi = NumberAt(edges, edges.size() - 1);
-  // Offset: the GUF value rounded per JCGM 100 7.2.6, when the values sit far from zero.
-  const RoundedResult rounded = RoundForStatement(value, u);
-  const double offset =
-      std::max(std::fabs(lo), std::fabs(hi)) > 10.0 * (hi - lo) ? std::stod(rounded.value) : 0.0;
-  const int exponent3 =
-      3 * static_cast<int>(std::floor(
-              std::log10(std::max(std::fabs(lo - offset), std::fabs(hi - offset))) / 3.0));
-  const double scale = std::pow(10.0, exponent3);
-  const auto to_x = [&](double y) { return (y - offset) / scale; };
+  const report_internal::AxisScale axis =
+      report_internal::ChooseAxisScale(measurand, unit, lo, hi, value);
+  const auto to_x = [&](double y) { return axis.To(y); };
 
   XyPlot plot;
   plot.title = fmt::format("Distribution for {}: Monte Carlo histogram and GUF density", measurand);
-  const std::string scaled_unit =
-      exponent3 == 0 ? unit : fmt::format("1e{} {}", exponent3, unit.empty() ? "1" : unit);
-  plot.x_label = (offset != 0.0 ? fmt::format("{} - {}", measurand, WithUnit(rounded.value, unit))
-                                : measurand) +
-                 (scaled_unit.empty() ? "" : " [" + scaled_unit + "]");
+  plot.x_label = axis.label;
   plot.y_label = "probability density x u_c";
   PlotSeries bins;
   bins.label = fmt::format("Monte Carlo, M = {:.0f}", trials);

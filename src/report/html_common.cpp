@@ -123,6 +123,34 @@ std::string ShortNumber(double x, int significant) {
   return fmt::format("{:.{}g}", x, significant);
 }
 
+AxisScale ChooseAxisScale(const std::string& name, const std::string& unit_symbol, double lo,
+                          double hi, double offset) {
+  AxisScale a;
+  const std::string unit = unit_symbol == "1" ? "" : unit_symbol;  // Dimensionless.
+  const double span = hi - lo;
+  std::string offset_text;
+  if (std::isfinite(offset) && span > 0.0 && std::fabs(lo) > 10.0 * span &&
+      std::fabs(hi) > 10.0 * span) {
+    offset_text = RoundForStatement(offset, span).value;
+    a.offset = std::stod(offset_text);
+  }
+  const double extent = std::max(std::fabs(lo - a.offset), std::fabs(hi - a.offset));
+  int exponent3 = 0;
+  if (std::isfinite(extent) && extent > 0.0) {
+    exponent3 = 3 * static_cast<int>(std::floor(std::log10(extent) / 3.0));
+  }
+  a.scale = std::pow(10.0, exponent3);
+  const std::string scaled_unit = exponent3 == 0 ? unit
+                                  : unit.empty() ? fmt::format("1e{}", exponent3)
+                                                 : fmt::format("1e{} {}", exponent3, unit);
+  a.label =
+      (offset_text.empty()
+           ? name
+           : fmt::format("{} - {}", name, unit.empty() ? offset_text : offset_text + " " + unit)) +
+      (scaled_unit.empty() ? "" : " [" + scaled_unit + "]");
+  return a;
+}
+
 bool AnyAllan(const ordered_json& report) {
   if (!report.contains("sensors") || !report["sensors"].is_array()) return false;
   for (const auto& s : report["sensors"]) {

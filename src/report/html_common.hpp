@@ -19,6 +19,20 @@ std::string JsonString(const nlohmann::ordered_json& j, const char* key);
 // `significant` digits (fmt "{:.Ng}"), "-" for NaN.
 std::string ShortNumber(double x, int significant);
 
+// A plot axis for values of `name` in `unit` spanning [lo, hi]: plotted as (x - offset) /
+// scale, scale a power of 1000 chosen so the ticks need no detached multiplier, both stated
+// in the label: "az_g [g]", "l - 50000838 nm [nm]", "ax_g - 0.0123 g [1e-6 g]". `offset` is
+// used when the values sit far from zero (|lo|, |hi| > 10 (hi - lo)), rounded per JCGM 100
+// 7.2.6 to the span; else 0.
+struct AxisScale {
+  double offset = 0.0;
+  double scale = 1.0;
+  std::string label;
+  double To(double x) const { return (x - offset) / scale; }
+};
+AxisScale ChooseAxisScale(const std::string& name, const std::string& unit, double lo, double hi,
+                          double offset);
+
 // True when any quantity of the report has an "allan" object.
 bool AnyAllan(const nlohmann::ordered_json& report);
 

@@ -19,6 +19,8 @@
 #include "metro/io/session_io.hpp"
 #include "metro/noise/allan.hpp"
 #include "metro/noise/noise_model.hpp"
+#include "metro/report/batch.hpp"
+#include "metro/report/batch_page.hpp"
 #include "metro/report/budget_page.hpp"
 #include "metro/report/certificate.hpp"
 #include "metro/report/svg_plot.hpp"
@@ -724,6 +726,16 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
   }
   if (schema == kBudgetReportSchema) {
     Result<std::string> html = RenderBudgetReportHtml(document);
+    if (!html.ok() && html.error().file.empty()) {
+      Error e = html.error();
+      e.file = json_path;
+      return e;
+    }
+    return html;
+  }
+  if (schema == kBatchSummarySchema) {
+    // The links are relative to the summary's folder, where batch wrote the session pages.
+    Result<std::string> html = RenderBatchSummaryHtml(document);
     if (!html.ok() && html.error().file.empty()) {
       Error e = html.error();
       e.file = json_path;

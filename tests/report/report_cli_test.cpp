@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "metro/core/rounding.hpp"
 #include "support/run_program.hpp"
 
 namespace metro {
@@ -95,6 +96,58 @@ TEST_CASE("characterize batch exits 1 and names the broken session", "[apps][rep
   r = Characterize("batch " + (in.path / "*.nothing").string() + " -o " + out.path.string());
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("pattern matches no file") != std::string::npos);
+}
+
+TEST_CASE("characterize budget --html writes the budget page with the statement of its JSON",
+          "[apps][report][budget]") {
+  Dir d("metro_cli_budget_html");
+  const std::string json = (d.path / "b.json").string(), html = (d.path / "b.html").string();
+  const std::string budget = kDatasets + "budgets/jcgm101_9_3_mass.json";
+  Run r = Characterize("budget " + budget + " -q -o " + json + " --html " + html);
+  REQUIRE(r.exit_code == 0);
+  const auto report = nlohmann::json::parse(Slurp(json));
+  const std::string h = Slurp(html);
+  // The statement on the page is the JSON's result rounded per GUM 7.2.6.
+  const RoundedResult s = RoundForStatement(report["result"]["value"].get<double>(),
+                                            report["result"]["U"].get<double>());
+  const std::string unit = report["measurand"]["unit"].get<std::string>();
+  const std::string statement = report["measurand"]["name"].get<std::string>() + " = (" + s.value +
+                                " \u00b1 " + s.uncertainty + ")" + (unit.empty() ? "" : " " + unit);
+  CHECK(h.find("<strong id=\"statement\">" + statement + "</strong>") != std::string::npos);
+  CHECK(Count(h, "<svg") == 2);
+  // The saved report renders as the same page; the budget definition is refused.
+  const std::string html2 = (d.path / "b2.html").string();
+  r = Characterize("report " + json + " --html " + html2);
+  REQUIRE(r.exit_code == 0);
+  CHECK(Slurp(html2).find("<strong id=\"statement\">" + statement + "</strong>") !=
+        std::string::npos);
+  r = Characterize("report " + budget + " --html " + html2);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("budget definition") != std::string::npos);
+  CHECK(r.err.find("characterize budget " + budget + " --html") != std::string::npos);
+  // Both to stdout cannot be.
+  r = Characterize("budget " + budget + " -q --html -");
+  CHECK(r.exit_code == 2);
+}
+
+TEST_CASE("characterize batch --html writes the batch page and a page per session",
+          "[apps][report][batch]") {
+  Dir d("metro_cli_batch_html");
+  const std::string out = (d.path / "out").string(), page = (d.path / "batch.html").string();
+  Run r = Characterize("batch " + kDatasets + "static_chest.csv " + kDatasets +
+                       "capture_15tags.csv -q -o " + out + " --html " + page);
+  REQUIRE(r.exit_code == 0);
+  const std::string h = Slurp(page);
+  for (const char* name : {"static_chest", "capture_15tags"}) {
+    CHECK(fs::exists(d.path / "out" / (std::string(name) + ".report.html")));
+    CHECK(h.find("href=\"out/" + std::string(name) + ".report.html\"") != std::string::npos);
+  }
+  CHECK(Slurp(d.path / "out" / "static_chest.report.html").find("<title>Session report: ") !=
+        std::string::npos);
+  const auto summary = nlohmann::json::parse(Slurp(d.path / "out" / "summary.json"));
+  CHECK(summary["sessions"][0]["page"] == "capture_15tags.report.html");
+  // A row per session and tag: capture_15tags has 14 tags, static_chest 1.
+  CHECK(Count(h, "<td><code>") == 15);
 }
 
 #ifdef METRO_CALIBRATE_EXE

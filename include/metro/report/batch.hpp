@@ -42,6 +42,10 @@ struct BatchOptions {
   SessionAnalysisOptions analysis;  // Per session; its thread counts are forced to 1.
   std::string output_dir;           // Created if missing.
   int jobs = 0;                     // Sessions in parallel; 0: all cores.
+  // Also write each session's HTML page (RenderSessionAnalysisHtml) beside its JSON report,
+  // "<report name without .json>.html", replaced together with the JSON; summary.json names
+  // it ("page").
+  bool session_pages = false;
   // Called after each session (from a worker thread, serialised): sessions done, total.
   std::function<void(size_t done, size_t total)> on_progress;
 
@@ -51,6 +55,7 @@ struct BatchOptions {
 struct BatchItem {
   std::string input;
   std::string report_path;  // Written when ok.
+  std::string page_path;    // With BatchOptions::session_pages, written when ok.
   bool ok = false;
   Error error;  // When !ok.
   bool input_error = true;
@@ -126,7 +131,11 @@ std::vector<std::string> NoFreshPacketWarnings(const nlohmann::ordered_json& rep
 // second run into it fails with BatchSummary::error). Inputs that are batch's own outputs
 // in that directory are left out and named in `skipped`; an input that is not a readable
 // regular file, or whose report would be written over an input, fails as its own session.
-// summary.json and summary.txt are replaced together (WriteFilesAtomically).
+// summary.json and summary.txt are replaced together (WriteFilesAtomically). Each entry of
+// summary.json's "sessions" that was analysed also holds its own results for the batch page
+// (batch_page.hpp): "tags" [{sensor, name, frames, fresh, stale, never, dead}] (dead: frames
+// > 0 and no fresh packet) and "quantities" [{sensor, name, quantity, unit, mean, u_mean,
+// n}] (u_mean as the session's report recommends it, in the quantity's unit).
 BatchSummary RunBatch(const std::vector<std::string>& inputs, const BatchOptions& options);
 
 }  // namespace metro
