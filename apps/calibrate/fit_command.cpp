@@ -30,6 +30,7 @@ struct FitOptions {
   std::string accel_model;
   std::string gyro_model;
   double gravity_mps2 = kStandardGravityMps2;
+  bool gravity_given = false;  // --gravity-mps2 was on the command line.
   double accel_fs_g = 2.0;
   double gyro_fs_dps = 250.0;
   std::string temperature = "auto";
@@ -65,6 +66,7 @@ int RunFit(const FitOptions& f) {
   o.loss = *loss;
   o.loss_scale = f.loss_scale;
   o.gravity_mps2 = f.gravity_mps2;
+  o.gravity_given = f.gravity_given;
   o.accel_fs_g = f.accel_fs_g;
   o.gyro_fs_dps = f.gyro_fs_dps;
   o.sensor = f.sensor;
@@ -170,10 +172,14 @@ int RunFit(const FitOptions& f) {
     apps::PrintError(cal.error());
     return kExitFailed;
   }
-  // calibration.json carries each tag's device ID when the tags file knows it.
+  // calibration.json carries each tag's device ID, name and profile from the tags file.
   for (TagCalibration& t : cal.value().tags) {
     const TagEntry* entry = tags.value() ? tags.value()->Find(t.sensor) : nullptr;
-    if (entry != nullptr) t.device_id = entry->device_id;
+    if (entry != nullptr) {
+      t.device_id = entry->device_id;
+      t.name = entry->name;
+      t.profile = entry->profile;
+    }
   }
   if (int rc = ApplySpec(spec.spec, &cal.value()); rc != kExitOk) return rc;
   std::string html;
@@ -181,6 +187,7 @@ int RunFit(const FitOptions& f) {
     CertificateOptions certificate;
     certificate.accel_fs_g = f.accel_fs_g;
     certificate.gyro_fs_dps = f.gyro_fs_dps;
+    certificate.full_scale_as_fitted = true;
     Result<std::string> rendered = RenderCalibrationCertificate(
         cal.value(), ptrs, "Conditions and residual plots from the input records as fitted.",
         certificate);
@@ -295,7 +302,10 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
   AddTagsOption(sub, &o->tags);
   AddSpecOptions(sub, &o->spec);
   AddRegistryOptions(sub, &o->registry);
-  sub->callback([o, exit_code] { *exit_code = RunFit(*o); });
+  sub->callback([o, exit_code, sub] {
+    o->gravity_given = sub->count("--gravity-mps2") > 0;
+    *exit_code = RunFit(*o);
+  });
 }
 
 }  // namespace metro::calibrate_app

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <ctime>
 #include <exception>
+#include <limits>
 #include <map>
 
 #include "calibration/calibrate_stages.hpp"
@@ -300,6 +301,30 @@ Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
   return Status::Ok();
 }
 
+InputFile RecordTimeSpan(const Session& session) {
+  InputFile out;
+  out.format = SessionFormatName(session.format);
+  double first_s = std::numeric_limits<double>::infinity();
+  double last_s = -first_s;
+  for (const Tag& t : session.tags) {
+    if (t.t_s.empty()) continue;
+    first_s = std::min(first_s, t.t_s.front());
+    last_s = std::max(last_s, t.t_s.back());
+  }
+  if (!(first_s <= last_s)) return out;
+  out.duration_s = last_s - first_s;
+  // Unix time 2000-01-01T00:00:00Z .. 2100-01-01T00:00:00Z: a date, not a clock since start.
+  constexpr double kFrom = 946684800.0, kTo = 4102444800.0;
+  const double origin_s =
+      session.input.time_integer ? static_cast<double>(session.input.time_origin_ns) * 1e-9 : 0.0;
+  const double start = origin_s + first_s, end = origin_s + last_s;
+  if (start >= kFrom && end < kTo) {
+    out.start_utc = UtcIso8601(static_cast<std::time_t>(std::floor(start)));
+    out.end_utc = UtcIso8601(static_cast<std::time_t>(std::floor(end)));
+  }
+  return out;
+}
+
 Result<Calibration> CalibrateSessions(const std::vector<const Session*>& sessions,
                                       const CalibrationOptions& options) {
   std::string why;
@@ -307,11 +332,16 @@ Result<Calibration> CalibrateSessions(const std::vector<const Session*>& session
   if (sessions.empty()) return MakeError("no sessions to calibrate");
   Calibration cal;
   cal.gravity_mps2 = options.gravity_mps2;
+  cal.gravity_source =
+      options.gravity_given || options.gravity_mps2 != kStandardGravityMps2 ? "given" : "standard";
   cal.tool_version = std::string(kToolName) + " " + kVersion;
   cal.date_utc = UtcIso8601Now();
   std::map<int, std::vector<const Tag*>> by_sensor;
   for (const Session* s : sessions) {
-    cal.inputs.push_back({s->path, s->sha256});
+    InputFile in = RecordTimeSpan(*s);
+    in.path = s->path;
+    in.sha256 = s->sha256;
+    cal.inputs.push_back(std::move(in));
     for (const Tag& t : s->tags) {
       if (options.sensor == 0 || t.sensor == options.sensor) by_sensor[t.sensor].push_back(&t);
     }

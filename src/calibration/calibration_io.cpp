@@ -5,11 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <string_view>
+#include <utility>
 
 #include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
+#include "metro/core/utc_time.hpp"
 
 namespace metro {
 
@@ -589,14 +592,24 @@ json CalibrationToJson(const Calibration& cal) {
   j["tool_version"] = cal.tool_version;
   j["date_utc"] = cal.date_utc;
   j["gravity_mps2"] = cal.gravity_mps2;
+  if (!cal.gravity_source.empty()) j["gravity_source"] = cal.gravity_source;
   json inputs = json::array();
-  for (const InputFile& f : cal.inputs) inputs.push_back({{"path", f.path}, {"sha256", f.sha256}});
+  for (const InputFile& f : cal.inputs) {
+    json in = {{"path", f.path}, {"sha256", f.sha256}};
+    if (!f.format.empty()) in["format"] = f.format;
+    if (f.duration_s) in["duration_s"] = *f.duration_s;
+    if (!f.start_utc.empty()) in["start_utc"] = f.start_utc;
+    if (!f.end_utc.empty()) in["end_utc"] = f.end_utc;
+    inputs.push_back(in);
+  }
   j["inputs"] = inputs;
   json tags = json::array();
   for (const TagCalibration& t : cal.tags) {
     json tj;
     tj["sensor"] = t.sensor;
     if (t.device_id) tj["device_id"] = FormatDeviceIdText(*t.device_id);
+    if (!t.name.empty()) tj["name"] = t.name;
+    if (!t.profile.empty()) tj["profile"] = t.profile;
     tj["threshold_factor"] = t.threshold_factor;
     tj["saturated_samples"] = t.saturated_samples;
     tj["iterations"] = t.iterations;
@@ -628,9 +641,46 @@ Result<Calibration> CalibrationFromJson(const json& j, const std::string& file) 
   cal.gravity_mps2 = rd.Number(j, "", "gravity_mps2");
   cal.tool_version = j.value("tool_version", "");
   cal.date_utc = j.value("date_utc", "");
+  if (j.contains("gravity_source")) {
+    const json& g = j.at("gravity_source");
+    if (!g.is_string() || (g != "standard" && g != "given")) {
+      return MakeError(file, 0, "'gravity_source': expected \"standard\" or \"given\"");
+    }
+    cal.gravity_source = g.get<std::string>();
+  }
   if (j.contains("inputs") && j.at("inputs").is_array()) {
-    for (const json& f : j.at("inputs")) {
-      cal.inputs.push_back({f.value("path", ""), f.value("sha256", "")});
+    const json& inputs = j.at("inputs");
+    for (size_t i = 0; i < inputs.size(); ++i) {
+      const json& f = inputs[i];
+      if (!f.is_object())
+        return MakeError(file, 0, fmt::format("'inputs[{}]': expected an object", i));
+      InputFile in;
+      in.path = f.value("path", "");
+      in.sha256 = f.value("sha256", "");
+      for (auto [key, field] :
+           {std::pair{"format", &in.format}, std::pair{"start_utc", &in.start_utc},
+            std::pair{"end_utc", &in.end_utc}}) {
+        if (!f.contains(key)) continue;
+        const json& v = f.at(key);
+        const bool date = std::string_view(key) != "format";
+        if (!v.is_string() || (date && !ParseUtcIso8601(v.get<std::string>()))) {
+          return MakeError(
+              file, 0,
+              fmt::format(
+                  "'inputs[{}].{}': expected {}", i, key,
+                  date ? "an ISO 8601 UTC time such as \"2026-05-01T12:00:00Z\"" : "a string"));
+        }
+        *field = v.get<std::string>();
+      }
+      if (f.contains("duration_s")) {
+        const json& d = f.at("duration_s");
+        if (!d.is_number() || !(d.get<double>() >= 0.0)) {
+          return MakeError(file, 0,
+                           fmt::format("'inputs[{}].duration_s': expected a number >= 0", i));
+        }
+        in.duration_s = d.get<double>();
+      }
+      cal.inputs.push_back(std::move(in));
     }
   }
   const json* tags = rd.Get(j, "", "tags");
@@ -652,6 +702,13 @@ Result<Calibration> CalibrationFromJson(const json& j, const std::string& file) 
         return MakeError(file, 0, fmt::format("'{}device_id': {}", path, id.error().message));
       }
       t.device_id = id.value();
+    }
+    for (auto [key, field] : {std::pair{"name", &t.name}, std::pair{"profile", &t.profile}}) {
+      if (!tj.contains(key)) continue;
+      if (!tj.at(key).is_string()) {
+        return MakeError(file, 0, fmt::format("'{}{}': expected a string", path, key));
+      }
+      *field = tj.at(key).get<std::string>();
     }
     if (!tj.contains("accel") && !tj.contains("gyro")) {
       return MakeError(file, 0, fmt::format("'{}' has neither 'accel' nor 'gyro'", path));

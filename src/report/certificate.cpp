@@ -9,10 +9,13 @@
 
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"
+#include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/rounding.hpp"
+#include "metro/core/utc_time.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/svg_plot.hpp"
+#include "metro/uncertainty/gum.hpp"
 
 namespace metro {
 
@@ -28,7 +31,12 @@ mustache::data ResultRow(const std::string& constant, const std::string& unit, d
   mustache::data row;
   row.set("constant", constant);
   row.set("unit", unit);
-  if (u > 0.0 && std::isfinite(u)) {
+  if (u > 0.0 && std::isfinite(u) && !(k > 0.0)) {
+    // No coverage factor (dof < 1): u is stated, U is not.
+    row.set("value", RoundForStatement(value, u).value);
+    row.set("u", RoundForStatement(value, u).uncertainty);
+    row.set("U", "not stated");
+  } else if (u > 0.0 && std::isfinite(u)) {
     const RoundedResult expanded = RoundForStatement(value, k * u);  // JCGM 100:2008 6.2.1
     row.set("value", expanded.value);
     row.set("u", RoundForStatement(value, u).uncertainty);
@@ -43,11 +51,46 @@ mustache::data ResultRow(const std::string& constant, const std::string& unit, d
 
 const char* kAxes[3] = {"x", "y", "z"};
 
+// The coverage factor of one sensor's U and the dof it was taken at: k = t_{(1+p)/2}(nu),
+// nu = the fit's dof (JCGM 100:2008 G.3.2); nu is infinite, k the normal quantile, when the
+// file's coverage_factor_95 is the normal 1.96 (an accelerometer u from the poses' noise
+// alone, G.6.6). k = 0 when dof < 1 (no U can be stated).
+struct Coverage {
+  double k = 0.0;
+  double dof = 0.0;  // +infinity: the normal quantile.
+  std::string text;  // "k = t_0.975(12) = 2.18 (12 degrees of freedom ...)".
+};
+Coverage SensorCoverage(const SensorCalibration& c, double p) {
+  Coverage out;
+  const double z975 = CoverageFactor(0.95, std::numeric_limits<double>::infinity());
+  const std::string q = Short(0.5 * (1.0 + p), 4);
+  if (c.dof >= 1 && std::abs(c.coverage_factor_95 - z975) < 1e-9) {
+    out.dof = std::numeric_limits<double>::infinity();
+    out.k = CoverageFactor(p, out.dof);
+    out.text = fmt::format(
+        "k = t_{}(inf) = {} (the uncertainty rests on the poses' noise alone, hundreds of "
+        "samples each: infinite degrees of freedom, JCGM 100:2008 G.6.6; the fit's own dof is {})",
+        q, Short(out.k, 4), c.dof);
+  } else if (c.dof >= 1) {
+    out.dof = c.dof;
+    out.k = CoverageFactor(p, out.dof);
+    out.text = fmt::format(
+        "k = t_{}({}) = {} (Student's t at the fit's {} degrees of freedom, JCGM 100:2008 G.3.2)",
+        q, c.dof, Short(out.k, 4), c.dof);
+  } else {
+    out.text = fmt::format(
+        "no coverage factor: the fit has {} degrees of freedom (fewer than 1), so only u is stated",
+        c.dof);
+  }
+  return out;
+}
+
 // Section 6, the statement of conformity with its decision rule (ISO/IEC 17025:2017 7.8.6.2),
 // when calibration.json carries one (docs/conformity.md).
-void SetConformity(const Calibration& cal, double k, mustache::data* data) {
+void SetConformity(const Calibration& cal, mustache::data* data) {
   if (!cal.conformity) return;
   const ConformityStatement& st = *cal.conformity;
+  const double k = st.coverage_factor;
   mustache::data rows{mustache::data::type::list};
   int pass = 0, fail = 0, inconclusive = 0;
   auto limit = [](const std::optional<double>& v) { return v ? Short(*v, 8) : std::string("-"); };
@@ -68,6 +111,7 @@ void SetConformity(const Calibration& cal, double k, mustache::data* data) {
   }
   mustache::data c;
   c.set("rule", st.DescribeRule());
+  c.set("k", Short(k, 3));
   c.set("rows", rows);
   c.set("summary", fmt::format("{} of {} constants pass, {} fail, {} inconclusive.", pass,
                                st.entries.size(), fail, inconclusive));
@@ -90,18 +134,27 @@ Result<std::string> ResidualPlot(const SensorCalibration& c, int sensor,
   after.label = "after calibration";
   after.style = SeriesStyle::kPoints;
   after.color = PlotColor::kBlue;
+  // |residual| on a logarithmic axis: after calibration the residuals are orders of magnitude
+  // smaller than before, and a linear axis would draw them on zero. An exact zero has no
+  // logarithm and is left out (said in the caption by the caller's count).
   for (size_t i = 0; i < r.value().before.size(); ++i) {
-    before.x.push_back(static_cast<double>(i + 1));
-    before.y.push_back(r.value().before[i]);
-    after.x.push_back(static_cast<double>(i + 1));
-    after.y.push_back(r.value().after[i]);
+    const double x = static_cast<double>(i + 1);
+    const double b = std::abs(r.value().before[i]), a = std::abs(r.value().after[i]);
+    if (b > 0.0 && std::isfinite(b)) {
+      before.x.push_back(x);
+      before.y.push_back(b);
+    }
+    if (a > 0.0 && std::isfinite(a)) {
+      after.x.push_back(x);
+      after.y.push_back(a);
+    }
   }
   XyPlot plot;
   plot.title = accel ? "Accelerometer: gravity-norm error per static pose"
                      : "Gyroscope: rate magnitude per static interval";
   plot.x_label = "static pose";
-  plot.y_label = accel ? "|a| - g_local/g_n [g]" : "|w| [deg/s]";
-  plot.hlines.push_back({"", 0.0, PlotColor::kGrey, true});
+  plot.y_label = accel ? "||a| - g_local/g_n| [g], log scale" : "|w| [deg/s], log scale";
+  plot.log_y = true;
   plot.series = {std::move(before), std::move(after)};
   return RenderXyPlot(plot);
 }
@@ -110,7 +163,8 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
                           const std::vector<const Session*>& sessions, double gravity_mps2,
                           const CertificateOptions& options) {
   const SensorModel& m = c.model;
-  const double k = options.coverage_factor;
+  const Coverage coverage = SensorCoverage(c, options.coverage_probability);
+  const double k = coverage.k;
   const bool accel = m.sensor == ImuSensor::kAccel;
   mustache::data d;
   d.set("sensor", std::to_string(sensor));
@@ -120,8 +174,8 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
   d.set("output_unit", m.output_unit);
   d.set("dof", std::to_string(c.dof));
   d.set("chi2", Short(c.reduced_chi2, 4));
-  d.set("t95", Short(c.coverage_factor_95, 4));
-  d.set("k", Short(k, 3));
+  d.set("k", k > 0.0 ? Short(k, 4) : std::string("-"));
+  d.set("coverage", coverage.text);
   mustache::data rows{mustache::data::type::list};
   for (int a = 0; a < 3; ++a) {
     rows.push_back(
@@ -169,14 +223,14 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
     mustache::data f;
     if (svg.ok()) {
       f.set("svg", svg.value());
-      f.set("caption",
-            fmt::format("Residual of each static segment the fit used, before calibration (raw "
-                        "means at the nominal sensitivity{}) and after (the calibrated model).",
-                        m.input_unit == "LSB"
-                            ? fmt::format(", +-{} {} range",
-                                          accel ? options.accel_fs_g : options.gyro_fs_dps,
-                                          OutputUnit(m.sensor).symbol)
-                            : ""));
+      f.set("caption", fmt::format("Absolute residual of each static segment the fit used, on a "
+                                   "logarithmic axis: before calibration (raw means at the nominal "
+                                   "sensitivity{}) and after (the calibrated model).",
+                                   m.input_unit == "LSB" ? fmt::format(", +-{} {} range",
+                                                                       accel ? options.accel_fs_g
+                                                                             : options.gyro_fs_dps,
+                                                                       OutputUnit(m.sensor).symbol)
+                                                         : ""));
     } else {
       f.set("svg", "");
       f.set("caption", "Residuals before/after: not drawn (" + svg.error().message + ").");
@@ -185,6 +239,184 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
   }
   d.set("plots", plots);
   return d;
+}
+
+// ---- Identification (ISO/IEC 17025:2017 7.8.2.1) from calibration.json alone --------------
+
+// What the records' format says about the item.
+std::string FormatSource(const std::string& format) {
+  if (format.empty()) return "format not recorded in calibration.json";
+  if (format == "receiver") {
+    return "receiver capture (the nRF52840 central's hex lines of metro BLE tags)";
+  }
+  if (format == "imutk") return "imu_tk accelerometer + gyroscope file pair";
+  if (format == "csv") return "session.csv";
+  return fmt::format("{} file", format);
+}
+
+// The IMU as far as the data and the tags file say: the declared profile, the receiver format
+// (which carries only metro's MPU6050 tags), or "not declared". Never a guess.
+std::string ImuDescription(const TagCalibration& t, const std::vector<std::string>& formats) {
+  if (t.profile == "mpu6050")
+    return "InvenSense MPU6050 (profile mpu6050 declared in the tags file)";
+  if (t.profile == "generic") {
+    return "IMU type not specified (profile generic declared in the tags file)";
+  }
+  if (!t.profile.empty()) return fmt::format("profile {} (tags file)", t.profile);
+  if (!formats.empty() && std::all_of(formats.begin(), formats.end(),
+                                      [](const std::string& f) { return f == "receiver"; })) {
+    return "MPU6050 on an nRF51802 BLE tag (receiver capture; no profile declared)";
+  }
+  return "IMU type not declared (no profile in a tags file)";
+}
+
+std::string SensorInput(const SensorCalibration& c, const CertificateOptions& options) {
+  const bool accel = c.model.sensor == ImuSensor::kAccel;
+  std::string range;
+  if (c.model.input_unit == "LSB") {
+    range = options.full_scale_as_fitted
+                ? fmt::format(", raw counts at +-{} {} full scale as fitted",
+                              Short(accel ? options.accel_fs_g : options.gyro_fs_dps, 6),
+                              accel ? "g" : "deg/s")
+                : std::string(", raw counts; full-scale setting not recorded in calibration.json");
+  }
+  return fmt::format("{} (input {}{})", accel ? "accelerometer" : "gyroscope", c.model.input_unit,
+                     range);
+}
+
+mustache::data ItemRows(const Calibration& cal, const CertificateOptions& options) {
+  mustache::data rows{mustache::data::type::list};
+  for (const TagCalibration& t : cal.tags) {
+    // The inputs this tag's segments came from (all inputs when none is recorded).
+    std::vector<std::string> formats;
+    for (size_t i = 0; i < cal.inputs.size(); ++i) {
+      const bool used = t.segments.empty() ||
+                        std::any_of(t.segments.begin(), t.segments.end(), [i](const Segment& s) {
+                          return s.piece == static_cast<int>(i);
+                        });
+      if (used &&
+          std::find(formats.begin(), formats.end(), cal.inputs[i].format) == formats.end()) {
+        formats.push_back(cal.inputs[i].format);
+      }
+    }
+    std::string sources;
+    for (const std::string& f : formats) sources += (sources.empty() ? "" : "; ") + FormatSource(f);
+    std::string sensors;
+    for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
+      if (c->has_value()) sensors += (sensors.empty() ? "" : " and ") + SensorInput(**c, options);
+    }
+    mustache::data row;
+    row.set("sensor", std::to_string(t.sensor));
+    row.set("name", t.name.empty() ? std::string("not stated") : t.name);
+    row.set("device_id",
+            t.device_id ? FormatDeviceIdText(*t.device_id) : std::string("not stated"));
+    if (t.device_id)
+      row.set("device_id_words", "nrfjprog order " + FormatDeviceIdWords(*t.device_id));
+    row.set("imu", ImuDescription(t, formats));
+    row.set("sensors", sensors);
+    row.set("source", sources.empty() ? std::string("no input recorded") : sources);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// Dates of measurement (7.8.2.1 f), distinct from the fit's and the issue's date.
+std::string MeasurementDates(const Calibration& cal) {
+  std::string first, last;
+  int dated = 0, relative = 0, unrecorded = 0;
+  for (const InputFile& in : cal.inputs) {
+    if (!in.start_utc.empty()) {
+      ++dated;
+      if (first.empty() || in.start_utc < first) first = in.start_utc;
+      if (last.empty() || in.end_utc > last) last = in.end_utc;
+    } else if (in.duration_s) {
+      ++relative;
+    } else {
+      ++unrecorded;
+    }
+  }
+  std::string out;
+  if (dated > 0) out = fmt::format("{} .. {} (UTC, from the records' time columns)", first, last);
+  if (relative > 0) {
+    out += fmt::format(
+        "{}{} record(s) with relative times only (a clock since the start, no date): measured on "
+        "or before the fit, {}",
+        out.empty() ? "" : "; ", relative, cal.date_utc);
+  }
+  if (unrecorded > 0) {
+    out += fmt::format(
+        "{}{} record(s) whose time span calibration.json does not record (written before metro "
+        "recorded it): measured on or before the fit, {}",
+        out.empty() ? "" : "; ", unrecorded, cal.date_utc);
+  }
+  return out.empty() ? std::string("no input recorded") : out;
+}
+
+std::string GravityStatement(const Calibration& cal) {
+  const std::string g = Short(cal.gravity_mps2, 8);
+  if (cal.gravity_source == "given") {
+    return fmt::format("{} m/s^2, given: calibrate fit --gravity-mps2 {}", g, g);
+  }
+  if (cal.gravity_source == "standard") {
+    return fmt::format(
+        "{} m/s^2, standard gravity g_n (conventional value, 3rd CGPM 1901), not a measured local "
+        "gravity",
+        g);
+  }
+  return fmt::format("{} m/s^2 (source not recorded in calibration.json)", g);
+}
+
+// Metrological traceability (7.8.4.1 c, 6.5): what the constants rest on, as recorded.
+std::vector<std::string> Traceability(const Calibration& cal) {
+  std::vector<std::string> out;
+  bool accel = false, table = false, rotation = false, gyro = false;
+  for (const TagCalibration& t : cal.tags) {
+    accel = accel || t.accel.has_value();
+    if (t.gyro) {
+      gyro = true;
+      for (const ResidualGroup& g : t.gyro->groups) {
+        table = table || (g.kind == "table_rate" && g.count > 0);
+        rotation = rotation || (g.kind == "rotation_gravity" && g.count > 0);
+      }
+    }
+  }
+  const std::string g = Short(cal.gravity_mps2, 8) + " m/s^2";
+  if (accel) {
+    out.push_back(
+        cal.gravity_source == "given"
+            ? fmt::format(
+                  "Accelerometer: traceable only to the gravity value {} given by the user; "
+                  "its own traceability and uncertainty are not recorded and not in U.",
+                  g)
+        : cal.gravity_source == "standard"
+            ? fmt::format("Accelerometer: referred to standard gravity {}, a conventional value, "
+                          "not to a measurement of local gravity (which differs from it by up to "
+                          "0.3 %, 9.78 .. 9.83 m/s^2); that difference is not in U.",
+                          g)
+            : fmt::format("Accelerometer: referred to the gravity value {}, whose source "
+                          "calibration.json does not record.",
+                          g));
+  }
+  if (gyro) {
+    std::string refs =
+        "the gyroscope bias to rest (zero rate; the Earth's rotation, 0.0042 deg/s, "
+        "is not corrected)";
+    if (table) {
+      refs +=
+          "; its scale to the rotation-table rates recorded in the records (table_rate_dps), "
+          "whose calibration is not recorded";
+    }
+    if (rotation) {
+      refs +=
+          "; its scale and misalignment to the angle between the gravity directions of "
+          "consecutive static poses (the accelerometer as reference)";
+    }
+    out.push_back("Gyroscope: " + refs + ".");
+  }
+  out.push_back(
+      "No further link to the SI is claimed: no reference standard with its own calibration "
+      "certificate took part, and the time base is the record's own clock.");
+  return out;
 }
 
 }  // namespace
@@ -238,8 +470,9 @@ Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& c, int s
 }
 
 bool CertificateOptions::IsValid(std::string* why) const {
-  if (!(coverage_factor >= 1.0 && coverage_factor <= 10.0)) {
-    *why = fmt::format("certificate: coverage factor k = {} is outside [1, 10]", coverage_factor);
+  if (!(coverage_probability > 0.0 && coverage_probability < 1.0)) {
+    *why = fmt::format("certificate: coverage probability p = {} is outside (0, 1)",
+                       coverage_probability);
     return false;
   }
   if (!(accel_fs_g > 0.0) || !(gyro_fs_dps > 0.0)) {
@@ -265,37 +498,45 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
   data.set("certificate_id",
            fmt::format("{} (first 16 hex digits of the SHA-256 of the calibration JSON)",
                        certificate_id));
-  std::string items;
+  std::string items;  // For the page's subtitle.
   for (const TagCalibration& t : cal.tags) {
-    items += fmt::format("{}tag sensor {} ({}{})", items.empty() ? "" : ", ", t.sensor,
-                         t.accel ? "accelerometer" : "", t.gyro ? " and gyroscope" : "");
+    items += fmt::format("{}sensor {}", items.empty() ? "" : ", ", t.sensor);
   }
-  data.set("items", items.empty() ? "(no tag)" : items + ": MPU6050 on an nRF51802 BLE tag");
+  data.set("print_id", certificate_id);
+  data.set("item_rows", ItemRows(cal, options));
+  data.set("date_issue_utc", UtcIso8601Now());
   data.set("date_utc", cal.date_utc);
+  data.set("measurement_dates", MeasurementDates(cal));
   data.set("tool_version", cal.tool_version);
-  data.set("gravity", fmt::format("{} m/s^2", Short(cal.gravity_mps2, 8)));
+  data.set("gravity", GravityStatement(cal));
   mustache::data inputs{mustache::data::type::list};
   for (size_t i = 0; i < cal.inputs.size(); ++i) {
+    const InputFile& in = cal.inputs[i];
     mustache::data row;
     row.set("index", std::to_string(i));
-    row.set("path", cal.inputs[i].path);
-    row.set("sha256", cal.inputs[i].sha256);
+    row.set("path", in.path);
+    row.set("sha256", in.sha256);
+    row.set("format", in.format.empty() ? std::string("not recorded") : in.format);
+    row.set("duration",
+            in.duration_s ? fmt::format("{:.1f} s", *in.duration_s) : std::string("not recorded"));
+    row.set("measured", !in.start_utc.empty() ? in.start_utc + " .. " + in.end_utc
+                        : in.duration_s       ? std::string("relative times only")
+                                              : std::string("not recorded"));
     inputs.push_back(row);
   }
   data.set("inputs", inputs);
   data.set("sessions_ok", !sessions.empty());
   data.set("sessions_note", sessions_note);
-  data.set("k", Short(options.coverage_factor, 3));
-  data.set("coverage_text", options.coverage_factor == 2.0
-                                ? "about 95 % coverage for a normal distribution"
-                                : "coverage probability as for a normal distribution");
+  data.set("p", Short(100.0 * options.coverage_probability, 4));
+  mustache::data traceability{mustache::data::type::list};
+  for (const std::string& line : Traceability(cal)) traceability.push_back(mustache::data(line));
+  data.set("traceability", traceability);
 
   mustache::data tags{mustache::data::type::list};
   mustache::data conditions{mustache::data::type::list};
   mustache::data condition_notes{mustache::data::type::list};
   mustache::data warnings{mustache::data::type::list};
   int min_dof = std::numeric_limits<int>::max();
-  double min_t95 = 0.0;
   for (const TagCalibration& t : cal.tags) {
     mustache::data td;
     td.set("sensor", std::to_string(t.sensor));
@@ -305,7 +546,6 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       sensors.push_back(SensorData(**c, t.sensor, sessions, cal.gravity_mps2, options));
       if ((*c)->dof < min_dof) {
         min_dof = (*c)->dof;
-        min_t95 = (*c)->coverage_factor_95;
       }
     }
     td.set("sensors", sensors);
@@ -367,15 +607,17 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       "t_ref without a temperature term) the biases may differ by more than U."));
   if (min_dof != std::numeric_limits<int>::max()) {
     validity.push_back(mustache::data(fmt::format(
-        "Smallest degrees of freedom of a fit: {}; k = {} gives about 95 % coverage only for "
-        "large dof, t_0.975({}) = {} (JCGM 100:2008 G.3.2).",
-        min_dof, Short(options.coverage_factor, 3), min_dof, Short(min_t95, 4))));
+        "Each U = k u has a coverage probability of about {} % with k from Student's t at the "
+        "degrees of freedom of its fit (section 3; JCGM 100:2008 G.3.2, G.6.6); the smallest "
+        "dof of a fit is {}.",
+        Short(100.0 * options.coverage_probability, 4), min_dof)));
   }
   validity.push_back(mustache::data(
       "Uncertainties are Type A from the fit residuals; they do not include the reference "
-      "(local gravity, table rate) uncertainty or long-term drift of the tag."));
+      "(gravity value, table rate) uncertainty or long-term drift of the tag (traceability "
+      "below)."));
   data.set("validity", validity);
-  SetConformity(cal, options.coverage_factor, &data);
+  SetConformity(cal, &data);
 
   Result<std::string> body = report_internal::RenderTemplate("certificate", std::move(data));
   if (!body.ok()) return body;

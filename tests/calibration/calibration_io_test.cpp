@@ -53,6 +53,73 @@ TEST_CASE("calibration.json round trip keeps every constant", "[calibration]") {
   }
 }
 
+TEST_CASE("calibration.json round trip keeps the identification of the certificate",
+          "[calibration]") {
+  Calibration cal = FitOnce().cal;
+  // What the fit records itself: the gravity source and each record's format and span.
+  CHECK(cal.gravity_source == "standard");
+  REQUIRE(cal.inputs.size() == 1);
+  CHECK(cal.inputs[0].format == "csv");
+  const std::vector<double>& t = FitOnce().sim.session.tags.front().t_s;
+  REQUIRE(cal.inputs[0].duration_s);
+  CHECK(*cal.inputs[0].duration_s == t.back() - t.front());
+  CHECK(cal.inputs[0].start_utc.empty());  // relative times: no date
+  // What the tags file adds, and a dated record.
+  cal.gravity_mps2 = 9.81744;
+  cal.gravity_source = "given";
+  cal.inputs[0].start_utc = "2026-01-01T00:00:00Z";
+  cal.inputs[0].end_utc = "2026-01-01T00:05:13Z";
+  cal.tags[0].device_id = 0x9ABCDEF012345678ull;
+  cal.tags[0].name = "Chest";
+  cal.tags[0].profile = "mpu6050";
+  const nlohmann::json j = CalibrationToJson(cal);
+  CHECK(j["gravity_source"] == "given");
+  CHECK(j["inputs"][0]["format"] == "csv");
+  CHECK(j["inputs"][0]["start_utc"] == "2026-01-01T00:00:00Z");
+  CHECK(j["tags"][0]["name"] == "Chest");
+  CHECK(j["tags"][0]["profile"] == "mpu6050");
+  Result<Calibration> back = CalibrationFromJson(nlohmann::json::parse(j.dump()), "c.json");
+  REQUIRE(back.ok());
+  const Calibration& b = back.value();
+  CHECK(b.gravity_mps2 == 9.81744);
+  CHECK(b.gravity_source == "given");
+  CHECK(b.inputs[0].format == "csv");
+  CHECK(b.inputs[0].duration_s == cal.inputs[0].duration_s);
+  CHECK(b.inputs[0].start_utc == "2026-01-01T00:00:00Z");
+  CHECK(b.inputs[0].end_utc == "2026-01-01T00:05:13Z");
+  CHECK(b.tags[0].device_id == cal.tags[0].device_id);
+  CHECK(b.tags[0].name == "Chest");
+  CHECK(b.tags[0].profile == "mpu6050");
+  // A file without them (written before metro recorded them) reads with them unset.
+  nlohmann::json old = j;
+  old.erase("gravity_source");
+  old["inputs"][0] = {{"path", "s.csv"}, {"sha256", "00"}};
+  old["tags"][0].erase("name");
+  old["tags"][0].erase("profile");
+  back = CalibrationFromJson(old, "c.json");
+  REQUIRE(back.ok());
+  CHECK(back.value().gravity_source.empty());
+  CHECK(back.value().inputs[0].format.empty());
+  CHECK_FALSE(back.value().inputs[0].duration_s);
+  CHECK(back.value().tags[0].name.empty());
+  // Malformed values are refused naming the key.
+  nlohmann::json bad = j;
+  bad["gravity_source"] = "local";
+  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
+        "'gravity_source': expected \"standard\" or \"given\"");
+  bad = j;
+  bad["inputs"][0]["start_utc"] = "1 Jan 2026";
+  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
+        "'inputs[0].start_utc': expected an ISO 8601 UTC time such as \"2026-05-01T12:00:00Z\"");
+  bad = j;
+  bad["inputs"][0]["duration_s"] = -1.0;
+  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
+        "'inputs[0].duration_s': expected a number >= 0");
+  bad = j;
+  bad["tags"][0]["name"] = 7;
+  CHECK(CalibrationFromJson(bad, "c.json").error().message == "'tags[0].name': expected a string");
+}
+
 TEST_CASE("calibration.json errors name the key", "[calibration]") {
   nlohmann::json j = CalibrationToJson(FitOnce().cal);
   nlohmann::json bad = j;

@@ -4,17 +4,21 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
+#include <regex>
 #include <string>
 
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/simulate.hpp"
+#include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
+#include "metro/uncertainty/gum.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
@@ -87,10 +91,13 @@ TEST_CASE("Certificate states identification results with U and k and conditions
     CHECK(h.find(section) != std::string::npos);
   }
   CHECK(h.find(f.sim.session.sha256) != std::string::npos);
-  CHECK(h.find("k = 2") != std::string::npos);
-  // U = 2 u of b0_x, rounded per GUM 7.2.6.
+  // U = k u of b0_x, rounded per GUM 7.2.6, k = t_0.975 at the fit's dof (1.96 when the
+  // accelerometer's u rests on the poses' noise alone).
   const TagCalibration& t = f.cal.tags.front();
-  const RoundedResult r = RoundForStatement(t.accel->model.bias[0], 2.0 * t.accel->bias_u[0]);
+  const double k = t.accel->coverage_factor_95 == 1.959963984540054
+                       ? 1.959963984540054
+                       : CoverageFactor(0.95, t.accel->dof);
+  const RoundedResult r = RoundForStatement(t.accel->model.bias[0], k * t.accel->bias_u[0]);
   CHECK(h.find("<td>bias b0_x</td><td>LSB</td><td class=\"num\">" + r.value + "</td>") !=
         std::string::npos);
   // The temperature range of the record, from the simulated ramp 22 -> 31 degC.
@@ -141,13 +148,262 @@ TEST_CASE("Certificate from calibration.json reloads matching inputs", "[report]
                                       poses.poses, poses.min_c, poses.max_c)) != std::string::npos);
 }
 
+// The page's text with mustache's HTML escapes of ' " & undone.
+std::string Unescape(std::string h) {
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"&apos;", "'"}, {"&quot;", "\""}, {"&amp;", "&"}}) {
+    for (size_t at = h.find(from); at != std::string::npos; at = h.find(from, at + to.size())) {
+      h.replace(at, from.size(), to);
+    }
+  }
+  return h;
+}
+
+// The y coordinates of the markers of one colour in the first plot of the page (PLplot's svg
+// device draws each point marker as a <text> glyph placed by its transform matrix).
+std::vector<double> MarkerYs(const std::string& h, const std::string& fill) {
+  const size_t a = h.find("<svg"), b = h.find("</svg>", a);
+  const std::string svg = h.substr(a, b - a);
+  const std::regex marker("<text[^>]*fill=\"" + fill +
+                          "\"[^>]*transform=\"matrix\\([^)]* ([-0-9.]+)\\)\"");
+  std::vector<double> ys;
+  for (std::sregex_iterator it(svg.begin(), svg.end(), marker), end; it != end; ++it) {
+    ys.push_back(std::stod((*it)[1].str()));
+  }
+  std::sort(ys.begin(), ys.end());
+  return ys;
+}
+
+// The text between `open` and the next `close` after it, or "" when absent.
+std::string Between(const std::string& h, const std::string& open, const std::string& close) {
+  const size_t a = h.find(open);
+  if (a == std::string::npos) return "";
+  const size_t b = h.find(close, a + open.size());
+  return b == std::string::npos ? "" : h.substr(a + open.size(), b - a - open.size());
+}
+
+// The calibration as `calibrate report` reads it: written to JSON and read back.
+Calibration ThroughJson(const Calibration& cal) {
+  Result<Calibration> back =
+      CalibrationFromJson(nlohmann::json::parse(FormatCalibrationJson(cal)), "cal.json");
+  METRO_CHECK(back.ok());
+  return std::move(back).value();
+}
+
+TEST_CASE("Certificate identifies the item from calibration.json and the tags file",
+          "[report][certificate]") {
+  Calibration cal = Fit().cal;
+  cal.tags.front().device_id = 0x9ABCDEF012345678ull;
+  cal.tags.front().name = "Chest";
+  cal.tags.front().profile = "mpu6050";
+  cal = ThroughJson(cal);
+  Result<std::string> html = RenderCalibrationCertificate(cal, {}, "records not given");
+  REQUIRE(html.ok());
+  const std::string items = Between(html.value(), "<table id=\"items\">", "</table>");
+  REQUIRE_FALSE(items.empty());
+  // The device ID as calibration.json states it, and in nrfjprog's word order.
+  const nlohmann::json j = nlohmann::json::parse(FormatCalibrationJson(cal));
+  const std::string id = j["tags"][0]["device_id"].get<std::string>();
+  CHECK(id == "9ABCDEF012345678");
+  CHECK(items.find("<td class=\"hash device-id\">" + id) != std::string::npos);
+  CHECK(items.find("nrfjprog order 12345678 9ABCDEF0") != std::string::npos);
+  CHECK(items.find("<td>Chest</td>") != std::string::npos);
+  CHECK(items.find("InvenSense MPU6050 (profile mpu6050 declared in the tags file)") !=
+        std::string::npos);
+  // The simulated session is session.csv of raw counts: the unit and the source, no guess.
+  CHECK(items.find("accelerometer (input LSB, raw counts; full-scale setting not recorded") !=
+        std::string::npos);
+  CHECK(items.find("session.csv") != std::string::npos);
+
+  // Without a tags file: no name, no device ID, no IMU type invented.
+  cal.tags.front().device_id.reset();
+  cal.tags.front().name.clear();
+  cal.tags.front().profile.clear();
+  html = RenderCalibrationCertificate(cal, {}, "records not given");
+  REQUIRE(html.ok());
+  const std::string bare = Between(html.value(), "<table id=\"items\">", "</table>");
+  CHECK(bare.find("<td class=\"hash device-id\">not stated</td>") != std::string::npos);
+  CHECK(bare.find("<td>not stated</td>") != std::string::npos);
+  CHECK(bare.find("MPU6050") == std::string::npos);
+  CHECK(bare.find("IMU type not declared") != std::string::npos);
+
+  // An imu_tk record (e.g. imu_tk's Xsens pair) is never called an MPU6050 either.
+  cal.inputs.front().format = "imutk";
+  html = RenderCalibrationCertificate(cal, {}, "records not given");
+  REQUIRE(html.ok());
+  const std::string imutk = Between(html.value(), "<table id=\"items\">", "</table>");
+  CHECK(imutk.find("MPU6050") == std::string::npos);
+  CHECK(imutk.find("imu_tk accelerometer + gyroscope file pair") != std::string::npos);
+  // The receiver's hex lines come only from metro's tags: that much the data say.
+  cal.inputs.front().format = "receiver";
+  html = RenderCalibrationCertificate(cal, {}, "records not given");
+  REQUIRE(html.ok());
+  CHECK(Between(html.value(), "<table id=\"items\">", "</table>")
+            .find("MPU6050 on an nRF51802 BLE tag (receiver capture; no profile declared)") !=
+        std::string::npos);
+}
+
+TEST_CASE("Certificate states k and dof per sensor as calibration.json gives them",
+          "[report][certificate]") {
+  const Calibration cal = ThroughJson(Fit().cal);
+  Result<std::string> html = RenderCalibrationCertificate(cal, {}, "records not given");
+  REQUIRE(html.ok());
+  const std::string h = Unescape(html.value());
+  const nlohmann::json j = nlohmann::json::parse(FormatCalibrationJson(cal));
+  const nlohmann::json& gyro = j["tags"][0]["gyro"];
+  const int dof = gyro["dof"].get<int>();
+  REQUIRE(dof >= 1);
+  // JCGM 100:2008 G.3.2: k = t_0.975(dof); the file's coverage_factor_95 is the same number.
+  const double k = gyro["coverage_factor_95"].get<double>();
+  CHECK(CoverageFactor(0.95, dof) == Approx(k).epsilon(1e-12));
+  CHECK(h.find(fmt::format("k = t_0.975({}) = {:.4g} (Student's t at the fit's {} degrees of "
+                           "freedom, JCGM 100:2008 G.3.2)",
+                           dof, k, dof)) != std::string::npos);
+  CHECK(h.find(fmt::format("<td class=\"num coverage-k\">{:.4g}</td>", k)) != std::string::npos);
+  // The gyroscope's U of b0_x is that k times u.
+  const double b = gyro["bias"][0].get<double>(), u = gyro["bias_u"][0].get<double>();
+  const RoundedResult r = RoundForStatement(b, k * u);
+  CHECK(h.find("<td>bias b0_x</td><td>LSB</td><td class=\"num\">" + r.value +
+               "</td><td class=\"num\">" + RoundForStatement(b, u).uncertainty +
+               "</td><td class=\"num\">" + r.uncertainty + "</td>") != std::string::npos);
+  // dof < 1: no k, so no U; u is still stated.
+  Calibration none = cal;
+  none.tags.front().gyro->dof = 0;
+  none.tags.front().gyro->coverage_factor_95 = 0.0;
+  html = RenderCalibrationCertificate(none, {}, "records not given");
+  REQUIRE(html.ok());
+  CHECK(html.value().find("no coverage factor: the fit has 0 degrees of freedom") !=
+        std::string::npos);
+  CHECK(html.value().find("<td class=\"num\">not stated</td>") != std::string::npos);
+}
+
+TEST_CASE("Certificate states the gravity value with its source", "[report][certificate]") {
+  Calibration cal = Fit().cal;
+  CHECK(cal.gravity_source == "standard");  // CalibrationOptions default, not given.
+  cal = ThroughJson(cal);
+  Result<std::string> html = RenderCalibrationCertificate(cal, {}, "");
+  REQUIRE(html.ok());
+  CHECK(Between(html.value(), "<td id=\"gravity\">", "</td>") ==
+        "9.80665 m/s^2, standard gravity g_n (conventional value, 3rd CGPM 1901), not a "
+        "measured local gravity");
+  CHECK(html.value().find("Accelerometer: referred to standard gravity 9.80665 m/s^2") !=
+        std::string::npos);
+
+  cal.gravity_mps2 = 9.81744;
+  cal.gravity_source = "given";
+  cal = ThroughJson(cal);
+  html = RenderCalibrationCertificate(cal, {}, "");
+  REQUIRE(html.ok());
+  CHECK(Between(html.value(), "<td id=\"gravity\">", "</td>") ==
+        "9.81744 m/s^2, given: calibrate fit --gravity-mps2 9.81744");
+  CHECK(html.value().find("traceable only to the gravity value 9.81744 m/s^2 given by the user") !=
+        std::string::npos);
+
+  // A file written before the source was recorded says so.
+  cal.gravity_source.clear();
+  html = RenderCalibrationCertificate(ThroughJson(cal), {}, "");
+  REQUIRE(html.ok());
+  CHECK(Between(html.value(), "<td id=\"gravity\">", "</td>") ==
+        "9.81744 m/s^2 (source not recorded in calibration.json)");
+}
+
+TEST_CASE("Certificate states the dates of measurement from the records", "[report][certificate]") {
+  Calibration cal = Fit().cal;
+  // The simulated record's times are relative: its span, no date.
+  REQUIRE(cal.inputs.size() == 1);
+  const std::vector<double>& t = Fit().sim.session.tags.front().t_s;
+  REQUIRE(cal.inputs[0].duration_s);
+  CHECK(*cal.inputs[0].duration_s == t.back() - t.front());
+  CHECK(cal.inputs[0].start_utc.empty());
+  Result<std::string> html = RenderCalibrationCertificate(ThroughJson(cal), {}, "");
+  REQUIRE(html.ok());
+  CHECK(Between(html.value(), "<td id=\"measurement-dates\">", "</td>") ==
+        "1 record(s) with relative times only (a clock since the start, no date): measured on "
+        "or before the fit, " +
+            cal.date_utc);
+  CHECK(html.value().find(fmt::format("<td class=\"num\">{:.1f} s</td>", t.back() - t.front())) !=
+        std::string::npos);
+
+  // A record with a Unix clock: its first and last observation, distinct from the issue date.
+  cal.inputs[0].start_utc = "2026-01-01T00:00:00Z";
+  cal.inputs[0].end_utc = "2026-01-01T01:00:00Z";
+  html = RenderCalibrationCertificate(ThroughJson(cal), {}, "");
+  REQUIRE(html.ok());
+  CHECK(Unescape(Between(html.value(), "<td id=\"measurement-dates\">", "</td>")) ==
+        "2026-01-01T00:00:00Z .. 2026-01-01T01:00:00Z (UTC, from the records' time columns)");
+}
+
+TEST_CASE("Record time span is a date only for a Unix clock", "[report][certificate]") {
+  Session s;
+  s.format = SessionFormat::kSensorLogger;
+  Tag tag;
+  tag.t_s = {0.0, 1800.0, 3600.75};
+  s.tags.push_back(tag);
+  s.input.time_integer = true;
+  s.input.time_origin_ns = 1767225600LL * 1000000000LL;  // date -d @1767225600: 2026-01-01 UTC
+  InputFile in = RecordTimeSpan(s);
+  CHECK(in.format == "sensorlogger");
+  REQUIRE(in.duration_s);
+  CHECK(*in.duration_s == 3600.75);
+  CHECK(in.start_utc == "2026-01-01T00:00:00Z");
+  CHECK(in.end_utc == "2026-01-01T01:00:00Z");
+  // A clock since power-on (origin 1 s): no date.
+  s.input.time_origin_ns = 1000000000LL;
+  in = RecordTimeSpan(s);
+  CHECK(in.start_utc.empty());
+  CHECK(in.end_utc.empty());
+  CHECK(*in.duration_s == 3600.75);
+  // Epoch seconds in a t_s column are a date too.
+  s.input.time_integer = false;
+  s.tags.front().t_s = {1767225600.0, 1767225610.0};
+  in = RecordTimeSpan(s);
+  CHECK(in.start_utc == "2026-01-01T00:00:00Z");
+  CHECK(in.end_utc == "2026-01-01T00:00:10Z");
+}
+
+TEST_CASE("Certificate has a traceability statement print CSS and log residual plots",
+          "[report][certificate]") {
+  const Fitted& f = Fit();
+  Result<std::string> html = RenderCalibrationCertificate(f.cal, {&f.sim.session}, "in memory");
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  CHECK(h.find("<h3 id=\"traceability\">Metrological traceability</h3>") != std::string::npos);
+  CHECK(h.find("No further link to the SI is claimed") != std::string::npos);
+  // The gyroscope's references as its residual groups in calibration.json record them.
+  const nlohmann::json j = nlohmann::json::parse(FormatCalibrationJson(f.cal));
+  int table = 0, rotation = 0;
+  for (const nlohmann::json& g : j["tags"][0]["gyro"]["residual_groups"]) {
+    if (g["kind"] == "table_rate") table += g["count"].get<int>();
+    if (g["kind"] == "rotation_gravity") rotation += g["count"].get<int>();
+  }
+  CHECK(rotation > 0);
+  CHECK((h.find("rotation-table rates recorded in the records (table_rate_dps)") !=
+         std::string::npos) == (table > 0));
+  CHECK(h.find("to the angle between the gravity directions of consecutive static poses") !=
+        std::string::npos);
+  // Print: tables whole on a page, numbered pages carrying the certificate id.
+  CHECK(h.find("table, figure, tr, .keep { break-inside: avoid;") != std::string::npos);
+  CHECK(h.find("content: \"page \" counter(page) \" of \" counter(pages);") != std::string::npos);
+  CHECK(h.find("content: \"Calibration certificate " + CalibrationCertificateId(f.cal) + "\";") !=
+        std::string::npos);
+  // The residual plots are drawn on a log axis of |residual|. The accelerometer's residuals
+  // after calibration are about 1e-4 g, spread over about a decade, and those before about
+  // 1e-2 g: on a linear axis (0 .. 0.1 g over ~280 px) the after markers' interquartile range
+  // would be under 1 px, on the log axis (about 5 decades) it is tens of px.
+  const std::vector<double> after = MarkerYs(h, "#1F77B4");
+  REQUIRE(after.size() > 8);
+  const double iqr_px = after[after.size() * 3 / 4] - after[after.size() / 4];
+  CHECK(iqr_px > 10.0);
+  CHECK(h.find("on a logarithmic axis") != std::string::npos);
+}
+
 TEST_CASE("Certificate bad input is refused with a message", "[report][certificate]") {
   const Fitted& f = Fit();
   CertificateOptions o;
-  o.coverage_factor = 0.5;
+  o.coverage_probability = 1.5;
   Result<std::string> r = RenderCalibrationCertificate(f.cal, {}, "", o);
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message == "certificate: coverage factor k = 0.5 is outside [1, 10]");
+  CHECK(r.error().message == "certificate: coverage probability p = 1.5 is outside (0, 1)");
   r = RenderCalibrationCertificate(f.cal, {&f.sim.session, &f.sim.session}, "");
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message == "certificate: 2 sessions given for 1 calibration inputs");

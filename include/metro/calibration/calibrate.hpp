@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "metro/calibration/conformity.hpp"
@@ -44,6 +45,9 @@ struct CalibrationOptions {
   ModelKind gyro_model = ModelKind::kFull;
   double gravity_mps2 = kStandardGravityMps2;  // Local gravity; the accel target norm is
                                                // gravity_mps2 / 9.80665 g.
+  // True when the user gave gravity_mps2 (`--gravity-mps2`), even as 9.80665: the calibration
+  // records gravity_source "given"; false and 9.80665: "standard" (any other value: "given").
+  bool gravity_given = false;
   double accel_fs_g = 2.0;     // Full-scale setting of raw (LSB) accelerometer data.
   double gyro_fs_dps = 250.0;  // Full-scale setting of raw (LSB) gyroscope data.
   TemperatureMode temperature = TemperatureMode::kAuto;
@@ -129,6 +133,10 @@ struct TagCalibration {
   // The tag's FICR device ID when known (`calibrate fit --tags FILE`), (DEVICEID[1] << 32) |
   // DEVICEID[0]; calibration.json's `device_id`.
   std::optional<uint64_t> device_id;
+  // The tag's name and declared IMU profile ("mpu6050", "generic") from the tags file
+  // (`calibrate fit --tags FILE`); empty when not given. calibration.json's `name`, `profile`.
+  std::string name;
+  std::string profile;
   std::optional<SensorCalibration> accel;
   std::optional<SensorCalibration> gyro;
   std::vector<Segment> segments;  // Every segment found, in every input.
@@ -139,13 +147,37 @@ struct TagCalibration {
 };
 
 struct InputFile {
+  InputFile() = default;
+  InputFile(std::string path_in, std::string sha256_in)
+      : path(std::move(path_in)), sha256(std::move(sha256_in)) {}
+
   std::string path;
   std::string sha256;
+  // What the record is and when it was measured (ISO/IEC 17025:2017 7.8.2.1 e, f); absent in
+  // files written before metro recorded them. `format`: SessionFormatName ("csv", "receiver",
+  // "imutk", ...). `duration_s`: last minus first observation time over every tag.
+  // `start_utc`, `end_utc` (ISO 8601): the first and last observation when the record's time
+  // column reads as a Unix clock between 2000-01-01 and 2100-01-01 (RecordTimeSpan); empty
+  // when its times are relative (a tag's or receiver's clock since start).
+  std::string format;
+  std::optional<double> duration_s;
+  std::string start_utc;
+  std::string end_utc;
 };
+
+// The time span of a record (the InputFile fields above), from its tags' observation times.
+// The times are a date when the time column read as Unix time falls within 2000 .. 2100:
+// integer times (t_ms, t_us, t_ns) from InputDialect::time_origin_ns plus t_s, otherwise t_s
+// itself (a column of epoch seconds).
+InputFile RecordTimeSpan(const Session& session);
 
 // The content of calibration.json ("metro.calibration/1", docs/calibration-format.md).
 struct Calibration {
   double gravity_mps2 = kStandardGravityMps2;
+  // Where gravity_mps2 came from: "standard" (g_n = 9.80665 m/s^2, the conventional value of
+  // the 3rd CGPM, 1901), "given" (`calibrate fit --gravity-mps2`, the user's local value), or
+  // empty (a file written before metro recorded it). calibration.json's `gravity_source`.
+  std::string gravity_source;
   std::vector<InputFile> inputs;
   std::string tool_version;
   std::string date_utc;  // ISO 8601, e.g. "2024-05-01T12:00:00Z".

@@ -1,9 +1,12 @@
 // Calibration certificate: the HTML view of a calibration ("metro.calibration/1") with the
 // content ISO/IEC 17025:2017 7.8.2 and 7.8.4 ask of a calibration report: identification
-// of the tag(s) and of every input session (SHA-256), method and model, results with
-// expanded uncertainties U = k u and the coverage factor k (JCGM 100:2008 6.2, 6.3, 7.2.6
-// rounding), the conditions (temperature range of the records), the residuals before and
-// after calibration, and the validity of the results.
+// of the item(s) from the data and the tags file (format, sensor, name, device ID, declared
+// profile), of every input session (SHA-256) and the dates of measurement from the records,
+// method and model, the gravity value with its source, results with expanded uncertainties
+// U = k u and the coverage factor k = t_0.975(dof) with its dof (JCGM 100:2008 6.2, 6.3,
+// G.3, 7.2.6 rounding), the conditions (temperature range of the records), the residuals
+// before and after calibration (log scale), the metrological traceability (7.8.4.1 c) and the
+// validity of the results. Print CSS keeps tables on one page and numbers the pages.
 #pragma once
 
 #include <string>
@@ -16,13 +19,19 @@
 namespace metro {
 
 struct CertificateOptions {
-  // k of the stated expanded uncertainties (2: about 95 % for a normal distribution and
-  // many degrees of freedom, JCGM 100:2008 6.3.3).
-  double coverage_factor = 2.0;
+  // Coverage probability p of the stated expanded uncertainties U = k u: each sensor's k is
+  // Student's t_{(1+p)/2}(nu) at its fit's degrees of freedom nu (JCGM 100:2008 6.3.3, G.3.2;
+  // CoverageFactor, uncertainty/gum.hpp); nu is infinite for an accelerometer u that rests on
+  // the poses' noise alone (calibration.json's coverage_factor_95 = 1.96, G.6.6).
+  double coverage_probability = 0.95;
   // Full-scale settings used for the "before calibration" residuals of raw (LSB) input:
   // the nominal MPU6050 sensitivity at these ranges (imu_model.hpp NominalScale).
   double accel_fs_g = 2.0;
   double gyro_fs_dps = 250.0;
+  // True when accel_fs_g and gyro_fs_dps are the settings the fit ran with (`calibrate fit
+  // --html`): the item description then states them. False: defaults, since calibration.json
+  // does not record them.
+  bool full_scale_as_fitted = false;
   // The certificate id shown in section 1; empty: CalibrationCertificateId(calibration), the
   // hash of the JSON as `fit` writes it. A certificate rendered from a file passes the file's
   // own hash, so it carries the id the registry records (docs/registry.md).
