@@ -164,6 +164,13 @@ TEST_CASE("calibrate fit and report write the certificate", "[apps][report][slow
   const std::string h = Slurp(html);
   CHECK(h.find("<title>Calibration certificate</title>") != std::string::npos);
   CHECK(Count(h, "<svg") == 2);
+  // An Xsens record is described from the data, never as an MPU6050; the gravity was given.
+  CHECK(h.find("MPU6050") == std::string::npos);
+  CHECK(h.find("imu_tk accelerometer + gyroscope file pair") != std::string::npos);
+  CHECK(h.find("9.81744 m/s^2, given: calibrate fit --gravity-mps2 9.81744") != std::string::npos);
+  const std::string json = Slurp(cal);
+  CHECK(json.find("\"gravity_source\": \"given\"") != std::string::npos);
+  CHECK(json.find("\"format\": \"imutk\"") != std::string::npos);
   const std::string html2 = (d.path / "certificate2.html").string();
   r = Exec(METRO_CALIBRATE_EXE, "report " + cal + " --html " + html2);
   REQUIRE(r.exit_code == 0);
