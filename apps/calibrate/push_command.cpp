@@ -42,6 +42,24 @@ struct PushCliOptions {
 
 int RunPushAll(const PushCliOptions& c);
 
+// The tags file (--tags) and calibration.json of a push; false (said on stderr) when either
+// cannot be read.
+bool LoadPushInputs(const PushCliOptions& c, std::optional<TagRegistry>* tags, Calibration* cal) {
+  Result<std::optional<TagRegistry>> t = LoadTagsOption(c.tags);
+  if (!t.ok()) {
+    apps::PrintError(t.error());
+    return false;
+  }
+  Result<Calibration> loaded = LoadCalibration(c.calibration);
+  if (!loaded.ok()) {
+    apps::PrintErrorText(loaded.error().ToString());
+    return false;
+  }
+  *tags = std::move(t).value();
+  *cal = std::move(loaded).value();
+  return true;
+}
+
 // `outcome`, when not null, receives the final line's verdict for --all's table.
 int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   if (c.all) return RunPushAll(c);
@@ -49,25 +67,17 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
     apps::PrintErrorText("--sensor N names the tag in calibration.json (or --all for every tag)");
     return kExitUsage;
   }
-  Result<std::optional<TagRegistry>> tags = LoadTagsOption(c.tags);
-  if (!tags.ok()) {
-    apps::PrintError(tags.error());
-    return kExitUsage;
-  }
-  Result<Calibration> cal = LoadCalibration(c.calibration);
-  if (!cal.ok()) {
-    apps::PrintErrorText(cal.error().ToString());
-    return kExitUsage;
-  }
-  if (cal.value().FindTag(c.sensor) == nullptr) {
+  std::optional<TagRegistry> tags;
+  Calibration cal;
+  if (!LoadPushInputs(c, &tags, &cal)) return kExitUsage;
+  if (cal.FindTag(c.sensor) == nullptr) {
     apps::PrintText(
         stderr, fmt::format("error: {}: calibration has no sensor {}\n", c.calibration, c.sensor));
     return kExitUsage;
   }
   // The tag the push must reach (docs/calibration-blob.md 1.1): a push to a tag whose device ID
   // is not known is refused unless --any-device.
-  Result<std::optional<uint64_t>> resolved =
-      ResolveDeviceId(c.device_id, tags.value(), cal.value(), c.sensor);
+  Result<std::optional<uint64_t>> resolved = ResolveDeviceId(c.device_id, tags, cal, c.sensor);
   if (!resolved.ok()) {
     apps::PrintErrorText(resolved.error().message);
     return kExitUsage;
@@ -91,7 +101,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   bo.dlpf_cfg = static_cast<uint8_t>(c.dlpf_cfg);
   bo.t_valid_min_c = c.t_valid_min_c;
   bo.t_valid_max_c = c.t_valid_max_c;
-  bo.profile = ResolveProfile(c.profile, tags.value(), c.sensor);
+  bo.profile = ResolveProfile(c.profile, tags, c.sensor);
   bo.accel_fs_g = c.accel_fs_g;
   bo.gyro_fs_dps = c.gyro_fs_dps;
   // Whether the blob format can represent the constants does not depend on the tag's device
@@ -100,7 +110,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   {
     blob::BlobFromCalibrationOptions trial = bo;
     trial.seq = 1;
-    Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal.value(), trial);
+    Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal, trial);
     Result<std::vector<uint8_t>> bytes = contents.ok()
                                              ? blob::WriteBlob(contents.value())
                                              : Result<std::vector<uint8_t>>(contents.error());
@@ -136,8 +146,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
       done_shown = done;
     }
   };
-  blob::PushSummary s =
-      blob::PushCalibration(port.value().get(), cal.value(), bo, expect, po, progress);
+  blob::PushSummary s = blob::PushCalibration(port.value().get(), cal, bo, expect, po, progress);
   bar.Finish();
   for (const std::string& w : s.warnings) {
     apps::PrintText(stderr, fmt::format("warning: {}\n", EscapeControlChars(w)));
@@ -159,8 +168,8 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   }
   // The result is one line: a newline in the message (from a port or file name) is escaped.
   const std::string message = EscapeControlChars(s.message);
-  const int recorded = RecordPushResult(registry.registry.get(), cal.value(), c.calibration,
-                                        c.sensor, s, expect, c.port, c.registry);
+  const int recorded = RecordPushResult(registry.registry.get(), cal, c.calibration, c.sensor, s,
+                                        expect, c.port, c.registry);
   if (s.ok) {
     apps::Note(fmt::format("OK: {}\n", message));
     if (outcome != nullptr) {
@@ -198,19 +207,12 @@ int RunPushAll(const PushCliOptions& c) {
         "--seq (each tag gets its active seq + 1)");
     return kExitUsage;
   }
-  Result<std::optional<TagRegistry>> tags = LoadTagsOption(c.tags);
-  if (!tags.ok()) {
-    apps::PrintError(tags.error());
-    return kExitUsage;
-  }
-  Result<Calibration> cal = LoadCalibration(c.calibration);
-  if (!cal.ok()) {
-    apps::PrintErrorText(cal.error().ToString());
-    return kExitUsage;
-  }
+  std::optional<TagRegistry> tags;
+  Calibration cal;
+  if (!LoadPushInputs(c, &tags, &cal)) return kExitUsage;
   std::vector<PushCliOptions> each;
-  for (const TagCalibration& t : cal.value().tags) {
-    Result<std::optional<uint64_t>> id = ResolveDeviceId("", tags.value(), cal.value(), t.sensor);
+  for (const TagCalibration& t : cal.tags) {
+    Result<std::optional<uint64_t>> id = ResolveDeviceId("", tags, cal, t.sensor);
     if (!id.ok() || !id.value()) {
       apps::PrintErrorText(
           id.ok() ? fmt::format("sensor {}: no device ID in the tags file or calibration.json "
@@ -234,10 +236,9 @@ int RunPushAll(const PushCliOptions& c) {
     const int rc = RunPush(one, &outcome);
     if (outcome.empty()) outcome = rc == kExitUsage ? "refused (see above)" : "failed (see above)";
     worst = std::max(worst, rc);
-    table += fmt::format(
-        "{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
-        tags.value() ? tags.value()->Name(one.sensor) : TagRegistry::Default().Name(one.sensor),
-        one.device_id, outcome);
+    table += fmt::format("{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
+                         tags ? tags->Name(one.sensor) : TagRegistry::Default().Name(one.sensor),
+                         one.device_id, outcome);
   }
   // The table is the result: on stdout.
   apps::PrintText(stdout, table);

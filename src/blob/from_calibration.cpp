@@ -11,6 +11,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/check.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/utc_time.hpp"
 
 namespace metro::blob {
 namespace {
@@ -57,27 +58,17 @@ bool IsHex64(const std::string& s) {
          });
 }
 
-// "2024-05-01T12:00:00Z" -> seconds since 1970-01-01 UTC.
+// calibration.json's date_utc (ISO 8601 UTC, core/utc_time.hpp) as the blob's u32 seconds.
 Result<uint32_t> ParseDateUtc(const std::string& text) {
-  std::tm tm{};
-  int y = 0, mo = 0, d = 0, h = 0, mi = 0, s = 0;
-  char z = 0;
-  if (std::sscanf(text.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%c", &y, &mo, &d, &h, &mi, &s, &z) != 7 ||
-      z != 'Z' || mo < 1 || mo > 12 || d < 1 || d > 31 || h > 23 || mi > 59 || s > 60) {
+  const std::optional<std::time_t> t = ParseUtcIso8601(text);
+  if (!t) {
     return MakeError(
         fmt::format("'date_utc' is '{}'; expected ISO 8601 UTC like 2024-05-01T12:00:00Z", text));
   }
-  tm.tm_year = y - 1900;
-  tm.tm_mon = mo - 1;
-  tm.tm_mday = d;
-  tm.tm_hour = h;
-  tm.tm_min = mi;
-  tm.tm_sec = s;
-  const std::time_t t = timegm(&tm);
-  if (t < 0 || t > 0xFFFFFFFF) {
+  if (*t < 0 || *t > 0xFFFFFFFF) {
     return MakeError(fmt::format("'date_utc' '{}' is outside 1970..2106 (u32 seconds)", text));
   }
-  return static_cast<uint32_t>(t);
+  return static_cast<uint32_t>(*t);
 }
 
 // "metro 0.1.0" -> 0x000100 (major << 16 | minor << 8 | patch); 0 when not of that form.

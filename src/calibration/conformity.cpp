@@ -43,19 +43,7 @@ std::pair<int64_t, int64_t> LocateArrayElement(const std::string& text, const st
       in_string = true;
     } else if (c == '{' || c == '[') {
       if (depth == 0 && c == '{') {
-        if (seen == index) {
-          int64_t line = 1;
-          int64_t column = 1;
-          for (size_t k = 0; k < i; ++k) {
-            if (text[k] == '\n') {
-              ++line;
-              column = 1;
-            } else {
-              ++column;
-            }
-          }
-          return {line, column};
-        }
+        if (seen == index) return TextLineColumn(text, i);
         ++seen;
       }
       ++depth;

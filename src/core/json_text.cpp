@@ -9,10 +9,7 @@
 #include <string>
 
 namespace metro {
-namespace {
-
-// 1-based line and column of byte `offset` of `text`.
-std::pair<int64_t, int64_t> LineColumn(std::string_view text, size_t offset) {
+std::pair<int64_t, int64_t> TextLineColumn(std::string_view text, size_t offset) {
   int64_t line = 1;
   int64_t column = 1;
   for (size_t i = 0; i < offset && i < text.size(); ++i) {
@@ -25,6 +22,8 @@ std::pair<int64_t, int64_t> LineColumn(std::string_view text, size_t offset) {
   }
   return {line, column};
 }
+
+namespace {
 
 // Calls visit(i) for each byte of `text` outside JSON strings, in order, until it returns
 // true; returns that offset, or npos. visit may move i forward past a token it has read.
@@ -83,7 +82,7 @@ size_t OverflowingNumberAt(std::string_view text) {
 template <class Json>
 Result<Json> Parse(std::string_view text, const std::string& path) {
   if (const size_t at = TooDeepAt(text); at != std::string_view::npos) {
-    const auto [line, column] = LineColumn(text, at);
+    const auto [line, column] = TextLineColumn(text, at);
     return MakeError(path, line, column,
                      fmt::format("JSON nested deeper than {} levels; metro's files nest a few "
                                  "levels (docs/report-schema.md, docs/budget-format.md)",
@@ -93,13 +92,13 @@ Result<Json> Parse(std::string_view text, const std::string& path) {
     return Json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     // e.byte is the 1-based position of the byte the parser stopped at.
-    const auto [line, column] = LineColumn(text, e.byte > 0 ? e.byte - 1 : 0);
+    const auto [line, column] = TextLineColumn(text, e.byte > 0 ? e.byte - 1 : 0);
     return MakeError(path, line, column, std::string("invalid JSON: ") + e.what());
   } catch (const nlohmann::json::exception& e) {
     // out_of_range 406: a number beyond a double's range (1e999); it carries no position.
     const size_t at = OverflowingNumberAt(text);
     if (at == std::string_view::npos) return MakeError(path + ": invalid JSON: " + e.what());
-    const auto [line, column] = LineColumn(text, at);
+    const auto [line, column] = TextLineColumn(text, at);
     return MakeError(path, line, column,
                      std::string("invalid JSON: ") + e.what() +
                          "; numbers must be finite doubles (at most about 1.8e308)");

@@ -2,9 +2,11 @@
 // with a nesting limit, errors at file:line:column.
 #pragma once
 
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "metro/core/status.hpp"
 
@@ -26,6 +28,9 @@ Result<nlohmann::ordered_json> ParseOrderedJsonText(std::string_view text, const
 // or a CSV header in Latin-1, a blob label) are written with U+FFFD in place of each bad
 // byte instead of throwing nlohmann's type_error 316, which terminated `characterize` for a
 // session named in Latin-1 (issue #20). Every JSON metro writes goes through here.
+// 1-based line and column of byte `offset` of `text` (for file:line:column messages).
+std::pair<int64_t, int64_t> TextLineColumn(std::string_view text, size_t offset);
+
 std::string JsonText(const nlohmann::json& j, int indent = -1);
 std::string JsonText(const nlohmann::ordered_json& j, int indent = -1);
 
