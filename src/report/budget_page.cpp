@@ -99,7 +99,7 @@ Result<std::string> HistogramSvg(const ordered_json& report, const std::string& 
     peak = std::max(peak, density);
   }
   PlotSeries guf;
-  guf.label = std::isfinite(dof) ? fmt::format("GUF: t, nu_eff = {:g}, scale u_c", dof)
+  guf.label = std::isfinite(dof) ? fmt::format("GUF: t, nu_eff = {:.3g}, scale u_c", dof)
                                  : "GUF: normal, u_c";
   guf.color = PlotColor::kRed;
   constexpr int kPoints = 400;
@@ -184,7 +184,7 @@ Result<std::string> RenderBudgetReportHtml(const ordered_json& report) {
                     "coverage probability of {}.",
                     WithUnit(uc.uncertainty, unit), k,
                     std::isfinite(dof)
-                        ? fmt::format("from the t distribution with nu_eff = {:g} effective "
+                        ? fmt::format("from the t distribution with nu_eff = {:.3g} effective "
                                       "degrees of freedom",
                                       dof)
                         : "from the normal distribution",

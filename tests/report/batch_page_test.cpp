@@ -61,6 +61,12 @@ TEST_CASE("Batch page has a row per session and tag with dead tags marked", "[re
   CHECK(h.find("href=\"out/a.report.html\"") != std::string::npos);
   CHECK(h.find("href=\"out/b.report.json\"") != std::string::npos);
   CHECK(Count(h, "href=\"out/") == 6);
+  // Self-contained but for those links to the pages batch wrote beside it.
+  CHECK(Count(h, "href=") == 6);
+  for (const char* bad : {"http://", "https://", "src=", "@import", "<script", "<link", "<img"}) {
+    INFO(bad);
+    CHECK(h.find(bad) == std::string::npos);
+  }
   CHECK(h.find("warning: b.txt: sensor 3: no fresh packet") != std::string::npos);
   // The summary numbers: mean 0.0125 g with the std of means 0.000226 g, per GUM 7.2.6.
   const RoundedResult r = RoundForStatement(0.0125, 0.000226274);

@@ -9,6 +9,7 @@
 #include "metro/core/rounding.hpp"
 #include "metro/report/html_report.hpp"
 #include "metro/uncertainty/budget_report.hpp"
+#include "support/html_checks.hpp"
 
 namespace metro {
 namespace {
@@ -39,6 +40,7 @@ TEST_CASE("Budget page statement equals the JSON rounded per GUM 7.2.6", "[repor
   Result<std::string> html = RenderBudgetReportHtml(report);
   REQUIRE(html.ok());
   const std::string& h = html.value();
+  testing::CheckSelfContained(h);
   // The statement comes before everything else on the page.
   CHECK(h.find("id=\"statement\"") < h.find("<svg"));
   const std::string statement = ElementText(h, "statement");
