@@ -281,15 +281,23 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--gyro-model", o->gyro_model,
                   "override --model for the gyroscope: bias | scale | full")
       ->check(CLI::IsMember({"bias", "scale", "full"}));
-  sub->add_option("--gravity-mps2", o->gravity_mps2, "local gravity [m/s^2]");
-  sub->add_option("--accel-fs-g", o->accel_fs_g, "accelerometer full scale of raw counts [g]");
-  sub->add_option("--gyro-fs-dps", o->gyro_fs_dps, "gyroscope full scale of raw counts [deg/s]");
+  sub->add_option("--gravity-mps2", o->gravity_mps2,
+                  "local gravity [m/s^2] (default: standard gravity 9.80665, CGPM 1901)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--accel-fs-g", o->accel_fs_g, "accelerometer full scale of raw counts [g]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--gyro-fs-dps", o->gyro_fs_dps, "gyroscope full scale of raw counts [deg/s]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   sub->add_option("--temperature", o->temperature,
                   "linear temperature term of the biases: auto (when temp_c varies), on, off")
       ->check(CLI::IsMember({"auto", "on", "off"}));
   sub->add_option("--loss", o->loss, "robust loss: none | huber | cauchy")
       ->check(CLI::IsMember({"none", "huber", "cauchy"}));
-  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, in standard deviations");
+  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, in standard deviations")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   sub->add_flag("--accel-only", o->accel_only, "calibrate the accelerometer only");
   sub->add_option("--min-static-s", o->min_static_s,
                   "shortest still period kept as a pose [s] (default 1; below 1 s the detector's "
