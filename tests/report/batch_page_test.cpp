@@ -55,7 +55,7 @@ TEST_CASE("Batch page has a row per session and tag with dead tags marked", "[re
   CHECK(Count(h, "<td><code>a.csv</code></td>") == 1);
   CHECK(Count(h, "<td><code>b.txt</code></td>") == 2);
   CHECK(Count(h, "DEAD: frames but no fresh packet") == 1);
-  CHECK(h.find("1 tag rows are dead") != std::string::npos);
+  CHECK(h.find("dead tag rows (frames but no fresh packet): 1.") != std::string::npos);
   CHECK(h.find("FAILED: c.csv:3:1: expected a number") != std::string::npos);
   // Links relative to the page, to pages that batch wrote; none for the failed session.
   CHECK(h.find("href=\"out/a.report.html\"") != std::string::npos);
