@@ -35,10 +35,6 @@ int RunBatchCommand(const BatchCommandOptions& o) {
     PrintError(s.error());
     return kExitUsage;
   }
-  if (Status s = CheckOutputs({{"--html", o.html}}, {}); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
-  }
   BatchOptions options;
   options.output_dir = o.output_dir;
   options.session_pages = !o.html.empty();
@@ -61,6 +57,13 @@ int RunBatchCommand(const BatchCommandOptions& o) {
     return kExitUsage;
   }
   for (const std::string& line : skipped) Note("note: " + line + "\n");
+  // The batch page is never written over a session (nor a device, a folder, ...).
+  std::vector<NamedPath> sessions;
+  for (const std::string& in : inputs.value()) sessions.push_back({"a session", in});
+  if (Status s = CheckOutputs({{"--html", o.html}}, sessions); !s.ok()) {
+    PrintError(s.error());
+    return kExitUsage;
+  }
   ProgressOptions bar;
   if (Quiet()) bar.mode = ProgressMode::kNever;
   ProgressBar progress("batch", static_cast<int64_t>(inputs.value().size()), stderr, bar);

@@ -148,6 +148,13 @@ TEST_CASE("characterize batch --html writes the batch page and a page per sessio
   CHECK(summary["sessions"][0]["page"] == "capture_15tags.report.html");
   // A row per session and tag: capture_15tags has 14 tags, static_chest 1.
   CHECK(Count(h, "<td><code>") == 15);
+  // The page is never written over a session.
+  const std::string session = (d.path / "s.csv").string();
+  fs::copy_file(kDatasets + "static_chest.csv", session);
+  r = Characterize("batch " + session + " -q -o " + out + " --html " + session);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("refusing to overwrite") != std::string::npos);
+  CHECK(Slurp(session) == Slurp(kDatasets + "static_chest.csv"));
 }
 
 #ifdef METRO_CALIBRATE_EXE
