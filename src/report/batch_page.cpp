@@ -141,7 +141,9 @@ Result<std::string> RenderBatchSummaryHtml(const ordered_json& summary,
       if (s.contains("quantities") && s["quantities"].is_array()) {
         for (const ordered_json& q : s["quantities"]) {
           const double mean = JsonNumber(q, "mean");
-          if (!std::isfinite(mean) || !q.contains("sensor")) continue;
+          if (!std::isfinite(mean) || !q.contains("sensor") || !q["sensor"].is_number_integer()) {
+            continue;
+          }
           points[{q["sensor"].get<int>(), JsonString(q, "quantity")}].push_back(
               {row_number, mean, JsonNumber(q, "u_mean")});
         }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 
@@ -132,7 +133,7 @@ AxisScale ChooseAxisScale(const std::string& name, const std::string& unit_symbo
   if (std::isfinite(offset) && span > 0.0 && std::fabs(lo) > 10.0 * span &&
       std::fabs(hi) > 10.0 * span) {
     offset_text = RoundForStatement(offset, span).value;
-    a.offset = std::stod(offset_text);
+    a.offset = std::strtod(offset_text.c_str(), nullptr);  // No throw.
   }
   const double extent = std::max(std::fabs(lo - a.offset), std::fabs(hi - a.offset));
   int exponent3 = 0;
