@@ -187,7 +187,6 @@ int RunFit(const FitOptions& f) {
     CertificateOptions certificate;
     certificate.accel_fs_g = f.accel_fs_g;
     certificate.gyro_fs_dps = f.gyro_fs_dps;
-    certificate.full_scale_as_fitted = true;
     Result<std::string> rendered = RenderCalibrationCertificate(
         cal.value(), ptrs, "Conditions and residual plots from the input records as fitted.",
         certificate);

@@ -359,6 +359,12 @@ Result<Calibration> CalibrateSessions(const std::vector<const Session*>& session
       if (e.file.empty() && sessions.size() == 1) e.file = sessions.front()->path;
       return e;
     }
+    for (std::optional<SensorCalibration>* c : {&t.value().accel, &t.value().gyro}) {
+      if (c->has_value() && (*c)->model.input_unit == "LSB") {
+        (*c)->full_scale =
+            (*c)->model.sensor == ImuSensor::kAccel ? options.accel_fs_g : options.gyro_fs_dps;
+      }
+    }
     cal.tags.push_back(std::move(t).value());
   }
   return cal;

@@ -79,6 +79,7 @@ json SensorJson(const SensorCalibration& c) {
     j["static_pose_temperature"] = {
         {"min_c", t.min_c}, {"mean_c", t.mean_c}, {"max_c", t.max_c}, {"poses", t.poses}};
   }
+  if (c.full_scale) j["full_scale"] = *c.full_scale;
   j["parameters"] = c.parameter_names;
   j["covariance"] = Mat(c.covariance);
   j["correlation"] = Mat(c.Correlation());
@@ -326,6 +327,14 @@ std::optional<SensorCalibration> ParseSensor(Reader* rd, const json& j, const st
     m.t_ref_c = rd->Number(t, tp, "t_ref_c");
     m.bias_per_c = rd->Vec3(t, tp, "bias_per_c");
     c.bias_per_c_u = rd->Vec3(t, tp, "bias_per_c_u");
+  }
+  if (j.contains("full_scale")) {
+    const json& fs = j.at("full_scale");
+    if (!fs.is_number() || !(fs.get<double>() > 0.0) || m.input_unit != "LSB") {
+      rd->Fail(fmt::format("'{}full_scale' must be a number > 0, for input_unit LSB only", path));
+    } else {
+      c.full_scale = fs.get<double>();
+    }
   }
   if (j.contains("static_pose_temperature")) {
     const json& t = j.at("static_pose_temperature");

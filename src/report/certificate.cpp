@@ -51,6 +51,12 @@ mustache::data ResultRow(const std::string& constant, const std::string& unit, d
 
 const char* kAxes[3] = {"x", "y", "z"};
 
+// The full-scale setting of raw input: calibration.json's, else the options' (older files).
+double FullScale(const SensorCalibration& c, const CertificateOptions& options) {
+  if (c.full_scale) return *c.full_scale;
+  return c.model.sensor == ImuSensor::kAccel ? options.accel_fs_g : options.gyro_fs_dps;
+}
+
 // The coverage factor of one sensor's U and the dof it was taken at: k = t_{(1+p)/2}(nu),
 // nu = the fit's dof (JCGM 100:2008 G.3.2); nu is infinite, k the normal quantile, when the
 // file's coverage_factor_95 is the normal 1.96 (an accelerometer u from the poses' noise
@@ -226,11 +232,10 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
       f.set("caption", fmt::format("Absolute residual of each static segment the fit used, on a "
                                    "logarithmic axis: before calibration (raw means at the nominal "
                                    "sensitivity{}) and after (the calibrated model).",
-                                   m.input_unit == "LSB" ? fmt::format(", +-{} {} range",
-                                                                       accel ? options.accel_fs_g
-                                                                             : options.gyro_fs_dps,
-                                                                       OutputUnit(m.sensor).symbol)
-                                                         : ""));
+                                   m.input_unit == "LSB"
+                                       ? fmt::format(", +-{} {} range", FullScale(c, options),
+                                                     OutputUnit(m.sensor).symbol)
+                                       : ""));
     } else {
       f.set("svg", "");
       f.set("caption", "Residuals before/after: not drawn (" + svg.error().message + ").");
@@ -270,21 +275,21 @@ std::string ImuDescription(const TagCalibration& t, const std::vector<std::strin
   return "IMU type not declared (no profile in a tags file)";
 }
 
-std::string SensorInput(const SensorCalibration& c, const CertificateOptions& options) {
+std::string SensorInput(const SensorCalibration& c) {
   const bool accel = c.model.sensor == ImuSensor::kAccel;
   std::string range;
   if (c.model.input_unit == "LSB") {
-    range = options.full_scale_as_fitted
-                ? fmt::format(", raw counts at +-{} {} full scale as fitted",
-                              Short(accel ? options.accel_fs_g : options.gyro_fs_dps, 6),
-                              accel ? "g" : "deg/s")
-                : std::string(", raw counts; full-scale setting not recorded in calibration.json");
+    range = c.full_scale ? fmt::format(", raw counts at +-{} {} full scale as fitted",
+                                       Short(*c.full_scale, 6), accel ? "g" : "deg/s")
+                         : std::string(
+                               ", raw counts; full-scale setting not recorded in "
+                               "calibration.json");
   }
   return fmt::format("{} (input {}{})", accel ? "accelerometer" : "gyroscope", c.model.input_unit,
                      range);
 }
 
-mustache::data ItemRows(const Calibration& cal, const CertificateOptions& options) {
+mustache::data ItemRows(const Calibration& cal) {
   mustache::data rows{mustache::data::type::list};
   for (const TagCalibration& t : cal.tags) {
     // The inputs this tag's segments came from (all inputs when none is recorded).
@@ -303,7 +308,7 @@ mustache::data ItemRows(const Calibration& cal, const CertificateOptions& option
     for (const std::string& f : formats) sources += (sources.empty() ? "" : "; ") + FormatSource(f);
     std::string sensors;
     for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
-      if (c->has_value()) sensors += (sensors.empty() ? "" : " and ") + SensorInput(**c, options);
+      if (c->has_value()) sensors += (sensors.empty() ? "" : " and ") + SensorInput(**c);
     }
     mustache::data row;
     row.set("sensor", std::to_string(t.sensor));
@@ -427,8 +432,7 @@ Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& c, int s
                                                const CertificateOptions& options) {
   const SensorModel& m = c.model;
   const bool accel = m.sensor == ImuSensor::kAccel;
-  const std::optional<double> nominal =
-      NominalScale(m.sensor, m.input_unit, accel ? options.accel_fs_g : options.gyro_fs_dps);
+  const std::optional<double> nominal = NominalScale(m.sensor, m.input_unit, FullScale(c, options));
   if (!nominal) return MakeError(fmt::format("no nominal scale for input unit {}", m.input_unit));
   const double target = accel ? gravity_mps2 / kStandardGravityMps2 : 0.0;
   const std::vector<std::string> columns = InputColumns(m.sensor, m.input_unit);
@@ -503,7 +507,7 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     items += fmt::format("{}sensor {}", items.empty() ? "" : ", ", t.sensor);
   }
   data.set("print_id", certificate_id);
-  data.set("item_rows", ItemRows(cal, options));
+  data.set("item_rows", ItemRows(cal));
   data.set("date_issue_utc", UtcIso8601Now());
   data.set("date_utc", cal.date_utc);
   data.set("measurement_dates", MeasurementDates(cal));

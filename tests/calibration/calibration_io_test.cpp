@@ -64,6 +64,9 @@ TEST_CASE("calibration.json round trip keeps the identification of the certifica
   REQUIRE(cal.inputs[0].duration_s);
   CHECK(*cal.inputs[0].duration_s == t.back() - t.front());
   CHECK(cal.inputs[0].start_utc.empty());  // relative times: no date
+  // Raw counts: the full-scale settings the fit took the nominal sensitivity from (defaults).
+  CHECK(cal.tags[0].accel->full_scale == 2.0);
+  CHECK(cal.tags[0].gyro->full_scale == 250.0);
   // What the tags file adds, and a dated record.
   cal.gravity_mps2 = 9.81744;
   cal.gravity_source = "given";
@@ -90,6 +93,8 @@ TEST_CASE("calibration.json round trip keeps the identification of the certifica
   CHECK(b.tags[0].device_id == cal.tags[0].device_id);
   CHECK(b.tags[0].name == "Chest");
   CHECK(b.tags[0].profile == "mpu6050");
+  CHECK(b.tags[0].accel->full_scale == 2.0);
+  CHECK(b.tags[0].gyro->full_scale == 250.0);
   // A file without them (written before metro recorded them) reads with them unset.
   nlohmann::json old = j;
   old.erase("gravity_source");
@@ -115,6 +120,10 @@ TEST_CASE("calibration.json round trip keeps the identification of the certifica
   bad["inputs"][0]["duration_s"] = -1.0;
   CHECK(CalibrationFromJson(bad, "c.json").error().message ==
         "'inputs[0].duration_s': expected a number >= 0");
+  bad = j;
+  bad["tags"][0]["accel"]["full_scale"] = 0;
+  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
+        "'tags[0].accel.full_scale' must be a number > 0, for input_unit LSB only");
   bad = j;
   bad["tags"][0]["name"] = 7;
   CHECK(CalibrationFromJson(bad, "c.json").error().message == "'tags[0].name': expected a string");

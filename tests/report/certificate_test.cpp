@@ -210,12 +210,18 @@ TEST_CASE("Certificate identifies the item from calibration.json and the tags fi
   CHECK(items.find("<td>Chest</td>") != std::string::npos);
   CHECK(items.find("InvenSense MPU6050 (profile mpu6050 declared in the tags file)") !=
         std::string::npos);
-  // The simulated session is session.csv of raw counts: the unit and the source, no guess.
-  CHECK(items.find("accelerometer (input LSB, raw counts; full-scale setting not recorded") !=
+  // The simulated session is session.csv of raw counts: the unit, the full scale the fit
+  // used (calibration.json's full_scale) and the source, no guess.
+  REQUIRE(j["tags"][0]["accel"]["full_scale"] == 2.0);
+  REQUIRE(j["tags"][0]["gyro"]["full_scale"] == 250.0);
+  CHECK(items.find("accelerometer (input LSB, raw counts at +-2 g full scale as fitted) and "
+                   "gyroscope (input LSB, raw counts at +-250 deg/s full scale as fitted)") !=
         std::string::npos);
   CHECK(items.find("session.csv") != std::string::npos);
 
-  // Without a tags file: no name, no device ID, no IMU type invented.
+  // Without a tags file (and a file from before full_scale was recorded): no name, no
+  // device ID, no IMU type or full scale invented.
+  cal.tags.front().accel->full_scale.reset();
   cal.tags.front().device_id.reset();
   cal.tags.front().name.clear();
   cal.tags.front().profile.clear();
@@ -226,6 +232,8 @@ TEST_CASE("Certificate identifies the item from calibration.json and the tags fi
   CHECK(bare.find("<td>not stated</td>") != std::string::npos);
   CHECK(bare.find("MPU6050") == std::string::npos);
   CHECK(bare.find("IMU type not declared") != std::string::npos);
+  CHECK(bare.find("accelerometer (input LSB, raw counts; full-scale setting not recorded in "
+                  "calibration.json)") != std::string::npos);
 
   // An imu_tk record (e.g. imu_tk's Xsens pair) is never called an MPU6050 either.
   cal.inputs.front().format = "imutk";

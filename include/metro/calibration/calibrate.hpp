@@ -112,6 +112,10 @@ struct SensorCalibration {
   double coverage_factor_95 = 0;  // Student t_0.975(dof) (JCGM 100:2008 G.3.2).
   // When every input has a temp_c column.
   std::optional<PoseTemperatureRange> static_pose_temperature;
+  // Raw (LSB) input only: the full-scale setting the fit took the nominal sensitivity from
+  // (CalibrationOptions::accel_fs_g [g] or gyro_fs_dps [deg/s]); calibration.json's
+  // `full_scale` (absent in older files and for input in physical units).
+  std::optional<double> full_scale;
   // M as calibration.json's `matrix` holds it (set by the reader, which checked it against
   // model.Matrix() to double rounding); unset after a fit, where M is model.Matrix().
   std::optional<Eigen::Matrix3d> matrix;

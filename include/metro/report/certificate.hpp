@@ -24,14 +24,11 @@ struct CertificateOptions {
   // CoverageFactor, uncertainty/gum.hpp); nu is infinite for an accelerometer u that rests on
   // the poses' noise alone (calibration.json's coverage_factor_95 = 1.96, G.6.6).
   double coverage_probability = 0.95;
-  // Full-scale settings used for the "before calibration" residuals of raw (LSB) input:
-  // the nominal MPU6050 sensitivity at these ranges (imu_model.hpp NominalScale).
+  // Full-scale settings used for the "before calibration" residuals of raw (LSB) input when
+  // calibration.json does not record them (SensorCalibration::full_scale, files written
+  // before issue #25): the nominal MPU6050 sensitivity at these ranges (NominalScale).
   double accel_fs_g = 2.0;
   double gyro_fs_dps = 250.0;
-  // True when accel_fs_g and gyro_fs_dps are the settings the fit ran with (`calibrate fit
-  // --html`): the item description then states them. False: defaults, since calibration.json
-  // does not record them.
-  bool full_scale_as_fitted = false;
   // The certificate id shown in section 1; empty: CalibrationCertificateId(calibration), the
   // hash of the JSON as `fit` writes it. A certificate rendered from a file passes the file's
   // own hash, so it carries the id the registry records (docs/registry.md).
