@@ -279,11 +279,12 @@ std::string SensorInput(const SensorCalibration& c) {
   const bool accel = c.model.sensor == ImuSensor::kAccel;
   std::string range;
   if (c.model.input_unit == "LSB") {
-    range = c.full_scale ? fmt::format(", raw counts at +-{} {} full scale as fitted",
-                                       Short(*c.full_scale, 6), accel ? "g" : "deg/s")
-                         : std::string(
-                               ", raw counts; full-scale setting not recorded in "
-                               "calibration.json");
+    range = c.full_scale
+                ? fmt::format(", raw counts; the fit's nominal sensitivity at +-{} {} full scale",
+                              Short(*c.full_scale, 6), accel ? "g" : "deg/s")
+                : std::string(
+                      ", raw counts; full-scale setting not recorded in "
+                      "calibration.json");
   }
   return fmt::format("{} (input {}{})", accel ? "accelerometer" : "gyroscope", c.model.input_unit,
                      range);

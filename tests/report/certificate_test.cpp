@@ -199,7 +199,7 @@ TEST_CASE("Certificate identifies the item from calibration.json and the tags fi
   cal = ThroughJson(cal);
   Result<std::string> html = RenderCalibrationCertificate(cal, {}, "records not given");
   REQUIRE(html.ok());
-  const std::string items = Between(html.value(), "<table id=\"items\">", "</table>");
+  const std::string items = Unescape(Between(html.value(), "<table id=\"items\">", "</table>"));
   REQUIRE_FALSE(items.empty());
   // The device ID as calibration.json states it, and in nrfjprog's word order.
   const nlohmann::json j = nlohmann::json::parse(FormatCalibrationJson(cal));
@@ -214,9 +214,9 @@ TEST_CASE("Certificate identifies the item from calibration.json and the tags fi
   // used (calibration.json's full_scale) and the source, no guess.
   REQUIRE(j["tags"][0]["accel"]["full_scale"] == 2.0);
   REQUIRE(j["tags"][0]["gyro"]["full_scale"] == 250.0);
-  CHECK(items.find("accelerometer (input LSB, raw counts at +-2 g full scale as fitted) and "
-                   "gyroscope (input LSB, raw counts at +-250 deg/s full scale as fitted)") !=
-        std::string::npos);
+  CHECK(items.find("accelerometer (input LSB, raw counts; the fit's nominal sensitivity at +-2 g "
+                   "full scale) and gyroscope (input LSB, raw counts; the fit's nominal "
+                   "sensitivity at +-250 deg/s full scale)") != std::string::npos);
   CHECK(items.find("session.csv") != std::string::npos);
 
   // Without a tags file (and a file from before full_scale was recorded): no name, no
