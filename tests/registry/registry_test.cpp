@@ -202,27 +202,34 @@ struct MovedTag {
   double scale_y_move = 0.0;
 };
 
+// The accelerometer of a simulated tag with the given truth, calibrated, dated `date_utc`,
+// its input's SHA-256 made distinct by the seed (each calibration a different record).
+Calibration FitAccelerometer(const ImuTruth& truth, uint64_t seed, int sensor,
+                             const std::string& date_utc) {
+  SimulationOptions so;
+  so.seed = seed;
+  so.sensor = sensor;
+  so.random_truth = false;
+  so.truth = truth;
+  Result<SimulatedSession> sim = SimulateCalibrationSession(so);
+  REQUIRE(sim.ok());
+  CalibrationOptions co;
+  co.fit_gyro = false;
+  Result<Calibration> c = CalibrateSessions({&sim.value().session}, co);
+  REQUIRE(c.ok());
+  Calibration cal = c.value();
+  cal.date_utc = date_utc;
+  if (cal.inputs.empty()) cal.inputs.push_back({});
+  cal.inputs[0].sha256 = Sha256Hex(std::to_string(seed));
+  return cal;
+}
+
 const MovedTag& Moved() {
   static const MovedTag m = [] {
     MovedTag out;
     const ImuTruth truth = DrawImuTruth(5, 2.0, 250.0, false);
     auto fit = [](const ImuTruth& t, uint64_t seed, const char* date) {
-      SimulationOptions so;
-      so.seed = seed;
-      so.sensor = 4;
-      so.random_truth = false;
-      so.truth = t;
-      Result<SimulatedSession> sim = SimulateCalibrationSession(so);
-      REQUIRE(sim.ok());
-      CalibrationOptions co;
-      co.fit_gyro = false;
-      Result<Calibration> c = CalibrateSessions({&sim.value().session}, co);
-      REQUIRE(c.ok());
-      Calibration cal = c.value();
-      cal.date_utc = date;
-      if (cal.inputs.empty()) cal.inputs.push_back({});
-      cal.inputs[0].sha256 = Sha256Hex(std::to_string(seed));  // Distinct records.
-      return cal;
+      return FitAccelerometer(t, seed, 4, date);
     };
     ImuTruth moved = truth;
     moved.accel.bias[0] += out.bias_x_move_lsb;
@@ -463,21 +470,9 @@ TEST_CASE("Registry: E_n of an unchanged tag is standard normal over independent
   for (int p = 0; p < kPairs; ++p) {
     const uint64_t device = 0x1000 + static_cast<uint64_t>(p);
     for (int k = 0; k < 2; ++k) {
-      SimulationOptions so;
-      so.seed = 1000 + static_cast<uint64_t>(2 * p + k);
-      so.sensor = 3;
-      so.random_truth = false;
-      so.truth = truth;
-      Result<SimulatedSession> sim = SimulateCalibrationSession(so);
-      REQUIRE(sim.ok());
-      CalibrationOptions co;
-      co.fit_gyro = false;
-      Result<Calibration> c = CalibrateSessions({&sim.value().session}, co);
-      REQUIRE(c.ok());
-      Calibration cal = c.value();
-      cal.date_utc = fmt::format("2026-0{}-01T00:00:00Z", k + 1);  // The order of the pair.
-      if (cal.inputs.empty()) cal.inputs.push_back({});
-      cal.inputs[0].sha256 = Sha256Hex(std::to_string(so.seed));
+      // The date gives the order of the pair.
+      const Calibration cal = FitAccelerometer(truth, 1000 + static_cast<uint64_t>(2 * p + k), 3,
+                                               fmt::format("2026-0{}-01T00:00:00Z", k + 1));
       REQUIRE(r.value()->RecordBlob(cal, Id(cal), 3, BlobFor(device, 1), {}).ok());
     }
     Result<DriftResult> d = r.value()->Drift(device);
