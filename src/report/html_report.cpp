@@ -25,6 +25,7 @@
 #include "metro/report/certificate.hpp"
 #include "metro/report/svg_plot.hpp"
 #include "metro/report/type_a_report.hpp"
+#include "metro/stats/quantization.hpp"
 #include "metro/stats/type_a.hpp"
 
 namespace metro {
@@ -152,17 +153,28 @@ void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
     int bins = options.histogram_bins > 0
                    ? options.histogram_bins
                    : std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 10, 60);
-    const double width = hi > lo ? (hi - lo) / bins : 1.0;
+    double width = hi > lo ? (hi - lo) / bins : 1.0;
+    double first_edge = lo;
+    // Quantized data (the packets' 0.01 deg, raw counts): bins a whole number of steps wide
+    // and centred on the steps, never narrower than one step, so no bin is empty or doubled
+    // by where the lattice falls (the histogram of 0.01 deg data looked non-normal).
+    const double step = QuantizationStep(x);
+    if (step > 0.0 && hi > lo) {
+      width = std::max(1.0, std::ceil(width / step - 1e-9)) * step;
+      first_edge = lo - 0.5 * step;
+      bins =
+          std::max(1, static_cast<int>(std::ceil((hi + 0.5 * step - first_edge) / width - 1e-9)));
+    }
     PlotSeries hist;
     hist.style = SeriesStyle::kBins;
     hist.color = PlotColor::kBlue;
     hist.label = "observations (density)";
     std::vector<double> counts(static_cast<size_t>(bins), 0.0);
     for (double v : x) {
-      const int b = std::min(bins - 1, static_cast<int>((v - lo) / width));
+      const int b = std::min(bins - 1, static_cast<int>((v - first_edge) / width));
       counts[static_cast<size_t>(std::max(0, b))] += 1.0;
     }
-    for (int b = 0; b <= bins; ++b) hist.x.push_back(lo + b * width);
+    for (int b = 0; b <= bins; ++b) hist.x.push_back(first_edge + b * width);
     for (double c : counts) hist.y.push_back(c / (static_cast<double>(n) * width));
     PlotSeries normal;
     normal.style = SeriesStyle::kLine;
@@ -182,9 +194,13 @@ void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
     hp.y_label = fmt::format("density [1/{}]", unit.empty() ? "1" : unit);
     hp.series = {std::move(hist), std::move(normal)};
     AddPlot(RenderXyPlot(hp),
-            fmt::format("Histogram of the {} observations in the window ({} bins) and the "
+            fmt::format("Histogram of the {} observations in the window ({} bins{}) and the "
                         "normal density with the reported mean and s.",
-                        n, bins),
+                        n, bins,
+                        step > 0.0 ? fmt::format(", each a whole number of the data's "
+                                                 "resolution {:g} {}",
+                                                 step, unit)
+                                   : std::string()),
             out);
   }
 

@@ -1,4 +1,5 @@
 // End-to-end tests of the characterize program: exit codes, messages, files.
+#include <fmt/format.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 
@@ -356,6 +357,33 @@ TEST_CASE("The Allan summary on the console equals the report", "[apps]") {
     ++rows;
   }
   CHECK(rows == 6);  // ax, ay, az, gx, gy, gz
+}
+
+// Issue #25 point 5: the session page's histogram never bins finer than the data's
+// resolution. A tag whose angles are printed to 0.01 deg: every bin is a whole number of
+// 0.01 deg steps, centred on the steps, and the caption says so.
+TEST_CASE("The session page's histogram bins are whole steps of the data's resolution",
+          "[apps][report]") {
+  std::string csv = "t_s,sensor,pitch_deg\n";
+  uint64_t state = 12345;
+  for (int i = 0; i < 2000; ++i) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    const double u = static_cast<double>(state >> 11) / 9007199254740992.0;  // [0, 1)
+    const int steps = static_cast<int>(std::floor(u * 7.0)) - 3;  // -3 .. 3 steps of 0.01
+    csv += fmt::format("{:.2f},2,{:.2f}\n", 0.1 * i, 1.5 + 0.01 * steps);
+  }
+  TempFile session(csv);
+  const std::string out = "metro_test_hist_" + std::to_string(::getpid());
+  const Run run =
+      Characterize(session.path() + " --type-a -q -o " + out + ".json --html " + out + ".html");
+  REQUIRE(run.exit_code == 0);
+  std::ifstream in(out + ".html");
+  std::stringstream html;
+  html << in.rdbuf();
+  std::remove((out + ".json").c_str());
+  std::remove((out + ".html").c_str());
+  CHECK(html.str().find("each a whole number of the data&apos;s resolution 0.01 deg") !=
+        std::string::npos);
 }
 
 }  // namespace
