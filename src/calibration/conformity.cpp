@@ -179,9 +179,10 @@ Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::s
   std::set<std::string> names;
   for (size_t i = 0; i < j["tolerances"].size(); ++i) {
     const json& e = j["tolerances"][i];
-    const auto [line, column] = LocateArrayElement(text, "tolerances", i);
+    // A pair, not a structured binding: C++17 lambdas cannot capture those (clang refuses).
+    const std::pair<int64_t, int64_t> at = LocateArrayElement(text, "tolerances", i);
     auto fail = [&](const std::string& what) {
-      return SpecError(path, line, column, fmt::format("tolerances[{}]: {}", i, what));
+      return SpecError(path, at.first, at.second, fmt::format("tolerances[{}]: {}", i, what));
     };
     if (!e.is_object()) {
       return fail("expected an object {\"constant\", \"lower\", \"upper\", \"unit\"}");
@@ -193,8 +194,8 @@ Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::s
       }
     }
     Tolerance t;
-    t.line = line;
-    t.column = column;
+    t.line = at.first;
+    t.column = at.second;
     if (!e.contains("constant") || !e["constant"].is_string()) {
       return fail("missing 'constant' (a name such as \"accel.b_x\")");
     }
