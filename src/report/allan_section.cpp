@@ -233,7 +233,7 @@ std::string AllanSummaryTable(const nlohmann::ordered_json& report) {
       if (q.contains("allan_type_a_link") && q["allan_type_a_link"]["allan_min_dev"].is_number()) {
         const auto& link = q["allan_type_a_link"];
         minimum =
-            fmt::format("{} {} at {:.3g} s{}", ShortNumber(link["allan_min_dev"].get<double>()),
+            fmt::format("{} {} at {:.3g} s{}", ConsoleNumber(link["allan_min_dev"].get<double>()),
                         q.value("unit", std::string()), link["allan_min_tau_s"].get<double>(),
                         link.value("allan_min_at_end", false) ? " (last tau)" : "");
       }

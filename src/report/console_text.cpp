@@ -109,7 +109,7 @@ RoundedResult RoundForTable(double value, double u, int significant) {
   return {exponent_form(r.value), exponent_form(r.uncertainty)};
 }
 
-std::string ShortNumber(double x) {
+std::string ConsoleNumber(double x) {
   const double a = std::fabs(x);
   if (a != 0.0 && std::isfinite(a) && (a < 1e-3 || a >= 1e6)) return fmt::format("{:.2e}", x);
   return fmt::format("{:.3g}", x);

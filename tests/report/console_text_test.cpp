@@ -49,13 +49,13 @@ TEST_CASE("Table rounding switches to exponent notation past six decimals", "[re
   CHECK(r.uncertainty == "3.7e-08");
 }
 
-TEST_CASE("Short numbers use exponent notation below 0.001", "[report]") {
-  CHECK(ShortNumber(0.000122) == "1.22e-04");
-  CHECK(ShortNumber(0.0122) == "0.0122");
-  CHECK(ShortNumber(-3.9e-13) == "-3.90e-13");
-  CHECK(ShortNumber(12.345) == "12.3");
-  CHECK(ShortNumber(2.5e7) == "2.50e+07");
-  CHECK(ShortNumber(0.0) == "0");
+TEST_CASE("Console numbers use exponent notation below 0.001", "[report]") {
+  CHECK(ConsoleNumber(0.000122) == "1.22e-04");
+  CHECK(ConsoleNumber(0.0122) == "0.0122");
+  CHECK(ConsoleNumber(-3.9e-13) == "-3.90e-13");
+  CHECK(ConsoleNumber(12.345) == "12.3");
+  CHECK(ConsoleNumber(2.5e7) == "2.50e+07");
+  CHECK(ConsoleNumber(0.0) == "0");
 }
 
 }  // namespace

@@ -27,8 +27,9 @@ std::string GroupedWarnings(const std::vector<WarningLine>& warnings,
 // digit (u 3.7e-08 rather than 0.000000037; a mean of -0.000018 next to it, -1.8e-05).
 RoundedResult RoundForTable(double value, double u, int significant = 2);
 
-// Three significant digits for a table cell, in exponent notation below 0.001 (1.22e-04,
-// not 0.000122) and from 1e6 on.
-std::string ShortNumber(double x);
+// Three significant digits for a console table cell, in exponent notation below 0.001
+// (1.22e-04, not 0.000122) and from 1e6 on. (The HTML pages' ShortNumber(x, digits) in
+// src/report/html_common.hpp keeps %g, whose fixed notation reads well in a page's columns.)
+std::string ConsoleNumber(double x);
 
 }  // namespace metro
