@@ -69,6 +69,8 @@ static void Check(const uint8_t* data, size_t size) {
   cfg.accel_fs_sel = 0;
   cfg.gyro_fs_sel = 0;
   cfg.dlpf_cfg = 3;
+  cfg.accel_input = METRO_FW_INPUT_INT16;
+  cfg.gyro_input = METRO_FW_INPUT_OFFSET_BINARY;
   if (metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, METRO_FW_ACCEL, &cfg, &cal) ==
       METRO_FW_OK) {
     const int16_t raw[3] = {32767, -32768, 1};

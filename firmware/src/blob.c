@@ -73,8 +73,9 @@ static int WalkSections(metro_fw_read_fn read, void* ctx, metro_fw_blob_info* in
       uint16_t* f = (uint16_t*)(void*)((char*)info + offsetof(metro_fw_blob_info, meta_off)) +
                     3u * known;                  /* off, len, version */
       if (f[0] != 0u) return METRO_FW_E_SECTION; /* duplicate */
-      /* A major this firmware knows carries at least the v1.0 body; v1.0 exactly that. */
-      if ((version >> 8) == (METRO_FW_SEC_VERSION_1_0 >> 8)) {
+      /* A major this firmware knows (1; 2 for a sensor) carries at least the v1.0 body, whose
+       * length v2.0 keeps; x.0 exactly that. */
+      if ((version >> 8) == 1u || (known != 0u && (version >> 8) == 2u)) {
         const uint32_t v1_len = known == 0u ? METRO_FW_META_BODY_LEN : METRO_FW_SENSOR_BODY_LEN;
         if (body_len < v1_len || ((version & 0xFFu) == 0u && body_len != v1_len)) {
           return METRO_FW_E_SECTION;
@@ -254,6 +255,11 @@ static int F32ToQ(const float* p, int frac, int cap_bits, int32_t* out) {
   return 0;
 }
 
+/* gyro_input follows accel_input in metro_fw_config: the decoder indexes them by kind. */
+typedef char metro_fw_config_input_check
+    [(offsetof(metro_fw_config, gyro_input) - offsetof(metro_fw_config, accel_input) == 1) ? 1
+                                                                                           : -1];
+
 /* The 21 floats of metro_fw_sensor_cal from m[0] to t_valid_max_c are consecutive. */
 typedef char metro_fw_cal_q_layout_check[(offsetof(metro_fw_sensor_cal, m) == 0 &&
                                           offsetof(metro_fw_sensor_cal, t_valid_max_c) == 80)
@@ -272,24 +278,17 @@ int metro_fw_cal_to_q(const void* cal, int m_frac, int m_cap_bits, int32_t q[21]
 
 /* Section 3.1 limit checks in exact integer arithmetic on fixed-point forms of the binary32
  * constants (no soft-float), each rounded once by metro_fw_cal_to_q:
- *   M        Q(k - fs_sel) SI/LSB, k = 25 (accel) or 27 (gyro): s_nom becomes the fs_sel-free
- *            S = s_nom(fs 0) 2^k (20084.0192 / 17872.17); |M_ij| < 2^15 (> 1.63 S: a larger
- *            entry fails its row norm anyway), so a squared row norm fits uint32;
+ *  *   M        Q(141 - e) SI/LSB, e the biased binary32 exponent of the nominal sensitivity
+ *            s_nom (v1.0: the MPU6050's of the section's fs_sel, binary32, so Q(25 - fs_sel)
+ *            accel, Q(27 - fs_sel) gyro; v2.0: the declared one, issue #25): s_nom becomes
+ *            S = mant / 2^9 in [2^14, 2^15) (mant its 24-bit significand); |M_ij| < 2^16
+ *            (> 2 S: a larger entry fails its row norm anyway); squared row norms in int64;
  *   b0, b1   Q16 LSB, LSB/degC, below 2^31 (|b1| < 2^15 LSB/degC: the fixed apply's range);
  *   b2       Q24 LSB/degC^2, below 2^31 (|b2| < 2^7 LSB/degC^2: the fixed apply's range);
  *   T        Q12 degC (t_ref_c, t_valid_min_c, t_valid_max_c).
  * Every step below is exact except |b2| D, truncated from Q36 to Q28 (by less than 2^-28; in
  * the temperature coefficient |b1| + 2 |b2| D it counts twice).
  * The decision band (where it can differ from the real-number rule) is in 3.1. */
-#define METRO_FW_ACCEL_S_Q 20084.0192 /* 9.80665 / 16384 * 2^25 */
-#define METRO_FW_GYRO_S_Q (250.0 * 4096.0 * 3.14159265358979323846 / 180.0) /* 2^27 */
-/* Squared row-norm bounds (1 -+ 0.1)^2 S^2 as integers: n2 >= 0.81 S^2 is n2 >= floor + 1
- * (0.81 S^2 is not an integer for either S), n2 <= 1.21 S^2 is n2 <= floor. */
-static const uint32_t kNorm2Bounds[4] = {
-    (uint32_t)(0.81 * METRO_FW_ACCEL_S_Q * METRO_FW_ACCEL_S_Q) + 1u,
-    (uint32_t)(1.21 * METRO_FW_ACCEL_S_Q * METRO_FW_ACCEL_S_Q),
-    (uint32_t)(0.81 * METRO_FW_GYRO_S_Q * METRO_FW_GYRO_S_Q) + 1u,
-    (uint32_t)(1.21 * METRO_FW_GYRO_S_Q * METRO_FW_GYRO_S_Q)};
 #define METRO_FW_TEMP_MIN_Q12 (-40 * 4096)
 #define METRO_FW_TEMP_MAX_Q12 (85 * 4096)
 #define METRO_FW_MIN_SPAN_Q12 (METRO_FW_T_VALID_MIN_SPAN_C * 4096)
@@ -297,11 +296,17 @@ static const uint32_t kNorm2Bounds[4] = {
 /* |x| for |x| < 2^31 (what metro_fw_cal_to_q gives with cap 31). */
 static uint32_t AbsU32(int32_t x) { return x < 0 ? 0u - (uint32_t)x : (uint32_t)x; }
 
-/* Section 3.1 physical limits on decoded constants (model bits already applied). */
+/* Section 3.1 physical limits on decoded constants (model bits already applied), for the
+ * nominal sensitivity with binary32 bits s_bits (SI per LSB) and the bias and
+ * temperature-coefficient limits at fs_sel 0 shifted right by limit_shift. */
 METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw_sensor_kind kind,
-                                          uint8_t fs_sel) {
+                                          uint32_t s_bits, uint8_t limit_shift) {
   int32_t q[21]; /* m[9], b0[3], b1[3], b2[3], t_ref, t_valid_min, t_valid_max */
-  const uint32_t* n2_bounds = kNorm2Bounds + 2 * kind;
+  /* s_nom = mant 2^(e - 150), so with M in Q(141 - e) it is S = mant / 2^9, 2^14 <= S < 2^15 */
+  const int m_frac = 141 - (int)((s_bits >> 23) & 0xFFu);
+  const int64_t mant2 = metro_fw_mul((int32_t)((s_bits & 0x7FFFFFu) | 0x800000u),
+                                     (int32_t)((s_bits & 0x7FFFFFu) | 0x800000u)); /* < 2^48 */
+  const int64_t n2_lo = metro_fw_mul(mant2, 81), n2_hi = metro_fw_mul(mant2, 121);
   const int32_t limit_fs0 =
       kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_BIAS_LIMIT_LSB : METRO_FW_GYRO_BIAS_LIMIT_LSB;
   const uint32_t tempco_fs0 =
@@ -309,7 +314,11 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
   int64_t det = 0;
   int32_t d;
   int i, j;
-  if (metro_fw_cal_to_q(c, (kind == METRO_FW_ACCEL ? 25 : 27) - fs_sel, 15, q) != 0) return 0;
+  /* s_nom > 0 with 22 <= 141 - e <= 28 (NaN, Inf, 0 and subnormals fall outside) */
+  if ((s_bits >> 31) != 0u || m_frac < METRO_FW_S_NOM_MIN_Q || m_frac > METRO_FW_S_NOM_MAX_Q ||
+      metro_fw_cal_to_q(c, m_frac, 16, q) != 0) {
+    return 0;
+  }
   if (q[18] < METRO_FW_TEMP_MIN_Q12 || q[18] > METRO_FW_TEMP_MAX_Q12 ||
       q[19] < METRO_FW_TEMP_MIN_Q12 || q[20] > METRO_FW_TEMP_MAX_Q12 || q[19] >= q[20] ||
       q[20] - q[19] < METRO_FW_MIN_SPAN_Q12) { /* no overflow: -40 <= t_min < t_max <= 85 */
@@ -322,12 +331,17 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
   for (i = 0; i < 3; ++i) {
     const int k1 = i == 2 ? 0 : i + 1; /* (i + 1) mod 3 without a libgcc division */
     const int k2 = i == 0 ? 2 : i - 1; /* (i + 2) mod 3 */
-    uint32_t n2 = 0u, minor;
+    uint64_t n2 = 0u;
+    int64_t n2s;
+    uint32_t minor;
     uint64_t b2d_q28, c_q28;
-    for (j = 0; j < 3; ++j) n2 += (uint32_t)(q[3 * i + j] * q[3 * i + j]); /* <= 3 * 2^30 */
-    if (n2 < n2_bounds[0] || n2 > n2_bounds[1]) return 0;
+    /* 0.81 S^2 <= n2 <= 1.21 S^2 as 81 mant^2 <= 100 2^18 n2 <= 121 mant^2, exactly (each
+     * q^2 < 2^32 in uint32, n2 < 3 2^32, so 100 2^18 n2 < 2^59) */
+    for (j = 0; j < 3; ++j) n2 += (uint32_t)q[3 * i + j] * (uint32_t)q[3 * i + j];
+    n2s = metro_fw_mul((int64_t)n2, 100 << 18);
+    if (n2s < n2_lo || n2s > n2_hi) return 0;
     /* det(M) = row0 . (row1 x row2). The minor fits int32 once rows 1 and 2 pass their norms
-     * (|minor| <= 1.21 S^2 < 2^29); before that it may wrap (unsigned, no overflow) but then
+     * (|minor| <= 1.21 S^2 < 2^31); before that it may wrap (unsigned, no overflow) but then
      * a later row fails and det is not used. */
     minor = (uint32_t)q[3 + k1] * (uint32_t)q[6 + k2] - (uint32_t)q[3 + k2] * (uint32_t)q[6 + k1];
     det += metro_fw_mul(q[i], (int32_t)minor);
@@ -337,8 +351,8 @@ METRO_FW_NOINLINE static int WithinLimits(const metro_fw_sensor_cal* c, metro_fw
     b2d_q28 = (uint64_t)metro_fw_mul(AbsU32(q[15 + i]), d) >> 8;
     c_q28 = (uint64_t)AbsU32(q[12 + i]) * 4096u + b2d_q28;
     if (((uint64_t)AbsU32(q[9 + i]) << 24) + (uint64_t)metro_fw_mul((int64_t)c_q28, d) >
-            ((uint64_t)(uint32_t)(limit_fs0 >> fs_sel) << 40) ||
-        c_q28 + b2d_q28 > ((uint64_t)(tempco_fs0 >> fs_sel) << 28)) {
+            ((uint64_t)(uint32_t)(limit_fs0 >> limit_shift) << 40) ||
+        c_q28 + b2d_q28 > ((uint64_t)(tempco_fs0 >> limit_shift) << 28)) {
       return 0;
     }
   }
@@ -381,7 +395,7 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob
                            metro_fw_sensor_cal* out) {
   uint8_t b[METRO_FW_SENSOR_BODY_LEN];
   const uint16_t* sec;
-  uint8_t fs_sel, bits, status;
+  uint8_t fs_sel, bits, status, major, input;
   uint32_t i;
   int rc;
   if (read == 0 || info == 0 || out == 0) return METRO_FW_E_ARG;
@@ -395,7 +409,8 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob
       3u * kind;
   if (sec[0] == 0u) return METRO_FW_OK; /* ABSENT */
   status = METRO_FW_SENSOR_UNSUPPORTED;
-  if ((sec[2] >> 8) != (METRO_FW_SEC_VERSION_1_0 >> 8)) goto done;
+  major = (uint8_t)(sec[2] >> 8);
+  if (major - 1u > 1u) goto done;                               /* majors 1 and 2 */
   if (sec[1] < METRO_FW_SENSOR_BODY_LEN) return METRO_FW_E_ARG; /* validator forbids */
   rc = read(ctx, sec[0], b, METRO_FW_SENSOR_BODY_LEN);
   if (rc != METRO_FW_OK) return rc;
@@ -408,16 +423,20 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob
     if ((u & 0x7F800000u) == 0x7F800000u || (i - 80u < 76u && u > 0x80000000u)) goto done;
   }
   bits = b[2];
+  /* v2.0: byte 3 is the input encoding, the u32 at 172 s_nom; v1.0: reserved (not read), the
+   * input int16 and s_nom the MPU6050's of fs_sel (set below) */
+  input = major == 2u ? b[3] : 0u;
   status = METRO_FW_SENSOR_BAD_MODEL;
   if ((bits & (uint8_t) ~(METRO_FW_MODEL_BIAS | METRO_FW_MODEL_FULL_M | METRO_FW_MODEL_LINEAR_T |
-                          METRO_FW_MODEL_QUADRATIC_T | METRO_FW_MODEL_HW_OFFSETS)) != 0u) {
+                          METRO_FW_MODEL_QUADRATIC_T | METRO_FW_MODEL_HW_OFFSETS)) != 0u ||
+      input > METRO_FW_INPUT_OFFSET_BINARY) {
     goto done;
   }
   status = METRO_FW_SENSOR_CONFIG_MISMATCH;
   if (cfg == 0) { /* the section's own configuration (the validator) */
     fs_sel = b[0];
     if (fs_sel > 3u || b[1] > 6u) goto done;
-  } else if (b[0] != fs_sel || b[1] != cfg->dlpf_cfg) {
+  } else if (b[0] != fs_sel || b[1] != cfg->dlpf_cfg || input != (&cfg->accel_input)[kind]) {
     goto done;
   }
   /* Decoded in place (no struct copy: on the M0 that links memcpy); a LIMITS failure
@@ -436,9 +455,18 @@ int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob
     out->hw_offs[i] = (int16_t)(u - ((u & 0x8000) << 1)); /* two's complement */
   }
   status = METRO_FW_SENSOR_OK;
-  if (!WithinLimits(out, kind, fs_sel)) {
-    (void)metro_fw_sensor_defaults(kind, fs_sel, out);
+  /* v1.0: the MPU6050's s_nom of fs_sel and its limits (shifted by fs_sel); v2.0: the declared
+   * s_nom and the fs_sel 0 limits in counts (3.1) */
+  if (!WithinLimits(out, kind,
+                    major == 2u ? metro_fw_get_u32(b + 172)
+                                : F32Bits(kind == METRO_FW_ACCEL ? METRO_FW_ACCEL_SENS_FS0
+                                                                 : METRO_FW_GYRO_SENS_FS0) +
+                                      ((uint32_t)fs_sel << 23),
+                    major == 2u ? 0u : fs_sel)) {
+    (void)metro_fw_sensor_defaults(kind, fs_sel, out); /* input 0 */
     status = METRO_FW_SENSOR_LIMITS;
+  } else {
+    out->input = input;
   }
 done:
   out->status = status;

@@ -271,10 +271,10 @@ TEST_CASE("A declared sensor of a newer section major refuses the blob; the olde
   // The walker skips it (2.2), but this firmware cannot use a sensor the flags declare: a tag
   // would run that sensor on defaults (issue #20), so the blob is refused.
   Blob b = StandardBlob(4);
-  b.sections[1].version = 0x0200;
+  b.sections[1].version = 0x0300;
   metro_fw_blob_info info{};
   CHECK(Validate(Build(b), &info) == METRO_FW_E_SENSOR);
-  CHECK(info.accel_version == 0x0200);
+  CHECK(info.accel_version == 0x0300);
   FakeFlash flash;
   flash.Program(METRO_FW_SLOT_A_ADDR, Build(StandardBlob(3)));
   flash.Program(METRO_FW_SLOT_B_ADDR, Build(b));

@@ -42,6 +42,11 @@ extern "C" {
 #define METRO_FW_SEC_ACCEL 0x0010u
 #define METRO_FW_SEC_GYRO 0x0011u
 #define METRO_FW_SEC_VERSION_1_0 0x0100u
+/* Sensor section v2.0 (issue #25, docs/calibration-blob.md 2.4): the v1.0 body whose reserved
+ * byte 3 is the raw input's encoding and whose reserved u32 at 172 is the declared nominal
+ * sensitivity s_nom (binary32, SI per LSB). A firmware that knows only major 1 refuses a blob
+ * that declares such a sensor (section 2.2), so it never applies these constants. */
+#define METRO_FW_SEC_VERSION_2_0 0x0200u
 #define METRO_FW_META_BODY_LEN 128u
 #define METRO_FW_SENSOR_BODY_LEN 176u
 #define METRO_FW_V1_TOTAL_LEN 540u
@@ -54,6 +59,21 @@ extern "C" {
 #define METRO_FW_MODEL_HW_OFFSETS 0x80u
 
 #define METRO_FW_SLOT_NONE (-1)
+
+/* Raw input encodings of a sensor (v2.0 byte 3; a v1.0 section is METRO_FW_INPUT_INT16). The
+ * applies take signed counts about the input's zero: an int16 sample as it is, an unsigned
+ * 16-bit (offset-binary) ADC word u as METRO_FW_OFFSET_BINARY_TO_INT16(u) = u - 32768. */
+#define METRO_FW_INPUT_INT16 0u
+#define METRO_FW_INPUT_OFFSET_BINARY 1u
+#define METRO_FW_OFFSET_BINARY_TO_INT16(u) ((int16_t)((int32_t)(uint16_t)(u)-32768))
+
+/* The nominal sensitivity a v2.0 section may declare, SI per LSB: 2^-14 <= s_nom < 2^-7
+ * (6.1e-5 ... 7.8e-3; accelerometer 160 000 ... 1255 LSB/g, gyroscope 286 ... 2.24
+ * LSB/(deg/s)), i.e. M in Q(141 - e) for s_nom's biased binary32 exponent e, 22 ... 28. The
+ * upper end keeps M and the output inside the fixed-point apply's formats (3.2), the lower
+ * end its error below 0.1 LSB. Every MPU6050 setting lies inside. */
+#define METRO_FW_S_NOM_MIN_Q 22
+#define METRO_FW_S_NOM_MAX_Q 28
 
 /* Plausibility limits of a sensor section (section 3.1), which the host tools also apply when
  * they build a blob.
@@ -121,7 +141,7 @@ enum metro_fw_sensor_status {
   METRO_FW_SENSOR_UNSUPPORTED = 2,     /* section major unknown: defaults */
   METRO_FW_SENSOR_NONFINITE = 3,       /* NaN/Inf, or a negative uncertainty: defaults */
   METRO_FW_SENSOR_BAD_MODEL = 4,       /* unknown model bits: defaults */
-  METRO_FW_SENSOR_CONFIG_MISMATCH = 5, /* fs_sel/dlpf_cfg differ from the firmware's */
+  METRO_FW_SENSOR_CONFIG_MISMATCH = 5, /* fs_sel/dlpf_cfg/input differ from the firmware's */
   METRO_FW_SENSOR_LIMITS = 6           /* constants outside physical limits: defaults */
 };
 
@@ -140,6 +160,7 @@ typedef struct {
   int16_t hw_offs[3]; /* MPU6050 offset register values (informational) */
   uint8_t model_bits;
   uint8_t status; /* enum metro_fw_sensor_status */
+  uint8_t input;  /* METRO_FW_INPUT_*: how the driver turns a sample into the applies' int16 */
 } metro_fw_sensor_cal;
 
 /* The firmware's own configuration, which a section must match. */
@@ -148,6 +169,8 @@ typedef struct {
   uint8_t accel_fs_sel;  /* 0..3 */
   uint8_t gyro_fs_sel;   /* 0..3 */
   uint8_t dlpf_cfg;      /* 0..6 */
+  uint8_t accel_input;   /* METRO_FW_INPUT_* of the accelerometer's driver (0: int16) */
+  uint8_t gyro_input;    /* METRO_FW_INPUT_* of the gyroscope's driver (0: int16) */
 } metro_fw_config;
 
 /* The result of loading at boot: what the firmware publishes. */
@@ -170,13 +193,15 @@ int metro_fw_sensor_defaults(metro_fw_sensor_kind kind, uint8_t fs_sel, metro_fw
 
 /* Decodes the section of sensor `kind` (its body offset, length and version in info, as
  * metro_fw_blob_validate found them) of a blob the validator accepted, and checks it against
- * cfg (section 3.1). On a usable section *out holds its constants with status
- * METRO_FW_SENSOR_OK; otherwise *out holds the defaults and the status says why (a body offset
- * of 0: METRO_FW_SENSOR_ABSENT). cfg NULL is the validator's form: the section is checked on
- * its own fs_sel and dlpf_cfg, which must be 0..3 and 0..6 (else CONFIG_MISMATCH), and the
- * defaults are fs_sel 0's. Returns METRO_FW_OK (whatever the status), METRO_FW_E_ARG for NULL
- * read/info/out, a bad kind or a body shorter than v1.0's, or a failing read's code (out then
- * holds the defaults). */
+ * cfg (section 3.1). Section majors 1 and 2 are read; a v2.0 section's limits are relative to
+ * its declared s_nom and input (an input code above 1 is BAD_MODEL, an input other than cfg's
+ * CONFIG_MISMATCH; a v1.0 section's input is METRO_FW_INPUT_INT16). On a usable section *out holds
+ * its constants with status METRO_FW_SENSOR_OK; otherwise *out holds the defaults and the status
+ * says why (a body offset of 0: METRO_FW_SENSOR_ABSENT). cfg NULL is the validator's form: the
+ * section is checked on its own fs_sel and dlpf_cfg, which must be 0..3 and 0..6 (else
+ * CONFIG_MISMATCH), and the defaults are fs_sel 0's. Returns METRO_FW_OK (whatever the status),
+ * METRO_FW_E_ARG for NULL read/info/out, a bad kind or a body shorter than v1.0's, or a failing
+ * read's code (out then holds the defaults). */
 int metro_fw_sensor_decode(metro_fw_read_fn read, void* ctx, const metro_fw_blob_info* info,
                            metro_fw_sensor_kind kind, const metro_fw_config* cfg,
                            metro_fw_sensor_cal* out);
