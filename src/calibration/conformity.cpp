@@ -16,45 +16,6 @@ namespace {
 
 using nlohmann::json;
 
-// Where the index'th object of the top-level array `key` begins in `text` (1-based line and
-// column of its '{'); {0, 0} when not found. nlohmann_json keeps no positions, so the text is
-// scanned: strings are skipped, depth is counted.
-std::pair<int64_t, int64_t> LocateArrayElement(const std::string& text, const std::string& key,
-                                               size_t index) {
-  const std::string quoted = "\"" + key + "\"";
-  size_t pos = text.find(quoted);
-  if (pos == std::string::npos) return {0, 0};
-  pos = text.find('[', pos + quoted.size());
-  if (pos == std::string::npos) return {0, 0};
-  int depth = 0;
-  size_t seen = 0;
-  bool in_string = false;
-  for (size_t i = pos + 1; i < text.size(); ++i) {
-    const char c = text[i];
-    if (in_string) {
-      if (c == '\\') {
-        ++i;
-      } else if (c == '"') {
-        in_string = false;
-      }
-      continue;
-    }
-    if (c == '"') {
-      in_string = true;
-    } else if (c == '{' || c == '[') {
-      if (depth == 0 && c == '{') {
-        if (seen == index) return TextLineColumn(text, i);
-        ++seen;
-      }
-      ++depth;
-    } else if (c == '}' || c == ']') {
-      if (depth == 0) break;
-      --depth;
-    }
-  }
-  return {0, 0};
-}
-
 Error SpecError(const std::string& path, int64_t line, int64_t column, std::string message) {
   return MakeError(path, line, column, std::move(message));
 }
@@ -180,7 +141,7 @@ Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::s
   for (size_t i = 0; i < j["tolerances"].size(); ++i) {
     const json& e = j["tolerances"][i];
     // A pair, not a structured binding: C++17 lambdas cannot capture those (clang refuses).
-    const std::pair<int64_t, int64_t> at = LocateArrayElement(text, "tolerances", i);
+    const std::pair<int64_t, int64_t> at = TopLevelArrayElementLineColumn(text, "tolerances", i);
     auto fail = [&](const std::string& what) {
       return SpecError(path, at.first, at.second, fmt::format("tolerances[{}]: {}", i, what));
     };

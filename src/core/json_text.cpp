@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -105,6 +106,23 @@ Result<Json> Parse(std::string_view text, const std::string& path) {
   }
 }
 
+// The key of the member whose ':' is at `colon`: the JSON string just before it, or "" when
+// there is none (only the text is read; escapes inside keys are not decoded).
+std::string_view KeyBefore(std::string_view text, size_t colon) {
+  size_t end = colon;
+  while (end > 0 && std::isspace(static_cast<unsigned char>(text[end - 1]))) --end;
+  if (end == 0 || text[end - 1] != '"') return {};
+  const size_t close = end - 1;
+  size_t open = close;
+  while (open > 0) {
+    --open;
+    if (text[open] == '"' && (open == 0 || text[open - 1] != '\\')) {
+      return text.substr(open + 1, close - open - 1);
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 Result<nlohmann::json> ParseJsonText(std::string_view text, const std::string& path) {
@@ -114,6 +132,39 @@ Result<nlohmann::json> ParseJsonText(std::string_view text, const std::string& p
 Result<nlohmann::ordered_json> ParseOrderedJsonText(std::string_view text,
                                                     const std::string& path) {
   return Parse<nlohmann::ordered_json>(text, path);
+}
+
+std::pair<int64_t, int64_t> TopLevelArrayElementLineColumn(std::string_view text,
+                                                           std::string_view key, size_t index) {
+  int depth = 0;
+  bool key_seen = false;  // The last member key at depth 1 was `key`; its value comes next.
+  bool in_array = false;  // Inside `key`'s array (depth 2).
+  bool found = false;
+  size_t seen = 0;
+  const size_t at = FirstOutsideStrings(text, [&](size_t& i) {
+    const char c = text[i];
+    if (std::isspace(static_cast<unsigned char>(c))) return false;
+    if (c == ':' && depth == 1 && !in_array) {
+      key_seen = KeyBefore(text, i) == key;
+      return false;
+    }
+    const bool opens_array = key_seen && depth == 1 && c == '[';
+    key_seen = false;
+    if (c == '[' || c == '{') {
+      if (in_array && depth == 2 && c == '{' && seen++ == index) {
+        found = true;
+        return true;
+      }
+      ++depth;
+      in_array = in_array || opens_array;
+    } else if (c == ']' || c == '}') {
+      if (in_array && depth == 2) return true;  // The array ended before element `index`.
+      --depth;
+    }
+    return false;
+  });
+  if (!found || at == std::string_view::npos) return {0, 0};
+  return TextLineColumn(text, at);
 }
 
 std::string JsonText(const nlohmann::json& j, int indent) {

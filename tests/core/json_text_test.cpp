@@ -1,7 +1,9 @@
 #include "metro/core/json_text.hpp"
 
 #include <catch2/catch.hpp>
+#include <cstdint>
 #include <string>
+#include <utility>
 
 namespace metro {
 namespace {
@@ -41,6 +43,27 @@ TEST_CASE("JSON text: errors at line and column, never an exception", "[core]") 
   CHECK(r.error().line == 2);
   CHECK(r.error().column == 65);
   CHECK(r.error().message.rfind("JSON nested deeper than 64 levels", 0) == 0);
+}
+
+TEST_CASE("JSON text: the element of a top-level array is located at its opening brace", "[core]") {
+  // Positions counted by hand: line 5 column 5 and line 6 column 5 open the two elements;
+  // the key inside a string and the nested member of the same name are not the array.
+  const std::string text =
+      "{\n"
+      "  \"note\": \"a \\\"tolerances\\\": [{ inside a string\",\n"
+      "  \"nested\": {\"tolerances\": [{\"x\": 1}]},\n"
+      "  \"tolerances\": [\n"
+      "    {\"constant\": \"accel.b_x\", \"lower\": [1, {\"deep\": 2}]},\n"
+      "    {\"constant\": \"gyro.b_y\"}\n"
+      "  ]\n"
+      "}\n";
+  REQUIRE(ParseJsonText(text, "spec.json").ok());
+  using LineColumn = std::pair<int64_t, int64_t>;
+  CHECK(TopLevelArrayElementLineColumn(text, "tolerances", 0) == LineColumn{5, 5});
+  CHECK(TopLevelArrayElementLineColumn(text, "tolerances", 1) == LineColumn{6, 5});
+  CHECK(TopLevelArrayElementLineColumn(text, "tolerances", 2) == LineColumn{0, 0});
+  CHECK(TopLevelArrayElementLineColumn(text, "missing", 0) == LineColumn{0, 0});
+  CHECK(TopLevelArrayElementLineColumn(text, "note", 0) == LineColumn{0, 0});
 }
 
 }  // namespace

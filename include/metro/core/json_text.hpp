@@ -31,6 +31,13 @@ Result<nlohmann::ordered_json> ParseOrderedJsonText(std::string_view text, const
 // 1-based line and column of byte `offset` of `text` (for file:line:column messages).
 std::pair<int64_t, int64_t> TextLineColumn(std::string_view text, size_t offset);
 
+// 1-based line and column of the '{' that opens element `index` of the array held by the
+// top-level object's member `key` ({"key": [{...}, {...}]}), or {0, 0} when there is no such
+// element. nlohmann_json keeps no positions; strings are skipped and depth is counted, so a
+// member of that name nested deeper, or inside a string, is not taken for it.
+std::pair<int64_t, int64_t> TopLevelArrayElementLineColumn(std::string_view text,
+                                                           std::string_view key, size_t index);
+
 std::string JsonText(const nlohmann::json& j, int indent = -1);
 std::string JsonText(const nlohmann::ordered_json& j, int indent = -1);
 
