@@ -24,13 +24,15 @@ std::mutex& PlplotMutex() {
 }
 
 // Colour map 0: 0 background, 1 axes and text, then the palette in PlotColor order, then
-// the band shade.
-constexpr PLINT kCmapSize = 10;
-constexpr PLINT kRed[kCmapSize] = {255, 0, 31, 255, 44, 214, 148, 127, 0, 225};
-constexpr PLINT kGreen[kCmapSize] = {255, 0, 119, 127, 160, 39, 103, 127, 0, 225};
-constexpr PLINT kBlue[kCmapSize] = {255, 0, 180, 14, 44, 40, 189, 127, 0, 225};
+// the band shade, the decade grid and the minor grid of log axes.
+constexpr PLINT kCmapSize = 12;
+constexpr PLINT kRed[kCmapSize] = {255, 0, 31, 255, 44, 214, 148, 127, 0, 225, 176, 226};
+constexpr PLINT kGreen[kCmapSize] = {255, 0, 119, 127, 160, 39, 103, 127, 0, 225, 184, 230};
+constexpr PLINT kBlue[kCmapSize] = {255, 0, 180, 14, 44, 40, 189, 127, 0, 225, 194, 236};
 constexpr PLINT kAxisColor = 1;
 constexpr PLINT kBandColor = 9;
+constexpr PLINT kDecadeGridColor = 10;
+constexpr PLINT kMinorGridColor = 11;
 
 PLINT ColorIndex(PlotColor c) { return 2 + static_cast<PLINT>(c); }
 
@@ -262,6 +264,28 @@ void DrawLegend(const XyPlot& plot) {
            symbol_ptrs.data());
 }
 
+// The grid of the log axes (log_x: vertical lines, log_y: horizontal ones) inside the
+// window [x_lo, x_hi] x [y_lo, y_hi] (log10 units on a log axis): light lines at 2..9 x 10^n
+// first, then a darker line at every power of ten, so a reader can tell a decade apart and
+// read a slope of -1/2 (white noise) or +1/2 (rate random walk) off the curve.
+void DrawLogGrid(bool log_x, bool log_y, double x_lo, double x_hi, double y_lo, double y_hi) {
+  auto lines = [](double lo, double hi, bool minor, auto draw) {
+    for (double n = std::floor(lo); n <= std::ceil(hi); n += 1.0) {
+      for (int m = minor ? 2 : 1; m <= (minor ? 9 : 1); ++m) {
+        const double at = n + std::log10(static_cast<double>(m));
+        if (at >= lo && at <= hi) draw(at);
+      }
+    }
+  };
+  plwidth(0.5);
+  for (const bool minor : {true, false}) {
+    plcol0(minor ? kMinorGridColor : kDecadeGridColor);
+    if (log_x) lines(x_lo, x_hi, minor, [&](double x) { pljoin(x, y_lo, x, y_hi); });
+    if (log_y) lines(y_lo, y_hi, minor, [&](double y) { pljoin(x_lo, y, x_hi, y); });
+  }
+  plwidth(1.0);
+}
+
 bool CheckSize(int width_px, int height_px, std::string* why) {
   if (width_px < 100 || width_px > 4000 || height_px < 100 || height_px > 4000) {
     *why = fmt::format("plot size {}x{} px is outside 100..4000 px", width_px, height_px);
@@ -357,6 +381,7 @@ Result<std::string> RenderXyPlot(const XyPlot& plot) {
     plcol0(kBandColor);
     plfill(4, bx, by);
   }
+  DrawLogGrid(plot.log_x, plot.log_y, xr.lo, xr.hi, yr.lo, yr.hi);
   plcol0(kAxisColor);
   const std::string xopt = plot.log_x ? "bcnstl" : "bcnst";
   const std::string yopt = plot.log_y ? "bcnstvl" : "bcnstv";

@@ -55,7 +55,9 @@ struct XyPlot {
   std::string title;
   std::string x_label;
   std::string y_label;
-  bool log_x = false;  // Logarithmic axes: every plotted value must then be > 0.
+  // Logarithmic axes: every plotted value must then be > 0. A log axis gets a grid: a line
+  // at every power of ten (10^n) and lighter lines at 2..9 x 10^n, across the plot.
+  bool log_x = false;
   bool log_y = false;
   int width_px = 800;
   int height_px = 340;
