@@ -61,7 +61,9 @@ seed() {
       ;;
     budget_fuzz) cp datasets/budgets/*.json "$corpus/" ;;
     intel_hex_fuzz) cp datasets/golden/tag_sensor2.hex "$corpus/" ;;
-    inspect_fuzz) cp datasets/golden/tag_sensor2.hex datasets/golden/tag_sensor2.bin "$corpus/" ;;
+    # and the firmware blob fuzzer's sections v2.0 (issue #25, firmware/fuzz/make_seeds.py)
+    inspect_fuzz) cp datasets/golden/tag_sensor2.hex datasets/golden/tag_sensor2.bin \
+      firmware/fuzz/seeds/*.bin "$corpus/" ;;
   esac
 }
 

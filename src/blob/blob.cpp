@@ -17,6 +17,11 @@
 
 namespace metro::blob {
 
+static_assert(kInputInt16 == METRO_FW_INPUT_INT16 &&
+                  kInputOffsetBinary == METRO_FW_INPUT_OFFSET_BINARY &&
+                  kSNomMinSiPerLsb == 1.0 / (1 << (METRO_FW_S_NOM_MAX_Q - 14)) &&
+                  kSNomMaxSiPerLsb == 1.0 / (1 << (METRO_FW_S_NOM_MIN_Q - 15)),
+              "blob.hpp's v2.0 constants are the firmware's (docs/calibration-blob.md 2.4)");
 static_assert(kAccelTempcoLimitLsbPerCFs0 == METRO_FW_ACCEL_TEMPCO_LIMIT_LSB &&
                   kGyroTempcoLimitLsbPerCFs0 == METRO_FW_GYRO_TEMPCO_LIMIT_LSB &&
                   kTValidMinSpanC == METRO_FW_T_VALID_MIN_SPAN_C,
@@ -91,6 +96,10 @@ void PutSensor(std::vector<uint8_t>& b, size_t off, const SensorConstants& s) {
   b[off + 0] = s.fs_sel;
   b[off + 1] = s.dlpf_cfg;
   b[off + 2] = s.model_bits;
+  if (s.s_nom_si_per_lsb) {  // v2.0: input encoding and declared nominal sensitivity
+    b[off + 3] = s.input;
+    PutF32(b, off + 172, *s.s_nom_si_per_lsb);
+  }
   PutF32(b, off + 4, s.t_ref_c);
   for (size_t i = 0; i < 9; ++i) PutF32(b, off + 8 + 4 * i, s.m[i]);
   for (size_t i = 0; i < 3; ++i) {
@@ -110,11 +119,15 @@ void PutSensor(std::vector<uint8_t>& b, size_t off, const SensorConstants& s) {
   for (size_t i = 0; i < 3; ++i) Put16(b, off + 164 + 2 * i, static_cast<uint16_t>(s.hw_offs[i]));
 }
 
-SensorConstants GetSensor(const std::vector<uint8_t>& b, size_t off) {
+SensorConstants GetSensor(const std::vector<uint8_t>& b, size_t off, uint16_t version) {
   SensorConstants s;
   s.fs_sel = b[off];
   s.dlpf_cfg = b[off + 1];
   s.model_bits = b[off + 2];
+  if ((version >> 8) == 2) {
+    s.input = b[off + 3];
+    s.s_nom_si_per_lsb = GetF32(b, off + 172);
+  }
   s.t_ref_c = GetF32(b, off + 4);
   for (size_t i = 0; i < 9; ++i) s.m[i] = GetF32(b, off + 8 + 4 * i);
   for (size_t i = 0; i < 3; ++i) {
@@ -176,9 +189,10 @@ MetaConstants GetMeta(const std::vector<uint8_t>& b, size_t off) {
   return m;
 }
 
-void PutSection(std::vector<uint8_t>& b, size_t off, uint16_t type, size_t body_len) {
+void PutSection(std::vector<uint8_t>& b, size_t off, uint16_t type, size_t body_len,
+                uint16_t version = METRO_FW_SEC_VERSION_1_0) {
   Put16(b, off, type);
-  Put16(b, off + 2, METRO_FW_SEC_VERSION_1_0);
+  Put16(b, off + 2, version);
   Put16(b, off + 4, static_cast<uint16_t>(body_len));
 }
 
@@ -203,6 +217,15 @@ bool SensorConstants::IsValid(std::string* why) const {
   if (!AllNonNegative(u_m) || !AllNonNegative(u_b0_lsb) || !AllNonNegative(u_b1_lsb_per_c) ||
       !AllNonNegative(u_b2_lsb_per_c2) || resid_rms_si < 0.0) {
     return fail("an uncertainty or resid_rms is negative");
+  }
+  if (input != kInputInt16 && input != kInputOffsetBinary) {
+    return fail(fmt::format("input {} is not 0 (int16) or 1 (offset binary)", input));
+  }
+  if (!s_nom_si_per_lsb && input != kInputInt16) {
+    return fail("an offset-binary input needs a section v2.0 (s_nom_si_per_lsb)");
+  }
+  if (s_nom_si_per_lsb && !(FiniteF32(*s_nom_si_per_lsb) && *s_nom_si_per_lsb > 0.0)) {
+    return fail(fmt::format("s_nom_si_per_lsb {} is not a positive binary32", *s_nom_si_per_lsb));
   }
   if (!(t_valid_min_c < t_valid_max_c)) {
     return fail(fmt::format("t_valid_min_c {} is not below t_valid_max_c {}", t_valid_min_c,
@@ -282,7 +305,8 @@ Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
   for (const auto& [sensor, type] :
        {std::pair{&c.accel, METRO_FW_SEC_ACCEL}, std::pair{&c.gyro, METRO_FW_SEC_GYRO}}) {
     if (!*sensor) continue;
-    PutSection(b, off, static_cast<uint16_t>(type), kSensorBodyLen);
+    PutSection(b, off, static_cast<uint16_t>(type), kSensorBodyLen,
+               (*sensor)->s_nom_si_per_lsb ? METRO_FW_SEC_VERSION_2_0 : METRO_FW_SEC_VERSION_1_0);
     PutSensor(b, off + kSectionHeaderLen, **sensor);
     off += kSectionHeaderLen + kSensorBodyLen;
   }
@@ -306,6 +330,8 @@ Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
     cfg.accel_fs_sel = kind == METRO_FW_ACCEL ? (*sensor)->fs_sel : 0;
     cfg.gyro_fs_sel = kind == METRO_FW_GYRO ? (*sensor)->fs_sel : 0;
     cfg.dlpf_cfg = (*sensor)->dlpf_cfg;
+    cfg.accel_input = kind == METRO_FW_ACCEL ? (*sensor)->input : 0;
+    cfg.gyro_input = kind == METRO_FW_GYRO ? (*sensor)->input : 0;
     metro_fw_sensor_cal cal{};
     METRO_CHECK(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, kind, &cfg, &cal) ==
                 METRO_FW_OK);
@@ -313,12 +339,17 @@ Result<std::vector<uint8_t>> WriteBlob(const BlobContents& c) {
       return MakeError(fmt::format(
           "calibration blob: the tag firmware would not use the {} constants ({}): {}", name,
           SensorStatusName(cal.status),
-          cal.status == METRO_FW_SENSOR_LIMITS
-              ? "row norms of M within 10 % of the nominal sensitivity, det(M) > 0, bias within "
+          cal.status != METRO_FW_SENSOR_LIMITS ? "see docs/calibration-blob.md section 3.1"
+          : (*sensor)->s_nom_si_per_lsb
+              ? "section v2.0: s_nom within 2^-14 .. 2^-7 SI per LSB, row norms of M within 10 "
+                "% of s_nom, det(M) > 0, bias |b0| + |b1| D + |b2| D^2 within 4096 (accel) / "
+                "7864 (gyro) LSB about the input's zero, temperature coefficient |b1| + 2 |b2| D "
+                "within 80 / 88 LSB/degC and -40 <= t_valid_min_c, t_valid_min_c + 2 <= "
+                "t_valid_max_c <= 85 are required"
+              : "row norms of M within 10 % of the nominal sensitivity, det(M) > 0, bias within "
                 "0.25 g / 60 deg/s, temperature coefficient |b1| + 2 |b2| D within 4.9 mg/degC "
                 "/ 0.67 deg/s/degC and -40 <= t_valid_min_c, t_valid_min_c + 2 <= "
-                "t_valid_max_c <= 85 are required"
-              : "see docs/calibration-blob.md section 3.1"));
+                "t_valid_max_c <= 85 are required"));
     }
   }
   if (rc != METRO_FW_OK) {
@@ -354,10 +385,9 @@ Result<BlobContents> DecodeBlob(const std::vector<uint8_t>& bytes,
   c.crc32 = info.crc32;
   c.provisional = (info.flags & METRO_FW_FLAG_PROVISIONAL) != 0;
   if (info.meta_off != 0 && (info.meta_version >> 8) == 1) c.meta = GetMeta(bytes, info.meta_off);
-  if (info.accel_off != 0 && (info.accel_version >> 8) == 1) {
-    c.accel = GetSensor(bytes, info.accel_off);
-  }
-  if (info.gyro_off != 0 && (info.gyro_version >> 8) == 1) c.gyro = GetSensor(bytes, info.gyro_off);
+  // The validator accepted the blob, so every sensor section present has major 1 or 2.
+  if (info.accel_off != 0) c.accel = GetSensor(bytes, info.accel_off, info.accel_version);
+  if (info.gyro_off != 0) c.gyro = GetSensor(bytes, info.gyro_off, info.gyro_version);
   return c;
 }
 

@@ -83,6 +83,72 @@ uint32_t ParseToolVersion(const std::string& text) {
   return major << 16 | minor << 8 | patch;
 }
 
+// The firmware's validator and decoder (WriteBlob) accept the section on a tag configured as it
+// says: a blob holding only it (META defaults) is written.
+bool FirmwareUses(const SensorConstants& s, ImuSensor sensor) {
+  BlobContents b;
+  b.seq = 1;
+  (sensor == ImuSensor::kAccel ? b.accel : b.gyro) = s;
+  return WriteBlob(b).ok();
+}
+
+// Why no section v2.0 holds `s` (its s_nom, input and b0 as tried last), naming the figures and
+// what the format holds (docs/calibration-blob.md 3.1).
+std::string GenericRefusal(const SensorConstants& s, ImuSensor sensor, const Eigen::Matrix3d& m_c,
+                           double nominal_out, const std::string& source,
+                           const std::string& write_error) {
+  const bool accel = sensor == ImuSensor::kAccel;
+  const char* lsb_unit = accel ? "LSB/g" : "LSB/(deg/s)";
+  const char* si_unit = accel ? "m/s^2" : "rad/s";
+  const double si = SiPerOutputUnit(sensor);
+  const double s_nom = *s.s_nom_si_per_lsb;
+  const std::string head =
+      fmt::format("the {} nominal sensitivity {:.4g} {} (from {}, profile generic)",
+                  ImuSensorName(sensor), 1.0 / nominal_out, lsb_unit, source);
+  const std::string tail = "; the blob format cannot represent it (docs/calibration-blob.md 3.1)";
+  if (!(s_nom >= kSNomMinSiPerLsb && s_nom < kSNomMaxSiPerLsb)) {
+    return fmt::format(
+        "{} is outside what a section v2.0 can declare, {:.4g} .. {:.4g} {} (s_nom 2^-14 .. "
+        "2^-7 {} per LSB, so that M and the output fit the tag's fixed-point apply){}",
+        head, si / kSNomMaxSiPerLsb, si / kSNomMinSiPerLsb, lsb_unit, si_unit, tail);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double ratio = m_c.row(i).norm() / nominal_out;
+    if (std::fabs(ratio - 1.0) > kSensitivityTolerance) {
+      return fmt::format(
+          "{}: row {} of M has {:.4g} {}, {:+.1f} % from it; a section holds M only when every "
+          "row norm lies within +-10 % of its nominal, i.e. {:.4g} .. {:.4g} {}{}",
+          head, "xyz"[i], 1.0 / m_c.row(i).norm(), lsb_unit, 100.0 * (1.0 / ratio - 1.0),
+          1.0 / (nominal_out * (1.0 + kSensitivityTolerance)),
+          1.0 / (nominal_out * (1.0 - kSensitivityTolerance)), lsb_unit, tail);
+    }
+  }
+  const double bias_limit = accel ? kAccelBiasLimitLsbFs0 : kGyroBiasLimitLsbFs0;
+  const double tempco_limit = TempcoLimitLsbPerC(accel, 0);
+  const double d =
+      std::max(std::fabs(s.t_valid_max_c - s.t_ref_c), std::fabs(s.t_valid_min_c - s.t_ref_c));
+  for (size_t i = 0; i < 3; ++i) {
+    const double b0_abs = s.b0_lsb[i] + (s.input == kInputOffsetBinary ? 32768.0 : 0.0);
+    const double bound = std::fabs(s.b0_lsb[i]) + std::fabs(s.b1_lsb_per_c[i]) * d;
+    if (bound > bias_limit) {
+      return fmt::format(
+          "the {} bias b0_{} = {:.6g} LSB ({:+.6g} from the signed input's zero 0, {:+.6g} from "
+          "an unsigned input's mid-scale 32768; with the temperature term up to {:.6g} LSB over "
+          "the validity range) is beyond the {} LSB a section holds about the input's zero "
+          "(|b0| + |b1| D + |b2| D^2, section v2.0: fs_sel 0's limit in counts){}",
+          ImuSensorName(sensor), "xyz"[i], b0_abs, b0_abs, b0_abs - 32768.0, bound, bias_limit,
+          tail);
+    }
+    if (std::fabs(s.b1_lsb_per_c[i]) > tempco_limit) {
+      return fmt::format(
+          "the {} temperature coefficient b1_{} = {:.6g} LSB/degC is beyond the {} LSB/degC a "
+          "section v2.0 holds (|b1| + 2 |b2| D){}",
+          ImuSensorName(sensor), "xyz"[i], s.b1_lsb_per_c[i], tempco_limit, tail);
+    }
+  }
+  return fmt::format("{}: {}{}", head, write_error, tail);
+}
+
 }  // namespace
 
 bool BlobFromCalibrationOptions::IsValid(std::string* why) const {
@@ -169,9 +235,12 @@ Result<uint8_t> NominalFsSel(ImuSensor sensor, const Eigen::Matrix3d& m,
       "the {} sensitivity {:.4g} {} is {:+.1f} % from the nominal {:.4g} {} of fs_sel {} "
       "(nominal from {}, profile {}); the blob format v1 cannot represent it: a section declares "
       "its nominal sensitivity as an MPU6050 FS_SEL and the tag uses M only within +-10 % of it "
-      "(docs/calibration-blob.md 3.1), i.e. {} {}",
+      "(docs/calibration-blob.md 3.1), i.e. {} {}{}",
       ImuSensorName(sensor), 1.0 / row_norm, lsb_unit, 100.0 * (1.0 / ratio - 1.0), 1.0 / s_nom,
-      lsb_unit, fs_sel, source, SensorProfileName(o.profile), ranges, lsb_unit));
+      lsb_unit, fs_sel, source, SensorProfileName(o.profile), ranges, lsb_unit,
+      o.profile == SensorProfile::kMpu6050
+          ? "; another IMU: --profile generic, whose section v2.0 declares its own nominal"
+          : ""));
 }
 
 Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m) {
@@ -201,8 +270,10 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   // docs/calibration-blob.md section 10: M is calibration.json's `matrix` (the reader checked it
   // against `scale` and `misalignment`); a calibration straight from a fit has model.Matrix().
   const Eigen::Matrix3d m_c = c.M();
+  const bool generic = options.profile == SensorProfile::kGeneric;
   Result<uint8_t> fs = NominalFsSel(model.sensor, m_c, options);
-  if (!fs.ok()) return MakeError(fmt::format("{}: {}", name, fs.error().message));
+  // generic: a section v2.0 declares the nominal itself when no FS_SEL of v1.0 fits (below)
+  if (!fs.ok() && !generic) return MakeError(fmt::format("{}: {}", name, fs.error().message));
   if (model.kind != ModelKind::kBias && c.matrix_u.isZero(0.0)) {
     return MakeError(fmt::format(
         "{}: 'matrix_u' is missing or zero; the blob stores the uncertainty of every element of M",
@@ -210,7 +281,7 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   }
   const double si = SiPerOutputUnit(model.sensor);
   SensorConstants s;
-  s.fs_sel = fs.value();
+  s.fs_sel = fs.ok() ? fs.value() : 0;
   s.dlpf_cfg = options.dlpf_cfg;
   s.model_bits = kModelBias;
   if (model.kind == ModelKind::kFull) s.model_bits |= kModelFullMatrix;
@@ -219,7 +290,7 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   // coefficient is |b1| on each axis.
   const bool accel = model.sensor == ImuSensor::kAccel;
   const double tempco_limit = TempcoLimitLsbPerC(accel, s.fs_sel);
-  for (int i = 0; i < 3 && model.has_temperature; ++i) {
+  for (int i = 0; i < 3 && model.has_temperature && !generic; ++i) {
     const double b1 = model.bias_per_c[i];
     if (std::fabs(b1) <= tempco_limit) continue;
     const double per_unit = accel ? 1000.0 * NominalOutPerLsb(model.sensor, s.fs_sel)
@@ -266,7 +337,51 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   }
   std::string why;
   if (!s.IsValid(&why)) return MakeError(fmt::format("{}: {}", name, why));
-  return s;
+  if (!generic) return s;
+  // generic (docs/calibration-blob.md 10, "Nominal sensitivity"): a section v1.0 when the tag
+  // firmware uses one (tags with a firmware older than issue #25 accept it too), else a section
+  // v2.0 declaring the nominal, with signed input or, when only that holds the biases, unsigned
+  // counts about the mid-scale 32768 (b0 stored relative to it, exactly: both are integers or
+  // binary64 values far below 2^52).
+  if (fs.ok() && FirmwareUses(s, model.sensor)) return s;
+  const std::optional<double> declared = accel ? options.accel_fs_g : options.gyro_fs_dps;
+  const double nominal_out = declared ? *declared / 32768.0 : m_c.rowwise().norm().mean();
+  const std::string source =
+      declared ? fmt::format("{} {:g}", accel ? "--accel-fs-g" : "--gyro-fs-dps", *declared)
+               : std::string("the calibration's own (mean row norm of M)");
+  s.s_nom_si_per_lsb = si * nominal_out;
+  double best = 1e300;  // the range setting the tag runs: the MPU6050 FS_SEL nearest on a log scale
+  for (int f = 0; f < 4; ++f) {
+    const double dist = std::fabs(std::log(nominal_out / NominalOutPerLsb(model.sensor, f)));
+    if (dist < best) {
+      best = dist;
+      s.fs_sel = static_cast<uint8_t>(f);
+    }
+  }
+  SensorConstants tried = s;
+  std::string write_error;
+  for (const uint8_t input : {kInputInt16, kInputOffsetBinary}) {
+    SensorConstants t = s;
+    t.input = input;
+    if (input == kInputOffsetBinary) {
+      for (double& b : t.b0_lsb) b -= 32768.0;
+    }
+    BlobContents trial;
+    trial.seq = 1;
+    (accel ? trial.accel : trial.gyro) = t;
+    Result<std::vector<uint8_t>> w = WriteBlob(trial);
+    if (w.ok()) return t;
+    // report the encoding whose biases lie nearer the input's zero
+    const double dev = std::fabs(t.b0_lsb[0]) + std::fabs(t.b0_lsb[1]) + std::fabs(t.b0_lsb[2]);
+    const double dev_tried =
+        std::fabs(tried.b0_lsb[0]) + std::fabs(tried.b0_lsb[1]) + std::fabs(tried.b0_lsb[2]);
+    if (input == kInputInt16 || dev < dev_tried) {
+      tried = t;
+      write_error = w.error().message;
+    }
+  }
+  return MakeError(fmt::format(
+      "{}: {}", name, GenericRefusal(tried, model.sensor, m_c, nominal_out, source, write_error)));
 }
 
 Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,

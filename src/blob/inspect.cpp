@@ -31,14 +31,17 @@ const char* StatusReason(int status) {
     case METRO_FW_SENSOR_NONFINITE:
       return "a NaN or Inf constant, or a negative uncertainty; expected finite constants";
     case METRO_FW_SENSOR_BAD_MODEL:
-      return "model bits outside 0x01, 0x02, 0x04, 0x08, 0x80";
+      return "model bits outside 0x01, 0x02, 0x04, 0x08, 0x80, or (section v2.0) an input "
+             "encoding other than 0 (int16) and 1 (offset binary)";
     case METRO_FW_SENSOR_CONFIG_MISMATCH:
       return "fs_sel above 3 or dlpf_cfg above 6, a configuration no tag has";
     case METRO_FW_SENSOR_LIMITS:
       return "expected row norms of M within 10 % of the nominal sensitivity, det(M) > 0, bias "
              "within 0.25 g / 60 deg/s, temperature coefficient |b1| + 2 |b2| D within 4.9 "
              "mg/degC / 0.67 deg/s/degC and -40 <= t_valid_min_c, t_valid_min_c + 2 <= "
-             "t_valid_max_c <= 85 (section 3.1)";
+             "t_valid_max_c <= 85 (section 3.1; for a section v2.0 relative to its declared "
+             "s_nom, 2^-14 .. 2^-7 SI per LSB, with fs_sel 0's bias and temperature-coefficient "
+             "limits in counts about the input's zero)";
     default:
       return "see docs/calibration-blob.md section 3.1";
   }
@@ -58,8 +61,9 @@ void SensorGate(const std::vector<uint8_t>& bytes, const metro_fw_blob_info& inf
                 std::vector<std::string>* refusals) {
   metro_fw_buffer buf{bytes.data(), static_cast<uint32_t>(bytes.size())};
   bool temp_terms = false;
-  for (const auto& [name, kind, off, bit] : {std::tuple{"accel", METRO_FW_ACCEL, info.accel_off, 0},
-                                             std::tuple{"gyro", METRO_FW_GYRO, info.gyro_off, 1}}) {
+  for (const auto& [name, kind, off, bit, version] :
+       {std::tuple{"accel", METRO_FW_ACCEL, info.accel_off, 0, info.accel_version},
+        std::tuple{"gyro", METRO_FW_GYRO, info.gyro_off, 1, info.gyro_version}}) {
     const bool declared = ((info.flags >> bit) & 1u) != 0;
     const std::string range = Range(base, off, off + uint64_t{METRO_FW_SENSOR_BODY_LEN});
     if (declared && off == 0) {
@@ -82,6 +86,11 @@ void SensorGate(const std::vector<uint8_t>& bytes, const metro_fw_blob_info& inf
       cfg.accel_fs_sel = fs;
       cfg.gyro_fs_sel = fs;
       cfg.dlpf_cfg = bytes[off + 1];
+      // section v2.0: a tag whose driver delivers the input the section declares
+      if ((version >> 8) == 2 && off + 4u <= bytes.size()) {
+        cfg.accel_input = bytes[off + 3];
+        cfg.gyro_input = bytes[off + 3];
+      }
     }
     metro_fw_sensor_cal cal{};
     METRO_CHECK(metro_fw_sensor_decode(metro_fw_buffer_read, &buf, &info, kind, &cfg, &cal) ==
@@ -287,6 +296,17 @@ std::string SensorText(const SensorConstants& s, bool accel) {
   const auto used = [&](uint8_t bit) {
     return (s.model_bits & bit) ? "" : " (bit clear: not applied)";
   };
+  if (s.s_nom_si_per_lsb) {
+    // section v2.0 (issue #25): the declared nominal and the raw input
+    const double unit = accel ? 9.80665 : 3.14159265358979323846 / 180.0;
+    out += fmt::format(
+        "    section v2.0: s_nom {} {} per LSB ({:.6g} {}); input {}\n", F32(*s.s_nom_si_per_lsb),
+        si, unit / *s.s_nom_si_per_lsb, accel ? "LSB/g" : "LSB/(deg/s)",
+        s.input == kInputOffsetBinary
+            ? "offset binary (unsigned 16-bit counts; b0 relative to the mid-scale 32768)"
+        : s.input == kInputInt16 ? "int16 (signed counts)"
+                                 : fmt::format("code {} (unknown)", s.input));
+  }
   out += fmt::format("    b0 {} LSB, u {}{}\n", F32s(s.b0_lsb), F32s(s.u_b0_lsb), used(kModelBias));
   out += fmt::format("    b1 {} LSB/degC, u {}{}\n", F32s(s.b1_lsb_per_c), F32s(s.u_b1_lsb_per_c),
                      used(kModelLinearT));
@@ -304,6 +324,13 @@ std::string SensorText(const SensorConstants& s, bool accel) {
 
 nlohmann::json SensorJson(const SensorConstants& s) {
   nlohmann::json j;
+  j["section_version"] = s.s_nom_si_per_lsb ? "2.0" : "1.0";
+  if (s.s_nom_si_per_lsb) {
+    j["s_nom_si_per_lsb"] = *s.s_nom_si_per_lsb;
+    j["input"] = s.input == kInputOffsetBinary ? "offset_binary"
+                 : s.input == kInputInt16      ? "int16"
+                                               : std::to_string(s.input);
+  }
   j["fs_sel"] = s.fs_sel;
   j["dlpf_cfg"] = s.dlpf_cfg;
   j["model_bits"] = s.model_bits;

@@ -1,5 +1,7 @@
 #include "metro/blob/inspect.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -83,6 +85,47 @@ TEST_CASE("Inspect text shows the whole blob with dates in UTC", "[blob][inspect
   CHECK(j["slots"][0]["meta"]["cal_time_utc"] == "2026-05-28T20:26:40Z");
   CHECK(j["slots"][0]["meta"]["cal_time_utc_s"] == 1780000000u);
   CHECK(j["slots"][0]["meta"]["due_time_utc"] == "2027-05-28T20:26:40Z");
+}
+
+TEST_CASE("Inspect shows a section v2.0's declared s_nom and input", "[blob][inspect]") {
+  // issue #25: the gyroscope of imu_tk's Xsens (83.2 LSB/(deg/s), unsigned counts).
+  BlobContents c = testing::Contents();
+  const double s_nom = 3.14159265358979323846 / 180.0 / 83.2;
+  const double old_nom = 250.0 / 32768.0 * 3.14159265358979323846 / 180.0;
+  for (double& m : c.gyro->m) m *= s_nom / old_nom;
+  c.gyro->s_nom_si_per_lsb = s_nom;
+  c.gyro->input = kInputOffsetBinary;
+  c.gyro->fs_sel = 1;
+  auto blob = WriteBlob(c);
+  REQUIRE(blob.ok());
+  auto r = InspectFile(WriteTemp("v2.bin", Bytes(blob.value())), InspectOptions{});
+  REQUIRE(r.ok());
+  CHECK(r.value().ok());
+  const std::string text = FormatInspect(r.value());
+  INFO(text);
+  // s_nom as the binary32 the tag holds, and 83.2 LSB/(deg/s) back from it
+  CHECK_THAT(text, Catch::Contains(fmt::format(
+                       "    section v2.0: s_nom {} rad/s per LSB (83.2 LSB/(deg/s)); input offset "
+                       "binary (unsigned 16-bit counts; b0 relative to the mid-scale 32768)\n",
+                       static_cast<float>(s_nom))));
+  CHECK(text.find("section v2.0") == text.rfind("section v2.0"));  // the accel stays v1.0
+  const auto j = InspectToJson(r.value());
+  CHECK(j["slots"][0]["gyro"]["section_version"] == "2.0");
+  CHECK(j["slots"][0]["gyro"]["input"] == "offset_binary");
+  CHECK(j["slots"][0]["gyro"]["s_nom_si_per_lsb"] ==
+        static_cast<double>(static_cast<float>(s_nom)));
+  CHECK(j["slots"][0]["accel"]["section_version"] == "1.0");
+  CHECK_FALSE(j["slots"][0]["accel"].contains("s_nom_si_per_lsb"));
+  // An input code the firmware does not know is refused by the gate, naming it.
+  std::vector<uint8_t> bad = blob.value();
+  bad[0x168 + 3] = 2;
+  const uint32_t crc = Crc32(bad.data(), bad.size() - 4);
+  for (int i = 0; i < 4; ++i) bad[bad.size() - 4 + i] = static_cast<uint8_t>(crc >> (8 * i));
+  auto rb = InspectFile(WriteTemp("v2_bad_input.bin", Bytes(bad)), InspectOptions{});
+  REQUIRE(rb.ok());
+  CHECK_FALSE(rb.value().ok());
+  CHECK_THAT(FormatInspect(rb.value()), Catch::Contains("an input encoding other than 0 (int16) "
+                                                        "and 1 (offset binary)"));
 }
 
 TEST_CASE("Inspect of a corrupt .bin names the firmware's reason", "[blob][inspect]") {

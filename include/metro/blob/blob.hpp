@@ -53,11 +53,28 @@ inline double TempcoLimitLsbPerC(bool accel, int fs_sel) {
   return (accel ? kAccelTempcoLimitLsbPerCFs0 : kGyroTempcoLimitLsbPerCFs0) >> fs_sel;
 }
 
-// Constants of one sensor (ACCEL or GYRO section body, 176 bytes).
+// Raw input encodings of a sensor section v2.0 (docs/calibration-blob.md 2.4): the tag's
+// driver hands the applies signed counts about the input's zero, and b0 is relative to it.
+inline constexpr uint8_t kInputInt16 = 0;         // two's complement int16, zero at 0
+inline constexpr uint8_t kInputOffsetBinary = 1;  // unsigned 16-bit ADC, zero at 32768
+// The nominal sensitivity a section v2.0 may declare, SI per LSB: 2^-14 <= s_nom < 2^-7
+// (firmware METRO_FW_S_NOM_MIN_Q / _MAX_Q). In v2.0 the bias and temperature-coefficient limits
+// are fs_sel 0's in counts whatever fs_sel: 4096 / 7864 LSB, 80 / 88 LSB/degC.
+inline constexpr double kSNomMinSiPerLsb = 1.0 / 16384.0;
+inline constexpr double kSNomMaxSiPerLsb = 1.0 / 128.0;
+inline constexpr int kAccelBiasLimitLsbFs0 = 4096;  // 0.25 g at 16384 LSB/g
+inline constexpr int kGyroBiasLimitLsbFs0 = 7864;   // 60 deg/s at 131.072 LSB/(deg/s)
+
+// Constants of one sensor (ACCEL or GYRO section body, 176 bytes). A section v1.0 declares its
+// nominal sensitivity as the MPU6050 FS_SEL; with s_nom_si_per_lsb set the writer emits a
+// section v2.0 (issue #25) that declares s_nom and the input encoding itself.
 struct SensorConstants {
-  uint8_t fs_sel = 0;      // MPU6050 FS_SEL, 0..3
+  uint8_t fs_sel = 0;      // MPU6050 FS_SEL, 0..3 (v2.0: the range setting the tag must run)
   uint8_t dlpf_cfg = 0;    // MPU6050 DLPF_CFG, 0..6
   uint8_t model_bits = 0;  // kModel* bits
+  // v2.0 only: the declared nominal sensitivity (m/s^2 or rad/s per LSB) and kInput*.
+  std::optional<double> s_nom_si_per_lsb;
+  uint8_t input = kInputInt16;
   double t_ref_c = 25.0;
   std::array<double, 9> m{};  // row-major, SI per LSB
   std::array<double, 3> b0_lsb{}, b1_lsb_per_c{}, b2_lsb_per_c2{};
@@ -69,7 +86,8 @@ struct SensorConstants {
   std::array<int16_t, 3> hw_offs{};  // MPU6050 offset register values
 
   // fs_sel <= 3, dlpf_cfg <= 6, known model bits, every number finite in binary32,
-  // uncertainties and resid_rms >= 0, t_valid_min_c < t_valid_max_c.
+  // uncertainties and resid_rms >= 0, t_valid_min_c < t_valid_max_c; input kInputInt16 or
+  // kInputOffsetBinary, and kInputInt16 without s_nom_si_per_lsb (v1.0 has no input field).
   bool IsValid(std::string* why) const;
 };
 
@@ -138,7 +156,8 @@ std::string FirmwareErrorMessage(int code);
 std::string SensorStatusName(int status);
 
 // The model of the header comment in double precision, with the firmware's temperature clamp
-// (a NaN temperature counts as t_ref_c) and model bits.
+// (a NaN temperature counts as t_ref_c) and model bits. raw_lsb are signed counts about the
+// input's zero (for kInputOffsetBinary the ADC word minus 32768).
 std::array<double, 3> ApplyConstants(const SensorConstants& c,
                                      const std::array<int16_t, 3>& raw_lsb, double temp_c);
 

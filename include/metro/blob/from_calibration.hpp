@@ -20,7 +20,9 @@
 // c is a defined constant, so the uncertainties scale exactly (JCGM 100:2008 5.1.2 with a
 // sensitivity coefficient c and no uncertainty of its own). fs_sel is the declared full-scale
 // setting's, or the setting whose nominal sensitivity the mean row norm of M_c matches within
-// 10 % (settings are a factor 2 apart, so at most one can match); see SensorProfile.
+// 10 % (settings are a factor 2 apart, so at most one can match); see SensorProfile, which
+// also says when a section v2.0 declares s_nom and the input instead (then b0 = b0_c - 32768
+// for unsigned counts).
 #pragma once
 
 #include <Eigen/Core>
@@ -36,15 +38,20 @@
 
 namespace metro::blob {
 
-// The IMU a blob is for (`calibrate blob --profile`), which sets the nominal sensitivity the
-// section's fs_sel declares (docs/calibration-blob.md section 10, "Nominal sensitivity"):
-//   kMpu6050  the MPU6050 datasheet's sensitivity of the declared full-scale setting (+-2, 4,
-//             8, 16 g; +-250, 500, 1000, 2000 deg/s), or without one the setting M matches;
-//   kGeneric  another IMU: 32768 / the declared full scale (any value), or without one M's own
-//             mean row norm; the section declares the MPU6050 fs_sel nearest to it.
-// Either way the blob format v1 represents the constants only when every row norm of M lies
-// within +-10 % of the declared fs_sel's nominal and the firmware's limits of section 3.1 hold;
-// otherwise the blob is refused, saying which constant the format cannot hold.
+// The IMU a blob is for (`calibrate blob --profile`), which sets the nominal sensitivity a
+// section declares (docs/calibration-blob.md section 10, "Nominal sensitivity"):
+//   kMpu6050  a section v1.0 whose fs_sel declares the MPU6050 datasheet's sensitivity of the
+//             declared full-scale setting (+-2, 4, 8, 16 g; +-250, 500, 1000, 2000 deg/s), or
+//             without one of the setting M matches within 10 %; else refused;
+//   kGeneric  another IMU: a section v1.0 when the tag firmware uses one (the fs_sel nearest to
+//             32768 / the declared full scale, or to M's own mean row norm), so that tags with
+//             an older firmware accept it too; otherwise a section v2.0 (issue #25) that declares
+//             s_nom itself (that nominal, SI per LSB) and the raw input: int16, or unsigned
+//             16-bit counts about the mid-scale 32768 when only those hold the biases (b0 is
+//             then the calibrator's bias minus 32768).
+// The blob is refused only when no section the firmware accepts can hold the constants
+// (section 3.1: s_nom 2^-14 .. 2^-7 SI per LSB, row norms within +-10 % of s_nom, bias and
+// temperature-coefficient limits), with a message naming the figures and what a section holds.
 enum class SensorProfile { kMpu6050, kGeneric };
 const char* SensorProfileName(SensorProfile profile);  // "mpu6050", "generic"
 std::optional<SensorProfile> ParseSensorProfile(std::string_view name);
@@ -78,10 +85,12 @@ struct BlobFromCalibrationOptions {
   bool IsValid(std::string* why) const;
 };
 
-// fs_sel of the section for sensor calibration matrix `m_out_per_lsb` under options.profile and
-// the declared full scale (above). Errors say why the format cannot represent M: a declared
-// setting the MPU6050 does not have, or a sensitivity more than 10 % from the nominal of every
-// fs_sel the format can declare (naming the nearest and the representable ranges).
+// fs_sel of a section v1.0 for sensor calibration matrix `m_out_per_lsb` under options.profile
+// and the declared full scale (above); for kGeneric an error only means that no v1.0 section
+// holds M (SensorConstantsFromCalibration then tries a section v2.0). Errors say why the format
+// cannot represent M: a declared setting the MPU6050 does not have, or a sensitivity more than 10 %
+// from the nominal of every fs_sel the format can declare (naming the nearest and the representable
+// ranges).
 Result<uint8_t> NominalFsSel(ImuSensor sensor, const Eigen::Matrix3d& m_out_per_lsb,
                              const BlobFromCalibrationOptions& options);
 
@@ -93,10 +102,11 @@ Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m_out_per_ls
 
 // The blob section of one sensor calibration (mapping above). Errors: an input unit other than
 // "LSB" (the tag applies the constants to raw counts), no representable fs_sel
-// (NominalFsSel), a model with free scale terms but no `matrix_u`, a temperature coefficient
-// |b1| above the plausibility limit (TempcoLimitLsbPerC at that fs_sel), a validity range the rule
-// cannot give (TemperatureValidityRange). The validity range's warnings, each starting with the
-// sensor's name, are appended to *warnings when it is not null.
+// (NominalFsSel; kGeneric: no section v1.0 or v2.0 the firmware accepts), a model with free scale
+// terms but no `matrix_u`, a temperature coefficient |b1| above the plausibility limit
+// (TempcoLimitLsbPerC at that fs_sel), a validity range the rule cannot give
+// (TemperatureValidityRange). The validity range's warnings, each starting with the sensor's name,
+// are appended to *warnings when it is not null.
 Result<SensorConstants> SensorConstantsFromCalibration(
     const SensorCalibration& calibration, const BlobFromCalibrationOptions& options,
     std::vector<std::string>* warnings = nullptr);
