@@ -235,12 +235,9 @@ Result<uint8_t> NominalFsSel(ImuSensor sensor, const Eigen::Matrix3d& m,
       "the {} sensitivity {:.4g} {} is {:+.1f} % from the nominal {:.4g} {} of fs_sel {} "
       "(nominal from {}, profile {}); the blob format v1 cannot represent it: a section declares "
       "its nominal sensitivity as an MPU6050 FS_SEL and the tag uses M only within +-10 % of it "
-      "(docs/calibration-blob.md 3.1), i.e. {} {}{}",
+      "(docs/calibration-blob.md 3.1), i.e. {} {}",
       ImuSensorName(sensor), 1.0 / row_norm, lsb_unit, 100.0 * (1.0 / ratio - 1.0), 1.0 / s_nom,
-      lsb_unit, fs_sel, source, SensorProfileName(o.profile), ranges, lsb_unit,
-      o.profile == SensorProfile::kMpu6050
-          ? "; another IMU: --profile generic, whose section v2.0 declares its own nominal"
-          : ""));
+      lsb_unit, fs_sel, source, SensorProfileName(o.profile), ranges, lsb_unit));
 }
 
 Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m) {
@@ -273,7 +270,12 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   const bool generic = options.profile == SensorProfile::kGeneric;
   Result<uint8_t> fs = NominalFsSel(model.sensor, m_c, options);
   // generic: a section v2.0 declares the nominal itself when no FS_SEL of v1.0 fits (below)
-  if (!fs.ok() && !generic) return MakeError(fmt::format("{}: {}", name, fs.error().message));
+  if (!fs.ok() && !generic) {
+    return MakeError(fmt::format(
+        "{}: {}; another IMU: --profile generic, whose section v2.0 declares its own nominal "
+        "sensitivity",
+        name, fs.error().message));
+  }
   if (model.kind != ModelKind::kBias && c.matrix_u.isZero(0.0)) {
     return MakeError(fmt::format(
         "{}: 'matrix_u' is missing or zero; the blob stores the uncertainty of every element of M",

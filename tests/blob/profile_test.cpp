@@ -350,6 +350,36 @@ TEST_CASE("calibrate blob and push --profile; push refuses before opening the po
   std::remove("metro_profile.bin");
   std::remove(cal_path.c_str());
 }
+
+TEST_CASE("calibrate blob --profile generic writes a section v2.0 that inspect shows",
+          "[blob][apps]") {
+  // 83.2 counts per deg/s (imu_tk's Xsens gyroscope): a blob with --profile generic, refused
+  // with the default profile; push gets past the format check to the port.
+  const std::string cal_path = "metro_profile_83lsb_per_dps.json";
+  REQUIRE(WriteFileAtomically(cal_path, FormatCalibrationJson(WithGyroSensitivity(83.2 / 131.072)))
+              .ok());
+  auto run = [](const std::string& args) { return testing::RunProgram(METRO_CALIBRATE_EXE, args); };
+  std::remove("metro_profile_v2.bin");
+  testing::ProgramRun r = run(
+      "blob " + cal_path + " --sensor 2 --device-id 9ABCDEF012345678 -q -o metro_profile_v2.bin");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("another IMU: --profile generic") != std::string::npos);
+  r = run("blob " + cal_path +
+          " --sensor 2 --device-id 9ABCDEF012345678 --profile generic -q -o metro_profile_v2.bin");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  r = run("inspect metro_profile_v2.bin");
+  CHECK(r.exit_code == 0);
+  CHECK(r.out.find("section v2.0: s_nom ") != std::string::npos);
+  CHECK(r.out.find(" LSB/(deg/s)); input int16 (signed counts)") != std::string::npos);
+  CHECK(r.out.find("result: valid") != std::string::npos);
+  const std::string port = "/nonexistent/metro-tty";
+  r = run("push --port " + port + " " + cal_path + " --sensor 2 --any-device --profile generic");
+  CHECK(r.exit_code == 1);
+  CHECK(r.err.find("not opened") == std::string::npos);
+  std::remove("metro_profile_v2.bin");
+  std::remove(cal_path.c_str());
+}
 #endif
 
 }  // namespace metro::blob
