@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "exit_codes.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/status.hpp"
 #include "metro/core/terminal_text.hpp"
@@ -71,6 +72,13 @@ inline void PrintError(const Error& error) {
   std::fwrite(line.data(), 1, line.size(), stderr);
 }
 
+// Prints "error: <message>" to stderr and returns the exit code of its kind (ExitCodeFor:
+// 2 for bad input or usage, 1 for a run or a write that failed).
+inline int PrintErrorExit(const Error& error) {
+  PrintError(error);
+  return ExitCodeFor(error);
+}
+
 // Prints "error: <message>" to stderr, on one line (a newline in `message` is shown as \n).
 inline void PrintErrorText(std::string_view message) {
   const std::string line = "error: " + EscapeControlChars(message) + "\n";
@@ -119,7 +127,7 @@ inline Status WriteOutput(const std::string& path, std::string_view contents) {
   }
   std::fwrite(contents.data(), 1, contents.size(), stdout);
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
-    return MakeError(std::string("cannot write to stdout: ") + std::strerror(errno));
+    return MakeIoError(std::string("cannot write to stdout: ") + std::strerror(errno));
   }
   return Status::Ok();
 }
@@ -142,7 +150,7 @@ class StreamedOutput {
   Status Write(std::string_view chunk) {
     if (!IsStdio(path_)) return file_.Write(chunk);
     if (std::fwrite(chunk.data(), 1, chunk.size(), stdout) != chunk.size()) {
-      return MakeError(std::string("cannot write to stdout: ") + std::strerror(errno));
+      return MakeIoError(std::string("cannot write to stdout: ") + std::strerror(errno));
     }
     return Status::Ok();
   }

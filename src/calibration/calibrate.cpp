@@ -255,7 +255,7 @@ Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,
   try {
     return CalibrateTagImpl(records, options);
   } catch (const std::exception& e) {
-    return MakeError(std::string("calibration failed: ") + e.what());
+    return MakeFailedError(std::string("calibration failed: ") + e.what());
   }
 }
 

@@ -129,7 +129,7 @@ double Rms(const std::vector<double>& r) {
 Status CheckRank(ceres::Problem* problem, const std::vector<double*>& free_blocks,
                  const std::vector<std::string>& names) {
   std::optional<Eigen::MatrixXd> jac = DenseJacobian(problem, free_blocks);
-  if (!jac) return MakeError("could not evaluate the Jacobian at the solution");
+  if (!jac) return MakeFailedError("could not evaluate the Jacobian at the solution");
   Eigen::MatrixXd& j = *jac;
   for (Eigen::Index c = 0; c < j.cols(); ++c) {
     const double n = j.col(c).norm();
@@ -149,7 +149,7 @@ Status CheckRank(ceres::Problem* problem, const std::vector<double*>& free_block
   }
   std::string list;
   for (const std::string& s : involved) list += (list.empty() ? "" : ", ") + s;
-  return MakeError(fmt::format(
+  return MakeFailedError(fmt::format(
       "degenerate calibration: the Jacobian is rank deficient (smallest/largest singular value "
       "{:.2e}); the data do not determine {}. Collect poses and rotations that exercise these "
       "parameters (every axis up and down, rotations about every axis)",
@@ -200,7 +200,7 @@ Result<Eigen::MatrixXd> ScaledCovariance(ceres::Problem* problem,
   ceres::Covariance covariance(co);
   std::vector<const double*> cblocks(free_blocks.begin(), free_blocks.end());
   if (!covariance.Compute(cblocks, problem)) {
-    return MakeError(
+    return MakeFailedError(
         "degenerate calibration: Ceres could not compute the parameter covariance (the "
         "Jacobian is rank deficient); the data do not determine every constant: collect more "
         "varied poses and rotations");
@@ -221,10 +221,10 @@ Status RankAndCovariance(ceres::Problem* problem, ImuSensor imu, ModelKind kind,
     names.push_back(std::string(ImuSensorName(imu)) + "." + n);
   }
   Status rank = CheckRank(problem, s->free_blocks, names);
-  if (!rank.ok()) return MakeError(fmt::format("sensor {}: {}", sensor, rank.error().message));
+  if (!rank.ok()) return rank.error().WithContext(fmt::format("sensor {}", sensor));
   Result<Eigen::MatrixXd> c = ScaledCovariance(problem, s->free_blocks, s->parameters, s->residuals,
                                                robust_scale, &s->reduced_chi2);
-  if (!c.ok()) return MakeError(fmt::format("sensor {}: {}", sensor, c.error().message));
+  if (!c.ok()) return c.error().WithContext(fmt::format("sensor {}", sensor));
   s->covariance = c.value();
   return Status::Ok();
 }
@@ -888,8 +888,8 @@ Status SolveStage(Stage stage, const TagProblemData& d, const CalibrationOptions
   fit->iterations += static_cast<int>(summary.iterations.size());
   fit->converged = summary.termination_type == ceres::CONVERGENCE;
   if (!summary.IsSolutionUsable()) {
-    return MakeError(fmt::format("the {} fit failed: {}",
-                                 accel_free ? "accelerometer" : "gyroscope", summary.message));
+    return MakeFailedError(fmt::format(
+        "the {} fit failed: {}", accel_free ? "accelerometer" : "gyroscope", summary.message));
   }
   // Unwhitened residuals of every group at the solution.
   fit->r_accel.clear();
@@ -1038,7 +1038,7 @@ Status PropagateAccelUncertainty(ceres::Problem* gyro_problem,
   std::vector<double*> all = gyro_free;
   all.insert(all.end(), accel_in_gyro.begin(), accel_in_gyro.end());
   std::optional<Eigen::MatrixXd> j = DenseJacobian(gyro_problem, all);
-  if (!j) return MakeError("could not evaluate the gyroscope Jacobian at the solution");
+  if (!j) return MakeFailedError("could not evaluate the gyroscope Jacobian at the solution");
   const Eigen::MatrixXd gg = j->leftCols(pg);
   const Eigen::MatrixXd ga = j->rightCols(accel.parameters);
   const Eigen::MatrixXd sens = -(gg.transpose() * gg).ldlt().solve(gg.transpose() * ga);
@@ -1193,7 +1193,7 @@ Status CheckDetermined(const SensorCalibration& c, int sensor_number) {
   if (bad.empty()) return Status::Ok();
   std::string list;
   for (const std::string& b : bad) list += (list.empty() ? "" : ", ") + b;
-  return MakeError(fmt::format(
+  return MakeFailedError(fmt::format(
       "sensor {}: degenerate calibration: the data do not determine {}; the uncertainty is as "
       "large as the datasheet tolerance. Collect more distinct poses (every axis up and down, "
       "the corners and edges of a cube) and rotations about every axis, or use a simpler --model",

@@ -104,7 +104,7 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
   }
   const int clusters = static_cast<int>(first_of.size());
   if (clusters < p) {
-    return MakeError(fmt::format(
+    return MakeFailedError(fmt::format(
         "sensor {}: degenerate calibration: the {} static poses hold {} distinct orientations "
         "(gravity directions more than {} deg apart); the accelerometer '{}' model{} has {} "
         "parameters, and repeated stops at one orientation do not determine more constants. Add "

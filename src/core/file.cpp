@@ -70,9 +70,13 @@ Status AtomicFileWriter::Open() {
     if (fd_ < 0 && errno != EEXIST) break;
   }
   if (fd_ < 0) {
+    // No space or a failing device is a write that failed; anything else (no permission,
+    // a read-only file system) an output that cannot be created where it was named.
+    const int err = errno;
     const std::string why = OsError("cannot create a temporary file beside", path_);
     tmp_.clear();
-    return MakeError(why);
+    const bool io = err == ENOSPC || err == EDQUOT || err == EIO;
+    return io ? MakeIoError(why) : MakeError(why);
   }
   if (replacing) {
     // The replaced file keeps its permissions (a 0600 report stays 0600) and, where the
@@ -81,7 +85,7 @@ Status AtomicFileWriter::Open() {
       [[maybe_unused]] const int ignored = ::fchown(fd_, old.st_uid, old.st_gid);
     }
     if (::fchmod(fd_, old.st_mode & 07777) != 0) {
-      return MakeError(OsError("cannot keep the permissions of", path_));
+      return MakeIoError(OsError("cannot keep the permissions of", path_));
     }
   }
   return Status::Ok();
@@ -95,7 +99,7 @@ Status AtomicFileWriter::Write(std::string_view chunk) {
     const ssize_t n = ::write(fd_, data, left);
     if (n < 0) {
       if (errno == EINTR) continue;
-      return MakeError(OsError("cannot write", path_));
+      return MakeIoError(OsError("cannot write", path_));
     }
     data += n;
     left -= static_cast<size_t>(n);
@@ -114,7 +118,7 @@ Status AtomicFileWriter::Finish() {
     const std::string why = OsError("cannot flush", path_);
     ::unlink(tmp_.c_str());
     tmp_.clear();
-    return MakeError(why);
+    return MakeIoError(why);
   }
   finished_ = true;
   return Status::Ok();
@@ -126,7 +130,7 @@ Status AtomicFileWriter::Publish() {
     const std::string why = OsError("cannot rename temporary file onto", path_);
     ::unlink(tmp_.c_str());
     tmp_.clear();
-    return MakeError(why);
+    return MakeIoError(why);
   }
   tmp_.clear();
   // Make the rename itself durable.

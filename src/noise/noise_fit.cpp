@@ -677,7 +677,9 @@ AllanMinimum FindAllanMinimum(const AllanCurve& curve) {
 }
 
 Result<MeanUncertaintyPrediction> PredictMeanUncertainty(const NoiseFit& fit, double duration_s) {
-  if (!fit.success) return MakeError("mean uncertainty: the noise fit failed: " + fit.message);
+  if (!fit.success) {
+    return MakeFailedError("mean uncertainty: the noise fit failed: " + fit.message);
+  }
   if (!(std::isfinite(duration_s) && duration_s > 0.0)) {
     return MakeError(fmt::format("mean uncertainty: duration {} s is not positive", duration_s));
   }
