@@ -114,6 +114,37 @@ TEST_CASE("pty: the push client over SerialPort updates the simulated tag", "[bl
   std::remove(flash.c_str());
 }
 
+TEST_CASE("pty: the simulated tag takes a blob with a section v2.0 (issue #25)", "[blob][push]") {
+  // The tag's receiver and update code validate with the firmware of issue #25: a gyroscope of
+  // 83.2 LSB/(deg/s) with unsigned counts (imu_tk's Xsens) is accepted and committed.
+  Result<BlobContents> golden = DecodeBlob(Bytes(kGolden + "tag_sensor2.bin"));
+  REQUIRE(golden.ok());
+  BlobContents c = golden.value();
+  const double s_nom = 3.14159265358979323846 / 180.0 / 83.2;
+  for (double& m : c.gyro->m) m *= s_nom / (250.0 / 32768.0 * 3.14159265358979323846 / 180.0);
+  c.gyro->s_nom_si_per_lsb = s_nom;
+  c.gyro->input = kInputOffsetBinary;
+  c.gyro->fs_sel = 1;
+  Result<std::vector<uint8_t>> blob = WriteBlob(c);
+  REQUIRE(blob.ok());
+  const std::string flash = "metro_pty_v2_flash.bin";
+  std::remove(flash.c_str());
+  {
+    SimTag sim(flash, {});
+    Result<std::unique_ptr<SerialPort>> port = SerialPort::Open(sim.pty());
+    REQUIRE(port.ok());
+    PushOptions o;
+    o.timeout_ms = 200;
+    PushClient client(port.value().get(), o);
+    Result<int> slot = client.Push(blob.value());
+    REQUIRE(slot.ok());
+    CHECK(slot.value() == 0);
+    CHECK(sim.Stop() == 0);
+  }
+  CHECK(Slot(Bytes(flash), 0, blob.value().size()) == blob.value());
+  std::remove(flash.c_str());
+}
+
 TEST_CASE("pty: SerialPort errors name the path", "[blob][push]") {
   Result<std::unique_ptr<SerialPort>> p = SerialPort::Open("/nonexistent/ttyX");
   REQUIRE_FALSE(p.ok());
