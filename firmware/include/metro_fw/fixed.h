@@ -21,8 +21,12 @@
  *           + 2^-21                                                            [SI]
  * about 0.002 LSB-equivalent for an MPU6050 calibration, below 0.02 LSB for any section
  * that passes section 3.1 with |b1| <= 8 LSB/degC and |b2| <= 0.05 LSB/degC^2, and at most
- * 0.063 LSB for every section that passes 3.1 (its temperature-coefficient limit bounds
- * |b1| + 2 |b2| |dT|; docs/calibration-blob.md 3.2). */
+ * 0.063 LSB for every section v1.0 that passes 3.1 (its temperature-coefficient limit bounds
+ * |b1| + 2 |b2| |dT|; docs/calibration-blob.md 3.2), 0.076 LSB for every section v2.0 (issue
+ * #25: s_nom down to 2^-14 SI/LSB makes the Q36 and Q20 roundings larger in LSB).
+ *
+ * raw_lsb are signed counts about the input's zero: a section v2.0 with offset-binary input
+ * takes METRO_FW_OFFSET_BINARY_TO_INT16(u) of the ADC word u (blob.h). */
 #ifndef METRO_FW_FIXED_H_
 #define METRO_FW_FIXED_H_
 

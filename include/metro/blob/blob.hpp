@@ -5,6 +5,8 @@
 //
 //   y = M * (r - b0 - b1*dT - b2*dT^2),  dT = clamp(T, t_valid_min_c, t_valid_max_c) - t_ref_c
 //
+// r is the raw sample in counts about the input's zero (int16; for a section v2.0 with
+// offset-binary input the unsigned ADC word minus 32768, issue #25).
 // Bias is removed before scaling, in raw counts (LSB); M (row-major, SI per LSB) holds the
 // nominal sensitivity, scale, misalignment and any sensor-to-body rotation. M = diag(s_nom),
 // b = 0 is identity. Terms whose model bit is clear are not applied. Uncertainties are standard
