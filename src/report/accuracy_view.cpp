@@ -46,12 +46,6 @@ std::string DofText(double dof) {
   return ShortNumber(dof, 3);
 }
 
-// An uncertainty alone, two significant digits (JCGM 100:2008 7.2.6).
-std::string U2(double u) {
-  if (!std::isfinite(u)) return "-";
-  return RoundForStatement(0.0, u).uncertainty;
-}
-
 const ordered_json& Member(const ordered_json& j, const char* key) {
   static const ordered_json kEmpty = ordered_json::object();
   return j.is_object() && j.contains(key) ? j[key] : kEmpty;
@@ -231,10 +225,10 @@ Result<std::string> ErrorPlot(const std::vector<Point>& points, const Curve& cur
 mustache::data BudgetData(const std::string& title, const ordered_json& b) {
   mustache::data d;
   d.set("title", title);
-  d.set("u_c", U2(JsonNumber(b, "u_deg")));
+  d.set("u_c", UncertaintyText(JsonNumber(b, "u_deg")));
   d.set("dof_eff", DofText(Dof(b, "dof_eff")));
   d.set("k", ShortNumber(JsonNumber(b, "k"), 3));
-  d.set("U", U2(JsonNumber(b, "U_deg")));
+  d.set("U", UncertaintyText(JsonNumber(b, "U_deg")));
   d.set("coverage", ShortNumber(100.0 * JsonNumber(b, "coverage"), 3));
   d.set("dof_note", JsonString(b, "dof_note"));
   std::vector<const ordered_json*> lines;
@@ -255,10 +249,10 @@ mustache::data BudgetData(const std::string& title, const ordered_json& b) {
     const double percent = JsonNumber(*l, "percent");
     mustache::data row;
     row.set("name", JsonString(*l, "name"));
-    row.set("u", U2(JsonNumber(*l, "u_deg")));
+    row.set("u", UncertaintyText(JsonNumber(*l, "u_deg")));
     row.set("distribution", JsonString(*l, "distribution"));
     row.set("sensitivity", ShortNumber(JsonNumber(*l, "sensitivity"), 4));
-    row.set("contribution", U2(std::fabs(JsonNumber(*l, "contribution_deg"))));
+    row.set("contribution", UncertaintyText(std::fabs(JsonNumber(*l, "contribution_deg"))));
     row.set("dof", DofText(Dof(*l, "dof")));
     row.set("percent", std::isfinite(percent) ? fmt::format("{:.1f}", percent) : "-");
     row.set("note", JsonString(*l, "note"));
@@ -345,12 +339,12 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
   data.set("statement_corrected", JsonString(result, "statement_corrected"));
   data.set("statement_uncorrected", JsonString(result, "statement_uncorrected"));
   data.set("result_ok", result.value("ok", false));
-  data.set("U_corrected", U2(JsonNumber(result, "U_corrected_deg")));
+  data.set("U_corrected", UncertaintyText(JsonNumber(result, "U_corrected_deg")));
   data.set("k_corrected", ShortNumber(JsonNumber(result, "k_corrected"), 3));
-  data.set("U_uncorrected", U2(JsonNumber(result, "U_uncorrected_deg")));
+  data.set("U_uncorrected", UncertaintyText(JsonNumber(result, "U_uncorrected_deg")));
   data.set("k_uncorrected", ShortNumber(JsonNumber(result, "k_uncorrected"), 3));
-  data.set("U_random", U2(JsonNumber(result, "U_random_deg")));
-  data.set("U_max_abs", U2(JsonNumber(result, "U_uncorrected_max_abs_deg")));
+  data.set("U_random", UncertaintyText(JsonNumber(result, "U_random_deg")));
+  data.set("U_max_abs", UncertaintyText(JsonNumber(result, "U_uncorrected_max_abs_deg")));
   data.set("coverage", ShortNumber(100.0 * coverage, 3));
   const std::string which_u = JsonString(result, "which_U_to_quote");
   data.set("has_which_u", !which_u.empty());
@@ -392,8 +386,8 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
   data.set("fit_dof", ShortNumber(fit_dof, 4));
   data.set("fit_reduced_chi2", ShortNumber(JsonNumber(fit, "reduced_chi2"), 3));
   data.set("fit_scaled", fit.value("covariance_scaled_by_reduced_chi2", false) ? "yes" : "no");
-  data.set("fit_residual_rms", U2(JsonNumber(fit, "residual_rms_deg")));
-  data.set("fit_max_prediction_u", U2(JsonNumber(fit, "max_prediction_u_deg")));
+  data.set("fit_residual_rms", UncertaintyText(JsonNumber(fit, "residual_rms_deg")));
+  data.set("fit_max_prediction_u", UncertaintyText(JsonNumber(fit, "max_prediction_u_deg")));
 
   // Per plateau, rounded per JCGM 100:2008 7.2.6 (the u of each point).
   mustache::data rows{mustache::data::type::list};
@@ -414,7 +408,7 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
     row.set("u", e.uncertainty);
     row.set("n_eff", ShortNumber(JsonNumber(a, "n_eff"), 3));
     row.set("k", ShortNumber(p.k, 3));
-    row.set("U", U2(p.expanded_deg));
+    row.set("U", UncertaintyText(p.expanded_deg));
     row.set("t", fmt::format("{} .. {}", ShortNumber(JsonNumber(j, "t_start_s"), 6),
                              ShortNumber(JsonNumber(j, "t_end_s"), 6)));
     rows.push_back(row);
@@ -425,13 +419,13 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
   const ordered_json& se = Member(report, "systematic");
   const ordered_json& lin = Member(report, "linearity");
   data.set("sys_mean", ShortNumber(JsonNumber(se, "mean_error_deg"), 3));
-  data.set("sys_std", U2(JsonNumber(se, "std_error_deg")));
-  data.set("sys_rms", U2(JsonNumber(se, "rms_error_deg")));
+  data.set("sys_std", UncertaintyText(JsonNumber(se, "std_error_deg")));
+  data.set("sys_rms", UncertaintyText(JsonNumber(se, "rms_error_deg")));
   data.set("sys_max", ShortNumber(JsonNumber(se, "max_abs_error_deg"), 3));
   data.set("sys_at", ShortNumber(JsonNumber(se, "at_reference_deg"), 6));
   data.set("lin_max", ShortNumber(JsonNumber(lin, "max_abs_deviation_deg"), 3));
   data.set("lin_at", ShortNumber(JsonNumber(lin, "at_reference_deg"), 6));
-  data.set("lin_rms", U2(JsonNumber(lin, "rms_deviation_deg")));
+  data.set("lin_rms", UncertaintyText(JsonNumber(lin, "rms_deviation_deg")));
   data.set("lin_percent", ShortNumber(JsonNumber(lin, "percent_of_span"), 3));
 
   // Hysteresis.
@@ -470,7 +464,7 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
       row.set("u", r.uncertainty);
       row.set("dof", DofText(dof));
       row.set("k", ShortNumber(k, 3));
-      row.set("U", U2(k * u));
+      row.set("U", UncertaintyText(k * u));
       row.set("plateaus", fmt::format("{} / {}", JsonString(pair, "up_plateaus"),
                                       JsonString(pair, "down_plateaus")));
       h_rows.push_back(row);
@@ -500,7 +494,7 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
   // Repeatability.
   const ordered_json& rp = Member(report, "repeatability");
   data.set("repeatability_available", rp.value("available", false));
-  data.set("s_r", U2(JsonNumber(rp, "s_r_deg")));
+  data.set("s_r", UncertaintyText(JsonNumber(rp, "s_r_deg")));
   data.set("s_r_dof", ShortNumber(JsonNumber(rp, "dof"), 4));
   data.set("s_r_groups", JsonString(rp, "groups"));
   data.set("s_r_sweeps", JsonString(rp, "sweeps"));

@@ -124,6 +124,11 @@ std::string ShortNumber(double x, int significant) {
   return fmt::format("{:.{}g}", x, significant);
 }
 
+std::string UncertaintyText(double u) {
+  if (!std::isfinite(u)) return "-";
+  return RoundForStatement(0.0, u).uncertainty;
+}
+
 AxisScale ChooseAxisScale(const std::string& name, const std::string& unit_symbol, double lo,
                           double hi, double offset) {
   AxisScale a;

@@ -18,6 +18,9 @@ double NumberAt(const nlohmann::ordered_json& a, size_t i);
 std::string JsonString(const nlohmann::ordered_json& j, const char* key);
 // `significant` digits (fmt "{:.Ng}"), "-" for NaN.
 std::string ShortNumber(double x, int significant);
+// An uncertainty alone, two significant digits (JCGM 100:2008 7.2.6, RoundForStatement);
+// "-" when not finite.
+std::string UncertaintyText(double u);
 
 // A plot axis for values of `name` in `unit` spanning [lo, hi]: plotted as (x - offset) /
 // scale, scale a power of 1000 chosen so the ticks need no detached multiplier, both stated

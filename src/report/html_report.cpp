@@ -3,347 +3,43 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cmath>
 #include <filesystem>
-#include <limits>
 #include <utility>
 
 #include "accuracy_view.hpp"
 #include "html_common.hpp"
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"
-#include "metro/core/angles.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
-#include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
-#include "metro/noise/allan.hpp"
-#include "metro/noise/noise_model.hpp"
 #include "metro/report/batch.hpp"
 #include "metro/report/batch_page.hpp"
 #include "metro/report/budget_page.hpp"
 #include "metro/report/certificate.hpp"
-#include "metro/report/svg_plot.hpp"
 #include "metro/report/type_a_report.hpp"
-#include "metro/stats/quantization.hpp"
-#include "metro/stats/type_a.hpp"
+#include "session_page.hpp"
 
 namespace metro {
 
 using nlohmann::ordered_json;
 namespace mustache = kainjow::mustache;
+using report_internal::AddAllanGroupPlots;
+using report_internal::AddAllanPlot;
+using report_internal::AddSeriesPlots;
 using report_internal::JsonNumber;
 using report_internal::JsonString;
+using report_internal::NoiseRows;
+using report_internal::OptionRows;
+using report_internal::QuantityPlots;
+using report_internal::ResultRows;
 using report_internal::ShortNumber;
+using report_internal::TypeADetailRows;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 bool IsQuaternionComponent(const std::string& name) {
   return name == "qw" || name == "qx" || name == "qy" || name == "qz";
-}
-
-// Min and max of each bucket, in the order they occur, so a long series keeps its envelope.
-void Decimate(const std::vector<double>& t, const std::vector<double>& v, size_t max_points,
-              std::vector<double>* t_out, std::vector<double>* v_out) {
-  const size_t n = std::min(t.size(), v.size());
-  if (n <= max_points) {
-    t_out->assign(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(n));
-    v_out->assign(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n));
-    return;
-  }
-  const size_t buckets = std::max<size_t>(1, max_points / 2);
-  for (size_t b = 0; b < buckets; ++b) {
-    const size_t lo = b * n / buckets;
-    const size_t hi = (b + 1) * n / buckets;
-    if (hi <= lo) continue;
-    size_t i_min = lo, i_max = lo;
-    for (size_t i = lo; i < hi; ++i) {
-      if (v[i] < v[i_min]) i_min = i;
-      if (v[i] > v[i_max]) i_max = i;
-    }
-    for (size_t i : {std::min(i_min, i_max), std::max(i_min, i_max)}) {
-      t_out->push_back(t[i]);
-      v_out->push_back(v[i]);
-    }
-  }
-}
-
-mustache::data Figure(const std::string& svg, const std::string& caption) {
-  mustache::data f;
-  f.set("svg", svg);
-  f.set("caption", caption);
-  return f;
-}
-
-struct QuantityPlots {
-  mustache::data plots{mustache::data::type::list};
-  mustache::data unavailable{mustache::data::type::list};
-};
-
-// Adds `plot` (or its error as an unavailable note).
-void AddPlot(const Result<std::string>& svg, const std::string& caption, QuantityPlots* out) {
-  if (svg.ok()) {
-    out->plots.push_back(Figure(svg.value(), caption));
-  } else {
-    out->unavailable.push_back(
-        mustache::data(fmt::format("{}: not drawn ({})", caption, svg.error().message)));
-  }
-}
-
-void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
-                    const ordered_json& quantity, const Tag& tag, const Quantity& q,
-                    const HtmlReportOptions& options, QuantityPlots* out) {
-  const std::string unit = JsonString(quantity, "unit");
-  const ordered_json& window = sensor["window"];
-  const size_t n_total = tag.size();
-  size_t first = static_cast<size_t>(JsonNumber(window, "first_index"));
-  // `--settle auto` evaluates each quantity from its own settle point.
-  if (quantity.contains("window_first_index")) {
-    first = static_cast<size_t>(JsonNumber(quantity, "window_first_index"));
-  }
-  size_t end = static_cast<size_t>(JsonNumber(window, "end_index"));
-  if (!(first < end && end <= n_total)) {
-    out->unavailable.push_back(mustache::data(
-        "time series, histogram and autocorrelation: the report's window does not fit the "
-        "session's observations"));
-    return;
-  }
-  const ordered_json& type_a = quantity["type_a"];
-  const double mean = JsonNumber(type_a, "mean");
-  const double s = JsonNumber(type_a, "std");
-
-  // Time series with the part outside the window shaded.
-  XyPlot ts;
-  ts.title = fmt::format("{}: time series", qname);
-  ts.x_label = "t_s [s]";
-  ts.y_label = fmt::format("{} [{}]", qname, unit);
-  if (first > 0) ts.bands.push_back({"excluded (skip/settle)", tag.t_s.front(), tag.t_s[first]});
-  if (end < n_total) {
-    ts.bands.push_back({first > 0 ? "" : "excluded (window)", tag.t_s[end], tag.t_s.back()});
-  }
-  ts.hlines.push_back({"mean of the window", mean, PlotColor::kRed, true});
-  PlotSeries line;
-  line.style = SeriesStyle::kLine;
-  Decimate(tag.t_s, q.values, static_cast<size_t>(options.max_series_points), &line.x, &line.y);
-  ts.series.push_back(std::move(line));
-  AddPlot(RenderXyPlot(ts),
-          fmt::format("{} over the whole record; shaded: observations left out of the Type A "
-                      "window ({} of {} kept).",
-                      qname, end - first, n_total),
-          out);
-
-  // The window's values, unwrapped as the evaluation did.
-  std::vector<double> x(q.values.begin() + static_cast<std::ptrdiff_t>(first),
-                        q.values.begin() + static_cast<std::ptrdiff_t>(end));
-  double density_mean = mean;
-  if (JsonString(quantity, "angle_handling") == "unwrapped") {
-    UnwrapDegInPlace(&x);
-    double sum = 0.0;
-    for (double v : x) sum += v;
-    const double sample_mean = sum / static_cast<double>(x.size());
-    density_mean = mean + 360.0 * std::round((sample_mean - mean) / 360.0);
-  }
-  const size_t n = x.size();
-  if (n >= 2 && std::isfinite(s) && s > 0.0) {
-    // Histogram as a density, with the normal density N(mean, s^2) of the Type A result.
-    const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
-    const double lo = *lo_it, hi = *hi_it;
-    int bins = options.histogram_bins > 0
-                   ? options.histogram_bins
-                   : std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 10, 60);
-    double width = hi > lo ? (hi - lo) / bins : 1.0;
-    double first_edge = lo;
-    // Quantized data (the packets' 0.01 deg, raw counts): bins a whole number of steps wide
-    // and centred on the steps, never narrower than one step, so no bin is empty or doubled
-    // by where the lattice falls (the histogram of 0.01 deg data looked non-normal).
-    const double step = QuantizationStep(x);
-    if (step > 0.0 && hi > lo) {
-      width = std::max(1.0, std::ceil(width / step - 1e-9)) * step;
-      first_edge = lo - 0.5 * step;
-      bins =
-          std::max(1, static_cast<int>(std::ceil((hi + 0.5 * step - first_edge) / width - 1e-9)));
-    }
-    PlotSeries hist;
-    hist.style = SeriesStyle::kBins;
-    hist.color = PlotColor::kBlue;
-    hist.label = "observations (density)";
-    std::vector<double> counts(static_cast<size_t>(bins), 0.0);
-    for (double v : x) {
-      const int b = std::min(bins - 1, static_cast<int>((v - first_edge) / width));
-      counts[static_cast<size_t>(std::max(0, b))] += 1.0;
-    }
-    for (int b = 0; b <= bins; ++b) hist.x.push_back(first_edge + b * width);
-    for (double c : counts) hist.y.push_back(c / (static_cast<double>(n) * width));
-    PlotSeries normal;
-    normal.style = SeriesStyle::kLine;
-    normal.color = PlotColor::kRed;
-    normal.label = "normal density of the Type A mean and s";
-    const double from = std::min(lo, density_mean - 4.0 * s);
-    const double to = std::max(hi, density_mean + 4.0 * s);
-    for (int i = 0; i <= 200; ++i) {
-      const double v = from + (to - from) * i / 200.0;
-      const double z = (v - density_mean) / s;
-      normal.x.push_back(v);
-      normal.y.push_back(std::exp(-0.5 * z * z) / (s * std::sqrt(2.0 * M_PI)));
-    }
-    XyPlot hp;
-    hp.title = fmt::format("{}: histogram", qname);
-    hp.x_label = fmt::format("{} [{}]", qname, unit);
-    hp.y_label = fmt::format("density [1/{}]", unit.empty() ? "1" : unit);
-    hp.series = {std::move(hist), std::move(normal)};
-    AddPlot(RenderXyPlot(hp),
-            fmt::format("Histogram of the {} observations in the window ({} bins{}) and the "
-                        "normal density with the reported mean and s.",
-                        n, bins,
-                        step > 0.0 ? fmt::format(", each a whole number of the data's "
-                                                 "resolution {:g} {}",
-                                                 step, unit)
-                                   : std::string()),
-            out);
-  }
-
-  // Autocorrelation with the band of white noise and the lags Zhang's n_eff uses.
-  const size_t max_lag =
-      std::min(static_cast<size_t>(options.max_autocorr_lag), n >= 8 ? n / 4 : size_t{0});
-  if (max_lag >= 2 && std::isfinite(s) && s > 0.0) {
-    std::vector<double> rho(max_lag + 1);
-    Autocorrelation(x.data(), n, max_lag, rho.data());
-    XyPlot ap;
-    ap.title = fmt::format("{}: autocorrelation", qname);
-    ap.x_label = "lag k [samples]";
-    ap.y_label = "rho_k";
-    const double band = 1.96 / std::sqrt(static_cast<double>(n));
-    const double cutoff = JsonNumber(type_a, "autocorr_cutoff_lag");
-    if (std::isfinite(cutoff) && cutoff >= 1.0) {
-      ap.bands.push_back({fmt::format("lags in n_eff (n_c = {:.0f})", cutoff), 0.5,
-                          std::min(cutoff, static_cast<double>(max_lag)) + 0.5});
-    }
-    ap.hlines.push_back({"+-1.96/sqrt(n) (white noise)", band, PlotColor::kRed, true});
-    ap.hlines.push_back({"", -band, PlotColor::kRed, true});
-    PlotSeries stems;
-    stems.style = SeriesStyle::kStems;
-    for (size_t k = 1; k <= max_lag; ++k) {
-      stems.x.push_back(static_cast<double>(k));
-      stems.y.push_back(rho[k]);
-    }
-    ap.series.push_back(std::move(stems));
-    AddPlot(RenderXyPlot(ap),
-            fmt::format("Sample autocorrelation of the window, lags 1..{}; n_eff = {}.", max_lag,
-                        ShortNumber(JsonNumber(type_a, "n_eff"), 4)),
-            out);
-  }
-}
-
-// Allan deviation with its confidence interval and the fitted IEEE 952 terms.
-void AddAllanPlot(const std::string& qname, const ordered_json& quantity, QuantityPlots* out,
-                  mustache::data* terms_table) {
-  const ordered_json& allan = quantity["allan"];
-  if (allan.contains("error")) {
-    out->unavailable.push_back(
-        mustache::data(fmt::format("Allan deviation: {}", JsonString(allan, "error"))));
-    return;
-  }
-  if (!allan.contains("tau_s") || !allan["tau_s"].is_array()) return;
-  const std::string unit = JsonString(quantity, "unit");
-  PlotSeries curve;
-  curve.style = SeriesStyle::kErrorBars;
-  curve.color = PlotColor::kBlue;
-  const std::string estimator = JsonString(allan, "estimator");
-  curve.label = fmt::format("{} with confidence interval", estimator);
-  const auto& tau = allan["tau_s"];
-  for (size_t i = 0; i < tau.size(); ++i) {
-    curve.x.push_back(report_internal::NumberAt(tau, i));
-    curve.y.push_back(report_internal::NumberAt(allan["adev"], i));
-    curve.y_low.push_back(report_internal::NumberAt(allan["ci_low"], i));
-    curve.y_high.push_back(report_internal::NumberAt(allan["ci_high"], i));
-  }
-  XyPlot plot;
-  plot.title = fmt::format("{}: Allan deviation", qname);
-  plot.x_label = "tau [s]";
-  plot.y_label = fmt::format("{} [{}]", estimator, unit);
-  plot.log_x = plot.log_y = true;
-  const Result<AllanEstimator> est = ParseAllanEstimator(estimator);
-  const ordered_json* noise = allan.contains("noise") ? &allan["noise"] : nullptr;
-  if (est.ok() && noise != nullptr && !curve.x.empty()) {
-    const double tau_lo = *std::min_element(curve.x.begin(), curve.x.end());
-    const double tau_hi = *std::max_element(curve.x.begin(), curve.x.end());
-    PlotSeries total;
-    total.style = SeriesStyle::kLine;
-    total.color = PlotColor::kBlack;
-    total.label = "fitted noise model";
-    std::vector<double> total_var(60, 0.0);
-    std::vector<double> grid(60);
-    for (size_t i = 0; i < grid.size(); ++i) {
-      grid[i] = tau_lo * std::pow(tau_hi / tau_lo,
-                                  static_cast<double>(i) / static_cast<double>(grid.size() - 1));
-    }
-    const PlotColor colors[] = {PlotColor::kGreen, PlotColor::kOrange, PlotColor::kPurple,
-                                PlotColor::kRed, PlotColor::kGrey};
-    bool any = false;
-    for (NoiseTerm term : kAllNoiseTerms) {
-      const std::string key = NoiseTermKey(term);
-      if (!noise->contains(key)) continue;
-      const ordered_json& t = (*noise)[key];
-      const double value = JsonNumber(t, "value");
-      if (!std::isfinite(value) || value <= 0.0) continue;
-      PlotSeries line;
-      line.style = SeriesStyle::kLine;
-      line.dashed = true;
-      line.color = colors[static_cast<int>(term)];
-      line.label =
-          fmt::format("{} = {} {}", key, ShortNumber(JsonNumber(t, "value_conventional"), 3),
-                      JsonString(t, "unit_conventional"));
-      for (size_t i = 0; i < grid.size(); ++i) {
-        double factor = 0.0;
-        if (!NoiseBasis(est.value(), term, grid[i], &factor)) continue;
-        line.x.push_back(grid[i]);
-        line.y.push_back(std::sqrt(factor) * value);
-        total_var[i] += factor * value * value;
-      }
-      if (!line.x.empty()) {
-        any = true;
-        plot.series.push_back(std::move(line));
-      }
-    }
-    if (any) {
-      for (size_t i = 0; i < grid.size(); ++i) {
-        total.x.push_back(grid[i]);
-        total.y.push_back(std::sqrt(total_var[i]));
-      }
-      plot.series.insert(plot.series.begin(), std::move(total));
-    }
-    // Table of the terms, rounded per GUM 7.2.6.
-    for (NoiseTerm term : kAllNoiseTerms) {
-      const std::string key = NoiseTermKey(term);
-      if (!noise->contains(key)) continue;
-      const ordered_json& t = (*noise)[key];
-      const double value = JsonNumber(t, "value");
-      if (!std::isfinite(value)) continue;
-      const RoundedResult r = RoundForStatement(value, JsonNumber(t, "u"));
-      const RoundedResult rc =
-          RoundForStatement(JsonNumber(t, "value_conventional"), JsonNumber(t, "u_conventional"));
-      mustache::data row;
-      row.set("term", key);
-      row.set("value", r.value);
-      row.set("u", r.uncertainty);
-      row.set("unit", JsonString(t, "unit"));
-      row.set("value_conventional", fmt::format("{} +- {}", rc.value, rc.uncertainty));
-      row.set("unit_conventional", JsonString(t, "unit_conventional"));
-      terms_table->push_back(row);
-    }
-  }
-  plot.series.insert(plot.series.begin(), std::move(curve));
-  AddPlot(RenderXyPlot(plot),
-          fmt::format("{} of {} on log-log axes with its confidence interval (bars) and the "
-                      "fitted IEEE Std 952-1997 Annex C noise terms (dashed).",
-                      estimator, qname),
-          out);
-  if (allan.contains("fit_error")) {
-    out->unavailable.push_back(
-        mustache::data(fmt::format("noise terms not fitted: {}", JsonString(allan, "fit_error"))));
-  }
 }
 
 std::string SettleText(const ordered_json& window) {
@@ -461,6 +157,12 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
   if (Status s = ValidateReport(report); !s.ok()) return s.error();
   const ordered_json& input = report["input"];
   mustache::data data;
+  // The result first, then how it was obtained.
+  data.set("result_rows", ResultRows(report));
+  data.set("summary_rows", TypeADetailRows(report));
+  mustache::data noise = NoiseRows(report);
+  data.set("has_noise", !noise.is_empty_list());
+  data.set("noise_rows", noise);
   data.set("input_path", JsonString(input, "path"));
   data.set("input_sha256", JsonString(input, "sha256"));
   data.set("input_format", JsonString(input, "format"));
@@ -475,11 +177,13 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
   }
   data.set("input_notes", StringList(input, "notes"));
   data.set("input_warnings", StringList(input, "warnings"));
-  data.set("window_options", report.contains("options") ? JsonText(report["options"]) : "");
+  mustache::data option_rows =
+      report.contains("options") ? OptionRows(report["options"]) : mustache::data::type::list;
+  data.set("has_options", !option_rows.is_empty_list());
+  data.set("option_rows", option_rows);
   data.set("session_ok", session != nullptr);
   data.set("session_note", session_note);
 
-  mustache::data summary{mustache::data::type::list};
   mustache::data sensors{mustache::data::type::list};
   int plotted = 0;
   int not_plotted = 0;
@@ -501,41 +205,17 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
     sd.set("t_first_s", ShortNumber(JsonNumber(window, "t_first_s"), 6));
     sd.set("t_last_s", ShortNumber(JsonNumber(window, "t_last_s"), 6));
     sd.set("settle", SettleText(window));
-    mustache::data sensor_warnings{mustache::data::type::list};
-    if (s.contains("warnings")) {
-      for (const auto& w : s["warnings"]) {
-        sensor_warnings.push_back(
-            mustache::data(w.is_string() ? w.get<std::string>() : JsonText(w)));
-      }
-    }
-    sd.set("warnings", sensor_warnings);
+    sd.set("warnings", StringList(s, "warnings"));
+    QuantityPlots groups;
+    AddAllanGroupPlots(s, &groups);
+    sd.set("has_allan_groups",
+           !groups.plots.is_empty_list() || !groups.unavailable.is_empty_list());
+    sd.set("allan_group_plots", groups.plots);
+    sd.set("allan_group_unavailable", groups.unavailable);
     mustache::data quantities{mustache::data::type::list};
     if (s.contains("quantities") && s["quantities"].is_object()) {
       for (const auto& [qname, q] : s["quantities"].items()) {
         const bool evaluated = q.contains("type_a") && q["type_a"].is_object();
-        if (evaluated) {
-          const ordered_json& a = q["type_a"];
-          const double u = JsonNumber(a, a.contains("u_mean") ? "u_mean" : "std_of_mean_autocorr");
-          RoundedResult r = RoundForStatement(JsonNumber(a, "mean"), u);
-          const double n = JsonNumber(a, "n");
-          const double n_eff = JsonNumber(a, "n_eff");
-          // Null in the report (a constant series, n <= 3): not computed, never "nan".
-          const std::string not_computed = "not computed";
-          if (!std::isfinite(u)) r.uncertainty = not_computed;
-          mustache::data row;
-          row.set("sensor", std::to_string(sensor));
-          row.set("tag", tag_name);
-          row.set("quantity", qname);
-          row.set("unit", JsonString(q, "unit"));
-          row.set("n", ShortNumber(n, 12));
-          row.set("mean", r.value);
-          row.set("u_mean", r.uncertainty);
-          row.set("std", ShortNumber(JsonNumber(a, "std"), 2));
-          row.set("n_eff", std::isfinite(n_eff) ? fmt::format("{:.1f}", n_eff) : not_computed);
-          row.set("n_eff_ratio",
-                  std::isfinite(n_eff) && n > 0 ? fmt::format("{:.3f}", n_eff / n) : not_computed);
-          summary.push_back(row);
-        }
         const bool wanted =
             options.plot_quantities.empty()
                 ? !IsQuaternionComponent(qname)
@@ -551,13 +231,7 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
         qd.set("sensor", std::to_string(sensor));
         qd.set("quantity", qname);
         qd.set("unit", JsonString(q, "unit"));
-        mustache::data qwarn{mustache::data::type::list};
-        if (q.contains("warnings")) {
-          for (const auto& w : q["warnings"]) {
-            qwarn.push_back(mustache::data(w.is_string() ? w.get<std::string>() : JsonText(w)));
-          }
-        }
-        qd.set("warnings", qwarn);
+        qd.set("warnings", StringList(q, "warnings"));
         QuantityPlots plots;
         const Quantity* column = tag != nullptr ? tag->Find(qname) : nullptr;
         if (column != nullptr) {
@@ -579,7 +253,6 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
     sd.set("quantities", quantities);
     sensors.push_back(sd);
   }
-  data.set("summary_rows", summary);
   data.set("sensors", sensors);
   data.set("has_more_quantities", not_plotted > 0);
   data.set("more_quantities",

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "mean_coverage.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/core/version.hpp"
 #include "metro/report/allan_section.hpp"
@@ -150,6 +151,7 @@ nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionType
                         {"u_mean_method", um ? json(r.u_mean_method) : json(nullptr)},
                         {"u_mean_ar_order",
                          r.u_mean_method == kUMeanArSpectral ? json(r.ar_order) : json(nullptr)}};
+        report_internal::SetMeanCoverage(&jq["type_a"]);
       } else {
         jq["type_a"] = nullptr;
         jq["error"] = q.error;

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <string>
 
+#include "mean_coverage.hpp"
+
 namespace metro {
 
 void ApplyAllanEvidenceToUMean(SessionTypeA* type_a, nlohmann::ordered_json* report) {
@@ -50,6 +52,7 @@ void ApplyAllanEvidenceToUMean(SessionTypeA* type_a, nlohmann::ordered_json* rep
       ja["u_mean_dof"] = dof;
       ja["u_mean_method"] = kUMeanAllan;
       ja["u_mean_ar_order"] = nullptr;
+      report_internal::SetMeanCoverage(&ja);
       jq["warnings"].push_back(warning);
     }
   }

@@ -5,11 +5,15 @@
 #include <fmt/format.h>
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/noise/allan.hpp"
 #include "metro/uncertainty/budget.hpp"
@@ -41,17 +45,50 @@ const SessionAnalysis& ImuAnalysis() {
 
 // Plots the report calls for, counted from the JSON: per evaluated quantity with s > 0 a
 // time series, a histogram and an autocorrelation (only the time series when s = 0), plus
-// an Allan plot where the report has an Allan curve.
+// an Allan plot where the report has an Allan curve, and per tag one combined plot per
+// sensor group (ax_g ay_g az_g; gx_dps gy_dps gz_dps) with two or more Allan curves.
 size_t ExpectedPlots(const ordered_json& report, bool with_session) {
   size_t n = 0;
   for (const auto& s : report["sensors"]) {
+    std::map<std::string, int> groups;  // "a_g" -> Allan curves of ax_g, ay_g, az_g.
     for (const auto& [name, q] : s["quantities"].items()) {
       if (!q["type_a"].is_object()) continue;
       if (with_session) n += q["type_a"]["std"].get<double>() > 0.0 ? 3 : 1;
-      if (q.contains("allan") && q["allan"].contains("tau_s")) ++n;
+      if (q.contains("allan") && q["allan"].contains("tau_s")) {
+        ++n;
+        const size_t underscore = name.find('_');
+        if (underscore >= 2 && std::string("xyz").find(name[underscore - 1]) != std::string::npos) {
+          ++groups[name.substr(0, underscore - 1) + name.substr(underscore)];
+        }
+      }
     }
+    for (const auto& g : groups) n += g.second >= 2 ? 1 : 0;
   }
   return n;
+}
+
+// The text of the cell with class `cls` in the table row with id `row_id` ("" when absent).
+std::string Cell(const std::string& html, const std::string& row_id, const std::string& cls) {
+  const size_t row = html.find("<tr id=\"" + row_id + "\">");
+  if (row == std::string::npos) return "";
+  const size_t row_end = html.find("</tr>", row);
+  const std::string open = "<td class=\"num " + cls + "\">";
+  const size_t at = html.find(open, row);
+  if (at == std::string::npos || at > row_end) return "";
+  const size_t begin = at + open.size();
+  return html.substr(begin, html.find("</td>", begin) - begin);
+}
+
+// The leaf keys of an options object as the page names them ("autocorrelation.method").
+void LeafKeys(const ordered_json& j, const std::string& prefix, std::vector<std::string>* out) {
+  for (const auto& [key, value] : j.items()) {
+    const std::string name = prefix.empty() ? key : prefix + "." + key;
+    if (value.is_object()) {
+      LeafKeys(value, name, out);
+    } else {
+      out->push_back(name);
+    }
+  }
 }
 
 TEST_CASE("Session HTML has every plot and no external reference", "[report][html]") {
@@ -66,7 +103,7 @@ TEST_CASE("Session HTML has every plot and no external reference", "[report][htm
   CHECK(h.find("Sensor 1") != std::string::npos);
   CHECK(h.find(a.session.sha256) != std::string::npos);
   const size_t expected = ExpectedPlots(a.report, true);
-  CHECK(expected >= 3 * 6 + 6);  // Six rate quantities with Allan curves at least.
+  CHECK(expected >= 3 * 6 + 6 + 2);  // Six rate quantities with Allan curves, two groups.
   CHECK(Count(h, "<svg") == expected);
   // The summary states the mean rounded per GUM 7.2.6 to two digits of u(mean).
   const auto& gx = a.report["sensors"][0]["quantities"]["gx_dps"]["type_a"];
@@ -75,6 +112,176 @@ TEST_CASE("Session HTML has every plot and no external reference", "[report][htm
                "</td>") != std::string::npos);
   // The settle window is shaded and named.
   CHECK(h.find("shaded: observations left out of the Type A window") != std::string::npos);
+}
+
+TEST_CASE("Session page opens with the result: value U k and p as the JSON rounded per 7.2.6",
+          "[report][html]") {
+  const SessionAnalysis& a = ImuAnalysis();
+  REQUIRE(a.ok);
+  // From the JSON alone (as characterize report renders a saved report) and with the session.
+  for (const bool with_session : {false, true}) {
+    Result<std::string> html = with_session ? RenderSessionAnalysisHtml(a)
+                                            : RenderSessionReportHtml(a.report, nullptr, "none");
+    REQUIRE(html.ok());
+    const std::string& h = html.value();
+    // The result is the page's first section, before the input and the options.
+    const size_t result = h.find("<section id=\"result\">");
+    REQUIRE(result != std::string::npos);
+    CHECK(result < h.find("<section id=\"input\">"));
+    CHECK(result < h.find("<section id=\"options\">"));
+    CHECK(h.find("<section") == result);
+    int rows = 0;
+    for (const auto& s : a.report["sensors"]) {
+      const std::string sensor = std::to_string(s["sensor"].get<int>());
+      for (const auto& [name, q] : s["quantities"].items()) {
+        if (!q["type_a"].is_object()) continue;
+        const ordered_json& t = q["type_a"];
+        const std::string id = "result-" + sensor + "-" + name;
+        INFO(id);
+        CHECK(Cell(h, id, "p") == "95 %");
+        if (t["U_mean"].is_null()) {
+          CHECK(Cell(h, id, "U") == "-");
+          CHECK(Cell(h, id, "k") == "-");
+          continue;
+        }
+        ++rows;
+        // U = k u(mean), k = t_0.975(nu); for nu >= 30 the Cornish-Fisher expansion of t
+        // about the normal quantile z = 1.959964 is within 1e-4 of it: t = z + (z^3 + z) /
+        // (4 nu) + (5 z^5 + 16 z^3 + 3 z) / (96 nu^2) (Abramowitz and Stegun 26.7.5).
+        CHECK(t["U_mean"].get<double>() ==
+              Approx(t["k"].get<double>() * t["u_mean"].get<double>()).epsilon(1e-15));
+        const double nu = t["u_mean_dof"].get<double>();
+        const double z = 1.959963984540054;
+        REQUIRE(nu >= 30.0);
+        CHECK(t["k"].get<double>() ==
+              Approx(z + (z * z * z + z) / (4.0 * nu) +
+                     (5.0 * std::pow(z, 5) + 16.0 * z * z * z + 3.0 * z) / (96.0 * nu * nu))
+                  .margin(1e-4));
+        const RoundedResult r =
+            RoundForStatement(t["mean"].get<double>(), t["U_mean"].get<double>());
+        CHECK(Cell(h, id, "value") == r.value);
+        CHECK(Cell(h, id, "U") == r.uncertainty);
+        CHECK(Cell(h, id, "k") == fmt::format("{:.3g}", t["k"].get<double>()));
+      }
+    }
+    CHECK(rows >= 6);
+  }
+  // temp_c drifts: its u(mean) has fewer than one degree of freedom, so no U is stated and
+  // the page says why.
+  const ordered_json& temp = a.report["sensors"][0]["quantities"]["temp_c"]["type_a"];
+  REQUIRE(temp["u_mean_dof"].get<double>() < 1.0);
+  CHECK(temp["k"].is_null());
+  Result<std::string> html = RenderSessionAnalysisHtml(a);
+  REQUIRE(html.ok());
+  CHECK(html.value().find("sensor 1 temp_c: no U: u(mean) = ") != std::string::npos);
+}
+
+TEST_CASE("Session page states the options as a table and not as the JSON string",
+          "[report][html]") {
+  const SessionAnalysis& a = ImuAnalysis();
+  REQUIRE(a.ok);
+  Result<std::string> html = RenderSessionAnalysisHtml(a);
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  const size_t table = h.find("<table id=\"options-table\">");
+  REQUIRE(table != std::string::npos);
+  const std::string options = h.substr(table, h.find("</table>", table) - table);
+  std::vector<std::string> keys;
+  LeafKeys(a.report["options"], "", &keys);
+  CHECK(keys.size() >= 10);
+  for (const std::string& key : keys) {
+    INFO(key);
+    CHECK(options.find("<tr><th>" + key + "</th><td>") != std::string::npos);
+  }
+  CHECK(options.find("<tr><th>settle</th><td>auto</td></tr>") != std::string::npos);
+  CHECK(options.find("<tr><th>from_s</th><td>not set</td></tr>") != std::string::npos);
+  // The raw JSON is gone (as the page escaped it and as it is).
+  const std::string raw = JsonText(a.report["options"]);
+  CHECK(h.find(raw) == std::string::npos);
+  CHECK(h.find("{&quot;skip_samples&quot;") == std::string::npos);
+  CHECK(h.find("window options") == std::string::npos);
+}
+
+TEST_CASE("Session page noise table: density, Allan minimum and u(mean) from the JSON",
+          "[report][html]") {
+  const SessionAnalysis& a = ImuAnalysis();
+  REQUIRE(a.ok);
+  Result<std::string> html = RenderSessionReportHtml(a.report, nullptr, "none");
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  int rows = 0;
+  for (const auto& [name, q] : a.report["sensors"][0]["quantities"].items()) {
+    if (!q.contains("allan")) continue;
+    const std::string id = "noise-1-" + name;
+    INFO(id);
+    const ordered_json& white = q["allan"]["noise"]["random_walk"];
+    const ordered_json& link = q["allan_type_a_link"];
+    const double d = white["density_one_sided"].get<double>();
+    const double u_d = white["u_density_one_sided"].get<double>();
+    // The one-sided density is sqrt(2) N (IEEE Std 952-1997: sigma(1 s) = N = d / sqrt 2).
+    CHECK(d == Approx(std::sqrt(2.0) * white["value"].get<double>()).epsilon(1e-14));
+    CHECK(Cell(h, id, "density") == ConciseNotation(d, u_d));
+    CHECK(Cell(h, id, "sigma-min") == fmt::format("{:.3g}", link["allan_min_dev"].get<double>()));
+    CHECK_THAT(Cell(h, id, "tau-min"),
+               Catch::StartsWith(fmt::format("{:.3g}", link["allan_min_tau_s"].get<double>())));
+    CHECK(Cell(h, id, "u-mean-allan") ==
+          RoundForStatement(0.0, link["u_mean_allan"].get<double>()).uncertainty);
+    CHECK(Cell(h, id, "u-mean") ==
+          RoundForStatement(0.0, q["type_a"]["u_mean"].get<double>()).uncertainty);
+    // The accelerometer's density also in ug/sqrt(Hz) (1 g = 1e6 ug).
+    if (q["unit"] == "g") {
+      CHECK(Cell(h, id, "density-conventional") ==
+            ConciseNotation(1e6 * d, 1e6 * u_d) + " ug/sqrt(Hz)");
+    }
+    ++rows;
+  }
+  CHECK(rows == 6);
+}
+
+TEST_CASE("Session page draws the x y and z Allan curves of a sensor in one plot with decades",
+          "[report][html]") {
+  const SessionAnalysis& a = ImuAnalysis();
+  REQUIRE(a.ok);
+  Result<std::string> html = RenderSessionReportHtml(a.report, nullptr, "none");
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  // Octave taus from 0.01 s to 10.24 s: the decades 0.01, 0.1, 1 and 10 s.
+  const ordered_json& tau = a.report["sensors"][0]["quantities"]["gx_dps"]["allan"]["tau_s"];
+  REQUIRE(tau.front().get<double>() == Approx(0.01));
+  REQUIRE(tau.back().get<double>() == Approx(10.24));
+  for (const std::string names : {"ax_g, ay_g and az_g", "gx_dps, gy_dps and gz_dps"}) {
+    INFO(names);
+    // The figure's caption follows its SVG.
+    const size_t at = h.find("oadev of " + names + " on log-log axes, one colour per axis");
+    REQUIRE(at != std::string::npos);
+    const size_t begin = h.rfind("<svg", at);
+    const std::string svg = h.substr(begin, at - begin);
+    // A legend entry per axis (PLplot writes text as hexadecimal character references) and
+    // each axis in its colour: x blue, y orange, z green.
+    const std::string unit = names.substr(2, names.find(',') - 2);  // "_g"
+    for (const char axis : {'x', 'y', 'z'}) {
+      std::string entry;
+      for (const char c : names.substr(0, 1) + axis + unit) entry += fmt::format("&#x{:x};", c);
+      CHECK(svg.find(">" + entry + "<") != std::string::npos);
+    }
+    for (const char* color : {"#1F77B4", "#FF7F0E", "#2CA02C"}) {
+      CHECK(svg.find(std::string("stroke=\"") + color + "\"") != std::string::npos);
+    }
+    // One vertical decade line at each of the four decades, equally spaced (x is log10 tau;
+    // the SVG writes 0.01 px).
+    std::vector<double> decades;
+    for (size_t p = svg.find("stroke=\"#B0B8C2\""); p != std::string::npos;
+         p = svg.find("stroke=\"#B0B8C2\"", p + 1)) {
+      const size_t points = svg.find("points=\"", p) + 8;
+      double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+      REQUIRE(std::sscanf(svg.c_str() + points, "%lf,%lf %lf,%lf", &x0, &y0, &x1, &y1) == 4);
+      if (std::fabs(x0 - x1) < 0.01) decades.push_back(x0);
+    }
+    REQUIRE(decades.size() == 4);
+    std::sort(decades.begin(), decades.end());
+    CHECK(decades[2] - decades[1] == Approx(decades[1] - decades[0]).margin(0.05));
+    CHECK(decades[3] - decades[2] == Approx(decades[1] - decades[0]).margin(0.05));
+  }
 }
 
 TEST_CASE("Session HTML says how a non-canonical file was read", "[report][html]") {

@@ -80,6 +80,15 @@ TEST_CASE("terms that were not computed are null with the reason, never 0 or n",
   // n <= 3: the classical s / sqrt(n) with n - 1 dof (s^2 of 1, 2, 4 is 7/3).
   CHECK(small["u_mean"].get<double>() == Approx(std::sqrt(7.0 / 3.0 / 3.0)).epsilon(1e-12));
   CHECK(small["u_mean_dof"].get<double>() == 2.0);
+  // U_mean = k u_mean with k = t_0.975(2) for p = 95 %: Student's t at 2 dof in closed form,
+  // t_a = (2a - 1) / sqrt(2 a (1 - a)) = 4.3027 (JCGM 100:2008 Table G.2: 4.30); none for the
+  // constant series.
+  const double t2 = (2.0 * 0.975 - 1.0) / std::sqrt(2.0 * 0.975 * 0.025);
+  CHECK(small["coverage"].get<double>() == 0.95);
+  CHECK(small["k"].get<double>() == Approx(t2).epsilon(1e-12));
+  CHECK(small["U_mean"].get<double>() == Approx(t2 * std::sqrt(7.0 / 3.0 / 3.0)).epsilon(1e-12));
+  CHECK(constant["k"].is_null());
+  CHECK(constant["U_mean"].is_null());
 }
 
 TEST_CASE("input warnings reach the table", "[report][dialect]") {

@@ -44,6 +44,12 @@ TEST_CASE("Allan evidence more than 2x u_mean replaces it, dof by JCGM 100 G.4.2
   const auto& jq = report["sensors"][0]["quantities"]["gy_dps"];
   CHECK(jq["type_a"]["u_mean"].get<double>() == 0.9);
   CHECK(jq["type_a"]["u_mean_method"].get<std::string>() == kUMeanAllan);
+  // U_mean follows the new u_mean and dof: t_0.975 at 4.5 dof lies between the table's
+  // t_0.975(5) = 2.5706 and t_0.975(4) = 2.7764 (JCGM 100:2008 Table G.2).
+  const double k = jq["type_a"]["k"].get<double>();
+  CHECK(k > 2.5706);
+  CHECK(k < 2.7764);
+  CHECK(jq["type_a"]["U_mean"].get<double>() == Approx(k * 0.9).epsilon(1e-15));
   REQUIRE(jq["warnings"].size() == 1);
   const std::string w = jq["warnings"][0].get<std::string>();
   CHECK(w.find("rate_random_walk") != std::string::npos);

@@ -4,9 +4,13 @@
 // holds.
 //
 // The view is chosen by the JSON "schema" key:
-//   "metro.report/1"       session view: per tag and quantity the time series with the
-//                          excluded (skip/settle) part shaded, the histogram with the normal
-//                          density of the Type A result, the autocorrelation with the
+//   "metro.report/1"       session view: the result first (per tag and quantity value, U,
+//                          k, p rounded per JCGM 100 7.2.6), the Type A details, the noise
+//                          table (one-sided density, Allan minimum, Allan-predicted
+//                          u(mean)), the input and the options as a table; per tag the x/y/z
+//                          Allan curves of each sensor in one plot; per quantity the time
+//                          series with the excluded (skip/settle) part shaded, the histogram with
+//                          the normal density of the Type A result, the autocorrelation with the
 //                          white-noise band, the Allan deviation with confidence bars and the
 //                          fitted IEEE 952 terms, and the budget as sorted bars;
 //   "metro.calibration/1"  the calibration certificate (certificate.hpp);
