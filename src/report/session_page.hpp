@@ -54,7 +54,8 @@ struct QuantityPlots {
 
 // Time series (the part outside the window shaded), histogram with the normal density of
 // the Type A result, and autocorrelation with the white-noise band, of quantity `qname` of
-// `sensor` (the report's sensors[i]) drawn from the session's `tag` and column `q`.
+// `sensor` (the report's sensors[i]) drawn from the session's `tag` and column `q`. Each
+// axis carries its scale and offset in the label (ChooseAxisScale), never a detached "x10^n".
 void AddSeriesPlots(const nlohmann::ordered_json& sensor, const std::string& qname,
                     const nlohmann::ordered_json& quantity, const Tag& tag, const Quantity& q,
                     const HtmlReportOptions& options, QuantityPlots* out);

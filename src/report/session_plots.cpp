@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -21,6 +22,8 @@ using nlohmann::ordered_json;
 namespace mustache = kainjow::mustache;
 
 namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Min and max of each bucket, in the order they occur, so a long series keeps its envelope.
 void Decimate(const std::vector<double>& t, const std::vector<double>& v, size_t max_points,
@@ -149,6 +152,59 @@ bool AxisOfSensorGroup(const std::string& name, std::string* group, char* axis) 
   return true;
 }
 
+// The finite range of a plot's x (bands included) or y (hlines and error bars included).
+void PlotRange(const XyPlot& p, bool x_axis, double* lo, double* hi) {
+  *lo = std::numeric_limits<double>::infinity();
+  *hi = -std::numeric_limits<double>::infinity();
+  auto add = [lo, hi](double v) {
+    if (!std::isfinite(v)) return;
+    *lo = std::min(*lo, v);
+    *hi = std::max(*hi, v);
+  };
+  for (const PlotSeries& series : p.series) {
+    for (double v : x_axis ? series.x : series.y) add(v);
+    if (!x_axis) {
+      for (double v : series.y_low) add(v);
+      for (double v : series.y_high) add(v);
+    }
+  }
+  for (const PlotBand& b : p.bands) {
+    if (x_axis) {
+      add(b.x_min);
+      add(b.x_max);
+    }
+  }
+  for (const PlotHLine& h : p.hlines) {
+    if (!x_axis) add(h.y);
+  }
+}
+
+// Labels the axes of a linear plot with their name and unit, scaled by a power of 1000 and
+// shifted by an offset near `x_center`/`y_center` where the values sit far from zero
+// (ChooseAxisScale), so PLplot draws no detached "x10^n" multiplier: "az_g - 0.971 g [1e-3 g]".
+// A center of NaN: never an offset.
+void ScaleAxes(const std::string& x_name, const std::string& x_unit, double x_center,
+               const std::string& y_name, const std::string& y_unit, double y_center, XyPlot* p) {
+  double lo = 0.0, hi = 0.0;
+  PlotRange(*p, true, &lo, &hi);
+  const AxisScale ax = ChooseAxisScale(x_name, x_unit, lo, hi, x_center);
+  PlotRange(*p, false, &lo, &hi);
+  const AxisScale ay = ChooseAxisScale(y_name, y_unit, lo, hi, y_center);
+  for (PlotSeries& series : p->series) {
+    for (double& v : series.x) v = ax.To(v);
+    for (double& v : series.y) v = ay.To(v);
+    for (double& v : series.y_low) v = ay.To(v);
+    for (double& v : series.y_high) v = ay.To(v);
+  }
+  for (PlotBand& b : p->bands) {
+    b.x_min = ax.To(b.x_min);
+    b.x_max = ax.To(b.x_max);
+  }
+  for (PlotHLine& h : p->hlines) h.y = ay.To(h.y);
+  p->x_label = ax.label;
+  p->y_label = ay.label;
+}
+
 }  // namespace
 
 void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
@@ -176,8 +232,6 @@ void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
   // Time series with the part outside the window shaded.
   XyPlot ts;
   ts.title = fmt::format("{}: time series", qname);
-  ts.x_label = "t_s [s]";
-  ts.y_label = fmt::format("{} [{}]", qname, unit);
   if (first > 0) ts.bands.push_back({"excluded (skip/settle)", tag.t_s.front(), tag.t_s[first]});
   if (end < n_total) {
     ts.bands.push_back({first > 0 ? "" : "excluded (window)", tag.t_s[end], tag.t_s.back()});
@@ -187,6 +241,7 @@ void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
   line.style = SeriesStyle::kLine;
   Decimate(tag.t_s, q.values, static_cast<size_t>(options.max_series_points), &line.x, &line.y);
   ts.series.push_back(std::move(line));
+  ScaleAxes("t_s", "s", tag.t_s.front(), qname, unit, mean, &ts);
   AddPlot(RenderXyPlot(ts),
           fmt::format("{} over the whole record; shaded: observations left out of the Type A "
                       "window ({} of {} kept).",
@@ -249,9 +304,9 @@ void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
     }
     XyPlot hp;
     hp.title = fmt::format("{}: histogram", qname);
-    hp.x_label = fmt::format("{} [{}]", qname, unit);
-    hp.y_label = fmt::format("density [1/{}]", unit.empty() ? "1" : unit);
     hp.series = {std::move(hist), std::move(normal)};
+    ScaleAxes(qname, unit, density_mean, "density", unit.empty() || unit == "1" ? "1" : "1/" + unit,
+              kNaN, &hp);
     AddPlot(RenderXyPlot(hp),
             fmt::format("Histogram of the {} observations in the window ({} bins{}) and the "
                         "normal density with the reported mean and s.",
@@ -271,8 +326,6 @@ void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
     Autocorrelation(x.data(), n, max_lag, rho.data());
     XyPlot ap;
     ap.title = fmt::format("{}: autocorrelation", qname);
-    ap.x_label = "lag k [samples]";
-    ap.y_label = "rho_k";
     const double band = 1.96 / std::sqrt(static_cast<double>(n));
     const double cutoff = JsonNumber(type_a, "autocorr_cutoff_lag");
     if (std::isfinite(cutoff) && cutoff >= 1.0) {
@@ -288,6 +341,7 @@ void AddSeriesPlots(const ordered_json& sensor, const std::string& qname,
       stems.y.push_back(rho[k]);
     }
     ap.series.push_back(std::move(stems));
+    ScaleAxes("lag k", "samples", kNaN, "rho_k", "1", kNaN, &ap);
     AddPlot(RenderXyPlot(ap),
             fmt::format("Sample autocorrelation of the window, lags 1..{}; n_eff = {}.", max_lag,
                         ShortNumber(JsonNumber(type_a, "n_eff"), 4)),

@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -282,6 +283,41 @@ TEST_CASE("Session page draws the x y and z Allan curves of a sensor in one plot
     CHECK(decades[2] - decades[1] == Approx(decades[1] - decades[0]).margin(0.05));
     CHECK(decades[3] - decades[2] == Approx(decades[1] - decades[0]).margin(0.05));
   }
+}
+
+// The text of a page's plots: PLplot writes each character as a hexadecimal reference
+// ("&#x61;" for 'a'); these are decoded, the rest kept.
+std::string PlotText(const std::string& html) {
+  std::string out;
+  for (size_t i = 0; i < html.size(); ++i) {
+    if (html.compare(i, 3, "&#x") == 0) {
+      const size_t end = html.find(';', i);
+      const long code = std::strtol(html.substr(i + 3, end - i - 3).c_str(), nullptr, 16);
+      out += code < 128 ? static_cast<char>(code) : '?';
+      i = end;
+    } else {
+      out += html[i];
+    }
+  }
+  return out;
+}
+
+TEST_CASE("Session page axes carry their scale in the label and no detached multiplier",
+          "[report][html]") {
+  const SessionAnalysis& a = ImuAnalysis();
+  REQUIRE(a.ok);
+  Result<std::string> html = RenderSessionAnalysisHtml(a);
+  REQUIRE(html.ok());
+  const std::string text = PlotText(html.value());
+  // PLplot's multiplier is a "(x10" beside the axis: az_g near 0.97 g with a spread of
+  // 0.01 g was labelled 9.6 .. 9.8 "(x10^-1)".
+  CHECK(text.find("(x10") == std::string::npos);
+  // az_g: the values sit 100 spreads away from zero, so the axis is az_g minus its mean
+  // rounded to the span (0.971 g), in mg; rho_k stays within +-0.05: in thousandths.
+  const double mean = a.report["sensors"][0]["quantities"]["az_g"]["type_a"]["mean"].get<double>();
+  REQUIRE(std::fabs(mean - 0.971) < 0.0005);
+  CHECK(text.find(">az_g - 0.971 g [1e-3 g]<") != std::string::npos);
+  CHECK(text.find(">rho_k [1e-3]<") != std::string::npos);
 }
 
 TEST_CASE("Session HTML says how a non-canonical file was read", "[report][html]") {
