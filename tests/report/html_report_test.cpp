@@ -177,6 +177,22 @@ TEST_CASE("Session page opens with the result: value U k and p as the JSON round
   CHECK(html.value().find("sensor 1 temp_c: no U: u(mean) = ") != std::string::npos);
 }
 
+TEST_CASE("Session page of a report saved before U was recorded states no U and says why",
+          "[report][html]") {
+  ordered_json old = ImuAnalysis().report;
+  for (auto& [name, q] : old["sensors"][0]["quantities"].items()) {
+    if (!q["type_a"].is_object()) continue;
+    for (const char* key : {"coverage", "k", "U_mean"}) q["type_a"].erase(key);
+  }
+  Result<std::string> html = RenderSessionReportHtml(old, nullptr, "none");
+  REQUIRE(html.ok());
+  CHECK(Cell(html.value(), "result-1-gx_dps", "U") == "-");
+  CHECK(Cell(html.value(), "result-1-gx_dps", "k") == "-");
+  CHECK(Cell(html.value(), "result-1-gx_dps", "p") == "-");
+  CHECK(html.value().find("sensor 1 gx_dps: the report states no U (written before metro "
+                          "recorded it): run characterize again") != std::string::npos);
+}
+
 TEST_CASE("Session page states the options as a table and not as the JSON string",
           "[report][html]") {
   const SessionAnalysis& a = ImuAnalysis();
