@@ -16,10 +16,9 @@ int FinishStdout(int exit_code) {
   std::cout.flush();
   if (flushed && !std::ferror(stdout) && !std::cout.fail()) return exit_code;
   if (exit_code != kExitOk) return exit_code;  // The error that matters was printed.
-  PrintError(MakeError(fmt::format(
+  return PrintErrorExit(MakeIoError(fmt::format(
       "cannot write to stdout: {}: the output is incomplete",
       flush_errno != 0 ? std::strerror(flush_errno) : "a write failed (a full disk?)")));
-  return kExitFailed;
 }
 
 Status WriteOutputs(const std::vector<std::pair<std::string, std::string_view>>& outputs) {

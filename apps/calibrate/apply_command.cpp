@@ -1,5 +1,5 @@
 // calibrate apply calibration.json SESSION -o calibrated.csv [--t-valid-min-c C]
-//   [--t-valid-max-c C]
+//   [--t-valid-max-c C] [--tags FILE]
 #include <fmt/format.h>
 
 #include <memory>
@@ -10,6 +10,8 @@
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
 #include "registry_hooks.hpp"
+#include "tags_cli.hpp"
+#include "tags_names.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -23,6 +25,7 @@ struct ApplyOptions {
   std::optional<double> t_valid_min_c;  // As given to `calibrate blob`.
   std::optional<double> t_valid_max_c;
   RegistryCliOptions registry;  // --registry: records the calibration applied (docs/registry.md)
+  std::string tags;  // --tags FILE: checks calibration.json's device IDs, names the tags.
 };
 
 int RunApply(const ApplyOptions& a) {
@@ -31,27 +34,32 @@ int RunApply(const ApplyOptions& a) {
     return kExitUsage;
   }
   if (Status s = apps::CheckStdinInputs(a.inputs, a.imutk); !s.ok()) {
-    apps::PrintError(s.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(s.error());
   }
-  std::vector<apps::NamedPath> inputs = {{"CALIBRATION", a.calibration}};
+  std::vector<apps::NamedPath> inputs = {{"CALIBRATION", a.calibration}, {"--tags", a.tags}};
   for (const std::string& in : a.inputs) inputs.push_back({"SESSION", in});
   if (Status s = apps::CheckOutputs({{"-o", a.output}}, inputs); !s.ok()) {
-    apps::PrintError(s.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(s.error());
   }
   Result<Calibration> cal = LoadCalibration(a.calibration);
   if (!cal.ok()) {
-    apps::PrintError(cal.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(cal.error());
+  }
+  // With a tags file, a calibration made for another tag (its device ID is not the one the
+  // file gives the sensor) is refused before anything is read or written.
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(a.tags);
+  if (!tags.ok()) return apps::PrintErrorExit(tags.error());
+  if (tags.value()) {
+    if (Status s = apps::ApplyTagsToCalibration(*tags.value(), a.tags, &cal.value()); !s.ok()) {
+      return apps::PrintErrorExit(s.error());
+    }
   }
   OpenedRegistry registry = OpenRegistryOption(a.registry);
   if (registry.exit_code != 0) return registry.exit_code;
   Result<Session> session =
       a.imutk ? LoadImuTk(a.inputs[0], a.inputs[1]) : LoadSession(a.inputs[0]);
   if (!session.ok()) {
-    apps::PrintError(session.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(session.error());
   }
   Session s = std::move(session).value();
   ApplyCalibrationOptions options;
@@ -59,8 +67,7 @@ int RunApply(const ApplyOptions& a) {
   options.validity.t_valid_max_c = a.t_valid_max_c;
   Result<ApplySummary> summary = ApplyCalibration(cal.value(), &s, options);
   if (!summary.ok()) {
-    apps::PrintError(summary.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(summary.error());
   }
   // The validity ranges' warnings and the samples outside a range always print; a session
   // entirely within its ranges is a note.
@@ -75,12 +82,15 @@ int RunApply(const ApplyOptions& a) {
     }
   }
   if (Status w = apps::WriteOutput(a.output, FormatSessionCsv(s, true)); !w.ok()) {
-    apps::PrintError(w.error());
-    return kExitFailed;
+    return apps::PrintErrorExit(w.error());
   }
   apps::Note(fmt::format("wrote {}: {} tags, {} rows calibrated\n",
                          apps::IsStdio(a.output) ? "stdout" : a.output,
                          summary.value().tags_calibrated, summary.value().rows));
+  if (tags.value()) {
+    apps::Note(fmt::format("calibrations applied ({}):\n{}", a.tags,
+                           apps::CalibrationTagLines(cal.value())));
+  }
   return RecordAppliedCalibration(registry.registry.get(), cal.value(), a.calibration, a.registry);
 }
 
@@ -108,6 +118,7 @@ void AddApplyCommand(CLI::App& app, int* exit_code) {
                   "upper end of the temperature validity range (default: the fitted span + 5 "
                   "degC)");
   AddRegistryOptions(sub, &o->registry);
+  AddTagsOption(sub, &o->tags);
   sub->callback([o, exit_code] { *exit_code = RunApply(*o); });
 }
 

@@ -71,32 +71,30 @@ int RunBlob(const BlobOptions& b) {
   }
   Result<std::optional<TagRegistry>> tags = LoadTagsOption(b.tags);
   if (!tags.ok()) {
-    apps::PrintError(tags.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(tags.error());
   }
   Result<uint32_t> slot_a = ParseSlotAddress(b.slot_address);
   if (!slot_a.ok()) {
     apps::PrintErrorText(slot_a.error().message);
-    return kExitUsage;
+    return apps::ExitCodeFor(slot_a.error());
   }
   for (Status s :
        {apps::CheckOutputs({{"-o", b.output}, {"--hex", b.hex}}, {{"CALIBRATION", b.calibration}}),
         apps::CheckBinaryStdout(b.output)}) {
     if (!s.ok()) {
-      apps::PrintError(s.error());
-      return kExitUsage;
+      return apps::PrintErrorExit(s.error());
     }
   }
   Result<Calibration> cal = LoadCalibration(b.calibration);
   if (!cal.ok()) {
     apps::PrintErrorText(cal.error().ToString());
-    return kExitUsage;
+    return apps::ExitCodeFor(cal.error());
   }
   Result<std::optional<uint64_t>> resolved =
       ResolveDeviceId(b.device_id, tags.value(), cal.value(), b.sensor);
   if (!resolved.ok()) {
     apps::PrintErrorText(resolved.error().message);
-    return kExitUsage;
+    return apps::ExitCodeFor(resolved.error());
   }
   if (!resolved.value()) {
     apps::PrintErrorText(fmt::format(
@@ -123,7 +121,7 @@ int RunBlob(const BlobOptions& b) {
       blob::BlobContentsFromCalibration(cal.value(), o, &warnings);
   if (!contents.ok()) {
     apps::PrintErrorText(fmt::format("{}: {}", b.calibration, contents.error().ToString()));
-    return kExitUsage;
+    return apps::ExitCodeFor(contents.error());
   }
   for (const std::string& w : warnings) {
     apps::PrintText(stderr, fmt::format("warning: {}\n", w));
@@ -131,7 +129,7 @@ int RunBlob(const BlobOptions& b) {
   Result<std::vector<uint8_t>> bytes = blob::WriteBlob(contents.value());
   if (!bytes.ok()) {
     apps::PrintErrorText(fmt::format("{}: {}", b.calibration, bytes.error().ToString()));
-    return kExitUsage;
+    return apps::ExitCodeFor(bytes.error());
   }
   const std::vector<uint8_t>& v = bytes.value();
   std::string hex;
@@ -148,7 +146,7 @@ int RunBlob(const BlobOptions& b) {
            {b.hex, hex}});
       !w.ok()) {
     apps::PrintErrorText(w.error().ToString());
-    return kExitFailed;
+    return apps::ExitCodeFor(w.error());
   }
   const uint32_t crc = blob::Crc32(v.data(), v.size() - 4);
   apps::Note(fmt::format("wrote {}: {} bytes, sensor {}, device {}, seq {}, CRC-32 0x{:08X}\n",
@@ -184,8 +182,7 @@ int RunBlobAll(const BlobOptions& b) {
   }
   Result<std::optional<TagRegistry>> tags = LoadTagsOption(b.tags);
   if (!tags.ok()) {
-    apps::PrintError(tags.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(tags.error());
   }
   struct stat st {};
   if (apps::IsStdio(b.output) || ::stat(b.output.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
@@ -198,19 +195,19 @@ int RunBlobAll(const BlobOptions& b) {
   Result<Calibration> cal = LoadCalibration(b.calibration);
   if (!cal.ok()) {
     apps::PrintErrorText(cal.error().ToString());
-    return kExitUsage;
+    return apps::ExitCodeFor(cal.error());
   }
   // Every tag resolvable and representable before anything is written.
   std::vector<BlobOptions> each;
   for (const TagCalibration& t : cal.value().tags) {
     Result<std::optional<uint64_t>> id = ResolveDeviceId("", tags.value(), cal.value(), t.sensor);
     if (!id.ok() || !id.value()) {
-      apps::PrintErrorText(
-          id.ok() ? fmt::format("sensor {}: no device ID in the tags file or calibration.json "
-                                "(nothing written)",
-                                t.sensor)
-                  : fmt::format("sensor {}: {} (nothing written)", t.sensor, id.error().message));
-      return kExitUsage;
+      const Error e = id.ok() ? MakeError(fmt::format("sensor {}: no device ID in the tags file or "
+                                                      "calibration.json (nothing written)",
+                                                      t.sensor))
+                              : id.error().WithContext(fmt::format("sensor {}", t.sensor));
+      apps::PrintErrorText(id.ok() ? e.message : e.ToString() + " (nothing written)");
+      return apps::ExitCodeFor(e);
     }
     blob::BlobFromCalibrationOptions o;
     o.sensor = t.sensor;
@@ -229,7 +226,7 @@ int RunBlobAll(const BlobOptions& b) {
     if (!bytes.ok()) {
       apps::PrintErrorText(
           fmt::format("{}: {} (nothing written)", b.calibration, bytes.error().ToString()));
-      return kExitUsage;
+      return apps::ExitCodeFor(bytes.error());
     }
     BlobOptions one = b;
     one.all = false;

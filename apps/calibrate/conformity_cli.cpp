@@ -39,8 +39,7 @@ int ApplySpec(const std::optional<ConformitySpec>& spec, Calibration* calibratio
   if (!spec) return kExitOk;
   Result<ConformityStatement> st = EvaluateConformity(*calibration, *spec);
   if (!st.ok()) {
-    apps::PrintError(st.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(st.error());
   }
   calibration->conformity = std::move(st).value();
   return kExitOk;

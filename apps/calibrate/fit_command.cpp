@@ -93,8 +93,7 @@ int RunFit(const FitOptions& f) {
   if (!f.segments.empty()) {
     Result<std::vector<AnnotatedSegment>> given = ReadSegmentsFile(f.segments);
     if (!given.ok()) {
-      apps::PrintError(given.error());
-      return kExitUsage;
+      return apps::PrintErrorExit(given.error());
     }
     o.annotated_segments = std::move(given).value();
     o.segments_path = f.segments;
@@ -112,25 +111,21 @@ int RunFit(const FitOptions& f) {
     return kExitUsage;
   }
   if (Status s = apps::CheckStdinInputs(f.inputs, f.imutk); !s.ok()) {
-    apps::PrintError(s.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(s.error());
   }
   if (Status s = apps::RefuseStdout(f.html, "--html", "the certificate goes to a file"); !s.ok()) {
-    apps::PrintError(s.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(s.error());
   }
   std::vector<apps::NamedPath> inputs = {
       {"--columns-file", f.load.columns_file}, {"--segments", f.segments}, {"--spec", f.spec.spec}};
   for (const std::string& in : f.inputs) inputs.push_back({"SESSION", in});
   inputs.push_back({"--tags", f.tags});
   if (Status s = apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs); !s.ok()) {
-    apps::PrintError(s.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(s.error());
   }
   Result<std::optional<TagRegistry>> tags = LoadTagsOption(f.tags);
   if (!tags.ok()) {
-    apps::PrintError(tags.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(tags.error());
   }
   const LoadedSpec spec = LoadSpecOption(f.spec);
   if (spec.exit_code != 0) return spec.exit_code;
@@ -142,8 +137,7 @@ int RunFit(const FitOptions& f) {
   for (size_t i = 0; i < f.inputs.size(); i += step) {
     LoadOptions load;
     if (Status st = apps::MakeLoadOptions(f.load, &load); !st.ok()) {
-      apps::PrintError(st.error());
-      return kExitUsage;
+      return apps::PrintErrorExit(st.error());
     }
     if (!f.imutk) {
       BeginLoadPhase(&progress, f.inputs[i]);
@@ -153,8 +147,7 @@ int RunFit(const FitOptions& f) {
         f.imutk ? LoadImuTk(f.inputs[i], f.inputs[i + 1]) : LoadSession(f.inputs[i], load);
     progress.Finish();
     if (!s.ok()) {
-      apps::PrintError(s.error());
-      return kExitUsage;
+      return apps::PrintErrorExit(s.error());
     }
     sessions.push_back(std::move(s).value());
   }
@@ -162,15 +155,13 @@ int RunFit(const FitOptions& f) {
   for (const Session& s : sessions) ptrs.push_back(&s);
   // Missing columns are bad input (exit 2), named with the file before any fitting.
   if (Status c = CheckCalibrationColumns(ptrs, o); !c.ok()) {
-    apps::PrintError(c.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(c.error());
   }
   progress.BeginPhase("fit (Ceres)", kUncountedWork);
   Result<Calibration> cal = CalibrateSessions(ptrs, o);
   progress.Finish();
   if (!cal.ok()) {
-    apps::PrintError(cal.error());
-    return kExitFailed;
+    return apps::PrintErrorExit(cal.error());
   }
   // calibration.json carries each tag's device ID, name and profile from the tags file.
   for (TagCalibration& t : cal.value().tags) {
@@ -191,8 +182,8 @@ int RunFit(const FitOptions& f) {
         cal.value(), ptrs, "Conditions and residual plots from the input records as fitted.",
         certificate);
     if (!rendered.ok()) {
-      apps::PrintError(rendered.error());
-      return kExitFailed;
+      // The certificate of the fit just made: a failure is the run's, not the input's.
+      return apps::PrintErrorExit(rendered.error().WithKind(ErrorKind::kFailed));
     }
     html = std::move(rendered).value();
   }
@@ -200,8 +191,7 @@ int RunFit(const FitOptions& f) {
   if (Status w =
           apps::WriteOutputs({{f.output, FormatCalibrationJson(cal.value())}, {f.html, html}});
       !w.ok()) {
-    apps::PrintError(w.error());
-    return kExitFailed;
+    return apps::PrintErrorExit(w.error());
   }
   // The summary is a note (not under --quiet); the warnings always print.
   for (const TagCalibration& t : cal.value().tags) {

@@ -29,8 +29,7 @@ int RunInspect(const InspectCliOptions& c) {
   blob::InspectOptions o;
   Result<std::optional<TagRegistry>> tags = LoadTagsOption(c.tags);
   if (!tags.ok()) {
-    apps::PrintError(tags.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(tags.error());
   }
   if (c.sensor != 0 && !tags.value()) {
     apps::PrintErrorText("--sensor N names a tag of the tags file: give --tags FILE");
@@ -48,7 +47,7 @@ int RunInspect(const InspectCliOptions& c) {
   }
   if (!resolved.ok()) {
     apps::PrintErrorText(resolved.error().message);
-    return kExitUsage;
+    return apps::ExitCodeFor(resolved.error());
   }
   if (c.sensor != 0 && !resolved.value()) {
     apps::PrintErrorText(
@@ -72,8 +71,7 @@ int RunInspect(const InspectCliOptions& c) {
   o.slot_b_address = static_cast<uint32_t>(a) + blob::kPageSize;
   Result<blob::InspectReport> r = blob::InspectFile(c.input, o);
   if (!r.ok()) {
-    apps::PrintError(r.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(r.error());
   }
   if (c.json) {
     fmt::print("{}\n", JsonText(blob::InspectToJson(r.value()), 2));

@@ -80,7 +80,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   Result<std::optional<uint64_t>> resolved = ResolveDeviceId(c.device_id, tags, cal, c.sensor);
   if (!resolved.ok()) {
     apps::PrintErrorText(resolved.error().message);
-    return kExitUsage;
+    return apps::ExitCodeFor(resolved.error());
   }
   if (c.any_device && !c.device_id.empty()) {
     apps::PrintErrorText("--any-device and --device-id contradict each other: give one");
@@ -117,7 +117,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
     if (!bytes.ok()) {
       apps::PrintErrorText(fmt::format("{}: {} (nothing sent; {} not opened)", c.calibration,
                                        bytes.error().ToString(), c.port));
-      return kExitUsage;
+      return apps::ExitCodeFor(bytes.error());
     }
   }
   OpenedRegistry registry = OpenRegistryOption(c.registry);
@@ -125,7 +125,9 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   Result<std::unique_ptr<blob::SerialPort>> port = blob::SerialPort::Open(c.port);
   if (!port.ok()) {
     apps::PrintErrorText(port.error().ToString());
-    return kExitFailed;
+    // The tag cannot be reached through the port: the push failed (exit 1,
+    // docs/calibration-blob.md).
+    return apps::ExitCodeFor(port.error().WithKind(ErrorKind::kFailed));
   }
   blob::PushOptions po;
   po.timeout_ms = c.timeout_ms;
@@ -214,12 +216,13 @@ int RunPushAll(const PushCliOptions& c) {
   for (const TagCalibration& t : cal.tags) {
     Result<std::optional<uint64_t>> id = ResolveDeviceId("", tags, cal, t.sensor);
     if (!id.ok() || !id.value()) {
-      apps::PrintErrorText(
-          id.ok() ? fmt::format("sensor {}: no device ID in the tags file or calibration.json "
-                                "(nothing sent; {} not opened)",
-                                t.sensor, c.port)
-                  : fmt::format("sensor {}: {} (nothing sent)", t.sensor, id.error().message));
-      return kExitUsage;
+      const Error e = id.ok()
+                          ? MakeError(fmt::format("sensor {}: no device ID in the tags file or "
+                                                  "calibration.json (nothing sent; {} not opened)",
+                                                  t.sensor, c.port))
+                          : id.error().WithContext(fmt::format("sensor {}", t.sensor));
+      apps::PrintErrorText(id.ok() ? e.message : e.ToString() + " (nothing sent)");
+      return apps::ExitCodeFor(e);
     }
     PushCliOptions one = c;
     one.all = false;

@@ -54,18 +54,16 @@ std::string Csv(const std::string& field) {
   return out + "\"";
 }
 
-int Fail(const Error& e, int code) {
-  apps::PrintError(e);
-  return code;
-}
+// Prints `e` and returns its exit code (apps::ExitCodeFor).
+int Fail(const Error& e) { return apps::PrintErrorExit(e); }
 
 int RunHistory(const RegistryQueryOptions& o) {
   Result<uint64_t> id = DeviceId(o.device_id);
-  if (!id.ok()) return Fail(id.error(), kExitUsage);
+  if (!id.ok()) return Fail(id.error());
   Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
-  if (!r.ok()) return Fail(r.error(), kExitUsage);
+  if (!r.ok()) return Fail(r.error());
   Result<std::vector<RegistryCalibration>> h = r.value()->History(id.value());
-  if (!h.ok()) return Fail(h.error(), kExitUsage);
+  if (!h.ok()) return Fail(h.error());
   if (o.json) {
     json j;
     j["device_id"] = blob::FormatDeviceId(id.value());
@@ -106,11 +104,11 @@ int RunHistory(const RegistryQueryOptions& o) {
 
 int RunDrift(const RegistryQueryOptions& o) {
   Result<uint64_t> id = DeviceId(o.device_id);
-  if (!id.ok()) return Fail(id.error(), kExitUsage);
+  if (!id.ok()) return Fail(id.error());
   Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
-  if (!r.ok()) return Fail(r.error(), kExitUsage);
+  if (!r.ok()) return Fail(r.error());
   Result<DriftResult> d = r.value()->Drift(id.value());
-  if (!d.ok()) return Fail(d.error(), kExitUsage);
+  if (!d.ok()) return Fail(d.error());
   if (d.value().shared_inputs) {
     apps::PrintText(stderr,
                     "warning: the two calibrations share an input record (same SHA-256): their "
@@ -146,9 +144,9 @@ int RunDue(const RegistryQueryOptions& o) {
     return kExitUsage;
   }
   Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
-  if (!r.ok()) return Fail(r.error(), kExitUsage);
+  if (!r.ok()) return Fail(r.error());
   Result<std::vector<DueDevice>> due = r.value()->Due(o.interval_days, now, o.all);
-  if (!due.ok()) return Fail(due.error(), kExitFailed);
+  if (!due.ok()) return Fail(due.error().WithKind(ErrorKind::kFailed));
   if (o.json) {
     json j;
     j["at_utc"] = now;
@@ -180,12 +178,12 @@ int RunDue(const RegistryQueryOptions& o) {
 
 int RunExport(const RegistryQueryOptions& o) {
   if (Status s = apps::CheckOutputs({{"-o", o.output}}, {}); !s.ok()) {
-    return Fail(s.error(), kExitUsage);
+    return Fail(s.error());
   }
   Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
-  if (!r.ok()) return Fail(r.error(), kExitUsage);
+  if (!r.ok()) return Fail(r.error());
   Result<std::vector<RegistryCalibration>> all = r.value()->All();
-  if (!all.ok()) return Fail(all.error(), kExitFailed);
+  if (!all.ok()) return Fail(all.error().WithKind(ErrorKind::kFailed));
   std::string text;
   if (o.format == "json") {
     json j;
@@ -211,7 +209,7 @@ int RunExport(const RegistryQueryOptions& o) {
       }
     }
   }
-  if (Status w = apps::WriteOutput(o.output, text); !w.ok()) return Fail(w.error(), kExitFailed);
+  if (Status w = apps::WriteOutput(o.output, text); !w.ok()) return Fail(w.error());
   return kExitOk;
 }
 

@@ -33,7 +33,8 @@ OpenedRegistry OpenRegistryOption(const RegistryCliOptions& o) {
 int RegistryResult(const Status& recorded, const std::string& what) {
   if (!recorded.ok()) {
     apps::PrintErrorText("registry: " + recorded.error().ToString());
-    return kExitFailed;
+    // Recorded after the outputs were written: a failure is a write that failed (exit 1).
+    return apps::ExitCodeFor(recorded.error().WithKind(ErrorKind::kIo));
   }
   apps::Note(fmt::format("registry: recorded {}\n", what));
   return kExitOk;

@@ -1,4 +1,4 @@
-// calibrate report calibration.json
+// calibrate report calibration.json [--html CERTIFICATE.html] [--tags FILE]
 #include <fmt/format.h>
 
 #include <memory>
@@ -7,6 +7,8 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/report/html_report.hpp"
+#include "tags_cli.hpp"
+#include "tags_names.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -15,33 +17,47 @@ namespace {
 struct ReportOptions {
   std::string calibration;
   std::string html;  // Calibration certificate (docs/reports.md).
+  std::string tags;  // --tags FILE: the tags' names, device IDs and profiles.
 };
 
 int RunReport(const ReportOptions& r) {
   if (Status s = apps::RefuseStdout(r.html, "--html",
                                     "the summary goes to stdout: name a file for the certificate");
       !s.ok()) {
-    apps::PrintError(s.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(s.error());
   }
-  if (Status s = apps::CheckOutputs({{"--html", r.html}}, {{"CALIBRATION", r.calibration}});
+  if (Status s = apps::CheckOutputs({{"--html", r.html}},
+                                    {{"CALIBRATION", r.calibration}, {"--tags", r.tags}});
       !s.ok()) {
-    apps::PrintError(s.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(s.error());
   }
   Result<Calibration> cal = LoadCalibration(r.calibration);
   if (!cal.ok()) {
-    apps::PrintError(cal.error());
-    return kExitUsage;
+    return apps::PrintErrorExit(cal.error());
   }
-  apps::PrintText(stdout, FormatCalibrationReport(cal.value()));
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(r.tags);
+  if (!tags.ok()) return apps::PrintErrorExit(tags.error());
+  Calibration named = cal.value();
+  if (tags.value()) {
+    if (Status s = apps::ApplyTagsToCalibration(*tags.value(), r.tags, &named); !s.ok()) {
+      return apps::PrintErrorExit(s.error());
+    }
+  }
+  apps::PrintText(stdout, FormatCalibrationReport(named));
+  if (tags.value()) {
+    apps::PrintText(stdout,
+                    fmt::format("tags ({}):\n{}", r.tags, apps::CalibrationTagLines(named)));
+  }
   if (!r.html.empty()) {
-    // The certificate reloads the recorded inputs when their SHA-256 still matches.
-    Result<std::string> html = RenderJsonFileHtml(r.calibration);
-    Status s = html.ok() ? WriteFileAtomically(r.html, html.value()) : Status(html.error());
+    // The certificate reloads the recorded inputs when their SHA-256 still matches; with
+    // --tags it names the tags from the file.
+    Result<std::string> html = tags.value() ? apps::RenderCertificateFor(named, r.calibration)
+                                            : RenderJsonFileHtml(r.calibration);
+    // The certificate of a calibration.json that loaded: a render failure is the run's.
+    Status s = html.ok() ? WriteFileAtomically(r.html, html.value())
+                         : Status(html.error().WithKind(ErrorKind::kFailed));
     if (!s.ok()) {
-      apps::PrintError(s.error());
-      return kExitFailed;
+      return apps::PrintErrorExit(s.error());
     }
     apps::Note(fmt::format("wrote {}\n", r.html));
   }
@@ -57,6 +73,7 @@ void AddReportCommand(CLI::App& app, int* exit_code) {
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
+  AddTagsOption(sub, &o->tags);
   sub->callback([o, exit_code] { *exit_code = RunReport(*o); });
 }
 

@@ -1,10 +1,13 @@
-// characterize SESSION --accuracy ...: accuracy of a tag against a rotation table.
+// characterize accuracy SESSION ... (or SESSION --accuracy ...): accuracy of a tag against a
+// rotation table.
 #include "accuracy_command.hpp"
 
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <memory>
 
+#include "analysis_options.hpp"
 #include "cli_progress.hpp"
 #include "exit_codes.hpp"
 #include "metro/accuracy/accuracy.hpp"
@@ -51,27 +54,29 @@ void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
   app.add_option("--reference-u", o->reference_u,
                  "the table's standard uncertainty in deg, or a budget file for it "
                  "(docs/budget-format.md)");
-  app.add_option("--reference-offset-s", o->reference_offset_s,
+  app.add_option("--reference-offset-s", o->library.alignment.offset_s,
                  "reference clock minus tag clock in s (default: estimated)");
   app.add_option("--error-model", o->model,
                  "the fitted error curve (auto: the order the data support; docs/accuracy.md)")
       ->type_name("TEXT:{auto,linear,harmonic1,harmonic2}")
       ->capture_default_str();
-  app.add_option("--min-dwell-s", o->min_dwell_s, "shortest table rest that is a plateau")
+  app.add_option("--min-dwell-s", o->library.plateaus.min_dwell_s,
+                 "shortest table rest that is a plateau")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app.add_option("--settle-s", o->settle_s, "seconds dropped after the table stops")
+  app.add_option("--settle-s", o->library.plateaus.settle_s,
+                 "seconds dropped after the table stops")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  app.add_option("--plateau-tolerance-deg", o->plateau_tolerance_deg,
+  app.add_option("--plateau-tolerance-deg", o->library.plateaus.tolerance_deg,
                  "largest reference change within a plateau")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  app.add_option("--assumed-hysteresis-deg", o->assumed_hysteresis_deg,
+  app.add_option("--assumed-hysteresis-deg", o->library.assumed_hysteresis_deg,
                  "hysteresis the corrected U assumes when no angle was visited both ways")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  app.add_option("--lag-tau-s", o->lag_tau_s,
+  app.add_option("--lag-tau-s", o->library.lag_tau_s,
                  "the tag's response time in s (default: estimated from the motion)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--no-lag-model", o->no_lag_model,
@@ -99,16 +104,13 @@ const std::vector<std::string>& AccuracyOnlyOptionNames() {
 
 int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   if (in.type_a) {
-    PrintError(MakeError("--accuracy and --type-a are separate analyses: give one"));
-    return kExitUsage;
+    return PrintErrorExit(MakeError("--accuracy and --type-a are separate analyses: give one"));
   }
   if (Status s = CheckStdinInputs({in.session, a.reference}); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   if (Status s = RefuseStdout(in.html, "--html", "the HTML view goes to a file"); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   // --reference-u is a budget file unless it is a number.
   char* number_end = nullptr;
@@ -121,52 +123,39 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
                                {"--reference-u", reference_u_file},
                                {"--columns-file", in.load.columns_file}});
       !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
-  AccuracyOptions options;
+  AccuracyOptions options = a.library;
   auto axis = ParseTableAxis(a.table_axis);
   if (!axis.ok()) {
-    PrintError(axis.error());
-    return kExitUsage;
+    return PrintErrorExit(axis.error());
   }
   options.axis = axis.value();
   auto model = ParseErrorModel(a.model);
   if (!model.ok()) {
-    PrintError(model.error());
-    return kExitUsage;
+    return PrintErrorExit(model.error());
   }
   options.model = model.value();
   if (in.sensors.size() > 1) {
-    PrintError(MakeError("--accuracy evaluates one tag: give at most one --sensor"));
-    return kExitUsage;
+    return PrintErrorExit(MakeError("--accuracy evaluates one tag: give at most one --sensor"));
   }
   options.sensor = in.sensors.empty() ? 0 : in.sensors.front();
-  options.plateaus.min_dwell_s = a.min_dwell_s;
-  options.plateaus.settle_s = a.settle_s;
-  options.plateaus.tolerance_deg = a.plateau_tolerance_deg;
   options.plateaus.settle_auto = in.settle == "auto";
   options.window = in.window;
-  options.alignment.offset_s = a.reference_offset_s;
-  options.assumed_hysteresis_deg = a.assumed_hysteresis_deg;
-  options.lag_tau_s = a.lag_tau_s;
   options.model_lag = !a.no_lag_model;
   options.plateaus.trim_departures = !a.keep_departures;
   auto reference_u = ParseReferenceU(a.reference_u);
   if (!reference_u.ok()) {
-    PrintError(reference_u.error());
-    return kExitUsage;
+    return PrintErrorExit(reference_u.error());
   }
   options.reference = reference_u.value();
   std::string why;
   if (!options.IsValid(&why)) {
-    PrintError(MakeError(why));
-    return kExitUsage;
+    return PrintErrorExit(MakeError(why));
   }
   LoadOptions load;
   if (Status s = MakeLoadOptions(in.load, &load); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   load.threads = in.threads;
   // One line per phase on a terminal: the load in bytes, then the evaluation.
@@ -176,8 +165,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   auto session = LoadSession(in.session, load);
   progress.Finish();
   if (!session.ok()) {
-    PrintError(session.error());
-    return kExitUsage;
+    return PrintErrorExit(session.error());
   }
   std::optional<Session> reference;
   if (!a.reference.empty()) {
@@ -186,8 +174,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     ref_load.threads = in.threads;
     auto loaded = LoadSession(a.reference, ref_load);
     if (!loaded.ok()) {
-      PrintError(loaded.error());
-      return kExitUsage;
+      return PrintErrorExit(loaded.error());
     }
     reference = std::move(loaded).value();
   }
@@ -196,8 +183,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   auto result = EvaluateAccuracy(session.value(), ref, options);
   progress.Finish();
   if (!result.ok()) {
-    PrintError(result.error());
-    return kExitUsage;
+    return PrintErrorExit(result.error());
   }
   const nlohmann::ordered_json report = AccuracyReportJson(result.value(), session.value(), ref);
   const std::string json = JsonText(report, 2) + "\n";
@@ -205,8 +191,8 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   if (!in.html.empty()) {
     Result<std::string> rendered = RenderJsonHtml(report, in.output);
     if (!rendered.ok()) {
-      PrintError(rendered.error());
-      return kExitFailed;
+      // The view of the evaluation just made: a failure is the run's, not the input's.
+      return PrintErrorExit(rendered.error().WithKind(ErrorKind::kFailed));
     }
     html = std::move(rendered).value();
   }
@@ -214,11 +200,48 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   // JSON and the HTML are replaced together or not at all.
   if (Status s = WriteOutputs({{in.output.empty() ? "-" : in.output, json}, {in.html, html}});
       !s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
+    return PrintErrorExit(s.error());
   }
   if (!in.output.empty()) PrintTable(AccuracyReportTable(result.value()), in.output);
   return kExitOk;
+}
+
+namespace {
+
+struct AccuracyCommandOptions {
+  std::string session;
+  AnalysisCliOptions analysis;  // Input and window (AnalysisCliKind::kAccuracy).
+  AccuracyCliOptions accuracy;
+  std::string output;
+  std::string html;
+  int threads = 0;
+};
+
+}  // namespace
+
+void AddAccuracyCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<AccuracyCommandOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "accuracy",
+      "accuracy of a tag against a rotation table: plateaus, error curve, hysteresis, budget "
+      "(docs/accuracy.md; also: characterize SESSION --accuracy ...)");
+  sub->add_option("session", o->session, "session.csv or receiver capture; - reads stdin")
+      ->required()
+      ->check(ExistingFileOrStdin());
+  AddAnalysisCliOptions(sub, &o->analysis, AnalysisCliKind::kAccuracy);
+  sub->add_option("-o,--output", o->output,
+                  "write the JSON report here (atomically) and print a table to stdout; -o - "
+                  "writes it to stdout and the table to stderr (default: the JSON to stdout)");
+  sub->add_option("--html", o->html, "also write the HTML view here (docs/reports.md)");
+  AddAccuracyOptions(*sub, &o->accuracy);
+  sub->add_option("--threads", o->threads, "worker threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  sub->callback([o, exit_code] {
+    o->accuracy.enabled = true;  // --accuracy is implied here.
+    const AnalysisCliOptions& a = o->analysis;
+    *exit_code = RunAccuracy(o->accuracy, {o->session, a.load, a.sensors, o->output, a.settle,
+                                           o->threads, false, o->html, AccuracyWindow(a)});
+  });
 }
 
 }  // namespace metro::apps

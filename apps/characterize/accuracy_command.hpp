@@ -1,7 +1,8 @@
-// characterize SESSION --accuracy [--table-axis yaw|pitch|roll] [--reference LOG]
+// characterize accuracy SESSION [--table-axis yaw|pitch|roll] [--reference LOG]
 //   [--reference-u DEG|BUDGET.json] [-o REPORT.json]: accuracy against a rotation table
-// (docs/accuracy.md). The options live on the top-level app next to the main job's; the
-// analyze path calls RunAccuracy when --accuracy is given.
+// (docs/accuracy.md). Also spelled characterize SESSION --accuracy ...: there the options
+// live on the top-level app next to the main job's, and the analyze path calls RunAccuracy
+// when --accuracy is given.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "load_cli.hpp"
+#include "metro/accuracy/accuracy.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro::apps {
@@ -19,13 +21,11 @@ struct AccuracyCliOptions {
   std::string table_axis = "yaw";
   std::string reference;    // Separate reference log (t_s, table_angle_deg).
   std::string reference_u;  // Standard uncertainty in deg, or a budget file.
-  std::optional<double> reference_offset_s;
   std::string model = "auto";
-  double min_dwell_s = 3.0;
-  double settle_s = 2.0;
-  double plateau_tolerance_deg = 0.005;
-  double assumed_hysteresis_deg = 0.2;
-  std::optional<double> lag_tau_s;  // Given response time; default: estimated.
+  // --min-dwell-s, --settle-s, --plateau-tolerance-deg, --assumed-hysteresis-deg,
+  // --lag-tau-s and --reference-offset-s, bound to the library's options (their defaults are
+  // the library's); RunAccuracy sets the rest.
+  AccuracyOptions library;
   bool no_lag_model = false;
   bool keep_departures = false;
 };
@@ -43,7 +43,11 @@ struct AccuracyRunInputs {
   WindowOptions window;  // --skip-samples, --skip-seconds, --from-s, --to-s.
 };
 
+// --accuracy and the accuracy evaluation's own options (on the `accuracy` subcommand
+// --accuracy is implied, and accepted).
 void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* options);
+// `characterize accuracy SESSION ...`.
+void AddAccuracyCommand(CLI::App& app, int* exit_code);
 // The options AddAccuracyOptions adds that only --accuracy uses (refused without it).
 const std::vector<std::string>& AccuracyOnlyOptionNames();
 int RunAccuracy(const AccuracyCliOptions& options, const AccuracyRunInputs& inputs);

@@ -4,20 +4,28 @@
 
 namespace metro::apps {
 
-void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o) {
+void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o, AnalysisCliKind kind) {
+  const bool type_a = kind == AnalysisCliKind::kTypeA;
   AddLoadCliOptions(app, &o->load);
-  app->add_option("--skip-samples", o->skip_samples, "drop the first N observations of each tag")
+  app->add_option("--skip-samples", o->window.skip_samples,
+                  "drop the first N observations of each tag")
       ->check(CLI::NonNegativeNumber);
-  app->add_option("--skip-seconds", o->skip_seconds,
+  app->add_option("--skip-seconds", o->window.skip_seconds,
                   "drop each tag's observations in its first S seconds")
       ->check(CLI::NonNegativeNumber);
-  app->add_option("--from-s", o->from_s, "keep observations with t_s >= this");
-  app->add_option("--to-s", o->to_s, "keep observations with t_s <= this");
+  app->add_option("--from-s", o->window.from_s, "keep observations with t_s >= this");
+  app->add_option("--to-s", o->window.to_s, "keep observations with t_s <= this");
   app->add_option("--settle", o->settle,
-                  "auto: drop each quantity's start-up transient (fitted exponential, cut "
-                  "where the rest biases the mean by <= 0.1 u; docs/type-a.md)")
+                  type_a ? "auto: drop each quantity's start-up transient (fitted exponential, "
+                           "cut where the rest biases the mean by <= 0.1 u; docs/type-a.md)"
+                         : "auto: also drop each plateau's start-up transient (MSER-5; "
+                           "docs/accuracy.md)")
       ->check(CLI::IsMember({"none", "auto"}))
       ->capture_default_str();
+  if (!type_a) {
+    app->add_option("--sensor", o->sensors, "the tag to evaluate (default: the first)");
+    return;
+  }
   app->add_option("--settle-scope", o->settle_scope,
                   "with --settle auto: quantity (each from its own settle point) or tag (every "
                   "quantity of a tag from the largest non-temperature cut)")
@@ -42,16 +50,20 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o) {
       ->capture_default_str();
 }
 
+WindowOptions AccuracyWindow(const AnalysisCliOptions& o) {
+  WindowOptions window = o.window;
+  window.settle_auto = false;  // The plateaus settle by their own rule (docs/accuracy.md).
+  window.settle_tag_wide = false;
+  return window;
+}
+
 Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
                                   SessionAnalysisOptions* out) {
   LoadOptions& load = out->load;
   if (Status s = MakeLoadOptions(o.load, &load); !s.ok()) return s;
   load.threads = threads;
   SessionTypeAOptions& type_a = out->type_a;
-  type_a.window.skip_samples = o.skip_samples;
-  type_a.window.skip_seconds = o.skip_seconds;
-  type_a.window.from_s = o.from_s;
-  type_a.window.to_s = o.to_s;
+  type_a.window = o.window;
   type_a.window.settle_auto = o.settle == "auto";
   type_a.window.settle_tag_wide = o.settle_scope == "tag";
   type_a.sensors = o.sensors;

@@ -16,10 +16,9 @@ namespace metro::apps {
 
 struct AnalysisCliOptions {
   LoadCliOptions load;  // --format, --column, --rate-hz, ... (load_cli.hpp).
-  int64_t skip_samples = 0;
-  double skip_seconds = 0.0;
-  std::optional<double> from_s;
-  std::optional<double> to_s;
+  // --skip-samples, --skip-seconds, --from-s, --to-s, bound to the library's struct (its
+  // settle fields are set from --settle and --settle-scope).
+  WindowOptions window;
   std::string settle = "none";
   std::string settle_scope = "quantity";  // "tag": one cut per tag (--settle-scope).
   std::vector<int> sensors;
@@ -31,10 +30,19 @@ struct AnalysisCliOptions {
   std::string gaps = "skip";  // --gaps: skip, split or refuse (docs/noise.md, "Gaps").
 };
 
-// Registers the load flags (load_cli.hpp), --skip-samples, --skip-seconds,
-// --from-s, --to-s, --settle, --settle-scope, --sensor, --quantity, --tag-registry,
-// --allan, --taus, --estimator and --gaps on `app`.
-void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o);
+// Which analysis registers the options: the Type A analysis (`analyze`, `batch`, and the
+// top-level `characterize SESSION`), or the accuracy evaluation (`accuracy`), which takes the
+// input and window options only.
+enum class AnalysisCliKind { kTypeA, kAccuracy };
+
+// Registers the load flags (load_cli.hpp), --skip-samples, --skip-seconds, --from-s, --to-s,
+// --settle and --sensor on `app`; for kTypeA also --settle-scope, --quantity, --tags
+// (--tag-registry), --allan, --taus, --estimator and --gaps.
+void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o,
+                           AnalysisCliKind kind = AnalysisCliKind::kTypeA);
+
+// The window the accuracy evaluation takes from these flags.
+WindowOptions AccuracyWindow(const AnalysisCliOptions& o);
 
 // The library options for these flags; `threads` is the worker count inside one session
 // (0: all cores). Errors (an unreadable tag registry, an unknown tau spacing or

@@ -1,4 +1,6 @@
-// The main job: characterize SESSION --type-a [windows] [-o REPORT.json]
+// The main job: characterize analyze SESSION [windows] [--allan] [--budget B] [-o REPORT.json],
+// also spelled characterize SESSION --type-a ... (the options on the top-level app, where
+// --accuracy turns it into `characterize accuracy SESSION ...`).
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -37,7 +39,10 @@ struct AnalyzeOptions {
 // accuracy evaluation's own options without --accuracy; the Allan options without --allan;
 // with --accuracy, the options only the Type A analysis uses.
 Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
-  auto given = [&](const std::string& name) { return app.count(name) > 0; };
+  // `analyze` has no accuracy options: only the top-level spelling can be given them.
+  auto given = [&](const std::string& name) {
+    return app.get_option_no_throw(name) != nullptr && app.count(name) > 0;
+  };
   if (o.accuracy.enabled) {
     for (const char* name : {"--allan", "--taus", "--estimator", "--gaps", "--allan-csv",
                              "--budget", "--quantity", "--settle-scope"}) {
@@ -67,19 +72,13 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
 int RunAnalyze(const AnalyzeOptions& o) {
   if (o.accuracy.enabled) {
     const AnalysisCliOptions& a = o.analysis;
-    WindowOptions window;
-    window.skip_samples = a.skip_samples;
-    window.skip_seconds = a.skip_seconds;
-    window.from_s = a.from_s;
-    window.to_s = a.to_s;
     return RunAccuracy(o.accuracy, {o.session, a.load, a.sensors, o.output, a.settle, o.threads,
-                                    o.type_a, o.html, window});
+                                    o.type_a, o.html, AccuracyWindow(a)});
   }
   for (Status s : {RefuseStdout(o.html, "--html", "the HTML report goes to a file"),
                    RefuseStdout(o.allan_csv, "--allan-csv", "the Allan curves go to a file")}) {
     if (!s.ok()) {
-      PrintError(s.error());
-      return kExitUsage;
+      return PrintErrorExit(s.error());
     }
   }
   std::vector<NamedPath> inputs = {{"SESSION", o.session},
@@ -94,13 +93,11 @@ int RunAnalyze(const AnalyzeOptions& o) {
   if (Status s = CheckOutputs({{"-o", o.output}, {"--allan-csv", o.allan_csv}, {"--html", o.html}},
                               inputs);
       !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   SessionAnalysisOptions options;
   if (Status s = MakeSessionAnalysisOptions(o.analysis, o.threads, &options); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   options.allan_csv = options.allan && !o.allan_csv.empty();
   options.budget_path = o.budget;
@@ -111,8 +108,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
   SessionAnalysis analysis = AnalyzeSession(o.session, options);
   progress.Finish();
   if (!analysis.ok) {
-    PrintError(analysis.error);
-    return analysis.input_error ? kExitUsage : kExitFailed;
+    return PrintErrorExit(analysis.error);
   }
   if (analysis.session.rejected_rows > 0) {
     Note(fmt::format("note: --lenient skipped {} malformed rows (first at line {})\n",
@@ -123,8 +119,8 @@ int RunAnalyze(const AnalyzeOptions& o) {
   if (!o.html.empty()) {
     Result<std::string> rendered = RenderSessionAnalysisHtml(analysis);
     if (!rendered.ok()) {
-      PrintError(rendered.error());
-      return kExitFailed;
+      // The page of the analysis just made: a failure is the run's, not the input's.
+      return PrintErrorExit(rendered.error().WithKind(ErrorKind::kFailed));
     }
     html = std::move(rendered).value();
   }
@@ -142,8 +138,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
                                {allan_csv_path, analysis.allan_csv},
                                {o.html, html}});
       !s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
+    return PrintErrorExit(s.error());
   }
   if (!o.output.empty() && !Quiet()) {
     PrintTable(analysis.table, o.output);
@@ -158,18 +153,21 @@ int RunAnalyze(const AnalyzeOptions& o) {
   return kExitOk;
 }
 
-}  // namespace
-
-void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<AnalyzeOptions>();
-  app.add_option("session", o->session, "session.csv or receiver capture; - reads stdin")
-      ->check(ExistingFileOrStdin());
+// SESSION and the Type A options, on the top-level app (`accuracy`: also the accuracy
+// options, for the --accuracy spelling) or on the `analyze` subcommand.
+void AddTypeAOptions(CLI::App& app, AnalyzeOptions* o, bool accuracy) {
+  CLI::Option* session =
+      app.add_option("session", o->session, "session.csv or receiver capture; - reads stdin")
+          ->check(ExistingFileOrStdin());
+  if (!accuracy) session->required();
   app.add_flag("--type-a", o->type_a,
-               "GUM Type A evaluation of every quantity per tag (the default analysis)");
+               accuracy ? "GUM Type A evaluation of every quantity per tag (the default analysis)"
+                        : "GUM Type A evaluation of every quantity per tag (implied: accepted "
+                          "for the spelling without the subcommand)");
   AddAnalysisCliOptions(&app, &o->analysis);
   app.add_option("-o,--output", o->output,
                  "write the JSON report here (atomically) and print a table to stdout; -o - "
-                 "writes it to stdout and the table to stderr");
+                 "writes it to stdout and the table to stderr (default: the JSON to stdout)");
   app.add_option("--allan-csv", o->allan_csv, "also write the Allan curves as CSV here");
   app.add_option("--budget", o->budget,
                  "evaluate this uncertainty budget (docs/budget-format.md); its session inputs "
@@ -177,9 +175,16 @@ void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
       ->check(CLI::ExistingFile);
   app.add_option("--html", o->html,
                  "also write a self-contained HTML report with plots here (docs/reports.md)");
-  AddAccuracyOptions(app, &o->accuracy);
+  if (accuracy) AddAccuracyOptions(app, &o->accuracy);
   app.add_option("--threads", o->threads, "worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
+}
+
+}  // namespace
+
+void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<AnalyzeOptions>();
+  AddTypeAOptions(app, o.get(), /*accuracy=*/true);
   app.callback([&app, o, exit_code] {
     if (!app.get_subcommands().empty()) return;
     if (o->session.empty()) {
@@ -188,8 +193,23 @@ void AddAnalyzeOptions(CLI::App& app, int* exit_code) {
       return;
     }
     if (Status s = CheckModeOptions(app, *o); !s.ok()) {
-      PrintError(s.error());
-      *exit_code = kExitUsage;
+      *exit_code = PrintErrorExit(s.error());
+      return;
+    }
+    *exit_code = RunAnalyze(*o);
+  });
+}
+
+void AddAnalyzeCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<AnalyzeOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "analyze",
+      "GUM Type A evaluation of every quantity per tag, with --allan the noise terms, with "
+      "--budget a budget on the session (also: characterize SESSION --type-a ...)");
+  AddTypeAOptions(*sub, o.get(), /*accuracy=*/false);
+  sub->callback([sub, o, exit_code] {
+    if (Status s = CheckModeOptions(*sub, *o); !s.ok()) {
+      *exit_code = PrintErrorExit(s.error());
       return;
     }
     *exit_code = RunAnalyze(*o);

@@ -32,8 +32,7 @@ int RunBatchCommand(const BatchCommandOptions& o) {
                               "batch writes a report per session: name a "
                               "directory");
       !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   BatchOptions options;
   options.output_dir = o.output_dir;
@@ -41,28 +40,24 @@ int RunBatchCommand(const BatchCommandOptions& o) {
   options.jobs = o.jobs;
   // One thread inside each session: the sessions themselves run in parallel.
   if (Status s = MakeSessionAnalysisOptions(o.analysis, 1, &options.analysis); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   options.analysis.allan_skip_without_rates = true;
   std::string why;
   if (!options.IsValid(&why)) {
-    PrintError(MakeError(why));
-    return kExitUsage;
+    return PrintErrorExit(MakeError(why));
   }
   std::vector<std::string> skipped;
   Result<std::vector<std::string>> inputs = ExpandBatchInputs(o.inputs, &skipped);
   if (!inputs.ok()) {
-    PrintError(inputs.error());
-    return kExitUsage;
+    return PrintErrorExit(inputs.error());
   }
   for (const std::string& line : skipped) Note("note: " + line + "\n");
   // The batch page is never written over a session (nor a device, a folder, ...).
   std::vector<NamedPath> sessions;
   for (const std::string& in : inputs.value()) sessions.push_back({"a session", in});
   if (Status s = CheckOutputs({{"--html", o.html}}, sessions); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   ProgressOptions bar;
   if (Quiet()) bar.mode = ProgressMode::kNever;
@@ -90,12 +85,11 @@ int RunBatchCommand(const BatchCommandOptions& o) {
     }
     const Result<std::string> html = RenderBatchSummaryHtml(summary.summary, page);
     if (!html.ok()) {
-      PrintError(html.error());
-      return kExitFailed;
+      // The page of the batch just run: a failure is the run's, not the input's.
+      return PrintErrorExit(html.error().WithKind(ErrorKind::kFailed));
     }
     if (Status s = WriteOutput(o.html, html.value()); !s.ok()) {
-      PrintError(s.error());
-      return kExitFailed;
+      return PrintErrorExit(s.error());
     }
   }
   PrintTable(summary.table, o.output_dir);

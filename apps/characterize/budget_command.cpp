@@ -12,24 +12,15 @@
 #include "metro/core/progress.hpp"
 #include "metro/report/budget_page.hpp"
 #include "metro/uncertainty/budget_report.hpp"
+#include "metro/uncertainty/session_resolver.hpp"
 #include "output.hpp"
 
 namespace metro {
-namespace {
-
-SessionQuantityResolver& BudgetResolver() {
-  static SessionQuantityResolver resolver;
-  return resolver;
-}
-
-}  // namespace
-
-void SetBudgetSessionResolver(SessionQuantityResolver resolver) {
-  BudgetResolver() = std::move(resolver);
-}
 
 void AddBudgetCommand(CLI::App& app, int* exit_code) {
   auto options = std::make_shared<BudgetOptions>();
+  // Budget files may name sessions; they are evaluated in full (no window).
+  options->session_resolver = MakeSessionQuantityResolver("", {}, {});
   CLI::App* sub = app.add_subcommand(
       "budget", "Evaluate an uncertainty budget (GUM + JCGM 101 Monte Carlo) from a JSON file");
   sub->add_option("BUDGET", options->budget_path, "Budget file (docs/budget-format.md)")
@@ -52,28 +43,23 @@ void AddBudgetCommand(CLI::App& app, int* exit_code) {
   });
 }
 
-int RunBudget(const BudgetOptions& options) { return RunBudget(options, BudgetResolver()); }
-
-int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resolver) {
+int RunBudget(const BudgetOptions& options) {
   std::vector<apps::NamedPath> inputs = {{"BUDGET", options.budget_path}};
   for (std::string& session : SessionsNamedInBudget(options.budget_path)) {
     inputs.push_back({"a session of BUDGET", std::move(session)});
   }
   if (options.html_path == "-" && (options.output_path.empty() || options.output_path == "-")) {
-    apps::PrintError(
+    return apps::PrintErrorExit(
         MakeError("--html - and the JSON both go to stdout: name a file with -o or with --html"));
-    return 2;
   }
   if (Status s =
           apps::CheckOutputs({{"-o", options.output_path}, {"--html", options.html_path}}, inputs);
       !s.ok()) {
-    apps::PrintError(s.error());
-    return 2;
+    return apps::PrintErrorExit(s.error());
   }
-  auto budget = LoadBudget(options.budget_path, resolver);
+  auto budget = LoadBudget(options.budget_path, options.session_resolver);
   if (!budget.ok()) {
-    apps::PrintError(budget.error());
-    return 2;
+    return apps::PrintErrorExit(budget.error());
   }
   // Named before any trial is drawn (JCGM 101 6.4.9.4, docs/uncertainty.md).
   if (budget.value().monte_carlo.enabled) {
@@ -91,8 +77,7 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
   progress.Finish();
   if (!evaluation.ok()) {
     // Bad models (NaN, undefined) and impossible joint distributions are input errors.
-    apps::PrintError(evaluation.error());
-    return 2;
+    return apps::PrintErrorExit(evaluation.error());
   }
   const nlohmann::ordered_json report = BudgetReportJson(evaluation.value());
   const std::string json = JsonText(report, 2) + "\n";
@@ -102,25 +87,23 @@ int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resol
   if (!options.html_path.empty()) {
     Result<std::string> page = RenderBudgetReportHtml(report);
     if (!page.ok()) {
-      apps::PrintError(page.error());
-      return 1;
+      // The page of the evaluation just made: a failure is the run's, not the input's.
+      return apps::PrintErrorExit(page.error().WithKind(ErrorKind::kFailed));
     }
     html = std::move(page).value();
   }
   // The JSON and the page are replaced together or not at all.
   const Status written = apps::WriteOutputs({{output, json}, {options.html_path, html}});
   if (!written.ok()) {
-    apps::PrintError(written.error());
-    return 1;
+    return apps::PrintErrorExit(written.error());
   }
   if (!options.output_path.empty()) {
     apps::PrintTable(BudgetReportTable(evaluation.value()), options.output_path);
   }
   if (!evaluation.value().ok) {
-    apps::PrintError(MakeError(evaluation.value().monte_carlo
-                                   ? evaluation.value().monte_carlo->message
-                                   : std::string("evaluation failed")));
-    return 1;
+    return apps::PrintErrorExit(MakeFailedError(evaluation.value().monte_carlo
+                                                    ? evaluation.value().monte_carlo->message
+                                                    : std::string("evaluation failed")));
   }
   return 0;
 }

@@ -18,18 +18,19 @@ struct BudgetOptions {
   std::string budget_path;
   std::string output_path;  // Empty or "-": JSON to stdout.
   std::string html_path;    // Empty: no page; "-": the page to stdout (then -o must name a file).
+  // Answers the budget's session quantities ("type_a_from_session" inputs). Empty: such
+  // inputs are errors naming the input. AddBudgetCommand sets one that evaluates each named
+  // session in full (no window; MakeSessionQuantityResolver).
+  SessionQuantityResolver session_resolver;
 };
 
 // Registers the `budget` subcommand. Its callback stores RunBudget's exit code in
 // *exit_code (the dispatch style of commands.hpp); with exit_code null a non-zero code is
 // raised as CLI::RuntimeError(code) for CLI11_PARSE. Session quantities in the budget are
-// resolved with the resolver set by SetBudgetSessionResolver (none by default: such inputs
-// are errors naming the input).
+// evaluated from the sessions it names, in full (BudgetOptions::session_resolver).
 void AddBudgetCommand(CLI::App& app, int* exit_code = nullptr);
-void SetBudgetSessionResolver(SessionQuantityResolver resolver);
 
 int RunBudget(const BudgetOptions& options);
-int RunBudget(const BudgetOptions& options, const SessionQuantityResolver& resolver);
 
 namespace apps {
 using metro::AddBudgetCommand;

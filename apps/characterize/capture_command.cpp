@@ -1,5 +1,5 @@
 // characterize capture --port DEV [--baud 230400] [--duration-s S] -o capture.txt [--force]
-//   [--reconnect|--no-reconnect] [--analyze -o REPORT.json --capture capture.txt]
+//   [--reconnect|--no-reconnect] [--analyze -o REPORT.json --capture capture.txt] [--tags FILE]
 // Records the central receiver's serial stream (docs/capture.md).
 #include <fmt/format.h>
 #include <unistd.h>
@@ -10,6 +10,9 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis_options.hpp"
@@ -17,6 +20,7 @@
 #include "metro/capture/capture.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/core/version.hpp"
+#include "metro/io/tag_registry.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "unix_cli.hpp"
 
@@ -37,7 +41,23 @@ struct CaptureCliOptions {
   bool no_reconnect = false;
   double frame_period_s = kReceiverFramePeriodS;
   bool analyze = false;
+  std::string tags;  // --tags FILE: the tags' names under the live view and the final table.
 };
+
+// "names (tags.json): 1 Forehead, 2 Chest" for the sensors of `rows`, or "" without a tags
+// file. The capture's table keeps its columns; the names go below it.
+std::string NamesFooter(const std::vector<capture::TagLiveRow>& rows, const TagRegistry* tags,
+                        const std::string& tags_path) {
+  if (tags == nullptr || rows.empty()) return "";
+  std::vector<int> sensors;
+  for (const capture::TagLiveRow& r : rows) sensors.push_back(r.sensor);
+  std::sort(sensors.begin(), sensors.end());
+  std::string out = fmt::format("names ({}):", tags_path);
+  for (size_t i = 0; i < sensors.size(); ++i) {
+    out += fmt::format("{} {} {}", i == 0 ? "" : ",", sensors[i], tags->Name(sensors[i]));
+  }
+  return out + "\n";
+}
 
 // The live view (a terminal) or a plain summary every 10 s (a log), on stderr. Counts and
 // rates are fresh on every drawing; the settle and Type A statistics are recomputed when
@@ -45,7 +65,10 @@ struct CaptureCliOptions {
 // grow, so they are redone less often rather than costing more of the core).
 class LiveView {
  public:
-  LiveView() : terminal_(::isatty(STDERR_FILENO) == 1 && !Quiet()) {}
+  LiveView(const TagRegistry* tags, std::string tags_path)
+      : terminal_(::isatty(STDERR_FILENO) == 1 && !Quiet()),
+        tags_(tags),
+        tags_path_(std::move(tags_path)) {}
   void Tick(const capture::CaptureTally& tally, double elapsed_s) {
     rates_.Sample(tally, elapsed_s);
     if (Quiet()) return;
@@ -54,13 +77,14 @@ class LiveView {
     last_draw_s_ = elapsed_s;
     const std::vector<capture::TagLiveRow>& rows = Rows(tally, elapsed_s);
     if (!terminal_) {
-      PrintText(stderr, capture::FormatSummaryLines(rows, elapsed_s));
+      PrintText(stderr, capture::FormatSummaryLines(rows, elapsed_s) +
+                            NamesFooter(rows, tags_, tags_path_));
       std::fflush(stderr);
       return;
     }
     const std::string table =
         fmt::format("capture {:.0f} s, {} frames\n", elapsed_s, tally.frames()) +
-        capture::FormatLiveTable(rows, true);
+        capture::FormatLiveTable(rows, true) + NamesFooter(rows, tags_, tags_path_);
     std::string out;
     if (drawn_lines_ > 0) out = fmt::format("\x1b[{}A\x1b[J", drawn_lines_);
     out += table;
@@ -95,6 +119,8 @@ class LiveView {
   }
 
   bool terminal_;
+  const TagRegistry* tags_;  // nullptr: no --tags.
+  std::string tags_path_;
   double last_draw_s_ = 0.0;
   double stats_due_s_ = 0.0;
   int drawn_lines_ = 0;
@@ -141,6 +167,21 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
     PrintErrorText(why);
     return kExitUsage;
   }
+  // The tags file is read before the port is opened: a bad one records nothing.
+  std::optional<TagRegistry> tags;
+  if (!c.tags.empty()) {
+    for (const std::string& out : {capture_path, c.output}) {
+      if (!out.empty() && IsSameFile(c.tags, out)) {
+        PrintErrorText(
+            fmt::format("--tags {} is an output of the capture: name another file", c.tags));
+        return kExitUsage;
+      }
+    }
+    Result<TagRegistry> loaded = TagRegistry::Load(c.tags);
+    if (!loaded.ok()) return PrintErrorExit(loaded.error());
+    tags = std::move(loaded).value();
+  }
+  const TagRegistry* names = tags ? &*tags : nullptr;
 
   struct sigaction sa {};
   sa.sa_handler = OnCaptureSignal;
@@ -151,7 +192,7 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
   Note(fmt::format("capturing {} at {} baud to {}{}{}; Ctrl-C ends the capture\n", c.port, c.baud,
                    capture_path, replacing ? " (--force: replacing the existing file)" : "",
                    c.duration_s > 0 ? fmt::format(" for {:g} s", c.duration_s) : ""));
-  LiveView view;
+  LiveView view(names, c.tags);
   capture::CaptureObserver observer;
   observer.on_tick = [&](const capture::CaptureTally& t, double s) { view.Tick(t, s); };
   observer.on_event = [&](const std::string& e) { view.Event(e); };
@@ -169,7 +210,8 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
                         sum.other_lines)
           : "");
   if (!Quiet()) {
-    PrintText(stdout, capture::FormatLiveTable(capture::LiveRows(tally, view.rates()), false));
+    const std::vector<capture::TagLiveRow> rows = capture::LiveRows(tally, view.rates());
+    PrintText(stdout, capture::FormatLiveTable(rows, false) + NamesFooter(rows, names, c.tags));
     std::fflush(stdout);
   }
   if (!sum.ok) {
@@ -182,20 +224,18 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
   AnalysisCliOptions a;
   a.settle = "auto";
   a.load.frame_period_s = c.frame_period_s;
+  a.tag_registry = c.tags;  // The report names the tags as `analyze --tags` does.
   SessionAnalysisOptions options;
   if (Status s = MakeSessionAnalysisOptions(a, 0, &options); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   SessionAnalysis analysis = AnalyzeSession(capture_path, options);
   if (!analysis.ok) {
-    PrintError(analysis.error);
-    return analysis.input_error ? kExitUsage : kExitFailed;
+    return PrintErrorExit(analysis.error);
   }
   const std::string json = JsonText(analysis.report, 2) + "\n";
   if (Status s = WriteOutputs({{c.output.empty() ? "-" : c.output, json}}); !s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
+    return PrintErrorExit(s.error());
   }
   if (!c.output.empty()) PrintTable(analysis.table, c.output);
   return kExitOk;
@@ -227,6 +267,10 @@ void AddCaptureCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   sub->add_flag("--analyze", o->analyze,
                 "then the full Type A report of the capture (--settle auto)");
+  sub->add_option("--tags,--tag-registry", o->tags,
+                  "tags file naming the tags (docs/formats.md \"Tags file\"): below the live "
+                  "view and the final table, and in the --analyze report")
+      ->check(CLI::ExistingFile);
   sub->callback([o, exit_code] { *exit_code = RunCaptureCommand(*o); });
 }
 

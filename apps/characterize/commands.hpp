@@ -8,8 +8,12 @@
 
 namespace metro::apps {
 
-// The main job: `characterize SESSION --type-a ...` (options on the top-level app).
+// The main job spelled without a subcommand: `characterize SESSION --type-a ...` (and
+// `characterize SESSION --accuracy ...`), the options on the top-level app.
 void AddAnalyzeOptions(CLI::App& app, int* exit_code);
+// `characterize analyze SESSION ...`: the same Type A analysis as a subcommand.
+void AddAnalyzeCommand(CLI::App& app, int* exit_code);
+// `characterize accuracy SESSION ...` is in accuracy_command.hpp.
 void AddConvertCommand(CLI::App& app, int* exit_code);
 void AddSimulateCommand(CLI::App& app, int* exit_code);
 // `characterize batch` and `characterize report REPORT.json --html FILE` (docs/reports.md).

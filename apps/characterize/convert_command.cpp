@@ -23,29 +23,24 @@ struct ConvertOptions {
 int RunConvert(const ConvertOptions& o) {
   LoadOptions load;
   if (Status s = MakeLoadOptions(o.load, &load); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   if (o.from != "imutk" && !ParseSessionFormat(o.from, &load.format)) {
-    PrintError(MakeError("--from " + o.from + ": unknown format"));
-    return kExitUsage;
+    return PrintErrorExit(MakeError("--from " + o.from + ": unknown format"));
   }
   if (Status s = CheckStdinInputs(o.inputs, o.from == "imutk"); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   std::vector<NamedPath> inputs = {{"--columns-file", o.load.columns_file}};
   for (const std::string& input : o.inputs) inputs.push_back({"INPUT", input});
   if (Status s = CheckOutputs({{"-o", o.output}}, inputs); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   Result<Session> session = MakeError("no input");
   std::string join_comments;
   if (o.from == "imutk") {
     if (o.inputs.size() != 2) {
-      PrintError(MakeError("--from imutk takes two inputs: ACC GYRO"));
-      return kExitUsage;
+      return PrintErrorExit(MakeError("--from imutk takes two inputs: ACC GYRO"));
     }
     session = LoadImuTk(o.inputs[0], o.inputs[1], load);
   } else if (o.inputs.size() == 1) {
@@ -56,8 +51,7 @@ int RunConvert(const ConvertOptions& o) {
     for (const std::string& input : o.inputs) {
       auto part = LoadSession(input, load);
       if (!part.ok()) {
-        PrintError(part.error());
-        return kExitUsage;
+        return PrintErrorExit(part.error());
       }
       parts.push_back(std::move(part).value());
     }
@@ -71,8 +65,7 @@ int RunConvert(const ConvertOptions& o) {
     }
   }
   if (!session.ok()) {
-    PrintError(session.error());
-    return kExitUsage;
+    return PrintErrorExit(session.error());
   }
   const Session& s = session.value();
   // Provenance and the frame counts, which session.csv rows cannot carry, as comments.
@@ -89,8 +82,7 @@ int RunConvert(const ConvertOptions& o) {
   text += join_comments;
   text += FormatSessionCsv(s, true);
   if (Status w = WriteOutput(o.output, text); !w.ok()) {
-    PrintError(w.error());
-    return kExitFailed;
+    return PrintErrorExit(w.error());
   }
   int64_t observations = 0;
   for (const Tag& t : s.tags) observations += static_cast<int64_t>(t.size());

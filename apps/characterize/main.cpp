@@ -4,16 +4,18 @@
 #include <cstdio>
 #include <new>
 
+#include "accuracy_command.hpp"
 #include "budget_command.hpp"
 #include "commands.hpp"
-#include "metro/uncertainty/session_resolver.hpp"
 #include "unix_cli.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"metro characterize: uncertainty evaluation of IMU sensor-tag sessions"};
   app.require_subcommand(0, 1);
   int exit_code = metro::apps::kExitOk;
-  metro::apps::AddAnalyzeOptions(app, &exit_code);
+  metro::apps::AddAnalyzeOptions(app, &exit_code);  // characterize SESSION --type-a|--accuracy
+  metro::apps::AddAnalyzeCommand(app, &exit_code);
+  metro::apps::AddAccuracyCommand(app, &exit_code);
   metro::apps::AddConvertCommand(app, &exit_code);
   metro::apps::AddSimulateCommand(app, &exit_code);
   metro::apps::AddBudgetCommand(app, &exit_code);
@@ -22,8 +24,6 @@ int main(int argc, char** argv) {
   metro::apps::AddCaptureCommand(app, &exit_code);
   metro::apps::AddVersionFlag(app, "characterize");
   metro::apps::AddQuietFlag(app);  // On the app and every subcommand (docs/unix.md).
-  // Budget files may name sessions; they are evaluated in full (no window).
-  metro::SetBudgetSessionResolver(metro::MakeSessionQuantityResolver("", {}, {}));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

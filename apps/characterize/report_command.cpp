@@ -1,12 +1,16 @@
-// characterize report REPORT.json --html FILE [--session SESSION]
+// characterize report REPORT.json --html FILE [--session SESSION] [--tags FILE]
 #include <fmt/format.h>
 
 #include <memory>
 
 #include "commands.hpp"
+#include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/report/html_report.hpp"
+#include "metro/report/type_a_report.hpp"
 #include "output.hpp"
+#include "tags_names.hpp"
 
 namespace metro::apps {
 namespace {
@@ -15,22 +19,56 @@ struct ReportCommandOptions {
   std::string json;
   std::string html;
   std::string session;
+  std::string tags;  // --tags FILE: the tags' names on the page.
 };
 
-int RunReportCommand(const ReportCommandOptions& o) {
-  if (Status s = CheckOutputs({{"--html", o.html}}, {{"REPORT", o.json}, {"--session", o.session}});
-      !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+// The page of REPORT.json with the tags named from `tags_path`: a session report
+// (metro.report/1) takes each sensor's name from the file, a calibration.json (its
+// certificate) each tag's name, profile and, where it records none, device ID. Other
+// documents have no tags to name: an input error.
+Result<std::string> RenderWithTags(const ReportCommandOptions& o) {
+  Result<TagRegistry> tags = TagRegistry::Load(o.tags);
+  if (!tags.ok()) return tags.error();
+  Result<std::string> text = ReadFile(o.json);
+  if (!text.ok()) return text.error();
+  nlohmann::ordered_json document = nlohmann::ordered_json::parse(text.value(), nullptr, false);
+  // Not JSON, or no schema: the renderer's own error names what is wrong.
+  if (document.is_discarded() || !document.is_object() || !document.contains("schema") ||
+      !document["schema"].is_string()) {
+    return RenderJsonFileHtml(o.json, o.session);
   }
-  Result<std::string> html = RenderJsonFileHtml(o.json, o.session);
+  const std::string schema = document["schema"].get<std::string>();
+  if (schema == kReportSchema) {
+    ApplyTagsToSessionReport(tags.value(), &document);
+    return RenderJsonHtml(document, o.json, o.session);
+  }
+  if (schema == kCalibrationSchema) {
+    Result<Calibration> cal = LoadCalibration(o.json);
+    if (!cal.ok()) return cal.error();
+    if (Status s = ApplyTagsToCalibration(tags.value(), o.tags, &cal.value()); !s.ok()) {
+      return s.error();
+    }
+    return RenderCertificateFor(cal.value(), o.json);
+  }
+  return MakeError(o.json, 0,
+                   fmt::format("--tags names the tags of a session report ({}) or a "
+                               "calibration.json ({}); this is a {} document",
+                               kReportSchema, kCalibrationSchema, schema));
+}
+
+int RunReportCommand(const ReportCommandOptions& o) {
+  if (Status s = CheckOutputs({{"--html", o.html}},
+                              {{"REPORT", o.json}, {"--session", o.session}, {"--tags", o.tags}});
+      !s.ok()) {
+    return PrintErrorExit(s.error());
+  }
+  Result<std::string> html =
+      o.tags.empty() ? RenderJsonFileHtml(o.json, o.session) : RenderWithTags(o);
   if (!html.ok()) {
-    PrintError(html.error());
-    return kExitUsage;
+    return PrintErrorExit(html.error());
   }
   if (Status s = WriteOutput(o.html, html.value()); !s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
+    return PrintErrorExit(s.error());
   }
   Note(fmt::format("wrote {}\n", IsStdio(o.html) ? "stdout" : o.html));
   return kExitOk;
@@ -49,6 +87,10 @@ void AddReportCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--html", o->html, "HTML file to write (- for stdout)")->required();
   sub->add_option("--session", o->session,
                   "the session the report was made from, if it moved (its SHA-256 must match)")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--tags,--tag-registry", o->tags,
+                  "tags file naming the tags on the page (docs/formats.md \"Tags file\"): a "
+                  "session report's sensors, a calibration.json's tags (name, device_id, profile)")
       ->check(CLI::ExistingFile);
   sub->callback([o, exit_code] { *exit_code = RunReportCommand(*o); });
 }

@@ -46,13 +46,11 @@ struct SimulateOptions {
 
 int RunCalibrationSimulate(SimulateOptions o) {
   if (o.format != "csv") {
-    PrintError(MakeError("--kind calibration writes session.csv (raw LSB columns): drop --format " +
-                         o.format));
-    return kExitUsage;
+    return PrintErrorExit(MakeError(
+        "--kind calibration writes session.csv (raw LSB columns): drop --format " + o.format));
   }
   if (o.sim.sensors.size() != 1) {
-    PrintError(MakeError("--kind calibration simulates one tag: give one --sensor"));
-    return kExitUsage;
+    return PrintErrorExit(MakeError("--kind calibration simulates one tag: give one --sensor"));
   }
   SimulationOptions& c = o.calibration;
   c.sensor = o.sim.sensors.front();
@@ -62,25 +60,21 @@ int RunCalibrationSimulate(SimulateOptions o) {
   if (o.truth_output.empty() && !IsStdio(o.output)) o.truth_output = o.output + ".truth.json";
   std::string why;
   if (!c.IsValid(&why)) {
-    PrintError(MakeError(why));
-    return kExitUsage;
+    return PrintErrorExit(MakeError(why));
   }
   if (Status s = CheckOutputs({{"-o", o.output}, {"--truth-output", o.truth_output}}, {});
       !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   Result<SimulatedSession> sim = SimulateCalibrationSession(c);
   if (!sim.ok()) {
-    PrintError(sim.error());
-    return kExitFailed;
+    return PrintErrorExit(sim.error());
   }
   // The session and its truth are replaced together or not at all.
   Status s = WriteOutputs({{o.output, FormatSessionCsv(sim.value().session)},
                            {o.truth_output, CalibrationTruthJson(c, sim.value())}});
   if (!s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
+    return PrintErrorExit(s.error());
   }
   if (sim.value().saturated_samples > 0) {
     PrintText(stderr,
@@ -98,13 +92,11 @@ int RunCalibrationSimulate(SimulateOptions o) {
 int RunTableSimulate(SimulateOptions o) {
   auto axis = ParseTableAxis(o.table_axis);
   if (!axis.ok()) {
-    PrintError(axis.error());
-    return kExitUsage;
+    return PrintErrorExit(axis.error());
   }
   o.table.axis = axis.value();
   if (o.sim.sensors.size() != 1) {
-    PrintError(MakeError("--kind table simulates one tag: give one --sensor"));
-    return kExitUsage;
+    return PrintErrorExit(MakeError("--kind table simulates one tag: give one --sensor"));
   }
   o.table.sensor = o.sim.sensors.front();
   o.table.seed = o.sim.seed;
@@ -114,21 +106,19 @@ int RunTableSimulate(SimulateOptions o) {
   if (o.truth_output.empty() && !IsStdio(o.output)) o.truth_output = o.output + ".truth.json";
   std::string why;
   if (!o.table.IsValid(&why)) {
-    PrintError(MakeError(why));
-    return kExitUsage;
+    return PrintErrorExit(MakeError(why));
   }
   const bool receiver = o.format == "receiver";
   if (receiver && o.reference_output.empty()) {
-    PrintError(MakeError("a receiver capture has no table column: give --reference-output"));
-    return kExitUsage;
+    return PrintErrorExit(
+        MakeError("a receiver capture has no table column: give --reference-output"));
   }
   if (Status s = CheckOutputs({{"-o", o.output},
                                {"--reference-output", o.reference_output},
                                {"--truth-output", o.truth_output}},
                               {});
       !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   StreamedOutput writer(o.output);
   std::optional<StreamedOutput> ref_writer, truth_writer;
@@ -154,8 +144,7 @@ int RunTableSimulate(SimulateOptions o) {
   if (s.ok() && ref_writer) s = ref_writer->Publish();
   if (s.ok() && truth_writer) s = truth_writer->Publish();
   if (!s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
+    return PrintErrorExit(s.error());
   }
   Note(fmt::format("wrote {} (table, {}, seed {}){}\n", IsStdio(o.output) ? "stdout" : o.output,
                    o.format, o.table.seed,
@@ -183,17 +172,14 @@ int RunSimulate(SimulateOptions o) {
                                        : SimColumns::kAngles;
   std::string why;
   if (!o.sim.IsValid(&why)) {
-    PrintError(MakeError(why));
-    return kExitUsage;
+    return PrintErrorExit(MakeError(why));
   }
   if (Status s = CheckOutputs({{"-o", o.output}}, {}); !s.ok()) {
-    PrintError(s.error());
-    return kExitUsage;
+    return PrintErrorExit(s.error());
   }
   StreamedOutput writer(o.output);
   if (Status s = writer.Open(); !s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
+    return PrintErrorExit(s.error());
   }
   const SessionFormat format =
       o.format == "receiver" ? SessionFormat::kReceiver : SessionFormat::kCsv;
@@ -201,8 +187,7 @@ int RunSimulate(SimulateOptions o) {
                                    [&](std::string_view chunk) { return writer.Write(chunk); });
   if (s.ok()) s = writer.Commit();
   if (!s.ok()) {
-    PrintError(s.error());
-    return kExitFailed;
+    return PrintErrorExit(s.error());
   }
   Note(fmt::format("wrote {} ({}, seed {})\n", IsStdio(o.output) ? "stdout" : o.output, o.format,
                    o.sim.seed));

@@ -1,0 +1,95 @@
+// The tags file (`--tags FILE`, also `--tag-registry FILE`; docs/formats.md "Tags file") on
+// the commands that name tags after the fact: `calibrate apply` and `calibrate report`,
+// `characterize report` and `characterize capture`. As everywhere, the file overlays the
+// default names (thesis Table 5.2): TagRegistry::Find gives an entry for every sensor 1..15.
+#pragma once
+
+#include <fmt/format.h>
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "metro/blob/blob.hpp"
+#include "metro/calibration/calibrate.hpp"
+#include "metro/core/file.hpp"
+#include "metro/core/status.hpp"
+#include "metro/io/tag_registry.hpp"
+#include "metro/report/certificate.hpp"
+
+namespace metro::apps {
+
+// Gives each tag of `cal` the tags file's name, its profile when the file names one, and its
+// device ID where calibration.json records none. Input errors (exit 2), naming `tags_path`:
+// calibration.json's device ID for a sensor differs from the file's for that sensor, or the
+// file gives that device to another sensor (the calibration belongs to another tag).
+inline Status ApplyTagsToCalibration(const TagRegistry& tags, const std::string& tags_path,
+                                     Calibration* cal) {
+  for (TagCalibration& t : cal->tags) {
+    const TagEntry* entry = tags.Find(t.sensor);
+    if (t.device_id) {
+      if (entry != nullptr && entry->device_id && *entry->device_id != *t.device_id) {
+        return MakeError(fmt::format(
+            "sensor {} is device {} in calibration.json but device {} in {}: this calibration "
+            "was made for another tag",
+            t.sensor, blob::FormatDeviceId(*t.device_id), blob::FormatDeviceId(*entry->device_id),
+            tags_path));
+      }
+      const std::optional<int> owner = tags.SensorOfDevice(*t.device_id);
+      if (owner && *owner != t.sensor) {
+        return MakeError(fmt::format(
+            "sensor {} of calibration.json is device {}, which {} gives sensor {}: this "
+            "calibration was made for another tag",
+            t.sensor, blob::FormatDeviceId(*t.device_id), tags_path, *owner));
+      }
+    }
+    if (entry == nullptr) continue;
+    t.name = entry->name;
+    if (!entry->profile.empty()) t.profile = entry->profile;
+    if (!t.device_id) t.device_id = entry->device_id;
+  }
+  return Status::Ok();
+}
+
+// One line per tag of `cal`: "  sensor 2: Chest, device 9ABCDEF012345678, profile mpu6050"
+// (the parts that are known).
+inline std::string CalibrationTagLines(const Calibration& cal) {
+  std::string out;
+  for (const TagCalibration& t : cal.tags) {
+    out += fmt::format("  sensor {}: {}", t.sensor, t.name.empty() ? "(no name)" : t.name);
+    if (t.device_id) out += ", device " + blob::FormatDeviceId(*t.device_id);
+    if (!t.profile.empty()) out += ", profile " + t.profile;
+    out += "\n";
+  }
+  return out;
+}
+
+// The certificate of calibration.json at `path`, rendered for `cal` (the file's calibration
+// with the tags file applied) as RenderJsonFileHtml renders the file itself: the inputs
+// reloaded when their SHA-256 still matches, the certificate id the hash of the file's own
+// bytes (what `fit` printed and the registry recorded).
+inline Result<std::string> RenderCertificateFor(const Calibration& cal, const std::string& path) {
+  ReloadedInputs inputs = ReloadCalibrationInputs(cal, path);
+  std::vector<const Session*> ptrs;
+  for (const Session& s : inputs.sessions) ptrs.push_back(&s);
+  CertificateOptions certificate;
+  Result<std::string> sha = Sha256File(path);
+  if (sha.ok()) certificate.certificate_id = sha.value().substr(0, 16);
+  return RenderCalibrationCertificate(cal, inputs.complete ? ptrs : std::vector<const Session*>{},
+                                      inputs.note, certificate);
+}
+
+// A session report (metro.report/1): each sensors[].name from the tags file, as
+// `characterize analyze --tags FILE` names them.
+inline void ApplyTagsToSessionReport(const TagRegistry& tags, nlohmann::ordered_json* report) {
+  nlohmann::ordered_json& sensors = (*report)["sensors"];
+  if (!sensors.is_array()) return;
+  for (nlohmann::ordered_json& s : sensors) {
+    if (s.is_object() && s.contains("sensor") && s["sensor"].is_number_integer()) {
+      s["name"] = tags.Name(s["sensor"].get<int>());
+    }
+  }
+}
+
+}  // namespace metro::apps
