@@ -70,12 +70,12 @@ class Output {
     while (done < buf_.size()) {
       const ssize_t n = ::write(fd_, buf_.data() + done, buf_.size() - done);
       if (n < 0 && errno == EINTR) continue;
-      if (n < 0) return MakeError(path_, 0, fmt::format("write: {}", std::strerror(errno)));
+      if (n < 0) return MakeIoError(path_, 0, fmt::format("write: {}", std::strerror(errno)));
       done += static_cast<size_t>(n);
     }
     buf_.clear();
     if (::fdatasync(fd_) != 0 && errno != EINVAL && errno != EROFS) {
-      return MakeError(path_, 0, fmt::format("fdatasync: {}", std::strerror(errno)));
+      return MakeIoError(path_, 0, fmt::format("fdatasync: {}", std::strerror(errno)));
     }
     return Status::Ok();
   }
