@@ -112,8 +112,9 @@ TEST_CASE(
   std::remove(degenerate.c_str());
 }
 
-TEST_CASE("Exit codes: calibrate inspect of a file it cannot read is 2, no calibration is 1",
-          "[apps][unix][exit]") {
+TEST_CASE(
+    "Exit codes: calibrate inspect of a file it cannot read is 2 and of one with no calibration 1",
+    "[apps][unix][exit]") {
   // Not a regular file (a FIFO): unreadable as a blob, exit 2 (and not waited on).
   const std::string fifo = Scratch() + "metro_exit_codes_fifo.bin";
   std::remove(fifo.c_str());
@@ -193,7 +194,7 @@ TEST_CASE("Exit codes: an output into a missing folder is 2 in every characteriz
       "--html");
 }
 
-TEST_CASE("Exit codes: a write that fails after it started is 1, bad input 2",
+TEST_CASE("Exit codes: a write that fails after it started is 1 and bad input 2",
           "[apps][unix][exit]") {
   const std::string chest = kDatasets + "static_chest.csv";
   // stdout on a full device: the report could not be written (io), exit 1.

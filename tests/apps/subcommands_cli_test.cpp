@@ -142,7 +142,7 @@ TEST_CASE("characterize analyze and accuracy refuse the other mode's options (ex
   CHECK_THAT(r.err, Catch::Contains("--taus needs --allan"));
 }
 
-TEST_CASE("characterize --help lists analyze and accuracy; their --help the values and defaults",
+TEST_CASE("characterize --help lists analyze and accuracy and their --help the values and defaults",
           "[apps][subcommands]") {
   Run r = Characterize("--help");
   CHECK(r.exit_code == 0);

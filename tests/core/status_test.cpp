@@ -25,7 +25,8 @@ TEST_CASE("Result holds a value or an error", "[core]") {
   CHECK_FALSE(bad.status().ok());
 }
 
-TEST_CASE("Error kinds: MakeError is input, MakeFailedError failed, MakeIoError io", "[core]") {
+TEST_CASE("Error kinds: MakeError is input and MakeFailedError failed and MakeIoError io",
+          "[core]") {
   CHECK(MakeError("bad row").kind == ErrorKind::kInput);
   CHECK(MakeError("a.csv", 3, "bad").kind == ErrorKind::kInput);
   CHECK(MakeError("a.csv", 3, 4, "bad").kind == ErrorKind::kInput);
@@ -54,7 +55,7 @@ TEST_CASE("WithContext prefixes the message and keeps the kind and the position"
   CHECK(MakeError("x").WithContext("a").WithContext("b").message == "b: a: x");
 }
 
-TEST_CASE("File errors: a missing directory is input, a full disk is io", "[core]") {
+TEST_CASE("File errors: a missing directory and a device are input errors", "[core]") {
   // The directory does not exist: the output cannot be created where it was named.
   Status missing = WriteFileAtomically("/nonexistent-metro-dir/out.json", "{}");
   REQUIRE_FALSE(missing.ok());
