@@ -7,24 +7,24 @@ void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags) 
                   "input format (auto: detected; csv is session.csv in any dialect)")
       ->check(CLI::IsMember({"auto", "csv", "receiver", "euroc", "raw", "phyphox", "sensorlogger"}))
       ->capture_default_str();
-  app->add_option("--frame-period-s", o->frame_period_s,
+  app->add_option("--frame-period-s", o->library.frame_period_s,
                   "receiver frame period in seconds (default 3281/32768 = 0.10013)")
       ->check(CLI::PositiveNumber);
-  app->add_flag("--lenient", o->lenient,
+  app->add_flag("--lenient", o->library.lenient,
                 "skip malformed rows (counted in input.rejected_rows) instead of stopping");
   app->add_option("--column", o->columns,
                   "map a header name to a canonical column, 'SRC=DST' (SRC= leaves it out); "
                   "repeatable");
   app->add_option("--columns-file", o->columns_file, "a file of SRC=DST mappings, one per line")
       ->check(CLI::ExistingFile);
-  app->add_option("--rate-hz", o->rate_hz,
+  app->add_option("--rate-hz", o->library.rate_hz,
                   "a file without a time column: sample k of each tag is at k / R seconds")
       ->check(CLI::PositiveNumber);
   if (full_scale_flags) {
-    app->add_option("--accel-fs-g", o->accel_fs_g,
+    app->add_option("--accel-fs-g", o->library.accel_fs_g,
                     "raw accelerometer counts: full scale in g (adds ax_g.. beside ax_lsb..)")
         ->check(CLI::PositiveNumber);
-    app->add_option("--gyro-fs-dps", o->gyro_fs_dps,
+    app->add_option("--gyro-fs-dps", o->library.gyro_fs_dps,
                     "raw gyroscope counts: full scale in deg/s (adds gx_dps.. beside gx_lsb..)")
         ->check(CLI::PositiveNumber);
   }
@@ -34,11 +34,11 @@ Status MakeLoadOptions(const LoadCliOptions& o, LoadOptions* load) {
   if (!ParseSessionFormat(o.format, &load->format)) {
     return MakeError("--format " + o.format + ": unknown format");
   }
-  load->lenient = o.lenient;
-  load->frame_period_s = o.frame_period_s;
-  load->rate_hz = o.rate_hz;
-  load->accel_fs_g = o.accel_fs_g;
-  load->gyro_fs_dps = o.gyro_fs_dps;
+  load->lenient = o.library.lenient;
+  load->frame_period_s = o.library.frame_period_s;
+  load->rate_hz = o.library.rate_hz;
+  load->accel_fs_g = o.library.accel_fs_g;
+  load->gyro_fs_dps = o.library.gyro_fs_dps;
   load->column_map.clear();
   if (!o.columns_file.empty()) {
     auto file = LoadColumnMappings(o.columns_file);

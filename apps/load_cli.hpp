@@ -13,13 +13,12 @@ namespace metro::apps {
 
 struct LoadCliOptions {
   std::string format = "auto";
-  double frame_period_s = kReceiverFramePeriodS;
-  bool lenient = false;
   std::vector<std::string> columns;  // --column 'SRC=DST', repeatable.
   std::string columns_file;          // --columns-file FILE: SRC=DST lines.
-  double rate_hz = 0.0;              // --rate-hz: a file without a time column.
-  double accel_fs_g = 0.0;           // --accel-fs-g: raw counts to g beside the counts.
-  double gyro_fs_dps = 0.0;          // --gyro-fs-dps: raw counts to deg/s beside them.
+  // --frame-period-s, --lenient, --rate-hz (a file without a time column), --accel-fs-g and
+  // --gyro-fs-dps (raw counts scaled beside the counts), bound to the library's struct (its
+  // defaults); MakeLoadOptions copies these five fields.
+  LoadOptions library;
 };
 
 // Registers --format, --frame-period-s, --lenient, --column, --columns-file, --rate-hz and,

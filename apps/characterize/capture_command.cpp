@@ -223,7 +223,7 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
 
   AnalysisCliOptions a;
   a.settle = "auto";
-  a.load.frame_period_s = c.frame_period_s;
+  a.load.library.frame_period_s = c.frame_period_s;
   a.tag_registry = c.tags;  // The report names the tags as `analyze --tags` does.
   SessionAnalysisOptions options;
   if (Status s = MakeSessionAnalysisOptions(a, 0, &options); !s.ok()) {
