@@ -22,20 +22,8 @@ const std::string kDatasets = std::string(METRO_SOURCE_DIR) + "/datasets/";
 
 // A scratch folder for this file's outputs, removed when the test program ends.
 const std::string& Scratch() {
-  struct Folder {
-    std::string path;
-    ~Folder() {
-      std::error_code ec;
-      std::filesystem::remove_all(path, ec);
-    }
-  };
-  static const Folder folder = [] {
-    const std::filesystem::path p =
-        std::filesystem::temp_directory_path() / ("metro_exit_codes_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(p);
-    return Folder{p.string() + "/"};
-  }();
-  return folder.path;
+  static const testing::ScratchFolder folder("metro_exit_codes");
+  return folder.path();
 }
 // A folder that does not exist (and is never created by these tests).
 const std::string kMissingDir = "metro_exit_codes_no_such_dir";

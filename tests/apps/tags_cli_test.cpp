@@ -15,6 +15,7 @@
 
 #include "metro/core/file.hpp"
 #include "support/run_program.hpp"
+#include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
@@ -25,20 +26,8 @@ const std::string kDatasets = std::string(METRO_SOURCE_DIR) + "/datasets/";
 
 // A scratch folder for this file's outputs, removed when the test program ends.
 const std::string& Scratch() {
-  struct Folder {
-    std::string path;
-    ~Folder() {
-      std::error_code ec;
-      std::filesystem::remove_all(path, ec);
-    }
-  };
-  static const Folder folder = [] {
-    const std::filesystem::path p =
-        std::filesystem::temp_directory_path() / ("metro_tags_cli_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(p);
-    return Folder{p.string() + "/"};
-  }();
-  return folder.path;
+  static const testing::ScratchFolder folder("metro_tags_cli");
+  return folder.path();
 }
 
 Run Calibrate(const std::string& args) { return testing::RunProgram(METRO_CALIBRATE_EXE, args); }

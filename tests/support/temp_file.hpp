@@ -1,13 +1,15 @@
-// Test helper: a uniquely named file in the build's working directory, removed when the
-// object goes out of scope.
+// Test helpers: a uniquely named file in the build's working directory, removed when the
+// object goes out of scope; a scratch folder per test program, removed when it ends.
 #pragma once
 
 #include <unistd.h>
 
 #include <atomic>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
+#include <system_error>
 
 namespace metro::testing {
 
@@ -22,6 +24,31 @@ class TempFile {
   TempFile(const TempFile&) = delete;
   TempFile& operator=(const TempFile&) = delete;
   ~TempFile() { std::remove(path_.c_str()); }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+// A folder under the system's temporary directory named `prefix` and the process ID, made on
+// the first call and removed with its contents when the test program ends; the path ends in
+// '/'. One per prefix: each call site passes its own prefix (a function-local static).
+inline std::string MakeScratchFolder(const std::string& prefix) {
+  const std::filesystem::path p =
+      std::filesystem::temp_directory_path() / (prefix + "_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(p);
+  return p.string() + "/";
+}
+
+class ScratchFolder {
+ public:
+  explicit ScratchFolder(const std::string& prefix) : path_(MakeScratchFolder(prefix)) {}
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  ~ScratchFolder() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
   const std::string& path() const { return path_; }
 
  private:
