@@ -53,6 +53,11 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
             name));
       }
     }
+    if (given("--tags")) {
+      return MakeError(
+          "--tags does nothing with --accuracy: the accuracy evaluation takes one tag (--sensor "
+          "N) and its report names no tag; the `accuracy` subcommand refuses it too");
+    }
     return {};
   }
   for (const std::string& name : AccuracyOnlyOptionNames()) {

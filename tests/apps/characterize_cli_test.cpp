@@ -301,12 +301,14 @@ TEST_CASE("Options without effect in the mode and an empty window are refused", 
   const std::string chest = std::string(METRO_SOURCE_DIR) + "/datasets/static_chest.csv";
   const std::string table = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
   const std::string out = "metro_test_mode_" + std::to_string(::getpid()) + ".json";
+  const testing::TempFile tags(R"({"1": "Forehead"})", ".json");
   struct Refusal {
     std::string args, message;
   };
   const std::vector<Refusal> refusals = {
       {table + " --accuracy --allan", "--allan does nothing with --accuracy"},
       {table + " --accuracy --quantity yaw_deg", "--quantity does nothing with --accuracy"},
+      {table + " --accuracy --tags " + tags.path(), "--tags does nothing with --accuracy"},
       {chest + " --type-a --min-dwell-s 3", "--min-dwell-s applies to the accuracy evaluation"},
       {chest + " --type-a --keep-departures", "--keep-departures applies to the accuracy"},
       {chest + " --type-a --taus all", "--taus needs --allan"},
