@@ -16,6 +16,7 @@
 #include "metro/core/json_text.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/io/tag_registry.hpp"
 #include "metro/report/html_report.hpp"
 #include "output.hpp"
 
@@ -153,6 +154,12 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   if (!options.IsValid(&why)) {
     return PrintErrorExit(MakeError(why));
   }
+  TagRegistry tags = TagRegistry::Default();
+  if (!in.tags.empty()) {
+    Result<TagRegistry> loaded = TagRegistry::Load(in.tags);
+    if (!loaded.ok()) return PrintErrorExit(loaded.error());
+    tags = std::move(loaded).value();
+  }
   LoadOptions load;
   if (Status s = MakeLoadOptions(in.load, &load); !s.ok()) {
     return PrintErrorExit(s.error());
@@ -185,7 +192,8 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   if (!result.ok()) {
     return PrintErrorExit(result.error());
   }
-  const nlohmann::ordered_json report = AccuracyReportJson(result.value(), session.value(), ref);
+  const nlohmann::ordered_json report =
+      AccuracyReportJson(result.value(), session.value(), ref, tags);
   const std::string json = JsonText(report, 2) + "\n";
   std::string html;
   if (!in.html.empty()) {
@@ -239,8 +247,9 @@ void AddAccuracyCommand(CLI::App& app, int* exit_code) {
   sub->callback([o, exit_code] {
     o->accuracy.enabled = true;  // --accuracy is implied here.
     const AnalysisCliOptions& a = o->analysis;
-    *exit_code = RunAccuracy(o->accuracy, {o->session, a.load, a.sensors, o->output, a.settle,
-                                           o->threads, false, o->html, AccuracyWindow(a)});
+    *exit_code =
+        RunAccuracy(o->accuracy, {o->session, a.load, a.sensors, o->output, a.settle, o->threads,
+                                  false, o->html, AccuracyWindow(a), a.tag_registry});
   });
 }
 

@@ -41,6 +41,7 @@ struct AccuracyRunInputs {
   bool type_a = false;   // --type-a given as well: a usage error.
   std::string html;      // Also write the HTML view here (docs/reports.md).
   WindowOptions window;  // --skip-samples, --skip-seconds, --from-s, --to-s.
+  std::string tags;      // --tags FILE: the tag's name and device ID in the report.
 };
 
 // --accuracy and the accuracy evaluation's own options (on the `accuracy` subcommand

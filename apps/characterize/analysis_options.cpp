@@ -22,6 +22,10 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o, AnalysisCliKind
                            "docs/accuracy.md)")
       ->check(CLI::IsMember({"none", "auto"}))
       ->capture_default_str();
+  app->add_option("--tags,--tag-registry", o->tag_registry,
+                  R"(tags file, JSON {"1": "Forehead", "2": {"name": "Chest", "device_id": ...}} )"
+                  R"(naming the tags (docs/formats.md "Tags file"; default: thesis Table 5.2))")
+      ->check(CLI::ExistingFile);
   if (!type_a) {
     app->add_option("--sensor", o->sensors, "the tag to evaluate (default: the first)");
     return;
@@ -33,10 +37,6 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o, AnalysisCliKind
       ->capture_default_str();
   app->add_option("--sensor", o->sensors, "only this tag (repeatable)");
   app->add_option("--quantity", o->quantities, "only this quantity, e.g. pitch_deg (repeatable)");
-  app->add_option("--tags,--tag-registry", o->tag_registry,
-                  R"(tags file, JSON {"1": "Forehead", "2": {"name": "Chest", "device_id": ...}} )"
-                  R"(naming the tags (docs/formats.md "Tags file"; default: thesis Table 5.2))")
-      ->check(CLI::ExistingFile);
   app->add_flag("--allan", o->allan,
                 "Allan deviation and IEEE 952 noise terms of the rate quantities (docs/noise.md)");
   app->add_option("--taus", o->taus, "Allan taus: octave, decade:N, all")->capture_default_str();

@@ -53,11 +53,6 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
             name));
       }
     }
-    if (given("--tags")) {
-      return MakeError(
-          "--tags does nothing with --accuracy: the accuracy evaluation takes one tag (--sensor "
-          "N) and its report names no tag; the `accuracy` subcommand refuses it too");
-    }
     return {};
   }
   for (const std::string& name : AccuracyOnlyOptionNames()) {
@@ -78,7 +73,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
   if (o.accuracy.enabled) {
     const AnalysisCliOptions& a = o.analysis;
     return RunAccuracy(o.accuracy, {o.session, a.load, a.sensors, o.output, a.settle, o.threads,
-                                    o.type_a, o.html, AccuracyWindow(a)});
+                                    o.type_a, o.html, AccuracyWindow(a), a.tag_registry});
   }
   for (Status s : {RefuseStdout(o.html, "--html", "the HTML report goes to a file"),
                    RefuseStdout(o.allan_csv, "--allan-csv", "the Allan curves go to a file")}) {

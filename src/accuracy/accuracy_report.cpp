@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "metro/core/device_id.hpp"
 #include "metro/core/rounding.hpp"
 
 namespace metro {
@@ -67,7 +68,8 @@ std::string Statement(double u_expanded, double k, double coverage) {
 
 }  // namespace
 
-Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const Session* reference) {
+Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const Session* reference,
+                        const TagRegistry& tags) {
   Json j;
   j["schema"] = "metro.accuracy-report/1";
   Json input = {{"session", session.path},
@@ -76,6 +78,11 @@ Json AccuracyReportJson(const AccuracyResult& r, const Session& session, const S
                 {"sensor", r.sensor},
                 {"table_axis", TableAxisName(r.axis)},
                 {"quantity", r.quantity}};
+  const TagEntry* entry = tags.Find(r.sensor);
+  input["tag"] = {{"name", tags.Name(r.sensor)},
+                  {"device_id", entry != nullptr && entry->device_id
+                                    ? Json(FormatDeviceIdText(*entry->device_id))
+                                    : Json(nullptr)}};
   if (reference != nullptr && r.alignment) {
     const Alignment& a = *r.alignment;
     input["reference"] = {{"file", reference->path},

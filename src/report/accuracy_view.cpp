@@ -283,6 +283,12 @@ mustache::data InputData(const ordered_json& report) {
   add("SHA-256", JsonString(input, "sha256"));
   add("format", JsonString(input, "format"));
   add("sensor", JsonString(input, "sensor"));
+  const ordered_json& tag = Member(input, "tag");
+  if (tag.contains("name") && tag["name"].is_string()) {
+    const std::string device = JsonString(tag, "device_id");
+    add("tag", device.empty() ? JsonString(tag, "name")
+                              : fmt::format("{}, device ID {}", JsonString(tag, "name"), device));
+  }
   add("table axis", JsonString(input, "table_axis"));
   add("quantity", JsonString(input, "quantity"));
   const ordered_json& ref = Member(input, "reference");
@@ -301,8 +307,6 @@ mustache::data InputData(const ordered_json& report) {
   } else {
     add("reference", fmt::format("the session's column {}", JsonString(ref, "column")));
   }
-  const ordered_json& o = Member(report, "options");
-  add("options", o.empty() ? "" : JsonText(o));
   return rows;
 }
 
@@ -336,6 +340,10 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
 
   mustache::data data;
   data.set("input_rows", InputData(report));
+  // The options as a table, one row per option (as the session page), not a JSON string.
+  const mustache::data option_rows = OptionRows(Member(report, "options"));
+  data.set("option_rows", option_rows);
+  data.set("has_options", !option_rows.is_empty_list());
   data.set("statement_corrected", JsonString(result, "statement_corrected"));
   data.set("statement_uncorrected", JsonString(result, "statement_uncorrected"));
   data.set("result_ok", result.value("ok", false));

@@ -157,6 +157,40 @@ AxisScale ChooseAxisScale(const std::string& name, const std::string& unit_symbo
   return a;
 }
 
+namespace {
+
+void AddOptionRows(const std::string& prefix, const ordered_json& value, mustache::data* rows) {
+  if (value.is_object()) {
+    for (const auto& item : value.items()) {
+      AddOptionRows(prefix.empty() ? item.key() : prefix + "." + item.key(), item.value(), rows);
+    }
+    return;
+  }
+  std::string text;
+  if (value.is_null()) {
+    text = "not set";
+  } else if (value.is_array()) {
+    for (const ordered_json& e : value) {
+      text += (text.empty() ? "" : ", ") + (e.is_string() ? e.get<std::string>() : JsonText(e));
+    }
+    if (text.empty()) text = "empty list";
+  } else {
+    text = value.is_string() ? value.get<std::string>() : JsonText(value);
+  }
+  mustache::data row;
+  row.set("key", prefix);
+  row.set("value", text);
+  rows->push_back(row);
+}
+
+}  // namespace
+
+mustache::data OptionRows(const ordered_json& options) {
+  mustache::data rows{mustache::data::type::list};
+  AddOptionRows("", options, &rows);
+  return rows;
+}
+
 bool AnyAllan(const ordered_json& report) {
   if (!report.contains("sensors") || !report["sensors"].is_array()) return false;
   for (const auto& s : report["sensors"]) {

@@ -36,6 +36,12 @@ struct AxisScale {
 AxisScale ChooseAxisScale(const std::string& name, const std::string& unit, double lo, double hi,
                           double offset);
 
+// A report's "options" (session and accuracy pages) as rows {key, value}, one per leaf: nested
+// objects by dotted keys
+// ("autocorrelation.method"), arrays as their elements joined by ", " ("empty list" when empty),
+// null as "not set".
+kainjow::mustache::data OptionRows(const nlohmann::ordered_json& options);
+
 // True when any quantity of the report has an "allan" object.
 bool AnyAllan(const nlohmann::ordered_json& report);
 

@@ -29,11 +29,6 @@ kainjow::mustache::data ResultRows(const nlohmann::ordered_json& report);
 // 7.2.6), s, n_eff and n_eff/n.
 kainjow::mustache::data TypeADetailRows(const nlohmann::ordered_json& report);
 
-// The report's "options" as rows {key, value}, one per leaf: nested objects by dotted keys
-// ("autocorrelation.method"), arrays as their elements joined by ", " ("empty list" when empty),
-// null as "not set".
-kainjow::mustache::data OptionRows(const nlohmann::ordered_json& options);
-
 // "noise_rows": per tag and quantity with an Allan fit: the one-sided white-noise density
 // d = sqrt(2) N (allan.noise.random_walk.density_one_sided, u_density_one_sided) in the
 // concise notation of 7.2.2 (ConciseNotation, u to two digits) in its unit and, when it

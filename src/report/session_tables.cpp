@@ -39,30 +39,6 @@ mustache::data QuantityRow(const std::string& sensor, const std::string& tag,
 
 bool Evaluated(const ordered_json& q) { return q.contains("type_a") && q["type_a"].is_object(); }
 
-void AddOptionRows(const std::string& prefix, const ordered_json& value, mustache::data* rows) {
-  if (value.is_object()) {
-    for (const auto& item : value.items()) {
-      AddOptionRows(prefix.empty() ? item.key() : prefix + "." + item.key(), item.value(), rows);
-    }
-    return;
-  }
-  std::string text;
-  if (value.is_null()) {
-    text = "not set";
-  } else if (value.is_array()) {
-    for (const ordered_json& e : value) {
-      text += (text.empty() ? "" : ", ") + (e.is_string() ? e.get<std::string>() : JsonText(e));
-    }
-    if (text.empty()) text = "empty list";
-  } else {
-    text = value.is_string() ? value.get<std::string>() : JsonText(value);
-  }
-  mustache::data row;
-  row.set("key", prefix);
-  row.set("value", text);
-  rows->push_back(row);
-}
-
 }  // namespace
 
 mustache::data ResultRows(const ordered_json& report) {
@@ -124,12 +100,6 @@ mustache::data TypeADetailRows(const ordered_json& report) {
             std::isfinite(n_eff) && n > 0 ? fmt::format("{:.3f}", n_eff / n) : not_computed);
     rows.push_back(row);
   });
-  return rows;
-}
-
-mustache::data OptionRows(const ordered_json& options) {
-  mustache::data rows{mustache::data::type::list};
-  AddOptionRows("", options, &rows);
   return rows;
 }
 

@@ -7,11 +7,13 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
 #include "metro/core/rounding.hpp"
+#include "metro/io/tag_registry.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 
@@ -301,14 +303,12 @@ TEST_CASE("Options without effect in the mode and an empty window are refused", 
   const std::string chest = std::string(METRO_SOURCE_DIR) + "/datasets/static_chest.csv";
   const std::string table = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
   const std::string out = "metro_test_mode_" + std::to_string(::getpid()) + ".json";
-  const testing::TempFile tags(R"({"1": "Forehead"})", ".json");
   struct Refusal {
     std::string args, message;
   };
   const std::vector<Refusal> refusals = {
       {table + " --accuracy --allan", "--allan does nothing with --accuracy"},
       {table + " --accuracy --quantity yaw_deg", "--quantity does nothing with --accuracy"},
-      {table + " --accuracy --tags " + tags.path(), "--tags does nothing with --accuracy"},
       {chest + " --type-a --min-dwell-s 3", "--min-dwell-s applies to the accuracy evaluation"},
       {chest + " --type-a --keep-departures", "--keep-departures applies to the accuracy"},
       {chest + " --type-a --taus all", "--taus needs --allan"},
@@ -386,6 +386,38 @@ TEST_CASE("The session page's histogram bins are whole steps of the data's resol
   std::remove((out + ".html").c_str());
   CHECK(html.str().find("each a whole number of the data&apos;s resolution 0.01 deg") !=
         std::string::npos);
+}
+
+// Issue #25 point 3: the accuracy report names its tag from the tags file (input.tag), in both
+// spellings, and the page shows it; without a file, the thesis names (Table 5.2).
+TEST_CASE("The accuracy report names the tag and its device ID from --tags", "[apps][tags]") {
+  const std::string table = std::string(METRO_SOURCE_DIR) + "/datasets/table_sweep.csv";
+  const TempFile tags(R"({"2": {"name": "Bench Wrist", "device_id": "44556677 00112233"}})",
+                      ".json");
+  const std::string out = "metro_test_accuracy_tags_" + std::to_string(::getpid());
+  const Run run = Characterize("accuracy " + table + " --tags " + tags.path() + " -o " + out +
+                               ".json --html " + out + ".html");
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json report = nlohmann::json::parse(std::ifstream(out + ".json"));
+  REQUIRE(report["input"]["sensor"] == 2);
+  // The two words as nrfjprog prints them (DEVICEID[0] first) are DEVICEID[1] then [0] here.
+  CHECK(report["input"]["tag"]["name"] == "Bench Wrist");
+  CHECK(report["input"]["tag"]["device_id"] == "0011223344556677");
+  std::ifstream page(out + ".html");
+  const std::string html((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
+  CHECK(html.find("Bench Wrist, device ID 0011223344556677") != std::string::npos);
+  // The older spelling reads the same file the same way.
+  const Run alias = Characterize(table + " --accuracy --tags " + tags.path());
+  REQUIRE(alias.exit_code == 0);
+  CHECK(nlohmann::json::parse(alias.out)["input"]["tag"] == report["input"]["tag"]);
+  // Without a file: the thesis's name for sensor 2 and no device ID.
+  const Run plain = Characterize("accuracy " + table);
+  REQUIRE(plain.exit_code == 0);
+  const nlohmann::json plain_tag = nlohmann::json::parse(plain.out)["input"]["tag"];
+  CHECK(plain_tag["name"] == TagRegistry::Default().Name(2));
+  CHECK(plain_tag["device_id"].is_null());
+  std::remove((out + ".json").c_str());
+  std::remove((out + ".html").c_str());
 }
 
 }  // namespace

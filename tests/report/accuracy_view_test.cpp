@@ -9,6 +9,7 @@
 
 #include "metro/accuracy/accuracy.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
@@ -159,6 +160,34 @@ TEST_CASE("Accuracy HTML rounds per GUM 7.2.6 with k from the t distribution",
   CHECK(h.find("STATEMENT-U") != std::string::npos);
   CHECK(h.find("Hysteresis not available") != std::string::npos);
   CHECK(h.find("<title>Accuracy report: hand.csv</title>") != std::string::npos);
+}
+
+TEST_CASE("Accuracy HTML lists the options as a table and names the tag",
+          "[report][html][accuracy]") {
+  const ordered_json& report = SweepReport();
+  Result<std::string> html = RenderJsonHtml(report, "acc.json");
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  const size_t at = h.find("<table id=\"options-table\">");
+  REQUIRE(at != std::string::npos);
+  const std::string table = h.substr(at, h.find("</table>", at) - at);
+  // One row per option of the JSON (every leaf is a scalar here), with its value.
+  size_t rows = 0;
+  for (const auto& item : report["options"].items()) {
+    INFO(item.key());
+    REQUIRE_FALSE(item.value().is_structured());
+    const std::string value = item.value().is_null()     ? "not set"
+                              : item.value().is_string() ? item.value().get<std::string>()
+                                                         : JsonText(item.value());
+    CHECK(table.find("<tr><th>" + item.key() + "</th><td>" + value + "</td></tr>") !=
+          std::string::npos);
+    ++rows;
+  }
+  CHECK(Count(table, "<tr><th>") == rows + 1);  // The header row and one per option.
+  CHECK(h.find(JsonText(report["options"])) == std::string::npos);  // No raw JSON string.
+  // The tag's name in the input table (thesis Table 5.2 without a tags file).
+  CHECK(h.find("<tr><th>tag</th><td><code>" + report["input"]["tag"]["name"].get<std::string>() +
+               "</code></td></tr>") != std::string::npos);
 }
 
 TEST_CASE("Bad accuracy report input is refused with a message", "[report][html][accuracy]") {
