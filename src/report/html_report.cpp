@@ -18,7 +18,8 @@
 #include "metro/report/budget_page.hpp"
 #include "metro/report/certificate.hpp"
 #include "metro/report/type_a_report.hpp"
-#include "session_page.hpp"
+#include "session_plots.hpp"
+#include "session_tables.hpp"
 
 namespace metro {
 

@@ -1,3 +1,5 @@
+#include "session_plots.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -14,7 +16,6 @@
 #include "metro/report/svg_plot.hpp"
 #include "metro/stats/quantization.hpp"
 #include "metro/stats/type_a.hpp"
-#include "session_page.hpp"
 
 namespace metro::report_internal {
 

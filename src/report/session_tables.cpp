@@ -1,3 +1,5 @@
+#include "session_tables.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -5,7 +7,6 @@
 #include "html_common.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
-#include "session_page.hpp"
 
 namespace metro::report_internal {
 
