@@ -23,14 +23,121 @@
 // fraction of the tau's terms left out for missing samples (0 without gaps).
 #pragma once
 
+#include <array>
+#include <cmath>
+#include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "metro/noise/allan.hpp"
 #include "metro/noise/noise_fit.hpp"
+#include "metro/noise/noise_model.hpp"
 
 namespace metro {
+
+// "readoff" of a noise term: the value read off the curve at the term's characteristic tau
+// (IEEE Std 952-1997 Annex C), beside the fitted one.
+struct AllanReadOffReport {
+  double value = std::nan("");
+  double u = std::nan("");
+  double tau_s = std::nan("");
+};
+
+// The white rate noise as a one-sided density d = sqrt(2) N (sigma(1 s) = d / sqrt 2), the
+// figure a datasheet quotes; random_walk only.
+struct AllanDensityReport {
+  double density_one_sided = std::nan("");
+  double u_density_one_sided = std::nan("");
+  std::string unit_density;
+  double density_one_sided_conventional = std::nan("");
+  std::string unit_density_conventional;
+};
+
+// One fitted IEEE 952 term ("allan.noise.<key>"). value, u and their conventional forms are
+// NaN (null) when the fit does not support the term.
+struct AllanNoiseTermReport {
+  double value = std::nan("");
+  double u = std::nan("");
+  std::string unit;
+  double value_conventional = std::nan("");
+  std::string unit_conventional;
+  double u_conventional = std::nan("");
+  bool supported = false;
+  double tau_min_s = std::nan("");
+  double tau_max_s = std::nan("");
+  std::optional<AllanReadOffReport> readoff;  // null: not found on the curve.
+  std::optional<AllanDensityReport> density;  // random_walk only.
+};
+
+// "allan.sample_period": the sample period tau0 the curve was computed with.
+struct AllanSamplePeriodReport {
+  double tau0_s = std::nan("");
+  double rate_hz = std::nan("");
+  double mean_dt_s = std::nan("");
+  double jitter_rms_s = std::nan("");
+  double max_abs_jitter_s = std::nan("");
+  int64_t missing_samples = 0;
+  std::vector<std::string> warnings;
+};
+
+// "allan.gaps" (docs/noise.md "Gaps"): what was missing and what --gaps did about it.
+struct AllanGapsReport {
+  std::string policy;  // "skip", "split", "refuse".
+  int64_t grid_samples = 0;
+  int64_t missing_samples = 0;
+  double missing_fraction = 0.0;
+  // --gaps split: the stretches and the one analysed.
+  std::optional<int64_t> stretches;
+  std::optional<int64_t> analysed_first_sample;
+  std::optional<int64_t> analysed_samples;
+};
+
+// The "allan" object of a quantity. Either the curve (error empty) or the error form
+// {"error", "gaps"?} of a quantity that could not be analysed. Arrays are per tau; NaN is
+// null (no EDF).
+struct AllanReport {
+  std::string error;  // Not empty: the quantity could not be analysed (only `gaps` is kept).
+  std::string estimator;
+  std::vector<double> tau_s;
+  std::vector<double> adev;  // The estimator's deviation, in the quantity's unit.
+  std::vector<double> ci_low;
+  std::vector<double> ci_high;
+  std::vector<double> edf;
+  std::vector<int64_t> n_terms;
+  std::vector<int64_t> n_terms_gap_free;
+  std::vector<double> missing_fraction;
+  double confidence = std::nan("");
+  std::vector<int64_t> alpha;
+  std::vector<std::string> alpha_source;
+  std::array<AllanNoiseTermReport, kNoiseTermCount> noise;  // Indexed by NoiseTerm.
+  AllanSamplePeriodReport sample_period;
+  std::optional<AllanGapsReport> gaps;
+  std::optional<std::string> fit_error;  // Why the terms could not be fitted.
+
+  bool ok() const { return error.empty(); }
+  const AllanNoiseTermReport& term(NoiseTerm t) const { return noise[static_cast<size_t>(t)]; }
+};
+
+// "allan_type_a_link": what sits beside the Type A result. NaN is null.
+struct AllanTypeALink {
+  double allan_min_tau_s = std::nan("");
+  double allan_min_dev = std::nan("");
+  bool allan_min_at_end = false;
+  double duration_s = std::nan("");
+  double u_mean_allan = std::nan("");  // Predicted u of the window's mean.
+  double u_u_mean_allan = std::nan("");
+  std::optional<std::string> dominant_term;
+  std::optional<bool> extrapolated;
+};
+
+// The curve and fit of one quantity as its report object; sample_period and gaps are left for
+// the caller (they are not the curve's).
+AllanReport MakeAllanReport(const AllanCurve& curve, const NoiseFit& fit,
+                            const std::string& quantity_unit);
+
+AllanTypeALink MakeAllanTypeALink(const AllanCurve& curve, const NoiseFit& fit, double duration_s);
 
 nlohmann::ordered_json AllanToJson(const AllanCurve& curve, const NoiseFit& fit,
                                    const std::string& quantity_unit);

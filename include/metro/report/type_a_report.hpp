@@ -7,11 +7,10 @@
 
 #include "metro/io/session.hpp"
 #include "metro/io/tag_registry.hpp"
+#include "metro/report/session_report.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro {
-
-inline constexpr const char* kReportSchema = "metro.report/1";
 
 // Builds the report. `options` is echoed under "options" so a report says how it was made.
 nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionTypeA& result,
