@@ -8,7 +8,6 @@
 
 #include "cli_progress.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/report/budget_page.hpp"
 #include "metro/uncertainty/budget_report.hpp"
@@ -79,8 +78,8 @@ int RunBudget(const BudgetOptions& options) {
     // Bad models (NaN, undefined) and impossible joint distributions are input errors.
     return apps::PrintErrorExit(evaluation.error());
   }
-  const nlohmann::ordered_json report = BudgetReportJson(evaluation.value());
-  const std::string json = JsonText(report, 2) + "\n";
+  const BudgetReport report = MakeBudgetReport(evaluation.value());
+  const std::string json = ToJson(report) + "\n";
   // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.
   const std::string output = options.output_path.empty() ? "-" : options.output_path;
   std::string html;
@@ -98,7 +97,7 @@ int RunBudget(const BudgetOptions& options) {
     return apps::PrintErrorExit(written.error());
   }
   if (!options.output_path.empty()) {
-    apps::PrintTable(BudgetReportTable(evaluation.value()), options.output_path);
+    apps::PrintTable(BudgetReportTable(report), options.output_path);
   }
   if (!evaluation.value().ok) {
     return apps::PrintErrorExit(MakeFailedError(evaluation.value().monte_carlo

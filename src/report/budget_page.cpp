@@ -4,9 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
 
+#include "budget_view.hpp"
 #include "html_common.hpp"
 #include "html_templates.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/report/svg_plot.hpp"
 
@@ -14,16 +18,9 @@ namespace metro {
 namespace {
 
 using nlohmann::ordered_json;
-using report_internal::JsonNumber;
-using report_internal::JsonString;
-using report_internal::NumberAt;
+using report_internal::EscapeHtml;
 using report_internal::ShortNumber;
 namespace mustache = kainjow::mustache;
-
-const ordered_json& Member(const ordered_json& j, const char* key) {
-  static const ordered_json kNull;
-  return j.is_object() && j.contains(key) ? j[key] : kNull;
-}
 
 // As the JSON statement writes p: 0.99 -> "99 %", 0.9545 -> "95.45 %".
 std::string Percent(double p) { return fmt::format("{:g} %", std::round(p * 1e6) / 1e4); }
@@ -59,25 +56,25 @@ PlotSeries VerticalLine(const std::string& label, double x, double height, PlotC
 // The histogram of the Monte Carlo values as a probability density times u_c (a
 // dimensionless scale, so the axis needs no multiplier), against y - y_ref in the
 // measurand's unit scaled by a power of 1000 written in the axis label.
-Result<std::string> HistogramSvg(const ordered_json& report, const std::string& measurand,
-                                 const std::string& unit) {
-  const ordered_json& result = Member(report, "result");
-  const ordered_json& mc = Member(report, "monte_carlo");
-  const ordered_json& h = Member(mc, "histogram");
-  const ordered_json& edges = Member(h, "edges");
-  const ordered_json& counts = Member(h, "counts");
-  if (!edges.is_array() || !counts.is_array() || edges.size() != counts.size() + 1 ||
-      counts.empty()) {
+Result<std::string> HistogramSvg(const BudgetReport& report) {
+  const std::string& measurand = report.measurand.name;
+  const std::string& unit = report.measurand.unit;
+  const BudgetReportResult& result = report.result;
+  const BudgetReportMonteCarlo& mc = *report.monte_carlo;
+  if (!mc.histogram || mc.histogram->counts.empty() ||
+      mc.histogram->edges.size() != mc.histogram->counts.size() + 1) {
     return MakeError("the report has no Monte Carlo histogram (monte_carlo.histogram)");
   }
-  const double value = JsonNumber(result, "value");
-  const double u = JsonNumber(result, "u");
-  const double dof = JsonNumber(result, "dof_eff");
-  const double trials = JsonNumber(mc, "trials");
+  const std::vector<double>& edges = mc.histogram->edges;
+  const std::vector<int64_t>& counts = mc.histogram->counts;
+  const double value = result.value;
+  const double u = result.u;
+  const double dof = result.dof_eff;
+  const double trials = static_cast<double>(mc.trials);
   if (!std::isfinite(value) || !(u > 0.0) || !(trials > 0.0)) {
     return MakeError("the report has no finite GUF value and u_c to draw against");
   }
-  const double lo = NumberAt(edges, 0), hi = NumberAt(edges, edges.size() - 1);
+  const double lo = edges.front(), hi = edges.back();
   const report_internal::AxisScale axis =
       report_internal::ChooseAxisScale(measurand, unit, lo, hi, value);
   const auto to_x = [&](double y) { return axis.To(y); };
@@ -91,10 +88,10 @@ Result<std::string> HistogramSvg(const ordered_json& report, const std::string& 
   bins.style = SeriesStyle::kBins;
   bins.color = PlotColor::kBlue;
   double peak = 0.0;
-  for (size_t i = 0; i < edges.size(); ++i) bins.x.push_back(to_x(NumberAt(edges, i)));
+  for (double edge : edges) bins.x.push_back(to_x(edge));
   for (size_t i = 0; i < counts.size(); ++i) {
-    const double width = NumberAt(edges, i + 1) - NumberAt(edges, i);
-    const double density = NumberAt(counts, i) / (trials * width) * u;
+    const double width = edges[i + 1] - edges[i];
+    const double density = static_cast<double>(counts[i]) / (trials * width) * u;
     bins.y.push_back(density);
     peak = std::max(peak, density);
   }
@@ -112,11 +109,10 @@ Result<std::string> HistogramSvg(const ordered_json& report, const std::string& 
   plot.series.push_back(bins);
   plot.series.push_back(guf);
   const double top = 1.05 * peak;
-  const ordered_json& g = Member(result, "interval");
-  const ordered_json& s = Member(mc, "interval_shortest");
-  const double p = JsonNumber(result, "coverage");
+  const double p = result.coverage;
   for (size_t end = 0; end < 2; ++end) {
-    const double x_guf = NumberAt(g, end), x_mc = NumberAt(s, end);
+    const double x_guf = end == 0 ? result.interval.low : result.interval.high;
+    const double x_mc = end == 0 ? mc.shortest.low : mc.shortest.high;
     if (std::isfinite(x_guf)) {
       plot.series.push_back(VerticalLine(end == 0 ? fmt::format("GUF {} interval", Percent(p)) : "",
                                          to_x(x_guf), top, PlotColor::kOrange, true));
@@ -129,6 +125,11 @@ Result<std::string> HistogramSvg(const ordered_json& report, const std::string& 
   }
   plot.height_px = 380;
   return RenderXyPlot(plot);
+}
+
+// Infinite degrees of freedom (null in the JSON) print as "-", as NaN does.
+double FiniteOrNaN(double x) {
+  return std::isfinite(x) ? x : std::numeric_limits<double>::quiet_NaN();
 }
 
 // One row of the results table: a method, y, u(y) and an interval.
@@ -148,29 +149,79 @@ mustache::data ResultRow(const std::string& method, double value, double u, doub
 
 }  // namespace
 
+namespace report_internal {
+
+Result<mustache::data> BudgetViewData(const BudgetReport& budget) {
+  mustache::data d;
+  d.set("measurand", budget.measurand.name);
+  d.set("statement", budget.result.statement);
+  // Lines sorted by their share of the variance, largest first.
+  std::vector<const BudgetReportLine*> lines;
+  for (const BudgetReportLine& l : budget.budget) lines.push_back(&l);
+  std::stable_sort(lines.begin(), lines.end(),
+                   [](const BudgetReportLine* a, const BudgetReportLine* b) {
+                     return (std::isnan(b->percent) ? -1.0 : b->percent) <
+                            (std::isnan(a->percent) ? -1.0 : a->percent);
+                   });
+  mustache::data rows{mustache::data::type::list};
+  BarPlot bars;
+  bars.title = "Uncertainty budget: share of u_c^2";
+  bars.x_label = "100 (c_i u_i)^2 / u_c^2 [%]";
+  for (const BudgetReportLine* l : lines) {
+    const RoundedResult r = RoundForStatement(l->value, l->u);
+    mustache::data row;
+    row.set("name", l->name);
+    row.set("value", r.value);
+    row.set("u", r.uncertainty);
+    row.set("distribution", l->distribution);
+    row.set("sensitivity", ShortNumber(l->sensitivity, 4));
+    row.set("contribution", ShortNumber(l->contribution, 2));
+    row.set("dof", ShortNumber(FiniteOrNaN(l->dof), 4));
+    row.set("percent", std::isnan(l->percent) ? "-" : fmt::format("{:.1f}", l->percent));
+    rows.push_back(row);
+    bars.labels.push_back(l->name);
+    bars.values.push_back(std::isfinite(l->percent) && l->percent > 0.0 ? l->percent : 0.0);
+  }
+  d.set("lines", rows);
+  Result<std::string> svg =
+      bars.labels.empty() ? Result<std::string>(MakeError("no inputs")) : RenderBarPlot(bars);
+  d.set("bars_svg", svg.ok()
+                        ? svg.value()
+                        : "<p class=\"note\">No bars: " + EscapeHtml(svg.error().message) + "</p>");
+  d.set("has_monte_carlo", budget.monte_carlo.has_value());
+  if (budget.monte_carlo) {
+    const BudgetReportMonteCarlo& mc = *budget.monte_carlo;
+    const RoundedResult r = RoundForStatement(mc.value, mc.u);
+    d.set("monte_carlo",
+          fmt::format("y = {}, u(y) = {}, {} trials, shortest {} % interval [{}, {}]", r.value,
+                      r.uncertainty, mc.trials, ShortNumber(100.0 * mc.coverage, 3),
+                      ShortNumber(mc.shortest.low, 6), ShortNumber(mc.shortest.high, 6)));
+  } else {
+    d.set("monte_carlo", "");
+  }
+  return d;
+}
+
+}  // namespace report_internal
+
 bool IsBudgetDefinition(const ordered_json& document) {
   return document.is_object() && !document.contains("schema") && document.contains("measurand") &&
          document.contains("inputs");
 }
 
-Result<std::string> RenderBudgetReportHtml(const ordered_json& report) {
-  if (!report.is_object() || JsonString(report, "schema") != kBudgetReportSchema) {
-    return MakeError(fmt::format("not a {} report", kBudgetReportSchema));
-  }
-  const ordered_json& result = Member(report, "result");
-  if (!result.is_object()) return MakeError("budget report: missing the 'result' object");
+Result<std::string> RenderBudgetReportHtml(const BudgetReport& report) {
   Result<mustache::data> view = report_internal::BudgetViewData(report);
   if (!view.ok()) return view.error();
   mustache::data d = std::move(view).value();
-  const ordered_json& measurand_json = Member(report, "measurand");
-  const std::string measurand = JsonString(measurand_json, "name");
-  const std::string unit = JsonString(measurand_json, "unit");
-  const double value = JsonNumber(result, "value");
-  const double u = JsonNumber(result, "u");
-  const double k = JsonNumber(result, "k");
-  const double expanded = JsonNumber(result, "U");
-  const double dof = JsonNumber(result, "dof_eff");
-  const double p = JsonNumber(result, "coverage");
+  const std::string& measurand = report.measurand.name;
+  const std::string& unit = report.measurand.unit;
+  const BudgetReportResult& result = report.result;
+  const double value = result.value;
+  const double u = result.u;
+  const double k = result.k;
+  const double expanded = result.expanded;
+  const double dof = result.dof_eff;
+  const double p = result.coverage;
 
   // JCGM 100:2008 7.2.4 (the wording of its example), value and U rounded per 7.2.6.
   const RoundedResult s = RoundForStatement(value, expanded);
@@ -191,57 +242,45 @@ Result<std::string> RenderBudgetReportHtml(const ordered_json& report) {
                     Percent(p)));
   d.set("concise", fmt::format("{} = {}", measurand, WithUnit(ConciseNotation(value, u), unit)));
   d.set("unit", unit.empty() ? "(none)" : unit);
-  d.set("model", JsonString(measurand_json, "model").empty()
-                     ? "y = sum of c_i x_i (sensitivities given)"
-                     : JsonString(measurand_json, "model"));
-  d.set("budget_file", JsonString(report, "budget_file"));
+  d.set("model", report.measurand.model.empty() ? "y = sum of c_i x_i (sensitivities given)"
+                                                : report.measurand.model);
+  d.set("budget_file", report.budget_file);
   d.set("coverage", Percent(p));
 
   mustache::data rows{mustache::data::type::list};
-  const ordered_json& gi = Member(result, "interval");
-  rows.push_back(ResultRow("GUF (JCGM 100)", value, u, NumberAt(gi, 0), NumberAt(gi, 1),
+  rows.push_back(ResultRow("GUF (JCGM 100)", value, u, result.interval.low, result.interval.high,
                            fmt::format("y +- U, k = {:.2f}", k)));
-  const ordered_json& mc = Member(report, "monte_carlo");
-  const bool has_mc = mc.is_object();
-  d.set("has_mc", has_mc);
+  d.set("has_mc", report.monte_carlo.has_value());
   std::string verdict, verdict_class = "note";
-  if (has_mc) {
-    const double mc_value = JsonNumber(mc, "value");
-    const double mc_u = JsonNumber(mc, "u");
-    const ordered_json& sym = Member(mc, "interval_symmetric");
-    const ordered_json& shortest = Member(mc, "interval_shortest");
-    rows.push_back(ResultRow("Monte Carlo (JCGM 101), probabilistically symmetric", mc_value, mc_u,
-                             NumberAt(sym, 0), NumberAt(sym, 1),
+  if (report.monte_carlo) {
+    const BudgetReportMonteCarlo& mc = *report.monte_carlo;
+    rows.push_back(ResultRow("Monte Carlo (JCGM 101), probabilistically symmetric", mc.value, mc.u,
+                             mc.symmetric.low, mc.symmetric.high,
                              "7.7: quantiles (1-p)/2, (1+p)/2"));
-    rows.push_back(ResultRow("Monte Carlo (JCGM 101), shortest", mc_value, mc_u,
-                             NumberAt(shortest, 0), NumberAt(shortest, 1), "7.7: shortest"));
-    const bool adaptive = Member(mc, "adaptive").is_boolean() && mc["adaptive"].get<bool>();
-    d.set("mc_run",
-          fmt::format(
-              "M = {} trials{}, seed {}, numerical tolerance delta = {} (7.9.2){}",
-              JsonString(mc, "trials"),
-              adaptive ? fmt::format(" (adaptive, {} blocks)", JsonString(mc, "blocks")) : "",
-              JsonString(mc, "seed"),
-              WithUnit(ShortNumber(JsonNumber(mc, "numerical_tolerance"), 2), unit),
-              Member(mc, "message").is_string() ? "; " + mc["message"].get<std::string>() : ""));
-    if (Member(mc, "guf_validated").is_boolean()) {
-      const bool validated = mc["guf_validated"].get<bool>();
+    rows.push_back(ResultRow("Monte Carlo (JCGM 101), shortest", mc.value, mc.u, mc.shortest.low,
+                             mc.shortest.high, "7.7: shortest"));
+    d.set(
+        "mc_run",
+        fmt::format("M = {} trials{}, seed {}, numerical tolerance delta = {} (7.9.2){}", mc.trials,
+                    mc.adaptive ? fmt::format(" (adaptive, {} blocks)", mc.blocks) : "", mc.seed,
+                    WithUnit(ShortNumber(mc.numerical_tolerance, 2), unit),
+                    mc.message.empty() ? "" : "; " + mc.message));
+    if (mc.validation) {
+      const GufValidation& v = *mc.validation;
       // JCGM 101:2008 8.2: d_low = |y - U_p - y_low|, d_high = |y + U_p - y_high| against the
       // numerical tolerance delta of u(y).
       verdict = fmt::format(
           "GUF {} by the Monte Carlo method (JCGM 101:2008 8.2): d_low = {} and d_high = {}, "
           "{} the numerical tolerance delta = {}{}",
-          validated ? "validated" : "NOT validated",
-          WithUnit(ShortNumber(JsonNumber(mc, "d_low"), 2), unit),
-          WithUnit(ShortNumber(JsonNumber(mc, "d_high"), 2), unit),
-          validated ? "both within" : "not both within",
-          WithUnit(ShortNumber(JsonNumber(mc, "delta"), 2), unit),
-          validated ? "." : ": state the Monte Carlo result and its interval instead.");
-      verdict_class = validated ? "ok" : "note";
+          v.validated ? "validated" : "NOT validated", WithUnit(ShortNumber(v.d_low, 2), unit),
+          WithUnit(ShortNumber(v.d_high, 2), unit), v.validated ? "both within" : "not both within",
+          WithUnit(ShortNumber(v.delta, 2), unit),
+          v.validated ? "." : ": state the Monte Carlo result and its interval instead.");
+      verdict_class = v.validated ? "ok" : "note";
     } else {
       verdict = "No GUF validation in the report.";
     }
-    Result<std::string> svg = HistogramSvg(report, measurand, unit);
+    Result<std::string> svg = HistogramSvg(report);
     d.set("histogram_svg", svg.ok()
                                ? svg.value()
                                : "<p class=\"note\">No histogram: " +
@@ -260,7 +299,17 @@ Result<std::string> RenderBudgetReportHtml(const ordered_json& report) {
   if (!body.ok()) return body;
   return report_internal::RenderPage(
       fmt::format("Uncertainty budget: {}", measurand),
-      fmt::format("{} ({})", JsonString(report, "budget_file"), kBudgetReportSchema), body.value());
+      fmt::format("{} ({})", report.budget_file, kBudgetReportSchema), body.value());
+}
+
+Result<std::string> RenderBudgetReportHtml(std::string_view json_text, const std::string& file) {
+  Result<BudgetReport> report = BudgetReportFromJson(json_text, file);
+  if (!report.ok()) return report.error();
+  return RenderBudgetReportHtml(report.value());
+}
+
+Result<std::string> RenderBudgetReportHtml(const ordered_json& report) {
+  return RenderBudgetReportHtml(JsonText(report, 2), "");
 }
 
 }  // namespace metro

@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/json_reader.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
+#include "uncertainty/budget_report_json.hpp"
 
 namespace metro {
 namespace {
@@ -96,25 +99,138 @@ Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* prog
   return e;
 }
 
-nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
-  ordered_json j;
-  j["schema"] = "metro.budget-report/1";
-  j["budget_file"] = e.budget.file;
-  j["measurand"] = {
-      {"name", e.budget.measurand},
-      {"unit", e.budget.unit},
-      {"model", e.budget.model.empty() ? ordered_json() : ordered_json(e.budget.model)}};
+BudgetReport MakeBudgetReport(const BudgetEvaluation& e) {
+  BudgetReport r;
+  r.budget_file = e.budget.file;
+  r.measurand.name = e.budget.measurand;
+  r.measurand.unit = e.budget.unit;
+  r.measurand.model = e.budget.model;
   // The unit check (docs/budget-format.md, "Units"); the budget was validated, so it passes.
-  const Result<BudgetUnits> units = CheckBudgetUnits(e.budget);
+  Result<BudgetUnits> units = CheckBudgetUnits(e.budget);
   if (units.ok()) {
-    j["measurand"]["unit_check"] = {
-        {"checked", units.value().checked},
-        {"model_unit",
-         units.value().checked ? ordered_json(units.value().model_unit) : ordered_json()},
-        {"scale_known", units.value().scale_known},
-        {"note", units.value().note}};
+    r.measurand.unit_check = std::move(units).value();
+    if (!r.measurand.unit_check->checked) r.measurand.unit_check->model_unit.clear();
   }
   const GumResult& g = e.gum;
+  BudgetReportResult& result = r.result;
+  result.value = g.value;
+  result.u = g.u;
+  result.dof_eff = g.dof_eff;
+  result.k = g.k;
+  result.expanded = g.expanded;
+  result.coverage = g.coverage;
+  result.interval = {g.interval_low, g.interval_high};
+  result.u_first_order = g.u_first_order;
+  result.second_order = g.second_order;
+  result.dof_policy = g.dof_policy;
+  result.correlated = g.correlated;
+  result.dof_note = g.dof_note;
+  result.derivatives = g.derivatives;
+  const RoundedResult s = RoundForStatement(g.value, g.expanded);
+  const std::string unit = e.budget.unit.empty() ? "" : " " + e.budget.unit;
+  result.statement = fmt::format("{} = ({} +- {}){}, k = {:.2f}, p = {}", e.budget.measurand,
+                                 s.value, s.uncertainty, unit, g.k, Percent(g.coverage));
+  for (const BudgetLine& line : g.budget) {
+    BudgetReportLine l;
+    l.name = line.name;
+    l.value = line.value;
+    l.u = line.u;
+    l.distribution = line.distribution;
+    l.sensitivity = line.sensitivity;
+    l.contribution = line.contribution;
+    l.dof = line.dof;
+    l.percent = line.percent;
+    const auto it = std::find_if(e.budget.inputs.begin(), e.budget.inputs.end(),
+                                 [&](const BudgetInput& in) { return in.name == line.name; });
+    if (it != e.budget.inputs.end()) {
+      l.unit = it->unit;
+      l.note = it->note;
+      if (it->unit_conversion) {
+        const UnitConversion& c = *it->unit_conversion;
+        l.unit_conversion = BudgetLineConversion{
+            c.from, c.to, c.factor, c.offset, it->value_before_conversion, it->u_before_conversion};
+      }
+      if (it->session) {
+        l.session = BudgetLineSession{it->session->session, it->session->sensor,
+                                      it->session->quantity, it->n};
+      }
+    }
+    r.budget.push_back(std::move(l));
+  }
+  r.correlations = e.budget.correlations;
+  if (e.monte_carlo) {
+    const McResult& m = *e.monte_carlo;
+    BudgetReportMonteCarlo mc;
+    mc.trials = m.trials;
+    mc.seed = m.seed;
+    mc.generator = m.generator;
+    mc.threads = m.threads;
+    mc.adaptive = m.adaptive;
+    mc.converged = m.converged;
+    mc.blocks = m.blocks;
+    mc.ndig = e.budget.monte_carlo.ndig;
+    mc.coverage = m.coverage;
+    mc.value = m.value;
+    mc.u = m.u;
+    mc.u_defined = m.u_defined;
+    mc.mean_defined = m.mean_defined;
+    mc.inputs_without_variance = m.inputs_without_variance;
+    mc.symmetric = m.symmetric;
+    mc.shortest = m.shortest;
+    mc.shortest_discrete = m.shortest_discrete;
+    mc.numerical_tolerance = m.delta;
+    if (m.adaptive) mc.stability = m.stability;
+    mc.validation = e.validation;
+    mc.histogram = e.histogram;
+    mc.message = m.message;
+    r.monte_carlo = std::move(mc);
+  }
+  return r;
+}
+
+namespace {
+
+ordered_json Interval(const CoverageInterval& i) { return {Number(i.low), Number(i.high)}; }
+
+CoverageInterval ReadInterval(const JsonCursor& c) {
+  const std::vector<double> v = c.NumbersOrNaN();
+  if (!c.ok()) return {};
+  if (v.size() != 2) {
+    c.Fail("an array of 2 numbers or nulls [low, high]");
+    return {};
+  }
+  return {v[0], v[1]};
+}
+
+// Null means infinite degrees of freedom (see Dof).
+double ReadDof(const JsonCursor& c) {
+  if (c.IsNull()) return std::numeric_limits<double>::infinity();
+  if (!c.IsNumber()) {
+    c.Fail("a number or null (infinite degrees of freedom)");
+    return std::numeric_limits<double>::infinity();
+  }
+  return c.Number();
+}
+
+}  // namespace
+
+ordered_json ToJsonValue(const BudgetReport& r) {
+  ordered_json j;
+  j["schema"] = kBudgetReportSchema;
+  j["budget_file"] = r.budget_file;
+  j["measurand"] = {
+      {"name", r.measurand.name},
+      {"unit", r.measurand.unit},
+      {"model", r.measurand.model.empty() ? ordered_json() : ordered_json(r.measurand.model)}};
+  if (r.measurand.unit_check) {
+    const BudgetUnits& u = *r.measurand.unit_check;
+    j["measurand"]["unit_check"] = {
+        {"checked", u.checked},
+        {"model_unit", u.checked ? ordered_json(u.model_unit) : ordered_json()},
+        {"scale_known", u.scale_known},
+        {"note", u.note}};
+  }
+  const BudgetReportResult& g = r.result;
   ordered_json result;
   result["value"] = Number(g.value);
   result["u"] = Number(g.u);
@@ -122,20 +238,17 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
   result["k"] = Number(g.k);
   result["U"] = Number(g.expanded);
   result["coverage"] = g.coverage;
-  result["interval"] = {Number(g.interval_low), Number(g.interval_high)};
+  result["interval"] = Interval(g.interval);
   result["u_first_order"] = Number(g.u_first_order);
   result["second_order"] = g.second_order;
   result["dof_policy"] = CorrelatedDofPolicyName(g.dof_policy);
   result["correlated"] = g.correlated;
   result["dof_note"] = g.dof_note;
-  result["derivatives"] = g.derivatives;  // exact (symbolic, GiNaC), stated, or differences
-  const RoundedResult s = RoundForStatement(g.value, g.expanded);
-  const std::string unit = e.budget.unit.empty() ? "" : " " + e.budget.unit;
-  result["statement"] = fmt::format("{} = ({} +- {}){}, k = {:.2f}, p = {}", e.budget.measurand,
-                                    s.value, s.uncertainty, unit, g.k, Percent(g.coverage));
+  result["derivatives"] = g.derivatives;
+  result["statement"] = g.statement;
   j["result"] = result;
   ordered_json lines = ordered_json::array();
-  for (const BudgetLine& line : g.budget) {
+  for (const BudgetReportLine& line : r.budget) {
     ordered_json l;
     l["name"] = line.name;
     l["value"] = line.value;
@@ -145,36 +258,31 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
     l["contribution"] = line.contribution;
     l["dof"] = Dof(line.dof);
     l["percent"] = line.percent;
-    const auto it = std::find_if(e.budget.inputs.begin(), e.budget.inputs.end(),
-                                 [&](const BudgetInput& in) { return in.name == line.name; });
-    if (it != e.budget.inputs.end()) {
-      if (!it->unit.empty()) l["unit"] = it->unit;
-      if (!it->note.empty()) l["note"] = it->note;
-      if (it->unit_conversion) {
-        const UnitConversion& c = *it->unit_conversion;
-        l["unit_conversion"] = {{"from", c.from},
-                                {"to", c.to},
-                                {"factor", c.factor},
-                                {"offset", c.offset},
-                                {"value_from", it->value_before_conversion},
-                                {"u_from", it->u_before_conversion}};
-      }
-      if (it->session) {
-        l["session"] = {{"file", it->session->session},
-                        {"sensor", it->session->sensor},
-                        {"quantity", it->session->quantity},
-                        {"n", it->n}};
-      }
+    if (!line.unit.empty()) l["unit"] = line.unit;
+    if (!line.note.empty()) l["note"] = line.note;
+    if (line.unit_conversion) {
+      const BudgetLineConversion& c = *line.unit_conversion;
+      l["unit_conversion"] = {{"from", c.from},
+                              {"to", c.to},
+                              {"factor", c.factor},
+                              {"offset", c.offset},
+                              {"value_from", c.value_from},
+                              {"u_from", c.u_from}};
+    }
+    if (line.session) {
+      l["session"] = {{"file", line.session->file},
+                      {"sensor", line.session->sensor},
+                      {"quantity", line.session->quantity},
+                      {"n", line.session->n}};
     }
     lines.push_back(l);
   }
   j["budget"] = lines;
   ordered_json corr = ordered_json::array();
-  for (const Correlation& c : e.budget.correlations)
-    corr.push_back({{"a", c.a}, {"b", c.b}, {"r", c.r}});
+  for (const Correlation& c : r.correlations) corr.push_back({{"a", c.a}, {"b", c.b}, {"r", c.r}});
   j["correlations"] = corr;
-  if (e.monte_carlo) {
-    const McResult& m = *e.monte_carlo;
+  if (r.monte_carlo) {
+    const BudgetReportMonteCarlo& m = *r.monte_carlo;
     ordered_json mc;
     mc["trials"] = m.trials;
     mc["seed"] = m.seed;
@@ -183,7 +291,7 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
     mc["adaptive"] = m.adaptive;
     mc["converged"] = m.converged;
     mc["blocks"] = m.blocks;
-    mc["ndig"] = e.budget.monte_carlo.ndig;
+    mc["ndig"] = m.ndig;
     mc["coverage"] = m.coverage;
     mc["value"] = Number(m.value);
     mc["u"] = Number(m.u);
@@ -191,15 +299,14 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
     mc["u_defined"] = m.u_defined;
     mc["mean_defined"] = m.mean_defined;
     mc["inputs_without_variance"] = m.inputs_without_variance;
-    mc["interval_symmetric"] = {Number(m.symmetric.low), Number(m.symmetric.high)};
-    mc["interval_shortest"] = {Number(m.shortest.low), Number(m.shortest.high)};
+    mc["interval_symmetric"] = Interval(m.symmetric);
+    mc["interval_shortest"] = Interval(m.shortest);
     // JCGM 101 7.7 as written, beside the fitted minimum reported above (docs/uncertainty.md).
-    mc["interval_shortest_discrete"] = {Number(m.shortest_discrete.low),
-                                        Number(m.shortest_discrete.high)};
+    mc["interval_shortest_discrete"] = Interval(m.shortest_discrete);
     // The MCM's own numerical tolerance (7.9.2) and, adaptive, the 95 % half-widths that met it.
-    mc["numerical_tolerance"] = Number(m.delta);
-    if (m.adaptive) {
-      const McStability& st = m.stability;
+    mc["numerical_tolerance"] = Number(m.numerical_tolerance);
+    if (m.stability) {
+      const McStability& st = *m.stability;
       mc["stability_half_width"] = {
           {"value", Number(st.value)},
           {"u", Number(st.u)},
@@ -207,17 +314,17 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
           {"interval_shortest", {Number(st.shortest_low), Number(st.shortest_high)}},
           {"groups", st.groups}};
     }
-    if (e.validation) {
-      mc["delta"] = Number(e.validation->delta);
-      mc["d_low"] = Number(e.validation->d_low);
-      mc["d_high"] = Number(e.validation->d_high);
-      mc["guf_validated"] = e.validation->validated;
+    if (m.validation) {
+      mc["delta"] = Number(m.validation->delta);
+      mc["d_low"] = Number(m.validation->d_low);
+      mc["d_high"] = Number(m.validation->d_high);
+      mc["guf_validated"] = m.validation->validated;
     }
-    if (e.histogram) {
-      mc["histogram"] = {{"edges", e.histogram->edges},
-                         {"counts", e.histogram->counts},
-                         {"below", e.histogram->below},
-                         {"above", e.histogram->above}};
+    if (m.histogram) {
+      mc["histogram"] = {{"edges", m.histogram->edges},
+                         {"counts", m.histogram->counts},
+                         {"below", m.histogram->below},
+                         {"above", m.histogram->above}};
     }
     if (!m.message.empty()) mc["message"] = m.message;
     j["monte_carlo"] = mc;
@@ -227,29 +334,207 @@ nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& e) {
   return j;
 }
 
-std::string BudgetReportTable(const BudgetEvaluation& e) {
-  const GumResult& g = e.gum;
-  const std::string unit = e.budget.unit.empty() ? "" : " " + e.budget.unit;
+BudgetReport BudgetReportFromJsonValue(const JsonCursor& j) {
+  BudgetReport r;
+  if (!j.IsObject()) {
+    j.Fail(fmt::format("a {} object", kBudgetReportSchema));
+    return r;
+  }
+  if (j["schema"].String() != kBudgetReportSchema && j.ok()) {
+    j["schema"].Fail(fmt::format("\"{}\"", kBudgetReportSchema));
+  }
+  r.budget_file = j["budget_file"].String();
+  const JsonCursor measurand = j["measurand"];
+  r.measurand.name = measurand["name"].String();
+  r.measurand.unit = measurand["unit"].String();
+  r.measurand.model = measurand["model"].OptionalString().value_or("");
+  if (measurand.Has("unit_check")) {
+    const JsonCursor c = measurand["unit_check"];
+    BudgetUnits u;
+    u.checked = c["checked"].Bool();
+    u.model_unit = c["model_unit"].OptionalString().value_or("");
+    u.scale_known = c["scale_known"].Bool();
+    u.note = c["note"].String();
+    r.measurand.unit_check = u;
+  }
+  const JsonCursor result = j["result"];
+  BudgetReportResult& g = r.result;
+  g.value = result["value"].NumberOrNaN();
+  g.u = result["u"].NumberOrNaN();
+  g.dof_eff = ReadDof(result["dof_eff"]);
+  g.k = result["k"].NumberOrNaN();
+  g.expanded = result["U"].NumberOrNaN();
+  g.coverage = result["coverage"].NumberOrNaN();
+  g.interval = ReadInterval(result["interval"]);
+  g.u_first_order = result["u_first_order"].NumberOrNaN();
+  g.second_order = result["second_order"].Bool();
+  const JsonCursor policy = result["dof_policy"];
+  const std::string policy_name = policy.String();
+  bool known_policy = false;
+  for (CorrelatedDofPolicy p :
+       {CorrelatedDofPolicy::kGroup, CorrelatedDofPolicy::kIgnore, CorrelatedDofPolicy::kReject}) {
+    if (policy_name == CorrelatedDofPolicyName(p)) {
+      g.dof_policy = p;
+      known_policy = true;
+    }
+  }
+  if (!known_policy && policy.ok()) policy.Fail("one of \"group\", \"ignore\", \"reject\"");
+  g.correlated = result["correlated"].Bool();
+  g.dof_note = result["dof_note"].String();
+  // Reports before 2026-11-27 have no derivatives, no interval_shortest_discrete,
+  // numerical_tolerance, u_defined, mean_defined or inputs_without_variance
+  // (docs/budget-format.md).
+  if (result.Has("derivatives")) g.derivatives = result["derivatives"].String();
+  g.statement = result["statement"].String();
+  const JsonCursor lines = j["budget"];
+  if (!lines.IsArray()) lines.Fail("an array of input lines");
+  for (size_t i = 0; i < lines.Size(); ++i) {
+    const JsonCursor l = lines[i];
+    BudgetReportLine line;
+    line.name = l["name"].String();
+    line.value = l["value"].NumberOrNaN();
+    line.u = l["u"].NumberOrNaN();
+    line.distribution = l["distribution"].String();
+    line.sensitivity = l["sensitivity"].NumberOrNaN();
+    line.contribution = l["contribution"].NumberOrNaN();
+    line.dof = ReadDof(l["dof"]);
+    line.percent = l["percent"].NumberOrNaN();
+    if (l.Has("unit")) line.unit = l["unit"].String();
+    if (l.Has("note")) line.note = l["note"].String();
+    if (l.Has("unit_conversion")) {
+      const JsonCursor c = l["unit_conversion"];
+      line.unit_conversion = BudgetLineConversion{c["from"].String(),       c["to"].String(),
+                                                  c["factor"].Number(),     c["offset"].Number(),
+                                                  c["value_from"].Number(), c["u_from"].Number()};
+    }
+    if (l.Has("session")) {
+      const JsonCursor c = l["session"];
+      line.session = BudgetLineSession{c["file"].String(), c["sensor"].Integer(),
+                                       c["quantity"].String(), c["n"].Integer()};
+    }
+    r.budget.push_back(std::move(line));
+  }
+  const JsonCursor correlations = j["correlations"];
+  if (!correlations.IsArray()) correlations.Fail("an array of correlations {a, b, r}");
+  for (size_t i = 0; i < correlations.Size(); ++i) {
+    const JsonCursor c = correlations[i];
+    r.correlations.push_back({c["a"].String(), c["b"].String(), c["r"].Number()});
+  }
+  const JsonCursor mc = j["monte_carlo"];
+  if (!mc.IsNull()) {
+    BudgetReportMonteCarlo m;
+    m.trials = mc["trials"].Integer();
+    // Seeds are unsigned 64-bit: above 2^63 - 1 the JSON integer is unsigned.
+    const JsonCursor seed = mc["seed"];
+    if (seed.Raw().is_number_unsigned()) {
+      m.seed = seed.Raw().get<uint64_t>();
+    } else {
+      const int64_t s = seed.Integer();
+      if (s < 0 && seed.ok()) seed.Fail("an integer >= 0");
+      m.seed = static_cast<uint64_t>(s);
+    }
+    m.generator = mc["generator"].String();
+    m.threads = mc["threads"].Integer();
+    m.adaptive = mc["adaptive"].Bool();
+    m.converged = mc["converged"].Bool();
+    m.blocks = mc["blocks"].Integer();
+    m.ndig = mc["ndig"].Integer();
+    m.coverage = mc["coverage"].NumberOrNaN();
+    m.value = mc["value"].NumberOrNaN();
+    m.u = mc["u"].NumberOrNaN();
+    if (mc.Has("u_defined")) m.u_defined = mc["u_defined"].Bool();
+    if (mc.Has("mean_defined")) m.mean_defined = mc["mean_defined"].Bool();
+    if (mc.Has("inputs_without_variance")) {
+      m.inputs_without_variance = mc["inputs_without_variance"].Strings();
+    }
+    m.symmetric = ReadInterval(mc["interval_symmetric"]);
+    m.shortest = ReadInterval(mc["interval_shortest"]);
+    if (mc.Has("interval_shortest_discrete")) {
+      m.shortest_discrete = ReadInterval(mc["interval_shortest_discrete"]);
+    }
+    if (mc.Has("numerical_tolerance")) {
+      m.numerical_tolerance = mc["numerical_tolerance"].NumberOrNaN();
+    }
+    if (mc.Has("stability_half_width")) {
+      const JsonCursor st = mc["stability_half_width"];
+      McStability s;
+      s.value = st["value"].NumberOrNaN();
+      s.u = st["u"].NumberOrNaN();
+      const CoverageInterval sym = ReadInterval(st["interval_symmetric"]);
+      const CoverageInterval shortest = ReadInterval(st["interval_shortest"]);
+      s.symmetric_low = sym.low;
+      s.symmetric_high = sym.high;
+      s.shortest_low = shortest.low;
+      s.shortest_high = shortest.high;
+      s.groups = st["groups"].Integer();
+      m.stability = s;
+    }
+    if (mc.Has("guf_validated")) {
+      GufValidation v;
+      v.delta = mc["delta"].NumberOrNaN();
+      v.d_low = mc["d_low"].NumberOrNaN();
+      v.d_high = mc["d_high"].NumberOrNaN();
+      v.validated = mc["guf_validated"].Bool();
+      m.validation = v;
+    }
+    if (mc.Has("histogram")) {
+      const JsonCursor h = mc["histogram"];
+      McHistogram histogram;
+      histogram.edges = h["edges"].Numbers();
+      histogram.counts = h["counts"].Integers();
+      histogram.below = h["below"].Integer();
+      histogram.above = h["above"].Integer();
+      if (h.ok() && histogram.edges.size() != histogram.counts.size() + 1) {
+        h["edges"].Fail(fmt::format("{} edges (one more than the {} counts)",
+                                    histogram.counts.size() + 1, histogram.counts.size()));
+      }
+      m.histogram = std::move(histogram);
+    }
+    if (mc.Has("message")) m.message = mc["message"].String();
+    r.monte_carlo = std::move(m);
+  }
+  return r;
+}
+
+std::string ToJson(const BudgetReport& report) { return JsonText(ToJsonValue(report), 2); }
+
+Result<BudgetReport> BudgetReportFromJson(std::string_view text, const std::string& file) {
+  Result<JsonDocument> document = JsonDocument::Parse(std::string(text), file);
+  if (!document.ok()) return document.error();
+  const JsonCursor root(document.value());
+  BudgetReport report = BudgetReportFromJsonValue(root);
+  if (!root.ok()) return root.error();
+  return report;
+}
+
+ordered_json BudgetReportJson(const BudgetEvaluation& e) {
+  return ToJsonValue(MakeBudgetReport(e));
+}
+
+std::string BudgetReportTable(const BudgetReport& r) {
+  const BudgetReportResult& g = r.result;
+  const std::string& measurand = r.measurand.name;
+  const std::string unit = r.measurand.unit.empty() ? "" : " " + r.measurand.unit;
   std::string out;
-  out += fmt::format("Measurand {}{}", e.budget.measurand,
-                     e.budget.unit.empty() ? "" : " [" + e.budget.unit + "]");
-  out += e.budget.model.empty() ? "  (y = sum c_i x_i)\n" : "  = " + e.budget.model + "\n\n";
-  if (e.budget.model.empty()) out += "\n";
+  out += fmt::format("Measurand {}{}", measurand,
+                     r.measurand.unit.empty() ? "" : " [" + r.measurand.unit + "]");
+  out += r.measurand.model.empty() ? "  (y = sum c_i x_i)\n" : "  = " + r.measurand.model + "\n\n";
+  if (r.measurand.model.empty()) out += "\n";
   out += fmt::format("{:<14} {:>14} {:>12} {:<12} {:>12} {:>12} {:>8} {:>7}\n", "input", "value",
                      "u", "distribution", "c_i", "u_i(y)", "dof", "%");
-  for (const BudgetLine& l : g.budget) {
+  for (const BudgetReportLine& l : r.budget) {
     out +=
         fmt::format("{:<14} {:>14} {:>12} {:<12} {:>12} {:>12} {:>8} {:>7.2f}\n", l.name,
                     Long(l.value), Short(l.u), l.distribution, Short(l.sensitivity),
                     Short(l.contribution), std::isfinite(l.dof) ? Short(l.dof) : "inf", l.percent);
   }
-  for (const BudgetInput& in : e.budget.inputs) {
-    if (!in.unit_conversion) continue;
-    const UnitConversion& c = *in.unit_conversion;
+  for (const BudgetReportLine& l : r.budget) {
+    if (!l.unit_conversion) continue;
+    const BudgetLineConversion& c = *l.unit_conversion;
     out += fmt::format("unit: {} converted from {} to {}: {} {} -> {} {}, u {} -> {} (x {}{})\n",
-                       in.name, c.from, c.to, Long(in.value_before_conversion), c.from,
-                       Long(in.value), c.to, Short(in.u_before_conversion), Short(in.u),
-                       Long(c.factor), c.offset != 0.0 ? " + " + Long(c.offset) : "");
+                       l.name, c.from, c.to, Long(c.value_from), c.from, Long(l.value), c.to,
+                       Short(c.u_from), Short(l.u), Long(c.factor),
+                       c.offset != 0.0 ? " + " + Long(c.offset) : "");
   }
   out += "\n";
   out += fmt::format("GUM (JCGM 100): y = {}{}, u_c = {}{}{}, nu_eff = {}, k = {:.3f}, U = {}{}\n",
@@ -258,10 +543,10 @@ std::string BudgetReportTable(const BudgetEvaluation& e) {
                      Short(g.expanded), unit);
   if (g.correlated) out += "  dof: " + g.dof_note + "\n";
   const RoundedResult s = RoundForStatement(g.value, g.expanded);
-  out += fmt::format("Result (JCGM 100 7.2.6): {} = ({} +- {}){}, k = {:.2f}, p = {}\n",
-                     e.budget.measurand, s.value, s.uncertainty, unit, g.k, Percent(g.coverage));
-  if (e.monte_carlo) {
-    const McResult& m = *e.monte_carlo;
+  out += fmt::format("Result (JCGM 100 7.2.6): {} = ({} +- {}){}, k = {:.2f}, p = {}\n", measurand,
+                     s.value, s.uncertainty, unit, g.k, Percent(g.coverage));
+  if (r.monte_carlo) {
+    const BudgetReportMonteCarlo& m = *r.monte_carlo;
     out += fmt::format(
         "\nMonte Carlo (JCGM 101): M = {}{}, seed {}, y = {}{}, u = {}{}\n", m.trials,
         m.adaptive ? fmt::format(" (adaptive, {} blocks, {})", m.blocks,
@@ -272,23 +557,27 @@ std::string BudgetReportTable(const BudgetEvaluation& e) {
     out += fmt::format("  {} interval: shortest [{}, {}], symmetric [{}, {}]{}\n",
                        Percent(m.coverage), Long(m.shortest.low), Long(m.shortest.high),
                        Long(m.symmetric.low), Long(m.symmetric.high), unit);
-    if (m.adaptive) {
-      const McStability& st = m.stability;
+    if (m.stability) {
+      const McStability& st = *m.stability;
       out += fmt::format(
           "  stable to delta = {} (7.9.2): 95 % half-widths y {}, u {}, symmetric [{}, {}], "
           "shortest [{}, {}]\n",
-          Short(m.delta), Short(st.value), Short(st.u), Short(st.symmetric_low),
+          Short(m.numerical_tolerance), Short(st.value), Short(st.u), Short(st.symmetric_low),
           Short(st.symmetric_high), Short(st.shortest_low), Short(st.shortest_high));
     }
-    if (e.validation) {
+    if (m.validation) {
       out += fmt::format("  GUF validation (clause 8): d_low = {}, d_high = {}, delta = {} -> {}\n",
-                         Short(e.validation->d_low), Short(e.validation->d_high),
-                         Short(e.validation->delta),
-                         e.validation->validated ? "validated" : "NOT validated");
+                         Short(m.validation->d_low), Short(m.validation->d_high),
+                         Short(m.validation->delta),
+                         m.validation->validated ? "validated" : "NOT validated");
     }
     if (!m.message.empty()) out += "  " + m.message + "\n";
   }
   return out;
+}
+
+std::string BudgetReportTable(const BudgetEvaluation& e) {
+  return BudgetReportTable(MakeBudgetReport(e));
 }
 
 }  // namespace metro

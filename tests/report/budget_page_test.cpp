@@ -16,7 +16,7 @@ namespace {
 
 using nlohmann::ordered_json;
 
-ordered_json EvaluatedReport(const std::string& name, int64_t trials) {
+BudgetReport EvaluatedReport(const std::string& name, int64_t trials) {
   auto b = LoadBudget(std::string(METRO_SOURCE_DIR) + "/datasets/budgets/" + name);
   REQUIRE(b.ok());
   Budget budget = b.value();
@@ -24,7 +24,7 @@ ordered_json EvaluatedReport(const std::string& name, int64_t trials) {
   budget.monte_carlo.trials = trials;
   auto e = EvaluateBudget(budget);
   REQUIRE(e.ok());
-  return BudgetReportJson(e.value());
+  return MakeBudgetReport(e.value());
 }
 
 // The text of the element with id `id` (no nested tags).
@@ -36,7 +36,7 @@ std::string ElementText(const std::string& html, const std::string& id) {
 }
 
 TEST_CASE("Budget page statement equals the JSON rounded per GUM 7.2.6", "[report][budget]") {
-  const ordered_json report = EvaluatedReport("gum_h1_end_gauge.json", 200000);
+  const BudgetReport report = EvaluatedReport("gum_h1_end_gauge.json", 200000);
   Result<std::string> html = RenderBudgetReportHtml(report);
   REQUIRE(html.ok());
   const std::string& h = html.value();
@@ -46,8 +46,7 @@ TEST_CASE("Budget page statement equals the JSON rounded per GUM 7.2.6", "[repor
   const std::string statement = ElementText(h, "statement");
   std::smatch m;
   REQUIRE(std::regex_match(statement, m, std::regex("(\\S+) = \\((\\S+) \u00b1 (\\S+)\\) (\\S+)")));
-  const RoundedResult r = RoundForStatement(report["result"]["value"].get<double>(),
-                                            report["result"]["U"].get<double>());
+  const RoundedResult r = RoundForStatement(report.result.value, report.result.expanded);
   CHECK(m[1].str() == "l");
   CHECK(m[2].str() == r.value);
   CHECK(m[3].str() == r.uncertainty);
@@ -64,13 +63,14 @@ TEST_CASE("Budget page statement equals the JSON rounded per GUM 7.2.6", "[repor
 
 TEST_CASE("Budget page prints both intervals to digits that tell their ends apart",
           "[report][budget]") {
-  const ordered_json report = EvaluatedReport("gum_h1_end_gauge.json", 200000);
+  const BudgetReport report = EvaluatedReport("gum_h1_end_gauge.json", 200000);
   Result<std::string> html = RenderBudgetReportHtml(report);
   REQUIRE(html.ok());
-  const auto& g = report["result"]["interval"];
-  const auto& s = report["monte_carlo"]["interval_shortest"];
-  const RoundedInterval gi = RoundInterval(g[0].get<double>(), g[1].get<double>());
-  const RoundedInterval si = RoundInterval(s[0].get<double>(), s[1].get<double>());
+  REQUIRE(report.monte_carlo);
+  const CoverageInterval& g = report.result.interval;
+  const CoverageInterval& s = report.monte_carlo->shortest;
+  const RoundedInterval gi = RoundInterval(g.low, g.high);
+  const RoundedInterval si = RoundInterval(s.low, s.high);
   CHECK(html.value().find("[" + gi.low + ", " + gi.high + "]") != std::string::npos);
   CHECK(html.value().find("[" + si.low + ", " + si.high + "]") != std::string::npos);
   // The ends of the 99 % interval (width about 185 nm, to the tens) differ in two digits or
@@ -83,7 +83,8 @@ TEST_CASE("Budget page prints both intervals to digits that tell their ends apar
   CHECK(gi.low.back() == '0');
   CHECK(html.value().find("e+07") == std::string::npos);
   // The verdict is the JSON's.
-  const bool validated = report["monte_carlo"]["guf_validated"].get<bool>();
+  REQUIRE(report.monte_carlo->validation);
+  const bool validated = report.monte_carlo->validation->validated;
   CHECK(html.value().find(validated ? "GUF validated" : "GUF NOT validated") != std::string::npos);
   // The histogram with the GUF density, then the contribution bars.
   CHECK(html.value().find("Histogram of the Monte Carlo values of l") != std::string::npos);
@@ -98,7 +99,7 @@ TEST_CASE("Budget page prints both intervals to digits that tell their ends apar
 
 TEST_CASE("Budget page of JCGM 101 9.2.2 states the exact result", "[report][budget]") {
   // Y ~ N(0, 4): y = 0, U = 1.96 x 2 = 3.92, validated.
-  const ordered_json report = EvaluatedReport("jcgm101_9_2_2_additive.json", 200000);
+  const BudgetReport report = EvaluatedReport("jcgm101_9_2_2_additive.json", 200000);
   Result<std::string> html = RenderBudgetReportHtml(report);
   REQUIRE(html.ok());
   CHECK(ElementText(html.value(), "statement") == "Y = (0.0 \u00b1 3.9)");
@@ -106,9 +107,25 @@ TEST_CASE("Budget page of JCGM 101 9.2.2 states the exact result", "[report][bud
   CHECK(html.value().find("GUF validated") != std::string::npos);
 }
 
+// `html` without its footer (it carries the time the page was made).
+std::string WithoutFooter(const std::string& html) {
+  return std::regex_replace(html, std::regex("<footer>[^<]*</footer>"), "");
+}
+
+TEST_CASE("The page of a saved budget report is the page of the evaluation", "[report][budget]") {
+  const BudgetReport report = EvaluatedReport("gum_h1_end_gauge.json", 20000);
+  Result<std::string> direct = RenderBudgetReportHtml(report);
+  Result<std::string> saved = RenderBudgetReportHtml(ToJson(report), "b.report.json");
+  REQUIRE(direct.ok());
+  REQUIRE(saved.ok());
+  CHECK(direct.value().find("<footer>") != std::string::npos);
+  CHECK(WithoutFooter(saved.value()) == WithoutFooter(direct.value()));
+}
+
 TEST_CASE("A saved budget report renders as the budget page and a definition is refused",
           "[report][budget]") {
-  const ordered_json report = EvaluatedReport("jcgm101_9_2_2_additive.json", 20000);
+  const ordered_json report =
+      ordered_json::parse(ToJson(EvaluatedReport("jcgm101_9_2_2_additive.json", 20000)));
   Result<std::string> html = RenderJsonHtml(report, "b.report.json");
   REQUIRE(html.ok());
   CHECK(html.value().find("<title>Uncertainty budget: Y</title>") != std::string::npos);

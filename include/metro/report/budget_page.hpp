@@ -1,6 +1,7 @@
-// The budget page (issue #25): a "metro.budget-report/1" report (budget_report.hpp) as one
-// self-contained HTML page, from reports/templates/budget_page.mustache in the page chrome of
-// page.mustache. docs/reports.md ("Budget page") shows what it holds, in this order:
+// The budget page (issue #25): a budget report (metro/uncertainty/budget_report.hpp,
+// "metro.budget-report/1") as one self-contained HTML page, from
+// reports/templates/budget_page.mustache in the page chrome of page.mustache. docs/reports.md
+// ("Budget page") shows what it holds, in this order:
 //   the statement of JCGM 100:2008 7.2.4 (y = (value +- U) unit with k, nu_eff and the
 //     coverage probability; value and U rounded per 7.2.6 with RoundForStatement) and the
 //     concise notation of u_c (7.2.2);
@@ -13,16 +14,23 @@
 //   the contributions (c_i u_i)^2 / u_c^2 as sorted bars and the budget table.
 #pragma once
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json.hpp>  // Only for the two transitional declarations below.
 #include <string>
+#include <string_view>
 
 #include "metro/core/status.hpp"
+#include "metro/uncertainty/budget_report.hpp"
 
 namespace metro {
 
-inline constexpr const char* kBudgetReportSchema = "metro.budget-report/1";
+Result<std::string> RenderBudgetReportHtml(const BudgetReport& report);
 
-// Errors: not a "metro.budget-report/1" object, or one without its "result" or "budget".
+// The page of a "metro.budget-report/1" document read with BudgetReportFromJson: errors at
+// file:line:column with the value's path (`characterize report B.json`).
+Result<std::string> RenderBudgetReportHtml(std::string_view json_text, const std::string& file);
+
+// Transitional, until RenderJsonHtml (html_report.cpp) passes the file's text: the document
+// written out again (indent 2, as metro writes it) and read as above, with no file name.
 Result<std::string> RenderBudgetReportHtml(const nlohmann::ordered_json& report);
 
 // True when `document` is a budget definition (docs/budget-format.md: "measurand" and
