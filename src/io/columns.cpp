@@ -230,4 +230,8 @@ bool IsRateQuantity(std::string_view name) {
          (info.sensor == SensorKind::kAccelerometer || info.sensor == SensorKind::kGyroscope);
 }
 
+bool IsQuaternionComponent(std::string_view name) {
+  return name == "qw" || name == "qx" || name == "qy" || name == "qz";
+}
+
 }  // namespace metro

@@ -120,4 +120,8 @@ std::vector<std::string> MissingColumns(const std::vector<std::string>& family,
 // Allan deviation and the IEEE 952 noise terms.
 bool IsRateQuantity(std::string_view name);
 
+// A component of the orientation quaternion (qw qx qy qz, dimensionless): evaluated, but not
+// plotted by default (the Euler angles are plotted instead).
+bool IsQuaternionComponent(std::string_view name);
+
 }  // namespace metro

@@ -1,0 +1,208 @@
+#include "metro/report/plot_data.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <utility>
+
+#include "metro/core/angles.hpp"
+#include "metro/io/columns.hpp"
+#include "metro/stats/quantization.hpp"
+#include "metro/stats/type_a.hpp"
+
+namespace metro {
+namespace {
+
+// `v` to `digits` significant digits, so its JSON text is short and reads back exactly.
+double Rounded(double v, int digits) {
+  if (!std::isfinite(v) || v == 0.0) return v;
+  return std::strtod(fmt::format("{:.{}g}", v, digits).c_str(), nullptr);
+}
+
+constexpr int kTimeDigits = 9;
+constexpr int kValueDigits = 7;
+
+// The record decimated to the min and max of each bucket, in the order they occur, so a long
+// series keeps its envelope. Non-finite values are left out.
+void Decimate(const std::vector<double>& t, const std::vector<double>& v, size_t max_points,
+              SeriesPlotData* out) {
+  std::vector<size_t> finite;
+  finite.reserve(v.size());
+  for (size_t i = 0; i < std::min(t.size(), v.size()); ++i) {
+    if (std::isfinite(v[i]) && std::isfinite(t[i])) finite.push_back(i);
+  }
+  auto keep = [&](size_t i) {
+    out->t_s.push_back(Rounded(t[i], kTimeDigits));
+    out->values.push_back(Rounded(v[i], kValueDigits));
+  };
+  const size_t n = finite.size();
+  if (n <= max_points) {
+    for (size_t i : finite) keep(i);
+    return;
+  }
+  const size_t buckets = std::max<size_t>(1, max_points / 2);
+  for (size_t b = 0; b < buckets; ++b) {
+    const size_t lo = b * n / buckets;
+    const size_t hi = (b + 1) * n / buckets;
+    if (hi <= lo) continue;
+    size_t i_min = lo, i_max = lo;
+    for (size_t i = lo; i < hi; ++i) {
+      if (v[finite[i]] < v[finite[i_min]]) i_min = i;
+      if (v[finite[i]] > v[finite[i_max]]) i_max = i;
+    }
+    keep(finite[std::min(i_min, i_max)]);
+    if (i_min != i_max) keep(finite[std::max(i_min, i_max)]);
+  }
+}
+
+// The window's observations as the evaluation used them: finite, angles unwrapped when the
+// evaluation unwrapped them.
+std::vector<double> WindowValues(const Quantity& q, size_t first, size_t end, bool unwrapped) {
+  std::vector<double> x(q.values.begin() + static_cast<std::ptrdiff_t>(first),
+                        q.values.begin() + static_cast<std::ptrdiff_t>(end));
+  x.erase(std::remove_if(x.begin(), x.end(), [](double v) { return !std::isfinite(v); }), x.end());
+  if (unwrapped) UnwrapDegInPlace(&x);
+  return x;
+}
+
+// Bins of the window's values (sqrt(n) of them, 10..60, unless the options fix the number).
+// Quantized data (the packets' 0.01 deg, raw counts): bins a whole number of steps wide and
+// centred on the steps, never narrower than one step, so no bin is empty or doubled by where
+// the lattice falls (the histogram of 0.01 deg data looked non-normal).
+HistogramPlotData Histogram(const std::vector<double>& x, double mean, bool unwrapped,
+                            const PlotDataOptions& options) {
+  HistogramPlotData h;
+  const size_t n = x.size();
+  h.n = static_cast<int64_t>(n);
+  const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
+  const double lo = *lo_it, hi = *hi_it;
+  int bins = options.histogram_bins > 0
+                 ? options.histogram_bins
+                 : std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 10, 60);
+  double width = (hi - lo) / bins;
+  double first_edge = lo;
+  const double step = QuantizationStep(x);
+  if (step > 0.0) {
+    width = std::max(1.0, std::ceil(width / step - 1e-9)) * step;
+    first_edge = lo - 0.5 * step;
+    bins = std::max(1, static_cast<int>(std::ceil((hi + 0.5 * step - first_edge) / width - 1e-9)));
+    h.resolution = step;
+  }
+  h.counts.assign(static_cast<size_t>(bins), 0);
+  for (double v : x) {
+    const int b = std::min(bins - 1, static_cast<int>((v - first_edge) / width));
+    ++h.counts[static_cast<size_t>(std::max(0, b))];
+  }
+  for (int b = 0; b <= bins; ++b) h.edges_value.push_back(first_edge + b * width);
+  h.density_mean = mean;
+  if (unwrapped) {
+    double sum = 0.0;
+    for (double v : x) sum += v;
+    const double sample_mean = sum / static_cast<double>(n);
+    h.density_mean = mean + 360.0 * std::round((sample_mean - mean) / 360.0);
+  }
+  return h;
+}
+
+}  // namespace
+
+bool PlotDataOptions::IsValid(std::string* why) const {
+  auto fail = [why](const char* message) {
+    if (why != nullptr) *why = message;
+    return false;
+  };
+  if (max_quantities < 0) return fail("plot data: max_quantities must be >= 0");
+  if (max_series_points < 16) return fail("plot data: max_series_points must be >= 16");
+  if (histogram_bins < 0 || histogram_bins > 1000) {
+    return fail("plot data: histogram_bins must be 0 (automatic) or 1..1000");
+  }
+  if (max_autocorrelation_lag < 2) return fail("plot data: max_autocorrelation_lag must be >= 2");
+  return true;
+}
+
+bool PlotDataOptions::Selects(const std::string& name) const {
+  if (quantities.empty()) return !IsQuaternionComponent(name);
+  return std::find(quantities.begin(), quantities.end(), name) != quantities.end();
+}
+
+Result<QuantityPlotData> ComputeQuantityPlotData(const Tag& tag, const Quantity& q,
+                                                 const AppliedWindow& window,
+                                                 const QuantityTypeA& result,
+                                                 const PlotDataOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(why);
+  const size_t n_record = std::min(tag.t_s.size(), q.values.size());
+  const size_t first = result.window_begin;
+  const size_t end = window.end;
+  if (!(first < end && end <= n_record)) {
+    return MakeFailedError(
+        fmt::format("{}: the window [{}, {}) does not fit the tag's {} observations", result.name,
+                    first, end, n_record));
+  }
+  QuantityPlotData data;
+  SeriesPlotData& series = data.series;
+  Decimate(tag.t_s, q.values, static_cast<size_t>(options.max_series_points), &series);
+  series.n_record = static_cast<int64_t>(n_record);
+  series.n_window = static_cast<int64_t>(end - first);
+  series.record_first_t_s = Rounded(tag.t_s.front(), kTimeDigits);
+  series.record_last_t_s = Rounded(tag.t_s[n_record - 1], kTimeDigits);
+  series.window_first_t_s = Rounded(tag.t_s[first], kTimeDigits);
+  if (end < n_record) series.window_end_t_s = Rounded(tag.t_s[end], kTimeDigits);
+
+  const bool unwrapped = result.angle_handling == "unwrapped";
+  const std::vector<double> x = WindowValues(q, first, end, unwrapped);
+  const size_t n = x.size();
+  const double s = result.type_a.std;
+  const bool spread = n >= 2 && std::isfinite(s) && s > 0.0 &&
+                      *std::max_element(x.begin(), x.end()) > *std::min_element(x.begin(), x.end());
+  if (spread) data.histogram = Histogram(x, result.type_a.mean, unwrapped, options);
+
+  // Sample autocorrelation (the same estimator as the Type A evaluation's n_eff, Zhang 2006).
+  const size_t max_lag =
+      std::min(static_cast<size_t>(options.max_autocorrelation_lag), n >= 8 ? n / 4 : size_t{0});
+  if (spread && max_lag >= 2) {
+    std::vector<double> rho(max_lag + 1);
+    Autocorrelation(x.data(), n, max_lag, rho.data());
+    AutocorrelationPlotData a;
+    a.n = static_cast<int64_t>(n);
+    a.band = 1.96 / std::sqrt(static_cast<double>(n));
+    for (size_t k = 1; k <= max_lag; ++k) a.rho.push_back(Rounded(rho[k], kValueDigits));
+    data.autocorrelation = std::move(a);
+  }
+  return data;
+}
+
+Result<SessionPlotData> ComputeSessionPlotData(const Session& session, const SessionTypeA& type_a,
+                                               const PlotDataOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(why);
+  SessionPlotData out;
+  int plotted = 0;
+  for (const TagTypeA& t : type_a.tags) {
+    std::vector<std::optional<QuantityPlotData>>& row = out.quantities.emplace_back();
+    row.resize(t.quantities.size());
+    const Tag* tag = session.FindTag(t.sensor);
+    for (size_t j = 0; j < t.quantities.size(); ++j) {
+      const QuantityTypeA& q = t.quantities[j];
+      if (!q.ok || !options.Selects(q.name)) continue;
+      if (plotted >= options.max_quantities) {
+        ++out.not_plotted;
+        continue;
+      }
+      const Quantity* column = tag != nullptr ? tag->Find(q.name) : nullptr;
+      if (column == nullptr) {
+        return MakeFailedError(fmt::format("plot data: sensor {} has no column {} in {}", t.sensor,
+                                           q.name, session.path));
+      }
+      Result<QuantityPlotData> data = ComputeQuantityPlotData(*tag, *column, t.window, q, options);
+      if (!data.ok()) return data.error().WithContext(fmt::format("sensor {}", t.sensor));
+      row[j] = std::move(data).value();
+      ++plotted;
+    }
+  }
+  return out;
+}
+
+}  // namespace metro
