@@ -9,6 +9,7 @@
 
 #include "metro/core/angles.hpp"
 #include "metro/io/columns.hpp"
+#include "metro/report/session_report.hpp"
 #include "metro/stats/quantization.hpp"
 #include "metro/stats/type_a.hpp"
 
@@ -203,6 +204,30 @@ Result<SessionPlotData> ComputeSessionPlotData(const Session& session, const Ses
     }
   }
   return out;
+}
+
+Result<int> AddPlotData(const Session& session, const SessionTypeA& type_a,
+                        const PlotDataOptions& options, SessionReport* report) {
+  Result<SessionPlotData> data = ComputeSessionPlotData(session, type_a, options);
+  if (!data.ok()) return data.error();
+  for (size_t k = 0; k < type_a.tags.size(); ++k) {
+    const TagTypeA& t = type_a.tags[k];
+    SensorReport* sensor = nullptr;
+    for (SensorReport& s : report->sensors) {
+      if (s.sensor == t.sensor) sensor = &s;
+    }
+    for (size_t j = 0; j < t.quantities.size(); ++j) {
+      std::optional<QuantityPlotData>& plot = data.value().quantities[k][j];
+      if (!plot) continue;
+      QuantityReport* q = sensor != nullptr ? sensor->Find(t.quantities[j].name) : nullptr;
+      if (q == nullptr) {
+        return MakeFailedError(fmt::format("plot data: the report has no sensor {} quantity {}",
+                                           t.sensor, t.quantities[j].name));
+      }
+      q->plot = std::move(plot);
+    }
+  }
+  return data.value().not_plotted;
 }
 
 }  // namespace metro

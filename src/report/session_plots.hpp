@@ -5,11 +5,10 @@
 #pragma once
 
 #include <kainjow/mustache.hpp>
-#include <nlohmann/json.hpp>
 #include <string>
 
-#include "metro/io/session.hpp"
-#include "metro/report/html_report.hpp"
+#include "metro/report/plot_data.hpp"
+#include "metro/report/session_report.hpp"
 
 namespace metro::report_internal {
 
@@ -20,22 +19,21 @@ struct QuantityPlots {
 };
 
 // Time series (the part outside the window shaded), histogram with the normal density of
-// the Type A result, and autocorrelation with the white-noise band, of quantity `qname` of
-// `sensor` (the report's sensors[i]) drawn from the session's `tag` and column `q`. Each
-// axis carries its scale and offset in the label (ChooseAxisScale), never a detached "x10^n".
-void AddSeriesPlots(const nlohmann::ordered_json& sensor, const std::string& qname,
-                    const nlohmann::ordered_json& quantity, const Tag& tag, const Quantity& q,
-                    const HtmlReportOptions& options, QuantityPlots* out);
+// the Type A result, and autocorrelation with the white-noise band of `quantity`, drawn from
+// its plot data (computed when the session was analysed, plot_data.hpp). Each axis carries
+// its scale and offset in the label (ChooseAxisScale), never a detached "x10^n".
+void AddSeriesPlots(const QuantityReport& quantity, const QuantityPlotData& data,
+                    QuantityPlots* out);
 
 // The Allan deviation of one quantity with its confidence interval and the fitted IEEE 952
 // terms; `terms_table` receives the table of the terms.
-void AddAllanPlot(const std::string& qname, const nlohmann::ordered_json& quantity,
-                  QuantityPlots* out, kainjow::mustache::data* terms_table);
+void AddAllanPlot(const QuantityReport& quantity, QuantityPlots* out,
+                  kainjow::mustache::data* terms_table);
 
 // One plot per sensor group of `sensor` (the x, y and z axes of one sensor: ax_g ay_g az_g,
 // gx_dps gy_dps gz_dps; names <letters><x|y|z>_<unit>, one unit) with two or more Allan
 // curves: each axis's curve with its confidence interval and its fitted noise model, one
 // colour per axis (x blue, y orange, z green).
-void AddAllanGroupPlots(const nlohmann::ordered_json& sensor, QuantityPlots* out);
+void AddAllanGroupPlots(const SensorReport& sensor, QuantityPlots* out);
 
 }  // namespace metro::report_internal

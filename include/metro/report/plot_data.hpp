@@ -95,4 +95,12 @@ struct SessionPlotData {
 Result<SessionPlotData> ComputeSessionPlotData(const Session& session, const SessionTypeA& type_a,
                                                const PlotDataOptions& options);
 
+struct SessionReport;  // metro/report/session_report.hpp
+
+// Computes the plot data (ComputeSessionPlotData) and puts each quantity's into `report`'s
+// QuantityReport::plot; `report` was made from `type_a` (same tags and quantity names).
+// Returns how many selected quantities were left without plots (max_quantities).
+Result<int> AddPlotData(const Session& session, const SessionTypeA& type_a,
+                        const PlotDataOptions& options, SessionReport* report);
+
 }  // namespace metro

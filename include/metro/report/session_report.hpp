@@ -23,6 +23,7 @@
 
 #include "metro/core/status.hpp"
 #include "metro/noise/allan_report.hpp"
+#include "metro/report/plot_data.hpp"
 
 namespace metro {
 
@@ -207,6 +208,10 @@ struct QuantityReport {
   std::optional<QuantitySettle> settle;
   std::optional<AllanReport> allan;                 // --allan (docs/noise.md).
   std::optional<AllanTypeALink> allan_type_a_link;  // --allan, with a curve.
+  // "plot" (the last key): what the session page draws, computed at analysis time
+  // (plot_data.hpp). Absent: not plotted (PlotDataOptions), or a report from before metro
+  // kept plot data.
+  std::optional<QuantityPlotData> plot;
 };
 
 // "sensors[i]": one tag.
