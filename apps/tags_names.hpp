@@ -66,18 +66,13 @@ inline std::string CalibrationTagLines(const Calibration& cal) {
 }
 
 // The certificate of calibration.json at `path`, rendered for `cal` (the file's calibration
-// with the tags file applied) as RenderJsonFileHtml renders the file itself: the inputs
-// reloaded when their SHA-256 still matches, the certificate id the hash of the file's own
-// bytes (what `fit` printed and the registry recorded).
+// with the tags file applied) as RenderJsonFileHtml renders the file itself: the certificate id
+// the hash of the file's own bytes (what `fit` printed and the registry recorded).
 inline Result<std::string> RenderCertificateFor(const Calibration& cal, const std::string& path) {
-  ReloadedInputs inputs = ReloadCalibrationInputs(cal, path);
-  std::vector<const Session*> ptrs;
-  for (const Session& s : inputs.sessions) ptrs.push_back(&s);
   CertificateOptions certificate;
   Result<std::string> sha = Sha256File(path);
   if (sha.ok()) certificate.certificate_id = sha.value().substr(0, 16);
-  return RenderCalibrationCertificate(cal, inputs.complete ? ptrs : std::vector<const Session*>{},
-                                      inputs.note, certificate);
+  return RenderCalibrationCertificate(cal, certificate);
 }
 
 // A session report (metro.report/1): each sensors[].name from the tags file, as

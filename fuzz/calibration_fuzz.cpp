@@ -16,7 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const metro::Calibration& cal = calibration.value();
   (void)metro::FormatCalibrationReport(cal);
   const std::string text = metro::FormatCalibrationJson(cal);
-  (void)metro::CalibrationFromJson(nlohmann::json::parse(text), path);
+  (void)metro::CalibrationFromJson(text, path);
   for (const metro::TagCalibration& tag : cal.tags) {
     metro::blob::BlobFromCalibrationOptions options;
     options.sensor = tag.sensor;

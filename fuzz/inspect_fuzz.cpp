@@ -16,11 +16,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   auto report = metro::blob::InspectFile(path, options);
   if (report.ok()) {
     (void)metro::blob::FormatInspect(report.value());
-    (void)metro::blob::InspectToJson(report.value()).dump();
+    (void)metro::blob::ToJson(report.value());
   }
   const std::vector<uint8_t> bytes(data, data + size);
   metro::blob::InspectReport bin = metro::blob::InspectBin(bytes, options);
   (void)metro::blob::FormatInspect(bin);
-  (void)metro::blob::InspectToJson(bin).dump();
+  (void)metro::blob::ToJson(bin);
   return 0;
 }

@@ -175,12 +175,7 @@ int RunFit(const FitOptions& f) {
   if (int rc = ApplySpec(spec.spec, &cal.value()); rc != kExitOk) return rc;
   std::string html;
   if (!f.html.empty()) {
-    CertificateOptions certificate;
-    certificate.accel_fs_g = f.accel_fs_g;
-    certificate.gyro_fs_dps = f.gyro_fs_dps;
-    Result<std::string> rendered = RenderCalibrationCertificate(
-        cal.value(), ptrs, "Conditions and residual plots from the input records as fitted.",
-        certificate);
+    Result<std::string> rendered = RenderCalibrationCertificate(cal.value());
     if (!rendered.ok()) {
       // The certificate of the fit just made: a failure is the run's, not the input's.
       return apps::PrintErrorExit(rendered.error().WithKind(ErrorKind::kFailed));

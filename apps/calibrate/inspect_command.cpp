@@ -74,7 +74,7 @@ int RunInspect(const InspectCliOptions& c) {
     return apps::PrintErrorExit(r.error());
   }
   if (c.json) {
-    fmt::print("{}\n", JsonText(blob::InspectToJson(r.value()), 2));
+    fmt::print("{}\n", blob::ToJson(r.value()));
   } else {
     apps::PrintText(stdout, blob::FormatInspect(r.value()));  // Blob metadata is data.
   }

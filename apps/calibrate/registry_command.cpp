@@ -65,13 +65,7 @@ int RunHistory(const RegistryQueryOptions& o) {
   Result<std::vector<RegistryCalibration>> h = r.value()->History(id.value());
   if (!h.ok()) return Fail(h.error());
   if (o.json) {
-    json j;
-    j["device_id"] = blob::FormatDeviceId(id.value());
-    j["calibrations"] = json::array();
-    for (const RegistryCalibration& c : h.value()) {
-      j["calibrations"].push_back(RegistryCalibrationToJson(c));
-    }
-    apps::PrintText(stdout, JsonText(j, 2) + "\n");
+    apps::PrintText(stdout, HistoryToJson(id.value(), h.value()) + "\n");
     return kExitOk;
   }
   std::string out = fmt::format("device {}: {} calibration(s)\n", blob::FormatDeviceId(id.value()),
@@ -115,7 +109,7 @@ int RunDrift(const RegistryQueryOptions& o) {
                     "covariance is not 0, so u_change is overstated and |E_n| understated\n");
   }
   if (o.json) {
-    apps::PrintText(stdout, JsonText(DriftToJson(d.value()), 2) + "\n");
+    apps::PrintText(stdout, ToJson(d.value()) + "\n");
     return kExitOk;
   }
   std::string out = fmt::format("device {}: {} ({}) -> {} ({})\n", blob::FormatDeviceId(id.value()),
@@ -186,13 +180,7 @@ int RunExport(const RegistryQueryOptions& o) {
   if (!all.ok()) return Fail(all.error().WithKind(ErrorKind::kFailed));
   std::string text;
   if (o.format == "json") {
-    json j;
-    j["schema_version"] = r.value()->schema_version();
-    j["calibrations"] = json::array();
-    for (const RegistryCalibration& c : all.value()) {
-      j["calibrations"].push_back(RegistryCalibrationToJson(c));
-    }
-    text = JsonText(j, 2) + "\n";
+    text = ExportToJson(r.value()->schema_version(), all.value()) + "\n";
   } else {
     // One row per constant of each calibration (docs/registry.md "Export").
     text =

@@ -9,9 +9,11 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
+#include <nlohmann/json.hpp>
 #include <tuple>
 
 #include "metro/blob/intel_hex.hpp"
+#include "metro/core/json_text.hpp"
 #include "metro/core/utc_time.hpp"
 #include "metro_fw/blob.h"
 
@@ -521,7 +523,9 @@ std::string FormatInspect(const InspectReport& report) {
   return out;
 }
 
-nlohmann::json InspectToJson(const InspectReport& report) {
+namespace {
+
+nlohmann::json InspectValue(const InspectReport& report) {
   nlohmann::json j;
   j["file"] = report.file;
   j["format"] = report.format;
@@ -575,5 +579,9 @@ nlohmann::json InspectToJson(const InspectReport& report) {
   }
   return j;
 }
+
+}  // namespace
+
+std::string ToJson(const InspectReport& report) { return JsonText(InspectValue(report), 2); }
 
 }  // namespace metro::blob

@@ -325,6 +325,66 @@ InputFile RecordTimeSpan(const Session& session) {
   return out;
 }
 
+Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& c,
+                                               const std::vector<const Tag*>& records,
+                                               double gravity_mps2) {
+  const SensorModel& m = c.model;
+  const bool accel = m.sensor == ImuSensor::kAccel;
+  if (m.input_unit == "LSB" && !c.full_scale) {
+    return MakeError("static residuals: the full-scale setting of the raw (LSB) input is not set");
+  }
+  const std::optional<double> nominal =
+      NominalScale(m.sensor, m.input_unit, c.full_scale.value_or(1.0));
+  const std::vector<std::string> columns = InputColumns(m.sensor, m.input_unit);
+  if (!nominal || columns.size() != 3) {
+    return MakeError(fmt::format("static residuals: input unit {} is not a unit of the {}",
+                                 m.input_unit, ImuSensorLongName(m.sensor)));
+  }
+  const double target = accel ? gravity_mps2 / kStandardGravityMps2 : 0.0;
+  StaticResiduals out;
+  out.unit = std::string(OutputUnit(m.sensor).symbol);
+  for (const Segment& seg : c.segments) {
+    if (seg.kind != SegmentKind::kStatic || !seg.used) continue;
+    if (seg.piece < 0 || static_cast<size_t>(seg.piece) >= records.size()) continue;
+    const Tag& tag = *records[static_cast<size_t>(seg.piece)];
+    const Quantity* col[3] = {tag.Find(columns[0]), tag.Find(columns[1]), tag.Find(columns[2])};
+    if (col[0] == nullptr || col[1] == nullptr || col[2] == nullptr) continue;
+    if (seg.end > tag.size() || seg.begin >= seg.end) continue;
+    const Quantity* temp = tag.Find("temp_c");
+    Eigen::Vector3d raw = Eigen::Vector3d::Zero();
+    double temp_c = 0.0;
+    for (size_t i = seg.begin; i < seg.end; ++i) {
+      for (int a = 0; a < 3; ++a) raw[a] += col[a]->values[i];
+      if (temp != nullptr) temp_c += temp->values[i];
+    }
+    const double n = static_cast<double>(seg.end - seg.begin);
+    raw /= n;
+    temp_c /= n;
+    out.before.push_back((*nominal * raw).norm() - target);
+    out.after.push_back(m.Apply(raw, temp_c).norm() - target);
+  }
+  return out;
+}
+
+namespace {
+
+RecordConditions ConditionsOf(const Tag& tag, int input) {
+  RecordConditions r;
+  r.input = input;
+  r.samples = static_cast<int64_t>(tag.size());
+  if (!tag.t_s.empty()) r.duration_s = tag.t_s.back() - tag.t_s.front();
+  if (const Quantity* temp = tag.Find("temp_c")) {
+    for (double t : temp->values) {
+      if (!std::isfinite(t)) continue;
+      r.temp_min_c = std::min(r.temp_min_c.value_or(t), t);
+      r.temp_max_c = std::max(r.temp_max_c.value_or(t), t);
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
 Result<Calibration> CalibrateSessions(const std::vector<const Session*>& sessions,
                                       const CalibrationOptions& options) {
   std::string why;
@@ -337,13 +397,18 @@ Result<Calibration> CalibrateSessions(const std::vector<const Session*>& session
   cal.tool_version = std::string(kToolName) + " " + kVersion;
   cal.date_utc = UtcIso8601Now();
   std::map<int, std::vector<const Tag*>> by_sensor;
+  std::map<int, std::vector<RecordConditions>> conditions;
   for (const Session* s : sessions) {
+    const int input = static_cast<int>(cal.inputs.size());
     InputFile in = RecordTimeSpan(*s);
     in.path = s->path;
     in.sha256 = s->sha256;
     cal.inputs.push_back(std::move(in));
     for (const Tag& t : s->tags) {
-      if (options.sensor == 0 || t.sensor == options.sensor) by_sensor[t.sensor].push_back(&t);
+      if (options.sensor == 0 || t.sensor == options.sensor) {
+        by_sensor[t.sensor].push_back(&t);
+        conditions[t.sensor].push_back(ConditionsOf(t, input));
+      }
     }
   }
   if (by_sensor.empty()) {
@@ -364,7 +429,13 @@ Result<Calibration> CalibrateSessions(const std::vector<const Session*>& session
         (*c)->full_scale =
             (*c)->model.sensor == ImuSensor::kAccel ? options.accel_fs_g : options.gyro_fs_dps;
       }
+      if (c->has_value()) {
+        Result<StaticResiduals> residuals = ComputeStaticResiduals(**c, tags, options.gravity_mps2);
+        if (!residuals.ok()) return residuals.error();
+        (*c)->static_residuals = std::move(residuals).value();
+      }
     }
+    t.value().record_conditions = std::move(conditions[sensor]);
     cal.tags.push_back(std::move(t).value());
   }
   return cal;

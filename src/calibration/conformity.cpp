@@ -6,6 +6,7 @@
 #include <cmath>
 #include <set>
 
+#include "calibration/calibration_json.hpp"
 #include "metro/calibration/named_constants.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
@@ -329,7 +330,7 @@ Result<ConformityStatement> EvaluateConformity(const Calibration& calibration,
   return out;
 }
 
-nlohmann::json ConformityEntriesToJson(const ConformityStatement& statement) {
+json ConformityEntriesToJson(const ConformityStatement& statement) {
   json list = json::array();
   for (const ConformityEntry& e : statement.entries) {
     json j;
@@ -349,7 +350,7 @@ nlohmann::json ConformityEntriesToJson(const ConformityStatement& statement) {
   return list;
 }
 
-nlohmann::json ConformityRuleToJson(const ConformityStatement& statement) {
+json ConformityRuleToJson(const ConformityStatement& statement) {
   json j;
   j["decision_rule"] = DecisionRuleName(statement.rule);
   j["coverage_factor"] = statement.coverage_factor;
@@ -358,61 +359,51 @@ nlohmann::json ConformityRuleToJson(const ConformityStatement& statement) {
   return j;
 }
 
-Result<ConformityStatement> ConformityFromJson(const nlohmann::json& entries,
-                                               const nlohmann::json& rule,
-                                               const std::string& file) {
+ConformityStatement ConformityFromJsonValue(const JsonCursor& entries, const JsonCursor& rule) {
   ConformityStatement s;
-  auto bad = [&](const std::string& key) {
-    return MakeError(file, 0, fmt::format("missing or malformed key '{}'", key));
-  };
-  if (!rule.is_object() || !rule.contains("decision_rule") || !rule["decision_rule"].is_string() ||
-      !ParseDecisionRule(rule["decision_rule"].get<std::string>())) {
-    return bad("conformity_rule.decision_rule");
+  const std::string rule_name = rule["decision_rule"].String();
+  if (!rule.ok()) return s;
+  const std::optional<DecisionRule> parsed = ParseDecisionRule(rule_name);
+  if (!parsed) {
+    rule["decision_rule"].Fail("simple, guarded or risk");
+    return s;
   }
-  s.rule = *ParseDecisionRule(rule["decision_rule"].get<std::string>());
-  if (rule.contains("coverage_factor") && rule["coverage_factor"].is_number()) {
-    s.coverage_factor = rule["coverage_factor"].get<double>();
+  s.rule = *parsed;
+  if (const std::optional<double> k = rule["coverage_factor"].OptionalNumber()) {
+    s.coverage_factor = *k;
   }
-  if (rule.contains("max_consumer_risk") && rule["max_consumer_risk"].is_number()) {
-    s.max_consumer_risk = rule["max_consumer_risk"].get<double>();
+  if (const std::optional<double> risk = rule["max_consumer_risk"].OptionalNumber()) {
+    s.max_consumer_risk = *risk;
   }
-  if (!entries.is_array()) return bad("conformity");
-  for (size_t i = 0; i < entries.size(); ++i) {
-    const json& j = entries[i];
-    const std::string at = fmt::format("conformity[{}]", i);
-    if (!j.is_object()) return bad(at);
-    ConformityEntry e;
-    auto number = [&](const char* key, double* v) {
-      if (!j.contains(key) || !j[key].is_number()) return false;
-      *v = j[key].get<double>();
-      return true;
-    };
-    auto optional_number = [&](const char* key, std::optional<double>* v) {
-      if (!j.contains(key) || j[key].is_null()) return true;
-      if (!j[key].is_number()) return false;
-      *v = j[key].get<double>();
-      return true;
-    };
-    if (!j.contains("sensor") || !j["sensor"].is_number_integer()) return bad(at + ".sensor");
-    e.sensor = j["sensor"].get<int>();
-    if (!j.contains("constant") || !j["constant"].is_string()) return bad(at + ".constant");
-    e.constant = j["constant"].get<std::string>();
-    if (!j.contains("unit") || !j["unit"].is_string()) return bad(at + ".unit");
-    e.unit = j["unit"].get<std::string>();
-    if (!number("value", &e.value)) return bad(at + ".value");
-    if (!number("u", &e.u)) return bad(at + ".u");
-    if (!number("p_conformance", &e.p_conformance)) return bad(at + ".p_conformance");
-    if (!optional_number("lower", &e.lower)) return bad(at + ".lower");
-    if (!optional_number("upper", &e.upper)) return bad(at + ".upper");
-    if (!optional_number("acceptance_lower", &e.acceptance_lower))
-      return bad(at + ".acceptance_lower");
-    if (!optional_number("acceptance_upper", &e.acceptance_upper))
-      return bad(at + ".acceptance_upper");
-    if (!j.contains("decision") || !j["decision"].is_string() ||
-        !ParseConformityDecision(j["decision"].get<std::string>())) {
-      return bad(at + ".decision");
+  if (!entries.IsArray()) {
+    entries.Fail("an array of conformity entries");
+    return s;
+  }
+  for (size_t i = 0; i < entries.Size() && entries.ok(); ++i) {
+    const JsonCursor j = entries[i];
+    if (!j.IsObject()) {
+      j.Fail("an object (a conformity entry)");
+      break;
     }
-    e.decision = *ParseConformityDecision(j["decision"].get<std::string>());
+    ConformityEntry e;
+    e.sensor = static_cast<int>(j["sensor"].Integer());
+    e.constant = j["constant"].String();
+    e.unit = j["unit"].String();
+    e.value = j["value"].Number();
+    e.u = j["u"].Number();
+    e.p_conformance = j["p_conformance"].Number();
+    e.lower = j["lower"].OptionalNumber();
+    e.upper = j["upper"].OptionalNumber();
+    e.acceptance_lower = j["acceptance_lower"].OptionalNumber();
+    e.acceptance_upper = j["acceptance_upper"].OptionalNumber();
+    const std::string decision = j["decision"].String();
+    if (!j.ok()) break;
+    const std::optional<ConformityDecision> d = ParseConformityDecision(decision);
+    if (!d) {
+      j["decision"].Fail("pass, fail or inconclusive");
+      break;
+    }
+    e.decision = *d;
     s.entries.push_back(std::move(e));
   }
   return s;

@@ -11,6 +11,7 @@
 #include <set>
 #include <thread>
 
+#include "calibration/calibration_json.hpp"
 #include "metro/blob/blob.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/named_constants.hpp"
@@ -517,7 +518,9 @@ Result<std::vector<RegistryCalibration>> Registry::All() {
   return out;
 }
 
-json RegistryCalibrationToJson(const RegistryCalibration& c) {
+namespace {
+
+json RegistryCalibrationValue(const RegistryCalibration& c) {
   json j;
   j["id"] = c.id;
   j["certificate_id"] = c.certificate_id;
@@ -575,7 +578,7 @@ json RegistryCalibrationToJson(const RegistryCalibration& c) {
   return j;
 }
 
-json DriftToJson(const DriftResult& d) {
+json DriftValue(const DriftResult& d) {
   json j;
   j["device_id"] = blob::FormatDeviceId(d.device_id);
   auto ref = [](const RegistryCalibration& c) {
@@ -598,5 +601,26 @@ json DriftToJson(const DriftResult& d) {
   j["constants"] = constants;
   return j;
 }
+
+}  // namespace
+
+std::string HistoryToJson(uint64_t device_id, const std::vector<RegistryCalibration>& history) {
+  json j;
+  j["device_id"] = blob::FormatDeviceId(device_id);
+  j["calibrations"] = json::array();
+  for (const RegistryCalibration& c : history)
+    j["calibrations"].push_back(RegistryCalibrationValue(c));
+  return JsonText(j, 2);
+}
+
+std::string ExportToJson(int schema_version, const std::vector<RegistryCalibration>& all) {
+  json j;
+  j["schema_version"] = schema_version;
+  j["calibrations"] = json::array();
+  for (const RegistryCalibration& c : all) j["calibrations"].push_back(RegistryCalibrationValue(c));
+  return JsonText(j, 2);
+}
+
+std::string ToJson(const DriftResult& drift) { return JsonText(DriftValue(drift), 2); }
 
 }  // namespace metro

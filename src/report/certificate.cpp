@@ -4,16 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <limits>
 
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/device_id.hpp"
-#include "metro/core/file.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/core/utc_time.hpp"
-#include "metro/io/session_io.hpp"
 #include "metro/report/svg_plot.hpp"
 #include "metro/uncertainty/gum.hpp"
 
@@ -50,12 +47,6 @@ mustache::data ResultRow(const std::string& constant, const std::string& unit, d
 }
 
 const char* kAxes[3] = {"x", "y", "z"};
-
-// The full-scale setting of raw input: calibration.json's, else the options' (older files).
-double FullScale(const SensorCalibration& c, const CertificateOptions& options) {
-  if (c.full_scale) return *c.full_scale;
-  return c.model.sensor == ImuSensor::kAccel ? options.accel_fs_g : options.gyro_fs_dps;
-}
 
 // The coverage factor of one sensor's U and the dof it was taken at: k = t_{(1+p)/2}(nu),
 // nu = the fit's dof (JCGM 100:2008 G.3.2); nu is infinite, k the normal quantile, when the
@@ -125,14 +116,8 @@ void SetConformity(const Calibration& cal, mustache::data* data) {
   data->set("conformity", c);
 }
 
-const Quantity* FindColumn(const Tag& tag, const std::string& name) { return tag.Find(name); }
-
-Result<std::string> ResidualPlot(const SensorCalibration& c, int sensor,
-                                 const std::vector<const Session*>& sessions, double gravity_mps2,
-                                 const CertificateOptions& options) {
-  Result<StaticResiduals> r = ComputeStaticResiduals(c, sensor, sessions, gravity_mps2, options);
-  if (!r.ok()) return r.error();
-  const bool accel = c.model.sensor == ImuSensor::kAccel;
+// The static residuals before and after calibration that the fit recorded.
+Result<std::string> ResidualPlot(const StaticResiduals& r, bool accel) {
   PlotSeries before, after;
   before.label = "before (nominal sensitivity)";
   before.style = SeriesStyle::kPoints;
@@ -142,10 +127,10 @@ Result<std::string> ResidualPlot(const SensorCalibration& c, int sensor,
   after.color = PlotColor::kBlue;
   // |residual| on a logarithmic axis: after calibration the residuals are orders of magnitude
   // smaller than before, and a linear axis would draw them on zero. An exact zero has no
-  // logarithm and is left out (said in the caption by the caller's count).
-  for (size_t i = 0; i < r.value().before.size(); ++i) {
+  // logarithm and is left out.
+  for (size_t i = 0; i < r.before.size() && i < r.after.size(); ++i) {
     const double x = static_cast<double>(i + 1);
-    const double b = std::abs(r.value().before[i]), a = std::abs(r.value().after[i]);
+    const double b = std::abs(r.before[i]), a = std::abs(r.after[i]);
     if (b > 0.0 && std::isfinite(b)) {
       before.x.push_back(x);
       before.y.push_back(b);
@@ -165,8 +150,11 @@ Result<std::string> ResidualPlot(const SensorCalibration& c, int sensor,
   return RenderXyPlot(plot);
 }
 
+// What the page says where calibration.json lacks what the fit now records from the data.
+constexpr const char* kRefit =
+    "re-run `calibrate fit` on the input records to get them (docs/calibration-format.md)";
+
 mustache::data SensorData(const SensorCalibration& c, int sensor,
-                          const std::vector<const Session*>& sessions, double gravity_mps2,
                           const CertificateOptions& options) {
   const SensorModel& m = c.model;
   const Coverage coverage = SensorCoverage(c, options.coverage_probability);
@@ -224,24 +212,34 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
   }
   d.set("groups", groups);
   mustache::data plots{mustache::data::type::list};
-  if (!sessions.empty()) {
-    Result<std::string> svg = ResidualPlot(c, sensor, sessions, gravity_mps2, options);
-    mustache::data f;
-    if (svg.ok()) {
-      f.set("svg", svg.value());
-      f.set("caption", fmt::format("Absolute residual of each static segment the fit used, on a "
-                                   "logarithmic axis: before calibration (raw means at the nominal "
-                                   "sensitivity{}) and after (the calibrated model).",
-                                   m.input_unit == "LSB"
-                                       ? fmt::format(", +-{} {} range", FullScale(c, options),
-                                                     OutputUnit(m.sensor).symbol)
-                                       : ""));
-    } else {
-      f.set("svg", "");
-      f.set("caption", "Residuals before/after: not drawn (" + svg.error().message + ").");
-    }
-    plots.push_back(f);
+  mustache::data f;
+  if (!c.static_residuals) {
+    f.set("svg", "");
+    f.set("caption", fmt::format("Residuals before/after calibration: not in this calibration.json "
+                                 "(written before metro recorded them at fit time); {}.",
+                                 kRefit));
+  } else if (c.static_residuals->before.empty()) {
+    f.set("svg", "");
+    f.set("caption",
+          "Residuals before/after calibration: not drawn (the fit used no static "
+          "segment).");
+  } else if (Result<std::string> svg = ResidualPlot(*c.static_residuals, accel); !svg.ok()) {
+    f.set("svg", "");
+    f.set("caption",
+          "Residuals before/after calibration: not drawn (" + svg.error().message + ").");
+  } else {
+    f.set("svg", svg.value());
+    f.set("caption",
+          fmt::format("Absolute residual of each of the {} static segments the fit used, on a "
+                      "logarithmic axis: before calibration (raw means at the nominal "
+                      "sensitivity{}) and after (the calibrated model); computed by the fit.",
+                      c.static_residuals->before.size(),
+                      m.input_unit == "LSB" && c.full_scale
+                          ? fmt::format(", +-{} {} range", Short(*c.full_scale, 6),
+                                        OutputUnit(m.sensor).symbol)
+                          : ""));
   }
+  plots.push_back(f);
   d.set("plots", plots);
   return d;
 }
@@ -427,76 +425,19 @@ std::vector<std::string> Traceability(const Calibration& cal) {
 
 }  // namespace
 
-Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& c, int sensor,
-                                               const std::vector<const Session*>& sessions,
-                                               double gravity_mps2,
-                                               const CertificateOptions& options) {
-  const SensorModel& m = c.model;
-  const bool accel = m.sensor == ImuSensor::kAccel;
-  const std::optional<double> nominal = NominalScale(m.sensor, m.input_unit, FullScale(c, options));
-  if (!nominal) return MakeError(fmt::format("no nominal scale for input unit {}", m.input_unit));
-  const double target = accel ? gravity_mps2 / kStandardGravityMps2 : 0.0;
-  const std::vector<std::string> columns = InputColumns(m.sensor, m.input_unit);
-  if (columns.size() != 3) {
-    return MakeError(fmt::format("input unit {} is not a unit of the {}", m.input_unit,
-                                 ImuSensorLongName(m.sensor)));
-  }
-  StaticResiduals out;
-  out.unit = std::string(OutputUnit(m.sensor).symbol);
-  for (const Segment& seg : c.segments) {
-    if (seg.kind != SegmentKind::kStatic || !seg.used) continue;
-    if (seg.piece < 0 || static_cast<size_t>(seg.piece) >= sessions.size()) continue;
-    const Tag* tag = sessions[static_cast<size_t>(seg.piece)]->FindTag(sensor);
-    if (tag == nullptr) continue;
-    const Quantity* col[3];
-    bool have = true;
-    for (int a = 0; a < 3; ++a) {
-      col[a] = FindColumn(*tag, columns[static_cast<size_t>(a)]);
-      have = have && col[a] != nullptr;
-    }
-    if (!have || seg.end > tag->size() || seg.begin >= seg.end) continue;
-    const Quantity* temp = FindColumn(*tag, "temp_c");
-    Eigen::Vector3d raw = Eigen::Vector3d::Zero();
-    double temp_c = 0.0;
-    for (size_t i = seg.begin; i < seg.end; ++i) {
-      for (int a = 0; a < 3; ++a) raw[a] += col[a]->values[i];
-      if (temp != nullptr) temp_c += temp->values[i];
-    }
-    const double n = static_cast<double>(seg.end - seg.begin);
-    raw /= n;
-    temp_c /= n;
-    out.before.push_back((*nominal * raw).norm() - target);
-    out.after.push_back(m.Apply(raw, temp_c).norm() - target);
-  }
-  if (out.before.empty()) {
-    return MakeError("no static segment of the fit found in the input records");
-  }
-  return out;
-}
-
 bool CertificateOptions::IsValid(std::string* why) const {
   if (!(coverage_probability > 0.0 && coverage_probability < 1.0)) {
     *why = fmt::format("certificate: coverage probability p = {} is outside (0, 1)",
                        coverage_probability);
     return false;
   }
-  if (!(accel_fs_g > 0.0) || !(gyro_fs_dps > 0.0)) {
-    *why = "certificate: full-scale settings must be > 0";
-    return false;
-  }
   return true;
 }
 
 Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
-                                                 const std::vector<const Session*>& sessions,
-                                                 const std::string& sessions_note,
                                                  const CertificateOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
-  if (!sessions.empty() && sessions.size() != cal.inputs.size()) {
-    return MakeError(fmt::format("certificate: {} sessions given for {} calibration inputs",
-                                 sessions.size(), cal.inputs.size()));
-  }
   const std::string certificate_id =
       options.certificate_id.empty() ? CalibrationCertificateId(cal) : options.certificate_id;
   mustache::data data;
@@ -530,8 +471,24 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     inputs.push_back(row);
   }
   data.set("inputs", inputs);
-  data.set("sessions_ok", !sessions.empty());
-  data.set("sessions_note", sessions_note);
+  // What the fit recorded from the records: every tag's conditions and every sensor's residuals.
+  bool recorded = true;
+  for (const TagCalibration& t : cal.tags) {
+    recorded = recorded && t.record_conditions.has_value();
+    for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
+      recorded = recorded && (!c->has_value() || (*c)->static_residuals.has_value());
+    }
+  }
+  data.set("sessions_ok", recorded);
+  data.set("sessions_note",
+           recorded ? std::string("Conditions and residual plots as computed from the input "
+                                  "records by the fit (calibration.json's record_conditions and "
+                                  "static_residuals).")
+                    : fmt::format("This calibration.json was written before metro recorded the "
+                                  "records' conditions and the static residuals at fit time: "
+                                  "the temperature range of the records and the residual plots "
+                                  "are not in it; {}.",
+                                  kRefit));
   data.set("p", Short(100.0 * options.coverage_probability, 4));
   mustache::data traceability{mustache::data::type::list};
   for (const std::string& line : Traceability(cal)) traceability.push_back(mustache::data(line));
@@ -548,7 +505,7 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     mustache::data sensors{mustache::data::type::list};
     for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
       if (!c->has_value()) continue;
-      sensors.push_back(SensorData(**c, t.sensor, sessions, cal.gravity_mps2, options));
+      sensors.push_back(SensorData(**c, t.sensor, options));
       if ((*c)->dof < min_dof) {
         min_dof = (*c)->dof;
       }
@@ -558,22 +515,20 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     for (const std::string& w : t.warnings) {
       warnings.push_back(mustache::data(fmt::format("sensor {}: {}", t.sensor, w)));
     }
-    // Conditions of each record of this tag.
-    for (size_t i = 0; i < sessions.size(); ++i) {
-      const Tag* tag = sessions[i]->FindTag(t.sensor);
-      if (tag == nullptr || tag->size() == 0) continue;
+    // Conditions of each record of this tag, as the fit recorded them.
+    for (const RecordConditions& r :
+         t.record_conditions ? *t.record_conditions : std::vector<RecordConditions>{}) {
       mustache::data row;
       row.set("sensor", std::to_string(t.sensor));
-      row.set("record", cal.inputs[i].path);
-      row.set("samples", std::to_string(tag->size()));
-      row.set("duration", fmt::format("{:.1f} s", tag->t_s.back() - tag->t_s.front()));
-      const Quantity* temp = tag->Find("temp_c");
-      if (temp != nullptr && !temp->values.empty()) {
-        const auto [lo, hi] = std::minmax_element(temp->values.begin(), temp->values.end());
-        row.set("temperature", fmt::format("{:.2f} .. {:.2f} degC", *lo, *hi));
-      } else {
-        row.set("temperature", "not recorded (no temp_c column)");
-      }
+      row.set("record", r.input >= 0 && static_cast<size_t>(r.input) < cal.inputs.size()
+                            ? cal.inputs[static_cast<size_t>(r.input)].path
+                            : fmt::format("input {}", r.input));
+      row.set("samples", std::to_string(r.samples));
+      row.set("duration", fmt::format("{:.1f} s", r.duration_s));
+      row.set("temperature",
+              r.temp_min_c && r.temp_max_c
+                  ? fmt::format("{:.2f} .. {:.2f} degC", *r.temp_min_c, *r.temp_max_c)
+                  : std::string("not recorded (no temp_c column)"));
       conditions.push_back(row);
     }
     // The static poses' temperatures, from calibration.json (also without the records).
@@ -592,11 +547,12 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       }
     }
   }
-  if (sessions.empty()) {
+  if (!recorded) {
     condition_notes.push_back(mustache::data(
-        "The temperature range of the records is not stated: the input records are not "
-        "available (" +
-        sessions_note + ")."));
+        fmt::format("The temperature range of the records is not stated: this calibration.json "
+                    "does not record it (written before metro recorded the records' conditions "
+                    "at fit time); {}.",
+                    kRefit)));
   }
   data.set("tags", tags);
   data.set("conditions", conditions);
@@ -630,64 +586,6 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       "Calibration certificate",
       fmt::format("{} - {} - certificate {}", kCalibrationSchema, items, certificate_id),
       body.value());
-}
-
-ReloadedInputs ReloadCalibrationInputs(const Calibration& cal,
-                                       const std::string& calibration_path) {
-  ReloadedInputs out;
-  const std::filesystem::path dir = std::filesystem::path(calibration_path).parent_path();
-  auto candidates = [&dir](const std::string& p) {
-    std::vector<std::string> c = {p};
-    if (std::filesystem::path(p).is_relative() && !dir.empty()) c.push_back((dir / p).string());
-    return c;
-  };
-  std::vector<std::string> problems;
-  for (const InputFile& in : cal.inputs) {
-    bool found = false;
-    const size_t plus_hash = in.sha256.find('+');
-    if (plus_hash == std::string::npos) {
-      for (const std::string& p : candidates(in.path)) {
-        Result<std::string> hash = Sha256File(p);
-        if (!hash.ok() || hash.value() != in.sha256) continue;
-        LoadOptions load;
-        load.threads = 1;
-        Result<Session> s = LoadSession(p, load);
-        if (!s.ok()) continue;
-        out.sessions.push_back(std::move(s).value());
-        found = true;
-        break;
-      }
-    } else {
-      // imu_tk pair "acc+gyro": try every '+' of the path as the separator.
-      const std::string hash_a = in.sha256.substr(0, plus_hash);
-      const std::string hash_b = in.sha256.substr(plus_hash + 1);
-      for (size_t at = in.path.find('+'); at != std::string::npos && !found;
-           at = in.path.find('+', at + 1)) {
-        const std::string acc = in.path.substr(0, at), gyro = in.path.substr(at + 1);
-        const auto ca = candidates(acc), cg = candidates(gyro);
-        for (size_t i = 0; i < std::min(ca.size(), cg.size()) && !found; ++i) {
-          Result<std::string> ha = Sha256File(ca[i]), hb = Sha256File(cg[i]);
-          if (!ha.ok() || !hb.ok() || ha.value() != hash_a || hb.value() != hash_b) continue;
-          Result<Session> s = LoadImuTk(ca[i], cg[i]);
-          if (!s.ok()) continue;
-          out.sessions.push_back(std::move(s).value());
-          found = true;
-        }
-      }
-    }
-    if (!found) problems.push_back(in.path);
-  }
-  out.complete = problems.empty() && !cal.inputs.empty();
-  if (out.complete) {
-    out.note = "Conditions and residual plots from the input records, reloaded (SHA-256 match).";
-  } else {
-    std::string list;
-    for (const std::string& p : problems) list += (list.empty() ? "" : ", ") + p;
-    out.note = fmt::format("input record(s) not found or changed since the fit: {}",
-                           list.empty() ? "(none recorded)" : list);
-    out.sessions.clear();
-  }
-  return out;
 }
 
 }  // namespace metro

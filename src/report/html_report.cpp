@@ -391,19 +391,14 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
     return RenderSessionReportHtml(document, session ? &*session : nullptr, note, options);
   }
   if (schema == kCalibrationSchema) {
-    Result<Calibration> cal =
-        CalibrationFromJson(nlohmann::json::parse(JsonText(document)), json_path);
+    // The document's text as metro writes it (indent 2), so positions match a file it wrote.
+    Result<Calibration> cal = CalibrationFromJson(JsonText(document, 2), json_path);
     if (!cal.ok()) return cal.error();
-    ReloadedInputs inputs = ReloadCalibrationInputs(cal.value(), json_path);
-    std::vector<const Session*> ptrs;
-    for (const Session& s : inputs.sessions) ptrs.push_back(&s);
     // The id of the file's own bytes: what `fit` printed and the registry recorded.
     CertificateOptions certificate;
     Result<std::string> sha = Sha256File(json_path);
     if (sha.ok()) certificate.certificate_id = sha.value().substr(0, 16);
-    return RenderCalibrationCertificate(cal.value(),
-                                        inputs.complete ? ptrs : std::vector<const Session*>{},
-                                        inputs.note, certificate);
+    return RenderCalibrationCertificate(cal.value(), certificate);
   }
   if (schema == report_internal::kAccuracyReportSchema) {
     Result<std::string> html = report_internal::RenderAccuracyHtml(document, json_path);

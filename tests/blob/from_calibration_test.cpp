@@ -342,7 +342,7 @@ TEST_CASE("Mapping: META temperatures are the static poses' and the validity ran
   CHECK(r.value().accel->t_valid_min_c == -40.0);
   CHECK(r.value().accel->t_valid_max_c == 85.0);
   // And the range survives the calibration.json round trip.
-  Result<Calibration> back = CalibrationFromJson(CalibrationToJson(f.cal), "cal.json");
+  Result<Calibration> back = CalibrationFromJson(ToJson(f.cal), "cal.json");
   REQUIRE(back.ok());
   const auto& again = back.value().FindTag(2)->gyro->static_pose_temperature;
   REQUIRE(again.has_value());
@@ -661,7 +661,7 @@ TEST_CASE("Mapping: the blob's M is calibration.json's matrix (section 10)", "[b
   const double tk = j["tags"][0]["accel"]["matrix"][1][2].get<double>();
   const double file_value = std::nextafter(tk, 0.0);
   j["tags"][0]["accel"]["matrix"][1][2] = file_value;
-  Result<Calibration> cal = CalibrationFromJson(j, "calibration_sensor2.json");
+  Result<Calibration> cal = CalibrationFromJson(j.dump(2), "calibration_sensor2.json");
   REQUIRE(cal.ok());
   BlobFromCalibrationOptions o;
   o.sensor = 2;

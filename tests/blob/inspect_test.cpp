@@ -44,7 +44,7 @@ TEST_CASE("Inspect of a valid .bin reports the blob and its sensors", "[blob][in
   const auto text = FormatInspect(report);
   CHECK_THAT(text, Catch::Contains("seq 17  device 9ABCDEF012345678"));
   CHECK_THAT(text, Catch::Contains("result: valid"));
-  const auto j = InspectToJson(report);
+  const nlohmann::json j = nlohmann::json::parse(ToJson(report));
   CHECK(j["ok"] == true);
   CHECK(j["active_slot"] == "file");
   CHECK(j["slots"][0]["seq"] == 17);
@@ -81,7 +81,7 @@ TEST_CASE("Inspect text shows the whole blob with dates in UTC", "[blob][inspect
   CHECK_THAT(text, Catch::Contains("    M [rad/s per LSB]"));
   CHECK_THAT(text, Catch::Contains("LSB/degC^2, u [0 0 0] (bit clear: not applied)\n"));
   // JSON: the dates beside the seconds, every key kept.
-  const auto j = InspectToJson(r.value());
+  const nlohmann::json j = nlohmann::json::parse(ToJson(r.value()));
   CHECK(j["slots"][0]["meta"]["cal_time_utc"] == "2026-05-28T20:26:40Z");
   CHECK(j["slots"][0]["meta"]["cal_time_utc_s"] == 1780000000u);
   CHECK(j["slots"][0]["meta"]["due_time_utc"] == "2027-05-28T20:26:40Z");
@@ -109,7 +109,7 @@ TEST_CASE("Inspect shows a section v2.0's declared s_nom and input", "[blob][ins
                        "binary (unsigned 16-bit counts; b0 relative to the mid-scale 32768)\n",
                        static_cast<float>(s_nom))));
   CHECK(text.find("section v2.0") == text.rfind("section v2.0"));  // the accel stays v1.0
-  const auto j = InspectToJson(r.value());
+  const nlohmann::json j = nlohmann::json::parse(ToJson(r.value()));
   CHECK(j["slots"][0]["gyro"]["section_version"] == "2.0");
   CHECK(j["slots"][0]["gyro"]["input"] == "offset_binary");
   CHECK(j["slots"][0]["gyro"]["s_nom_si_per_lsb"] ==
@@ -138,7 +138,7 @@ TEST_CASE("Inspect of a corrupt .bin names the firmware's reason", "[blob][inspe
   CHECK(!r.value().ok());
   CHECK(r.value().slots[0].code_name == "METRO_FW_E_CRC");
   CHECK_THAT(FormatInspect(r.value()), Catch::Contains("NO VALID CALIBRATION"));
-  CHECK(InspectToJson(r.value())["active_slot"].is_null());
+  CHECK(nlohmann::json::parse(ToJson(r.value()))["active_slot"].is_null());
 }
 
 TEST_CASE("Inspect with the tag's device id detects a foreign blob", "[blob][inspect]") {
@@ -289,7 +289,7 @@ TEST_CASE("Inspect refuses a HEX that writes the MBR, the bootloader or 0x3B800"
   CHECK_THAT(text, Catch::Contains("refused: 0x00000000-0x0000000F (16 bytes) is written in the "
                                    "MBR and SoftDevice S110"));
   CHECK_THAT(text, Catch::EndsWith("result: REFUSED (5 problems): do not program this file\n"));
-  const auto j = InspectToJson(report);
+  const nlohmann::json j = nlohmann::json::parse(ToJson(report));
   CHECK(j["ok"] == false);
   CHECK(j["refusals"].size() == 5u);
   // The factory image alone still passes.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "metro/calibration/simulate.hpp"
 #include "metro/core/rounding.hpp"
@@ -17,6 +18,11 @@ struct Fitted {
   SimulatedSession sim;
   Calibration cal;
 };
+
+// calibration.json's reader on a document edited as JSON (written with a 2-space indent).
+Result<Calibration> FromJson(const nlohmann::json& j) {
+  return CalibrationFromJson(j.dump(2), "c.json");
+}
 
 const Fitted& FitOnce() {
   static const Fitted f = [] {
@@ -33,12 +39,12 @@ const Fitted& FitOnce() {
 
 TEST_CASE("calibration.json round trip keeps every constant", "[calibration]") {
   const Calibration& cal = FitOnce().cal;
-  const nlohmann::json j = CalibrationToJson(cal);
+  const nlohmann::json j = nlohmann::json::parse(ToJson(cal));
   CHECK(j["schema"] == "metro.calibration/1");
   CHECK(j["tags"][0]["accel"]["matrix"].size() == 3);
   CHECK(j["tags"][0]["gyro"]["misalignment"].size() == 6);
   CHECK(j["tags"][0]["accel"]["correlation"][0][0] == Approx(1.0));
-  Result<Calibration> back = CalibrationFromJson(nlohmann::json::parse(j.dump()), "c.json");
+  Result<Calibration> back = FromJson(j);
   REQUIRE(back.ok());
   const TagCalibration& a = cal.tags.front();
   const TagCalibration& b = back.value().tags.front();
@@ -75,13 +81,13 @@ TEST_CASE("calibration.json round trip keeps the identification of the certifica
   cal.tags[0].device_id = 0x9ABCDEF012345678ull;
   cal.tags[0].name = "Chest";
   cal.tags[0].profile = "mpu6050";
-  const nlohmann::json j = CalibrationToJson(cal);
+  const nlohmann::json j = nlohmann::json::parse(ToJson(cal));
   CHECK(j["gravity_source"] == "given");
   CHECK(j["inputs"][0]["format"] == "csv");
   CHECK(j["inputs"][0]["start_utc"] == "2026-01-01T00:00:00Z");
   CHECK(j["tags"][0]["name"] == "Chest");
   CHECK(j["tags"][0]["profile"] == "mpu6050");
-  Result<Calibration> back = CalibrationFromJson(nlohmann::json::parse(j.dump()), "c.json");
+  Result<Calibration> back = FromJson(j);
   REQUIRE(back.ok());
   const Calibration& b = back.value();
   CHECK(b.gravity_mps2 == 9.81744);
@@ -101,7 +107,7 @@ TEST_CASE("calibration.json round trip keeps the identification of the certifica
   old["inputs"][0] = {{"path", "s.csv"}, {"sha256", "00"}};
   old["tags"][0].erase("name");
   old["tags"][0].erase("profile");
-  back = CalibrationFromJson(old, "c.json");
+  back = FromJson(old);
   REQUIRE(back.ok());
   CHECK(back.value().gravity_source.empty());
   CHECK(back.value().inputs[0].format.empty());
@@ -110,58 +116,64 @@ TEST_CASE("calibration.json round trip keeps the identification of the certifica
   // Malformed values are refused naming the key.
   nlohmann::json bad = j;
   bad["gravity_source"] = "local";
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "'gravity_source': expected \"standard\" or \"given\"");
+  CHECK(FromJson(bad).error().message ==
+        "gravity_source: expected \"standard\" or \"given\", found the string \"local\"");
   bad = j;
   bad["inputs"][0]["start_utc"] = "1 Jan 2026";
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "'inputs[0].start_utc': expected an ISO 8601 UTC time such as \"2026-05-01T12:00:00Z\"");
+  CHECK(FromJson(bad).error().message ==
+        "inputs[0].start_utc: expected an ISO 8601 UTC time such as \"2026-05-01T12:00:00Z\", "
+        "found the string \"1 Jan 2026\"");
   bad = j;
   bad["inputs"][0]["duration_s"] = -1.0;
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "'inputs[0].duration_s': expected a number >= 0");
+  CHECK(FromJson(bad).error().message ==
+        "inputs[0].duration_s: expected a number >= 0, found the number -1.0");
   bad = j;
   bad["tags"][0]["accel"]["full_scale"] = 0;
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "'tags[0].accel.full_scale' must be a number > 0, for input_unit LSB only");
+  CHECK(FromJson(bad).error().message ==
+        "tags[0].accel.full_scale: expected a number > 0 (the full-scale setting of raw input: "
+        "for input_unit LSB only), found the number 0");
   bad = j;
   bad["tags"][0]["name"] = 7;
-  CHECK(CalibrationFromJson(bad, "c.json").error().message == "'tags[0].name': expected a string");
+  CHECK(FromJson(bad).error().message ==
+        "tags[0].name: expected a string or null, found the number 7");
 }
 
 TEST_CASE("calibration.json errors name the key", "[calibration]") {
-  nlohmann::json j = CalibrationToJson(FitOnce().cal);
+  nlohmann::json j = nlohmann::json::parse(ToJson(FitOnce().cal));
   nlohmann::json bad = j;
   bad["schema"] = "metro.calibration/9";
-  CHECK(CalibrationFromJson(bad, "c.json").error().ToString() ==
-        "c.json: schema is 'metro.calibration/9'; expected 'metro.calibration/1'");
+  CHECK(FromJson(bad).error().message ==
+        "schema: expected \"metro.calibration/1\", found the string \"metro.calibration/9\"");
   bad = j;
   bad["tags"][0]["gyro"].erase("bias");
-  CHECK(CalibrationFromJson(bad, "c.json").error().message == "missing key 'tags[0].gyro.bias'");
+  CHECK(FromJson(bad).error().message ==
+        "tags[0].gyro.bias: expected an array of 3 numbers, found nothing (the member is missing)");
   bad = j;
   bad["tags"][0]["accel"]["scale"] = {1, 2};
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "'tags[0].accel.scale' must be an array of 3 numbers");
+  CHECK(FromJson(bad).error().message ==
+        "tags[0].accel.scale: expected an array of 3 numbers, found an array");
   bad = j;
   bad["tags"][0]["accel"]["model"] = "affine";
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "'tags[0].accel.model' is 'affine'; expected bias, scale or full");
+  CHECK(FromJson(bad).error().message ==
+        "tags[0].accel.model: expected bias, scale or full, found the string \"affine\"");
   bad = j;
   bad["tags"][0]["accel"]["input_unit"] = "deg/s";
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "'tags[0].accel.input_unit' 'deg/s' is not a unit of the accel");
+  CHECK(FromJson(bad).error().message ==
+        "tags[0].accel.input_unit: expected a unit of the accel, found the string \"deg/s\"");
   bad = j;
   bad["tags"][0]["accel"]["static_pose_temperature"] = {
       {"min_c", 30.0}, {"mean_c", 25.0}, {"max_c", 35.0}, {"poses", 4}};
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "'tags[0].accel.static_pose_temperature' must have finite min_c <= mean_c <= max_c and "
-        "poses >= 1");
+  CHECK(FromJson(bad).error().message ==
+        "tags[0].accel.static_pose_temperature: expected finite min_c <= mean_c <= max_c and "
+        "poses >= 1, found an object");
   bad["tags"][0]["accel"]["static_pose_temperature"] = {{"min_c", 30.0}};
-  CHECK(CalibrationFromJson(bad, "c.json").error().message ==
-        "missing key 'tags[0].accel.static_pose_temperature.mean_c'");
+  CHECK(FromJson(bad).error().message ==
+        "tags[0].accel.static_pose_temperature.mean_c: expected a number, found nothing (the "
+        "member is missing)");
   bad = j;
   bad["tags"] = nlohmann::json::array();
-  CHECK(CalibrationFromJson(bad, "c.json").error().message == "'tags' must be a non-empty array");
+  CHECK(FromJson(bad).error().message ==
+        "tags: expected a non-empty array of tag calibrations, found an array");
 }
 
 TEST_CASE("Apply after fit recovers the true specific force and rate", "[calibration]") {
@@ -258,16 +270,16 @@ TEST_CASE("calibration.json: matrix that disagrees with scale and misalignment i
   // issue #20: `matrix` was never read, so a file whose matrix said something else than its
   // scale and misalignment was accepted (and the blob silently used scale and misalignment).
   nlohmann::json j = GoldenCalibrationJson();
-  REQUIRE(CalibrationFromJson(j, "c.json").ok());
+  REQUIRE(FromJson(j).ok());
   // T K [0][1] = -(-a_yz) k_y = 7.201811526559342e-07; 7.2e-07 is an edit, not a rounding.
   j["tags"][0]["accel"]["matrix"][0][1] = 7.2e-07;
-  Result<Calibration> r = CalibrationFromJson(j, "c.json");
+  Result<Calibration> r = FromJson(j);
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().ToString() ==
-        "c.json: 'tags[0].accel.matrix'[0][1] is 7.1999999999999999e-07 but 'scale' and "
-        "'misalignment' give T K = 7.2018115265593419e-07 (difference -1.81e-10, tolerance "
-        "4.44e-16 relative, the double rounding of both): the redundant fields disagree; "
-        "expected matrix = T K (docs/calibration-format.md)");
+  CHECK(r.error().message ==
+        "tags[0].accel.matrix[0][1]: expected T K = 7.2018115265593419e-07 from 'scale' and "
+        "'misalignment' (difference -1.81e-10, tolerance 4.44e-16 relative, the double rounding "
+        "of both: the redundant fields disagree, docs/calibration-format.md), found the number "
+        "7.2e-07");
 }
 
 TEST_CASE("calibration.json: the matrix tolerance is the double rounding, 2^-51 relative",
@@ -279,7 +291,7 @@ TEST_CASE("calibration.json: the matrix tolerance is the double rounding, 2^-51 
   nlohmann::json j = golden;
   const double one_ulp = std::nextafter(tk, 1.0);
   j["tags"][0]["gyro"]["matrix"][1][0] = one_ulp;
-  Result<Calibration> ok = CalibrationFromJson(j, "c.json");
+  Result<Calibration> ok = FromJson(j);
   REQUIRE(ok.ok());
   CHECK(ok.value().tags[0].gyro->M()(1, 0) == one_ulp);
   CHECK(ok.value().tags[0].gyro->model.Matrix()(1, 0) == tk);
@@ -287,34 +299,36 @@ TEST_CASE("calibration.json: the matrix tolerance is the double rounding, 2^-51 
   double four_ulp = tk;
   for (int i = 0; i < 4; ++i) four_ulp = std::nextafter(four_ulp, 1.0);
   j["tags"][0]["gyro"]["matrix"][1][0] = four_ulp;
-  Result<Calibration> bad = CalibrationFromJson(j, "c.json");
+  Result<Calibration> bad = FromJson(j);
   REQUIRE_FALSE(bad.ok());
-  CHECK_THAT(bad.error().message, Catch::StartsWith("'tags[0].gyro.matrix'[1][0] is ") &&
-                                      Catch::Contains("but 'scale' and 'misalignment' give T K"));
+  CHECK_THAT(bad.error().message, Catch::StartsWith("tags[0].gyro.matrix[1][0]: expected T K = ") &&
+                                      Catch::Contains("from 'scale' and 'misalignment'"));
   // A zero of T K must be written as 0.
   j = golden;
   j["tags"][0]["accel"]["matrix"][2][0] = 1e-300;
-  Result<Calibration> zero = CalibrationFromJson(j, "c.json");
+  Result<Calibration> zero = FromJson(j);
   REQUIRE_FALSE(zero.ok());
-  CHECK_THAT(zero.error().message, Catch::StartsWith("'tags[0].accel.matrix'[2][0] is 1e-300 but "
-                                                     "'scale' and 'misalignment' give T K = 0 "));
+  CHECK_THAT(zero.error().message,
+             Catch::StartsWith("tags[0].accel.matrix[2][0]: expected T K = 0 from 'scale'") &&
+                 Catch::EndsWith("found the number 1e-300"));
 }
 
 TEST_CASE("calibration.json: sensitivity that disagrees with scale is refused, matrix required",
           "[calibration][security]") {
   nlohmann::json j = GoldenCalibrationJson();
   j["tags"][0]["accel"]["sensitivity"][1] = 16637.56399613637;
-  Result<Calibration> r = CalibrationFromJson(j, "c.json");
+  Result<Calibration> r = FromJson(j);
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message ==
-        "'tags[0].accel.sensitivity'[1] is 16637.56399613637 but 1 / 'scale'[1] is "
-        "16636.56399613637 (tolerance 4.44e-16 relative): the redundant fields disagree; "
-        "expected sensitivity = 1 / scale");
+        "tags[0].accel.sensitivity[1]: expected 1 / scale[1] = 16636.56399613637 (tolerance "
+        "4.44e-16 relative: the redundant fields disagree), found the number 16637.56399613637");
   j = GoldenCalibrationJson();
   j["tags"][0]["gyro"].erase("matrix");
-  r = CalibrationFromJson(j, "c.json");
+  r = FromJson(j);
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message == "missing key 'tags[0].gyro.matrix'");
+  CHECK(r.error().message ==
+        "tags[0].gyro.matrix: expected a square matrix (an array of rows of numbers), found "
+        "nothing (the member is missing)");
 }
 
 TEST_CASE("calibration.json: an uncertainty that is not its covariance's is refused",
@@ -323,7 +337,7 @@ TEST_CASE("calibration.json: an uncertainty that is not its covariance's is refu
   // reached certificates and blobs while the covariance said otherwise.
   nlohmann::json j = GoldenCalibrationJson();
   const double var_b_y = j["tags"][0]["accel"]["covariance"][1][1].get<double>();
-  Result<Calibration> ok = CalibrationFromJson(j, "c.json");
+  Result<Calibration> ok = FromJson(j);
   REQUIRE(ok.ok());
   // The derived values are sqrt of the diagonal, and matrix_u matches what the file says.
   CHECK(ok.value().tags[0].accel->bias_u[1] == std::sqrt(var_b_y));
@@ -335,32 +349,32 @@ TEST_CASE("calibration.json: an uncertainty that is not its covariance's is refu
   }
   nlohmann::json edited = j;
   edited["tags"][0]["accel"]["bias_u"][1] = 0.5;
-  Result<Calibration> r = CalibrationFromJson(edited, "c.json");
+  Result<Calibration> r = FromJson(edited);
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message ==
-        fmt::format("'tags[0].accel.bias_u'[1] is 0.5 but the covariance gives {:.17g}: a "
-                    "standard uncertainty must be the square root of its variance "
-                    "(docs/calibration-format.md)",
+        fmt::format("tags[0].accel.bias_u[1]: expected {:.17g}, the square root of its variance "
+                    "in the covariance (docs/calibration-format.md), found the number 0.5",
                     std::sqrt(var_b_y)));
   edited = j;
   edited["tags"][0]["accel"]["matrix_u"][0][0] =
       2.0 * j["tags"][0]["accel"]["matrix_u"][0][0].get<double>();
-  r = CalibrationFromJson(edited, "c.json");
+  r = FromJson(edited);
   REQUIRE_FALSE(r.ok());
-  CHECK_THAT(r.error().message, Catch::StartsWith("'tags[0].accel.matrix_u'[0][0] is "));
+  CHECK_THAT(r.error().message, Catch::StartsWith("tags[0].accel.matrix_u[0][0]: expected "));
   // Not a covariance: negative variance, asymmetric, wrong size.
   edited = j;
   edited["tags"][0]["accel"]["covariance"][2][2] = -1.0;
-  r = CalibrationFromJson(edited, "c.json");
+  r = FromJson(edited);
   REQUIRE_FALSE(r.ok());
   CHECK_THAT(r.error().message,
-             Catch::StartsWith("'tags[0].accel.covariance'[2][2] is -1: expected a symmetric"));
+             Catch::StartsWith("tags[0].accel.covariance[2][2]: expected an element of a "
+                               "symmetric covariance matrix"));
   edited = j;
   edited["tags"][0]["accel"]["covariance"][0][3] =
       1.001 * j["tags"][0]["accel"]["covariance"][0][3].get<double>();
-  r = CalibrationFromJson(edited, "c.json");
+  r = FromJson(edited);
   REQUIRE_FALSE(r.ok());
-  CHECK_THAT(r.error().message, Catch::StartsWith("'tags[0].accel.covariance'[0][3] is "));
+  CHECK_THAT(r.error().message, Catch::StartsWith("tags[0].accel.covariance[0][3]: expected "));
 }
 
 }  // namespace metro
@@ -586,6 +600,84 @@ TEST_CASE("Apply clamps the temperature to the validity range as the tag does an
   CHECK(ApplyCalibration(cal, &again, bad).error().message ==
         "the temperature validity range 30 .. 31 degC is 1 degC wide; expected at least 2 degC "
         "(twice the +-1 degC linearity of the MPU6050 temperature sensor)");
+}
+
+}  // namespace metro
+
+namespace metro {
+
+TEST_CASE("calibration.json text read back writes the same bytes", "[calibration]") {
+  // What metro writes is a contract: ToJson(CalibrationFromJson(text)) == text, with the keys
+  // the fit adds for the certificate (record_conditions, static_residuals) and without them.
+  Calibration full = FitOnce().cal;
+  full.gravity_mps2 = 9.81744;
+  full.gravity_source = "given";
+  full.inputs[0].start_utc = "2026-01-01T00:00:00Z";
+  full.inputs[0].end_utc = "2026-01-01T00:05:13Z";
+  full.tags[0].device_id = 0x9ABCDEF012345678ull;
+  full.tags[0].name = "Chest";
+  full.tags[0].profile = "mpu6050";
+  CalibrationOptions accel_only;
+  accel_only.fit_gyro = false;
+  Result<Calibration> accel = CalibrateSessions({&FitOnce().sim.session}, accel_only);
+  REQUIRE(accel.ok());
+  for (const Calibration* cal :
+       std::vector<const Calibration*>{&FitOnce().cal, &full, &accel.value()}) {
+    const std::string text = FormatCalibrationJson(*cal);
+    Result<Calibration> back = CalibrationFromJson(text, "c.json");
+    REQUIRE(back.ok());
+    CHECK(FormatCalibrationJson(back.value()) == text);
+    CHECK(ToJson(back.value()) + "\n" == text);
+  }
+  // The new keys sit beside the old ones (keys sorted, as calibration.json always had them).
+  const nlohmann::json j = nlohmann::json::parse(ToJson(FitOnce().cal));
+  const nlohmann::json& residuals = j["tags"][0]["accel"]["static_residuals"];
+  CHECK(residuals["unit"] == "g");
+  CHECK(residuals["before"].size() == residuals["after"].size());
+  const nlohmann::json& records = j["tags"][0]["record_conditions"];
+  REQUIRE(records.size() == 1);
+  CHECK(records[0]["input"] == 0);
+  CHECK(records[0]["samples"] == FitOnce().sim.session.tags.front().size());
+}
+
+TEST_CASE("calibration.json reader names the line and column of a wrong type deep inside",
+          "[calibration]") {
+  // Line 11 is `        "bias": [1.5, -2.0, "x"]`: 8 spaces, "bias" at columns 9-14, ':' at
+  // 15, '[' at 17, 1.5 at 18-20, -2.0 at 23-26, "x" from column 29.
+  const std::string text =
+      "{\n"
+      "  \"schema\": \"metro.calibration/1\",\n"
+      "  \"gravity_mps2\": 9.80665,\n"
+      "  \"tags\": [\n"
+      "    {\n"
+      "      \"sensor\": 2,\n"
+      "      \"accel\": {\n"
+      "        \"model\": \"full\",\n"
+      "        \"input_unit\": \"LSB\",\n"
+      "        \"output_unit\": \"g\",\n"
+      "        \"bias\": [1.5, -2.0, \"x\"]\n"
+      "      }\n"
+      "    }\n"
+      "  ]\n"
+      "}\n";
+  Result<Calibration> r = CalibrationFromJson(text, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().ToString() ==
+        "c.json:11:29: tags[0].accel.bias[2]: expected a number, found the string \"x\"");
+  // Line 6 `      "sensor": 2,` with the number as a string: "sensor" at 7-14, the value at 17.
+  std::string sensor = text;
+  sensor.replace(sensor.find("\"sensor\": 2"), 11, "\"sensor\": \"2\"");
+  r = CalibrationFromJson(sensor, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().ToString() ==
+        "c.json:6:17: tags[0].sensor: expected an integer, found the string \"2\"");
+  // Not JSON at all: the parser's position (line 3, after `9.80665`, a ',' is missing).
+  std::string broken = text;
+  broken.replace(broken.find("9.80665,"), 8, "9.80665");
+  r = CalibrationFromJson(broken, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().file == "c.json");
+  CHECK(r.error().line == 4);
 }
 
 }  // namespace metro

@@ -149,7 +149,7 @@ TEST_CASE("Conformity: a spec evaluated on the golden calibration, with unit con
   // Written into calibration.json and read back.
   Calibration with = cal.value();
   with.conformity = st.value();
-  Result<Calibration> back = CalibrationFromJson(CalibrationToJson(with), "x.json");
+  Result<Calibration> back = CalibrationFromJson(ToJson(with), "x.json");
   REQUIRE(back.ok());
   REQUIRE(back.value().conformity.has_value());
   CHECK(back.value().conformity->rule == DecisionRule::kGuarded);

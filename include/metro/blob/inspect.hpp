@@ -11,7 +11,6 @@
 #pragma once
 
 #include <cstdint>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -83,7 +82,8 @@ Result<InspectReport> InspectFile(const std::string& path, const InspectOptions&
 // Human-readable summary, one block per slot.
 std::string FormatInspect(const InspectReport& report);
 
-// JSON with unit-suffixed keys, e.g. {"file", "format", "active_slot", "slots": [...]}.
-nlohmann::json InspectToJson(const InspectReport& report);
+// JSON text with unit-suffixed keys, e.g. {"active_slot", "file", "format", "slots": [...]}
+// (2-space indent, keys sorted, no trailing newline): what `calibrate inspect --json` prints.
+std::string ToJson(const InspectReport& report);
 
 }  // namespace metro::blob

@@ -87,6 +87,18 @@ struct PoseTemperatureRange {
   int poses = 0;
 };
 
+// The residual of every static segment a sensor's fit used, before calibration (the segment's
+// raw mean at the nominal sensitivity, NominalScale at the fit's full-scale setting) and after
+// (SensorModel::Apply at the segment's mean temp_c, 0 degC without one): accelerometer
+// |a| - gravity_mps2/g_n [g] (the gravity-norm residual of Tedaldi et al., ICRA 2014),
+// gyroscope |w| [deg/s] (the rate at rest). Computed by the fit from its records, so the
+// certificate's before/after plot needs no input file; calibration.json's `static_residuals`.
+struct StaticResiduals {
+  std::string unit;            // "g" or "deg/s" (OutputUnit).
+  std::vector<double> before;  // One per used static segment, in segment order.
+  std::vector<double> after;
+};
+
 struct SensorCalibration {
   SensorModel model;
   // Standard uncertainties (k = 1) of the constants, in the units of the constants;
@@ -119,6 +131,9 @@ struct SensorCalibration {
   // M as calibration.json's `matrix` holds it (set by the reader, which checked it against
   // model.Matrix() to double rounding); unset after a fit, where M is model.Matrix().
   std::optional<Eigen::Matrix3d> matrix;
+  // Set by CalibrateSessions (empty lists when no static segment was used); absent in files
+  // written before metro recorded it.
+  std::optional<StaticResiduals> static_residuals;
 
   // The M that apply, the report and the blob use: `matrix` when read from a file.
   Eigen::Matrix3d M() const { return matrix ? *matrix : model.Matrix(); }
@@ -131,6 +146,19 @@ struct SensorCalibration {
 // calibration.json checks the file's values against it.
 // Precondition: covariance is square with as many rows as the model has free parameters.
 void DeriveUncertainties(SensorCalibration* c);
+
+// The conditions of one record of a tag (ISO/IEC 17025:2017 7.8.4.1 a: the environmental
+// conditions of the calibration), from the data at fit time: calibration.json's
+// `record_conditions`.
+struct RecordConditions {
+  int input = 0;          // Index of the record in Calibration::inputs.
+  int64_t samples = 0;    // Rows of the tag in the record.
+  double duration_s = 0;  // Last minus first observation time of the tag.
+  // Lowest and highest finite temp_c of the tag; absent without a temp_c column (or with NaN
+  // only).
+  std::optional<double> temp_min_c;
+  std::optional<double> temp_max_c;
+};
 
 struct TagCalibration {
   int sensor = 1;
@@ -148,6 +176,9 @@ struct TagCalibration {
   int saturated_samples = 0;      // Excluded samples (either sensor).
   int iterations = 0;
   std::vector<std::string> warnings;
+  // One per input record that holds the tag, in input order; set by CalibrateSessions, absent
+  // in files written before metro recorded it.
+  std::optional<std::vector<RecordConditions>> record_conditions;
 };
 
 struct InputFile {
@@ -210,9 +241,18 @@ Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
 Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,
                                     const CalibrationOptions& options);
 
+// The static residuals of `calibration` (StaticResiduals above) from the records it was
+// fitted on (`records[segment.piece]`, the tag's records in the order given to CalibrateTag).
+// Precondition: full_scale is set for LSB input. Errors: no nominal scale for the input unit.
+Result<StaticResiduals> ComputeStaticResiduals(const SensorCalibration& calibration,
+                                               const std::vector<const Tag*>& records,
+                                               double gravity_mps2);
+
 // Calibrates every tag (or options.sensor) found in the sessions; a tag's records from several
 // sessions are fitted together (with fit_accel false: CalibrateGyroBiasAtRest, one record per
-// tag). Fills inputs, tool version and date.
+// tag). Fills inputs, tool version and date, and what the certificate shows of the records
+// (each sensor's static_residuals, each tag's record_conditions), so that no view reloads
+// an input.
 Result<Calibration> CalibrateSessions(const std::vector<const Session*>& sessions,
                                       const CalibrationOptions& options);
 

@@ -2,9 +2,9 @@
 // readable report of a calibration, and applying a calibration to a session.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "metro/calibration/calibrate.hpp"
@@ -24,12 +24,19 @@ inline constexpr const char* kCalibrationSchema = "metro.calibration/1";
 // 2^-51 = 4.4e-16, relative to the larger of the two values (so a zero must be written as 0).
 inline constexpr double kRedundantRelTolerance = 0x1p-51;
 
-nlohmann::json CalibrationToJson(const Calibration& calibration);
-// Errors name `file` and the JSON key that is missing or malformed, and refuse redundant fields
-// that disagree beyond kRedundantRelTolerance, naming both (`matrix` and `scale` and
-// `misalignment`, or `sensitivity` and `scale`).
-Result<Calibration> CalibrationFromJson(const nlohmann::json& json, const std::string& file = "");
-// Pretty-printed JSON text (2-space indent, trailing newline).
+// calibration.json's text (2-space indent, object keys sorted, no trailing newline): every key
+// and number text as metro has written it; keys added later sit beside the older ones
+// (docs/calibration-format.md).
+std::string ToJson(const Calibration& calibration);
+// Reads calibration.json's text. Errors at `file:line:column` of the offending value with its
+// path and what was expected (`c.json:41:17: tags[0].accel.bias[2]: expected a number, found
+// the string "x"`): not JSON, a missing or malformed key, another schema, redundant fields
+// that disagree beyond kRedundantRelTolerance (`matrix` against T K from `scale` and
+// `misalignment`, `sensitivity` against 1 / `scale`) and standard uncertainties that are not
+// the square roots of their covariance's diagonal. Keys added after the first files (the
+// identification, record_conditions, static_residuals, ...) are optional.
+Result<Calibration> CalibrationFromJson(std::string_view text, const std::string& file);
+// ToJson with a trailing newline: the bytes `calibrate fit` writes.
 std::string FormatCalibrationJson(const Calibration& calibration);
 Result<Calibration> LoadCalibration(const std::string& path);
 // The certificate id: the first 16 hex digits of the SHA-256 of FormatCalibrationJson (the

@@ -31,7 +31,6 @@
 //             as certain as conformity must be for a pass); otherwise inconclusive.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -119,12 +118,5 @@ ConformityEntry DecideConformity(const std::string& constant, double value, doub
                                  std::optional<double> lower, std::optional<double> upper,
                                  DecisionRule rule, double coverage_factor,
                                  double max_consumer_risk);
-
-// calibration.json's `conformity` and `conformity_rule` (docs/calibration-format.md).
-nlohmann::json ConformityEntriesToJson(const ConformityStatement& statement);
-nlohmann::json ConformityRuleToJson(const ConformityStatement& statement);
-// From those two keys; errors name the key.
-Result<ConformityStatement> ConformityFromJson(const nlohmann::json& entries,
-                                               const nlohmann::json& rule, const std::string& file);
 
 }  // namespace metro

@@ -162,8 +162,11 @@ class Registry {
   int version_ = 0;
 };
 
-// JSON of the queries (docs/registry.md).
-nlohmann::json RegistryCalibrationToJson(const RegistryCalibration& c);
-nlohmann::json DriftToJson(const DriftResult& drift);
+// JSON text of the queries (docs/registry.md; 2-space indent, keys sorted, no trailing
+// newline): `history --json` ({"calibrations": [...], "device_id": ...}), `export --format
+// json` ({"calibrations": [...], "schema_version": N}) and `drift --json`.
+std::string HistoryToJson(uint64_t device_id, const std::vector<RegistryCalibration>& history);
+std::string ExportToJson(int schema_version, const std::vector<RegistryCalibration>& all);
+std::string ToJson(const DriftResult& drift);
 
 }  // namespace metro
