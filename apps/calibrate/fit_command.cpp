@@ -25,58 +25,26 @@ struct FitOptions {
   std::vector<std::string> inputs;
   std::string output;
   bool imutk = false;  // Inputs are imu_tk pairs: ACC GYRO [ACC GYRO ...].
-  int sensor = 0;
-  std::string model = "full";
-  std::string accel_model;
-  std::string gyro_model;
-  double gravity_mps2 = kStandardGravityMps2;
-  bool gravity_given = false;  // --gravity-mps2 was on the command line.
-  double accel_fs_g = 2.0;
-  double gyro_fs_dps = 250.0;
-  std::string temperature = "auto";
-  std::string loss = "none";
-  double loss_scale = 3.0;
-  bool accel_only = false;
-  std::optional<double> min_static_s;  // Shortest pose kept (default 1 s; shrinks the window).
-  std::string segments;                // Annotated segments instead of the detector.
-  std::string html;                    // Calibration certificate (docs/reports.md).
-  std::string tags;                    // --tags FILE: device IDs into calibration.json.
+  // --sensor, --model, --accel-model, --gyro-model, --gravity-mps2, --accel-fs-g, --gyro-fs-dps,
+  // --temperature, --loss, --loss-scale, --accel-only, --min-static-s: the library's options
+  // and defaults, bound directly (--accel-model none is fit_accel = false).
+  CalibrationOptions calibration;
+  std::string segments;         // Annotated segments instead of the detector.
+  std::string html;             // Calibration certificate (docs/reports.md).
+  std::string tags;             // --tags FILE: device IDs into calibration.json.
   apps::LoadCliOptions load;    // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
   SpecCliOptions spec;          // --spec, --fail-on-nonconformity (docs/conformity.md)
   RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
 };
 
 int RunFit(const FitOptions& f) {
-  CalibrationOptions o;
-  const std::optional<ModelKind> model = ParseModelKind(f.model);
-  // --accel-model none: no accelerometer calibration (the gyroscope's bias at rest).
-  const bool accel_none = f.accel_model == "none";
-  const std::optional<ModelKind> am =
-      ParseModelKind(f.accel_model.empty() || accel_none ? f.model : f.accel_model);
-  const std::optional<ModelKind> gm = ParseModelKind(f.gyro_model.empty() ? f.model : f.gyro_model);
-  const std::optional<LossKind> loss = ParseLossKind(f.loss);
-  if (!model || !am || !gm || !loss) {
-    apps::PrintText(
-        stderr,
-        fmt::format("error: --model takes bias, scale or full; --loss none, huber or cauchy\n"));
-    return kExitUsage;
-  }
-  o.accel_model = *am;
-  o.gyro_model = *gm;
-  o.loss = *loss;
-  o.loss_scale = f.loss_scale;
-  o.gravity_mps2 = f.gravity_mps2;
-  o.gravity_given = f.gravity_given;
-  o.accel_fs_g = f.accel_fs_g;
-  o.gyro_fs_dps = f.gyro_fs_dps;
-  o.sensor = f.sensor;
-  o.fit_gyro = !f.accel_only;
-  o.fit_accel = !accel_none;
-  if (accel_none && f.accel_only) {
+  CalibrationOptions o = f.calibration;
+  const bool accel_none = !o.fit_accel;
+  if (accel_none && !o.fit_gyro) {
     apps::PrintErrorText("--accel-model none and --accel-only leave nothing to calibrate");
     return kExitUsage;
   }
-  if (accel_none && (f.gyro_model.empty() ? f.model : f.gyro_model) != "bias") {
+  if (accel_none && o.gyro_model != ModelKind::kBias) {
     apps::PrintErrorText(
         "--accel-model none evaluates the gyroscope's bias at rest from one static record: give "
         "--gyro-model bias (a scale or misalignment needs poses, rotations and the "
@@ -89,7 +57,6 @@ int RunFit(const FitOptions& f) {
         "the static pose)");
     return kExitUsage;
   }
-  if (f.min_static_s) o.segmentation.min_static_s = *f.min_static_s;
   if (!f.segments.empty()) {
     Result<std::vector<AnnotatedSegment>> given = ReadSegmentsFile(f.segments);
     if (!given.ok()) {
@@ -98,9 +65,6 @@ int RunFit(const FitOptions& f) {
     o.annotated_segments = std::move(given).value();
     o.segments_path = f.segments;
   }
-  o.temperature = f.temperature == "on"    ? TemperatureMode::kOn
-                  : f.temperature == "off" ? TemperatureMode::kOff
-                                           : TemperatureMode::kAuto;
   std::string why;
   if (!o.IsValid(&why)) {
     apps::PrintErrorText(why);
@@ -255,35 +219,64 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
   sub->add_option("-o,--output", o->output, "calibration.json to write (- for stdout)")->required();
   sub->add_flag("--imutk", o->imutk, "inputs are imu_tk file pairs: ACC GYRO [ACC GYRO ...]");
   apps::AddLoadCliOptions(sub, &o->load, /*full_scale_flags=*/false);
-  sub->add_option("--sensor", o->sensor, "calibrate only this tag (0 = every tag)");
-  sub->add_option("--model", o->model, "bias | scale | full, for both sensors")
+  CalibrationOptions& c = o->calibration;
+  sub->add_option("--sensor", c.sensor, "calibrate only this tag (0 = every tag)");
+  // --model sets both sensors' model unless --accel-model or --gyro-model names its own
+  // (callbacks run once the whole command line is parsed, so the counts are final).
+  const auto model_kind = [](const std::string& name) { return *ParseModelKind(name); };
+  sub->add_option_function<std::string>(
+         "--model",
+         [o, sub, model_kind](const std::string& v) {
+           if (sub->count("--accel-model") == 0) o->calibration.accel_model = model_kind(v);
+           if (sub->count("--gyro-model") == 0) o->calibration.gyro_model = model_kind(v);
+         },
+         "bias | scale | full, for both sensors")
       ->check(CLI::IsMember({"bias", "scale", "full"}));
-  sub->add_option("--accel-model", o->accel_model,
-                  "override --model for the accelerometer: bias | scale | full, or none (with "
-                  "--gyro-model bias: the gyroscope's bias at rest from one static record)")
+  sub->add_option_function<std::string>(
+         "--accel-model",
+         [o, model_kind](const std::string& v) {
+           if (v == "none") {
+             o->calibration.fit_accel = false;  // The accel model stays --model's (unused).
+           } else {
+             o->calibration.accel_model = model_kind(v);
+           }
+         },
+         "override --model for the accelerometer: bias | scale | full, or none (with "
+         "--gyro-model bias: the gyroscope's bias at rest from one static record)")
       ->check(CLI::IsMember({"bias", "scale", "full", "none"}));
-  sub->add_option("--gyro-model", o->gyro_model,
-                  "override --model for the gyroscope: bias | scale | full")
+  sub->add_option_function<std::string>(
+         "--gyro-model",
+         [o, model_kind](const std::string& v) { o->calibration.gyro_model = model_kind(v); },
+         "override --model for the gyroscope: bias | scale | full")
       ->check(CLI::IsMember({"bias", "scale", "full"}));
-  sub->add_option("--gravity-mps2", o->gravity_mps2,
+  sub->add_option("--gravity-mps2", c.gravity_mps2,
                   "local gravity [m/s^2] (default: standard gravity 9.80665, CGPM 1901)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--accel-fs-g", o->accel_fs_g, "accelerometer full scale of raw counts [g]")
+  sub->add_option("--accel-fs-g", c.accel_fs_g, "accelerometer full scale of raw counts [g]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sub->add_option("--gyro-fs-dps", o->gyro_fs_dps, "gyroscope full scale of raw counts [deg/s]")
+  sub->add_option("--gyro-fs-dps", c.gyro_fs_dps, "gyroscope full scale of raw counts [deg/s]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sub->add_option("--temperature", o->temperature,
-                  "linear temperature term of the biases: auto (when temp_c varies), on, off")
+  sub->add_option_function<std::string>(
+         "--temperature",
+         [o](const std::string& v) {
+           o->calibration.temperature = v == "on"    ? TemperatureMode::kOn
+                                        : v == "off" ? TemperatureMode::kOff
+                                                     : TemperatureMode::kAuto;
+         },
+         "linear temperature term of the biases: auto (when temp_c varies), on, off")
       ->check(CLI::IsMember({"auto", "on", "off"}));
-  sub->add_option("--loss", o->loss, "robust loss: none | huber | cauchy")
+  sub->add_option_function<std::string>(
+         "--loss", [o](const std::string& v) { o->calibration.loss = *ParseLossKind(v); },
+         "robust loss: none | huber | cauchy")
       ->check(CLI::IsMember({"none", "huber", "cauchy"}));
-  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, in standard deviations")
+  sub->add_option("--loss-scale", c.loss_scale, "robust loss scale, in standard deviations")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sub->add_flag("--accel-only", o->accel_only, "calibrate the accelerometer only");
-  sub->add_option("--min-static-s", o->min_static_s,
+  sub->add_flag_callback(
+      "--accel-only", [o] { o->calibration.fit_gyro = false; }, "calibrate the accelerometer only");
+  sub->add_option("--min-static-s", c.segmentation.min_static_s,
                   "shortest still period kept as a pose [s] (default 1; below 1 s the detector's "
                   "window shrinks with it, so poses of about twice this are found)");
   sub->add_option("--segments", o->segments,
@@ -295,7 +288,7 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
   AddSpecOptions(sub, &o->spec);
   AddRegistryOptions(sub, &o->registry);
   sub->callback([o, exit_code, sub] {
-    o->gravity_given = sub->count("--gravity-mps2") > 0;
+    o->calibration.gravity_given = sub->count("--gravity-mps2") > 0;
     *exit_code = RunFit(*o);
   });
 }
