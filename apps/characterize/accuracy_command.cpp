@@ -13,11 +13,10 @@
 #include "metro/accuracy/accuracy.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/io/tag_registry.hpp"
-#include "metro/report/html_report.hpp"
+#include "metro/report/accuracy_page.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -192,12 +191,11 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   if (!result.ok()) {
     return PrintErrorExit(result.error());
   }
-  const nlohmann::ordered_json report =
-      AccuracyReportJson(result.value(), session.value(), ref, tags);
-  const std::string json = JsonText(report, 2) + "\n";
+  const AccuracyReport report = MakeAccuracyReport(result.value(), session.value(), ref, tags);
+  const std::string json = ToJson(report) + "\n";
   std::string html;
   if (!in.html.empty()) {
-    Result<std::string> rendered = RenderJsonHtml(report, in.output);
+    Result<std::string> rendered = RenderAccuracyReportHtml(report, in.output);
     if (!rendered.ok()) {
       // The view of the evaluation just made: a failure is the run's, not the input's.
       return PrintErrorExit(rendered.error().WithKind(ErrorKind::kFailed));
@@ -210,7 +208,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
       !s.ok()) {
     return PrintErrorExit(s.error());
   }
-  if (!in.output.empty()) PrintTable(AccuracyReportTable(result.value()), in.output);
+  if (!in.output.empty()) PrintTable(AccuracyReportTable(report), in.output);
   return kExitOk;
 }
 

@@ -8,11 +8,13 @@
 #include <limits>
 #include <vector>
 
+#include "accuracy/accuracy_report_json.hpp"
 #include "html_common.hpp"
 #include "html_templates.hpp"
 #include "metro/accuracy/error_fit.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
+#include "metro/report/accuracy_page.hpp"
 #include "metro/report/svg_plot.hpp"
 #include "metro/uncertainty/gum.hpp"
 
@@ -625,3 +627,18 @@ Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::st
 }
 
 }  // namespace metro::report_internal
+
+namespace metro {
+
+Result<std::string> RenderAccuracyReportHtml(const AccuracyReport& report,
+                                             const std::string& json_path) {
+  return report_internal::RenderAccuracyHtml(ToJsonValue(report), json_path);
+}
+
+Result<std::string> RenderAccuracyReportHtml(std::string_view json_text, const std::string& file) {
+  Result<AccuracyReport> report = AccuracyReportFromJson(json_text, file);
+  if (!report.ok()) return report.error();
+  return RenderAccuracyReportHtml(report.value(), file);
+}
+
+}  // namespace metro

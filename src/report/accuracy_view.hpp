@@ -1,7 +1,9 @@
 // The HTML view of an accuracy report ("metro.accuracy-report/1", docs/accuracy.md), private
-// to src/report/: RenderJsonHtml dispatches here on the schema key.
+// to src/report/: RenderJsonHtml dispatches here on the schema key, and
+// RenderAccuracyReportHtml (metro/report/accuracy_page.hpp) renders the typed model through
+// the same code, from the JSON the model writes (ToJsonValue).
 //
-// Everything is drawn from the JSON alone: the plateau errors against the reference angle
+// Everything is drawn from the report alone: the plateau errors against the reference angle
 // with their expanded-uncertainty bars U_i = t_{(1+p)/2}(nu_i) u_i (JCGM 100:2008 6.2.1,
 // G.3.2; up and down sweeps as separate series), the fitted error curve with its band
 // e(theta) +- t_{(1+p)/2}(m - p) u_fit(theta), u_fit = sqrt(g^T C g) from the reported
@@ -13,11 +15,12 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "metro/accuracy/accuracy_report.hpp"
 #include "metro/core/status.hpp"
 
 namespace metro::report_internal {
 
-inline constexpr const char* kAccuracyReportSchema = "metro.accuracy-report/1";
+using ::metro::kAccuracyReportSchema;
 
 // The page. `json_path` names the report in the title (may be empty). Errors: not an
 // accuracy report, or a required key ("input", "points", "fit", "budget", "result") missing

@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "accuracy/accuracy_report_json.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
 #include "metro/core/angles.hpp"
 #include "metro/io/session_io.hpp"
@@ -218,7 +219,7 @@ TEST_CASE("Accuracy with a receiver capture and a separate reference log", "[acc
       CHECK(std::fabs(r.points[i].error_deg - truth.plateaus[i].error_deg) <
             5.0 * r.points[i].type_a.u_deg);
     }
-    const auto json = AccuracyReportJson(r, session, &reference);
+    const auto json = ToJsonValue(MakeAccuracyReport(r, session, &reference));
     CHECK(json["input"]["reference"]["alignment"]["offset_s"] == r.alignment->offset_s);
     CHECK(json["input"]["reference"]["alignment"]["method"].get<std::string>().find("estimated") !=
           std::string::npos);
@@ -230,7 +231,7 @@ TEST_CASE("Accuracy report JSON layout", "[accuracy]") {
   o.seed = 2;
   const Simulated sim = Simulate(o);
   const AccuracyResult r = Evaluate(sim.session);
-  const auto j = AccuracyReportJson(r, sim.session, nullptr);
+  const auto j = ToJsonValue(MakeAccuracyReport(r, sim.session, nullptr));
   CHECK(j["schema"] == "metro.accuracy-report/1");
   CHECK(j["input"]["table_axis"] == "yaw");
   REQUIRE(j["points"].size() == 45);
@@ -248,7 +249,8 @@ TEST_CASE("Accuracy report JSON layout", "[accuracy]") {
   }
   CHECK(j["result"]["U_corrected_deg"] == r.corrected.gum.expanded);
   CHECK(j["budget"]["corrected"]["inputs"].size() == 6);
-  CHECK(AccuracyReportTable(r).find("hysteresis (up - down)") != std::string::npos);
+  CHECK(AccuracyReportTable(MakeAccuracyReport(r, sim.session, nullptr))
+            .find("hysteresis (up - down)") != std::string::npos);
 }
 
 TEST_CASE("Accuracy bad input names what to collect", "[accuracy]") {

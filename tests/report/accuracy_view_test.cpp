@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "accuracy/accuracy_report_json.hpp"
 #include "metro/accuracy/accuracy.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
 #include "metro/core/json_text.hpp"
@@ -52,7 +53,7 @@ const ordered_json& SweepReport() {
     options.reference.u_deg = 0.01;
     Result<AccuracyResult> result = EvaluateAccuracy(session.value(), nullptr, options);
     REQUIRE(result.ok());
-    return AccuracyReportJson(result.value(), session.value(), nullptr);
+    return ToJsonValue(MakeAccuracyReport(result.value(), session.value(), nullptr));
   }();
   return report;
 }
