@@ -10,6 +10,7 @@
 
 #include "metro/calibration/simulate.hpp"
 #include "metro/core/rounding.hpp"
+#include "metro/io/session_io.hpp"
 
 namespace metro {
 namespace {
@@ -628,6 +629,25 @@ TEST_CASE("calibration.json text read back writes the same bytes", "[calibration
     REQUIRE(back.ok());
     CHECK(FormatCalibrationJson(back.value()) == text);
     CHECK(ToJson(back.value()) + "\n" == text);
+  }
+  // The bundled multi-pose session under several option sets.
+  Result<Session> bundled =
+      LoadSession(std::string(METRO_SOURCE_DIR) + "/datasets/calibration_session.csv");
+  REQUIRE(bundled.ok());
+  std::vector<CalibrationOptions> option_sets(4);
+  option_sets[1].accel_model = ModelKind::kBias;
+  option_sets[1].gyro_model = ModelKind::kScale;
+  option_sets[2].temperature = TemperatureMode::kOff;
+  option_sets[2].gravity_mps2 = 9.81;
+  option_sets[3].loss = LossKind::kHuber;
+  option_sets[3].accel_fs_g = 4.0;
+  for (const CalibrationOptions& o : option_sets) {
+    Result<Calibration> fitted = CalibrateSessions({&bundled.value()}, o);
+    REQUIRE(fitted.ok());
+    const std::string text = FormatCalibrationJson(fitted.value());
+    Result<Calibration> back = CalibrationFromJson(text, "c.json");
+    REQUIRE(back.ok());
+    CHECK(FormatCalibrationJson(back.value()) == text);
   }
   // The new keys sit beside the old ones (keys sorted, as calibration.json always had them).
   const nlohmann::json j = nlohmann::json::parse(ToJson(FitOnce().cal));

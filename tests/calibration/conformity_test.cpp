@@ -151,6 +151,7 @@ TEST_CASE("Conformity: a spec evaluated on the golden calibration, with unit con
   with.conformity = st.value();
   Result<Calibration> back = CalibrationFromJson(ToJson(with), "x.json");
   REQUIRE(back.ok());
+  CHECK(ToJson(back.value()) == ToJson(with));  // The same bytes written again.
   REQUIRE(back.value().conformity.has_value());
   CHECK(back.value().conformity->rule == DecisionRule::kGuarded);
   REQUIRE(back.value().conformity->entries.size() == 3);
