@@ -158,6 +158,17 @@ TEST_CASE("Conformity: a spec evaluated on the golden calibration, with unit con
   CHECK(back.value().conformity->entries[0].p_conformance == b.p_conformance);
   CHECK(back.value().conformity->entries[2].upper == 0.0618);
   CHECK_FALSE(back.value().conformity->entries[2].lower.has_value());
+  // A wrong type in an entry is refused at its position. Keys are sorted, so the text opens
+  // `{`, `  "conformity": [`, `    {`, then the entry's keys acceptance_lower,
+  // acceptance_upper and, on line 6, `      "constant": ...`: the value at column 19.
+  std::string text = ToJson(with);
+  const size_t at = text.find("\"constant\": \"");
+  REQUIRE(at != std::string::npos);
+  text.replace(at, text.find(',', at) - at, "\"constant\": 7");
+  Result<Calibration> bad = CalibrationFromJson(text, "x.json");
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().ToString() ==
+        "x.json:6:19: conformity[0].constant: expected a string, found the number 7");
 }
 
 TEST_CASE("Conformity: bad specs are refused at file:line:column", "[calibration][conformity]") {
