@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdint>
+
 namespace metro {
 
 using ordered_json = nlohmann::ordered_json;
@@ -43,6 +46,10 @@ QuantityPlotData PlotDataFromJsonValue(const JsonCursor& plot) {
   SeriesPlotData& series = data.series;
   series.n_record = s["n_record"].Integer();
   series.n_window = s["n_window"].Integer();
+  if (series.n_record < 1) s["n_record"].Fail("a number of observations >= 1");
+  if (series.n_window < 0 || series.n_window > series.n_record) {
+    s["n_window"].Fail(fmt::format("0..n_record ({})", series.n_record));
+  }
   series.record_first_t_s = s["record_first_t_s"].Number();
   series.record_last_t_s = s["record_last_t_s"].Number();
   series.window_first_t_s = s["window_first_t_s"].Number();
@@ -64,6 +71,21 @@ QuantityPlotData PlotDataFromJsonValue(const JsonCursor& plot) {
     if (hist.edges_value.size() != hist.counts.size() + 1) {
       h["edges"].Fail(fmt::format("one edge more than counts ({} edges)", hist.counts.size() + 1));
     }
+    for (size_t i = 1; i < hist.edges_value.size(); ++i) {
+      if (!(hist.edges_value[i] > hist.edges_value[i - 1])) {
+        h["edges"][i].Fail("edges in increasing order");
+        break;
+      }
+    }
+    int64_t total = 0;
+    for (size_t i = 0; i < hist.counts.size(); ++i) {
+      if (hist.counts[i] < 0) h["counts"][i].Fail("a count >= 0");
+      total += std::max<int64_t>(0, std::min<int64_t>(hist.counts[i], int64_t{1} << 53));
+    }
+    if (hist.n < 1 || total != hist.n) {
+      h["n"].Fail(fmt::format("the number of observations binned ({}), at least 1", total));
+    }
+    if (hist.resolution < 0.0) h["resolution"].Fail("a resolution >= 0");
     data.histogram = std::move(hist);
   }
   if (!plot["autocorrelation"].IsNull()) {
@@ -72,6 +94,8 @@ QuantityPlotData PlotDataFromJsonValue(const JsonCursor& plot) {
     ac.n = a["n"].Integer();
     ac.band = a["band"].Number();
     ac.rho = a["rho"].Numbers();
+    if (ac.n < 1) a["n"].Fail("a number of observations >= 1");
+    if (!(ac.band > 0.0)) a["band"].Fail("a band > 0");
     data.autocorrelation = std::move(ac);
   }
   return data;

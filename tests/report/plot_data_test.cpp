@@ -179,6 +179,34 @@ TEST_CASE("plot data: JSON round trip and a wrong value at its position", "[repo
         "bad.json:5:18: histogram.counts[1]: expected an integer, found the string \"2\"");
 }
 
+TEST_CASE("plot data: JSON that would draw nonsense is refused at its position", "[report]") {
+  const std::string series = R"({"series": {"n_record": 3, "n_window": 3, "record_first_t_s": 0,
+ "record_last_t_s": 0.02, "window_first_t_s": 0, "window_end_t_s": null,
+ "t_s": [0, 0.01, 0.02], "values": [1, 2, 3]},
+)";
+  auto error_of = [&series](const std::string& rest) {
+    Result<JsonDocument> document = JsonDocument::Parse(series + rest, "p.json");
+    REQUIRE(document.ok());
+    const JsonCursor root(document.value());
+    PlotDataFromJsonValue(root);
+    return root.ok() ? std::string() : root.error().ToString();
+  };
+  // Counts that do not add up to n (a division by a wrong n on the page).
+  CHECK(error_of(R"( "histogram": {"n": 0, "resolution": 0, "density_mean": 2,
+   "edges": [0.5, 2, 3.5], "counts": [0, 0]}, "autocorrelation": null})") ==
+        "p.json:4:21: histogram.n: expected the number of observations binned (0), at least 1, "
+        "found the number 0");
+  // Edges that go back (a bin of negative width).
+  CHECK(error_of(R"( "histogram": {"n": 3, "resolution": 0, "density_mean": 2,
+   "edges": [0.5, 2, 1.5], "counts": [1, 2]}, "autocorrelation": null})") ==
+        "p.json:5:22: histogram.edges[2]: expected edges in increasing order, found the number "
+        "1.5");
+  // A white-noise band of zero.
+  CHECK(error_of(R"( "histogram": null, "autocorrelation": {"n": 3, "band": 0, "rho": [0.5]}})") ==
+        "p.json:4:57: autocorrelation.band: expected a band > 0, found the number 0");
+  CHECK(error_of(R"( "histogram": null, "autocorrelation": null})").empty());
+}
+
 TEST_CASE("plot data: the quantities selected, at most max_quantities of them", "[report]") {
   // Two tags with qw, pitch_deg and gx_dps each: qw is not selected by default, and at most
   // three of the four others get plot data; the fourth is counted as not plotted.
