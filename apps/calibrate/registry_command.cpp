@@ -9,15 +9,12 @@
 
 #include "commands.hpp"
 #include "metro/blob/blob.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/utc_time.hpp"
 #include "metro/registry/registry.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
 namespace {
-
-using nlohmann::json;
 
 struct RegistryQueryOptions {
   std::string url;
@@ -142,20 +139,7 @@ int RunDue(const RegistryQueryOptions& o) {
   Result<std::vector<DueDevice>> due = r.value()->Due(o.interval_days, now, o.all);
   if (!due.ok()) return Fail(due.error().WithKind(ErrorKind::kFailed));
   if (o.json) {
-    json j;
-    j["at_utc"] = now;
-    j["interval_days"] = o.interval_days;
-    j["devices"] = json::array();
-    for (const DueDevice& d : due.value()) {
-      j["devices"].push_back({{"device_id", blob::FormatDeviceId(d.device_id)},
-                              {"calibration_id", d.calibration_id},
-                              {"certificate_id", d.certificate_id},
-                              {"last_date_utc", d.last_date_utc},
-                              {"due_utc", d.due_utc},
-                              {"overdue_days", d.overdue_days},
-                              {"due", d.overdue_days > 0}});
-    }
-    apps::PrintText(stdout, JsonText(j, 2) + "\n");
+    apps::PrintText(stdout, DueToJson(now, o.interval_days, due.value()) + "\n");
     return kExitOk;
   }
   std::string out = fmt::format("{} device(s) {} at {} (interval {} days)\n", due.value().size(),
@@ -232,7 +216,8 @@ void AddRegistryCommand(CLI::App& app, int* exit_code) {
                   "recalibration interval [days] (default 365)");
   due->add_option("--at", o->at_utc, "judge at this ISO 8601 UTC time (default now)");
   due->add_flag("--all", o->all, "list every device with its due date");
-  due->add_flag("--json", o->json, "JSON output");
+  due->add_flag("--json", o->json,
+                R"(JSON: {"at_utc", "interval_days", "devices": [{"device_id", "due", ...}]})");
   due->callback([o, exit_code] { *exit_code = RunDue(*o); });
 
   CLI::App* exported = reg->add_subcommand("export",

@@ -623,4 +623,22 @@ std::string ExportToJson(int schema_version, const std::vector<RegistryCalibrati
 
 std::string ToJson(const DriftResult& drift) { return JsonText(DriftValue(drift), 2); }
 
+std::string DueToJson(const std::string& at_utc, double interval_days,
+                      const std::vector<DueDevice>& due) {
+  json j;
+  j["at_utc"] = at_utc;
+  j["interval_days"] = interval_days;
+  j["devices"] = json::array();
+  for (const DueDevice& d : due) {
+    j["devices"].push_back({{"device_id", blob::FormatDeviceId(d.device_id)},
+                            {"calibration_id", d.calibration_id},
+                            {"certificate_id", d.certificate_id},
+                            {"last_date_utc", d.last_date_utc},
+                            {"due_utc", d.due_utc},
+                            {"overdue_days", d.overdue_days},
+                            {"due", d.overdue_days > 0}});
+  }
+  return JsonText(j, 2);
+}
+
 }  // namespace metro

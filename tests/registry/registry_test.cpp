@@ -14,6 +14,7 @@
 #include <functional>
 #include <map>
 
+#include "metro/blob/blob.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/simulate.hpp"
 #include "metro/core/file.hpp"
@@ -304,6 +305,17 @@ TEST_CASE("Registry: due lists devices whose interval has run out", "[registry]"
     Result<std::vector<DueDevice>> shorter = r.value()->Due(30.0, "2026-07-15T00:00:00Z");
     REQUIRE(shorter.ok());
     CHECK(shorter.value().size() == 2);
+    // `due --json`: the same list, "due" true only for an interval that has run out.
+    const nlohmann::json j =
+        nlohmann::json::parse(DueToJson("2026-03-01T00:00:00Z", 365.0, all.value()));
+    CHECK(j["at_utc"] == "2026-03-01T00:00:00Z");
+    CHECK(j["interval_days"] == 365.0);
+    REQUIRE(j["devices"].size() == 2);
+    CHECK(j["devices"][0]["device_id"] == blob::FormatDeviceId(0xA));
+    CHECK(j["devices"][0]["due_utc"] == "2026-01-01T00:00:00Z");
+    CHECK(j["devices"][0]["overdue_days"] == 59.0);
+    CHECK(j["devices"][0]["due"] == true);
+    CHECK(j["devices"][1]["due"] == false);
   });
 }
 

@@ -164,9 +164,13 @@ class Registry {
 
 // JSON text of the queries (docs/registry.md; 2-space indent, keys sorted, no trailing
 // newline): `history --json` ({"calibrations": [...], "device_id": ...}), `export --format
-// json` ({"calibrations": [...], "schema_version": N}) and `drift --json`.
+// json` ({"calibrations": [...], "schema_version": N}), `drift --json` and `due --json`
+// ({"at_utc", "devices": [{"calibration_id", "certificate_id", "device_id", "due",
+// "due_utc", "last_date_utc", "overdue_days"}], "interval_days"}).
 std::string HistoryToJson(uint64_t device_id, const std::vector<RegistryCalibration>& history);
 std::string ExportToJson(int schema_version, const std::vector<RegistryCalibration>& all);
 std::string ToJson(const DriftResult& drift);
+std::string DueToJson(const std::string& at_utc, double interval_days,
+                      const std::vector<DueDevice>& due);
 
 }  // namespace metro
