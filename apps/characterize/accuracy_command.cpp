@@ -140,7 +140,7 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
     return PrintErrorExit(MakeError("--accuracy evaluates one tag: give at most one --sensor"));
   }
   options.sensor = in.sensors.empty() ? 0 : in.sensors.front();
-  options.plateaus.settle_auto = in.settle == "auto";
+  options.plateaus.settle_auto = in.settle_auto;
   options.window = in.window;
   options.model_lag = !a.no_lag_model;
   options.plateaus.trim_departures = !a.keep_departures;
@@ -246,8 +246,8 @@ void AddAccuracyCommand(CLI::App& app, int* exit_code) {
     o->accuracy.enabled = true;  // --accuracy is implied here.
     const AnalysisCliOptions& a = o->analysis;
     *exit_code =
-        RunAccuracy(o->accuracy, {o->session, a.load, a.sensors, o->output, a.settle, o->threads,
-                                  false, o->html, AccuracyWindow(a), a.tag_registry});
+        RunAccuracy(o->accuracy, {o->session, a.load, a.sensors, o->output, a.window.settle_auto,
+                                  o->threads, false, o->html, AccuracyWindow(a), a.tag_registry});
   });
 }
 

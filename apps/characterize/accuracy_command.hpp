@@ -36,7 +36,7 @@ struct AccuracyRunInputs {
   LoadCliOptions load;
   std::vector<int> sensors;
   std::string output;
-  std::string settle = "none";  // "auto": MSER-5 within each plateau too.
+  bool settle_auto = false;  // --settle auto: MSER-5 within each plateau too.
   int threads = 0;
   bool type_a = false;   // --type-a given as well: a usage error.
   std::string html;      // Also write the HTML view here (docs/reports.md).

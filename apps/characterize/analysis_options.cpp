@@ -15,13 +15,15 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o, AnalysisCliKind
       ->check(CLI::NonNegativeNumber);
   app->add_option("--from-s", o->window.from_s, "keep observations with t_s >= this");
   app->add_option("--to-s", o->window.to_s, "keep observations with t_s <= this");
-  app->add_option("--settle", o->settle,
-                  type_a ? "auto: drop each quantity's start-up transient (fitted exponential, "
-                           "cut where the rest biases the mean by <= 0.1 u; docs/type-a.md)"
-                         : "auto: also drop each plateau's start-up transient (MSER-5; "
-                           "docs/accuracy.md)")
+  // none|auto -> WindowOptions::settle_auto.
+  app->add_option_function<std::string>(
+         "--settle", [o](const std::string& value) { o->window.settle_auto = value == "auto"; },
+         type_a ? "auto: drop each quantity's start-up transient (fitted exponential, "
+                  "cut where the rest biases the mean by <= 0.1 u; docs/type-a.md)"
+                : "auto: also drop each plateau's start-up transient (MSER-5; "
+                  "docs/accuracy.md)")
       ->check(CLI::IsMember({"none", "auto"}))
-      ->capture_default_str();
+      ->default_str(o->window.settle_auto ? "auto" : "none");
   app->add_option("--tags,--tag-registry", o->tag_registry,
                   R"(tags file, JSON {"1": "Forehead", "2": {"name": "Chest", "device_id": ...}} )"
                   R"(naming the tags (docs/formats.md "Tags file"; default: thesis Table 5.2))")
@@ -30,24 +32,51 @@ void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o, AnalysisCliKind
     app->add_option("--sensor", o->sensors, "the tag to evaluate (default: the first)");
     return;
   }
-  app->add_option("--settle-scope", o->settle_scope,
-                  "with --settle auto: quantity (each from its own settle point) or tag (every "
-                  "quantity of a tag from the largest non-temperature cut)")
+  // quantity|tag -> WindowOptions::settle_tag_wide.
+  app->add_option_function<std::string>(
+         "--settle-scope",
+         [o](const std::string& value) { o->window.settle_tag_wide = value == "tag"; },
+         "with --settle auto: quantity (each from its own settle point) or tag (every "
+         "quantity of a tag from the largest non-temperature cut)")
       ->check(CLI::IsMember({"quantity", "tag"}))
-      ->capture_default_str();
+      ->default_str(o->window.settle_tag_wide ? "tag" : "quantity");
   app->add_option("--sensor", o->sensors, "only this tag (repeatable)");
   app->add_option("--quantity", o->quantities, "only this quantity, e.g. pitch_deg (repeatable)");
   app->add_flag("--allan", o->allan,
                 "Allan deviation and IEEE 952 noise terms of the rate quantities (docs/noise.md)");
-  app->add_option("--taus", o->taus, "Allan taus: octave, decade:N, all")->capture_default_str();
-  app->add_option("--estimator", o->estimator, "Allan estimator: oadev, mdev, ohdev")
-      ->capture_default_str();
-  app->add_option("--gaps", o->gaps,
-                  "Allan through missing samples: skip (leave out the terms that read one, "
-                  "NIST SP 1065), split (the longest gap-free stretch only) or refuse "
-                  "(docs/noise.md)")
+  // The library's parsers, so the flags accept exactly what the library does; a value they
+  // refuse is a usage error naming the flag (exit 2).
+  app->add_option_function<std::string>(
+         "--taus",
+         [o](const std::string& value) {
+           Result<TauSpacing> taus = ParseTauSpacing(value);
+           if (!taus.ok()) throw CLI::ValidationError("--taus", taus.error().message);
+           o->allan_options.allan.taus = taus.value();
+         },
+         "Allan taus: octave, decade:N, all")
+      ->default_str(TauSpacingName(o->allan_options.allan.taus));
+  app->add_option_function<std::string>(
+         "--estimator",
+         [o](const std::string& value) {
+           Result<AllanEstimator> estimator = ParseAllanEstimator(value);
+           if (!estimator.ok())
+             throw CLI::ValidationError("--estimator", estimator.error().message);
+           o->allan_options.allan.estimator = estimator.value();
+         },
+         "Allan estimator: oadev, mdev, ohdev")
+      ->default_str(AllanEstimatorName(o->allan_options.allan.estimator));
+  app->add_option_function<std::string>(
+         "--gaps",
+         [o](const std::string& value) {
+           Result<AllanGapPolicy> gaps = ParseAllanGapPolicy(value);
+           if (!gaps.ok()) throw CLI::ValidationError("--gaps", gaps.error().message);
+           o->allan_options.gaps = gaps.value();
+         },
+         "Allan through missing samples: skip (leave out the terms that read one, "
+         "NIST SP 1065), split (the longest gap-free stretch only) or refuse "
+         "(docs/noise.md)")
       ->check(CLI::IsMember({"skip", "split", "refuse"}))
-      ->capture_default_str();
+      ->default_str(AllanGapPolicyName(o->allan_options.gaps));
 }
 
 WindowOptions AccuracyWindow(const AnalysisCliOptions& o) {
@@ -64,8 +93,6 @@ Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
   load.threads = threads;
   SessionTypeAOptions& type_a = out->type_a;
   type_a.window = o.window;
-  type_a.window.settle_auto = o.settle == "auto";
-  type_a.window.settle_tag_wide = o.settle_scope == "tag";
   type_a.sensors = o.sensors;
   type_a.quantities = o.quantities;
   type_a.threads = threads;
@@ -77,18 +104,10 @@ Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
     out->registry = loaded.value();
   }
   if (o.allan) {
-    auto taus = ParseTauSpacing(o.taus);
-    if (!taus.ok()) return taus.error();
-    auto estimator = ParseAllanEstimator(o.estimator);
-    if (!estimator.ok()) return estimator.error();
     out->allan = true;
-    out->allan_options.allan.taus = taus.value();
-    out->allan_options.allan.estimator = estimator.value();
+    out->allan_options = o.allan_options;
     out->allan_options.allan.threads = threads;
     out->allan_options.quantities = o.quantities;
-    auto gaps = ParseAllanGapPolicy(o.gaps);
-    if (!gaps.ok()) return gaps.error();
-    out->allan_options.gaps = gaps.value();
   }
   return Status::Ok();
 }

@@ -10,24 +10,25 @@
 #include "load_cli.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/report/allan_section.hpp"
 #include "metro/report/session_analysis.hpp"
 
 namespace metro::apps {
 
 struct AnalysisCliOptions {
   LoadCliOptions load;  // --format, --column, --rate-hz, ... (load_cli.hpp).
-  // --skip-samples, --skip-seconds, --from-s, --to-s, bound to the library's struct (its
-  // settle fields are set from --settle and --settle-scope).
+  // --skip-samples, --skip-seconds, --from-s, --to-s, --settle (none|auto: settle_auto) and
+  // --settle-scope (quantity|tag: settle_tag_wide), bound to the library's struct; its
+  // defaults are the flags' defaults.
   WindowOptions window;
-  std::string settle = "none";
-  std::string settle_scope = "quantity";  // "tag": one cut per tag (--settle-scope).
   std::vector<int> sensors;
   std::vector<std::string> quantities;
   std::string tag_registry;
   bool allan = false;
-  std::string taus = "octave";
-  std::string estimator = "oadev";
-  std::string gaps = "skip";  // --gaps: skip, split or refuse (docs/noise.md, "Gaps").
+  // --taus (ParseTauSpacing: allan.taus), --estimator (ParseAllanEstimator: allan.estimator)
+  // and --gaps (skip|split|refuse: gaps; docs/noise.md, "Gaps"), bound to the library's
+  // struct; its defaults are the flags' defaults. Used with --allan only.
+  SessionAllanOptions allan_options;
 };
 
 // Which analysis registers the options: the Type A analysis (`analyze`, `batch`, and the

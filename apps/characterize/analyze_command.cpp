@@ -72,8 +72,9 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
 int RunAnalyze(const AnalyzeOptions& o) {
   if (o.accuracy.enabled) {
     const AnalysisCliOptions& a = o.analysis;
-    return RunAccuracy(o.accuracy, {o.session, a.load, a.sensors, o.output, a.settle, o.threads,
-                                    o.type_a, o.html, AccuracyWindow(a), a.tag_registry});
+    return RunAccuracy(o.accuracy,
+                       {o.session, a.load, a.sensors, o.output, a.window.settle_auto, o.threads,
+                        o.type_a, o.html, AccuracyWindow(a), a.tag_registry});
   }
   for (Status s : {RefuseStdout(o.html, "--html", "the HTML report goes to a file"),
                    RefuseStdout(o.allan_csv, "--allan-csv", "the Allan curves go to a file")}) {

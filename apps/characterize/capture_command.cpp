@@ -222,7 +222,7 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
   if (!c.analyze) return kExitOk;
 
   AnalysisCliOptions a;
-  a.settle = "auto";
+  a.window.settle_auto = true;
   a.load.library.frame_period_s = c.frame_period_s;
   a.tag_registry = c.tags;  // The report names the tags as `analyze --tags` does.
   SessionAnalysisOptions options;
