@@ -7,7 +7,6 @@
 
 #include "commands.hpp"
 #include "metro/blob/inspect.hpp"
-#include "metro/core/json_text.hpp"
 #include "tags_cli.hpp"
 #include "unix_cli.hpp"
 
