@@ -290,6 +290,27 @@ AccuracyReport MakeAccuracyReport(const AccuracyResult& r, const Session& sessio
   return m;
 }
 
+Json AccuracyOptionsToJsonValue(const AccuracyOptions& o) {
+  return {{"plateau_tolerance_deg", o.plateaus.tolerance_deg},
+          {"min_dwell_s", o.plateaus.min_dwell_s},
+          {"min_samples", o.plateaus.min_samples},
+          {"settle_s", o.plateaus.settle_s},
+          {"settle", o.plateaus.settle_auto ? "auto" : "none"},
+          {"angle_match_deg", o.angle_match_deg},
+          {"model", ErrorModelName(o.model)},
+          {"resolution_deg", o.resolution_deg},
+          {"reference_u_deg", o.reference.u_deg},
+          {"reference_dof", Num(o.reference.dof)},
+          {"reference_u_source", o.reference.source},
+          {"coverage", o.coverage},
+          {"assumed_hysteresis_deg", o.assumed_hysteresis_deg},
+          {"model_lag", o.model_lag},
+          {"lag_tau_s", o.lag_tau_s ? Json(*o.lag_tau_s) : Json(nullptr)},
+          {"settle_lag_residual_deg", o.plateaus.settle_lag_residual_deg},
+          {"trim_departures", o.plateaus.trim_departures},
+          {"departure_sigmas", o.plateaus.departure_sigmas}};
+}
+
 Json ToJsonValue(const AccuracyReport& m) {
   Json j;
   j["schema"] = kAccuracyReportSchema;
@@ -335,24 +356,7 @@ Json ToJsonValue(const AccuracyReport& m) {
                  {"n", w.n},
                  {"t_first_s", w.t_first_s},
                  {"t_last_s", w.t_last_s}};
-  j["options"] = {{"plateau_tolerance_deg", o.plateaus.tolerance_deg},
-                  {"min_dwell_s", o.plateaus.min_dwell_s},
-                  {"min_samples", o.plateaus.min_samples},
-                  {"settle_s", o.plateaus.settle_s},
-                  {"settle", o.plateaus.settle_auto ? "auto" : "none"},
-                  {"angle_match_deg", o.angle_match_deg},
-                  {"model", ErrorModelName(o.model)},
-                  {"resolution_deg", o.resolution_deg},
-                  {"reference_u_deg", o.reference.u_deg},
-                  {"reference_dof", Num(o.reference.dof)},
-                  {"reference_u_source", o.reference.source},
-                  {"coverage", o.coverage},
-                  {"assumed_hysteresis_deg", o.assumed_hysteresis_deg},
-                  {"model_lag", o.model_lag},
-                  {"lag_tau_s", o.lag_tau_s ? Json(*o.lag_tau_s) : Json(nullptr)},
-                  {"settle_lag_residual_deg", o.plateaus.settle_lag_residual_deg},
-                  {"trim_departures", o.plateaus.trim_departures},
-                  {"departure_sigmas", o.plateaus.departure_sigmas}};
+  j["options"] = AccuracyOptionsToJsonValue(o);
   const AccuracyReportSegmentation& s = m.segmentation;
   Json excluded = Json::array();
   for (const AccuracyExcludedSpan& e : s.excluded) {
@@ -638,7 +642,7 @@ AccuracyReport AccuracyReportFromJsonValue(const JsonCursor& j) {
     pt.type_a.std_deg = ta["std_deg"].NumberOrNaN();
     pt.type_a.u_deg = ta["u_deg"].NumberOrNaN();
     pt.type_a.n_eff = ta["n_eff"].NumberOrNaN();
-    pt.type_a.dof = ta["dof"].NumberOrNaN();
+    pt.type_a.dof = ReadDof(ta["dof"]);
     pt.direction = ReadDirection(p["direction"]);
     pt.sweep = static_cast<int>(p["sweep"].Integer());
     pt.t_start_s = p["t_start_s"].NumberOrNaN();
@@ -729,6 +733,7 @@ AccuracyReport AccuracyReportFromJsonValue(const JsonCursor& j) {
       x.fit = ReadFit(c["fit"]);
     }
   }
+  if (!j["budget"].IsObject()) j["budget"].Fail("an object {corrected, uncorrected}");
   m.corrected = ReadBudget(j["budget"]["corrected"], "corrected");
   m.uncorrected = ReadBudget(j["budget"]["uncorrected"], "uncorrected");
   const JsonCursor result = j["result"];

@@ -11,6 +11,9 @@ namespace metro {
 
 nlohmann::ordered_json ToJsonValue(const AccuracyReport& report);
 
+// The report's "options" section for `options` (also the page's options table).
+nlohmann::ordered_json AccuracyOptionsToJsonValue(const AccuracyOptions& options);
+
 // Reads the report at `cursor`; errors are recorded in the cursor's reading (check ok()).
 AccuracyReport AccuracyReportFromJsonValue(const JsonCursor& cursor);
 

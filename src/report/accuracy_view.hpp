@@ -22,9 +22,13 @@ namespace metro::report_internal {
 
 using ::metro::kAccuracyReportSchema;
 
-// The page. `json_path` names the report in the title (may be empty). Errors: not an
-// accuracy report, or a required key ("input", "points", "fit", "budget", "result") missing
-// or malformed; the message names the key.
+// The page of a report. `json_path` names the report in the title when it names no session (may
+// be empty). Errors: a report without points, or a point without a finite reference_deg,
+// error_deg or type_a.u_deg.
+Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::string& json_path);
+
+// The page of a parsed document, read with AccuracyReportFromJson from its text as metro writes
+// it (indent 2): errors name `json_path`, the line and column of the offending value and its path.
 Result<std::string> RenderAccuracyHtml(const nlohmann::ordered_json& report,
                                        const std::string& json_path);
 

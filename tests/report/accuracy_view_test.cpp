@@ -106,38 +106,72 @@ TEST_CASE("Accuracy HTML has every plot and no external reference", "[report][ht
 
 // A hand-made report whose numbers are checked against published Student t quantiles:
 // t_0.975(4) = 2.776, t_0.975(9) = 2.262, z_0.975 = 1.960 (e.g. JCGM 100:2008 Table G.2).
-const char* const kHandReport = R"({
-  "schema": "metro.accuracy-report/1",
-  "input": {"session": "hand.csv", "sha256": "abcdef", "format": "csv", "sensor": 3,
-            "table_axis": "yaw", "quantity": "yaw_deg",
-            "reference": {"file": null, "column": "table_angle_deg"}},
-  "points": [
-    {"reference_deg": 0, "mean_deg": 0.1234567, "error_deg": 0.1234567, "direction": "first",
-     "type_a": {"n": 50, "std_deg": 0.05, "u_deg": 0.0123, "n_eff": 5, "dof": 4}},
-    {"reference_deg": 90, "mean_deg": 90.2, "error_deg": 0.2, "direction": "up",
-     "type_a": {"n": 50, "std_deg": 0.05, "u_deg": 0.01, "n_eff": 1e9, "dof": null}},
-    {"reference_deg": 45, "mean_deg": 44.95, "error_deg": -0.05, "direction": "down",
-     "type_a": {"n": 50, "std_deg": 0.05, "u_deg": 0.02, "n_eff": 10, "dof": 9}}],
-  "fit": {"model": "linear", "dof": 1, "chi2": 1.0, "reduced_chi2": 1.0,
-          "params": [{"name": "c0_deg", "value": 0.1, "u": 0.01, "unit": "deg"},
-                     {"name": "scale", "value": 0.001, "u": 0.0001, "unit": "deg/deg"}],
-          "covariance": [[1e-4, 0], [0, 1e-8]]},
-  "budget": {"corrected": {"u_deg": 0.02, "dof_eff": 30, "k": 2.04, "U_deg": 0.0408,
-                           "coverage": 0.95,
-                           "inputs": [{"name": "small_input", "u_deg": 0.001, "percent": 0.25},
-                                      {"name": "big_input", "u_deg": 0.0199, "percent": 99.75}]}},
-  "result": {"ok": true, "coverage": 0.95, "statement_corrected": "STATEMENT-C",
-             "statement_uncorrected": "STATEMENT-U"}
-})";
+// The sweep's report with its points, fit, corrected budget and statements replaced by hand
+// values, the cross-axis section not evaluated and no hysteresis.
+ordered_json HandReport() {
+  ordered_json doc = SweepReport();
+  doc["input"]["session"] = "hand.csv";
+  const ordered_json base = doc["points"][0];
+  const auto point = [&base](double reference, double mean, double error, const char* direction,
+                             double u, double n_eff, const ordered_json& dof) {
+    ordered_json p = base;
+    p["reference_deg"] = reference;
+    p["mean_deg"] = mean;
+    p["error_deg"] = error;
+    p["direction"] = direction;
+    p["type_a"] = {{"n", 50}, {"std_deg", 0.05}, {"u_deg", u}, {"n_eff", n_eff}, {"dof", dof}};
+    for (auto& item : p["other_axes_mean_deg"].items()) item.value() = nullptr;
+    for (auto& item : p["other_axes_u_deg"].items()) item.value() = nullptr;
+    return p;
+  };
+  doc["points"] = {point(0, 0.1234567, 0.1234567, "first", 0.0123, 5, 4),
+                   point(90, 90.2, 0.2, "up", 0.01, 1e9, nullptr),
+                   point(45, 44.95, -0.05, "down", 0.02, 10, 9)};
+  ordered_json& fit = doc["fit"];
+  fit["model"] = "linear";
+  fit["params"] =
+      ordered_json::parse(R"([{"name": "c0_deg", "value": 0.1, "u": 0.01, "unit": "deg"},
+      {"name": "scale", "value": 0.001, "u": 0.0001, "unit": "deg/deg"}])");
+  fit["covariance"] = ordered_json::parse("[[1e-4, 0], [0, 1e-8]]");
+  fit["chi2"] = 1.0;
+  fit["dof"] = 1;
+  fit["reduced_chi2"] = 1.0;
+  fit["residuals_deg"] = {0.0, 0.0, 0.0};
+  doc["budget"]["corrected"] = ordered_json::parse(R"({"u_deg": 0.02, "dof_eff": 30, "k": 2.04,
+      "U_deg": 0.0408, "coverage": 0.95, "dof_note": "",
+      "inputs": [{"name": "small_input", "u_deg": 0.001, "distribution": "normal",
+                  "sensitivity": 1, "contribution_deg": 0.001, "dof": null, "percent": 0.25,
+                  "note": ""},
+                 {"name": "big_input", "u_deg": 0.0199, "distribution": "normal",
+                  "sensitivity": 1, "contribution_deg": 0.0199, "dof": null, "percent": 99.75,
+                  "note": ""}]})");
+  doc["result"]["statement_corrected"] = "STATEMENT-C";
+  doc["result"]["statement_uncorrected"] = "STATEMENT-U";
+  ordered_json& h = doc["hysteresis"];
+  h["available"] = false;
+  for (const char* key :
+       {"mean_deg", "u_mean_deg", "max_abs_deg", "u_max_abs_deg", "at_reference_deg"}) {
+    h[key] = nullptr;
+  }
+  h["pairs"] = ordered_json::array();
+  for (auto& item : doc["cross_axis"].items()) {
+    item.value() = {{"evaluated", false},
+                    {"mean_deg", nullptr},
+                    {"span_deg", nullptr},
+                    {"fitted", false},
+                    {"note", "no other angles"}};
+  }
+  return doc;
+}
 
 TEST_CASE("Accuracy HTML rounds per GUM 7.2.6 with k from the t distribution",
           "[report][html][accuracy]") {
-  const ordered_json doc = ordered_json::parse(kHandReport);
+  const ordered_json doc = HandReport();
   Result<std::string> html = RenderJsonHtml(doc, "hand.json");
-  REQUIRE(html.ok());
+  if (!html.ok()) FAIL(html.error().ToString());
   const std::string& h = html.value();
   CheckSelfContained(h);
-  CHECK(Count(h, "<svg") == 2);  // The error plot and the one budget's bars.
+  CHECK(Count(h, "<svg") == 3);  // The error plot and the two budgets' bars.
   // Point 1: e = 0.1234567, u = 0.0123 -> 0.123, 0.012; U = 2.776 * 0.0123 = 0.03415 -> 0.034.
   CHECK(h.find("<td class=\"num\">0.123</td><td class=\"num\">0.012</td><td class=\"num\">5</td>"
                "<td class=\"num\">2.78</td><td class=\"num\">0.034</td>") != std::string::npos);
@@ -191,33 +225,60 @@ TEST_CASE("Accuracy HTML lists the options as a table and names the tag",
                "</code></td></tr>") != std::string::npos);
 }
 
+// 1-based line and column of byte `offset`, counted here independently of the reader.
+std::string LineColumn(const std::string& text, size_t offset) {
+  int line = 1, column = 1;
+  for (size_t i = 0; i < offset; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return std::to_string(line) + ":" + std::to_string(column);
+}
+
 TEST_CASE("Bad accuracy report input is refused with a message", "[report][html][accuracy]") {
-  ordered_json doc = ordered_json::parse(kHandReport);
+  // Read with AccuracyReportFromJson: the position of the value in the document as metro writes
+  // it (indent 2) and its path.
+  ordered_json doc = HandReport();
   doc.erase("points");
   Result<std::string> r = RenderJsonHtml(doc, "bad.json");
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().file == "bad.json");
-  CHECK(r.error().message == "metro.accuracy-report/1 report: missing key 'points'");
+  CHECK(r.error().ToString() ==
+        "bad.json:1:1: points: expected an array of plateau points, found nothing (the member is "
+        "missing)");
 
-  doc = ordered_json::parse(kHandReport);
+  doc = HandReport();
   doc["points"] = ordered_json::array();
   r = RenderJsonHtml(doc, "bad.json");
   REQUIRE_FALSE(r.ok());
+  CHECK(r.error().file == "bad.json");
   CHECK(r.error().message == "metro.accuracy-report/1 report: 'points' is not a non-empty array");
 
-  doc = ordered_json::parse(kHandReport);
+  doc = HandReport();
   doc["points"][1]["type_a"].erase("u_deg");
+  std::string text = JsonText(doc, 2);
   r = RenderJsonHtml(doc, "bad.json");
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message ==
-        "metro.accuracy-report/1 report: point 1 lacks a finite reference_deg, error_deg or "
-        "type_a.u_deg");
+  // Missing: at the object it belongs to, the "type_a" of the second point (n = 50 first).
+  const size_t second = text.find("\"type_a\": {", text.find("\"reference_deg\": 90"));
+  REQUIRE(second != std::string::npos);
+  CHECK(r.error().ToString() ==
+        "bad.json:" + LineColumn(text, second + 10) +
+            ": points[1].type_a.u_deg: expected a number or null, found nothing (the member is "
+            "missing)");
 
-  doc = ordered_json::parse(kHandReport);
+  doc = HandReport();
   doc["budget"] = "none";
+  text = JsonText(doc, 2);
   r = RenderJsonHtml(doc, "bad.json");
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message == "metro.accuracy-report/1 report: 'budget' is not an object");
+  CHECK(r.error().ToString() ==
+        "bad.json:" + LineColumn(text, text.find("\"budget\": \"none\"") + 10) +
+            ": budget: expected an object {corrected, uncorrected}, "
+            "found the string \"none\"");
 }
 
 #ifdef METRO_CHARACTERIZE_EXE
