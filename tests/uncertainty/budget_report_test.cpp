@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include "uncertainty/budget_report_json.hpp"
+
 namespace metro {
 namespace {
 
@@ -15,7 +17,7 @@ TEST_CASE("Budget report JSON for GUM H.1 with Monte Carlo", "[uncertainty][repo
   budget.monte_carlo.trials = 100000;
   auto e = EvaluateBudget(budget);
   REQUIRE(e.ok());
-  const auto j = BudgetReportJson(e.value());
+  const auto j = ToJsonValue(MakeBudgetReport(e.value()));
   CHECK(j["schema"] == "metro.budget-report/1");
   CHECK(j["result"]["u"].get<double>() == Approx(31.66388).margin(5e-4));
   // The file truncates nu_eff = 16.75 to 16 as H.1.6 does (G.6.4): k = t_0.995(16) = 2.9208,
@@ -60,7 +62,7 @@ TEST_CASE("Budget report of an adaptive run states the half-widths that met delt
   REQUIRE(b.ok());
   auto e = EvaluateBudget(b.value());
   REQUIRE(e.ok());
-  const auto j = BudgetReportJson(e.value());
+  const auto j = ToJsonValue(MakeBudgetReport(e.value()));
   const auto& mc = j["monte_carlo"];
   REQUIRE(mc["converged"] == true);
   // u = 2 at ndig 2: delta = 0.05 (JCGM 101 9.2.2).
@@ -93,7 +95,7 @@ TEST_CASE("Budget report states the unit check and every session unit conversion
   REQUIRE(e.ok());
   // h = 32 sin(pi/6) = 16 cm exactly.
   CHECK(e.value().gum.value == Approx(16.0).epsilon(1e-14));
-  const auto j = BudgetReportJson(e.value());
+  const auto j = ToJsonValue(MakeBudgetReport(e.value()));
   CHECK(j["measurand"]["unit_check"]["checked"] == true);
   CHECK(j["measurand"]["unit_check"]["model_unit"] == "cm");
   bool found = false;
@@ -149,7 +151,7 @@ TEST_CASE("Budget report histogram of the Monte Carlo values follows the known d
     // Binomial counts: within 5 standard deviations.
     CHECK(std::fabs(static_cast<double>(h.counts[i]) - expected) <= 5.0 * std::sqrt(expected) + 1);
   }
-  const auto j = BudgetReportJson(e.value());
+  const auto j = ToJsonValue(MakeBudgetReport(e.value()));
   CHECK(j["monte_carlo"]["histogram"]["counts"].size() == 60);
   CHECK(j["monte_carlo"]["histogram"]["edges"].size() == 61);
   CHECK(j["monte_carlo"]["histogram"]["below"].get<int64_t>() == h.below);
