@@ -24,7 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   small.monte_carlo.threads = 1;
   metro::Result<metro::BudgetEvaluation> evaluation = metro::EvaluateBudget(small);
   if (evaluation.ok()) {
-    (void)metro::BudgetReportJson(evaluation.value()).dump();
+    (void)metro::ToJson(metro::MakeBudgetReport(evaluation.value()));
     (void)metro::BudgetReportTable(evaluation.value());
   }
   return 0;

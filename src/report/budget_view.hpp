@@ -1,8 +1,9 @@
 // The budget section shared by the budget page and the session page (budget.mustache), from the
-// typed budget report. Private to src/report/.
+// typed budget report, and the budget page of a parsed document. Private to src/report/.
 #pragma once
 
 #include <kainjow/mustache.hpp>
+#include <nlohmann/json.hpp>
 
 #include "metro/core/status.hpp"
 #include "metro/uncertainty/budget_report.hpp"
@@ -15,3 +16,16 @@ namespace metro::report_internal {
 Result<kainjow::mustache::data> BudgetViewData(const BudgetReport& budget);
 
 }  // namespace metro::report_internal
+
+namespace metro {
+
+// For RenderJsonHtml (html_report.cpp), which dispatches on a parsed document: the page of a
+// "metro.budget-report/1" document, written out again as metro writes it (indent 2) and read
+// with BudgetReportFromJson (no file name: the caller adds it).
+Result<std::string> RenderBudgetReportHtml(const nlohmann::ordered_json& report);
+
+// True when `document` is a budget definition (docs/budget-format.md: "measurand" and
+// "inputs", no "schema"), the input of `characterize budget` rather than a report of it.
+bool IsBudgetDefinition(const nlohmann::ordered_json& document);
+
+}  // namespace metro

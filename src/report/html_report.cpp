@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "accuracy_view.hpp"
+#include "budget_view.hpp"
 #include "html_common.hpp"
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"

@@ -8,6 +8,7 @@
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
 #include "metro/uncertainty/session_resolver.hpp"
+#include "uncertainty/budget_report_json.hpp"
 
 namespace metro {
 

@@ -9,6 +9,7 @@
 #include "metro/core/rounding.hpp"
 #include "metro/report/html_report.hpp"
 #include "metro/uncertainty/budget_report.hpp"
+#include "report/budget_view.hpp"
 #include "support/html_checks.hpp"
 
 namespace metro {

@@ -21,6 +21,7 @@
 #include "metro/uncertainty/budget_report.hpp"
 #include "support/html_checks.hpp"
 #include "support/temp_file.hpp"
+#include "uncertainty/budget_report_json.hpp"
 
 namespace metro {
 namespace {

@@ -14,7 +14,6 @@
 //   the contributions (c_i u_i)^2 / u_c^2 as sorted bars and the budget table.
 #pragma once
 
-#include <nlohmann/json.hpp>  // Only for the two transitional declarations below.
 #include <string>
 #include <string_view>
 
@@ -28,13 +27,5 @@ Result<std::string> RenderBudgetReportHtml(const BudgetReport& report);
 // The page of a "metro.budget-report/1" document read with BudgetReportFromJson: errors at
 // file:line:column with the value's path (`characterize report B.json`).
 Result<std::string> RenderBudgetReportHtml(std::string_view json_text, const std::string& file);
-
-// Transitional, until RenderJsonHtml (html_report.cpp) passes the file's text: the document
-// written out again (indent 2, as metro writes it) and read as above, with no file name.
-Result<std::string> RenderBudgetReportHtml(const nlohmann::ordered_json& report);
-
-// True when `document` is a budget definition (docs/budget-format.md: "measurand" and
-// "inputs", no "schema"), the input of `characterize budget` rather than a report of it.
-bool IsBudgetDefinition(const nlohmann::ordered_json& document);
 
 }  // namespace metro

@@ -16,7 +16,6 @@
 
 #include <cstdint>
 #include <limits>
-#include <nlohmann/json.hpp>  // Only for BudgetReportJson below, until its callers move.
 #include <optional>
 #include <string>
 #include <string_view>
@@ -180,10 +179,5 @@ Result<BudgetReport> BudgetReportFromJson(std::string_view text, const std::stri
 // The readable table of `characterize budget`.
 std::string BudgetReportTable(const BudgetReport& report);
 std::string BudgetReportTable(const BudgetEvaluation& evaluation);
-
-// Transitional, for callers that still build a report as JSON (the session report's
-// "budget"): ToJsonValue(MakeBudgetReport(evaluation)) of src/uncertainty/budget_report_json.hpp.
-// Leaves this header when they use that header.
-nlohmann::ordered_json BudgetReportJson(const BudgetEvaluation& evaluation);
 
 }  // namespace metro
