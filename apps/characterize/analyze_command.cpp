@@ -115,7 +115,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
     Note(fmt::format("note: --lenient skipped {} malformed rows (first at line {})\n",
                      analysis.session.rejected_rows, analysis.session.rejected_lines.front()));
   }
-  const std::string json = JsonText(analysis.report, 2) + "\n";
+  const std::string json = ToJson(analysis.report) + "\n";
   std::string html;
   if (!o.html.empty()) {
     Result<std::string> rendered = RenderSessionAnalysisHtml(analysis);

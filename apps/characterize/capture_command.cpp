@@ -233,7 +233,7 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
   if (!analysis.ok) {
     return PrintErrorExit(analysis.error);
   }
-  const std::string json = JsonText(analysis.report, 2) + "\n";
+  const std::string json = ToJson(analysis.report) + "\n";
   if (Status s = WriteOutputs({{c.output.empty() ? "-" : c.output, json}}); !s.ok()) {
     return PrintErrorExit(s.error());
   }

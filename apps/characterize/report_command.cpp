@@ -8,7 +8,7 @@
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/report/html_report.hpp"
-#include "metro/report/type_a_report.hpp"
+#include "metro/report/session_report.hpp"
 #include "output.hpp"
 #include "tags_names.hpp"
 
@@ -39,8 +39,13 @@ Result<std::string> RenderWithTags(const ReportCommandOptions& o) {
   }
   const std::string schema = document["schema"].get<std::string>();
   if (schema == kReportSchema) {
-    ApplyTagsToSessionReport(tags.value(), &document);
-    return RenderJsonHtml(document, o.json, o.session);
+    Result<SessionReport> report = SessionReportFromJson(text.value(), o.json);
+    if (!report.ok()) return report.error();
+    // Each sensor's name from the tags file, as `characterize analyze --tags FILE` names them.
+    for (SensorReport& s : report.value().sensors) {
+      s.name = tags.value().Name(static_cast<int>(s.sensor));
+    }
+    return RenderSessionReportHtml(report.value());
   }
   if (schema == kCalibrationSchema) {
     Result<Calibration> cal = LoadCalibration(o.json);
@@ -86,7 +91,8 @@ void AddReportCommand(CLI::App& app, int* exit_code) {
   sub->add_option("json", o->json, "REPORT.json")->required()->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "HTML file to write (- for stdout)")->required();
   sub->add_option("--session", o->session,
-                  "the session the report was made from, if it moved (its SHA-256 must match)")
+                  "accepted for older scripts and not used: a page is drawn from the report alone "
+                  "(its plot data), no input is reloaded")
       ->check(CLI::ExistingFile);
   sub->add_option("--tags,--tag-registry", o->tags,
                   "tags file naming the tags on the page (docs/formats.md \"Tags file\"): a "

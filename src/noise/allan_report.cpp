@@ -9,16 +9,6 @@
 namespace metro {
 namespace {
 
-using Json = nlohmann::ordered_json;
-
-Json Number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
-
-Json NumberArray(const std::vector<double>& v) {
-  Json a = Json::array();
-  for (double x : v) a.push_back(Number(x));
-  return a;
-}
-
 std::string CsvNumber(double v) { return std::isfinite(v) ? fmt::format("{:.10g}", v) : ""; }
 
 }  // namespace
@@ -94,82 +84,6 @@ AllanTypeALink MakeAllanTypeALink(const AllanCurve& curve, const NoiseFit& fit, 
     link.extrapolated = p.value().extrapolated;
   }
   return link;
-}
-
-Json AllanToJson(const AllanCurve& curve, const NoiseFit& fit, const std::string& quantity_unit) {
-  const NoiseUnits units = NoiseUnitsFor(quantity_unit);
-  const std::array<ReadOff, kNoiseTermCount> readoffs = ReadOffNoiseTerms(curve);
-  Json j;
-  j["estimator"] = AllanEstimatorName(curve.estimator);
-  j["tau_s"] = NumberArray(curve.tau_s);
-  j["adev"] = NumberArray(curve.dev);
-  j["ci_low"] = NumberArray(curve.ci_low);
-  j["ci_high"] = NumberArray(curve.ci_high);
-  j["edf"] = NumberArray(curve.edf);
-  j["n_terms"] = curve.n_terms;
-  // Terms lost to missing samples at each tau (ComputeAllanWithGaps; 0 without gaps).
-  j["n_terms_gap_free"] = curve.n_terms_gap_free;
-  j["missing_fraction"] = NumberArray(MissingFractions(curve));
-  // Two-sided confidence level of [ci_low, ci_high] and the power-law noise type alpha
-  // (S_y ~ f^alpha) behind each tau's EDF, with where it came from (as in --allan-csv).
-  j["confidence"] = Number(curve.confidence);
-  j["alpha"] = curve.alpha;
-  Json sources = Json::array();
-  for (AlphaSource source : curve.alpha_source) sources.push_back(AlphaSourceName(source));
-  j["alpha_source"] = sources;
-  Json noise = Json::object();
-  for (NoiseTerm t : kAllNoiseTerms) {
-    const size_t i = static_cast<size_t>(t);
-    const UnitConversion& conv = units.terms[i];
-    const NoiseTermEstimate& est = fit.terms[i];
-    const bool have = fit.success && est.supported;
-    Json term;
-    term["value"] = have ? Number(est.value) : Json(nullptr);
-    term["u"] = have ? Number(est.u) : Json(nullptr);
-    term["unit"] = conv.unit;
-    term["value_conventional"] = have ? Number(est.value * conv.factor) : Json(nullptr);
-    term["unit_conventional"] = conv.unit_conventional;
-    term["u_conventional"] = have ? Number(est.u * conv.factor) : Json(nullptr);
-    term["supported"] = have;
-    term["tau_min_s"] = have ? Number(est.tau_min_s) : Json(nullptr);
-    term["tau_max_s"] = have ? Number(est.tau_max_s) : Json(nullptr);
-    const ReadOff& ro = readoffs[i];
-    if (ro.found) {
-      term["readoff"] = {
-          {"value", Number(ro.value)}, {"u", Number(ro.u)}, {"tau_s", Number(ro.tau_read_s)}};
-    } else {
-      term["readoff"] = nullptr;
-    }
-    if (t == NoiseTerm::kRandomWalk) {
-      // One-sided density of the white rate noise: d = sqrt(2) N (sigma(1 s) = d / sqrt 2).
-      const double d = std::sqrt(2.0) * est.value;
-      const double ud = std::sqrt(2.0) * est.u;
-      term["density_one_sided"] = have ? Number(d) : Json(nullptr);
-      term["u_density_one_sided"] = have ? Number(ud) : Json(nullptr);
-      term["unit_density"] = units.density.unit;
-      term["density_one_sided_conventional"] =
-          have ? Number(d * units.density.factor) : Json(nullptr);
-      term["unit_density_conventional"] = units.density.unit_conventional;
-    }
-    noise[NoiseTermKey(t)] = term;
-  }
-  j["noise"] = noise;
-  return j;
-}
-
-Json AllanTypeALinkToJson(const AllanCurve& curve, const NoiseFit& fit, double duration_s) {
-  Json j;
-  const AllanMinimum min = FindAllanMinimum(curve);
-  j["allan_min_tau_s"] = min.found ? Number(min.tau_s) : Json(nullptr);
-  j["allan_min_dev"] = min.found ? Number(min.dev) : Json(nullptr);
-  j["allan_min_at_end"] = min.at_end;
-  j["duration_s"] = Number(duration_s);
-  const Result<MeanUncertaintyPrediction> p = PredictMeanUncertainty(fit, duration_s);
-  j["u_mean_allan"] = p.ok() ? Number(p.value().u) : Json(nullptr);
-  j["u_u_mean_allan"] = p.ok() ? Number(p.value().u_of_u) : Json(nullptr);
-  j["dominant_term"] = p.ok() ? Json(NoiseTermKey(p.value().dominant)) : Json(nullptr);
-  j["extrapolated"] = p.ok() ? Json(p.value().extrapolated) : Json(nullptr);
-  return j;
 }
 
 std::vector<double> MissingFractions(const AllanCurve& curve) {

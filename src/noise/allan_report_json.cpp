@@ -1,5 +1,6 @@
 #include "allan_report_json.hpp"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -8,9 +9,12 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
+// NaN (no EDF) and an infinity are null.
+Json Number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+
 Json Numbers(const std::vector<double>& v) {
   Json a = Json::array();
-  for (double x : v) a.push_back(x);  // NaN is written as null.
+  for (double x : v) a.push_back(Number(x));
   return a;
 }
 
@@ -19,7 +23,7 @@ Json ToJsonValue(const AllanGapsReport& g) {
   j["policy"] = g.policy;
   j["grid_samples"] = g.grid_samples;
   j["missing_samples"] = g.missing_samples;
-  j["missing_fraction"] = g.missing_fraction;
+  j["missing_fraction"] = Number(g.missing_fraction);
   if (g.stretches) j["stretches"] = *g.stretches;
   if (g.analysed_first_sample) j["analysed_first_sample"] = *g.analysed_first_sample;
   if (g.analysed_samples) j["analysed_samples"] = *g.analysed_samples;
@@ -40,15 +44,15 @@ AllanGapsReport GapsFromJsonValue(const JsonCursor& c) {
 
 Json ToJsonValue(const AllanNoiseTermReport& t) {
   Json j;
-  j["value"] = t.value;
-  j["u"] = t.u;
+  j["value"] = Number(t.value);
+  j["u"] = Number(t.u);
   j["unit"] = t.unit;
-  j["value_conventional"] = t.value_conventional;
+  j["value_conventional"] = Number(t.value_conventional);
   j["unit_conventional"] = t.unit_conventional;
-  j["u_conventional"] = t.u_conventional;
+  j["u_conventional"] = Number(t.u_conventional);
   j["supported"] = t.supported;
-  j["tau_min_s"] = t.tau_min_s;
-  j["tau_max_s"] = t.tau_max_s;
+  j["tau_min_s"] = Number(t.tau_min_s);
+  j["tau_max_s"] = Number(t.tau_max_s);
   if (t.readoff) {
     j["readoff"] = {{"value", t.readoff->value}, {"u", t.readoff->u}, {"tau_s", t.readoff->tau_s}};
   } else {
@@ -56,10 +60,10 @@ Json ToJsonValue(const AllanNoiseTermReport& t) {
   }
   if (t.density) {
     const AllanDensityReport& d = *t.density;
-    j["density_one_sided"] = d.density_one_sided;
-    j["u_density_one_sided"] = d.u_density_one_sided;
+    j["density_one_sided"] = Number(d.density_one_sided);
+    j["u_density_one_sided"] = Number(d.u_density_one_sided);
     j["unit_density"] = d.unit_density;
-    j["density_one_sided_conventional"] = d.density_one_sided_conventional;
+    j["density_one_sided_conventional"] = Number(d.density_one_sided_conventional);
     j["unit_density_conventional"] = d.unit_density_conventional;
   }
   return j;
@@ -111,18 +115,18 @@ Json ToJsonValue(const AllanReport& a) {
   j["n_terms"] = a.n_terms;
   j["n_terms_gap_free"] = a.n_terms_gap_free;
   j["missing_fraction"] = Numbers(a.missing_fraction);
-  j["confidence"] = a.confidence;
+  j["confidence"] = Number(a.confidence);
   j["alpha"] = a.alpha;
   j["alpha_source"] = a.alpha_source;
   Json noise = Json::object();
   for (NoiseTerm t : kAllNoiseTerms) noise[NoiseTermKey(t)] = ToJsonValue(a.term(t));
   j["noise"] = noise;
   const AllanSamplePeriodReport& p = a.sample_period;
-  j["sample_period"] = {{"tau0_s", p.tau0_s},
-                        {"rate_hz", p.rate_hz},
-                        {"mean_dt_s", p.mean_dt_s},
-                        {"jitter_rms_s", p.jitter_rms_s},
-                        {"max_abs_jitter_s", p.max_abs_jitter_s},
+  j["sample_period"] = {{"tau0_s", Number(p.tau0_s)},
+                        {"rate_hz", Number(p.rate_hz)},
+                        {"mean_dt_s", Number(p.mean_dt_s)},
+                        {"jitter_rms_s", Number(p.jitter_rms_s)},
+                        {"max_abs_jitter_s", Number(p.max_abs_jitter_s)},
                         {"missing_samples", p.missing_samples},
                         {"warnings", p.warnings}};
   if (a.gaps) j["gaps"] = ToJsonValue(*a.gaps);
@@ -171,12 +175,12 @@ AllanReport AllanReportFromJsonValue(const JsonCursor& c) {
 
 Json ToJsonValue(const AllanTypeALink& link) {
   Json j;
-  j["allan_min_tau_s"] = link.allan_min_tau_s;
-  j["allan_min_dev"] = link.allan_min_dev;
+  j["allan_min_tau_s"] = Number(link.allan_min_tau_s);
+  j["allan_min_dev"] = Number(link.allan_min_dev);
   j["allan_min_at_end"] = link.allan_min_at_end;
-  j["duration_s"] = link.duration_s;
-  j["u_mean_allan"] = link.u_mean_allan;
-  j["u_u_mean_allan"] = link.u_u_mean_allan;
+  j["duration_s"] = Number(link.duration_s);
+  j["u_mean_allan"] = Number(link.u_mean_allan);
+  j["u_u_mean_allan"] = Number(link.u_u_mean_allan);
   j["dominant_term"] = link.dominant_term ? Json(*link.dominant_term) : Json(nullptr);
   j["extrapolated"] = link.extrapolated ? Json(*link.extrapolated) : Json(nullptr);
   return j;

@@ -14,8 +14,6 @@
 namespace metro {
 namespace {
 
-using json = nlohmann::ordered_json;
-
 // Position of each sample on the grid of period tau0: k = round((t - t_first) / tau0), from
 // the exact integer times when the file had them. Errors: two samples in one grid slot (a
 // clock that does not fit one grid).
@@ -42,15 +40,15 @@ Result<std::vector<int64_t>> GridIndices(const Tag& tag, size_t begin, size_t en
 // missing and what was done about it (report key allan.gaps, docs/noise.md "Gaps").
 Result<AllanCurve> CurveThroughGaps(const std::vector<double>& rate,
                                     const std::vector<int64_t>& index, double tau0_s,
-                                    const SessionAllanOptions& options, json* gaps) {
+                                    const SessionAllanOptions& options, AllanGapsReport* gaps) {
   const int64_t grid = index.back() + 1;
   const int64_t n = static_cast<int64_t>(rate.size());
   const int64_t missing = grid - n;
   const double fraction = static_cast<double>(missing) / static_cast<double>(grid);
-  (*gaps)["policy"] = AllanGapPolicyName(options.gaps);
-  (*gaps)["grid_samples"] = grid;
-  (*gaps)["missing_samples"] = missing;
-  (*gaps)["missing_fraction"] = fraction;
+  gaps->policy = AllanGapPolicyName(options.gaps);
+  gaps->grid_samples = grid;
+  gaps->missing_samples = missing;
+  gaps->missing_fraction = fraction;
   if (fraction > options.max_missing_fraction) {
     return MakeError(fmt::format(
         "{} of the {} samples of the record's time grid are missing ({:.1f} %, more than {:.0f} "
@@ -79,9 +77,9 @@ Result<AllanCurve> CurveThroughGaps(const std::vector<double>& rate,
       begin = k;
     }
   }
-  (*gaps)["stretches"] = stretches;
-  (*gaps)["analysed_first_sample"] = best_begin;
-  (*gaps)["analysed_samples"] = best_length;
+  gaps->stretches = static_cast<int64_t>(stretches);
+  gaps->analysed_first_sample = static_cast<int64_t>(best_begin);
+  gaps->analysed_samples = static_cast<int64_t>(best_length);
   const auto b = static_cast<ptrdiff_t>(best_begin);
   const auto e = static_cast<ptrdiff_t>(best_begin + best_length);
   return ComputeAllan(std::vector<double>(rate.begin() + b, rate.begin() + e), tau0_s,
@@ -112,19 +110,19 @@ Result<AllanGapPolicy> ParseAllanGapPolicy(const std::string& text) {
 
 Result<AllanSectionSummary> AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                                              const SessionAllanOptions& options,
-                                             nlohmann::ordered_json* report, std::string* csv) {
+                                             SessionReport* report, std::string* csv) {
   std::string why;
   if (!options.allan.IsValid(&why)) return MakeError("invalid --allan options: " + why);
   AllanSectionSummary summary;
   auto failed = [&summary](const TagTypeA& t, const QuantityTypeA& q, const std::string& reason) {
     summary.failures.push_back(fmt::format("sensor {} {}: {}", t.sensor, q.name, reason));
   };
-  auto& sensors = (*report)["sensors"];
+  std::vector<SensorReport>& sensors = report->sensors;
   for (size_t k = 0; k < type_a.tags.size(); ++k) {
     const TagTypeA& t = type_a.tags[k];
     const Tag* tag = session.FindTag(t.sensor);
     METRO_CHECK(tag != nullptr);
-    json& jtag = sensors[k];
+    SensorReport& jtag = sensors[k];
     for (const QuantityTypeA& q : t.quantities) {
       const bool wanted = options.quantities.empty()
                               ? IsRateQuantity(q.name)
@@ -132,7 +130,8 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
                                           q.name) != options.quantities.end();
       if (!wanted) continue;
       ++summary.requested;
-      json& jq = jtag["quantities"][q.name];
+      QuantityReport* jq = jtag.Find(q.name);
+      METRO_CHECK(jq != nullptr);
       const Quantity* values = tag->Find(q.name);
       const auto b = static_cast<ptrdiff_t>(t.window.begin);
       const auto e = static_cast<ptrdiff_t>(t.window.end);
@@ -155,44 +154,46 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
             err.message.find("gap") != std::string::npos) {
           err.message += " (--gaps refuse; --gaps skip analyses through them)";
         }
-        jq["allan"] = {{"error", err.ToString()}};
+        jq->allan = AllanReport{};
+        jq->allan->error = err.ToString();
         failed(t, q, err.ToString());
         continue;
       }
-      json gaps;
+      std::optional<AllanGapsReport> gaps;
       Result<AllanCurve> curve = MakeError("not computed");
       if (period.value().missing_samples == 0) {
         curve = ComputeAllan(rate, period.value().tau0_s, options.allan);
       } else {
         Result<std::vector<int64_t>> index =
             GridIndices(*tag, t.window.begin, t.window.end, period.value().tau0_s, session.path);
-        curve = index.ok()
-                    ? CurveThroughGaps(rate, index.value(), period.value().tau0_s, options, &gaps)
-                    : Result<AllanCurve>(index.error());
+        if (index.ok()) {
+          gaps = AllanGapsReport{};
+          curve = CurveThroughGaps(rate, index.value(), period.value().tau0_s, options, &*gaps);
+        } else {
+          curve = index.error();
+        }
       }
       if (!curve.ok()) {
-        jq["allan"] = {{"error", curve.error().ToString()}};
-        if (!gaps.is_null()) jq["allan"]["gaps"] = gaps;
+        jq->allan = AllanReport{};
+        jq->allan->error = curve.error().ToString();
+        jq->allan->gaps = gaps;
         failed(t, q, curve.error().ToString());
         continue;
       }
       ++summary.analysed;
       auto fit = FitNoiseTerms(curve.value(), options.fit);
       const NoiseFit noise_fit = fit.ok() ? fit.value() : NoiseFit{};
-      json allan = AllanToJson(curve.value(), noise_fit, q.unit);
+      AllanReport allan = MakeAllanReport(curve.value(), noise_fit, q.unit);
       const SamplePeriod& p = period.value();
-      allan["sample_period"] = {{"tau0_s", p.tau0_s},
-                                {"rate_hz", p.rate_hz},
-                                {"mean_dt_s", p.mean_dt_s},
-                                {"jitter_rms_s", p.jitter_rms_s},
-                                {"max_abs_jitter_s", p.max_abs_jitter_s},
-                                {"missing_samples", p.missing_samples},
-                                {"warnings", p.warnings}};
-      if (!gaps.is_null()) allan["gaps"] = gaps;
-      if (!fit.ok()) allan["fit_error"] = fit.error().message;
-      jq["allan"] = allan;
-      jq["allan_type_a_link"] =
-          AllanTypeALinkToJson(curve.value(), noise_fit, t.window.t_last_s - t.window.t_first_s);
+      allan.sample_period = {p.tau0_s,           p.rate_hz,
+                             p.mean_dt_s,        p.jitter_rms_s,
+                             p.max_abs_jitter_s, static_cast<int64_t>(p.missing_samples),
+                             p.warnings};
+      allan.gaps = gaps;
+      if (!fit.ok()) allan.fit_error = fit.error().message;
+      jq->allan = std::move(allan);
+      jq->allan_type_a_link =
+          MakeAllanTypeALink(curve.value(), noise_fit, t.window.t_last_s - t.window.t_first_s);
       if (csv != nullptr) {
         *csv += fmt::format("# sensor {} {}\n", t.sensor, q.name);
         *csv += AllanCurveCsv(curve.value(), q.unit);
@@ -207,39 +208,33 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
   return summary;
 }
 
-std::string AllanSummaryTable(const nlohmann::ordered_json& report) {
+std::string AllanSummaryTable(const SessionReport& report) {
   std::string out;
-  auto term = [](const nlohmann::ordered_json& noise, const char* key) -> std::string {
-    if (!noise.contains(key)) return "-";
-    const auto& t = noise[key];
-    if (!t.value("supported", false) || !t["value"].is_number() || !t["u"].is_number()) {
-      return "-";
-    }
-    return ConciseNotation(t["value"].get<double>(), t["u"].get<double>()) + " " +
-           t.value("unit", std::string());
+  auto term = [](const AllanNoiseTermReport& t) -> std::string {
+    if (!t.supported || !std::isfinite(t.value) || !std::isfinite(t.u)) return "-";
+    return ConciseNotation(t.value, t.u) + " " + t.unit;
   };
-  for (const auto& s : report["sensors"]) {
-    for (const auto& [qname, q] : s["quantities"].items()) {
-      if (!q.contains("allan") || !q["allan"].contains("noise")) continue;
+  for (const SensorReport& s : report.sensors) {
+    for (const QuantityReport& q : s.quantities) {
+      if (!q.allan || !q.allan->ok()) continue;
+      const AllanReport& allan = *q.allan;
       if (out.empty()) {
         out = fmt::format(
             "\nAllan deviation ({}; IEEE 952 terms fitted, value(u)):\n{:>6} {:<18} {:<28} "
             "{:<28} {:<28} {}\n",
-            q["allan"].value("estimator", std::string("oadev")), "sensor", "quantity",
-            "N (white noise)", "B (bias instability)", "K (rate random walk)", "minimum");
+            allan.estimator, "sensor", "quantity", "N (white noise)", "B (bias instability)",
+            "K (rate random walk)", "minimum");
       }
-      const auto& noise = q["allan"]["noise"];
       std::string minimum = "-";
-      if (q.contains("allan_type_a_link") && q["allan_type_a_link"]["allan_min_dev"].is_number()) {
-        const auto& link = q["allan_type_a_link"];
-        minimum =
-            fmt::format("{} {} at {:.3g} s{}", ConsoleNumber(link["allan_min_dev"].get<double>()),
-                        q.value("unit", std::string()), link["allan_min_tau_s"].get<double>(),
-                        link.value("allan_min_at_end", false) ? " (last tau)" : "");
+      if (q.allan_type_a_link && std::isfinite(q.allan_type_a_link->allan_min_dev)) {
+        const AllanTypeALink& link = *q.allan_type_a_link;
+        minimum = fmt::format("{} {} at {:.3g} s{}", ConsoleNumber(link.allan_min_dev), q.unit,
+                              link.allan_min_tau_s, link.allan_min_at_end ? " (last tau)" : "");
       }
-      out += fmt::format("{:>6} {:<18} {:<28} {:<28} {:<28} {}\n", s["sensor"].get<int>(), qname,
-                         term(noise, "random_walk"), term(noise, "bias_instability"),
-                         term(noise, "rate_random_walk"), minimum);
+      out += fmt::format("{:>6} {:<18} {:<28} {:<28} {:<28} {}\n", s.sensor, q.name,
+                         term(allan.term(NoiseTerm::kRandomWalk)),
+                         term(allan.term(NoiseTerm::kBiasInstability)),
+                         term(allan.term(NoiseTerm::kRateRandomWalk)), minimum);
     }
   }
   return out;

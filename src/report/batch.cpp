@@ -62,42 +62,32 @@ struct SessionResults {
   std::vector<std::string> warnings;
 };
 
-int64_t Count(const ordered_json& j, const char* key) {
-  return j.contains(key) && j[key].is_number_integer() ? j[key].get<int64_t>() : 0;
-}
-
-double Number(const ordered_json& j, const char* key) {
-  if (!j.contains(key) || !j[key].is_number()) return std::nan("");
-  return j[key].get<double>();
-}
-
-SessionResults ExtractResults(const ordered_json& report, const std::string& input) {
+SessionResults ExtractResults(const SessionReport& report, const std::string& input) {
   SessionResults results;
   results.warnings = NoFreshPacketWarnings(report, input + ": ");
   std::vector<QuantityResult>& out = results.quantities;
-  for (const auto& s : report["sensors"]) {
+  for (const SensorReport& s : report.sensors) {
     TagResult t;
-    t.sensor = s["sensor"].get<int>();
-    t.tag_name = s.value("name", "");
-    t.frames = Count(s, "frames");
-    t.fresh = Count(s, "fresh");
-    t.stale = Count(s, "stale");
-    t.never = Count(s, "never");
+    t.sensor = static_cast<int>(s.sensor);
+    t.tag_name = s.name;
+    t.frames = s.frames;
+    t.fresh = s.fresh;
+    t.stale = s.stale;
+    t.never = s.never;
     results.tags.push_back(t);
-    if (!s.contains("quantities")) continue;
-    for (const auto& [name, q] : s["quantities"].items()) {
-      if (!q.contains("type_a") || !q["type_a"].is_object()) continue;
-      const auto& a = q["type_a"];
+    for (const QuantityReport& q : s.quantities) {
+      if (!q.type_a) continue;
+      const TypeAReport& a = *q.type_a;
       QuantityResult r;
-      r.sensor = s["sensor"].get<int>();
-      r.tag_name = s.value("name", "");
-      r.quantity = name;
-      r.unit = q.value("unit", "");
-      r.mean = Number(a, "mean");
+      r.sensor = static_cast<int>(s.sensor);
+      r.tag_name = s.name;
+      r.quantity = q.name;
+      r.unit = q.unit;
+      r.mean = a.mean;
       // metro's recommended u of the mean; reports from before it had only Zhang's.
-      r.u_mean = Number(a, a.contains("u_mean") ? "u_mean" : "std_of_mean_autocorr");
-      r.n = Number(a, "n");
-      r.n_eff = Number(a, "n_eff");
+      r.u_mean = a.has_u_mean ? a.u_mean : a.std_of_mean_autocorr;
+      r.n = static_cast<double>(a.n);
+      r.n_eff = a.n_eff;
       out.push_back(std::move(r));
     }
   }
@@ -190,18 +180,15 @@ CircularStatistics CircularStatisticsDeg(const std::vector<double>& angles_deg) 
   return out;
 }
 
-std::vector<std::string> NoFreshPacketWarnings(const ordered_json& report,
+std::vector<std::string> NoFreshPacketWarnings(const SessionReport& report,
                                                const std::string& prefix) {
   std::vector<std::string> out;
-  if (!report.contains("sensors")) return out;
-  for (const auto& s : report["sensors"]) {
-    const int64_t frames = Count(s, "frames");
-    if (frames <= 0 || Count(s, "fresh") != 0) continue;
+  for (const SensorReport& s : report.sensors) {
+    if (s.frames <= 0 || s.fresh != 0) continue;
     out.push_back(
         fmt::format("{}WARNING sensor {} ({}): no fresh packet in {} frames (stale {}, never {}): "
                     "packet_loss_ratio 1.0, no observations; the tag never connected or was lost",
-                    prefix, s["sensor"].get<int>(), s.value("name", ""), frames, Count(s, "stale"),
-                    Count(s, "never")));
+                    prefix, s.sensor, s.name, s.frames, s.stale, s.never));
   }
   return out;
 }
@@ -391,7 +378,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
           item.input_error = false;
         }
       }
-      const std::string json = JsonText(a.report, 2) + "\n";
+      const std::string json = ToJson(a.report) + "\n";
       Status s = !item.error.message.empty() ? Status(item.error)
                  : options.session_pages
                      ? WriteFilesAtomically({{item.report_path, json}, {item.page_path, page}})

@@ -18,8 +18,10 @@
 #include "metro/report/batch_page.hpp"
 #include "metro/report/budget_page.hpp"
 #include "metro/report/certificate.hpp"
+#include "metro/report/session_report.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "session_plots.hpp"
+#include "session_report_json.hpp"
 #include "session_tables.hpp"
 
 namespace metro {
@@ -35,6 +37,7 @@ using report_internal::NoiseRows;
 using report_internal::OptionRows;
 using report_internal::QuantityPlots;
 using report_internal::ResultRows;
+using report_internal::SessionOptionRows;
 using report_internal::ShortNumber;
 using report_internal::TypeADetailRows;
 
@@ -44,89 +47,70 @@ bool IsQuaternionComponent(const std::string& name) {
   return name == "qw" || name == "qx" || name == "qy" || name == "qz";
 }
 
-std::string SettleText(const ordered_json& window) {
-  if (!window.contains("settle")) return "none";
-  const ordered_json& s = window["settle"];
+std::string SettleText(const ReportWindow& window) {
+  if (!window.settle) return "none";
+  const ReportWindowSettle& s = *window.settle;
   // `driver`: the quantity whose cut the tag window takes (each quantity has its own).
-  const std::string driver = s.contains("driver") && s["driver"].is_string()
-                                 ? fmt::format(", the cut of {}", s["driver"].get<std::string>())
-                                 : "";
-  return fmt::format("{}: {} samples{}{}", JsonString(s, "method"),
-                     ShortNumber(JsonNumber(s, "samples"), 10), driver,
-                     s.value("at_limit", false) ? " (at the limit)" : "");
+  const std::string driver = s.driver ? fmt::format(", the cut of {}", *s.driver) : "";
+  return fmt::format("{}: {} samples{}{}", s.method,
+                     ShortNumber(static_cast<double>(s.samples), 10), driver,
+                     s.at_limit ? " (at the limit)" : "");
 }
 
 // How the file was read (the report's input.dialect, mapping and time), in words: empty for
 // a receiver capture, which has none of them.
-std::string DialectText(const ordered_json& input) {
-  if (!input.contains("dialect") || !input["dialect"].is_object()) return "";
-  const ordered_json& d = input["dialect"];
-  const std::string delimiter = JsonString(d, "delimiter");
+std::string DialectText(const ReportInput& input) {
+  if (!input.dialect) return "";
+  const ReportDialect& d = *input.dialect;
+  const std::string& delimiter = d.delimiter;
   std::string text = delimiter == "\t"  ? "tab-separated"
                      : delimiter == ";" ? "semicolon-separated"
                      : delimiter == "," ? "comma-separated"
                                         : fmt::format("separated by {}", delimiter);
-  if (JsonString(d, "decimal_point") == ",") text += ", decimal comma";
-  text += fmt::format(", {} line ends", JsonString(d, "line_ends"));
-  if (d.value("bom", false)) text += ", UTF-8 byte-order mark";
-  if (d.value("quoted", false)) text += ", quoted fields";
-  if (d.value("header_in_comment", false)) text += ", header in a '#' comment";
+  if (d.decimal_point == ",") text += ", decimal comma";
+  text += fmt::format(", {} line ends", d.line_ends);
+  if (d.bom) text += ", UTF-8 byte-order mark";
+  if (d.quoted) text += ", quoted fields";
+  if (d.header_in_comment) text += ", header in a '#' comment";
   return text;
 }
 
-std::string MappingText(const ordered_json& input) {
-  if (!input.contains("mapping") || !input["mapping"].is_array()) return "";
+std::string MappingText(const ReportInput& input) {
+  if (!input.mapping) return "";
   std::string text;
-  for (const ordered_json& m : input["mapping"]) {
-    const std::string canonical = JsonString(m, "canonical");
-    text += fmt::format("{}{} \u2192 {}", text.empty() ? "" : "; ", JsonString(m, "source"),
-                        canonical.empty() ? "(left out)" : canonical);
+  for (const ReportColumnMapping& m : *input.mapping) {
+    text += fmt::format("{}{} \u2192 {}", text.empty() ? "" : "; ", m.source,
+                        m.canonical.empty() ? "(left out)" : m.canonical);
   }
   return text;
 }
 
-std::string TimeText(const ordered_json& input) {
-  if (!input.contains("time") || !input["time"].is_object()) return "";
-  const ordered_json& t = input["time"];
-  const std::string source = JsonString(t, "source");
-  std::string text = t.contains("rate_hz")
-                         ? fmt::format("none in the file: sample i at i / {} Hz",
-                                       ShortNumber(JsonNumber(t, "rate_hz"), 10))
-                         : fmt::format("column {} in {}", source, JsonString(t, "unit"));
-  if (t.value("integer", false)) {
-    text += fmt::format(", integer (exact), origin {} ns",
-                        t.contains("origin_ns") ? JsonText(t["origin_ns"]) : "0");
-  }
-  if (t.contains("resolution_s")) {
-    text +=
-        fmt::format(", resolution {} s as written", ShortNumber(JsonNumber(t, "resolution_s"), 3));
+std::string TimeText(const ReportInput& input) {
+  if (!input.time) return "";
+  const ReportTime& t = *input.time;
+  std::string text = t.rate_hz ? fmt::format("none in the file: sample i at i / {} Hz",
+                                             ShortNumber(*t.rate_hz, 10))
+                               : fmt::format("column {} in {}", t.source, t.unit);
+  if (t.integer) text += fmt::format(", integer (exact), origin {} ns", t.origin_ns.value_or(0));
+  if (t.resolution_s) {
+    text += fmt::format(", resolution {} s as written", ShortNumber(*t.resolution_s, 3));
   }
   return text;
 }
 
-mustache::data StringList(const ordered_json& j, const char* key) {
+mustache::data StringList(const std::vector<std::string>& strings) {
   mustache::data list{mustache::data::type::list};
-  if (j.contains(key) && j[key].is_array()) {
-    for (const auto& v : j[key])
-      list.push_back(mustache::data(v.is_string() ? v.get<std::string>() : JsonText(v)));
-  }
+  for (const std::string& v : strings) list.push_back(mustache::data(v));
   return list;
 }
 
-Status ValidateReport(const ordered_json& report) {
-  if (!report.is_object() || report.value("schema", "") != kReportSchema) {
-    return MakeError(
-        fmt::format("not a {} report (schema key missing or different)", kReportSchema));
-  }
-  for (const char* key : {"input", "sensors"}) {
-    if (!report.contains(key)) {
-      return MakeError(fmt::format("{} report: missing key '{}'", kReportSchema, key));
+bool AnyAllan(const SessionReport& report) {
+  for (const SensorReport& s : report.sensors) {
+    for (const QuantityReport& q : s.quantities) {
+      if (q.allan) return true;
     }
   }
-  if (!report["sensors"].is_array()) {
-    return MakeError(fmt::format("{} report: 'sensors' is not an array", kReportSchema));
-  }
-  return Status::Ok();
+  return false;
 }
 
 }  // namespace
@@ -136,28 +120,27 @@ bool HtmlReportOptions::IsValid(std::string* why) const {
     *why = "html: max_plotted_quantities must be >= 0";
     return false;
   }
-  if (max_series_points < 16) {
-    *why = "html: max_series_points must be >= 16";
-    return false;
-  }
-  if (histogram_bins < 0 || histogram_bins > 1000) {
-    *why = "html: histogram_bins must be in 0..1000";
-    return false;
-  }
-  if (max_autocorr_lag < 2) {
-    *why = "html: max_autocorr_lag must be >= 2";
-    return false;
-  }
   return true;
 }
 
-Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Session* session,
-                                            const std::string& session_note,
+Result<std::string> RenderSessionReportHtml(const SessionReport& report,
                                             const HtmlReportOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
-  if (Status s = ValidateReport(report); !s.ok()) return s.error();
-  const ordered_json& input = report["input"];
+  const ReportInput& input = report.input;
+  // The figures come from the plot data kept in the report at analysis time; a report from
+  // before metro kept it has the tables and Allan curves only.
+  bool any_plot_data = false;
+  for (const SensorReport& s : report.sensors) {
+    for (const QuantityReport& q : s.quantities) any_plot_data = any_plot_data || q.plot;
+  }
+  const std::string session_note =
+      any_plot_data
+          ? "Time series, histograms and autocorrelations drawn from the plot data computed "
+            "when the session was analysed (the report's \"plot\" objects)."
+          : "This report predates the plot data metro now keeps in a report: it has no time "
+            "series, histograms or autocorrelations. Run characterize analyze on the session "
+            "again for them; tables, Allan curves and budget bars come from the report.";
   mustache::data data;
   // The result first, then how it was obtained.
   data.set("result_rows", ResultRows(report));
@@ -165,11 +148,11 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
   mustache::data noise = NoiseRows(report);
   data.set("has_noise", !noise.is_empty_list());
   data.set("noise_rows", noise);
-  data.set("input_path", JsonString(input, "path"));
-  data.set("input_sha256", JsonString(input, "sha256"));
-  data.set("input_format", JsonString(input, "format"));
-  data.set("input_rows", ShortNumber(JsonNumber(input, "rows"), 12));
-  data.set("input_rejected_rows", ShortNumber(JsonNumber(input, "rejected_rows"), 12));
+  data.set("input_path", input.path);
+  data.set("input_sha256", input.sha256);
+  data.set("input_format", input.format);
+  data.set("input_rows", ShortNumber(static_cast<double>(input.rows), 12));
+  data.set("input_rejected_rows", ShortNumber(static_cast<double>(input.rejected_rows), 12));
   // Each row only when the report has it (a receiver capture has no dialect, a canonical
   // file no mapping): a missing value renders no section.
   for (const auto& [key, text] :
@@ -177,37 +160,33 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
         std::pair{"input_mapping", MappingText(input)}, std::pair{"input_time", TimeText(input)}}) {
     if (!text.empty()) data.set(key, text);
   }
-  data.set("input_notes", StringList(input, "notes"));
-  data.set("input_warnings", StringList(input, "warnings"));
-  mustache::data option_rows =
-      report.contains("options") ? OptionRows(report["options"]) : mustache::data::type::list;
+  data.set("input_notes", StringList(input.notes));
+  data.set("input_warnings", StringList(input.warnings));
+  mustache::data option_rows = SessionOptionRows(report);
   data.set("has_options", !option_rows.is_empty_list());
   data.set("option_rows", option_rows);
-  data.set("session_ok", session != nullptr);
+  data.set("session_ok", any_plot_data);
   data.set("session_note", session_note);
 
   mustache::data sensors{mustache::data::type::list};
   int plotted = 0;
   int not_plotted = 0;
-  for (const ordered_json& s : report["sensors"]) {
-    const int sensor = static_cast<int>(JsonNumber(s, "sensor"));
-    const std::string tag_name = JsonString(s, "name");
-    const Tag* tag = session != nullptr ? session->FindTag(sensor) : nullptr;
+  for (size_t i = 0; i < report.sensors.size(); ++i) {
+    const SensorReport& s = report.sensors[i];
+    const int sensor = static_cast<int>(s.sensor);
     mustache::data sd;
     sd.set("sensor", std::to_string(sensor));
-    sd.set("tag", tag_name);
-    sd.set("frames", ShortNumber(JsonNumber(s, "frames"), 12));
-    sd.set("fresh", ShortNumber(JsonNumber(s, "fresh"), 12));
-    sd.set("stale", ShortNumber(JsonNumber(s, "stale"), 12));
-    sd.set("loss", fmt::format("{:.2f} %", 100.0 * JsonNumber(s, "packet_loss_ratio")));
-    const ordered_json empty = ordered_json::object();
-    const ordered_json& window = s.contains("window") ? s["window"] : empty;
-    sd.set("n", ShortNumber(JsonNumber(window, "n"), 12));
-    sd.set("n_total", ShortNumber(JsonNumber(window, "n_total"), 12));
-    sd.set("t_first_s", ShortNumber(JsonNumber(window, "t_first_s"), 6));
-    sd.set("t_last_s", ShortNumber(JsonNumber(window, "t_last_s"), 6));
-    sd.set("settle", SettleText(window));
-    sd.set("warnings", StringList(s, "warnings"));
+    sd.set("tag", s.name);
+    sd.set("frames", ShortNumber(static_cast<double>(s.frames), 12));
+    sd.set("fresh", ShortNumber(static_cast<double>(s.fresh), 12));
+    sd.set("stale", ShortNumber(static_cast<double>(s.stale), 12));
+    sd.set("loss", fmt::format("{:.2f} %", 100.0 * s.packet_loss_ratio));
+    sd.set("n", ShortNumber(static_cast<double>(s.window.n), 12));
+    sd.set("n_total", ShortNumber(static_cast<double>(s.window.n_total), 12));
+    sd.set("t_first_s", ShortNumber(s.window.t_first_s, 6));
+    sd.set("t_last_s", ShortNumber(s.window.t_last_s, 6));
+    sd.set("settle", SettleText(s.window));
+    sd.set("warnings", StringList(s.warnings));
     QuantityPlots groups;
     AddAllanGroupPlots(s, &groups);
     sd.set("has_allan_groups",
@@ -215,42 +194,40 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
     sd.set("allan_group_plots", groups.plots);
     sd.set("allan_group_unavailable", groups.unavailable);
     mustache::data quantities{mustache::data::type::list};
-    if (s.contains("quantities") && s["quantities"].is_object()) {
-      for (const auto& [qname, q] : s["quantities"].items()) {
-        const bool evaluated = q.contains("type_a") && q["type_a"].is_object();
-        const bool wanted =
-            options.plot_quantities.empty()
-                ? !IsQuaternionComponent(qname)
-                : std::find(options.plot_quantities.begin(), options.plot_quantities.end(),
-                            qname) != options.plot_quantities.end();
-        if (!evaluated || !wanted) continue;
-        if (plotted >= options.max_plotted_quantities) {
-          ++not_plotted;
-          continue;
-        }
-        ++plotted;
-        mustache::data qd;
-        qd.set("sensor", std::to_string(sensor));
-        qd.set("quantity", qname);
-        qd.set("unit", JsonString(q, "unit"));
-        qd.set("warnings", StringList(q, "warnings"));
-        QuantityPlots plots;
-        const Quantity* column = tag != nullptr ? tag->Find(qname) : nullptr;
-        if (column != nullptr) {
-          AddSeriesPlots(s, qname, q, *tag, *column, options, &plots);
-        } else {
-          plots.unavailable.push_back(mustache::data(fmt::format(
-              "time series, histogram and autocorrelation of {}: unavailable ({})", qname,
-              session == nullptr ? session_note : "the session has no such tag or column")));
-        }
-        mustache::data terms{mustache::data::type::list};
-        if (q.contains("allan")) AddAllanPlot(qname, q, &plots, &terms);
-        qd.set("has_allan_terms", !terms.is_empty_list());
-        qd.set("allan_terms", terms);
-        qd.set("plots", plots.plots);
-        qd.set("unavailable", plots.unavailable);
-        quantities.push_back(qd);
+    for (const QuantityReport& q : s.quantities) {
+      const std::string& qname = q.name;
+      const bool wanted =
+          options.plot_quantities.empty()
+              ? !IsQuaternionComponent(qname)
+              : std::find(options.plot_quantities.begin(), options.plot_quantities.end(), qname) !=
+                    options.plot_quantities.end();
+      if (!q.type_a || !wanted) continue;
+      if (plotted >= options.max_plotted_quantities) {
+        ++not_plotted;
+        continue;
       }
+      ++plotted;
+      mustache::data qd;
+      qd.set("sensor", std::to_string(sensor));
+      qd.set("quantity", qname);
+      qd.set("unit", q.unit);
+      qd.set("warnings", StringList(q.warnings));
+      QuantityPlots plots;
+      if (q.plot) {
+        AddSeriesPlots(q, *q.plot, &plots);
+      } else {
+        plots.unavailable.push_back(mustache::data(fmt::format(
+            "time series, histogram and autocorrelation of {}: unavailable ({})", qname,
+            any_plot_data ? "no plot data was kept for it when the session was analysed"
+                          : "the report predates plot data; run characterize analyze again")));
+      }
+      mustache::data terms{mustache::data::type::list};
+      if (q.allan) AddAllanPlot(q, &plots, &terms);
+      qd.set("has_allan_terms", !terms.is_empty_list());
+      qd.set("allan_terms", terms);
+      qd.set("plots", plots.plots);
+      qd.set("unavailable", plots.unavailable);
+      quantities.push_back(qd);
     }
     sd.set("quantities", quantities);
     sensors.push_back(sd);
@@ -261,8 +238,10 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
            fmt::format("{} more quantities are in the tables but not plotted (at most {} are "
                        "plotted).",
                        not_plotted, options.max_plotted_quantities));
-  if (report.contains("budget")) {
-    Result<mustache::data> budget = report_internal::BudgetViewData(report["budget"]);
+  const bool has_budget = !report.budget_json.empty();
+  if (has_budget) {
+    Result<mustache::data> budget =
+        report_internal::BudgetViewData(ordered_json::parse(report.budget_json));
     if (!budget.ok()) return budget.error();
     data.set("budget", budget.value());
   } else {
@@ -270,110 +249,35 @@ Result<std::string> RenderSessionReportHtml(const ordered_json& report, const Se
   }
   Result<std::string> body = report_internal::RenderTemplate("session", std::move(data));
   if (!body.ok()) return body;
-  const std::string file = std::filesystem::path(JsonString(input, "path")).filename().string();
+  const std::string file = std::filesystem::path(input.path).filename().string();
   return report_internal::RenderPage(
       fmt::format("Session report: {}", file),
       fmt::format("{} (GUM Type A{}{}) - sha256 {}", kReportSchema,
-                  report_internal::AnyAllan(report) ? ", Allan deviation" : "",
-                  report.contains("budget") ? ", uncertainty budget" : "",
-                  JsonString(input, "sha256").substr(0, 16)),
+                  AnyAllan(report) ? ", Allan deviation" : "",
+                  has_budget ? ", uncertainty budget" : "", input.sha256.substr(0, 16)),
       body.value());
 }
 
 Result<std::string> RenderSessionAnalysisHtml(const SessionAnalysis& analysis,
                                               const HtmlReportOptions& options) {
   if (!analysis.ok) return MakeError("no HTML report of a failed analysis");
-  return RenderSessionReportHtml(
-      analysis.report, &analysis.session,
-      fmt::format("Plots drawn from the session as analysed ({}).", analysis.session.path),
-      options);
+  return RenderSessionReportHtml(analysis.report, options);
 }
 
 namespace {
 
-// Reloads the report's session: `explicit_path`, or input.path as given and relative to the
-// report's directory. Sets *note to what happened.
-std::optional<Session> ReloadReportSession(const ordered_json& report, const std::string& json_path,
-                                           const std::string& explicit_path, std::string* note) {
-  const ordered_json& input = report["input"];
-  const std::string path = JsonString(input, "path");
-  const std::string sha256 = JsonString(input, "sha256");
-  std::vector<std::string> candidates;
-  if (!explicit_path.empty()) {
-    candidates.push_back(explicit_path);
-  } else if (!path.empty()) {
-    candidates.push_back(path);
-    const std::filesystem::path dir = std::filesystem::path(json_path).parent_path();
-    if (std::filesystem::path(path).is_relative() && !dir.empty()) {
-      candidates.push_back((dir / path).string());
-    }
-  }
-  std::vector<std::string> reasons;
-  for (const std::string& candidate : candidates) {
-    Result<std::string> hash = Sha256File(candidate);
-    if (!hash.ok()) {
-      reasons.push_back(fmt::format("{}: cannot be read", candidate));
-      continue;
-    }
-    if (hash.value() != sha256) {
-      reasons.push_back(
-          fmt::format("{}: its SHA-256 {} differs from the report's", candidate, hash.value()));
-      continue;
-    }
-    LoadOptions load;
-    if (!ParseSessionFormat(JsonString(input, "format"), &load.format)) {
-      load.format = SessionFormat::kAuto;
-    }
-    // The same columns, time and scales as the report's load (type_a_report's "input").
-    if (input.contains("mapping") && input["mapping"].is_array()) {
-      for (const auto& m : input["mapping"]) {
-        if (m.is_object() && m.value("source", ordered_json()).is_string() &&
-            m.value("canonical", ordered_json()).is_string()) {
-          load.column_map.push_back(
-              {m["source"].get<std::string>(), m["canonical"].get<std::string>()});
-        }
-      }
-    }
-    if (input.contains("time") && input["time"].is_object()) {
-      const double rate_hz = JsonNumber(input["time"], "rate_hz");
-      if (std::isfinite(rate_hz) && rate_hz > 0.0) load.rate_hz = rate_hz;
-    }
-    if (input.contains("raw_full_scale") && input["raw_full_scale"].is_object()) {
-      const double accel = JsonNumber(input["raw_full_scale"], "accel_fs_g");
-      const double gyro = JsonNumber(input["raw_full_scale"], "gyro_fs_dps");
-      if (std::isfinite(accel) && accel > 0.0) load.accel_fs_g = accel;
-      if (std::isfinite(gyro) && gyro > 0.0) load.gyro_fs_dps = gyro;
-    }
-    load.lenient = JsonNumber(input, "rejected_rows") > 0;
-    const double period = JsonNumber(input, "frame_period_s");
-    if (std::isfinite(period) && period > 0.0) load.frame_period_s = period;
-    load.threads = 1;
-    Result<Session> session = LoadSession(candidate, load);
-    if (!session.ok()) {
-      reasons.push_back(session.error().ToString());
-      continue;
-    }
-    *note = fmt::format(
-        "Plots drawn from the session reloaded from {} (SHA-256 matches the "
-        "report).",
-        candidate);
-    return std::move(session).value();
-  }
-  if (candidates.empty()) reasons.push_back("the report names no input file");
-  std::string joined;
-  for (const std::string& r : reasons) joined += (joined.empty() ? "" : "; ") + r;
-  *note = fmt::format(
-      "The session's raw data are not available ({}): the time series, histogram and "
-      "autocorrelation plots need them and are omitted; tables, Allan curves and budget bars "
-      "come from the JSON alone.",
-      joined);
-  return std::nullopt;
+// The session view of a saved report's text, read with SessionReportFromJson.
+Result<std::string> RenderSessionReportText(const std::string& text, const std::string& json_path,
+                                            const HtmlReportOptions& options) {
+  Result<SessionReport> report = SessionReportFromJson(text, json_path);
+  if (!report.ok()) return report.error();
+  return RenderSessionReportHtml(report.value(), options);
 }
 
 }  // namespace
 
 Result<std::string> RenderJsonHtml(const ordered_json& document, const std::string& json_path,
-                                   const std::string& session_path,
+                                   const std::string& /*session_path*/,
                                    const HtmlReportOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
@@ -382,14 +286,8 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
           ? document["schema"].get<std::string>()
           : "";
   if (schema == kReportSchema) {
-    if (Status s = ValidateReport(document); !s.ok()) {
-      Error e = s.error();
-      e.file = json_path;
-      return e;
-    }
-    std::string note;
-    std::optional<Session> session = ReloadReportSession(document, json_path, session_path, &note);
-    return RenderSessionReportHtml(document, session ? &*session : nullptr, note, options);
+    // The document's text as metro writes it (indent 2), so positions match a file it wrote.
+    return RenderSessionReportText(JsonText(document, 2), json_path, options);
   }
   if (schema == kCalibrationSchema) {
     // The document's text as metro writes it (indent 2), so positions match a file it wrote.
@@ -439,13 +337,19 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
 }
 
 Result<std::string> RenderJsonFileHtml(const std::string& json_path,
-                                       const std::string& session_path,
+                                       const std::string& /*session_path*/,
                                        const HtmlReportOptions& options) {
   Result<std::string> text = ReadFile(json_path);
   if (!text.ok()) return text.error();
   Result<ordered_json> document = ParseOrderedJsonText(text.value(), json_path);
   if (!document.ok()) return document.error();
-  return RenderJsonHtml(document.value(), json_path, session_path, options);
+  if (document.value().is_object() && document.value().value("schema", "") == kReportSchema) {
+    // Read from the file's own text: an error names the value's line and column in it.
+    std::string why;
+    if (!options.IsValid(&why)) return MakeError(why);
+    return RenderSessionReportText(text.value(), json_path, options);
+  }
+  return RenderJsonHtml(document.value(), json_path, "", options);
 }
 
 }  // namespace metro

@@ -1,7 +1,9 @@
 #include "metro/report/session_analysis.hpp"
 
+#include "metro/core/json_text.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/report/batch.hpp"
+#include "metro/report/plot_data.hpp"
 #include "metro/report/settle_report.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/report/u_mean_evidence.hpp"
@@ -13,7 +15,7 @@
 namespace metro {
 
 bool SessionAnalysisOptions::IsValid(std::string* why) const {
-  return load.IsValid(why) && type_a.IsValid(why);
+  return load.IsValid(why) && type_a.IsValid(why) && plot.IsValid(why);
 }
 
 SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOptions& options) {
@@ -39,7 +41,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
   auto type_a = EvaluateSessionTypeA(out.session, options.type_a);
   if (!type_a.ok()) return fail(type_a.error(), true);
   out.type_a = std::move(type_a).value();
-  out.report = TypeAReportJson(out.session, out.type_a, options.type_a, options.registry);
+  out.report = MakeSessionReport(out.session, out.type_a, options.type_a, options.registry);
   AddSettleToReport(out.session, out.type_a, options.type_a.window, &out.report);
   bool run_allan = options.allan;
   if (run_allan && options.allan_skip_without_rates && options.allan_options.quantities.empty()) {
@@ -49,7 +51,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
     }
     if (!any_rate) {
       run_allan = false;
-      out.report["allan_skipped"] =
+      out.report.allan_skipped =
           "no rate quantity (gyroscope or accelerometer column) in the window: no Allan "
           "deviation for this session";
     }
@@ -64,6 +66,10 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
     out.nothing_produced = out.nothing_produced || allan.value().NothingProduced();
     ApplyAllanEvidenceToUMean(&out.type_a, &out.report);
   }
+  // The figures of the session page, from the record as analysed (the window, the settle
+  // cuts and the Allan u_mean are final here).
+  Result<int> plots = AddPlotData(out.session, out.type_a, options.plot, &out.report);
+  if (!plots.ok()) return fail(plots.error(), false);
   out.table.clear();
   for (const std::string& w : NoFreshPacketWarnings(out.report)) out.table += w + "\n";
   out.table += TypeAReportTable(out.report);
@@ -74,7 +80,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
     if (!budget.ok()) return fail(budget.error(), true);
     auto evaluation = EvaluateBudget(budget.value(), progress);
     if (!evaluation.ok()) return fail(evaluation.error(), false);
-    out.report["budget"] = BudgetReportJson(evaluation.value());
+    out.report.budget_json = JsonText(BudgetReportJson(evaluation.value()));
     out.table += BudgetReportTable(evaluation.value());
   }
   if (progress != nullptr) progress->Finish();

@@ -1,11 +1,13 @@
 #include "session_report_json.hpp"
 
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "metro/core/json_text.hpp"
 #include "noise/allan_report_json.hpp"
+#include "plot_data_json.hpp"
 
 namespace metro {
 namespace {
@@ -13,6 +15,16 @@ namespace {
 using Json = nlohmann::ordered_json;
 
 Json Null() { return Json(nullptr); }
+
+// NaN (and an infinity) is null in a report: in the text nlohmann writes it so anyway, and in
+// the value too, so a reader of the value sees what a reader of the file sees.
+void NullNonFinite(Json* j) {
+  if (j->is_number_float()) {
+    if (!std::isfinite(j->get<double>())) *j = nullptr;
+  } else if (j->is_structured()) {
+    for (Json& v : *j) NullNonFinite(&v);
+  }
+}
 
 template <typename T>
 Json OrNull(const std::optional<T>& v) {
@@ -322,6 +334,7 @@ Json ToJsonValue(const QuantityReport& q) {
   if (q.settle) j["settle"] = ToJsonValue(*q.settle);
   if (q.allan) j["allan"] = ToJsonValue(*q.allan);
   if (q.allan_type_a_link) j["allan_type_a_link"] = ToJsonValue(*q.allan_type_a_link);
+  if (q.plot) j["plot"] = PlotDataToJsonValue(*q.plot);
   return j;
 }
 
@@ -347,6 +360,8 @@ QuantityReport QuantityFromJsonValue(const std::string& name, const JsonCursor& 
   if (c.Has("allan_type_a_link")) {
     q.allan_type_a_link = AllanTypeALinkFromJsonValue(c["allan_type_a_link"]);
   }
+  // Reports written before metro kept plot data have none.
+  if (c.Has("plot")) q.plot = PlotDataFromJsonValue(c["plot"]);
   return q;
 }
 
@@ -402,6 +417,7 @@ Json ToJsonValue(const SessionReport& report) {
   j["sensors"] = std::move(sensors);
   if (report.allan_skipped) j["allan_skipped"] = *report.allan_skipped;
   if (!report.budget_json.empty()) j["budget"] = Json::parse(report.budget_json);
+  NullNonFinite(&j);
   return j;
 }
 

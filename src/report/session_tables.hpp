@@ -4,8 +4,9 @@
 #pragma once
 
 #include <kainjow/mustache.hpp>
-#include <nlohmann/json.hpp>
 #include <string>
+
+#include "metro/report/session_report.hpp"
 
 namespace metro::report_internal {
 
@@ -16,11 +17,11 @@ namespace metro::report_internal {
 // (type_a.coverage) in percent. A quantity without U_mean (a constant series, a report
 // written before metro stated U, u(mean) with fewer than one degree of freedom) shows "-"
 // for U and k and says why in "note" (set only then).
-kainjow::mustache::data ResultRows(const nlohmann::ordered_json& report);
+kainjow::mustache::data ResultRows(const SessionReport& report);
 
 // "summary_rows": the Type A details per tag and quantity: n, mean and u(mean) (rounded per
 // 7.2.6), s, n_eff and n_eff/n.
-kainjow::mustache::data TypeADetailRows(const nlohmann::ordered_json& report);
+kainjow::mustache::data TypeADetailRows(const SessionReport& report);
 
 // "noise_rows": per tag and quantity with an Allan fit: the one-sided white-noise density
 // d = sqrt(2) N (allan.noise.random_walk.density_one_sided, u_density_one_sided) in the
@@ -30,6 +31,9 @@ kainjow::mustache::data TypeADetailRows(const nlohmann::ordered_json& report);
 // tau" when the curve still falls there), the Allan-predicted u(mean) over the window
 // (allan_type_a_link.u_mean_allan, two significant digits) and the Type A u(mean) used
 // (type_a.u_mean, two significant digits).
-kainjow::mustache::data NoiseRows(const nlohmann::ordered_json& report);
+kainjow::mustache::data NoiseRows(const SessionReport& report);
+
+// "option_rows": the report's options as {option, value} rows (OptionRows of html_common).
+kainjow::mustache::data SessionOptionRows(const SessionReport& report);
 
 }  // namespace metro::report_internal

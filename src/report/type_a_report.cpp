@@ -2,6 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <iterator>
+#include <utility>
+#include <vector>
+
 #include "mean_coverage.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/core/version.hpp"
@@ -23,204 +28,182 @@ const char* OriginName(QuantityOrigin origin) {
   return "?";
 }
 
-nlohmann::ordered_json OptionalNumber(const std::optional<double>& v) {
-  return v ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
+// What the loader applied to a text file (docs/report-schema.md, "input"): enough to see
+// that nothing was guessed.
+void AddInputDialect(const InputDialect& d, ReportInput* input) {
+  input->dialect = ReportDialect{
+      std::string(1, d.delimiter), std::string(1, d.decimal_point), d.line_ends, d.bom, d.quoted,
+      d.header_in_comment};
+  std::vector<ReportColumnMapping> mapping;
+  for (const ColumnMapping& m : d.mapping) mapping.push_back({m.source, m.canonical});
+  input->mapping = std::move(mapping);
+  ReportTime time;
+  time.source = d.time_source;
+  time.unit = d.time_unit;
+  time.integer = d.time_integer;
+  if (d.time_integer) time.origin_ns = d.time_origin_ns;
+  if (d.rate_hz > 0.0) time.rate_hz = d.rate_hz;
+  if (d.time_resolution_s > 0.0) time.resolution_s = d.time_resolution_s;
+  input->time = time;
+  if (d.accel_fs_g > 0.0 || d.gyro_fs_dps > 0.0) {
+    input->raw_full_scale = ReportRawFullScale{d.accel_fs_g, d.gyro_fs_dps};
+  }
 }
 
-// What the loader applied to a text file (docs/report-schema.md, "input"): enough to read
-// the file again the same way (html_report's reload) and to see that nothing was guessed.
-void AddInputDialect(const InputDialect& d, nlohmann::ordered_json* input) {
-  using json = nlohmann::ordered_json;
-  (*input)["dialect"] = {{"delimiter", std::string(1, d.delimiter)},
-                         {"decimal_point", std::string(1, d.decimal_point)},
-                         {"line_ends", d.line_ends},
-                         {"bom", d.bom},
-                         {"quoted", d.quoted},
-                         {"header_in_comment", d.header_in_comment}};
-  json mapping = json::array();
-  for (const ColumnMapping& m : d.mapping) {
-    mapping.push_back({{"source", m.source}, {"canonical", m.canonical}});
+ReportInput MakeInput(const Session& session) {
+  ReportInput input;
+  input.path = session.path;
+  input.sha256 = session.sha256;
+  input.format = SessionFormatName(session.format);
+  input.rows = session.rows;
+  input.rejected_rows = session.rejected_rows;
+  for (size_t i = 0; i < session.rejected_lines.size(); ++i) {
+    input.rejected.push_back({session.rejected_lines[i], session.rejected_reasons[i]});
   }
-  (*input)["mapping"] = mapping;
-  json time = {{"source", d.time_source}, {"unit", d.time_unit}, {"integer", d.time_integer}};
-  if (d.time_integer) time["origin_ns"] = d.time_origin_ns;
-  if (d.rate_hz > 0.0) time["rate_hz"] = d.rate_hz;
-  if (d.time_resolution_s > 0.0) time["resolution_s"] = d.time_resolution_s;
-  (*input)["time"] = time;
-  if (d.accel_fs_g > 0.0 || d.gyro_fs_dps > 0.0) {
-    (*input)["raw_full_scale"] = {{"accel_fs_g", d.accel_fs_g}, {"gyro_fs_dps", d.gyro_fs_dps}};
+  input.columns = session.columns;
+  input.unknown_columns = session.unknown_columns;
+  if (session.format == SessionFormat::kReceiver) {
+    input.frame_period_s = session.frame_period_s;
+  } else {
+    AddInputDialect(session.input, &input);
   }
+  input.notes = session.input.notes;
+  input.warnings = session.input.warnings;
+  return input;
+}
+
+TypeAReport MakeTypeA(const TypeAResult& r) {
+  TypeAReport a;
+  a.n = r.n;
+  a.mean = r.mean;
+  a.variance = r.variance;
+  a.std = r.std;
+  a.variance_of_mean = r.variance_of_mean;
+  a.std_of_mean = r.std_of_mean;
+  a.dof = r.dof;
+  // Terms that were not computed are null, with the reason (autocorr_note).
+  if (r.autocorr_computed) {
+    a.n_eff = r.n_eff;
+    a.std_of_mean_autocorr = r.std_of_mean_autocorr;
+    a.autocorr_cutoff_lag = r.cutoff_lag;
+    a.rho1 = r.rho1;
+  } else {
+    a.autocorr_note = r.autocorr_note;
+  }
+  if (r.u_mean_available) {
+    a.u_mean = r.u_mean;
+    a.u_mean_dof = r.u_mean_dof;
+    a.u_mean_method = r.u_mean_method;
+  }
+  if (r.u_mean_method == kUMeanArSpectral) a.u_mean_ar_order = r.ar_order;
+  report_internal::SetMeanCoverage(&a);
+  return a;
 }
 
 }  // namespace
 
-nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionTypeA& result,
-                                       const SessionTypeAOptions& options,
-                                       const TagRegistry& registry) {
-  using json = nlohmann::ordered_json;
-  json report;
-  report["schema"] = kReportSchema;
-  report["tool"] = {{"name", kToolName}, {"version", kVersion}};
-  json input;
-  input["path"] = session.path;
-  input["sha256"] = session.sha256;
-  input["format"] = SessionFormatName(session.format);
-  input["rows"] = session.rows;
-  input["rejected_rows"] = session.rejected_rows;
-  json rejected = json::array();
-  for (size_t i = 0; i < session.rejected_lines.size(); ++i) {
-    rejected.push_back(
-        {{"line", session.rejected_lines[i]}, {"reason", session.rejected_reasons[i]}});
-  }
-  input["rejected"] = rejected;
-  input["columns"] = session.columns;
-  input["unknown_columns"] = session.unknown_columns;
-  if (session.format == SessionFormat::kReceiver) {
-    input["frame_period_s"] = session.frame_period_s;
-  } else {
-    AddInputDialect(session.input, &input);
-  }
-  if (!session.input.notes.empty()) input["notes"] = session.input.notes;
-  if (!session.input.warnings.empty()) input["warnings"] = session.input.warnings;
-  report["input"] = input;
+SessionReport MakeSessionReport(const Session& session, const SessionTypeA& result,
+                                const SessionTypeAOptions& options, const TagRegistry& registry) {
+  SessionReport report;
+  report.tool = ReportTool{kToolName, kVersion};
+  report.input = MakeInput(session);
 
   const WindowOptions& w = options.window;
-  report["options"] = {
-      {"skip_samples", w.skip_samples},
-      {"skip_seconds", w.skip_seconds},
-      {"from_s", OptionalNumber(w.from_s)},
-      {"to_s", OptionalNumber(w.to_s)},
-      {"settle", w.settle_auto ? "auto" : "none"},
-      {"sensors", options.sensors},
-      {"quantities", options.quantities},
-      {"autocorrelation",
-       {{"method", "Zhang 2006, Bartlett band, first lag inside the band ends the sum"},
-        {"band_confidence", options.type_a.band_confidence},
-        {"max_lag_fraction", options.type_a.max_lag_fraction}}}};
+  SessionReportOptions& o = report.options;
+  o.skip_samples = w.skip_samples;
+  o.skip_seconds = w.skip_seconds;
+  o.from_s = w.from_s ? *w.from_s : std::nan("");
+  o.to_s = w.to_s ? *w.to_s : std::nan("");
+  o.settle = w.settle_auto ? "auto" : "none";
+  o.sensors.assign(options.sensors.begin(), options.sensors.end());
+  o.quantities = options.quantities;
+  o.autocorrelation = {"Zhang 2006, Bartlett band, first lag inside the band ends the sum",
+                       options.type_a.band_confidence, options.type_a.max_lag_fraction};
 
-  json sensors = json::array();
   for (const TagTypeA& t : result.tags) {
-    json s;
-    s["sensor"] = t.sensor;
-    s["name"] = registry.Name(t.sensor);
-    s["frames"] = t.counts.frames;
-    s["fresh"] = t.counts.fresh;
-    s["stale"] = t.counts.stale;
-    s["never"] = t.counts.never;
-    s["packet_loss_ratio"] = t.counts.PacketLossRatio();
+    SensorReport s;
+    s.sensor = t.sensor;
+    s.name = registry.Name(t.sensor);
+    s.frames = t.counts.frames;
+    s.fresh = t.counts.fresh;
+    s.stale = t.counts.stale;
+    s.never = t.counts.never;
+    s.packet_loss_ratio = t.counts.PacketLossRatio();
     const AppliedWindow& a = t.window;
-    json window = {{"n_total", a.n_total},
-                   {"n", a.n()},
-                   {"first_index", a.begin},
-                   {"end_index", a.end},
-                   {"t_first_s", a.n() ? json(a.t_first_s) : json(nullptr)},
-                   {"t_last_s", a.n() ? json(a.t_last_s) : json(nullptr)},
-                   {"first_line", a.n() ? json(a.first_line) : json(nullptr)},
-                   {"last_line", a.n() ? json(a.last_line) : json(nullptr)}};
+    s.window.n_total = static_cast<int64_t>(a.n_total);
+    s.window.n = static_cast<int64_t>(a.n());
+    s.window.first_index = static_cast<int64_t>(a.begin);
+    s.window.end_index = static_cast<int64_t>(a.end);
+    if (a.n() > 0) {
+      s.window.t_first_s = a.t_first_s;
+      s.window.t_last_s = a.t_last_s;
+      s.window.first_line = a.first_line;
+      s.window.last_line = a.last_line;
+    }
     if (w.settle_auto) {
-      window["settle"] = {
-          {"method", "MSER-5"}, {"samples", a.settle_samples}, {"at_limit", a.settle_at_limit}};
+      s.window.settle = ReportWindowSettle{
+          "MSER-5", static_cast<int64_t>(a.settle_samples), a.settle_at_limit, {}, {}};
     }
-    s["window"] = window;
-    json quantities = json::object();
     for (const QuantityTypeA& q : t.quantities) {
-      json jq;
-      jq["unit"] = q.unit;
-      jq["origin"] = OriginName(q.origin);
-      jq["angle_handling"] = q.angle_handling;
-      if (q.angle_handling == "unwrapped") jq["unwrap_jumps"] = q.unwrap_jumps;
+      QuantityReport jq;
+      jq.name = q.name;
+      jq.unit = q.unit;
+      jq.origin = OriginName(q.origin);
+      jq.angle_handling = q.angle_handling;
+      if (q.angle_handling == "unwrapped") jq.unwrap_jumps = q.unwrap_jumps;
       if (q.ok) {
-        const TypeAResult& r = q.type_a;
-        // Terms that were not computed are null, with the reason (autocorr_note).
-        const bool ac = r.autocorr_computed;
-        const bool um = r.u_mean_available;
-        jq["type_a"] = {{"n", r.n},
-                        {"mean", r.mean},
-                        {"variance", r.variance},
-                        {"std", r.std},
-                        {"variance_of_mean", r.variance_of_mean},
-                        {"std_of_mean", r.std_of_mean},
-                        {"dof", r.dof},
-                        {"n_eff", ac ? json(r.n_eff) : json(nullptr)},
-                        {"std_of_mean_autocorr", ac ? json(r.std_of_mean_autocorr) : json(nullptr)},
-                        {"autocorr_cutoff_lag", ac ? json(r.cutoff_lag) : json(nullptr)},
-                        {"rho1", ac ? json(r.rho1) : json(nullptr)},
-                        {"autocorr_note", ac ? json(nullptr) : json(r.autocorr_note)},
-                        {"u_mean", um ? json(r.u_mean) : json(nullptr)},
-                        {"u_mean_dof", um ? json(r.u_mean_dof) : json(nullptr)},
-                        {"u_mean_method", um ? json(r.u_mean_method) : json(nullptr)},
-                        {"u_mean_ar_order",
-                         r.u_mean_method == kUMeanArSpectral ? json(r.ar_order) : json(nullptr)}};
-        report_internal::SetMeanCoverage(&jq["type_a"]);
+        jq.type_a = MakeTypeA(q.type_a);
       } else {
-        jq["type_a"] = nullptr;
-        jq["error"] = q.error;
+        jq.error = q.error;
       }
-      if (w.settle_auto) jq["settle_samples"] = q.settle_samples;
-      jq["warnings"] = q.warnings;
-      // Appended without a lookup (operator[] of an ordered object is a linear search): a
-      // tag's quantity names are unique.
-      quantities.get_ref<json::object_t&>().emplace_back(q.name, std::move(jq));
+      if (w.settle_auto) jq.settle_samples = static_cast<int64_t>(q.settle_samples);
+      jq.warnings = q.warnings;
+      s.quantities.push_back(std::move(jq));
     }
-    s["quantities"] = quantities;
-    s["warnings"] = t.warnings;
-    sensors.push_back(s);
+    s.warnings = t.warnings;
+    report.sensors.push_back(std::move(s));
   }
-  report["sensors"] = sensors;
   return report;
 }
 
-std::string TypeAReportTable(const nlohmann::ordered_json& report) {
+std::string TypeAReportTable(const SessionReport& report) {
   std::string out;
   auto it = std::back_inserter(out);
-  fmt::format_to(it, "{} ({}, {} rows, {} rejected)\n", report["input"]["path"].get<std::string>(),
-                 report["input"]["format"].get<std::string>(),
-                 report["input"]["rows"].get<int64_t>(),
-                 report["input"]["rejected_rows"].get<int64_t>());
-  if (report["input"].contains("notes")) {
-    for (const auto& note : report["input"]["notes"]) {
-      fmt::format_to(it, "  note: {}\n", note.get<std::string>());
-    }
-  }
+  fmt::format_to(it, "{} ({}, {} rows, {} rejected)\n", report.input.path, report.input.format,
+                 report.input.rows, report.input.rejected_rows);
+  for (const std::string& note : report.input.notes) fmt::format_to(it, "  note: {}\n", note);
   fmt::format_to(it, "{:>6} {:<16} {:<18} {:<6} {:>8} {:>14} {:>10} {:>10} {:>10} {:>10}\n",
                  "sensor", "name", "quantity", "unit", "n", "mean", "s", "s(mean)", "n_eff",
                  "u(mean)");
-  for (const auto& s : report["sensors"]) {
-    const int sensor = s["sensor"].get<int>();
-    const std::string name = s["name"].get<std::string>();
-    if (s["quantities"].empty()) {
-      fmt::format_to(it, "{:>6} {:<16} (no observations: frames {}, stale {}, never {})\n", sensor,
-                     name, s["frames"].get<int64_t>(), s["stale"].get<int64_t>(),
-                     s["never"].get<int64_t>());
+  for (const SensorReport& s : report.sensors) {
+    if (s.quantities.empty()) {
+      fmt::format_to(it, "{:>6} {:<16} (no observations: frames {}, stale {}, never {})\n",
+                     s.sensor, s.name, s.frames, s.stale, s.never);
     }
-    for (const auto& [qname, q] : s["quantities"].items()) {
+    for (const QuantityReport& q : s.quantities) {
       // The unit as the report states it ("1" for the quaternion's dimensionless components).
-      std::string unit = q.contains("unit") && q["unit"].is_string() ? q["unit"].get<std::string>()
-                                                                     : std::string();
-      if (unit.empty()) unit = "1";
-      if (q["type_a"].is_null()) {
-        fmt::format_to(it, "{:>6} {:<16} {:<18} {:<6} {}\n", sensor, name, qname, unit,
-                       q["error"].get<std::string>());
+      const std::string unit = q.unit.empty() ? "1" : q.unit;
+      if (!q.type_a) {
+        fmt::format_to(it, "{:>6} {:<16} {:<18} {:<6} {}\n", s.sensor, s.name, q.name, unit,
+                       q.error);
         continue;
       }
-      const auto& a = q["type_a"];
+      const TypeAReport& a = *q.type_a;
       // GUM 7.2.6: mean rounded to u_mean, metro's recommended u(mean) (2 significant
       // digits); a report written before u_mean existed has std_of_mean_autocorr.
-      const char* u_key = a.contains("u_mean") ? "u_mean" : "std_of_mean_autocorr";
-      const std::string n_eff =
-          a["n_eff"].is_number() ? fmt::format("{:.1f}", a["n_eff"].get<double>()) : "-";
+      const double u = a.has_u_mean ? a.u_mean : a.std_of_mean_autocorr;
+      const std::string n_eff = std::isfinite(a.n_eff) ? fmt::format("{:.1f}", a.n_eff) : "-";
       std::string value, uncertainty = "-";
-      if (a[u_key].is_number()) {
-        const RoundedResult r = RoundForTable(a["mean"].get<double>(), a[u_key].get<double>());
+      if (std::isfinite(u)) {
+        const RoundedResult r = RoundForTable(a.mean, u);
         value = r.value;
         uncertainty = r.uncertainty;
       } else {
-        value = fmt::format("{:.6g}", a["mean"].get<double>());
+        value = fmt::format("{:.6g}", a.mean);
       }
-      fmt::format_to(it,
-                     "{:>6} {:<16} {:<18} {:<6} {:>8} {:>14} {:>10.3g} {:>10.2g} {:>10} {:>10}\n",
-                     sensor, name, qname, unit, a["n"].get<int64_t>(), value,
-                     a["std"].get<double>(), a["std_of_mean"].get<double>(), n_eff, uncertainty);
+      fmt::format_to(
+          it, "{:>6} {:<16} {:<18} {:<6} {:>8} {:>14} {:>10.3g} {:>10.2g} {:>10} {:>10}\n",
+          s.sensor, s.name, q.name, unit, a.n, value, a.std, a.std_of_mean, n_eff, uncertainty);
     }
   }
   out += AllanSummaryTable(report);
@@ -228,20 +211,14 @@ std::string TypeAReportTable(const nlohmann::ordered_json& report) {
   return out;
 }
 
-std::string TypeAReportWarnings(const nlohmann::ordered_json& report) {
+std::string TypeAReportWarnings(const SessionReport& report) {
   std::vector<WarningLine> lines;
-  if (report["input"].contains("warnings")) {
-    for (const auto& wmsg : report["input"]["warnings"]) {
-      lines.push_back({"input", wmsg.get<std::string>()});
-    }
-  }
-  for (const auto& s : report["sensors"]) {
-    const std::string sensor = fmt::format("sensor {}", s["sensor"].get<int>());
-    for (const auto& wmsg : s["warnings"]) lines.push_back({sensor, wmsg.get<std::string>()});
-    for (const auto& [qname, q] : s["quantities"].items()) {
-      for (const auto& wmsg : q["warnings"]) {
-        lines.push_back({sensor + " " + qname, wmsg.get<std::string>()});
-      }
+  for (const std::string& w : report.input.warnings) lines.push_back({"input", w});
+  for (const SensorReport& s : report.sensors) {
+    const std::string sensor = fmt::format("sensor {}", s.sensor);
+    for (const std::string& w : s.warnings) lines.push_back({sensor, w});
+    for (const QuantityReport& q : s.quantities) {
+      for (const std::string& w : q.warnings) lines.push_back({sensor + " " + q.name, w});
     }
   }
   // Near-identical warnings (the same message but for its numbers) are grouped with a count.

@@ -3,40 +3,32 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "mean_coverage.hpp"
 
 namespace metro {
 
-void ApplyAllanEvidenceToUMean(SessionTypeA* type_a, nlohmann::ordered_json* report) {
-  auto& sensors = (*report)["sensors"];
+void ApplyAllanEvidenceToUMean(SessionTypeA* type_a, SessionReport* report) {
+  std::vector<SensorReport>& sensors = report->sensors;
   for (size_t k = 0; k < type_a->tags.size() && k < sensors.size(); ++k) {
     for (QuantityTypeA& q : type_a->tags[k].quantities) {
       if (!q.ok || !q.type_a.u_mean_available) continue;
-      auto& quantities = sensors[k]["quantities"];
-      if (!quantities.contains(q.name)) continue;
-      auto& jq = quantities[q.name];
-      if (!jq.contains("allan_type_a_link")) continue;
-      const auto& link = jq["allan_type_a_link"];
-      if (!link.contains("u_mean_allan") || !link["u_mean_allan"].is_number()) continue;
-      const double u_allan = link["u_mean_allan"].get<double>();
+      QuantityReport* jq = sensors[k].Find(q.name);
+      if (jq == nullptr || !jq->allan_type_a_link || !jq->type_a) continue;
+      const AllanTypeALink& link = *jq->allan_type_a_link;
+      const double u_allan = link.u_mean_allan;
+      if (!std::isfinite(u_allan)) continue;
       TypeAResult& ta = q.type_a;
       if (!(u_allan > 2.0 * ta.u_mean)) continue;
-      const double u_u = link.contains("u_u_mean_allan") && link["u_u_mean_allan"].is_number()
-                             ? link["u_u_mean_allan"].get<double>()
-                             : 0.0;
+      const double u_u = std::isfinite(link.u_u_mean_allan) ? link.u_u_mean_allan : 0.0;
       const double n_minus_1 = static_cast<double>(ta.n - 1);
       // JCGM 100:2008 G.4.2: nu = (1/2) (u / u(u))^2.
       const double ratio = u_u > 0.0 ? u_allan / u_u : 0.0;
       const double dof = u_u > 0.0 ? std::clamp(0.5 * ratio * ratio, 1.0, n_minus_1) : n_minus_1;
-      const std::string dominant =
-          link.contains("dominant_term") && link["dominant_term"].is_string()
-              ? link["dominant_term"].get<std::string>()
-              : "unknown";
-      const bool extrapolated = link.contains("extrapolated") &&
-                                link["extrapolated"].is_boolean() &&
-                                link["extrapolated"].get<bool>();
+      const std::string dominant = link.dominant_term.value_or("unknown");
+      const bool extrapolated = link.extrapolated.value_or(false);
       const std::string warning = fmt::format(
           "the Allan deviation shows noise the autocorrelation misses: the fitted noise model "
           "(dominant term {}{}) predicts u of the mean {:.3g} over the window, {:.1f}x the "
@@ -47,13 +39,13 @@ void ApplyAllanEvidenceToUMean(SessionTypeA* type_a, nlohmann::ordered_json* rep
       ta.u_mean_dof = dof;
       ta.u_mean_method = kUMeanAllan;
       q.warnings.push_back(warning);
-      auto& ja = jq["type_a"];
-      ja["u_mean"] = u_allan;
-      ja["u_mean_dof"] = dof;
-      ja["u_mean_method"] = kUMeanAllan;
-      ja["u_mean_ar_order"] = nullptr;
+      TypeAReport& ja = *jq->type_a;
+      ja.u_mean = u_allan;
+      ja.u_mean_dof = dof;
+      ja.u_mean_method = kUMeanAllan;
+      ja.u_mean_ar_order.reset();
       report_internal::SetMeanCoverage(&ja);
-      jq["warnings"].push_back(warning);
+      jq->warnings.push_back(warning);
     }
   }
 }

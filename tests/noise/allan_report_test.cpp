@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "metro/noise/noise_units.hpp"
+#include "noise/allan_report_json.hpp"
 #include "noise/noise_simulation.hpp"
 
 namespace metro {
@@ -53,12 +54,14 @@ TEST_CASE("Allan JSON has the report shape and white noise numbers", "[noise]") 
   REQUIRE(curve.ok());
   const Result<NoiseFit> fit = FitNoiseTerms(curve.value());
   REQUIRE(fit.ok());
-  const nlohmann::ordered_json j = AllanToJson(curve.value(), fit.value(), "deg/s");
+  const nlohmann::ordered_json j =
+      ToJsonValue(MakeAllanReport(curve.value(), fit.value(), "deg/s"));
   std::vector<std::string> keys;
   for (auto it = j.begin(); it != j.end(); ++it) keys.push_back(it.key());
   CHECK(keys == std::vector<std::string>{"estimator", "tau_s", "adev", "ci_low", "ci_high", "edf",
                                          "n_terms", "n_terms_gap_free", "missing_fraction",
-                                         "confidence", "alpha", "alpha_source", "noise"});
+                                         "confidence", "alpha", "alpha_source", "noise",
+                                         "sample_period"});
   // The level of the intervals and the noise type behind each one (white rate: alpha 0).
   CHECK(j["confidence"].get<double>() == Approx(0.683));
   REQUIRE(j["alpha"].size() == curve.value().size());
@@ -92,7 +95,8 @@ TEST_CASE("Allan JSON has the report shape and white noise numbers", "[noise]") 
   CHECK(j["noise"]["bias_instability"]["value"].is_null());
   CHECK(j["noise"]["bias_instability"]["unit_conventional"] == "deg/h");
 
-  const nlohmann::ordered_json link = AllanTypeALinkToJson(curve.value(), fit.value(), 100.0);
+  const nlohmann::ordered_json link =
+      ToJsonValue(MakeAllanTypeALink(curve.value(), fit.value(), 100.0));
   CHECK(link["u_mean_allan"].get<double>() == Approx(n / 10.0).epsilon(0.01));
   CHECK(link["dominant_term"] == "random_walk");
   CHECK(link["allan_min_at_end"] == true);  // White noise: averaging helps to the end.

@@ -9,6 +9,7 @@
 #include "metro/noise/allan.hpp"
 #include "metro/noise/allan_report.hpp"
 #include "metro/noise/noise_fit.hpp"
+#include "noise/allan_report_json.hpp"
 #include "noise/noise_test_data.hpp"
 
 namespace metro {
@@ -59,7 +60,8 @@ TEST_CASE("MPU6050 static log: sigma(1 s) as published, white-noise dominated", 
     CHECK(n.value == Approx(expected[c]).epsilon(0.05));
     // The noise id sees white rate noise at short tau.
     CHECK(curve.value().alpha[3] == 0);
-    const nlohmann::ordered_json j = AllanToJson(curve.value(), fit.value(), c < 3 ? "g" : "deg/s");
+    const nlohmann::ordered_json j =
+        ToJsonValue(MakeAllanReport(curve.value(), fit.value(), c < 3 ? "g" : "deg/s"));
     CHECK(j["noise"]["random_walk"]["supported"] == true);
   }
 }

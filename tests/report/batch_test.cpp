@@ -308,9 +308,9 @@ TEST_CASE("A tag that never connected has its row, loss 1.0 and a warning on top
   const SessionAnalysis a = AnalyzeSession(capture, {});
   REQUIRE(a.ok);
   CHECK(a.table.rfind("WARNING sensor 13 (", 0) == 0);
-  for (const auto& sensor : a.report["sensors"]) {
-    if (sensor["sensor"] == 13) CHECK(sensor["packet_loss_ratio"].get<double>() == 1.0);
-  }
+  const SensorReport* dead = a.report.FindSensor(13);
+  REQUIRE(dead != nullptr);
+  CHECK(dead->packet_loss_ratio == 1.0);
 }
 
 TEST_CASE("Batch bad input is refused with a message", "[report][batch]") {

@@ -19,6 +19,7 @@
 #include "metro/noise/allan.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
+#include "report/session_report_json.hpp"
 #include "support/html_checks.hpp"
 #include "support/temp_file.hpp"
 #include "uncertainty/budget_report_json.hpp"
@@ -45,17 +46,23 @@ const SessionAnalysis& ImuAnalysis() {
   return analysis;
 }
 
-// Plots the report calls for, counted from the JSON: per evaluated quantity with s > 0 a
-// time series, a histogram and an autocorrelation (only the time series when s = 0), plus
-// an Allan plot where the report has an Allan curve, and per tag one combined plot per
-// sensor group (ax_g ay_g az_g; gx_dps gy_dps gz_dps) with two or more Allan curves.
-size_t ExpectedPlots(const ordered_json& report, bool with_session) {
+// ImuAnalysis's report in its JSON form, as a reader of the saved file sees it.
+const ordered_json& ImuJson() {
+  static const ordered_json json = ToJsonValue(ImuAnalysis().report);
+  return json;
+}
+
+// Plots the report calls for, counted from the JSON: per evaluated quantity with plot data
+// and s > 0 a time series, a histogram and an autocorrelation (only the time series when
+// s = 0), plus an Allan plot where the report has an Allan curve, and per tag one combined
+// plot per sensor group (ax_g ay_g az_g; gx_dps gy_dps gz_dps) with two or more Allan curves.
+size_t ExpectedPlots(const ordered_json& report) {
   size_t n = 0;
   for (const auto& s : report["sensors"]) {
     std::map<std::string, int> groups;  // "a_g" -> Allan curves of ax_g, ay_g, az_g.
     for (const auto& [name, q] : s["quantities"].items()) {
       if (!q["type_a"].is_object()) continue;
-      if (with_session) n += q["type_a"]["std"].get<double>() > 0.0 ? 3 : 1;
+      if (q.contains("plot")) n += q["type_a"]["std"].get<double>() > 0.0 ? 3 : 1;
       if (q.contains("allan") && q["allan"].contains("tau_s")) {
         ++n;
         const size_t underscore = name.find('_');
@@ -104,11 +111,11 @@ TEST_CASE("Session HTML has every plot and no external reference", "[report][htm
   CHECK(h.find("Type A summary") != std::string::npos);
   CHECK(h.find("Sensor 1") != std::string::npos);
   CHECK(h.find(a.session.sha256) != std::string::npos);
-  const size_t expected = ExpectedPlots(a.report, true);
+  const size_t expected = ExpectedPlots(ImuJson());
   CHECK(expected >= 3 * 6 + 6 + 2);  // Six rate quantities with Allan curves, two groups.
   CHECK(Count(h, "<svg") == expected);
   // The summary states the mean rounded per GUM 7.2.6 to two digits of u(mean).
-  const auto& gx = a.report["sensors"][0]["quantities"]["gx_dps"]["type_a"];
+  const auto& gx = ImuJson()["sensors"][0]["quantities"]["gx_dps"]["type_a"];
   const RoundedResult r = RoundForStatement(gx["mean"].get<double>(), gx["u_mean"].get<double>());
   CHECK(h.find("<td class=\"num\">" + r.value + "</td><td class=\"num\">" + r.uncertainty +
                "</td>") != std::string::npos);
@@ -122,8 +129,8 @@ TEST_CASE("Session page opens with the result: value U k and p as the JSON round
   REQUIRE(a.ok);
   // From the JSON alone (as characterize report renders a saved report) and with the session.
   for (const bool with_session : {false, true}) {
-    Result<std::string> html = with_session ? RenderSessionAnalysisHtml(a)
-                                            : RenderSessionReportHtml(a.report, nullptr, "none");
+    Result<std::string> html =
+        with_session ? RenderSessionAnalysisHtml(a) : RenderSessionReportHtml(a.report);
     REQUIRE(html.ok());
     const std::string& h = html.value();
     // The result is the page's first section, before the input and the options.
@@ -133,7 +140,7 @@ TEST_CASE("Session page opens with the result: value U k and p as the JSON round
     CHECK(result < h.find("<section id=\"options\">"));
     CHECK(h.find("<section") == result);
     int rows = 0;
-    for (const auto& s : a.report["sensors"]) {
+    for (const auto& s : ImuJson()["sensors"]) {
       const std::string sensor = std::to_string(s["sensor"].get<int>());
       for (const auto& [name, q] : s["quantities"].items()) {
         if (!q["type_a"].is_object()) continue;
@@ -170,7 +177,7 @@ TEST_CASE("Session page opens with the result: value U k and p as the JSON round
   }
   // temp_c drifts: its u(mean) has fewer than one degree of freedom, so no U is stated and
   // the page says why.
-  const ordered_json& temp = a.report["sensors"][0]["quantities"]["temp_c"]["type_a"];
+  const ordered_json& temp = ImuJson()["sensors"][0]["quantities"]["temp_c"]["type_a"];
   REQUIRE(temp["u_mean_dof"].get<double>() < 1.0);
   CHECK(temp["k"].is_null());
   Result<std::string> html = RenderSessionAnalysisHtml(a);
@@ -180,12 +187,14 @@ TEST_CASE("Session page opens with the result: value U k and p as the JSON round
 
 TEST_CASE("Session page of a report saved before U was recorded states no U and says why",
           "[report][html]") {
-  ordered_json old = ImuAnalysis().report;
+  ordered_json old = ImuJson();
   for (auto& [name, q] : old["sensors"][0]["quantities"].items()) {
     if (!q["type_a"].is_object()) continue;
     for (const char* key : {"coverage", "k", "U_mean"}) q["type_a"].erase(key);
   }
-  Result<std::string> html = RenderSessionReportHtml(old, nullptr, "none");
+  Result<SessionReport> old_report = SessionReportFromJson(JsonText(old, 2), "old.json");
+  REQUIRE(old_report.ok());
+  Result<std::string> html = RenderSessionReportHtml(old_report.value());
   REQUIRE(html.ok());
   CHECK(Cell(html.value(), "result-1-gx_dps", "U") == "-");
   CHECK(Cell(html.value(), "result-1-gx_dps", "k") == "-");
@@ -205,7 +214,7 @@ TEST_CASE("Session page states the options as a table and not as the JSON string
   REQUIRE(table != std::string::npos);
   const std::string options = h.substr(table, h.find("</table>", table) - table);
   std::vector<std::string> keys;
-  LeafKeys(a.report["options"], "", &keys);
+  LeafKeys(ImuJson()["options"], "", &keys);
   CHECK(keys.size() >= 10);
   for (const std::string& key : keys) {
     INFO(key);
@@ -214,7 +223,7 @@ TEST_CASE("Session page states the options as a table and not as the JSON string
   CHECK(options.find("<tr><th>settle</th><td>auto</td></tr>") != std::string::npos);
   CHECK(options.find("<tr><th>from_s</th><td>not set</td></tr>") != std::string::npos);
   // The raw JSON is gone (as the page escaped it and as it is).
-  const std::string raw = JsonText(a.report["options"]);
+  const std::string raw = JsonText(ImuJson()["options"]);
   CHECK(h.find(raw) == std::string::npos);
   CHECK(h.find("{&quot;skip_samples&quot;") == std::string::npos);
   CHECK(h.find("window options") == std::string::npos);
@@ -224,11 +233,11 @@ TEST_CASE("Session page noise table: density, Allan minimum and u(mean) from the
           "[report][html]") {
   const SessionAnalysis& a = ImuAnalysis();
   REQUIRE(a.ok);
-  Result<std::string> html = RenderSessionReportHtml(a.report, nullptr, "none");
+  Result<std::string> html = RenderSessionReportHtml(a.report);
   REQUIRE(html.ok());
   const std::string& h = html.value();
   int rows = 0;
-  for (const auto& [name, q] : a.report["sensors"][0]["quantities"].items()) {
+  for (const auto& [name, q] : ImuJson()["sensors"][0]["quantities"].items()) {
     if (!q.contains("allan")) continue;
     const std::string id = "noise-1-" + name;
     INFO(id);
@@ -260,11 +269,11 @@ TEST_CASE("Session page draws the x y and z Allan curves of a sensor in one plot
           "[report][html]") {
   const SessionAnalysis& a = ImuAnalysis();
   REQUIRE(a.ok);
-  Result<std::string> html = RenderSessionReportHtml(a.report, nullptr, "none");
+  Result<std::string> html = RenderSessionReportHtml(a.report);
   REQUIRE(html.ok());
   const std::string& h = html.value();
   // Octave taus from 0.01 s to 10.24 s: the decades 0.01, 0.1, 1 and 10 s.
-  const ordered_json& tau = a.report["sensors"][0]["quantities"]["gx_dps"]["allan"]["tau_s"];
+  const ordered_json& tau = ImuJson()["sensors"][0]["quantities"]["gx_dps"]["allan"]["tau_s"];
   REQUIRE(tau.front().get<double>() == Approx(0.01));
   REQUIRE(tau.back().get<double>() == Approx(10.24));
   for (const std::string names : {"ax_g, ay_g and az_g", "gx_dps, gy_dps and gz_dps"}) {
@@ -331,7 +340,7 @@ TEST_CASE("Session page axes carry their scale in the label and no detached mult
   CHECK(text.find("(x10") == std::string::npos);
   // az_g: the values sit 100 spreads away from zero, so the axis is az_g minus its mean
   // rounded to the span (0.971 g), in mg; rho_k stays within +-0.05: in thousandths.
-  const double mean = a.report["sensors"][0]["quantities"]["az_g"]["type_a"]["mean"].get<double>();
+  const double mean = ImuJson()["sensors"][0]["quantities"]["az_g"]["type_a"]["mean"].get<double>();
   REQUIRE(std::fabs(mean - 0.971) < 0.0005);
   CHECK(text.find(">az_g - 0.971 g [1e-3 g]<") != std::string::npos);
   CHECK(text.find(">rho_k [1e-3]<") != std::string::npos);
@@ -364,30 +373,46 @@ TEST_CASE("Session HTML says how a non-canonical file was read", "[report][html]
   CHECK(canonical.value().find("<tr><th>read as</th>") != std::string::npos);
 }
 
-TEST_CASE("Report without its session keeps the JSON plots and says why", "[report][html]") {
-  const SessionAnalysis& a = ImuAnalysis();
-  REQUIRE(a.ok);
-  Result<std::string> html = RenderSessionReportHtml(a.report, nullptr, "the session is gone");
+TEST_CASE("Report without plot data keeps the Allan plots and says to analyse again",
+          "[report][html]") {
+  // A report written before metro kept plot data: no quantity has "plot".
+  ordered_json old = ImuJson();
+  for (auto& s : old["sensors"]) {
+    for (auto& [name, q] : s["quantities"].items()) q.erase("plot");
+  }
+  Result<SessionReport> report = SessionReportFromJson(JsonText(old, 2), "old.json");
+  REQUIRE(report.ok());
+  Result<std::string> html = RenderSessionReportHtml(report.value());
   REQUIRE(html.ok());
   CheckSelfContained(html.value());
-  CHECK(Count(html.value(), "<svg") == ExpectedPlots(a.report, false));
-  CHECK(html.value().find("unavailable (the session is gone)") != std::string::npos);
+  // Only the Allan curves and groups: six rate quantities and two sensor groups.
+  CHECK(ExpectedPlots(old) == 6 + 2);
+  CHECK(Count(html.value(), "<svg") == ExpectedPlots(old));
+  CHECK(html.value().find("This report predates the plot data") != std::string::npos);
+  CHECK(html.value().find("unavailable (the report predates plot data; run characterize analyze "
+                          "again)") != std::string::npos);
 }
 
-TEST_CASE("Saved report reloads its session only when the SHA-256 matches", "[report][html]") {
+TEST_CASE("Saved report draws every plot from its plot data without the session",
+          "[report][html]") {
   const SessionAnalysis& a = ImuAnalysis();
   REQUIRE(a.ok);
-  testing::TempFile json(a.report.dump(2), ".json");
+  testing::TempFile json(ToJson(a.report), ".json");
   Result<std::string> html = RenderJsonFileHtml(json.path());
   REQUIRE(html.ok());
-  CHECK(html.value().find("SHA-256 matches the report") != std::string::npos);
-  CHECK(Count(html.value(), "<svg") == ExpectedPlots(a.report, true));
-
-  // A different file given as the session: refused, plots from the JSON only.
+  CHECK(html.value().find("drawn from the plot data computed when the session was analysed") !=
+        std::string::npos);
+  CHECK(Count(html.value(), "<svg") == ExpectedPlots(ImuJson()));
+  CHECK(ExpectedPlots(ImuJson()) == 3 * 7 + 6 + 2);  // Seven quantities, six Allan curves.
+  // The same page as the one drawn at analysis time (but for the time it was made).
+  Result<std::string> live = RenderSessionAnalysisHtml(a);
+  REQUIRE(live.ok());
+  auto without_footer = [](const std::string& h) { return h.substr(0, h.find("<footer>")); };
+  CHECK(without_footer(html.value()) == without_footer(live.value()));
+  // --session is no longer read: another file changes nothing.
   Result<std::string> other = RenderJsonFileHtml(json.path(), kDatasets + "static_chest.csv");
   REQUIRE(other.ok());
-  CHECK(other.value().find("differs from the report") != std::string::npos);
-  CHECK(Count(other.value(), "<svg") == ExpectedPlots(a.report, false));
+  CHECK(without_footer(other.value()) == without_footer(live.value()));
 }
 
 TEST_CASE("Budget report gets sorted bars", "[report][html]") {
@@ -469,23 +494,28 @@ TEST_CASE("Bad report input is refused with a message", "[report][html]") {
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().ToString().find("no_such_report.json") != std::string::npos);
 
+  // A report is read with SessionReportFromJson: the first wrong or missing value is named
+  // at its line and column with its path (the root object opens at 1:1).
   const ordered_json missing = ordered_json::parse(R"({"schema": "metro.report/1", "input": {}})");
   r = RenderJsonHtml(missing, "r.json");
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message == "metro.report/1 report: missing key 'sensors'");
-
-  r = RenderSessionReportHtml(ordered_json::parse(R"({"schema": "x"})"), nullptr, "");
+  CHECK(r.error().ToString() ==
+        "r.json:1:1: tool.name: expected a string, found nothing (the member is missing)");
+  // A saved report with a wrong value deep inside: line 2, column 12 of the file.
+  testing::TempFile wrong("{\"schema\": \"metro.report/1\",\n \"tool\": {\"name\": 7}}", ".json");
+  r = RenderJsonFileHtml(wrong.path());
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message == "not a metro.report/1 report (schema key missing or different)");
+  CHECK(r.error().ToString() ==
+        wrong.path() + ":2:19: tool.name: expected a string, found the number 7");
 
   HtmlReportOptions o;
-  o.max_series_points = 3;
+  o.max_plotted_quantities = -1;
   std::string why;
   CHECK_FALSE(o.IsValid(&why));
-  CHECK(why == "html: max_series_points must be >= 16");
+  CHECK(why == "html: max_plotted_quantities must be >= 0");
   r = RenderSessionAnalysisHtml(ImuAnalysis(), o);
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message == "html: max_series_points must be >= 16");
+  CHECK(r.error().message == "html: max_plotted_quantities must be >= 0");
 
   SessionAnalysis failed;
   r = RenderSessionAnalysisHtml(failed);

@@ -18,7 +18,7 @@ namespace {
 const std::string kDatasets = std::string(METRO_SOURCE_DIR) + "/datasets/";
 
 // The text `characterize SESSION -o R.json` writes for `analysis` (without its newline).
-std::string WrittenText(const SessionAnalysis& analysis) { return JsonText(analysis.report, 2); }
+std::string WrittenText(const SessionAnalysis& analysis) { return ToJson(analysis.report); }
 
 SessionAnalysis Analyze(const std::string& dataset, SessionAnalysisOptions options) {
   options.type_a.threads = 1;

@@ -7,6 +7,7 @@
 
 #include "metro/report/html_report.hpp"
 #include "metro/report/session_analysis.hpp"
+#include "report/session_report_json.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
@@ -23,7 +24,8 @@ TEST_CASE("the input block records the dialect, mapping and time", "[report][dia
   options.load.column_map = {{"Time (ms)", "t_ms"}, {"gyro_z (deg/s)", "gz_dps"}};
   SessionAnalysis a = AnalyzeSession(file.path(), options);
   REQUIRE(a.ok);
-  const auto& input = a.report["input"];
+  nlohmann::ordered_json report_a = ToJsonValue(a.report);
+  const auto& input = report_a["input"];
   CHECK(input["format"] == "csv");
   CHECK(input["dialect"]["delimiter"] == ";");
   CHECK(input["dialect"]["decimal_point"] == ",");
@@ -35,7 +37,7 @@ TEST_CASE("the input block records the dialect, mapping and time", "[report][dia
   CHECK(input["time"]["unit"] == "ms");
   CHECK(input["time"]["integer"] == true);
   CHECK(input["time"]["origin_ns"] == 0);
-  const auto& q = a.report["sensors"][0]["quantities"]["gz_dps"]["type_a"];
+  const auto& q = report_a["sensors"][0]["quantities"]["gz_dps"]["type_a"];
   CHECK(q["n"] == 4);
   CHECK(q["mean"].get<double>() == 2.0);
   // Sample variance of 1.5, 2.5, 1.5, 2.5: 4 * 0.25 / 3.
@@ -51,7 +53,8 @@ TEST_CASE("terms that were not computed are null with the reason, never 0 or n",
   TempFile file(text);
   SessionAnalysis a = AnalyzeSession(file.path(), SessionAnalysisOptions{});
   REQUIRE(a.ok);
-  const auto& quantities = a.report["sensors"][0]["quantities"];
+  nlohmann::ordered_json report_a = ToJsonValue(a.report);
+  const auto& quantities = report_a["sensors"][0]["quantities"];
   const auto& constant = quantities["gy_dps"]["type_a"];
   CHECK(constant["mean"].get<double>() == 0.25);
   for (const char* key : {"n_eff", "rho1", "autocorr_cutoff_lag", "std_of_mean_autocorr", "u_mean",
@@ -73,7 +76,8 @@ TEST_CASE("terms that were not computed are null with the reason, never 0 or n",
   TempFile three("t_s,gz_dps\n0,1\n0.1,2\n0.2,4\n");
   SessionAnalysis b = AnalyzeSession(three.path(), SessionAnalysisOptions{});
   REQUIRE(b.ok);
-  const auto& small = b.report["sensors"][0]["quantities"]["gz_dps"]["type_a"];
+  nlohmann::ordered_json report_b = ToJsonValue(b.report);
+  const auto& small = report_b["sensors"][0]["quantities"]["gz_dps"]["type_a"];
   CHECK(small["n_eff"].is_null());
   CHECK(small["rho1"].is_null());
   CHECK(small["autocorr_note"].is_string());
@@ -95,9 +99,10 @@ TEST_CASE("input warnings reach the table", "[report][dialect]") {
   TempFile file("t_ns,gz_dps\n1.0E+10,1\n1.1E+10,2\n1.2E+10,3\n");
   SessionAnalysis a = AnalyzeSession(file.path(), SessionAnalysisOptions{});
   REQUIRE(a.ok);
-  REQUIRE(a.report["input"]["warnings"].size() == 1);
+  nlohmann::ordered_json report_a = ToJsonValue(a.report);
+  REQUIRE(report_a["input"]["warnings"].size() == 1);
   // 1.1E+10 ns = 11 s: its last written digit is the 1e9 ns place.
-  CHECK(a.report["input"]["time"]["resolution_s"].get<double>() == 1.0);
+  CHECK(report_a["input"]["time"]["resolution_s"].get<double>() == 1.0);
   CHECK_THAT(a.table, Catch::Contains("input: t_ns is written in E-notation"));
 }
 
@@ -117,7 +122,8 @@ TEST_CASE("Allan tau0 of an epoch-nanosecond clock comes from integer difference
   options.allan = true;
   SessionAnalysis a = AnalyzeSession(file.path(), options);
   REQUIRE(a.ok);
-  const auto& period = a.report["sensors"][0]["quantities"]["gz_rads"]["allan"]["sample_period"];
+  nlohmann::ordered_json report_a = ToJsonValue(a.report);
+  const auto& period = report_a["sensors"][0]["quantities"]["gz_rads"]["allan"]["sample_period"];
   CHECK(period["tau0_s"].get<double>() == 0.005);
   CHECK(period["jitter_rms_s"].get<double>() == 0.0);
 }

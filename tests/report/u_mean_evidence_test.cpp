@@ -1,13 +1,14 @@
 #include "metro/report/u_mean_evidence.hpp"
 
 #include <catch2/catch.hpp>
+#include <optional>
 #include <string>
 
 namespace metro {
 namespace {
 
 // One tag, one quantity with u_mean = 0.1 (n = 1001) and an Allan link predicting u_allan.
-void Build(double u_allan, double u_u, SessionTypeA* s, nlohmann::ordered_json* report) {
+void Build(double u_allan, double u_u, SessionTypeA* s, SessionReport* report) {
   QuantityTypeA q;
   q.name = "gy_dps";
   q.ok = true;
@@ -19,21 +20,29 @@ void Build(double u_allan, double u_u, SessionTypeA* s, nlohmann::ordered_json* 
   TagTypeA t;
   t.quantities.push_back(q);
   s->tags.push_back(t);
-  nlohmann::ordered_json jq;
-  jq["type_a"] = {{"u_mean", 0.1}, {"u_mean_dof", 40.0}, {"u_mean_method", kUMeanArSpectral}};
-  jq["warnings"] = nlohmann::ordered_json::array();
-  jq["allan_type_a_link"] = {{"u_mean_allan", u_allan},
-                             {"u_u_mean_allan", u_u},
-                             {"dominant_term", "rate_random_walk"},
-                             {"extrapolated", true}};
-  (*report)["sensors"] = nlohmann::ordered_json::array();
-  (*report)["sensors"].push_back({{"quantities", {{"gy_dps", jq}}}});
+  QuantityReport jq;
+  jq.name = "gy_dps";
+  jq.type_a = TypeAReport{};
+  jq.type_a->n = 1001;
+  jq.type_a->u_mean = 0.1;
+  jq.type_a->u_mean_dof = 40.0;
+  jq.type_a->u_mean_method = kUMeanArSpectral;
+  jq.type_a->u_mean_ar_order = 3;
+  AllanTypeALink link;
+  link.u_mean_allan = u_allan;
+  link.u_u_mean_allan = u_u;
+  link.dominant_term = "rate_random_walk";
+  link.extrapolated = true;
+  jq.allan_type_a_link = link;
+  SensorReport sensor;
+  sensor.quantities.push_back(jq);
+  report->sensors.push_back(sensor);
 }
 
 TEST_CASE("Allan evidence more than 2x u_mean replaces it, dof by JCGM 100 G.4.2",
           "[report][u_mean]") {
   SessionTypeA s;
-  nlohmann::ordered_json report;
+  SessionReport report;
   Build(0.9, 0.3, &s, &report);
   ApplyAllanEvidenceToUMean(&s, &report);
   const TypeAResult& a = s.tags[0].quantities[0].type_a;
@@ -41,17 +50,20 @@ TEST_CASE("Allan evidence more than 2x u_mean replaces it, dof by JCGM 100 G.4.2
   CHECK(a.u_mean == 0.9);
   CHECK(a.u_mean_dof == Approx(4.5).epsilon(1e-14));
   CHECK(a.u_mean_method == std::string(kUMeanAllan));
-  const auto& jq = report["sensors"][0]["quantities"]["gy_dps"];
-  CHECK(jq["type_a"]["u_mean"].get<double>() == 0.9);
-  CHECK(jq["type_a"]["u_mean_method"].get<std::string>() == kUMeanAllan);
+  const QuantityReport& jq = *report.sensors[0].Find("gy_dps");
+  CHECK(jq.type_a->u_mean == 0.9);
+  CHECK(jq.type_a->u_mean_dof == Approx(4.5).epsilon(1e-14));
+  CHECK(jq.type_a->u_mean_method == std::optional<std::string>(kUMeanAllan));
+  CHECK(!jq.type_a->u_mean_ar_order.has_value());
   // U_mean follows the new u_mean and dof: t_0.975 at 4.5 dof lies between the table's
   // t_0.975(5) = 2.5706 and t_0.975(4) = 2.7764 (JCGM 100:2008 Table G.2).
-  const double k = jq["type_a"]["k"].get<double>();
+  const double k = jq.type_a->k;
   CHECK(k > 2.5706);
   CHECK(k < 2.7764);
-  CHECK(jq["type_a"]["U_mean"].get<double>() == Approx(k * 0.9).epsilon(1e-15));
-  REQUIRE(jq["warnings"].size() == 1);
-  const std::string w = jq["warnings"][0].get<std::string>();
+  CHECK(jq.type_a->coverage == 0.95);
+  CHECK(jq.type_a->U_mean == Approx(k * 0.9).epsilon(1e-15));
+  REQUIRE(jq.warnings.size() == 1);
+  const std::string w = jq.warnings[0];
   CHECK(w.find("rate_random_walk") != std::string::npos);
   CHECK(w.find("9.0x") != std::string::npos);
   CHECK(s.tags[0].quantities[0].warnings.size() == 1);
@@ -59,12 +71,13 @@ TEST_CASE("Allan evidence more than 2x u_mean replaces it, dof by JCGM 100 G.4.2
 
 TEST_CASE("Allan evidence within 2x u_mean leaves it alone", "[report][u_mean]") {
   SessionTypeA s;
-  nlohmann::ordered_json report;
+  SessionReport report;
   Build(0.19, 0.05, &s, &report);
   ApplyAllanEvidenceToUMean(&s, &report);
   CHECK(s.tags[0].quantities[0].type_a.u_mean == 0.1);
   CHECK(s.tags[0].quantities[0].type_a.u_mean_method == std::string(kUMeanArSpectral));
-  CHECK(report["sensors"][0]["quantities"]["gy_dps"]["warnings"].empty());
+  CHECK(report.sensors[0].Find("gy_dps")->warnings.empty());
+  CHECK(report.sensors[0].Find("gy_dps")->type_a->u_mean == 0.1);
 }
 
 }  // namespace

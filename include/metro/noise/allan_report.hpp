@@ -1,19 +1,22 @@
-// JSON and CSV forms of an Allan curve and its noise terms.
+// The report forms of an Allan curve and its noise terms (docs/noise.md).
 //
-// AllanToJson produces the "allan" object of a characterize report (one per quantity):
+// AllanReport is the "allan" object of a session report's quantity (session_report.hpp; its
+// JSON in src/noise/allan_report_json.hpp):
 //   {"estimator": "oadev", "tau_s": [...], "adev": [...], "ci_low": [...], "ci_high": [...],
 //    "edf": [...], "n_terms": [...], "n_terms_gap_free": [...], "missing_fraction": [...],
 //    "confidence": 0.683, "alpha": [...], "alpha_source": ["lag1_acf", ...],
 //    "noise": {"quantization": T, "random_walk": T, "bias_instability": T,
-//              "rate_random_walk": T, "rate_ramp": T}}
-// "adev" holds the chosen estimator's deviation in the quantity's unit. Each T is
-//   {"value", "u", "unit", "value_conventional", "unit_conventional", "supported",
-//    "tau_min_s", "tau_max_s", "readoff": {"value", "u", "tau_s"} | null}
+//              "rate_random_walk": T, "rate_ramp": T},
+//    "sample_period": {...}, "gaps": {...}?, "fit_error": "..."?}
+// or {"error": "...", "gaps": {...}?} for a quantity that could not be analysed. "adev" holds
+// the chosen estimator's deviation in the quantity's unit. Each T is
+//   {"value", "u", "unit", "value_conventional", "unit_conventional", "u_conventional",
+//    "supported", "tau_min_s", "tau_max_s", "readoff": {"value", "u", "tau_s"} | null}
 // with value/u null when the fit does not support the term; random_walk also carries
 // "density_one_sided", "u_density_one_sided", "unit_density" (sqrt(2) N, the figure a
 // datasheet quotes) and their conventional forms. NaN (no EDF) is written as null.
 //
-// AllanTypeALinkToJson gives what sits beside the n_eff Type A result:
+// AllanTypeALink is what sits beside the n_eff Type A result ("allan_type_a_link"):
 //   {"allan_min_tau_s", "allan_min_dev", "allan_min_at_end", "duration_s",
 //    "u_mean_allan", "u_u_mean_allan", "dominant_term", "extrapolated"}
 //
@@ -26,7 +29,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -138,12 +140,6 @@ AllanReport MakeAllanReport(const AllanCurve& curve, const NoiseFit& fit,
                             const std::string& quantity_unit);
 
 AllanTypeALink MakeAllanTypeALink(const AllanCurve& curve, const NoiseFit& fit, double duration_s);
-
-nlohmann::ordered_json AllanToJson(const AllanCurve& curve, const NoiseFit& fit,
-                                   const std::string& quantity_unit);
-
-nlohmann::ordered_json AllanTypeALinkToJson(const AllanCurve& curve, const NoiseFit& fit,
-                                            double duration_s);
 
 std::string AllanCurveCsv(const AllanCurve& curve, const std::string& quantity_unit);
 

@@ -4,7 +4,6 @@
 // (quantities[name].allan_type_a_link).
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -12,6 +11,7 @@
 #include "metro/noise/allan.hpp"
 #include "metro/noise/noise_fit.hpp"
 #include "metro/noise/sample_period.hpp"
+#include "metro/report/session_report.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro {
@@ -52,7 +52,7 @@ struct AllanSectionSummary {
   bool NothingProduced() const { return requested > 0 && analysed == 0; }
 };
 
-// Adds the "allan" objects to `report` (built by TypeAReportJson from the same `type_a`).
+// Adds the "allan" objects to `report` (built by MakeSessionReport from the same `type_a`).
 // When `csv` is not null it receives every curve as CSV, one block per tag and quantity
 // (nothing when no curve was made).
 // A quantity that cannot be analysed (too few samples, a refused gap, a clock that does not
@@ -61,12 +61,12 @@ struct AllanSectionSummary {
 // says what was missing ("allan.gaps"). Errors: no rate quantity.
 Result<AllanSectionSummary> AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                                              const SessionAllanOptions& options,
-                                             nlohmann::ordered_json* report, std::string* csv);
+                                             SessionReport* report, std::string* csv);
 
 // The console summary of a report's Allan sections (empty when there is none): per tag and
 // quantity the fitted IEEE 952 N, B and K (IEEE Std 952-1997 Annex C) in the JCGM 100 7.2.2
 // concise notation with their units ("-" where the fit found none) and the Allan minimum with
 // its tau ("end" when the curve is still falling at its last tau).
-std::string AllanSummaryTable(const nlohmann::ordered_json& report);
+std::string AllanSummaryTable(const SessionReport& report);
 
 }  // namespace metro

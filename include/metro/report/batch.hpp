@@ -12,6 +12,7 @@
 
 #include "metro/core/status.hpp"
 #include "metro/report/session_analysis.hpp"
+#include "metro/report/session_report.hpp"
 
 namespace metro {
 
@@ -112,9 +113,9 @@ struct CircularStatistics {
 CircularStatistics CircularStatisticsDeg(const std::vector<double>& angles_deg);
 
 // The lines that must head a console table or a summary: one per tag of a receiver capture
-// with no fresh packet (frames > 0, fresh == 0), from a Type A report ("sensors"): its
+// with no fresh packet (frames > 0, fresh == 0), from a session report's sensors: its
 // counts and packet_loss_ratio 1.0. `prefix` goes before each line (e.g. the session).
-std::vector<std::string> NoFreshPacketWarnings(const nlohmann::ordered_json& report,
+std::vector<std::string> NoFreshPacketWarnings(const SessionReport& report,
                                                const std::string& prefix = "");
 
 // Analyses every input. Per tag (sensor number and name) and quantity, across the sessions

@@ -28,28 +28,27 @@
 #include "metro/core/status.hpp"
 #include "metro/io/session.hpp"
 #include "metro/report/session_analysis.hpp"
+#include "metro/report/session_report.hpp"
 
 namespace metro {
 
 struct HtmlReportOptions {
-  // Quantities that get plots; empty: every evaluated quantity except the quaternion
-  // components qw qx qy qz (their Euler angles are plotted instead).
+  // Quantities that get a section with their plots; empty: every evaluated quantity except
+  // the quaternion components qw qx qy qz (their Euler angles are plotted instead). The
+  // plots themselves are the report's plot data, computed when the session was analysed
+  // (SessionAnalysisOptions::plot, plot_data.hpp).
   std::vector<std::string> plot_quantities;
   int max_plotted_quantities = 48;  // Over all tags; the rest are listed in the tables only.
-  int max_series_points = 2000;     // Longer time series are drawn as min/max per bucket.
-  int histogram_bins = 0;           // 0: sqrt(n), clamped to 10..60.
-  int max_autocorr_lag = 200;       // Also at most n/4.
 
   bool IsValid(std::string* why) const;
 };
 
-// The session view of a "metro.report/1" report. `session` holds the raw series the
-// report was made from (nullptr when not available: the time series, histogram and
-// autocorrelation plots are then listed as unavailable with `session_note` as reason);
-// `session_note` is shown either way (e.g. where the data came from).
-// Errors: invalid options, a report that is not "metro.report/1" or lacks required keys.
-Result<std::string> RenderSessionReportHtml(const nlohmann::ordered_json& report,
-                                            const Session* session, const std::string& session_note,
+// The session view of a "metro.report/1" report, drawn from the report alone: the time
+// series, histograms and autocorrelations from each quantity's plot data (a report from
+// before metro kept plot data says so and lists them as unavailable), the Allan curves from
+// its Allan sections.
+// Errors: invalid options, a budget section that cannot be shown.
+Result<std::string> RenderSessionReportHtml(const SessionReport& report,
                                             const HtmlReportOptions& options = {});
 
 // The session view of a finished AnalyzeSession (everything in memory).
@@ -57,10 +56,9 @@ Result<std::string> RenderSessionAnalysisHtml(const SessionAnalysis& analysis,
                                               const HtmlReportOptions& options = {});
 
 // Any saved JSON document, dispatched on its "schema" key (see above). `json_path` is
-// where it was read from: a report's input session (input.path, tried as given and
-// relative to the JSON's directory) is reloaded when its SHA-256 matches input.sha256,
-// unless `session_path` names the session explicitly (its SHA-256 must match too);
-// likewise the inputs of a calibration. The page says which data it used.
+// where it was read from; a session report is read with SessionReportFromJson (errors at the
+// value's line and column). No view reloads an input: `session_path` is accepted for the
+// callers of older versions and not used.
 Result<std::string> RenderJsonHtml(const nlohmann::ordered_json& document,
                                    const std::string& json_path,
                                    const std::string& session_path = "",

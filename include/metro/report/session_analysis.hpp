@@ -4,7 +4,6 @@
 // report means the same thing whichever way it was made.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -14,6 +13,8 @@
 #include "metro/io/session_io.hpp"
 #include "metro/io/tag_registry.hpp"
 #include "metro/report/allan_section.hpp"
+#include "metro/report/plot_data.hpp"
+#include "metro/report/session_report.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro {
@@ -25,6 +26,9 @@ struct SessionAnalysisOptions {
   bool allan = false;
   SessionAllanOptions allan_options;  // Used when `allan`.
   bool allan_csv = false;             // Also render the Allan curves as CSV.
+  // What the session page will plot, computed here and kept in the report (each quantity's
+  // "plot", plot_data.hpp).
+  PlotDataOptions plot;
   // With `allan` and no quantities named: a session without any rate quantity (gyroscope
   // or accelerometer column) is still reported, with "allan_skipped" saying why, instead
   // of failing. `characterize batch` sets this: one angle-only session in a fleet
@@ -50,9 +54,9 @@ struct SessionAnalysis {
 
   Session session;
   SessionTypeA type_a;
-  nlohmann::ordered_json report;  // "metro.report/1" (docs/report-schema.md).
-  std::string table;              // TypeAReportTable + the budget table, for people.
-  std::string allan_csv;          // When options.allan_csv and a curve was made.
+  SessionReport report;   // "metro.report/1" (docs/report-schema.md).
+  std::string table;      // TypeAReportTable + the budget table, for people.
+  std::string allan_csv;  // When options.allan_csv and a curve was made.
   // A line per requested analysis that produced nothing for a quantity ("--allan: sensor 3
   // gx_dps: <reason>"), for stderr; the report holds the same reason.
   std::vector<std::string> failures;

@@ -4,9 +4,8 @@
 // own window (window_first_index, t_first_s) and settle object (the fitted transient).
 #pragma once
 
-#include <nlohmann/json.hpp>
-
 #include "metro/io/session.hpp"
+#include "metro/report/session_report.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro {
@@ -15,9 +14,9 @@ namespace metro {
 inline constexpr const char* kSettleMethod =
     "exponential transient fit, cut at remaining bias <= 0.1 u (docs/type-a.md)";
 
-// Adds the keys above to `report`, a TypeAReportJson of `result` (same sensor order).
+// Adds the keys above to `report`, a MakeSessionReport of `result` (same sensor order).
 // Nothing when options.settle_auto is false, apart from options.settle_scope.
 void AddSettleToReport(const Session& session, const SessionTypeA& result,
-                       const WindowOptions& options, nlohmann::ordered_json* report);
+                       const WindowOptions& options, SessionReport* report);
 
 }  // namespace metro

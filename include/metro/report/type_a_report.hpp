@@ -1,8 +1,7 @@
-// The Type A report ("metro.report/1", docs/report-schema.md): JSON for machines and a
-// readable table for people.
+// The Type A report ("metro.report/1", docs/report-schema.md): the typed report of a
+// session's Type A evaluation (session_report.hpp) and a readable table for people.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 
 #include "metro/io/session.hpp"
@@ -12,18 +11,21 @@
 
 namespace metro {
 
-// Builds the report. `options` is echoed under "options" so a report says how it was made.
-nlohmann::ordered_json TypeAReportJson(const Session& session, const SessionTypeA& result,
-                                       const SessionTypeAOptions& options,
-                                       const TagRegistry& registry);
+// The report of `result`, the Type A evaluation of `session` with `options` (echoed under
+// "options" so a report says how it was made): input, options, and per tag and quantity the
+// window, the Type A terms with the mean's expanded uncertainty (coverage, k, U_mean) and the
+// warnings. The settle and Allan stages add their keys (settle_report.hpp,
+// allan_section.hpp).
+SessionReport MakeSessionReport(const Session& session, const SessionTypeA& result,
+                                const SessionTypeAOptions& options, const TagRegistry& registry);
 
 // A fixed-width table: one row per tag and quantity, values rounded per GUM 7.2.6.
 // Ends with the report's warnings (TypeAReportWarnings).
-std::string TypeAReportTable(const nlohmann::ordered_json& report);
+std::string TypeAReportTable(const SessionReport& report);
 
 // The report's warnings (input, per tag, per quantity), one line each under a "warnings:"
 // heading; empty when there are none. The programs print it to stderr when the table is
 // not printed (--quiet, or the JSON on stdout), so a warning is never only in the JSON.
-std::string TypeAReportWarnings(const nlohmann::ordered_json& report);
+std::string TypeAReportWarnings(const SessionReport& report);
 
 }  // namespace metro

@@ -10,8 +10,7 @@
 // lives in the report layer because it needs both the stats and the noise results.
 #pragma once
 
-#include <nlohmann/json.hpp>
-
+#include "metro/report/session_report.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro {
@@ -19,9 +18,9 @@ namespace metro {
 // Value of u_mean_method set by ApplyAllanEvidenceToUMean.
 inline constexpr const char* kUMeanAllan = "allan_noise_model";
 
-// `report` was built from `type_a` by TypeAReportJson and AddAllanToReport (its sensors[k]
+// `report` was built from `type_a` by MakeSessionReport and AddAllanToReport (its sensors[k]
 // is type_a->tags[k]). Both change: the quantity's u_mean, u_mean_dof, u_mean_method and
 // warnings. Quantities without a u_mean_allan are left alone.
-void ApplyAllanEvidenceToUMean(SessionTypeA* type_a, nlohmann::ordered_json* report);
+void ApplyAllanEvidenceToUMean(SessionTypeA* type_a, SessionReport* report);
 
 }  // namespace metro
