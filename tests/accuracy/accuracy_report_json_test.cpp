@@ -7,6 +7,7 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <regex>
@@ -20,6 +21,8 @@
 #include "metro/report/accuracy_page.hpp"
 #include "metro/report/html_report.hpp"
 #include "metro/sim/table_session.hpp"
+#include "metro/uncertainty/budget_report.hpp"
+#include "support/run_program.hpp"
 #include "support/session_text.hpp"
 #include "support/temp_file.hpp"
 
@@ -260,6 +263,53 @@ TEST_CASE("An accuracy report written before input.tag still loads and renders",
   REQUIRE(dispatched.ok());
   CHECK(WithoutFooter(dispatched.value()) == WithoutFooter(page.value()));
 }
+
+#ifdef METRO_CHARACTERIZE_EXE
+TEST_CASE("What characterize accuracy and budget write reads back byte for byte",
+          "[accuracy][report][json][apps]") {
+  TempFile tags_file(R"({"2": {"name": "Chest", "device_id": "0x1234abcd 0x0000fe01"}})", ".json");
+  for (const std::string& options :
+       {std::string(""), "--tags " + tags_file.path() + " --reference-u 0.01 --settle auto",
+        std::string("--error-model harmonic1 --skip-seconds 5 --no-lag-model")}) {
+    INFO(options);
+    const testing::ProgramRun r =
+        testing::RunProgram(METRO_CHARACTERIZE_EXE, "accuracy " + kSweep + " " + options);
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    REQUIRE(r.out.size() > 1);
+    REQUIRE(r.out.back() == '\n');
+    CheckRoundTrip(r.out.substr(0, r.out.size() - 1), "characterize accuracy " + options);
+    if (!options.empty() && options.find("--tags") == 0) {
+      CHECK(r.out.find("\"name\": \"Chest\"") != std::string::npos);
+    }
+  }
+  const testing::ProgramRun b =
+      testing::RunProgram(METRO_CHARACTERIZE_EXE, "budget " + std::string(METRO_SOURCE_DIR) +
+                                                      "/datasets/budgets/gum_h1_end_gauge.json");
+  INFO(b.err);
+  REQUIRE(b.exit_code == 0);
+  REQUIRE(b.out.size() > 1);
+  const std::string text = b.out.substr(0, b.out.size() - 1);
+  Result<BudgetReport> read = BudgetReportFromJson(text, "b.json");
+  if (!read.ok()) FAIL(read.error().ToString());
+  CHECK(ToJson(read.value()) == text);
+}
+
+TEST_CASE("characterize report refuses a damaged accuracy report at the value's position",
+          "[accuracy][report][json][apps]") {
+  ordered_json j = ordered_json::parse(SweepText());
+  j["points"][3]["type_a"]["u_deg"] = "small";
+  const std::string text = JsonText(j, 2) + "\n";
+  TempFile file(text, ".json");
+  const testing::ProgramRun r = testing::RunProgram(
+      METRO_CHARACTERIZE_EXE, "report " + file.path() + " --html " + file.path() + ".html");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: " + file.path() + ":" + LineColumn(text, text.find("\"small\"")) +
+                     ": points[3].type_a.u_deg: expected a number or null, found the string "
+                     "\"small\"\n");
+  std::remove((file.path() + ".html").c_str());
+}
+#endif
 
 }  // namespace
 }  // namespace metro
