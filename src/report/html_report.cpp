@@ -238,10 +238,9 @@ Result<std::string> RenderSessionReportHtml(const SessionReport& report,
            fmt::format("{} more quantities are in the tables but not plotted (at most {} are "
                        "plotted).",
                        not_plotted, options.max_plotted_quantities));
-  const bool has_budget = !report.budget_json.empty();
+  const bool has_budget = report.budget.has_value();
   if (has_budget) {
-    Result<mustache::data> budget =
-        report_internal::BudgetViewData(ordered_json::parse(report.budget_json));
+    Result<mustache::data> budget = report_internal::BudgetViewData(*report.budget);
     if (!budget.ok()) return budget.error();
     data.set("budget", budget.value());
   } else {

@@ -1,6 +1,5 @@
 #include "metro/report/session_analysis.hpp"
 
-#include "metro/core/json_text.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/report/batch.hpp"
 #include "metro/report/plot_data.hpp"
@@ -10,7 +9,6 @@
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
 #include "metro/uncertainty/session_resolver.hpp"
-#include "uncertainty/budget_report_json.hpp"
 
 namespace metro {
 
@@ -80,7 +78,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
     if (!budget.ok()) return fail(budget.error(), true);
     auto evaluation = EvaluateBudget(budget.value(), progress);
     if (!evaluation.ok()) return fail(evaluation.error(), false);
-    out.report.budget_json = JsonText(BudgetReportJson(evaluation.value()));
+    out.report.budget = MakeBudgetReport(evaluation.value());
     out.table += BudgetReportTable(evaluation.value());
   }
   if (progress != nullptr) progress->Finish();

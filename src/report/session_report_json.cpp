@@ -8,6 +8,7 @@
 #include "metro/core/json_text.hpp"
 #include "noise/allan_report_json.hpp"
 #include "plot_data_json.hpp"
+#include "uncertainty/budget_report_json.hpp"
 
 namespace metro {
 namespace {
@@ -416,7 +417,7 @@ Json ToJsonValue(const SessionReport& report) {
   for (const SensorReport& s : report.sensors) sensors.push_back(ToJsonValue(s));
   j["sensors"] = std::move(sensors);
   if (report.allan_skipped) j["allan_skipped"] = *report.allan_skipped;
-  if (!report.budget_json.empty()) j["budget"] = Json::parse(report.budget_json);
+  if (report.budget) j["budget"] = ToJsonValue(*report.budget);
   NullNonFinite(&j);
   return j;
 }
@@ -442,7 +443,7 @@ SessionReport SessionReportFromJsonValue(const JsonCursor& c) {
   if (!sensors.IsArray()) sensors.Fail("an array");
   for (size_t i = 0; i < sensors.Size(); ++i) r.sensors.push_back(SensorFromJsonValue(sensors[i]));
   r.allan_skipped = c["allan_skipped"].OptionalString();
-  if (c.Has("budget")) r.budget_json = JsonText(c["budget"].Raw());
+  if (c.Has("budget")) r.budget = BudgetReportFromJsonValue(c["budget"]);
   return r;
 }
 

@@ -24,6 +24,7 @@
 #include "metro/core/status.hpp"
 #include "metro/noise/allan_report.hpp"
 #include "metro/report/plot_data.hpp"
+#include "metro/uncertainty/budget_report.hpp"
 
 namespace metro {
 
@@ -241,9 +242,8 @@ struct SessionReport {
   std::vector<SensorReport> sensors;
   // `characterize batch`: why a session without rate quantities has no Allan section.
   std::optional<std::string> allan_skipped;
-  // --budget: the "budget" object (metro.budget-report/1, docs/budget-format.md) as its JSON
-  // text, until the budget report is typed; empty: no budget.
-  std::string budget_json;
+  // --budget: the "budget" object, a whole metro.budget-report/1 (docs/budget-format.md).
+  std::optional<BudgetReport> budget;
 
   // The sensor numbered `sensor`, or nullptr.
   const SensorReport* FindSensor(int64_t number) const;
