@@ -9,6 +9,7 @@
 #include "accuracy_view.hpp"
 #include "budget_view.hpp"
 #include "html_common.hpp"
+#include "html_dispatch.hpp"
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"

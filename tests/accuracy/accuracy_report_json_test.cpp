@@ -22,6 +22,7 @@
 #include "metro/report/html_report.hpp"
 #include "metro/sim/table_session.hpp"
 #include "metro/uncertainty/budget_report.hpp"
+#include "report/html_dispatch.hpp"
 #include "support/run_program.hpp"
 #include "support/session_text.hpp"
 #include "support/temp_file.hpp"

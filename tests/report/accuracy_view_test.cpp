@@ -14,6 +14,7 @@
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
+#include "report/html_dispatch.hpp"
 #include "support/html_checks.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"

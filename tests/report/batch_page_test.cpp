@@ -7,6 +7,7 @@
 
 #include "metro/core/rounding.hpp"
 #include "metro/report/html_report.hpp"
+#include "report/html_dispatch.hpp"
 
 namespace metro {
 namespace {

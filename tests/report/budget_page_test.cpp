@@ -10,6 +10,7 @@
 #include "metro/report/html_report.hpp"
 #include "metro/uncertainty/budget_report.hpp"
 #include "report/budget_view.hpp"
+#include "report/html_dispatch.hpp"
 #include "support/html_checks.hpp"
 
 namespace metro {

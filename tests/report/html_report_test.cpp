@@ -19,6 +19,7 @@
 #include "metro/noise/allan.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "metro/uncertainty/budget_report.hpp"
+#include "report/html_dispatch.hpp"
 #include "report/session_report_json.hpp"
 #include "support/html_checks.hpp"
 #include "support/temp_file.hpp"

@@ -21,7 +21,6 @@
 // Numbers in tables are rounded per JCGM 100:2008 7.2.6; the JSON keeps full precision.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -55,16 +54,10 @@ Result<std::string> RenderSessionReportHtml(const SessionReport& report,
 Result<std::string> RenderSessionAnalysisHtml(const SessionAnalysis& analysis,
                                               const HtmlReportOptions& options = {});
 
-// Any saved JSON document, dispatched on its "schema" key (see above). `json_path` is
-// where it was read from; a session report is read with SessionReportFromJson (errors at the
-// value's line and column). No view reloads an input: `session_path` is accepted for the
-// callers of older versions and not used.
-Result<std::string> RenderJsonHtml(const nlohmann::ordered_json& document,
-                                   const std::string& json_path,
-                                   const std::string& session_path = "",
-                                   const HtmlReportOptions& options = {});
-
-// Reads a JSON file and renders it with RenderJsonHtml. Errors name the file.
+// Reads a saved JSON document and renders the page its "schema" key calls for (see above);
+// a session report is read with SessionReportFromJson, so a wrong or missing value is named
+// at its line and column in the file with its path. No view reloads an input: `session_path`
+// is accepted for the callers of older versions and not used. Errors name the file.
 Result<std::string> RenderJsonFileHtml(const std::string& json_path,
                                        const std::string& session_path = "",
                                        const HtmlReportOptions& options = {});
