@@ -229,8 +229,8 @@ Json ToJsonValue(const TypeAReport& a) {
             {"n_eff", a.n_eff},
             {"std_of_mean_autocorr", a.std_of_mean_autocorr},
             {"autocorr_cutoff_lag", OrNull(a.autocorr_cutoff_lag)},
-            {"rho1", a.rho1},
-            {"autocorr_note", OrNull(a.autocorr_note)}};
+            {"rho1", a.rho1}};
+  if (a.has_autocorr_note) j["autocorr_note"] = OrNull(a.autocorr_note);
   if (a.has_u_mean) {
     j["u_mean"] = a.u_mean;
     j["u_mean_dof"] = a.u_mean_dof;
@@ -258,6 +258,7 @@ TypeAReport TypeAFromJsonValue(const JsonCursor& c) {
   a.std_of_mean_autocorr = c["std_of_mean_autocorr"].NumberOrNaN();
   a.autocorr_cutoff_lag = c["autocorr_cutoff_lag"].OptionalInteger();
   a.rho1 = c["rho1"].NumberOrNaN();
+  a.has_autocorr_note = c.Has("autocorr_note");
   a.autocorr_note = c["autocorr_note"].OptionalString();
   // Reports written before metro stated u_mean (and then coverage, k, U_mean) lack the keys.
   a.has_u_mean = c.Has("u_mean");

@@ -5,6 +5,8 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -253,6 +255,25 @@ TEST_CASE("a report written before coverage k U_mean and settle_scope still load
   REQUIRE(now.ok());
   CHECK(now.value().sensors.at(0).Find("gz_dps")->type_a->coverage == 0.95);
   CHECK(now.value().sensors.at(0).Find("gz_dps")->type_a->U_mean == 0.127);
+}
+
+TEST_CASE("a report written by an older metro loads and is written back with the same keys",
+          "[report][session_report]") {
+  // Saved before u_mean, coverage, settle_scope and plot data existed, with Allan error forms.
+  std::ifstream in(std::string(METRO_SOURCE_DIR) + "/fuzz/seeds/report_fuzz/session_report.json");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  REQUIRE(!text.empty());
+  const Result<SessionReport> r = SessionReportFromJson(text, "old.json");
+  INFO((r.ok() ? std::string() : r.error().ToString()));
+  REQUIRE(r.ok());
+  const QuantityReport* yaw = r.value().sensors.at(0).Find("yaw_deg");
+  REQUIRE(yaw != nullptr);
+  CHECK(!yaw->type_a->has_u_mean);
+  CHECK(yaw->allan.has_value());
+  CHECK(!yaw->allan->ok());
+  CHECK(!yaw->plot.has_value());
+  // Nothing added, nothing lost: the same document (metro writes it indented).
+  CHECK(nlohmann::ordered_json::parse(ToJson(r.value())) == nlohmann::ordered_json::parse(text));
 }
 
 }  // namespace

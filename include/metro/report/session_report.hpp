@@ -156,6 +156,7 @@ struct TypeAReport {
   std::optional<int64_t> autocorr_cutoff_lag;
   double rho1 = std::nan("");
   std::optional<std::string> autocorr_note;  // null when the terms above were computed.
+  bool has_autocorr_note = true;             // false: a report written before the key existed.
   // false: a report written before u_mean existed (the four keys below absent).
   bool has_u_mean = true;
   double u_mean = std::nan("");
