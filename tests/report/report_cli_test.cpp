@@ -71,6 +71,14 @@ TEST_CASE("characterize --html writes the JSON and the HTML report", "[apps][rep
   r = Characterize("report " + kDatasets + "static_chest.csv --html " + html2);
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("invalid JSON") != std::string::npos);
+  // A saved report with a wrong value is read through SessionReportFromJson: the value's line
+  // and column with its path, exit 2. Line 2 of this file is ' "tool": {"name": 7}}'.
+  const std::string bad = (d.path / "bad.json").string();
+  { std::ofstream(bad) << "{\"schema\": \"metro.report/1\",\n \"tool\": {\"name\": 7}}\n"; }
+  r = Characterize("report " + bad + " --html " + html2);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find(bad + ":2:19: tool.name: expected a string, found the number 7") !=
+        std::string::npos);
 }
 
 TEST_CASE("characterize batch exits 1 and names the broken session", "[apps][report]") {
