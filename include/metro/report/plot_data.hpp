@@ -29,7 +29,7 @@ struct PlotDataOptions {
   // components qw qx qy qz (their Euler angles are plotted instead).
   std::vector<std::string> quantities;
   int max_quantities = 48;            // Over all tags; the rest are in the tables only.
-  int max_series_points = 2000;       // Longer records are kept as min/max per bucket.
+  int max_series_points = 1000;       // Longer records are kept as min/max per bucket.
   int histogram_bins = 0;             // 0: sqrt(n), clamped to 10..60.
   int max_autocorrelation_lag = 200;  // Also at most n/4.
 
