@@ -20,7 +20,6 @@
 #include "core/parallel.hpp"
 #include "metro/core/angles.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
@@ -29,7 +28,6 @@
 
 namespace metro {
 
-using nlohmann::ordered_json;
 namespace fs = std::filesystem;
 
 namespace {
@@ -446,57 +444,37 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
       }
     }
   }
-  ordered_json summary;
-  summary["schema"] = kBatchSummarySchema;
-  summary["tool"] = {{"name", kToolName}, {"version", kVersion}};
-  summary["warnings"] = warnings;
-  summary["output_dir"] = options.output_dir;
-  summary["sessions_total"] = inputs.size();
-  ordered_json sessions = ordered_json::array();
+  BatchSummaryReport& summary = out.summary;
+  summary.tool = {kToolName, kVersion};
+  summary.warnings = warnings;
+  summary.output_dir = options.output_dir;
+  summary.sessions_total = static_cast<int64_t>(inputs.size());
   for (size_t i = 0; i < inputs.size(); ++i) {
     const BatchItem& item = out.items[i];
-    ordered_json s;
-    s["input"] = item.input;
-    s["ok"] = item.ok;
+    BatchSessionEntry s;
+    s.input = item.input;
+    s.ok = item.ok;
     if (item.ok) {
-      s["sha256"] = hashes[i];
-      s["report"] = names[i];
-      if (!item.page_path.empty()) s["page"] = fs::path(item.page_path).filename().string();
-      ordered_json tags_i = ordered_json::array();
+      s.sha256 = hashes[i];
+      s.report = names[i];
+      if (!item.page_path.empty()) s.page = fs::path(item.page_path).filename().string();
+      s.tags.emplace();
       for (const TagResult& t : results[i].tags) {
-        tags_i.push_back({{"sensor", t.sensor},
-                          {"name", t.tag_name},
-                          {"frames", t.frames},
-                          {"fresh", t.fresh},
-                          {"stale", t.stale},
-                          {"never", t.never},
-                          {"dead", t.frames > 0 && t.fresh == 0}});
+        s.tags->push_back({t.sensor, t.tag_name, t.frames, t.fresh, t.stale, t.never,
+                           t.frames > 0 && t.fresh == 0});
       }
-      s["tags"] = tags_i;
-      ordered_json quantities_i = ordered_json::array();
-      const auto number = [](double x) {
-        return std::isfinite(x) ? ordered_json(x) : ordered_json();
-      };
+      s.quantities.emplace();
       for (const QuantityResult& r : results[i].quantities) {
-        quantities_i.push_back({{"sensor", r.sensor},
-                                {"name", r.tag_name},
-                                {"quantity", r.quantity},
-                                {"unit", r.unit},
-                                {"mean", number(r.mean)},
-                                {"u_mean", number(r.u_mean)},
-                                {"n", number(r.n)}});
+        s.quantities->push_back({r.sensor, r.tag_name, r.quantity, r.unit, r.mean, r.u_mean, r.n});
       }
-      s["quantities"] = quantities_i;
     } else {
       ++out.failed;
-      s["error"] = item.error.ToString();
-      s["input_error"] = item.input_error;
+      s.error = item.error.ToString();
+      s.input_error = item.input_error;
     }
-    sessions.push_back(s);
+    summary.sessions.push_back(std::move(s));
   }
-  summary["sessions_failed"] = out.failed;
-  summary["sessions"] = sessions;
-  ordered_json quantities = ordered_json::array();
+  summary.sessions_failed = static_cast<int64_t>(out.failed);
   std::string table;
   for (const std::string& w : warnings) table += w + "\n";
   table += fmt::format("{} sessions, {} failed\n", inputs.size(), out.failed);
@@ -524,25 +502,23 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
       // JCGM 100:2008 4.2.2: experimental standard deviation of the session means.
       if (n >= 2) std_of_means = std::sqrt(ss / static_cast<double>(n - 1));
     }
-    ordered_json q;
-    q["sensor"] = key.first;
-    q["name"] = acc.tag_name;
-    q["quantity"] = key.second;
-    q["unit"] = acc.unit;
-    q["sessions"] = n;
-    q["statistics"] = circular ? "circular" : "linear";
-    q["mean_of_means"] = std::isfinite(mean) ? ordered_json(mean) : ordered_json(nullptr);
-    q["std_of_means"] =
-        n >= 2 && std::isfinite(std_of_means) ? ordered_json(std_of_means) : ordered_json(nullptr);
-    if (circular) q["resultant_length"] = circle.resultant_length;
-    q["worst_n_eff_ratio"] =
-        std::isfinite(acc.worst_ratio) ? ordered_json(acc.worst_ratio) : ordered_json(nullptr);
-    q["worst_n_eff_session"] = acc.worst_session;
-    if (acc.units.size() > 1) q["warning"] = "sessions disagree on the unit of this quantity";
+    BatchQuantitySummary q;
+    q.sensor = key.first;
+    q.name = acc.tag_name;
+    q.quantity = key.second;
+    q.unit = acc.unit;
+    q.sessions = static_cast<int64_t>(n);
+    q.statistics = circular ? "circular" : "linear";
+    q.mean_of_means = mean;
+    if (n >= 2) q.std_of_means = std_of_means;
+    if (circular) q.resultant_length = circle.resultant_length;
+    q.worst_n_eff_ratio = acc.worst_ratio;
+    q.worst_n_eff_session = acc.worst_session;
+    if (acc.units.size() > 1) q.warning = "sessions disagree on the unit of this quantity";
     if (circular && !std::isfinite(mean)) {
-      q["warning"] = "the session means cancel on the circle (R = 0): no mean direction";
+      q.warning = "the session means cancel on the circle (R = 0): no mean direction";
     }
-    quantities.push_back(q);
+    summary.quantities.push_back(std::move(q));
     const bool has_std = n >= 2 && std::isfinite(std_of_means);
     const RoundedResult r = std::isfinite(mean)
                                 ? RoundForStatement(mean, has_std ? std_of_means : 0.0)
@@ -551,26 +527,17 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
                          acc.tag_name, key.second, acc.unit, n, r.value,
                          has_std ? r.uncertainty : "-", acc.worst_ratio);
   }
-  summary["quantities"] = quantities;
   // Per tag: receiver counts; packet_loss_ratio = (stale + never) / frames (docs/formats.md).
-  ordered_json tags = ordered_json::array();
+  summary.tags.emplace();
   std::string tag_table;
   for (const auto& [sensor, acc] : by_tag) {
     const bool receiver = acc.frames > 0;
     const double loss =
         receiver ? static_cast<double>(acc.stale + acc.never) / static_cast<double>(acc.frames)
                  : 0.0;
-    ordered_json t;
-    t["sensor"] = sensor;
-    t["name"] = acc.tag_name;
-    t["sessions"] = acc.sessions;
-    t["frames"] = acc.frames;
-    t["fresh"] = acc.fresh;
-    t["stale"] = acc.stale;
-    t["never"] = acc.never;
-    t["packet_loss_ratio"] = loss;
-    t["sessions_without_fresh"] = acc.sessions_without_fresh;
-    tags.push_back(t);
+    summary.tags->push_back({sensor, acc.tag_name, static_cast<int64_t>(acc.sessions), acc.frames,
+                             acc.fresh, acc.stale, acc.never, loss,
+                             static_cast<int64_t>(acc.sessions_without_fresh)});
     if (!receiver) continue;
     tag_table += fmt::format(
         "{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>8.2f} %{}\n", sensor, acc.tag_name,
@@ -579,7 +546,6 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
             ? fmt::format("  no fresh packet in {} session(s)", acc.sessions_without_fresh)
             : "");
   }
-  summary["tags"] = tags;
   if (!tag_table.empty()) {
     table += fmt::format("\n{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10}\n", "sensor",
                          "tag", "sessions", "frames", "fresh", "stale", "never", "loss");
@@ -588,12 +554,11 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
   for (const BatchItem& item : out.items) {
     if (!item.ok) table += fmt::format("FAILED {}: {}\n", item.input, item.error.ToString());
   }
-  out.summary = summary;
   const fs::path dir(options.output_dir);
   // Both or neither. Tag names and file names in the table are data: escaped, so that
   // `cat summary.txt` cannot drive a terminal.
   out.table = EscapeControlCharsKeepLines(table);
-  const std::string summary_json = JsonText(summary, 2) + "\n";
+  const std::string summary_json = ToJson(summary) + "\n";
   if (Status s = WriteFilesAtomically({{(dir / "summary.json").string(), summary_json},
                                        {(dir / "summary.txt").string(), out.table}});
       !s.ok()) {

@@ -11,24 +11,16 @@
 #include "html_common.hpp"
 #include "html_templates.hpp"
 #include "metro/core/rounding.hpp"
-#include "metro/report/batch.hpp"
 #include "metro/report/svg_plot.hpp"
 
 namespace metro {
 namespace {
 
-using nlohmann::ordered_json;
 using report_internal::EscapeHtml;
-using report_internal::JsonNumber;
-using report_internal::JsonString;
 namespace mustache = kainjow::mustache;
 
 std::string Link(const std::string& prefix, const std::string& name) {
   return prefix.empty() ? name : prefix + "/" + name;
-}
-
-std::string Count(const ordered_json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? JsonString(j, key) : "-";
 }
 
 // One point per session that evaluated the quantity.
@@ -38,10 +30,11 @@ struct SessionPoint {
   double u = 0.0;
 };
 
-Result<std::string> SpreadPlot(const ordered_json& q, const std::vector<SessionPoint>& points) {
-  const std::string quantity = JsonString(q, "quantity");
-  const std::string unit = JsonString(q, "unit");
-  const double center = JsonNumber(q, "mean_of_means");
+Result<std::string> SpreadPlot(const BatchQuantitySummary& q,
+                               const std::vector<SessionPoint>& points) {
+  const std::string& quantity = q.quantity;
+  const std::string& unit = q.unit;
+  const double center = q.mean_of_means;
   double lo = center, hi = center;
   for (const SessionPoint& p : points) {
     const double u = std::isfinite(p.u) ? p.u : 0.0;
@@ -51,8 +44,7 @@ Result<std::string> SpreadPlot(const ordered_json& q, const std::vector<SessionP
   const report_internal::AxisScale axis =
       report_internal::ChooseAxisScale(quantity, unit, lo, hi, center);
   XyPlot plot;
-  plot.title =
-      fmt::format("sensor {} {}: {}", JsonString(q, "sensor"), JsonString(q, "name"), quantity);
+  plot.title = fmt::format("sensor {} {}: {}", q.sensor, q.name, quantity);
   plot.x_label = "session (row of the sessions table)";
   plot.y_label = axis.label;
   plot.width_px = 560;
@@ -77,8 +69,8 @@ Result<std::string> SpreadPlot(const ordered_json& q, const std::vector<SessionP
   plot.series.push_back(frame);
   if (std::isfinite(center)) {
     PlotHLine h;
-    h.label = JsonString(q, "statistics") == "circular" ? "circular mean of the means"
-                                                        : "mean of the means";
+    h.label = q.statistics.value_or("") == "circular" ? "circular mean of the means"
+                                                      : "mean of the means";
     h.y = axis.To(center);
     plot.hlines.push_back(h);
   }
@@ -87,106 +79,93 @@ Result<std::string> SpreadPlot(const ordered_json& q, const std::vector<SessionP
 
 }  // namespace
 
-Result<std::string> RenderBatchSummaryHtml(const ordered_json& summary,
+Result<std::string> RenderBatchSummaryHtml(const BatchSummaryReport& summary,
                                            const BatchPageOptions& options) {
-  if (!summary.is_object() || JsonString(summary, "schema") != kBatchSummarySchema ||
-      !summary.contains("sessions") || !summary["sessions"].is_array()) {
-    return MakeError(fmt::format("not a {} summary with its 'sessions'", kBatchSummarySchema));
-  }
   mustache::data d;
   mustache::data rows{mustache::data::type::list};
   // (sensor, quantity) -> each session's mean and u_mean.
-  std::map<std::pair<int, std::string>, std::vector<SessionPoint>> points;
+  std::map<std::pair<int64_t, std::string>, std::vector<SessionPoint>> points;
   size_t dead = 0;
   int row_number = 0;
-  for (const ordered_json& s : summary["sessions"]) {
+  for (const BatchSessionEntry& s : summary.sessions) {
     ++row_number;
-    const std::string input = JsonString(s, "input");
-    const bool ok = s.contains("ok") && s["ok"].is_boolean() && s["ok"].get<bool>();
     const auto base_row = [&] {
       mustache::data row;
       row.set("number", std::to_string(row_number));
-      row.set("input", input);
-      const std::string page = JsonString(s, "page");
+      row.set("input", s.input);
+      const std::string page = s.ok ? s.page.value_or("") : "";
       row.set("has_page", !page.empty());
       row.set("page_href", Link(options.link_prefix, page));
-      const std::string report = JsonString(s, "report");
+      const std::string report = s.ok ? s.report : "";
       row.set("has_report", !report.empty());
       row.set("report_href", Link(options.link_prefix, report));
       return row;
     };
-    const ordered_json empty = ordered_json::array();
-    const ordered_json& tags = s.contains("tags") && s["tags"].is_array() ? s["tags"] : empty;
-    if (!ok || tags.empty()) {
+    const bool has_tags = s.ok && s.tags && !s.tags->empty();
+    if (!has_tags) {
       mustache::data row = base_row();
       row.set("sensor", "-");
       row.set("tag", "-");
       for (const char* key : {"frames", "fresh", "stale", "never"}) row.set(key, "-");
-      row.set("status", ok ? "analysed" : "FAILED: " + JsonString(s, "error"));
-      row.set("status_class", ok ? "" : "warn");
+      row.set("status", s.ok ? "analysed" : "FAILED: " + s.error);
+      row.set("status_class", s.ok ? "" : "warn");
       rows.push_back(row);
     }
-    if (ok) {
-      for (const ordered_json& t : tags) {
+    if (!s.ok) continue;
+    if (has_tags) {
+      for (const BatchSessionTag& t : *s.tags) {
         mustache::data row = base_row();
-        row.set("sensor", JsonString(t, "sensor"));
-        row.set("tag", JsonString(t, "name"));
-        for (const char* key : {"frames", "fresh", "stale", "never"}) row.set(key, Count(t, key));
-        const bool is_dead = t.contains("dead") && t["dead"].is_boolean() && t["dead"].get<bool>();
-        dead += is_dead ? 1 : 0;
-        row.set("status", is_dead ? "DEAD: frames but no fresh packet" : "ok");
-        row.set("status_class", is_dead ? "warn" : "");
+        row.set("sensor", std::to_string(t.sensor));
+        row.set("tag", t.name);
+        row.set("frames", std::to_string(t.frames));
+        row.set("fresh", std::to_string(t.fresh));
+        row.set("stale", std::to_string(t.stale));
+        row.set("never", std::to_string(t.never));
+        dead += t.dead ? 1 : 0;
+        row.set("status", t.dead ? "DEAD: frames but no fresh packet" : "ok");
+        row.set("status_class", t.dead ? "warn" : "");
         rows.push_back(row);
       }
-      if (s.contains("quantities") && s["quantities"].is_array()) {
-        for (const ordered_json& q : s["quantities"]) {
-          const double mean = JsonNumber(q, "mean");
-          if (!std::isfinite(mean) || !q.contains("sensor") || !q["sensor"].is_number_integer()) {
-            continue;
-          }
-          points[{q["sensor"].get<int>(), JsonString(q, "quantity")}].push_back(
-              {row_number, mean, JsonNumber(q, "u_mean")});
-        }
+    }
+    if (s.quantities) {
+      for (const BatchSessionQuantity& q : *s.quantities) {
+        if (!std::isfinite(q.mean)) continue;
+        points[{q.sensor, q.quantity}].push_back({row_number, q.mean, q.u_mean});
       }
     }
   }
   d.set("rows", rows);
-  d.set("sessions_total", JsonString(summary, "sessions_total"));
-  d.set("sessions_failed", JsonString(summary, "sessions_failed"));
+  d.set("sessions_total", std::to_string(summary.sessions_total));
+  d.set("sessions_failed", std::to_string(summary.sessions_failed));
   d.set("dead", std::to_string(dead));
   mustache::data warnings{mustache::data::type::list};
-  if (summary.contains("warnings") && summary["warnings"].is_array()) {
-    for (const ordered_json& w : summary["warnings"]) {
-      warnings.push_back(mustache::data(w.is_string() ? w.get<std::string>() : w.dump()));
-    }
+  const std::vector<std::string> no_warnings;
+  for (const std::string& w : summary.warnings.value_or(no_warnings)) {
+    warnings.push_back(mustache::data(w));
   }
-  d.set("has_warnings", summary.contains("warnings") && summary["warnings"].is_array() &&
-                            !summary["warnings"].empty());
+  d.set("has_warnings", summary.warnings && !summary.warnings->empty());
   d.set("warnings", warnings);
 
   // The quantities: a table row each; plots for those with the most sessions first.
   mustache::data quantities{mustache::data::type::list};
-  std::vector<std::pair<const ordered_json*, const std::vector<SessionPoint>*>> plotted;
-  if (summary.contains("quantities") && summary["quantities"].is_array()) {
-    for (const ordered_json& q : summary["quantities"]) {
-      mustache::data row;
-      row.set("sensor", JsonString(q, "sensor"));
-      row.set("tag", JsonString(q, "name"));
-      row.set("quantity", JsonString(q, "quantity"));
-      row.set("unit", JsonString(q, "unit"));
-      row.set("sessions", JsonString(q, "sessions"));
-      const double mean = JsonNumber(q, "mean_of_means");
-      const double spread = JsonNumber(q, "std_of_means");
-      const RoundedResult r = RoundForStatement(mean, std::isfinite(spread) ? spread : 0.0);
-      row.set("mean", std::isfinite(mean) ? r.value : "-");
-      row.set("std", std::isfinite(spread) ? r.uncertainty : "-");
-      row.set("statistics", JsonString(q, "statistics"));
-      row.set("warning", JsonString(q, "warning"));
-      quantities.push_back(row);
-      if (!q.contains("sensor") || !q["sensor"].is_number_integer()) continue;
-      const auto it = points.find({q["sensor"].get<int>(), JsonString(q, "quantity")});
-      if (it != points.end() && !it->second.empty()) plotted.push_back({&q, &it->second});
-    }
+  std::vector<std::pair<const BatchQuantitySummary*, const std::vector<SessionPoint>*>> plotted;
+  for (const BatchQuantitySummary& q : summary.quantities) {
+    mustache::data row;
+    row.set("sensor", std::to_string(q.sensor));
+    row.set("tag", q.name);
+    row.set("quantity", q.quantity);
+    row.set("unit", q.unit);
+    row.set("sessions", std::to_string(q.sessions));
+    const double mean = q.mean_of_means;
+    const double spread = q.std_of_means;
+    const RoundedResult r = RoundForStatement(mean, std::isfinite(spread) ? spread : 0.0);
+    row.set("mean", std::isfinite(mean) ? r.value : "-");
+    row.set("std", std::isfinite(spread) ? r.uncertainty : "-");
+    row.set("statistics", q.statistics.value_or(""));
+    row.set("warning", q.warning.value_or(""));
+    quantities.push_back(row);
+    const auto it = points.find({q.sensor, q.quantity});
+    if (it != points.end() && !it->second.empty()) plotted.push_back({&q, &it->second});
   }
   d.set("quantities", quantities);
   std::stable_sort(plotted.begin(), plotted.end(), [](const auto& a, const auto& b) {
@@ -214,10 +193,16 @@ Result<std::string> RenderBatchSummaryHtml(const ordered_json& summary,
   if (!body.ok()) return body;
   return report_internal::RenderPage(
       "Batch summary",
-      fmt::format("{} sessions, {} failed, {} dead tag rows; {}",
-                  JsonString(summary, "sessions_total"), JsonString(summary, "sessions_failed"),
-                  dead, JsonString(summary, "output_dir")),
+      fmt::format("{} sessions, {} failed, {} dead tag rows; {}", summary.sessions_total,
+                  summary.sessions_failed, dead, summary.output_dir),
       body.value());
+}
+
+Result<std::string> RenderBatchSummaryHtml(std::string_view json_text, const std::string& file,
+                                           const BatchPageOptions& options) {
+  Result<BatchSummaryReport> summary = BatchSummaryFromJson(json_text, file);
+  if (!summary.ok()) return summary.error();
+  return RenderBatchSummaryHtml(summary.value(), options);
 }
 
 }  // namespace metro

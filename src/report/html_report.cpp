@@ -319,13 +319,7 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
   }
   if (schema == kBatchSummarySchema) {
     // The links are relative to the summary's folder, where batch wrote the session pages.
-    Result<std::string> html = RenderBatchSummaryHtml(document);
-    if (!html.ok() && html.error().file.empty()) {
-      Error e = html.error();
-      e.file = json_path;
-      return e;
-    }
-    return html;
+    return RenderBatchSummaryHtml(JsonText(document, 2), json_path);
   }
   if (IsBudgetDefinition(document)) {
     return MakeError(json_path, 0,

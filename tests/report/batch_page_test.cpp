@@ -3,8 +3,10 @@
 #include "metro/report/batch_page.hpp"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
+#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/report/html_report.hpp"
 #include "report/html_dispatch.hpp"
@@ -21,29 +23,42 @@ size_t Count(const std::string& text, const std::string& what) {
 }
 
 // Two sessions of two tags; tag 3 of the second session sent frames but no fresh packet.
-ordered_json Summary() {
+ordered_json SummaryJson() {
   return ordered_json::parse(R"({
-    "schema": "metro.batch-summary/1", "warnings": ["b.txt: sensor 3: no fresh packet"],
+    "schema": "metro.batch-summary/1", "tool": {"name": "characterize", "version": "0.1.0"},
+    "warnings": ["b.txt: sensor 3: no fresh packet"],
     "output_dir": "out", "sessions_total": 3, "sessions_failed": 1,
     "sessions": [
-      {"input": "a.csv", "ok": true, "report": "a.report.json", "page": "a.report.html",
+      {"input": "a.csv", "ok": true, "sha256": "aa", "report": "a.report.json",
+       "page": "a.report.html",
        "tags": [{"sensor": 2, "name": "Chest", "frames": 0, "fresh": 0, "stale": 0, "never": 0,
                  "dead": false}],
        "quantities": [{"sensor": 2, "name": "Chest", "quantity": "ax_g", "unit": "g",
-                       "mean": 0.01234, "u_mean": 0.0002, "n": 100}]},
-      {"input": "b.txt", "ok": true, "report": "b.report.json", "page": "b.report.html",
+                       "mean": 0.01234, "u_mean": 0.0002, "n": 100.0}]},
+      {"input": "b.txt", "ok": true, "sha256": "bb", "report": "b.report.json",
+       "page": "b.report.html",
        "tags": [{"sensor": 2, "name": "Chest", "frames": 50, "fresh": 48, "stale": 2, "never": 0,
                  "dead": false},
                 {"sensor": 3, "name": "Arm", "frames": 50, "fresh": 0, "stale": 0, "never": 50,
                  "dead": true}],
        "quantities": [{"sensor": 2, "name": "Chest", "quantity": "ax_g", "unit": "g",
-                       "mean": 0.01266, "u_mean": 0.0003, "n": 48}]},
+                       "mean": 0.01266, "u_mean": 0.0003, "n": 48.0}]},
       {"input": "c.csv", "ok": false, "error": "c.csv:3:1: expected a number",
        "input_error": true}],
     "quantities": [{"sensor": 2, "name": "Chest", "quantity": "ax_g", "unit": "g", "sessions": 2,
                     "statistics": "linear", "mean_of_means": 0.0125,
-                    "std_of_means": 0.000226274}],
+                    "std_of_means": 0.000226274, "worst_n_eff_ratio": 0.5,
+                    "worst_n_eff_session": "b.txt"}],
     "tags": []})");
+}
+
+// The same as the typed summary, read back as `characterize report` reads summary.json.
+BatchSummaryReport Summary() {
+  Result<BatchSummaryReport> summary =
+      BatchSummaryFromJson(JsonText(SummaryJson(), 2), "out/summary.json");
+  INFO((summary.ok() ? std::string() : summary.error().ToString()));
+  REQUIRE(summary.ok());
+  return summary.value();
 }
 
 TEST_CASE("Batch page has a row per session and tag with dead tags marked", "[report][batch]") {
@@ -80,14 +95,24 @@ TEST_CASE("Batch page has a row per session and tag with dead tags marked", "[re
 }
 
 TEST_CASE("A saved batch summary renders as the batch page", "[report][batch]") {
-  Result<std::string> html = RenderJsonHtml(Summary(), "out/summary.json");
+  Result<std::string> html = RenderJsonHtml(SummaryJson(), "out/summary.json");
   REQUIRE(html.ok());
   CHECK(html.value().find("<title>Batch summary</title>") != std::string::npos);
   // Beside summary.json: links without a prefix.
   CHECK(html.value().find("href=\"a.report.html\"") != std::string::npos);
-  ordered_json bad = Summary();
+  // The same page as from the typed summary.
+  Result<std::string> typed = RenderBatchSummaryHtml(Summary());
+  REQUIRE(typed.ok());
+  CHECK(typed.value() == html.value());
+  // A summary without its sessions is refused at the object that lacks them (line 1, column
+  // 1 of the text written with indent 2), naming the member.
+  ordered_json bad = SummaryJson();
   bad.erase("sessions");
-  CHECK_FALSE(RenderBatchSummaryHtml(bad).ok());
+  Result<std::string> refused = RenderJsonHtml(bad, "out/summary.json");
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().ToString() ==
+        "out/summary.json:1:1: sessions: expected an array, found nothing (the member is "
+        "missing)");
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "metro/core/file.hpp"
@@ -143,17 +144,17 @@ TEST_CASE("Std of session means across different sessions", "[report][batch]") {
   const BatchSummary summary =
       RunBatch({(in.path / "a.csv").string(), (in.path / "b.csv").string()}, o);
   REQUIRE(summary.ok);
-  REQUIRE(summary.summary["quantities"].size() == 1);
-  const auto& q = summary.summary["quantities"][0];
+  REQUIRE(summary.summary.quantities.size() == 1);
+  const BatchQuantitySummary& q = summary.summary.quantities[0];
   // pitch_deg is an angle: pooled on the circle. Two means d apart: R = cos(d / 2), so the
   // circular std with n - 1 is sqrt(2) sqrt(-2 ln cos(d / 2)) = d / sqrt(2) (1 + d^2 / 96 +
   // ...), d in rad: 0.35355395 deg against the linear 0.35355339.
   const double half_rad = 0.5 * d_deg * M_PI / 180.0;
-  CHECK(q["statistics"] == "circular");
-  CHECK(q["std_of_means"].get<double>() ==
+  CHECK(q.statistics == "circular");
+  CHECK(q.std_of_means ==
         Approx(std::sqrt(2.0) * std::sqrt(-2.0 * std::log(std::cos(half_rad))) * 180.0 / M_PI)
             .epsilon(1e-9));
-  CHECK(q["std_of_means"].get<double>() == Approx(d_deg / std::sqrt(2.0)).epsilon(2e-6));
+  CHECK(q.std_of_means == Approx(d_deg / std::sqrt(2.0)).epsilon(2e-6));
 }
 
 TEST_CASE("Batch names the Allan analyses that produced nothing", "[report][batch]") {
@@ -171,8 +172,9 @@ TEST_CASE("Batch names the Allan analyses that produced nothing", "[report][batc
   const BatchSummary summary = RunBatch({(in.path / "gap.csv").string()}, o);
   REQUIRE(summary.ok);  // The Type A report was written.
   const std::string expected = (in.path / "gap.csv").string() + ": --allan: sensor 1 gx_dps: ";
-  REQUIRE(summary.summary["warnings"].size() == 1);
-  CHECK(summary.summary["warnings"][0].get<std::string>().find(expected) == 0);
+  REQUIRE(summary.summary.warnings);
+  REQUIRE(summary.summary.warnings->size() == 1);
+  CHECK(summary.summary.warnings->front().find(expected) == 0);
   CHECK(summary.table.find(expected) != std::string::npos);
 }
 
@@ -229,21 +231,21 @@ TEST_CASE("Batch pools yaw across +-180 on the circle", "[report][batch]") {
   const BatchSummary summary =
       RunBatch({(in.path / "s0.csv").string(), (in.path / "s1.csv").string()}, o);
   REQUIRE(summary.ok);
-  std::map<std::string, ordered_json> q;
-  for (const auto& row : summary.summary["quantities"]) q[row["quantity"].get<std::string>()] = row;
+  std::map<std::string, BatchQuantitySummary> q;
+  for (const BatchQuantitySummary& row : summary.summary.quantities) q[row.quantity] = row;
   REQUIRE(q.count("yaw_deg") == 1);
-  CHECK(q["yaw_deg"]["statistics"] == "circular");
-  CHECK(std::abs(q["yaw_deg"]["mean_of_means"].get<double>()) == Approx(180.0).margin(1e-6));
-  CHECK(q["yaw_deg"]["std_of_means"].get<double>() == Approx(0.05 * std::sqrt(2.0)).epsilon(1e-4));
+  CHECK(q["yaw_deg"].statistics == "circular");
+  CHECK(std::abs(q["yaw_deg"].mean_of_means) == Approx(180.0).margin(1e-6));
+  CHECK(q["yaw_deg"].std_of_means == Approx(0.05 * std::sqrt(2.0)).epsilon(1e-4));
   // Pitch on the circle too: symmetric means 10 and 20 give 15 exactly; the spread of +-5
   // deg is 5 sqrt(2) (1 + O(1e-3)).
-  CHECK(q["pitch_deg"]["statistics"] == "circular");
-  CHECK(q["pitch_deg"]["mean_of_means"].get<double>() == Approx(15.0).epsilon(1e-9));
-  CHECK(q["pitch_deg"]["std_of_means"].get<double>() == Approx(5.0 * std::sqrt(2.0)).epsilon(2e-3));
+  CHECK(q["pitch_deg"].statistics == "circular");
+  CHECK(q["pitch_deg"].mean_of_means == Approx(15.0).epsilon(1e-9));
+  CHECK(q["pitch_deg"].std_of_means == Approx(5.0 * std::sqrt(2.0)).epsilon(2e-3));
   // A rate stays linear: mean 2, sample std sqrt(2).
-  CHECK(q["gx_dps"]["statistics"] == "linear");
-  CHECK(q["gx_dps"]["mean_of_means"].get<double>() == Approx(2.0).epsilon(1e-12));
-  CHECK(q["gx_dps"]["std_of_means"].get<double>() == Approx(std::sqrt(2.0)).epsilon(1e-12));
+  CHECK(q["gx_dps"].statistics == "linear");
+  CHECK(q["gx_dps"].mean_of_means == Approx(2.0).epsilon(1e-12));
+  CHECK(q["gx_dps"].std_of_means == Approx(std::sqrt(2.0)).epsilon(1e-12));
 }
 
 TEST_CASE("A tag that never connected has its row, loss 1.0 and a warning on top",
@@ -274,26 +276,28 @@ TEST_CASE("A tag that never connected has its row, loss 1.0 and a warning on top
   o.jobs = 1;
   const BatchSummary summary = RunBatch({capture}, o);
   REQUIRE(summary.ok);
-  const ordered_json& s = summary.summary;
+  const BatchSummaryReport& s = summary.summary;
   // The warning heads summary.json (before the sessions) and the table.
-  REQUIRE(s["warnings"].size() == 1);
-  const std::string w = s["warnings"][0].get<std::string>();
+  REQUIRE(s.warnings);
+  REQUIRE(s.warnings->size() == 1);
+  const std::string w = s.warnings->front();
   CHECK(w.find("WARNING sensor 13") != std::string::npos);
   CHECK(w.find("packet_loss_ratio 1.0") != std::string::npos);
   CHECK(summary.table.rfind(capture + ": WARNING sensor 13", 0) == 0);
   bool found_13 = false, found_2 = false;
-  for (const auto& t : s["tags"]) {
-    if (t["sensor"] == 13) {
+  REQUIRE(s.tags);
+  for (const BatchTagSummary& t : *s.tags) {
+    if (t.sensor == 13) {
       found_13 = true;
-      CHECK(t["frames"].get<int64_t>() == frames_13);
-      CHECK(t["fresh"].get<int64_t>() == 0);
-      CHECK(t["never"].get<int64_t>() == frames_13);
-      CHECK(t["packet_loss_ratio"].get<double>() == 1.0);
-      CHECK(t["sessions_without_fresh"].get<int64_t>() == 1);
+      CHECK(t.frames == frames_13);
+      CHECK(t.fresh == 0);
+      CHECK(t.never == frames_13);
+      CHECK(t.packet_loss_ratio == 1.0);
+      CHECK(t.sessions_without_fresh == 1);
     }
-    if (t["sensor"] == 2) {
+    if (t.sensor == 2) {
       found_2 = true;
-      CHECK(t["packet_loss_ratio"].get<double>() ==
+      CHECK(t.packet_loss_ratio ==
             Approx(double(stale_2 + never_2) / double(frames_2)).epsilon(1e-15));
     }
   }

@@ -1,22 +1,21 @@
 // `characterize batch`: many sessions through AnalyzeSession in parallel, one JSON report
-// per session, a summary across sessions ("metro.batch-summary/1", docs/reports.md), and
-// every failure named with its error. One bad file never costs the other results.
+// per session, a summary across sessions (BatchSummaryReport, "metro.batch-summary/1",
+// batch_summary.hpp, docs/reports.md), and every failure named with its error. One bad file
+// never costs the other results.
 #pragma once
 
 #include <cmath>
 #include <cstddef>
 #include <functional>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "metro/core/status.hpp"
+#include "metro/report/batch_summary.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "metro/report/session_report.hpp"
 
 namespace metro {
-
-inline constexpr const char* kBatchSummarySchema = "metro.batch-summary/1";
 
 // The lock file batch keeps in its output directory (docs/reports.md, "One batch per
 // folder"); it holds "pid N on HOST, since UNIX-TIME" of the run holding it.
@@ -64,11 +63,11 @@ struct BatchItem {
 
 // What RunBatch produced. The defaults read as failure.
 struct BatchSummary {
-  bool ok = false;                 // Every session analysed and written, and the summary written.
-  size_t failed = 0;               // Sessions that failed.
-  std::vector<BatchItem> items;    // In input order.
-  nlohmann::ordered_json summary;  // Also written to output_dir/summary.json.
-  std::string table;               // Also written to output_dir/summary.txt.
+  bool ok = false;               // Every session analysed and written, and the summary written.
+  size_t failed = 0;             // Sessions that failed.
+  std::vector<BatchItem> items;  // In input order.
+  BatchSummaryReport summary;    // Also written to output_dir/summary.json (ToJson).
+  std::string table;             // Also written to output_dir/summary.txt.
   // Inputs that were batch's own outputs in output_dir (summary.json, summary.txt,
   // *.report.json from an earlier run into the same folder), not analysed: "skipping PATH:
   // why", one per input.

@@ -1,4 +1,4 @@
-// The batch page (issue #25): a "metro.batch-summary/1" summary (batch.hpp) as one
+// The batch page (issue #25): a batch summary (BatchSummaryReport, batch_summary.hpp) as one
 // self-contained HTML page (reports/templates/batch_page.mustache in page.mustache's chrome):
 //   one row per session and tag (frames, fresh, stale, never; a tag with frames but no fresh
 //     packet is marked dead), failed sessions with their error, links to each session's page
@@ -9,10 +9,11 @@
 // docs/reports.md ("Batch page") shows it.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 
 #include "metro/core/status.hpp"
+#include "metro/report/batch_summary.hpp"
 
 namespace metro {
 
@@ -24,8 +25,13 @@ struct BatchPageOptions {
   int max_plotted_quantities = 48;  // The rest are in the table only (the page says so).
 };
 
-// Errors: not a "metro.batch-summary/1" object.
-Result<std::string> RenderBatchSummaryHtml(const nlohmann::ordered_json& summary,
+// Errors: a plot or the template failing to render.
+Result<std::string> RenderBatchSummaryHtml(const BatchSummaryReport& summary,
+                                           const BatchPageOptions& options = {});
+
+// The page of a saved summary.json, read with BatchSummaryFromJson: errors at
+// file:line:column with the value's path (`characterize report OUTDIR/summary.json`).
+Result<std::string> RenderBatchSummaryHtml(std::string_view json_text, const std::string& file,
                                            const BatchPageOptions& options = {});
 
 }  // namespace metro
