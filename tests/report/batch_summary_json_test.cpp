@@ -1,8 +1,10 @@
 // The batch summary's codec (batch_summary.hpp): what `characterize batch` writes reads back
 // and is written again byte for byte; a damaged summary is refused at the value's
 // file:line:column with its path; a summary from before the later keys still loads.
+#include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -16,6 +18,10 @@
 #include "metro/report/batch.hpp"
 #include "metro/report/batch_page.hpp"
 #include "metro/report/batch_summary.hpp"
+
+#ifdef METRO_CHARACTERIZE_EXE
+#include "support/run_program.hpp"
+#endif
 
 namespace metro {
 namespace {
@@ -224,6 +230,52 @@ TEST_CASE("A batch summary from before the later keys loads and is written as it
   CHECK(html.value().find("FAILED: ") != std::string::npos);
   CHECK(html.value().find("<svg") == std::string::npos);
 }
+
+#ifdef METRO_CHARACTERIZE_EXE
+TEST_CASE("characterize report reads summary.json back and refuses a damaged one",
+          "[apps][report][batch]") {
+  TempDir d;
+  const std::string out = (d.path / "out").string();
+  const std::string exe = METRO_CHARACTERIZE_EXE;
+  fs::create_directories(out);  // The page's folder exists before batch runs.
+  // The page batch writes into its folder and the page of the saved summary are one page.
+  testing::ProgramRun r = testing::RunProgram(
+      exe, "batch " + kDatasets + "static_chest.csv " + kDatasets +
+               "capture_15tags_receiver.txt -q -o " + out + " --html " + out + "/batch.html");
+  REQUIRE(r.exit_code == 0);
+  r = testing::RunProgram(exe, "report " + out + "/summary.json --html " + out + "/again.html");
+  REQUIRE(r.exit_code == 0);
+  // Apart from the footer's time of generation.
+  const auto without_footer = [](std::string html) {
+    const size_t at = html.find("<footer>");
+    REQUIRE(at != std::string::npos);
+    return html.substr(0, at);
+  };
+  CHECK(without_footer(ReadText(d.path / "out" / "again.html")) ==
+        without_footer(ReadText(d.path / "out" / "batch.html")));
+  // The first tag's frame count of the second session made a string: line and column of the
+  // value counted here from the text.
+  std::string text = ReadText(d.path / "out" / "summary.json");
+  const size_t second = text.find("\"input\"", text.find("\"input\"") + 1);
+  REQUIRE(second != std::string::npos);
+  const size_t key = text.find("\"frames\": ", second);
+  REQUIRE(key != std::string::npos);
+  const size_t value = key + std::string("\"frames\": ").size();
+  const size_t end = text.find(',', value);
+  const std::string frames = text.substr(value, end - value);
+  text.replace(value, end - value, "\"" + frames + "\"");
+  const int64_t line = 1 + std::count(text.begin(), text.begin() + value, '\n');
+  const int64_t column = static_cast<int64_t>(value - text.rfind('\n', value - 1));
+  const std::string bad = (d.path / "bad.json").string();
+  { std::ofstream(bad, std::ios::binary) << text; }
+  r = testing::RunProgram(exe, "report " + bad + " --html " + (d.path / "bad.html").string());
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == fmt::format("error: {}:{}:{}: sessions[1].tags[0].frames: expected an integer, "
+                             "found the string \"{}\"\n",
+                             bad, line, column, frames));
+  CHECK_FALSE(fs::exists(d.path / "bad.html"));
+}
+#endif
 
 }  // namespace
 }  // namespace metro
