@@ -6,7 +6,6 @@
 
 #include <fmt/format.h>
 
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -73,18 +72,6 @@ inline Result<std::string> RenderCertificateFor(const Calibration& cal, const st
   Result<std::string> sha = Sha256File(path);
   if (sha.ok()) certificate.certificate_id = sha.value().substr(0, 16);
   return RenderCalibrationCertificate(cal, certificate);
-}
-
-// A session report (metro.report/1): each sensors[].name from the tags file, as
-// `characterize analyze --tags FILE` names them.
-inline void ApplyTagsToSessionReport(const TagRegistry& tags, nlohmann::ordered_json* report) {
-  nlohmann::ordered_json& sensors = (*report)["sensors"];
-  if (!sensors.is_array()) return;
-  for (nlohmann::ordered_json& s : sensors) {
-    if (s.is_object() && s.contains("sensor") && s["sensor"].is_number_integer()) {
-      s["name"] = tags.Name(s["sensor"].get<int>());
-    }
-  }
 }
 
 }  // namespace metro::apps

@@ -11,7 +11,6 @@
 #include "cli_progress.hpp"
 #include "commands.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"

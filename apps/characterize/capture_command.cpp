@@ -18,7 +18,6 @@
 #include "analysis_options.hpp"
 #include "commands.hpp"
 #include "metro/capture/capture.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/version.hpp"
 #include "metro/io/tag_registry.hpp"
 #include "metro/report/session_analysis.hpp"

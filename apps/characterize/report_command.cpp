@@ -6,7 +6,6 @@
 #include "commands.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/report/html_report.hpp"
 #include "metro/report/session_report.hpp"
 #include "output.hpp"
@@ -31,13 +30,9 @@ Result<std::string> RenderWithTags(const ReportCommandOptions& o) {
   if (!tags.ok()) return tags.error();
   Result<std::string> text = ReadFile(o.json);
   if (!text.ok()) return text.error();
-  nlohmann::ordered_json document = nlohmann::ordered_json::parse(text.value(), nullptr, false);
+  const std::string schema = JsonSchemaOf(text.value());
   // Not JSON, or no schema: the renderer's own error names what is wrong.
-  if (document.is_discarded() || !document.is_object() || !document.contains("schema") ||
-      !document["schema"].is_string()) {
-    return RenderJsonFileHtml(o.json, o.session);
-  }
-  const std::string schema = document["schema"].get<std::string>();
+  if (schema.empty()) return RenderJsonFileHtml(o.json);
   if (schema == kReportSchema) {
     Result<SessionReport> report = SessionReportFromJson(text.value(), o.json);
     if (!report.ok()) return report.error();
@@ -67,8 +62,14 @@ int RunReportCommand(const ReportCommandOptions& o) {
       !s.ok()) {
     return PrintErrorExit(s.error());
   }
-  Result<std::string> html =
-      o.tags.empty() ? RenderJsonFileHtml(o.json, o.session) : RenderWithTags(o);
+  if (!o.session.empty()) {
+    // Older scripts pass the session; the page no longer needs it (said, not silently taken).
+    Note(
+        fmt::format("note: --session {} is not read: the page is drawn from the report alone (its "
+                    "plot data, docs/report-schema.md)\n",
+                    o.session));
+  }
+  Result<std::string> html = o.tags.empty() ? RenderJsonFileHtml(o.json) : RenderWithTags(o);
   if (!html.ok()) {
     return PrintErrorExit(html.error());
   }

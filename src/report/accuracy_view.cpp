@@ -560,12 +560,6 @@ Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::
       body.value());
 }
 
-Result<std::string> RenderAccuracyHtml(const ordered_json& report, const std::string& json_path) {
-  Result<AccuracyReport> model = AccuracyReportFromJson(JsonText(report, 2), json_path);
-  if (!model.ok()) return model.error();
-  return RenderAccuracyHtml(model.value(), json_path);
-}
-
 }  // namespace metro::report_internal
 
 namespace metro {
@@ -578,7 +572,13 @@ Result<std::string> RenderAccuracyReportHtml(const AccuracyReport& report,
 Result<std::string> RenderAccuracyReportHtml(std::string_view json_text, const std::string& file) {
   Result<AccuracyReport> report = AccuracyReportFromJson(json_text, file);
   if (!report.ok()) return report.error();
-  return RenderAccuracyReportHtml(report.value(), file);
+  Result<std::string> html = RenderAccuracyReportHtml(report.value(), file);
+  if (!html.ok() && html.error().file.empty()) {
+    Error e = html.error();
+    e.file = file;  // A report that reads but cannot be drawn: name the file it came from.
+    return e;
+  }
+  return html;
 }
 
 }  // namespace metro

@@ -27,9 +27,4 @@ using ::metro::kAccuracyReportSchema;
 // error_deg or type_a.u_deg.
 Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::string& json_path);
 
-// The page of a parsed document, read with AccuracyReportFromJson from its text as metro writes
-// it (indent 2): errors name `json_path`, the line and column of the offending value and its path.
-Result<std::string> RenderAccuracyHtml(const nlohmann::ordered_json& report,
-                                       const std::string& json_path);
-
 }  // namespace metro::report_internal

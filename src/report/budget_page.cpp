@@ -305,11 +305,13 @@ Result<std::string> RenderBudgetReportHtml(const BudgetReport& report) {
 Result<std::string> RenderBudgetReportHtml(std::string_view json_text, const std::string& file) {
   Result<BudgetReport> report = BudgetReportFromJson(json_text, file);
   if (!report.ok()) return report.error();
-  return RenderBudgetReportHtml(report.value());
-}
-
-Result<std::string> RenderBudgetReportHtml(const ordered_json& report) {
-  return RenderBudgetReportHtml(JsonText(report, 2), "");
+  Result<std::string> html = RenderBudgetReportHtml(report.value());
+  if (!html.ok() && html.error().file.empty()) {
+    Error e = html.error();
+    e.file = file;  // A report that reads but cannot be drawn: name the file it came from.
+    return e;
+  }
+  return html;
 }
 
 }  // namespace metro

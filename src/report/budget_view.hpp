@@ -19,11 +19,6 @@ Result<kainjow::mustache::data> BudgetViewData(const BudgetReport& budget);
 
 namespace metro {
 
-// For RenderJsonHtml (html_report.cpp), which dispatches on a parsed document: the page of a
-// "metro.budget-report/1" document, written out again as metro writes it (indent 2) and read
-// with BudgetReportFromJson (no file name: the caller adds it).
-Result<std::string> RenderBudgetReportHtml(const nlohmann::ordered_json& report);
-
 // True when `document` is a budget definition (docs/budget-format.md: "measurand" and
 // "inputs", no "schema"), the input of `characterize budget` rather than a report of it.
 bool IsBudgetDefinition(const nlohmann::ordered_json& document);

@@ -15,6 +15,7 @@
 #include "metro/core/file.hpp"
 #include "metro/core/json_text.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/report/accuracy_page.hpp"
 #include "metro/report/batch.hpp"
 #include "metro/report/batch_page.hpp"
 #include "metro/report/budget_page.hpp"
@@ -264,34 +265,32 @@ Result<std::string> RenderSessionAnalysisHtml(const SessionAnalysis& analysis,
   return RenderSessionReportHtml(analysis.report, options);
 }
 
-namespace {
-
-// The session view of a saved report's text, read with SessionReportFromJson.
-Result<std::string> RenderSessionReportText(const std::string& text, const std::string& json_path,
-                                            const HtmlReportOptions& options) {
-  Result<SessionReport> report = SessionReportFromJson(text, json_path);
-  if (!report.ok()) return report.error();
-  return RenderSessionReportHtml(report.value(), options);
+std::string JsonSchemaOf(std::string_view text) {
+  Result<ordered_json> document = ParseOrderedJsonText(text, "");
+  if (!document.ok() || !document.value().is_object()) return {};
+  const ordered_json& d = document.value();
+  return d.contains("schema") && d["schema"].is_string() ? d["schema"].get<std::string>() : "";
 }
 
-}  // namespace
-
-Result<std::string> RenderJsonHtml(const ordered_json& document, const std::string& json_path,
-                                   const std::string& /*session_path*/,
-                                   const HtmlReportOptions& options) {
+Result<std::string> RenderJsonTextHtml(std::string_view text, const std::string& json_path,
+                                       const HtmlReportOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
-  const std::string schema =
-      document.is_object() && document.contains("schema") && document["schema"].is_string()
-          ? document["schema"].get<std::string>()
-          : "";
+  Result<ordered_json> document = ParseOrderedJsonText(text, json_path);
+  if (!document.ok()) return document.error();
+  const ordered_json& d = document.value();
+  const std::string schema = d.is_object() && d.contains("schema") && d["schema"].is_string()
+                                 ? d["schema"].get<std::string>()
+                                 : "";
+  // Each typed document is read from the text itself (its FromJson), so an error names the
+  // value's line and column in the file with its path.
   if (schema == kReportSchema) {
-    // The document's text as metro writes it (indent 2), so positions match a file it wrote.
-    return RenderSessionReportText(JsonText(document, 2), json_path, options);
+    Result<SessionReport> report = SessionReportFromJson(text, json_path);
+    if (!report.ok()) return report.error();
+    return RenderSessionReportHtml(report.value(), options);
   }
   if (schema == kCalibrationSchema) {
-    // The document's text as metro writes it (indent 2), so positions match a file it wrote.
-    Result<Calibration> cal = CalibrationFromJson(JsonText(document, 2), json_path);
+    Result<Calibration> cal = CalibrationFromJson(text, json_path);
     if (!cal.ok()) return cal.error();
     // The id of the file's own bytes: what `fit` printed and the registry recorded.
     CertificateOptions certificate;
@@ -300,50 +299,33 @@ Result<std::string> RenderJsonHtml(const ordered_json& document, const std::stri
     return RenderCalibrationCertificate(cal.value(), certificate);
   }
   if (schema == report_internal::kAccuracyReportSchema) {
-    Result<std::string> html = report_internal::RenderAccuracyHtml(document, json_path);
-    if (!html.ok() && html.error().file.empty()) {
-      Error e = html.error();
-      e.file = json_path;
-      return e;
-    }
-    return html;
+    return RenderAccuracyReportHtml(text, json_path);
   }
-  if (schema == kBudgetReportSchema) {
-    Result<std::string> html = RenderBudgetReportHtml(document);
-    if (!html.ok() && html.error().file.empty()) {
-      Error e = html.error();
-      e.file = json_path;
-      return e;
-    }
-    return html;
-  }
+  if (schema == kBudgetReportSchema) return RenderBudgetReportHtml(text, json_path);
   if (schema == kBatchSummarySchema) {
     // The links are relative to the summary's folder, where batch wrote the session pages.
-    return RenderBatchSummaryHtml(JsonText(document, 2), json_path);
+    return RenderBatchSummaryHtml(text, json_path);
   }
-  if (IsBudgetDefinition(document)) {
+  if (IsBudgetDefinition(d)) {
     return MakeError(json_path, 0,
                      "this is a budget definition (docs/budget-format.md), not a report: run "
                      "`characterize budget " +
                          json_path + " --html PAGE.html` to evaluate it and write its page");
   }
-  return report_internal::RenderGenericHtml(document, json_path, schema);
+  return report_internal::RenderGenericHtml(d, json_path, schema);
+}
+
+Result<std::string> RenderJsonHtml(const ordered_json& document, const std::string& json_path,
+                                   const HtmlReportOptions& options) {
+  // As metro writes it (indent 2), so positions match a file it wrote.
+  return RenderJsonTextHtml(JsonText(document, 2), json_path, options);
 }
 
 Result<std::string> RenderJsonFileHtml(const std::string& json_path,
-                                       const std::string& /*session_path*/,
                                        const HtmlReportOptions& options) {
   Result<std::string> text = ReadFile(json_path);
   if (!text.ok()) return text.error();
-  Result<ordered_json> document = ParseOrderedJsonText(text.value(), json_path);
-  if (!document.ok()) return document.error();
-  if (document.value().is_object() && document.value().value("schema", "") == kReportSchema) {
-    // Read from the file's own text: an error names the value's line and column in it.
-    std::string why;
-    if (!options.IsValid(&why)) return MakeError(why);
-    return RenderSessionReportText(text.value(), json_path, options);
-  }
-  return RenderJsonHtml(document.value(), json_path, "", options);
+  return RenderJsonTextHtml(text.value(), json_path, options);
 }
 
 }  // namespace metro

@@ -410,10 +410,6 @@ TEST_CASE("Saved report draws every plot from its plot data without the session"
   REQUIRE(live.ok());
   auto without_footer = [](const std::string& h) { return h.substr(0, h.find("<footer>")); };
   CHECK(without_footer(html.value()) == without_footer(live.value()));
-  // --session is no longer read: another file changes nothing.
-  Result<std::string> other = RenderJsonFileHtml(json.path(), kDatasets + "static_chest.csv");
-  REQUIRE(other.ok());
-  CHECK(without_footer(other.value()) == without_footer(live.value()));
 }
 
 TEST_CASE("Budget report gets sorted bars", "[report][html]") {

@@ -22,6 +22,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "metro/core/status.hpp"
@@ -54,12 +55,15 @@ Result<std::string> RenderSessionReportHtml(const SessionReport& report,
 Result<std::string> RenderSessionAnalysisHtml(const SessionAnalysis& analysis,
                                               const HtmlReportOptions& options = {});
 
-// Reads a saved JSON document and renders the page its "schema" key calls for (see above);
-// a session report is read with SessionReportFromJson, so a wrong or missing value is named
-// at its line and column in the file with its path. No view reloads an input: `session_path`
-// is accepted for the callers of older versions and not used. Errors name the file.
+// Reads a saved JSON document and renders the page its "schema" key calls for (see above).
+// Each typed document (session report, calibration, accuracy and budget reports) is read with
+// its FromJson from the file's text, so a wrong or missing value is named at its line and
+// column in the file with its path. No view reloads an input. Errors name the file.
 Result<std::string> RenderJsonFileHtml(const std::string& json_path,
-                                       const std::string& session_path = "",
                                        const HtmlReportOptions& options = {});
+
+// The "schema" of a JSON document's text; "" when it is not a JSON object with a string
+// "schema".
+std::string JsonSchemaOf(std::string_view text);
 
 }  // namespace metro
