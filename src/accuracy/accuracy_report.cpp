@@ -8,8 +8,8 @@
 
 #include "accuracy/accuracy_report_json.hpp"
 #include "core/json_reader.hpp"
+#include "core/json_text.hpp"
 #include "metro/core/device_id.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 
 namespace metro {

@@ -12,8 +12,8 @@
 #include <nlohmann/json.hpp>
 #include <tuple>
 
+#include "core/json_text.hpp"
 #include "metro/blob/intel_hex.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/utc_time.hpp"
 #include "metro_fw/blob.h"
 

@@ -9,9 +9,9 @@
 #include <cmath>
 #include <utility>
 
+#include "core/json_text.hpp"
 #include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/utc_time.hpp"
 
 namespace metro {

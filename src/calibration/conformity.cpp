@@ -7,9 +7,9 @@
 #include <set>
 
 #include "calibration/calibration_json.hpp"
+#include "core/json_text.hpp"
 #include "metro/calibration/named_constants.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/units.hpp"
 
 namespace metro {

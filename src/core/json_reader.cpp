@@ -7,7 +7,7 @@
 #include <limits>
 #include <utility>
 
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 
 namespace metro {
 namespace {

@@ -1,4 +1,4 @@
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 
 #include <fmt/format.h>
 

@@ -4,9 +4,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/json_text.hpp"
 #include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 
 namespace metro {
 

@@ -12,10 +12,10 @@
 #include <thread>
 
 #include "calibration/calibration_json.hpp"
+#include "core/json_text.hpp"
 #include "metro/blob/blob.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/named_constants.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/utc_time.hpp"
 #include "schema.hpp"
 #include "sql_backend.hpp"

@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "accuracy/accuracy_report_json.hpp"
+#include "core/json_text.hpp"
 #include "html_common.hpp"
 #include "html_templates.hpp"
 #include "metro/accuracy/error_fit.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/report/accuracy_page.hpp"
 #include "metro/report/svg_plot.hpp"

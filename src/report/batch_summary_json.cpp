@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 
 namespace metro {
 namespace {

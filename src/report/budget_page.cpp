@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "budget_view.hpp"
+#include "core/json_text.hpp"
 #include "html_common.hpp"
 #include "html_templates.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/report/svg_plot.hpp"
 

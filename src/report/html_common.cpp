@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <limits>
 
+#include "core/json_text.hpp"
 #include "html_templates.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/report/svg_plot.hpp"
 

@@ -8,12 +8,12 @@
 
 #include "accuracy_view.hpp"
 #include "budget_view.hpp"
+#include "core/json_text.hpp"
 #include "html_common.hpp"
 #include "html_dispatch.hpp"
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/accuracy_page.hpp"
 #include "metro/report/batch.hpp"

@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 #include "noise/allan_report_json.hpp"
 #include "plot_data_json.hpp"
 #include "uncertainty/budget_report_json.hpp"

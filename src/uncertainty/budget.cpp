@@ -12,8 +12,8 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "core/json_text.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "uncertainty/model.hpp"
 #include "uncertainty/model_units.hpp"
 

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "core/json_reader.hpp"
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "uncertainty/budget_report_json.hpp"
 

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "core/json_text.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/accuracy_page.hpp"
 #include "metro/report/html_report.hpp"

@@ -1,4 +1,4 @@
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 
 #include <catch2/catch.hpp>
 #include <cstdint>

@@ -14,11 +14,11 @@
 #include <functional>
 #include <map>
 
+#include "core/json_text.hpp"
 #include "metro/blob/blob.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/simulate.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "registry/postgres_server.hpp"
 #include "registry/schema.hpp"
 #include "registry/sql_backend.hpp"

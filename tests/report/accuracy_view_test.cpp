@@ -8,9 +8,9 @@
 #include <string>
 
 #include "accuracy/accuracy_report_json.hpp"
+#include "core/json_text.hpp"
 #include "metro/accuracy/accuracy.hpp"
 #include "metro/accuracy/accuracy_report.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"

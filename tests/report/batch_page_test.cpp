@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/report/html_report.hpp"
 #include "report/html_dispatch.hpp"

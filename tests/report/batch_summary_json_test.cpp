@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 #include "metro/report/batch.hpp"
 #include "metro/report/batch_page.hpp"
 #include "metro/report/batch_summary.hpp"

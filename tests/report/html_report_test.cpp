@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "core/json_text.hpp"
 #include "metro/core/file.hpp"
-#include "metro/core/json_text.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/noise/allan.hpp"
 #include "metro/uncertainty/budget.hpp"

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/json_reader.hpp"
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 #include "report/plot_data_json.hpp"
 
 namespace metro {

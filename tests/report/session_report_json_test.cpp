@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "metro/report/session_report.hpp"
 

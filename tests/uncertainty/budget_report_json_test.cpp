@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "metro/core/json_text.hpp"
+#include "core/json_text.hpp"
 #include "metro/report/budget_page.hpp"
 #include "metro/uncertainty/budget_report.hpp"
 #include "metro/uncertainty/session_resolver.hpp"

@@ -19,7 +19,7 @@ inline constexpr const char* kCalibrationSchema = "metro.calibration/1";
 // `misalignment`, `sensitivity` against 1 / `scale`. Each element of T K is one product t_ij k_j
 // (t_ii = 1, t_ij = +-a misalignment term, imu_model.hpp) and 1 / k one quotient: the writer
 // rounds it once to binary64 (at most 2^-53 relative) and writes it exactly (shortest
-// round-trip or 17 significant digits, as nlohmann_json does); the reader rounds its own
+// round-trip or 17 significant digits, as metro's JSON writer does); the reader rounds its own
 // product once more. An honest file is therefore within 2 * 2^-53; the tolerance is twice that,
 // 2^-51 = 4.4e-16, relative to the larger of the two values (so a zero must be written as 0).
 inline constexpr double kRedundantRelTolerance = 0x1p-51;

@@ -1,5 +1,6 @@
 // JSON text from users' files (budgets, tag registries, calibration.json, reports): parsed
-// with a nesting limit, errors at file:line:column.
+// with a nesting limit, errors at file:line:column. Private to the library and its tests: the
+// public headers carry typed models, not JSON.
 #pragma once
 
 #include <cstdint>
