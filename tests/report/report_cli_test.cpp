@@ -64,6 +64,14 @@ TEST_CASE("characterize --html writes the JSON and the HTML report", "[apps][rep
   CHECK(h2.find("drawn from the plot data computed when the session was analysed") !=
         std::string::npos);
   CHECK(Count(h2, "<svg") == Count(h, "<svg"));
+  // --session of older scripts: the same page, and a note that the session is not read.
+  const std::string html3 = (d.path / "r3.html").string();
+  r = Characterize("report " + json + " --html " + html3 + " --session " + kDatasets +
+                   "static_chest.csv");
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.find("note: --session " + kDatasets + "static_chest.csv is not read") !=
+        std::string::npos);
+  CHECK(Count(Slurp(html3), "<svg") == Count(h, "<svg"));
   // Refuses to write over its input; a file that is not JSON is an input error.
   r = Characterize("report " + json + " --html " + json);
   CHECK(r.exit_code == 2);
