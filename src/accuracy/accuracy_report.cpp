@@ -82,16 +82,6 @@ constexpr const char* kFitWeights = "1/u_i^2, u_i the plateau Type A u";
 
 // ---- Reading (JsonCursor records the first error; every read gives a default after it). ----
 
-// Null means infinite degrees of freedom (Num writes infinity as null).
-double ReadDof(const JsonCursor& c) {
-  if (c.IsNull()) return std::numeric_limits<double>::infinity();
-  if (!c.IsNumber()) {
-    c.Fail("a number or null (infinite degrees of freedom)");
-    return std::numeric_limits<double>::infinity();
-  }
-  return c.Number();
-}
-
 template <typename T>
 T ReadCount(const JsonCursor& c) {
   const int64_t v = c.Integer();
@@ -173,7 +163,7 @@ ReadingBudget ReadBudget(const JsonCursor& j, const std::string& name) {
   b.name = name;
   GumResult& g = b.gum;
   g.u = j["u_deg"].NumberOrNaN();
-  g.dof_eff = ReadDof(j["dof_eff"]);
+  g.dof_eff = j["dof_eff"].NumberOrInfinity();
   g.k = j["k"].NumberOrNaN();
   g.expanded = j["U_deg"].NumberOrNaN();
   g.coverage = j["coverage"].NumberOrNaN();
@@ -188,7 +178,7 @@ ReadingBudget ReadBudget(const JsonCursor& j, const std::string& name) {
     line.distribution = in["distribution"].String();
     line.sensitivity = in["sensitivity"].NumberOrNaN();
     line.contribution = in["contribution_deg"].NumberOrNaN();
-    line.dof = ReadDof(in["dof"]);
+    line.dof = in["dof"].NumberOrInfinity();
     line.percent = in["percent"].NumberOrNaN();
     b.input_names.push_back(line.name);
     b.notes.push_back(in["note"].String());
@@ -587,7 +577,7 @@ AccuracyReport AccuracyReportFromJsonValue(const JsonCursor& j) {
   o.model = ReadErrorModel(options["model"]);
   o.resolution_deg = options["resolution_deg"].Number();
   o.reference.u_deg = options["reference_u_deg"].Number();
-  o.reference.dof = ReadDof(options["reference_dof"]);
+  o.reference.dof = options["reference_dof"].NumberOrInfinity();
   o.reference.source = options["reference_u_source"].String();
   o.coverage = options["coverage"].Number();
   o.assumed_hysteresis_deg = options["assumed_hysteresis_deg"].Number();
@@ -642,7 +632,7 @@ AccuracyReport AccuracyReportFromJsonValue(const JsonCursor& j) {
     pt.type_a.std_deg = ta["std_deg"].NumberOrNaN();
     pt.type_a.u_deg = ta["u_deg"].NumberOrNaN();
     pt.type_a.n_eff = ta["n_eff"].NumberOrNaN();
-    pt.type_a.dof = ReadDof(ta["dof"]);
+    pt.type_a.dof = ta["dof"].NumberOrInfinity();
     pt.direction = ReadDirection(p["direction"]);
     pt.sweep = static_cast<int>(p["sweep"].Integer());
     pt.t_start_s = p["t_start_s"].NumberOrNaN();
@@ -702,7 +692,7 @@ AccuracyReport AccuracyReportFromJsonValue(const JsonCursor& j) {
     pair.down_error_deg = p["down_error_deg"].NumberOrNaN();
     pair.hysteresis_deg = p["hysteresis_deg"].NumberOrNaN();
     pair.u_deg = p["u_deg"].NumberOrNaN();
-    pair.dof = ReadDof(p["dof"]);
+    pair.dof = p["dof"].NumberOrInfinity();
     pair.up_count = static_cast<int>(p["up_plateaus"].Integer());
     pair.down_count = static_cast<int>(p["down_plateaus"].Integer());
     h.pairs.push_back(pair);
@@ -751,12 +741,7 @@ AccuracyReport AccuracyReportFromJsonValue(const JsonCursor& j) {
 std::string ToJson(const AccuracyReport& report) { return JsonText(ToJsonValue(report), 2); }
 
 Result<AccuracyReport> AccuracyReportFromJson(std::string_view text, const std::string& file) {
-  Result<JsonDocument> document = JsonDocument::Parse(std::string(text), file);
-  if (!document.ok()) return document.error();
-  const JsonCursor root(document.value());
-  AccuracyReport report = AccuracyReportFromJsonValue(root);
-  if (!root.ok()) return root.error();
-  return report;
+  return ReadJsonText<AccuracyReport>(text, file, AccuracyReportFromJsonValue);
 }
 
 std::string AccuracyReportTable(const AccuracyReport& m) {

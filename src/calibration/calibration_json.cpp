@@ -597,12 +597,7 @@ Calibration CalibrationFromJsonValue(const JsonCursor& j) {
 std::string ToJson(const Calibration& calibration) { return JsonText(ToJsonValue(calibration), 2); }
 
 Result<Calibration> CalibrationFromJson(std::string_view text, const std::string& file) {
-  Result<JsonDocument> document = JsonDocument::Parse(std::string(text), file);
-  if (!document.ok()) return document.error();
-  const JsonCursor root(document.value());
-  Calibration cal = CalibrationFromJsonValue(root);
-  if (!root.ok()) return root.error();
-  return cal;
+  return ReadJsonText<Calibration>(text, file, CalibrationFromJsonValue);
 }
 
 std::string FormatCalibrationJson(const Calibration& calibration) {

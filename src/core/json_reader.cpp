@@ -274,6 +274,13 @@ double JsonCursor::NumberOrNaN() const {
   return Expect(IsNumberValue, "a number or null") ? value_->get<double>() : 0.0;
 }
 
+double JsonCursor::NumberOrInfinity() const {
+  if (IsNull()) return std::numeric_limits<double>::infinity();
+  return Expect(IsNumberValue, "a number or null (infinite degrees of freedom)")
+             ? value_->get<double>()
+             : std::numeric_limits<double>::infinity();
+}
+
 std::optional<double> JsonCursor::OptionalNumber() const {
   if (value_ == nullptr || value_->is_null()) return std::nullopt;
   if (!Expect(IsNumberValue, "a number or null")) return std::nullopt;

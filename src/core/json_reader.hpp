@@ -79,6 +79,8 @@ class JsonCursor {
   std::string String() const;
   // null gives NaN (metro writes NaN as null).
   double NumberOrNaN() const;
+  // null gives +infinity (metro writes infinite degrees of freedom as null).
+  double NumberOrInfinity() const;
   // null or absent gives nullopt.
   std::optional<double> OptionalNumber() const;
   std::optional<int64_t> OptionalInteger() const;
@@ -113,5 +115,18 @@ class JsonCursor {
   const nlohmann::ordered_json* value_ = nullptr;  // nullptr: absent.
   std::vector<JsonPathStep> path_;
 };
+
+// Reads JSON `text` (from `file`) into a typed model with `read` (its FromJsonValue): the
+// model, or the first error of the reading (syntax, type, missing member) at its position.
+template <typename T>
+Result<T> ReadJsonText(std::string_view text, const std::string& file,
+                       T (*read)(const JsonCursor&)) {
+  Result<JsonDocument> document = JsonDocument::Parse(std::string(text), file);
+  if (!document.ok()) return document.error();
+  const JsonCursor root(document.value());
+  T value = read(root);
+  if (!root.ok()) return root.error();
+  return value;
+}
 
 }  // namespace metro

@@ -252,12 +252,7 @@ BatchSummaryReport BatchSummaryFromJsonValue(const JsonCursor& c) {
 std::string ToJson(const BatchSummaryReport& summary) { return JsonText(ToJsonValue(summary), 2); }
 
 Result<BatchSummaryReport> BatchSummaryFromJson(std::string_view text, const std::string& file) {
-  Result<JsonDocument> document = JsonDocument::Parse(std::string(text), file);
-  if (!document.ok()) return document.error();
-  const JsonCursor root(document.value());
-  BatchSummaryReport summary = BatchSummaryFromJsonValue(root);
-  if (!root.ok()) return root.error();
-  return summary;
+  return ReadJsonText<BatchSummaryReport>(text, file, BatchSummaryFromJsonValue);
 }
 
 }  // namespace metro

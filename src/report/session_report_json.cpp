@@ -451,12 +451,7 @@ SessionReport SessionReportFromJsonValue(const JsonCursor& c) {
 std::string ToJson(const SessionReport& report) { return JsonText(ToJsonValue(report), 2); }
 
 Result<SessionReport> SessionReportFromJson(std::string_view text, const std::string& file) {
-  Result<JsonDocument> document = JsonDocument::Parse(std::string(text), file);
-  if (!document.ok()) return document.error();
-  const JsonCursor root(document.value());
-  SessionReport report = SessionReportFromJsonValue(root);
-  if (!root.ok()) return root.error();
-  return report;
+  return ReadJsonText<SessionReport>(text, file, SessionReportFromJsonValue);
 }
 
 }  // namespace metro

@@ -202,16 +202,6 @@ CoverageInterval ReadInterval(const JsonCursor& c) {
   return {v[0], v[1]};
 }
 
-// Null means infinite degrees of freedom (see Dof).
-double ReadDof(const JsonCursor& c) {
-  if (c.IsNull()) return std::numeric_limits<double>::infinity();
-  if (!c.IsNumber()) {
-    c.Fail("a number or null (infinite degrees of freedom)");
-    return std::numeric_limits<double>::infinity();
-  }
-  return c.Number();
-}
-
 }  // namespace
 
 ordered_json ToJsonValue(const BudgetReport& r) {
@@ -361,7 +351,7 @@ BudgetReport BudgetReportFromJsonValue(const JsonCursor& j) {
   BudgetReportResult& g = r.result;
   g.value = result["value"].NumberOrNaN();
   g.u = result["u"].NumberOrNaN();
-  g.dof_eff = ReadDof(result["dof_eff"]);
+  g.dof_eff = result["dof_eff"].NumberOrInfinity();
   g.k = result["k"].NumberOrNaN();
   g.expanded = result["U"].NumberOrNaN();
   g.coverage = result["coverage"].NumberOrNaN();
@@ -397,7 +387,7 @@ BudgetReport BudgetReportFromJsonValue(const JsonCursor& j) {
     line.distribution = l["distribution"].String();
     line.sensitivity = l["sensitivity"].NumberOrNaN();
     line.contribution = l["contribution"].NumberOrNaN();
-    line.dof = ReadDof(l["dof"]);
+    line.dof = l["dof"].NumberOrInfinity();
     line.percent = l["percent"].NumberOrNaN();
     if (l.Has("unit")) line.unit = l["unit"].String();
     if (l.Has("note")) line.note = l["note"].String();
@@ -499,12 +489,7 @@ BudgetReport BudgetReportFromJsonValue(const JsonCursor& j) {
 std::string ToJson(const BudgetReport& report) { return JsonText(ToJsonValue(report), 2); }
 
 Result<BudgetReport> BudgetReportFromJson(std::string_view text, const std::string& file) {
-  Result<JsonDocument> document = JsonDocument::Parse(std::string(text), file);
-  if (!document.ok()) return document.error();
-  const JsonCursor root(document.value());
-  BudgetReport report = BudgetReportFromJsonValue(root);
-  if (!root.ok()) return root.error();
-  return report;
+  return ReadJsonText<BudgetReport>(text, file, BudgetReportFromJsonValue);
 }
 
 ordered_json BudgetReportJson(const BudgetEvaluation& e) {

@@ -79,6 +79,8 @@ TEST_CASE("JSON reader: integers, nulls and arrays", "[core]") {
     const JsonCursor root(document);
     CHECK(root["i"].Integer() == 3);
     CHECK(std::isnan(root["n"].NumberOrNaN()));
+    CHECK(std::isinf(root["n"].NumberOrInfinity()));
+    CHECK(root["i"].NumberOrInfinity() == 3.0);
     CHECK_FALSE(root["n"].OptionalNumber().has_value());
     CHECK_FALSE(root["absent"].OptionalNumber().has_value());
     CHECK_FALSE(root["absent"].OptionalString().has_value());
@@ -106,6 +108,23 @@ TEST_CASE("JSON reader: integers, nulls and arrays", "[core]") {
     root["v"].Fail("an object");
     CHECK(root.error().ToString() == "r.json:1:38: v: expected an object, found an array");
   }
+}
+
+TEST_CASE("JSON reader: a model read from text in one call", "[core]") {
+  // ReadJsonText: the model, or the first error of its reading.
+  auto read = [](const JsonCursor& c) { return c["dof"].NumberOrInfinity(); };
+  double (*reader)(const JsonCursor&) = read;
+  Result<double> dof = ReadJsonText<double>("{\"dof\": null}", "d.json", reader);
+  REQUIRE(dof.ok());
+  CHECK(std::isinf(dof.value()));
+  dof = ReadJsonText<double>("{\"dof\": \"many\"}", "d.json", reader);
+  REQUIRE_FALSE(dof.ok());
+  CHECK(dof.error().ToString() ==
+        "d.json:1:9: dof: expected a number or null (infinite degrees of freedom), found the "
+        "string \"many\"");
+  dof = ReadJsonText<double>("{\"dof\": ", "d.json", reader);
+  REQUIRE_FALSE(dof.ok());
+  CHECK(dof.error().line == 1);
 }
 
 TEST_CASE("JSON reader: a syntax error is reported by Parse at its position", "[core]") {
