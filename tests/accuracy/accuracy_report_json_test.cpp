@@ -26,6 +26,7 @@
 #include "support/run_program.hpp"
 #include "support/session_text.hpp"
 #include "support/temp_file.hpp"
+#include "support/text_position.hpp"
 
 namespace metro {
 namespace {
@@ -65,19 +66,7 @@ void CheckRoundTrip(const std::string& text, const std::string& what) {
   CHECK(AccuracyReportTable(again.value()) == AccuracyReportTable(read.value()));
 }
 
-// 1-based line and column of byte `offset`, counted here independently of the reader.
-std::string LineColumn(const std::string& text, size_t offset) {
-  int line = 1, column = 1;
-  for (size_t i = 0; i < offset; ++i) {
-    if (text[i] == '\n') {
-      ++line;
-      column = 1;
-    } else {
-      ++column;
-    }
-  }
-  return std::to_string(line) + ":" + std::to_string(column);
-}
+using testing::LineColumn;
 
 TEST_CASE("Accuracy reports of the bundled table sweep read back byte for byte",
           "[accuracy][report][json]") {

@@ -18,6 +18,7 @@
 #include "support/html_checks.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
+#include "support/text_position.hpp"
 
 namespace metro {
 namespace {
@@ -226,19 +227,7 @@ TEST_CASE("Accuracy HTML lists the options as a table and names the tag",
                "</code></td></tr>") != std::string::npos);
 }
 
-// 1-based line and column of byte `offset`, counted here independently of the reader.
-std::string LineColumn(const std::string& text, size_t offset) {
-  int line = 1, column = 1;
-  for (size_t i = 0; i < offset; ++i) {
-    if (text[i] == '\n') {
-      ++line;
-      column = 1;
-    } else {
-      ++column;
-    }
-  }
-  return std::to_string(line) + ":" + std::to_string(column);
-}
+using testing::LineColumn;
 
 TEST_CASE("Bad accuracy report input is refused with a message", "[report][html][accuracy]") {
   // Read with AccuracyReportFromJson: the position of the value in the document as metro writes

@@ -18,6 +18,7 @@
 #include "metro/uncertainty/budget_report.hpp"
 #include "metro/uncertainty/session_resolver.hpp"
 #include "support/temp_file.hpp"
+#include "support/text_position.hpp"
 
 namespace metro {
 namespace {
@@ -109,19 +110,7 @@ void CheckKeyOrder(const nlohmann::ordered_json& j, const std::string& path) {
   }
 }
 
-// 1-based line and column of byte `offset`, counted here independently of the reader.
-std::string LineColumn(const std::string& text, size_t offset) {
-  int line = 1, column = 1;
-  for (size_t i = 0; i < offset; ++i) {
-    if (text[i] == '\n') {
-      ++line;
-      column = 1;
-    } else {
-      ++column;
-    }
-  }
-  return std::to_string(line) + ":" + std::to_string(column);
-}
+using testing::LineColumn;
 
 TEST_CASE("Budget reports of the bundled budgets read back byte for byte",
           "[uncertainty][report][json]") {
