@@ -109,10 +109,7 @@ TEST_CASE("Budget page of JCGM 101 9.2.2 states the exact result", "[report][bud
   CHECK(html.value().find("GUF validated") != std::string::npos);
 }
 
-// `html` without its footer (it carries the time the page was made).
-std::string WithoutFooter(const std::string& html) {
-  return std::regex_replace(html, std::regex("<footer>[^<]*</footer>"), "");
-}
+using testing::WithoutFooter;
 
 TEST_CASE("The page of a saved budget report is the page of the evaluation", "[report][budget]") {
   const BudgetReport report = EvaluatedReport("gum_h1_end_gauge.json", 20000);

@@ -30,4 +30,13 @@ inline void CheckSelfContained(const std::string& html) {
   }
 }
 
+// `html` without its footer, which carries the time the page was made: two renders of one
+// document compare equal with it.
+inline std::string WithoutFooter(const std::string& html) {
+  const size_t begin = html.find("<footer>");
+  const size_t end = html.find("</footer>", begin);
+  if (begin == std::string::npos || end == std::string::npos) return html;
+  return html.substr(0, begin) + html.substr(end + 9);
+}
+
 }  // namespace metro::testing
