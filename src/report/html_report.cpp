@@ -14,6 +14,7 @@
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
+#include "metro/io/columns.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/accuracy_page.hpp"
 #include "metro/report/batch.hpp"
@@ -44,10 +45,6 @@ using report_internal::ShortNumber;
 using report_internal::TypeADetailRows;
 
 namespace {
-
-bool IsQuaternionComponent(const std::string& name) {
-  return name == "qw" || name == "qx" || name == "qy" || name == "qz";
-}
 
 std::string SettleText(const ReportWindow& window) {
   if (!window.settle) return "none";
