@@ -136,13 +136,7 @@ bool IsIntegerValue(const ordered_json& v) {
   return std::isfinite(d) && std::floor(d) == d && std::fabs(d) < 9.0e15;
 }
 
-const ordered_json& NullJson() {
-  static const ordered_json null_value;
-  return null_value;
-}
-
-}  // namespace
-
+// "sensors[0].quantities.gx_dps" ("(top level)" for the root).
 std::string JsonPathText(const std::vector<JsonPathStep>& path) {
   if (path.empty()) return "(top level)";
   std::string out;
@@ -155,6 +149,13 @@ std::string JsonPathText(const std::vector<JsonPathStep>& path) {
   }
   return out;
 }
+
+const ordered_json& NullJson() {
+  static const ordered_json null_value;
+  return null_value;
+}
+
+}  // namespace
 
 Result<JsonDocument> JsonDocument::Parse(std::string text, std::string file) {
   Result<ordered_json> root = ParseOrderedJsonText(text, file);

@@ -24,9 +24,6 @@ namespace metro {
 // One step of a path into a document: a member name or an array index.
 using JsonPathStep = std::variant<std::string, size_t>;
 
-// "sensors[0].quantities.gx_dps" ("(top level)" for the root).
-std::string JsonPathText(const std::vector<JsonPathStep>& path);
-
 // A parsed JSON file, kept with its text for positions.
 class JsonDocument {
  public:
