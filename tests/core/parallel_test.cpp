@@ -3,8 +3,10 @@
 
 #include <atomic>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <new>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -32,17 +34,30 @@ TEST_CASE("An exception in ParallelFor's items reaches the caller and stops the 
     CHECK(ran == std::vector<int>{0, 1, 2, 3, 4, 5});
   }
   SECTION("several threads: the first exception, after every thread has finished") {
-    // Every item from 10 on throws, so however the threads are scheduled (one thread may
-    // run far ahead on a loaded machine), each stops at the first such item it takes: at
-    // most the ten good items and one failing item per thread run.
+    // Item 10 throws; every later item waits until it has thrown, so however the threads
+    // are scheduled no later item finishes first. Once it has thrown no further item is handed
+    // out: each other thread ends its current item, and at most items 0..10 and one later item
+    // per thread run. Without the stop the other threads would run all 100000.
     std::atomic<int> ran{0};
-    CHECK_THROWS_AS(ParallelFor(100000, 4,
-                                [&ran](size_t i) {
-                                  ran.fetch_add(1);
-                                  if (i >= 10) throw std::runtime_error("item >= 10");
-                                }),
-                    std::runtime_error);
-    CHECK(ran.load() <= 10 + 4);
+    std::atomic<bool> thrown{false};
+    CHECK_THROWS_AS(
+        ParallelFor(100000, 4,
+                    [&ran, &thrown](size_t i) {
+                      if (i > 10) {
+                        const auto give_up =
+                            std::chrono::steady_clock::now() + std::chrono::seconds(10);
+                        while (!thrown.load() && std::chrono::steady_clock::now() < give_up) {
+                          std::this_thread::yield();
+                        }
+                      }
+                      ran.fetch_add(1);
+                      if (i == 10) {
+                        thrown.store(true);
+                        throw std::runtime_error("item 10");
+                      }
+                    }),
+        std::runtime_error);
+    CHECK(ran.load() <= 11 + 4);
   }
 }
 
