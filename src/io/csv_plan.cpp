@@ -310,9 +310,17 @@ size_t FindDataEnd(const MappedFile& file, size_t data_begin, char line_end, cha
   return end;
 }
 
+// A "key,value" line before a raw logger's header.
+struct MetadataLine {
+  std::string key;
+  std::string value;
+  int64_t line = 0;
+  int64_t value_column = 0;  // 1-based column where the value starts.
+};
+
 struct Found {
   HeaderLine header;
-  std::vector<std::pair<std::string, std::string>> metadata;  // key, value
+  std::vector<MetadataLine> metadata;
 };
 
 // Stage 2: the header line.
@@ -395,7 +403,9 @@ Result<Found> FindHeaderLine(const std::string& path, const std::vector<HeadLine
     if (all_key_value) {
       for (auto it = meta.rbegin(); it != meta.rend(); ++it) {
         const std::vector<std::string> f = SplitFields(lines[*it].text, d);
-        found.metadata.emplace_back(f[0], f[1]);
+        const size_t value_at = lines[*it].text.find(d) + 1;
+        found.metadata.push_back(
+            {f[0], f[1], lines[*it].number, static_cast<int64_t>(value_at) + 1});
       }
       set(lines[header], lines[header].text);
       found.header.metadata_lines = static_cast<int64_t>(meta.size());
@@ -696,17 +706,30 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
   }
   plan.format = format;
   plan.rate_hz = options.rate_hz;
-  for (const auto& [key, value] : found.metadata) {
-    const std::string k = Lower(key);
+  for (const MetadataLine& m : found.metadata) {
+    const std::string k = Lower(std::string(TrimView(m.key)));
+    if (k != "fs" && k != "rate_hz" && k != "sample rate" && k != "sampling rate") continue;
+    const std::string_view value = TrimView(m.value);
     double rate_hz = 0.0;
     const auto parsed = fast_float::from_chars(value.data(), value.data() + value.size(), rate_hz);
     const bool positive = parsed.ec == std::errc() && parsed.ptr == value.data() + value.size() &&
                           std::isfinite(rate_hz) && rate_hz > 0.0;
-    if ((k == "fs" || k == "rate_hz" || k == "sample rate" || k == "sampling rate") &&
-        options.rate_hz == 0.0 && positive) {
+    // A sample-rate line that says no rate is refused, not skipped: the times of every row
+    // would come from it.
+    if (!positive) {
+      return MakeError(path, m.line, m.value_column,
+                       fmt::format("metadata '{}' gives the sample rate as '{}'; expected a "
+                                   "positive number of hertz, e.g. '{},100' (or drop the line "
+                                   "and pass --rate-hz R)",
+                                   Printable(m.key), Printable(m.value), Printable(m.key)));
+    }
+    if (options.rate_hz == 0.0) {
       plan.rate_hz = rate_hz;
-      dialect.notes.push_back(
-          fmt::format("metadata '{},{}' sets the sample rate to {} Hz", key, value, plan.rate_hz));
+      dialect.notes.push_back(fmt::format("metadata '{},{}' sets the sample rate to {} Hz", m.key,
+                                          m.value, plan.rate_hz));
+    } else if (rate_hz != options.rate_hz) {
+      dialect.notes.push_back(fmt::format("--rate-hz {} overrides the metadata '{},{}' (line {})",
+                                          options.rate_hz, m.key, m.value, m.line));
     }
   }
   if (header->metadata_lines > 0) {

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -351,6 +352,28 @@ TEST_CASE("raw-count logger prints", "[io][csv][formats]") {
   CHECK(Values(r2.value(), "az_g")[0] == 14684.0 / 16384.0);
   CHECK(Values(r2.value(), "gx_dps")[0] == -429.0 * 250.0 / 32768.0);
   CHECK(r2.value().tags[0].Find("az_g")->origin == QuantityOrigin::kDerived);
+}
+
+TEST_CASE("a raw logger's sample-rate line that gives no rate is refused at its value",
+          "[io][csv][formats]") {
+  const std::string rows = "ax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n2,3,4,5,6,7\n3,4,5,6,7,8\n";
+  for (const std::string bad : {"abc", "", "-5", "0", "1e400", "100x"}) {
+    auto r = LoadText("Logging Type,1\nFs," + bad + "\n" + rows);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().line == 2);
+    CHECK(r.error().column == 4);  // "Fs," is three characters: the value starts at column 4.
+    CHECK_THAT(r.error().message, Catch::Contains("expected a positive number of hertz"));
+  }
+  // --rate-hz still overrides a good line, and says so.
+  LoadOptions rate;
+  rate.rate_hz = 50.0;
+  auto r = LoadText("Fs,100\n" + rows, rate);
+  REQUIRE(r.ok());
+  CHECK(r.value().tags[0].t_s == std::vector<double>{0.0, 0.02, 0.04});
+  const std::vector<std::string>& notes = r.value().input.notes;
+  CHECK(std::any_of(notes.begin(), notes.end(), [](const std::string& n) {
+    return n.find("--rate-hz 50 overrides the metadata 'Fs,100' (line 1)") != std::string::npos;
+  }));
 }
 
 TEST_CASE("a file without a time column is timed by --rate-hz", "[io][csv][time]") {
