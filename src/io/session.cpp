@@ -333,8 +333,12 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
   size_t meaningful = 0;
   size_t receiver = 0;
   size_t pos = 0;
+  // Lines end at LF (CRLF included), or at CR in a file with no LF (classic Mac OS, some
+  // loggers), as the CSV planner splits them.
+  const char line_end =
+      head.find('\n') == std::string::npos && head.find('\r') != std::string::npos ? '\r' : '\n';
   while (pos < head.size() && meaningful < 20) {
-    size_t nl = head.find('\n', pos);
+    size_t nl = head.find(line_end, pos);
     if (nl == std::string::npos) {
       if (pos > 0 && meaningful > 0) break;  // A line cut by the 64 kB head.
       nl = head.size();

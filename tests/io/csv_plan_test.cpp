@@ -92,6 +92,12 @@ TEST_CASE("tab separated, CR-only line ends, quoted header", "[io][csv][dialect]
   CHECK(cr.value().input.line_ends == "CR");
   CHECK(Values(cr.value(), "gy_dps") == std::vector<double>{1.5, 2.5, 3.5});
   CHECK(cr.value().tags[0].line == std::vector<uint32_t>{2, 3, 4});
+  // A leading comment does not make the whole CR-only file one comment line.
+  auto commented = LoadText("# logged by a Mac\rt_s,gy_dps\r0,1.5\r1,2.5\r2,3.5\r");
+  REQUIRE(commented.ok());
+  CHECK(commented.value().input.line_ends == "CR");
+  CHECK(Values(commented.value(), "gy_dps") == std::vector<double>{1.5, 2.5, 3.5});
+  CHECK(commented.value().tags[0].line == std::vector<uint32_t>{3, 4, 5});
 }
 
 TEST_CASE("a non-canonical header is named with the mapping it needs", "[io][csv][dialect]") {
