@@ -4,9 +4,11 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <iterator>
@@ -400,21 +402,59 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
 
 }  // namespace
 
+namespace {
+
+// A stream (stdin, a FIFO, a character device), copied whole first (the loaders map their
+// input, which a pipe does not allow); the session and its errors name it `name`, never the
+// copy's path.
+Result<Session> LoadStream(const internal::StdinCopyOptions& copy_options,
+                           const LoadOptions& options) {
+  auto copy = internal::CopyStdinToFile(copy_options);
+  if (!copy.ok()) return copy.error();
+  Result<Session> session = LoadSessionOrThrow(copy.value().path(), options);
+  if (session.ok()) {
+    session.value().path = copy_options.display_name;
+    return session;
+  }
+  Error error = session.error();
+  if (error.file == copy.value().path()) error.file = copy_options.display_name;
+  return error;
+}
+
+// A named path that is no regular file or directory (a FIFO, /dev/stdin on a pipe, a
+// device): read as a stream, as `-` is. A terminal is refused (nobody is going to type a
+// session); so is what cannot be opened.
+Result<Session> LoadNamedStream(const std::string& path, const LoadOptions& options) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return MakeError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  if (::isatty(fd)) {
+    ::close(fd);
+    return MakeError(path, 0,
+                     "is a terminal (a console or serial port), not a session file: record a "
+                     "receiver's port with `characterize capture --port DEV -o capture.txt` "
+                     "and read the capture");
+  }
+  internal::StdinCopyOptions copy_options;
+  copy_options.source_fd = fd;
+  copy_options.display_name = path;
+  Result<Session> session = LoadStream(copy_options, options);
+  ::close(fd);
+  return session;
+}
+
+}  // namespace
+
 Result<Session> LoadSession(const std::string& path, const LoadOptions& options) {
   try {
-    if (!internal::IsStdinPath(path)) return LoadSessionOrThrow(path, options);
-    // `-`: standard input, copied whole first (the loaders map their input); the session
-    // and its errors name it "<stdin>", never the copy's path.
-    auto copy = internal::CopyStdinToFile();
-    if (!copy.ok()) return copy.error();
-    Result<Session> session = LoadSessionOrThrow(copy.value().path(), options);
-    if (session.ok()) {
-      session.value().path = internal::kStdinDisplayName;
-      return session;
+    if (internal::IsStdinPath(path)) {
+      internal::StdinCopyOptions stdin_options;
+      return LoadStream(stdin_options, options);
     }
-    Error error = session.error();
-    if (error.file == copy.value().path()) error.file = internal::kStdinDisplayName;
-    return error;
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+      return LoadNamedStream(path, options);
+    }
+    return LoadSessionOrThrow(path, options);
   } catch (const std::bad_alloc&) {
     return internal::OutOfMemoryError(path);
   }

@@ -6,7 +6,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <utility>
@@ -18,9 +20,10 @@ namespace {
 constexpr const char* kTerminalMessage =
     "reading a session from stdin, but stdin is a terminal: pipe a file in or name it";
 constexpr const char* kNameTheFile = "; name the file instead of piping it";
+constexpr int64_t kBinaryCheckBytes = int64_t{64} << 10;
 
-Error StdinError(const std::string& what, int errnum) {
-  return MakeError(kStdinDisplayName, 0, what + ": " + std::strerror(errnum));
+Error StreamError(const std::string& name, const std::string& what, int errnum) {
+  return MakeError(name, 0, what + ": " + std::strerror(errnum));
 }
 
 std::string ProcPath(int fd) { return "/proc/self/fd/" + std::to_string(fd); }
@@ -60,6 +63,27 @@ bool WriteAll(int fd, const char* data, size_t size) {
 
 }  // namespace
 
+Result<int64_t> MaxStreamBytes() {
+  const char* env = std::getenv(kMaxStreamBytesVariable);
+  if (env == nullptr || *env == '\0') return kDefaultMaxStreamBytes;
+  const std::string text = env;
+  int64_t value = 0;
+  bool digits = !text.empty();
+  for (char c : text) {
+    if (c < '0' || c > '9' || value > (INT64_MAX - 9) / 10) {
+      digits = false;
+      break;
+    }
+    value = value * 10 + (c - '0');
+  }
+  if (!digits || value < 1) {
+    return MakeError(std::string(kMaxStreamBytesVariable) + "='" + text +
+                     "': expected a whole number of bytes >= 1, e.g. " +
+                     std::to_string(kDefaultMaxStreamBytes) + " (the default, 4 GiB)");
+  }
+  return value;
+}
+
 StdinFile::StdinFile(StdinFile&& other) noexcept { *this = std::move(other); }
 
 StdinFile& StdinFile::operator=(StdinFile&& other) noexcept {
@@ -89,14 +113,23 @@ void StdinFile::Reset() {
 
 Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
   const int source = options.source_fd;
+  // Errors name the stream as given ("<stdin>", a FIFO's path); messages say "stdin".
+  const std::string& name = options.display_name;
+  const std::string said = name == kStdinDisplayName ? std::string("stdin") : name;
+  int64_t max_bytes = options.max_bytes;
+  if (max_bytes <= 0) {
+    Result<int64_t> cap = MaxStreamBytes();
+    if (!cap.ok()) return cap.error();
+    max_bytes = cap.value();
+  }
   // First, before this function opens anything that could take a closed descriptor's
   // number (a closed stdin would otherwise read back our own, empty, copy).
   struct stat st {};
   if (::fstat(source, &st) != 0) {
     if (errno == EBADF) {
-      return MakeError(kStdinDisplayName, 0, "stdin is closed: pipe a file in or name it");
+      return MakeError(name, 0, "stdin is closed: pipe a file in or name it");
     }
-    return StdinError("cannot read stdin", errno);
+    return StreamError(name, "cannot read " + said, errno);
   }
   if (::isatty(source)) return MakeError(kTerminalMessage);
 
@@ -130,23 +163,23 @@ Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
       const char* env = std::getenv("TMPDIR");
       dir = env != nullptr && *env != '\0' ? env : "/tmp";
     }
-    std::string name = dir + "/metro-stdin-XXXXXX";
-    std::vector<char> buffer(name.begin(), name.end());
+    std::string tmp_name = dir + "/metro-stdin-XXXXXX";
+    std::vector<char> buffer(tmp_name.begin(), tmp_name.end());
     buffer.push_back('\0');
     const int fd = ::mkostemp(buffer.data(), O_CLOEXEC);
     if (fd < 0) {
       const int why = errno;
-      return StdinError("cannot make a temporary file in " + dir + " to hold stdin" + kNameTheFile,
-                        why);
+      return StreamError(
+          name, "cannot make a temporary file in " + dir + " to hold " + said + kNameTheFile, why);
     }
-    name.assign(buffer.data());
+    tmp_name.assign(buffer.data());
     out.fd_ = fd;
     out.storage_ = StdinStorage::kTmpfile;
     if (Opens(ProcPath(fd))) {
-      ::unlink(name.c_str());  // Gone with the descriptor, even if the process is killed.
+      ::unlink(tmp_name.c_str());  // Gone with the descriptor, even if the process is killed.
       out.path_ = ProcPath(fd);
     } else {
-      out.path_ = name;
+      out.path_ = tmp_name;
       out.remove_path_ = true;
     }
   }
@@ -159,14 +192,32 @@ Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
     if (n < 0) {
       if (errno == EINTR) continue;
       if ((errno == EAGAIN || errno == EWOULDBLOCK) && WaitReadable(source)) continue;
-      return StdinError("cannot read stdin", errno);
+      return StreamError(name, "cannot read " + said, errno);
+    }
+    // Binary data is refused on its first bytes, not after the cap (/dev/zero never ends).
+    if (total < kBinaryCheckBytes &&
+        std::memchr(chunk.data(), '\0',
+                    std::min(static_cast<size_t>(n),
+                             static_cast<size_t>(kBinaryCheckBytes - total))) != nullptr) {
+      return MakeError(name, 0,
+                       "binary data (NUL bytes) in the first 64 KiB: expected a text "
+                       "session.csv or a receiver capture");
+    }
+    if (n > max_bytes - total) {
+      return MakeError(
+          name, 0,
+          "more than " + std::to_string(max_bytes) + " bytes: a stream may hold at most that (" +
+              kMaxStreamBytesVariable +
+              " sets another cap, in bytes); save the input to a file and name it, or raise "
+              "the cap");
     }
     if (!WriteAll(out.fd_, chunk.data(), static_cast<size_t>(n))) {
       const int why = errno;
-      return StdinError(std::string("cannot copy stdin to a ") +
-                            (out.storage_ == StdinStorage::kMemfd ? "memory" : "temporary") +
-                            " file" + kNameTheFile,
-                        why);
+      return StreamError(name,
+                         "cannot copy " + said + " to a " +
+                             (out.storage_ == StdinStorage::kMemfd ? "memory" : "temporary") +
+                             " file" + kNameTheFile,
+                         why);
     }
     total += n;
   }

@@ -32,10 +32,23 @@ inline constexpr const char* kStdinDisplayName = "<stdin>";
 // Where a StdinFile's bytes are (see the top of this file).
 enum class StdinStorage { kNone, kStdinItself, kMemfd, kTmpfile };
 
+// What a stream (stdin, a FIFO, a character device named as the session) may hold at most
+// by default: 4 GiB, above a day at 400 Hz of six channels as CSV (2.8 GB). The environment
+// variable METRO_MAX_STREAM_BYTES (a whole number of bytes) sets another cap.
+inline constexpr int64_t kDefaultMaxStreamBytes = int64_t{4} << 30;
+inline constexpr const char* kMaxStreamBytesVariable = "METRO_MAX_STREAM_BYTES";
+
+// The cap in force: METRO_MAX_STREAM_BYTES when set, else kDefaultMaxStreamBytes. Errors: the
+// variable is set but is not a whole number of bytes >= 1.
+Result<int64_t> MaxStreamBytes();
+
 struct StdinCopyOptions {
   int source_fd = STDIN_FILENO;  // Read from here (tests use a pipe).
   bool try_memfd = true;         // false: straight to the temporary-file fallback (tests).
   std::string tmp_dir;           // Fallback directory; empty: $TMPDIR, else /tmp.
+  // The stream's name in errors: "<stdin>", or the FIFO's or device's path.
+  std::string display_name = kStdinDisplayName;
+  int64_t max_bytes = 0;  // More is refused; 0: MaxStreamBytes().
 };
 
 // A file holding the bytes read from standard input. Owns its descriptor (closed, and a
@@ -70,7 +83,10 @@ class StdinFile {
 // Reads `source_fd` to its end (EINTR retried, partial reads and writes continued, a
 // non-blocking descriptor waited on with poll) into a StdinFile. An empty stdin gives an
 // empty file, which the loaders then report as "empty file". Errors (Error::file is
-// "<stdin>", except the first, which needs no file name):
+// options.display_name, except the first, which needs no file name):
+//  - more than max_bytes: the cap and how to raise it (an endless `yes |` stops there);
+//  - NUL bytes in the first 64 KiB (binary data, /dev/zero): refused at once, not after the
+//    cap;
 //  - source_fd is a terminal: "reading a session from stdin, but stdin is a terminal: pipe
 //    a file in or name it" (nobody is going to type a session);
 //  - source_fd is closed: "stdin is closed: pipe a file in or name it";

@@ -359,5 +359,81 @@ TEST_CASE("A session piped in loads as the same session as its file", "[io][stdi
   CHECK(from_stdin.value().tags[1].size() == 2);
 }
 
+TEST_CASE("A stream longer than its cap is refused at the cap, naming it", "[io][stdin]") {
+  FedPipe pipe(Pattern(5000), 5);
+  StdinCopyOptions options;
+  options.source_fd = pipe.read_fd();
+  options.max_bytes = 4096;
+  Result<StdinFile> copy = CopyStdinToFile(options);
+  REQUIRE_FALSE(copy.ok());
+  CHECK(copy.error().file == kStdinDisplayName);
+  CHECK_THAT(copy.error().message, Catch::Contains("more than 4096 bytes"));
+  CHECK_THAT(copy.error().message, Catch::Contains(kMaxStreamBytesVariable));
+  // At the cap exactly, the stream is whole.
+  FedPipe exact(Pattern(4096), 3);
+  options.source_fd = exact.read_fd();
+  Result<StdinFile> whole = CopyStdinToFile(options);
+  REQUIRE(whole.ok());
+  CHECK(ReadBack(whole.value()) == Pattern(4096));
+}
+
+TEST_CASE("Binary data on a stream is refused on its first bytes, not at the cap", "[io][stdin]") {
+  std::string data = kSession;
+  data[10] = '\0';
+  FedPipe pipe(data);
+  StdinCopyOptions options;
+  options.source_fd = pipe.read_fd();
+  options.display_name = "/dev/zero";
+  Result<StdinFile> copy = CopyStdinToFile(options);
+  REQUIRE_FALSE(copy.ok());
+  CHECK(copy.error().file == "/dev/zero");
+  CHECK_THAT(copy.error().message, Catch::Contains("binary data (NUL bytes)"));
+}
+
+TEST_CASE("METRO_MAX_STREAM_BYTES sets the cap; a value that is no byte count is refused",
+          "[io][stdin]") {
+  struct Restore {
+    ~Restore() { ::unsetenv(kMaxStreamBytesVariable); }
+  } restore;
+  ::unsetenv(kMaxStreamBytesVariable);
+  REQUIRE(MaxStreamBytes().ok());
+  CHECK(MaxStreamBytes().value() == kDefaultMaxStreamBytes);
+  ::setenv(kMaxStreamBytesVariable, "123456", 1);
+  REQUIRE(MaxStreamBytes().ok());
+  CHECK(MaxStreamBytes().value() == 123456);
+  for (const char* bad : {"1e9", "-5", "0", "12 MB", "99999999999999999999"}) {
+    ::setenv(kMaxStreamBytesVariable, bad, 1);
+    Result<int64_t> cap = MaxStreamBytes();
+    REQUIRE_FALSE(cap.ok());
+    CHECK_THAT(cap.error().message, Catch::Contains(std::string("'") + bad + "'"));
+  }
+}
+
+TEST_CASE("A FIFO named as the session is read as a stream and keeps its name", "[io][stdin]") {
+  testing::ScratchFolder folder("metro_fifo_session");
+  const std::string fifo = folder.path() + "session.fifo";
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  std::thread writer([&] {
+    const int fd = ::open(fifo.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) return;
+    const char* p = kSession.data();
+    size_t left = kSession.size();
+    while (left > 0) {
+      const ssize_t n = ::write(fd, p, left);
+      if (n <= 0) break;
+      p += n;
+      left -= static_cast<size_t>(n);
+    }
+    ::close(fd);
+  });
+  Result<Session> s = LoadSession(fifo);
+  writer.join();
+  REQUIRE(s.ok());
+  CHECK(s.value().path == fifo);
+  CHECK(s.value().sha256 == Sha256Hex(kSession));
+  REQUIRE(s.value().tags.size() == 2);
+  CHECK(s.value().tags[1].size() == 2);
+}
+
 }  // namespace
 }  // namespace metro::internal
