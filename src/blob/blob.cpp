@@ -425,6 +425,10 @@ std::string FirmwareErrorName(int code) {
       return "METRO_FW_E_STALE_SEQ";
     case METRO_FW_E_FRAME:
       return "METRO_FW_E_FRAME";
+    case METRO_FW_E_SENSOR:
+      return "METRO_FW_E_SENSOR";
+    case METRO_FW_LIVE_UNVERIFIED:
+      return "METRO_FW_LIVE_UNVERIFIED";
     default:
       return fmt::format("METRO_FW_E_UNKNOWN({})", code);
   }

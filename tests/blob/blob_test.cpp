@@ -3,8 +3,12 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
+#include <regex>
+#include <string>
 
 #include "blob/blob_test_support.hpp"
 #include "metro_fw/blob.h"
@@ -216,6 +220,24 @@ TEST_CASE("Decode reports the firmware's reason", "[blob]") {
   auto shortblob = DecodeBlob(std::vector<uint8_t>(2, 0));
   REQUIRE(!shortblob.ok());
   CHECK_THAT(shortblob.error().message, Catch::StartsWith("METRO_FW_E_BOUNDS"));
+}
+
+TEST_CASE("Every firmware return code of error.h has its own name", "[blob]") {
+  // The enumerators as the firmware's header spells them, read from its text: a code added
+  // there without a name here fails this test.
+  std::ifstream in(std::string(METRO_SOURCE_DIR) + "/firmware/include/metro_fw/error.h");
+  REQUIRE(in);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::regex enumerator(R"((METRO_FW_[A-Z_]+) = (-?[0-9]+))");
+  int count = 0;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), enumerator);
+       it != std::sregex_iterator(); ++it, ++count) {
+    const int code = std::stoi((*it)[2].str());
+    CAPTURE(code);
+    CHECK(FirmwareErrorName(code) == (*it)[1].str());
+  }
+  CHECK(count >= 15);  // METRO_FW_OK .. METRO_FW_E_SENSOR and METRO_FW_LIVE_UNVERIFIED.
+  CHECK(FirmwareErrorName(-99) == "METRO_FW_E_UNKNOWN(-99)");
 }
 
 TEST_CASE("Apply on the firmware equals ApplyConstants on the PC within float32", "[blob]") {
