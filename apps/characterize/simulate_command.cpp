@@ -154,6 +154,16 @@ int RunTableSimulate(SimulateOptions o) {
 }
 
 int RunSimulate(SimulateOptions o) {
+  // An output the chosen kind does not write is a usage error, never silently left unwritten.
+  if (o.kind != "table" && !o.reference_output.empty()) {
+    return PrintErrorExit(MakeError(
+        "--reference-output writes a rotation table's reference log: only with --kind table"));
+  }
+  if (o.kind == "static" && !o.truth_output.empty()) {
+    return PrintErrorExit(MakeError(
+        "--truth-output writes the truth of a table or calibration session (--kind table or "
+        "calibration); a static session's truth is its options (docs/simulator.md)"));
+  }
   if (o.kind == "table") return RunTableSimulate(std::move(o));
   if (o.kind == "calibration") return RunCalibrationSimulate(std::move(o));
   if (o.tags > 0) {

@@ -131,6 +131,22 @@ TEST_CASE("characterize analyze and accuracy refuse the other mode's options (ex
   CHECK_THAT(r.err, Catch::Contains("--taus needs --allan"));
 }
 
+TEST_CASE("characterize simulate refuses an output its kind does not write (exit 2)",
+          "[apps][subcommands]") {
+  const std::string out = Scratch() + "sim_refused.csv";
+  for (const std::string& args : std::vector<std::string>{
+           "simulate -o " + out + " --reference-output " + Scratch() + "ref.csv",
+           "simulate --kind calibration -o " + out + " --reference-output " + Scratch() + "ref.csv",
+           "simulate -o " + out + " --truth-output " + Scratch() + "truth.json"}) {
+    INFO(args);
+    const Run r = Characterize(args);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("only with --kind table") ||
+                          Catch::Contains("--kind table or calibration"));
+    CHECK_FALSE(std::filesystem::exists(out));
+  }
+}
+
 TEST_CASE("characterize --help lists analyze and accuracy and their --help the values and defaults",
           "[apps][subcommands]") {
   Run r = Characterize("--help");
