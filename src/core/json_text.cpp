@@ -60,6 +60,31 @@ size_t TooDeepAt(std::string_view text) {
   });
 }
 
+// The offset of the comma that gives an object its (kMaxJsonObjectMembers + 1)-th member, or
+// npos. nlohmann::ordered_json keeps an object's members in a vector and looks each new key
+// up in it, so reading an object costs the square of its members: bounded here, the parse
+// stays linear in the text. One pass, no recursion (depth is at most kMaxJsonDepth).
+size_t TooManyMembersAt(std::string_view text) {
+  int depth = 0;
+  bool object[kMaxJsonDepth + 2] = {};
+  size_t members[kMaxJsonDepth + 2] = {};
+  return FirstOutsideStrings(text, [&](size_t& i) {
+    const char c = text[i];
+    if (c == '[' || c == '{') {
+      if (depth + 1 < kMaxJsonDepth + 2) {
+        ++depth;
+        object[depth] = c == '{';
+        members[depth] = 1;
+      }
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    } else if (c == ',' && depth > 0 && object[depth]) {
+      return ++members[depth] > kMaxJsonObjectMembers;
+    }
+    return false;
+  });
+}
+
 // The offset of the first number too large for a double, which nlohmann::json refuses with
 // out_of_range 406 and no position; npos when there is none.
 size_t OverflowingNumberAt(std::string_view text) {
@@ -88,6 +113,14 @@ Result<Json> Parse(std::string_view text, const std::string& path) {
                      fmt::format("JSON nested deeper than {} levels; metro's files nest a few "
                                  "levels (docs/report-schema.md, docs/budget-format.md)",
                                  kMaxJsonDepth));
+  }
+  if (const size_t at = TooManyMembersAt(text); at != std::string_view::npos) {
+    const auto [line, column] = TextLineColumn(text, at);
+    return MakeError(path, line, column,
+                     fmt::format("a JSON object with more than {} members; metro's files hold "
+                                 "at most a few hundred keys in an object, and many items in "
+                                 "arrays (docs/report-schema.md, docs/budget-format.md)",
+                                 kMaxJsonObjectMembers));
   }
   try {
     return Json::parse(text);

@@ -18,10 +18,17 @@ namespace metro {
 // document crashed `characterize report`).
 inline constexpr int kMaxJsonDepth = 64;
 
+// More members in one object than any metro file has (a tags file holds at most 255 tags, a
+// report's quantities a few dozen): an object's members are looked up one by one as it is
+// read (nlohmann::ordered_json), so the bound keeps reading linear in the text (an object of
+// 150,000 keys took 55 s).
+inline constexpr size_t kMaxJsonObjectMembers = 4096;
+
 // `text` as JSON, or an error `path:line:column: invalid JSON: ...` (the nlohmann parser's
 // message), or `path:line:column: JSON nested deeper than 64 levels ...` at the bracket
 // that goes beyond the limit, or `path:line:column: invalid JSON: ... number overflow ...` at
-// a number too large for a double (1e999). Never throws.
+// a number too large for a double (1e999), or `path:line:column: a JSON object with more than
+// 4096 members ...` at the comma that goes beyond kMaxJsonObjectMembers. Never throws.
 Result<nlohmann::json> ParseJsonText(std::string_view text, const std::string& path);
 Result<nlohmann::ordered_json> ParseOrderedJsonText(std::string_view text, const std::string& path);
 

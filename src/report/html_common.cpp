@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <unordered_set>
 
 #include "core/json_text.hpp"
 #include "html_templates.hpp"
@@ -33,6 +34,8 @@ double AsNumber(const ordered_json& v) {
 // Arrays longer than this are shown as their first elements and a count.
 constexpr size_t kMaxArrayShown = 24;
 constexpr int kMaxDepth = 6;
+// An array of objects is one table when the union of their keys is at most this many columns.
+constexpr size_t kMaxTableColumns = 32;
 
 std::string ScalarHtml(const ordered_json& v) {
   if (v.is_string()) return EscapeHtml(v.get<std::string>());
@@ -67,16 +70,26 @@ std::string ArrayHtml(const ordered_json& arr, int depth) {
     return "<code>" + out + "</code>";
   }
   // Array of objects with scalar members: one table, one row per element.
-  const bool rows = std::all_of(arr.begin(), arr.end(), [](const ordered_json& e) {
+  bool rows = std::all_of(arr.begin(), arr.end(), [](const ordered_json& e) {
     return e.is_object() && std::all_of(e.begin(), e.end(), IsScalar);
   });
+  // Columns: the union of the members' keys in first-seen order, when they are few enough
+  // for a table; else (objects with many distinct keys) one nested table per element, so the
+  // page stays linear in the document (a table of every row by every key is not).
+  std::vector<std::string> columns;
   if (rows) {
-    std::vector<std::string> columns;
+    std::unordered_set<std::string> seen;
     for (const auto& e : arr) {
       for (const auto& [key, value] : e.items()) {
-        if (std::find(columns.begin(), columns.end(), key) == columns.end()) columns.push_back(key);
+        if (seen.insert(key).second) columns.push_back(key);
+      }
+      if (columns.size() > kMaxTableColumns) {
+        rows = false;
+        break;
       }
     }
+  }
+  if (rows) {
     std::string out = "<table>\n<tr>";
     for (const std::string& c : columns) out += "<th>" + EscapeHtml(c) + "</th>";
     out += "</tr>\n";

@@ -45,6 +45,34 @@ TEST_CASE("JSON text: errors at line and column, never an exception", "[core]") 
   CHECK(r.error().message.rfind("JSON nested deeper than 64 levels", 0) == 0);
 }
 
+TEST_CASE("JSON text: an object of more than 4096 members is refused at the comma past them",
+          "[core]") {
+  // {"k0":0, ... "k{n-1}":n-1} on one line; the comma before member m sits right after
+  // member m-1's text.
+  auto object = [](int n) {
+    std::string text = "{";
+    for (int i = 0; i < n; ++i) text += (i ? "," : "") + ("\"k" + std::to_string(i) + "\":0");
+    return text + "}";
+  };
+  CHECK(ParseOrderedJsonText(object(4096), "ok.json").ok());
+  const std::string text = object(4097);
+  Result<nlohmann::ordered_json> r = ParseOrderedJsonText(text, "wide.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().line == 1);
+  CHECK(static_cast<size_t>(r.error().column) == text.find(",\"k4096\"") + 1);
+  CHECK(r.error().message.rfind("a JSON object with more than 4096 members", 0) == 0);
+  CHECK(ParseJsonText(text, "wide.json").error().ToString() == r.error().ToString());
+  // Arrays are not bounded, nor are members of nested objects counted with their parent's,
+  // nor commas inside strings.
+  std::string items = "[";
+  for (int i = 0; i < 10000; ++i)
+    items += i ? ",{\"a\":1,\"b\":\",,,,\"}" : "{\"a\":1,\"b\":\",,,,\"}";
+  CHECK(ParseOrderedJsonText(items + "]", "items.json").ok());
+  CHECK(
+      ParseOrderedJsonText("{\"a\":" + object(4000) + ",\"b\":" + object(4000) + "}", "nested.json")
+          .ok());
+}
+
 TEST_CASE("JSON text: the element of a top-level array is located at its opening brace", "[core]") {
   // Positions counted by hand: line 5 column 5 and line 6 column 5 open the two elements;
   // the key inside a string and the nested member of the same name are not the array.
