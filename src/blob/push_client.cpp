@@ -497,9 +497,9 @@ std::string PushRecoveryAdvice(const PushSummary& s, const std::string& port,
   std::string out;
   if (s.commit == CommitState::kUnknown || s.commit == CommitState::kCommitted) {
     out += fmt::format(
-        "to find out: calibrate push --port {} {} --sensor {} --seq {} (a tag that holds this "
-        "blob is only read back and compared; one that does not gets seq {})\n",
-        port, calibration_path, sensor, s.seq, s.seq);
+        "to find out: calibrate push --port {} {} --sensor {} --device-id {} --seq {} (a tag "
+        "that holds this blob is only read back and compared; one that does not gets seq {})\n",
+        port, calibration_path, sensor, FormatDeviceId(s.tag.device_id), s.seq, s.seq);
   }
   const uint32_t seq = WiredPathSeq(s);
   out += fmt::format(

@@ -494,8 +494,9 @@ TEST_CASE("Push: a link lost after CAL_EXECUTE is an unknown outcome, not a fail
     CHECK(s.message == "outcome unknown: the tag may hold seq 8 (CAL_EXECUTE: link lost: hung up)");
     const std::string advice = PushRecoveryAdvice(s, "/dev/ttyACM0", "cal.json", 2);
     CHECK(advice ==
-          "to find out: calibrate push --port /dev/ttyACM0 cal.json --sensor 2 --seq 8 (a tag "
-          "that holds this blob is only read back and compared; one that does not gets seq 8)\n"
+          "to find out: calibrate push --port /dev/ttyACM0 cal.json --sensor 2 --device-id "
+          "9ABCDEF012345678 --seq 8 (a tag that holds this blob is only read back and compared; "
+          "one that does not gets seq 8)\n"
           "to program over SWD instead: calibrate blob cal.json --sensor 2 --device-id "
           "9ABCDEF012345678 --seq 8 -o tag.bin --hex tag.hex && nrfjprog -f NRF51 --program "
           "tag.hex --sectorerase --verify --reset\n");

@@ -332,13 +332,15 @@ TEST_CASE("pty: calibrate push says outcome unknown when the link drops after CA
     CHECK(Has(r.err, "outcome unknown: the tag may hold seq 4 (CAL_EXECUTE: link lost: "));
     CHECK_FALSE(Has(r.err, "FAILED"));
     CHECK(Has(r.err, "to find out: calibrate push --port " + sim.pty() + " " + kGolden +
-                         "calibration_sensor2.json --sensor 2 --seq 4 (a tag that holds this "
-                         "blob is only read back and compared; one that does not gets seq 4)"));
+                         "calibration_sensor2.json --sensor 2 --device-id 9ABCDEF012345678 "
+                         "--seq 4 (a tag that holds this blob is only read back and compared; "
+                         "one that does not gets seq 4)"));
     sim.Stop();
   }
-  // It did commit; the advised command finds that out and writes nothing.
+  // It did commit; the advised command, with the flags it prints (the device ID included: a
+  // push with no known device is refused), finds that out and writes nothing.
   SimTag sim(flash, {});
-  Run r = Push(sim.pty(), "--seq 4");
+  Run r = Push(sim.pty(), "--device-id 9ABCDEF012345678 --seq 4");
   INFO(r.err);
   CHECK(r.exit_code == 0);
   CHECK(Has(r.err,
