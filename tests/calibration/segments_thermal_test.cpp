@@ -32,10 +32,10 @@ struct ThermalCase {
 // What the detector did against the truth, summed over tags.
 struct ThermalTally {
   int tags = 0;
-  int true_stops = 0;    // Still stretches of the truth (rate 0 for >= 2 s).
-  int dropped = 0;       // True stops no static segment lies in.
-  int true_turns = 0;    // Table runs of the truth (constant rate for >= 2 s).
-  int turns_missed = 0;  // True turns not found as table or steady rotation.
+  int true_stops = 0;      // Still stretches of the truth (rate 0 for >= 2 s).
+  int dropped = 0;         // True stops no static segment lies in.
+  int true_turns = 0;      // Table runs of the truth (constant rate for >= 2 s).
+  int turns_missed = 0;    // True turns not found as table or steady rotation.
   int static_turning = 0;  // Static segments whose mean true rate is above 0.5 deg/s.
   std::vector<int> dropped_per_tag;
   int max_abs_per_c_error_mdps = 0;  // max |fitted b1 - true b1| [mdeg/s/degC].
@@ -125,8 +125,8 @@ ThermalTally RunThermalCase(const ThermalCase& c, uint64_t first_seed, int tags)
     }
     if (s.gyro_bias_temperature) {
       for (int a = 0; a < 3; ++a) {
-        const double err_dps = std::abs(s.gyro_bias_per_c[a] - sim.truth.gyro.bias_per_c[a]) *
-                               sim.truth.gyro.scale[a];
+        const double err_dps =
+            std::abs(s.gyro_bias_per_c[a] - sim.truth.gyro.bias_per_c[a]) * sim.truth.gyro.scale[a];
         tally.max_abs_per_c_error_mdps =
             std::max(tally.max_abs_per_c_error_mdps, static_cast<int>(std::ceil(err_dps * 1e3)));
       }
