@@ -125,7 +125,7 @@ struct SegmentationSummary {
   int pose_count = 0;             // Distinct poses among them (Segment::pose).
   int table_count = 0;
   int rotation_count = 0;
-  int steady_count = 0;     // Steady rotations excluded.
+  int steady_count = 0;  // Steady rotations excluded.
   // The gyroscope bias the steady-rotation test used (input units; zero without a gyroscope or
   // with fewer than 2 poses): bias(T) = gyro_bias + gyro_bias_per_c (T - gyro_bias_t_ref_c).
   // gyro_bias_temperature is false when no temperature was used (gyro_bias_per_c = 0).
