@@ -315,6 +315,7 @@ Result<Record> ReadRecord(const Tag& tag, int piece, const CalibrationOptions& o
   in.gyro = r.gyro.empty() ? nullptr : &r.gyro;
   in.table_rate_dps = r.table_rate_dps.empty() ? nullptr : &r.table_rate_dps;
   in.saturated = &r.saturated;
+  in.temp_c = r.temp_c.empty() ? nullptr : &r.temp_c;  // The bias follows it (segments.hpp).
   in.piece = piece;
   if (!options.annotated_segments.empty()) {
     Result<SegmentationSummary> given =

@@ -131,18 +131,75 @@ std::vector<Run> StillRuns(size_t n, const Still& still,
   return runs;
 }
 
-// The gyroscope bias seen by the still periods (per-axis median of their means) and each
-// one's deviation from it (norm, input units).
-std::vector<double> RateDeviations(const std::vector<Eigen::Vector3d>& means) {
-  Eigen::Vector3d bias;
-  for (int a = 0; a < 3; ++a) {
-    std::vector<double> axis;
-    for (const Eigen::Vector3d& m : means) axis.push_back(m[a]);
-    bias[a] = Median(axis);
+// The gyroscope bias the still periods see, bias(T) = b0 + b1 (T - t_ref_c) per axis, and the
+// standard uncertainty of its value at T (segments.hpp, "Steady rotations").
+struct BiasLine {
+  bool temperature = false;  // False: b1 = 0, b0 the per-axis median.
+  Eigen::Vector3d b0 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d b1 = Eigen::Vector3d::Zero();
+  double t_ref_c = 0;
+  Eigen::Vector3d scatter = Eigen::Vector3d::Zero();  // s = 1.4826 median |residual|, per axis.
+  double count = 0;
+  double t_mean_c = 0;
+  double t_sxx = 0;  // sum (T_i - mean T)^2
+
+  Eigen::Vector3d At(double temp_c) const {
+    return temperature ? Eigen::Vector3d(b0 + b1 * (temp_c - t_ref_c)) : b0;
   }
-  std::vector<double> dev;
-  for (const Eigen::Vector3d& m : means) dev.push_back((m - bias).norm());
-  return dev;
+  // |m - bias(T)|: the rate of a still period of mean m at temperature T (norm, input units).
+  double Deviation(const Eigen::Vector3d& m, double temp_c) const {
+    return (m - At(temp_c)).norm();
+  }
+  // u(bias(T)) as a norm over the axes: the least-squares form with the median's efficiency
+  // factor sqrt(pi/2) = 1.2533.
+  double U(double temp_c) const {
+    double f = 1.0 / count;
+    if (temperature) f += (temp_c - t_mean_c) * (temp_c - t_mean_c) / t_sxx;
+    return 1.2533 * scatter.norm() * std::sqrt(f);
+  }
+};
+
+// Fits the line to the still periods' mean rates and mean temperatures (temps_c empty or with
+// a NaN: no temperature) by Siegel's repeated median; without two distinct temperatures b1 = 0.
+BiasLine FitBiasLine(const std::vector<Eigen::Vector3d>& means,
+                     const std::vector<double>& temps_c) {
+  METRO_CHECK(!means.empty());
+  BiasLine line;
+  const size_t p = means.size();
+  line.count = static_cast<double>(p);
+  bool temperature = temps_c.size() == p && std::all_of(temps_c.begin(), temps_c.end(),
+                                                        [](double t) { return std::isfinite(t); });
+  if (temperature) {
+    line.t_ref_c = Median(temps_c);
+    for (double t : temps_c) line.t_mean_c += t / line.count;
+    for (double t : temps_c) line.t_sxx += (t - line.t_mean_c) * (t - line.t_mean_c);
+    temperature = line.t_sxx > 0;
+  }
+  line.temperature = temperature;
+  for (int a = 0; a < 3; ++a) {
+    if (temperature) {
+      // Siegel (1982): b1 = med_i med_{j: T_j != T_i} (m_j - m_i) / (T_j - T_i).
+      std::vector<double> outer;
+      for (size_t i = 0; i < p; ++i) {
+        std::vector<double> slopes;
+        for (size_t j = 0; j < p; ++j) {
+          if (temps_c[j] == temps_c[i]) continue;
+          slopes.push_back((means[j][a] - means[i][a]) / (temps_c[j] - temps_c[i]));
+        }
+        if (!slopes.empty()) outer.push_back(Median(std::move(slopes)));
+      }
+      line.b1[a] = Median(std::move(outer));
+    }
+    std::vector<double> level;
+    for (size_t i = 0; i < p; ++i) {
+      level.push_back(means[i][a] - (temperature ? line.b1[a] * (temps_c[i] - line.t_ref_c) : 0));
+    }
+    line.b0[a] = Median(level);
+    std::vector<double> residual;
+    for (double v : level) residual.push_back(std::abs(v - line.b0[a]));
+    line.scatter[a] = 1.4826 * Median(std::move(residual));
+  }
+  return line;
 }
 
 }  // namespace
@@ -161,6 +218,8 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
   if (has_table) METRO_CHECK(input.table_rate_dps->size() == n);
   const bool has_sat = input.saturated != nullptr && !input.saturated->empty();
   if (has_sat) METRO_CHECK(input.saturated->size() == n);
+  const bool has_temp = input.temp_c != nullptr && !input.temp_c->empty();
+  if (has_temp) METRO_CHECK(input.temp_c->size() == n);
 
   SegmentationSummary summary;
   if (n < 3) return summary;
@@ -195,6 +254,20 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
   const double same_rate = 3.0 * std::sqrt(summary.gyro_floor);
   auto mean_accel = [&](const Run& r) { return MeanOf(accel, r, saturated); };
   auto mean_gyro = [&](const Run& r) { return MeanOf(*input.gyro, r, saturated); };
+  // Mean of the finite temperatures of the runs (NaN when none is, or without temp_c).
+  auto mean_temp_c = [&](const std::vector<Run>& runs) {
+    double sum = 0;
+    size_t count = 0;
+    for (const Run& r : runs) {
+      for (size_t i = r.begin; i < r.end && has_temp; ++i) {
+        const double v = (*input.temp_c)[i];
+        if (!std::isfinite(v)) continue;
+        sum += v;
+        ++count;
+      }
+    }
+    return count > 0 ? sum / static_cast<double>(count) : std::nan("");
+  };
 
   // Still periods for factor c, grouped into poses: neighbours with the same accelerometer
   // and gyroscope means and no table turn or time gap between them are one pose.
@@ -255,20 +328,34 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
     return s;
   };
 
-  // Steady rotations: poses whose gyroscope mean is not the bias.
+  // Steady rotations: poses whose gyroscope mean is not the bias at their temperature.
   double rate_limit = 0;
-  std::vector<double> deviation;
+  BiasLine bias;
+  std::vector<double> deviation, pose_temp_c;
   if (has_gyro && poses.size() >= 2) {
     std::vector<Eigen::Vector3d> means;
     for (const auto& p : poses) means.push_back(MeanOfRuns(*input.gyro, p));
-    deviation = RateDeviations(means);
+    if (has_temp) {
+      for (const auto& p : poses) pose_temp_c.push_back(mean_temp_c(p));
+    }
+    bias = FitBiasLine(means, pose_temp_c);
+    for (size_t p = 0; p < poses.size(); ++p) {
+      deviation.push_back(bias.Deviation(means[p], has_temp ? pose_temp_c[p] : 0.0));
+    }
     rate_limit = options.gyro_units_per_dps > 0
                      ? options.max_static_rate_dps * options.gyro_units_per_dps
                      : std::max(10.0 * Median(deviation), 30.0 * std::sqrt(summary.gyro_floor / 3));
+    summary.gyro_bias_temperature = bias.temperature;
+    summary.gyro_bias = bias.b0;
+    summary.gyro_bias_per_c = bias.b1;
+    summary.gyro_bias_t_ref_c = bias.t_ref_c;
   }
+  // Beyond the limit by more than 3 u of the bias there (segments.hpp).
+  auto turning = [&](double dev, double temp_c) { return dev > rate_limit + 3.0 * bias.U(temp_c); };
   std::vector<std::vector<Run>> kept;
   for (size_t p = 0; p < poses.size(); ++p) {
-    if (rate_limit > 0 && deviation[p] > rate_limit) {
+    const double temp_c = pose_temp_c.empty() ? 0.0 : pose_temp_c[p];
+    if (rate_limit > 0 && turning(deviation[p], temp_c)) {
       Segment s = make(SegmentKind::kSteady, poses[p].front().begin, poses[p].back().end);
       s.used = false;
       s.steady_rate = deviation[p];
@@ -281,11 +368,16 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
               ? " although table_rate_dps is 0 there; excluded"
               : " (its rate is unknown: table_rate_dps is empty there); excluded";
       s.note = fmt::format(
-          "steady rotation at {} ({} s): the accelerometer is still but the gyroscope turns; "
+          "steady rotation at {} ({} s): the accelerometer is still but the gyroscope turns{}; "
           "not a static pose{}",
           options.gyro_units_per_dps > 0 ? fmt::format("{:.3g} deg/s", s.steady_rate_dps)
                                          : fmt::format("{:.4g} input units", deviation[p]),
-          fmt::format("{:.1f}", s.end_s - s.start_s), table_word);
+          fmt::format("{:.1f}", s.end_s - s.start_s),
+          bias.temperature ? fmt::format(" (against the bias at {:.1f} degC of the still periods' "
+                                         "bias-temperature line)",
+                                         temp_c)
+                           : "",
+          table_word);
       segments.push_back(s);
       ++summary.steady_count;
       continue;
@@ -375,17 +467,13 @@ SegmentationSummary DetectSegments(const SegmentationInput& input,
       return !saturated(i) && !table_turning(i);
     };
     const std::vector<Run> shorts = StillRuns(n, still, gap_before, 4 * hs + 1);
-    std::vector<Eigen::Vector3d> pose_rates;  // The poses' gyroscope means, for the bias.
-    if (rate_limit > 0 && has_gyro) {
-      for (const auto& p : kept) pose_rates.push_back(MeanOfRuns(*input.gyro, p));
-    }
     for (const Run& r : shorts) {
       if (r.end - r.begin >= min_static_n) continue;
-      if (!pose_rates.empty()) {
-        // Not a steady rotation either: the rate against the poses' bias.
-        std::vector<Eigen::Vector3d> means = pose_rates;
-        means.push_back(mean_gyro(r));
-        if (RateDeviations(means).back() > rate_limit) continue;
+      if (rate_limit > 0) {
+        // Not a steady rotation either: the rate against the poses' bias at its temperature.
+        const double temp_c = bias.temperature ? mean_temp_c({r}) : 0.0;
+        const double at_c = std::isfinite(temp_c) ? temp_c : bias.t_ref_c;
+        if (turning(bias.Deviation(mean_gyro(r), at_c), at_c)) continue;
       }
       // The window shortens a still stretch by a window: its dwell is about run + window.
       const double dwell_s =

@@ -17,12 +17,31 @@
 // disturbance.
 //
 // Steady rotations are not static: a still period whose mean gyroscope rate differs from the
-// gyroscope bias (the per-axis median of the still periods' means) by more than a limit is a
-// turn at constant rate (a turntable whose rate the record does not give, or gives as 0). Its
-// accelerometer is as quiet as a pose's when the axis is vertical, but its gyroscope mean is
-// not a bias. It becomes a kSteady segment, excluded with a note giving its rate. The limit is
-// max_static_rate_dps when gyro_units_per_dps is known; else (unit-free) 10 times the median
-// deviation of the still periods and at least 30 per-sample noise standard deviations.
+// gyroscope bias by more than a limit is a turn at constant rate (a turntable whose rate the
+// record does not give, or gives as 0). Its accelerometer is as quiet as a pose's when the
+// axis is vertical, but its gyroscope mean is not a bias. It becomes a kSteady segment,
+// excluded with a note giving its rate. The limit is max_static_rate_dps when
+// gyro_units_per_dps is known; else (unit-free) 10 times the median deviation of the still
+// periods and at least 30 per-sample noise standard deviations.
+//
+// The gyroscope bias follows the temperature (MPU6050: tens of mdeg/s per degC, the
+// simulator draws up to 0.16 deg/s/degC): over a 15 -> 45 degC ramp it moves by several deg/s,
+// as much as a slow turn. So, with a temperature column, the bias is a line in temperature,
+//
+//   bias(T) = b0 + b1 (T - T_ref),   per axis, T_ref the median of the still periods' T,
+//
+// fitted to the still periods' mean rates and mean temperatures by Siegel's repeated median
+// (Biometrika 69 (1982) 242: b1 = med_i med_j (m_j - m_i) / (T_j - T_i), b0 = med_i (m_i -
+// b1 (T_i - T_ref)); it stands up to almost half the periods being turns), and each still
+// period is compared with the bias at its own temperature. Without temperatures (or all at one
+// temperature) b1 = 0 and b0 is the per-axis median, as before. The comparison allows for the
+// fit's own uncertainty: a still period is a steady rotation when
+//   |m - bias(T)| > limit + 3 u(bias(T)),
+// u per axis = 1.2533 s sqrt(1/P + (T - mean T)^2 / sum (T_i - mean T)^2) (the least-squares
+// form with the median's efficiency factor sqrt(pi/2)), s = 1.4826 median |residual| over the
+// P still periods. A rotation about the vertical is the only turn that keeps the accelerometer
+// still, and its rate stands out of the line as a whole; a bias that follows the temperature
+// lies on it.
 //
 // The threshold factor c is chosen automatically: every c of `threshold_factors` is tried and
 // the one that yields the most poses wins (imu_tk instead keeps the threshold with the
@@ -84,12 +103,14 @@ struct SegmentationOptions {
   bool IsValid(std::string* why) const;
 };
 
-// Input of the detector: one record of one tag. Vectors are per sample; gyro, temp and
+// Input of the detector: one record of one tag. Vectors are per sample; gyro, temp_c and
 // table_rate_dps may be empty. `saturated[k]` excludes sample k from static intervals.
+// temp_c (degC, NaN = no reading) lets the steady-rotation test follow the bias in temperature.
 struct SegmentationInput {
   const std::vector<double>* t_s = nullptr;
   const std::vector<Eigen::Vector3d>* accel = nullptr;
   const std::vector<Eigen::Vector3d>* gyro = nullptr;
+  const std::vector<double>* temp_c = nullptr;
   const std::vector<double>* table_rate_dps = nullptr;
   const std::vector<unsigned char>* saturated = nullptr;
   int piece = 0;
@@ -104,7 +125,14 @@ struct SegmentationSummary {
   int pose_count = 0;             // Distinct poses among them (Segment::pose).
   int table_count = 0;
   int rotation_count = 0;
-  int steady_count = 0;     // Steady rotations excluded.
+  int steady_count = 0;  // Steady rotations excluded.
+  // The gyroscope bias the steady-rotation test used (input units; zero without a gyroscope or
+  // with fewer than 2 poses): bias(T) = gyro_bias + gyro_bias_per_c (T - gyro_bias_t_ref_c).
+  // gyro_bias_temperature is false when no temperature was used (gyro_bias_per_c = 0).
+  bool gyro_bias_temperature = false;
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_bias_per_c = Eigen::Vector3d::Zero();  // [input unit / degC]
+  double gyro_bias_t_ref_c = 0;
   int disturbed_poses = 0;  // Poses whose still periods a disturbance separates.
   // Still periods too short for min_static_s (found with the short window): how many, their
   // durations, and the min_static_s (with window_s no longer) that would accept them all.
