@@ -270,9 +270,7 @@ Result<std::string> RenderBudgetReportHtml(const BudgetReport& report) {
     d.set("concise", guf_concise);
   }
   d.set("stated_basis",
-        fmt::format("Stated: {}. {}.",
-                    mc_stated ? "the Monte Carlo result (JCGM 101)" : "the GUF result (JCGM 100)",
-                    stated.reason.empty() ? std::string("-") : stated.reason));
+        fmt::format("Why this result: {}.", stated.reason.empty() ? "-" : stated.reason));
   d.set("unit", unit.empty() ? "(none)" : unit);
   d.set("model", report.measurand.model.empty() ? "y = sum of c_i x_i (sensitivities given)"
                                                 : report.measurand.model);
