@@ -78,6 +78,9 @@ int RunBudget(const BudgetOptions& options) {
     // Bad models (NaN, undefined) and impossible joint distributions are input errors.
     return apps::PrintErrorExit(evaluation.error());
   }
+  for (const std::string& w : evaluation.value().gum.warnings) {
+    apps::PrintText(stderr, fmt::format("warning: {}: {}\n", options.budget_path, w));
+  }
   const BudgetReport report = MakeBudgetReport(evaluation.value());
   const std::string json = ToJson(report) + "\n";
   // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr.

@@ -154,7 +154,12 @@ namespace report_internal {
 Result<mustache::data> BudgetViewData(const BudgetReport& budget) {
   mustache::data d;
   d.set("measurand", budget.measurand.name);
-  d.set("statement", budget.result.statement);
+  // The stated result (BudgetReportStated): the Monte Carlo one when the GUF failed its
+  // validation, with the GUF statement after it.
+  d.set("statement", budget.stated.method == kStatedMonteCarlo
+                         ? fmt::format("{}. Stated because {}. GUF: {}", budget.stated.statement,
+                                       budget.stated.reason, budget.result.statement)
+                         : budget.result.statement);
   // Lines sorted by their share of the variance, largest first.
   std::vector<const BudgetReportLine*> lines;
   for (const BudgetReportLine& l : budget.budget) lines.push_back(&l);
@@ -223,24 +228,49 @@ Result<std::string> RenderBudgetReportHtml(const BudgetReport& report) {
   const double dof = result.dof_eff;
   const double p = result.coverage;
 
+  // The headline is the stated result (BudgetReportStated): the GUF one when the Monte Carlo
+  // method validated it or none ran, the Monte Carlo one otherwise (JCGM 101:2008 8.2);
+  // both stay in the table below it.
+  const BudgetReportStated& stated = report.stated;
+  const bool mc_stated = stated.method == kStatedMonteCarlo && report.monte_carlo.has_value();
   // JCGM 100:2008 7.2.4 (the wording of its example), value and U rounded per 7.2.6.
   const RoundedResult s = RoundForStatement(value, expanded);
   const RoundedResult uc = RoundForStatement(value, u);
-  d.set("statement", fmt::format("{} = ({} \u00b1 {}){}", measurand, s.value, s.uncertainty,
-                                 unit.empty() ? "" : " " + unit));
-  d.set("statement_detail",
-        fmt::format("where the number following \u00b1 is the expanded uncertainty U = k u_c, "
-                    "determined from the combined standard uncertainty u_c = {} and the "
-                    "coverage factor k = {:.2f} {}; it defines an interval estimated to have a "
-                    "coverage probability of {}.",
-                    WithUnit(uc.uncertainty, unit), k,
-                    std::isfinite(dof)
-                        ? fmt::format("from the t distribution with nu_eff = {:.3g} effective "
-                                      "degrees of freedom",
-                                      dof)
-                        : "from the normal distribution",
-                    Percent(p)));
-  d.set("concise", fmt::format("{} = {}", measurand, WithUnit(ConciseNotation(value, u), unit)));
+  const std::string guf_statement = fmt::format("{} = ({} \u00b1 {}){}", measurand, s.value,
+                                                s.uncertainty, unit.empty() ? "" : " " + unit);
+  const std::string guf_detail = fmt::format(
+      "where the number following \u00b1 is the expanded uncertainty U = k u_c, determined "
+      "from the combined standard uncertainty u_c = {} and the coverage factor k = {:.2f} {}; "
+      "it defines an interval estimated to have a coverage probability of {}.",
+      WithUnit(uc.uncertainty, unit), k,
+      std::isfinite(dof) ? fmt::format("from the t distribution with nu_eff = {:.3g} effective "
+                                       "degrees of freedom",
+                                       dof)
+                         : "from the normal distribution",
+      Percent(p));
+  const std::string guf_concise =
+      fmt::format("{} = {}", measurand, WithUnit(ConciseNotation(value, u), unit));
+  d.set("guf_below", mc_stated);
+  if (mc_stated) {
+    // The JSON's stated.statement, then what its numbers are; the GUF statement below it.
+    d.set("statement", stated.statement);
+    d.set("statement_detail",
+          fmt::format("the Monte Carlo result: the mean and standard deviation of M = {} model "
+                      "values and the shortest interval holding {} of them.",
+                      report.monte_carlo->trials, Percent(stated.coverage)));
+    d.set("concise", fmt::format("{} = {}", measurand,
+                                 std::isfinite(stated.value) && std::isfinite(stated.u)
+                                     ? WithUnit(ConciseNotation(stated.value, stated.u), unit)
+                                     : "undefined"));
+    d.set("guf_statement", guf_statement);
+    d.set("guf_detail", guf_detail + " In concise notation " + guf_concise + ".");
+  } else {
+    d.set("statement", guf_statement);
+    d.set("statement_detail", guf_detail);
+    d.set("concise", guf_concise);
+  }
+  d.set("stated_basis",
+        fmt::format("Why this result: {}.", stated.reason.empty() ? "-" : stated.reason));
   d.set("unit", unit.empty() ? "(none)" : unit);
   d.set("model", report.measurand.model.empty() ? "y = sum of c_i x_i (sensitivities given)"
                                                 : report.measurand.model);
@@ -248,7 +278,8 @@ Result<std::string> RenderBudgetReportHtml(const BudgetReport& report) {
   d.set("coverage", Percent(p));
 
   mustache::data rows{mustache::data::type::list};
-  rows.push_back(ResultRow("GUF (JCGM 100)", value, u, result.interval.low, result.interval.high,
+  rows.push_back(ResultRow(mc_stated ? "GUF (JCGM 100)" : "GUF (JCGM 100), stated", value, u,
+                           result.interval.low, result.interval.high,
                            fmt::format("y +- U, k = {:.2f}", k)));
   d.set("has_mc", report.monte_carlo.has_value());
   std::string verdict, verdict_class = "note";
@@ -257,8 +288,9 @@ Result<std::string> RenderBudgetReportHtml(const BudgetReport& report) {
     rows.push_back(ResultRow("Monte Carlo (JCGM 101), probabilistically symmetric", mc.value, mc.u,
                              mc.symmetric.low, mc.symmetric.high,
                              "7.7: quantiles (1-p)/2, (1+p)/2"));
-    rows.push_back(ResultRow("Monte Carlo (JCGM 101), shortest", mc.value, mc.u, mc.shortest.low,
-                             mc.shortest.high, "7.7: shortest"));
+    rows.push_back(ResultRow(
+        mc_stated ? "Monte Carlo (JCGM 101), shortest, stated" : "Monte Carlo (JCGM 101), shortest",
+        mc.value, mc.u, mc.shortest.low, mc.shortest.high, "7.7: shortest"));
     d.set(
         "mc_run",
         fmt::format("M = {} trials{}, seed {}, numerical tolerance delta = {} (7.9.2){}", mc.trials,
@@ -275,7 +307,7 @@ Result<std::string> RenderBudgetReportHtml(const BudgetReport& report) {
           v.validated ? "validated" : "NOT validated", WithUnit(ShortNumber(v.d_low, 2), unit),
           WithUnit(ShortNumber(v.d_high, 2), unit), v.validated ? "both within" : "not both within",
           WithUnit(ShortNumber(v.delta, 2), unit),
-          v.validated ? "." : ": state the Monte Carlo result and its interval instead.");
+          v.validated ? "." : ": the Monte Carlo result and its interval are stated above.");
       verdict_class = v.validated ? "ok" : "note";
     } else {
       verdict = "No GUF validation in the report.";

@@ -78,6 +78,9 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
     if (!budget.ok()) return fail(budget.error(), true);
     auto evaluation = EvaluateBudget(budget.value(), progress);
     if (!evaluation.ok()) return fail(evaluation.error(), false);
+    for (const std::string& w : evaluation.value().gum.warnings) {
+      out.warnings.push_back("--budget: " + w);
+    }
     out.report.budget = MakeBudgetReport(evaluation.value());
     out.table += BudgetReportTable(evaluation.value());
   }

@@ -10,6 +10,7 @@
 #include "metro/core/angles.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/stats/derived_quantity.hpp"
+#include "metro/stats/quantization.hpp"
 
 namespace metro {
 namespace {
@@ -36,6 +37,19 @@ std::vector<double> WindowValues(const Quantity& q, size_t begin, size_t end, in
 bool IsTemperature(const Quantity& q) {
   const Unit* unit = UnitBySymbol(q.unit);
   return unit != nullptr && unit->dimension == Dimension::kTemperature;
+}
+
+// True when x[0, n) holds at most two distinct values; noisy data leave at the third value.
+bool AtMostTwoValues(const double* x, size_t n) {
+  if (n == 0) return true;
+  const double first = x[0];
+  double second = first;
+  for (size_t i = 1; i < n; ++i) {
+    if (x[i] == first || x[i] == second) continue;
+    if (second != first) return false;
+    second = x[i];
+  }
+  return true;
 }
 
 // Table columns may be empty ("unknown"): those observations are left out.
@@ -361,6 +375,14 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
         !std::all_of(window, window + n, [](double v) { return std::isfinite(v); })) {
       copy_window();
       a = EvaluateTypeA(window, n, options.type_a);
+    }
+    if (a.ok() && AtMostTwoValues(window, n)) {
+      // A window whose spread may hide the noise (no spread, or perhaps one step): with the
+      // quantization step of the tag's whole record, Willink's rules for digitized readings
+      // (type_a.hpp). Any other window is evaluated as before, without this extra read.
+      TypeAOptions digitized = options.type_a;
+      digitized.quantization_step = QuantizationStep(q.values);
+      if (digitized.quantization_step > 0.0) a = EvaluateTypeA(window, n, digitized);
     }
     const double* x_begin = window;
     const double* x_end = window + n;

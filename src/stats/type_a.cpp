@@ -271,6 +271,9 @@ constexpr double kLongCorrelationRho = 0.99729605608547;
 
 }  // namespace
 
+static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t n,
+                                                   const TypeAOptions& options);
+
 bool TypeAOptions::IsValid(std::string* why) const {
   if (!(band_confidence > 0.0 && band_confidence < 1.0)) {
     if (why) *why = "band_confidence must be in (0, 1)";
@@ -278,6 +281,14 @@ bool TypeAOptions::IsValid(std::string* why) const {
   }
   if (!(max_lag_fraction > 0.0 && max_lag_fraction <= 0.5)) {
     if (why) *why = "max_lag_fraction must be in (0, 0.5]";
+    return false;
+  }
+  if (!(quantization_step >= 0.0 && std::isfinite(quantization_step))) {
+    if (why) *why = "quantization_step must be finite and >= 0 (0: not known)";
+    return false;
+  }
+  if (truncated && quantization_step == 0.0) {
+    if (why) *why = "truncated readings need their quantization_step";
     return false;
   }
   return true;
@@ -320,7 +331,59 @@ void Autocorrelation(const double* x, size_t n, size_t max_lag, double* rho) {
   fftw_free(spectrum);
 }
 
+namespace {
+
+// Spreads within this fraction of the step are "none" or "one step": readings printed with
+// fixed decimals sit on the lattice up to the rounding of their binary representation.
+constexpr double kStepTolerance = 1e-6;
+
+}  // namespace
+
+double DigitizedUMean(size_t n, double step, double x_min, double x_max, double mean, double u_0) {
+  const double spread = x_max - x_min;
+  if (spread <= kStepTolerance * step) {
+    // Willink (2007): no spread; c from his Table for n = 2, 3 and n >= 4.
+    const double c = n == 2 ? 6.4 : n == 3 ? 1.3 : 1.0;
+    return std::sqrt(c / 12.0) * step;
+  }
+  if (std::fabs(spread - step) <= kStepTolerance * step) {
+    const double mid = 0.5 * (x_max + x_min);
+    return std::sqrt(std::max(u_0 * u_0, (mid - mean) * (mid - mean) / 3.0));
+  }
+  return u_0;
+}
+
 Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOptions& options) {
+  Result<TypeAResult> result = EvaluateTypeAContinuous(values, n, options);
+  if (!result.ok() || !(options.quantization_step > 0.0)) return result;
+  TypeAResult& r = result.value();
+  const double step = options.quantization_step;
+  const auto [lo, hi] = std::minmax_element(values, values + n);
+  const double spread = *hi - *lo;
+  const double u_0 = r.u_mean_available ? r.u_mean : 0.0;
+  const double u = DigitizedUMean(n, step, *lo, *hi, r.mean, u_0);
+  const bool none = spread <= kStepTolerance * step;
+  if (none || u > u_0) {
+    r.u_mean_available = true;
+    r.u_mean = u;
+    r.u_mean_dof = static_cast<double>(n) - 1.0;
+    r.u_mean_method = kUMeanDigitized;
+    if (!r.u_mean_note.empty()) r.u_mean_note += "; ";
+    r.u_mean_note += fmt::format(
+        "digitized readings (step {:.6g}), {}: u_mean by Willink's rules (Metrologia 44 (2007) "
+        "73), {:.6g} with n - 1 = {} dof",
+        step,
+        none ? "all equal"
+             : fmt::format("a spread of one step with the mean {:.6g} off its middle",
+                           r.mean - 0.5 * (*lo + *hi)),
+        u, n - 1);
+  }
+  if (options.truncated) r.mean += 0.5 * step;  // GTC's truncate: readings cut, not rounded.
+  return result;
+}
+
+static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t n,
+                                                   const TypeAOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError("invalid Type A options: " + why);
   if (n < 2) {
@@ -371,6 +434,19 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   r.u_mean = r.std_of_mean;
   r.u_mean_dof = dn - 1.0;
   r.u_mean_method = kUMeanClassical;
+  if (r.variance == 0.0) {
+    // s = 0 says nothing about the mean's uncertainty, for any n (issue #36: n <= 3 gave
+    // u = 0 silently): the readings' resolution bounds it (the digitized rules, when the
+    // step is known; a Type B input otherwise).
+    r.autocorr_note =
+        "constant series (s = 0): no autocorrelation and no uncertainty of the mean can be "
+        "computed from it; the readings' resolution (a Type B input) bounds u";
+    r.u_mean_available = false;
+    r.u_mean = 0.0;
+    r.u_mean_dof = 0.0;
+    r.u_mean_method.clear();
+    return r;
+  }
   if (!options.autocorrelation) {
     r.autocorr_note = "autocorrelation off: u_mean is the classical s(mean)";
     return r;
@@ -380,16 +456,6 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
         "n = {} <= 3: too few observations to estimate an autocorrelation; u_mean is the "
         "classical s(mean) with n - 1 dof",
         n);
-    return r;
-  }
-  if (r.variance == 0.0) {
-    r.autocorr_note =
-        "constant series (s = 0): no autocorrelation and no uncertainty of the mean can be "
-        "computed from it; the readings' resolution (a Type B input) bounds u";
-    r.u_mean_available = false;
-    r.u_mean = 0.0;
-    r.u_mean_dof = 0.0;
-    r.u_mean_method.clear();
     return r;
   }
   // metro's u_mean: the AR(p) spectral density at frequency zero (spectral_mean.hpp).

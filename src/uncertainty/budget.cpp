@@ -14,6 +14,7 @@
 
 #include "core/json_text.hpp"
 #include "metro/core/file.hpp"
+#include "metro/stats/type_a.hpp"
 #include "uncertainty/model.hpp"
 #include "uncertainty/model_units.hpp"
 
@@ -201,7 +202,18 @@ Status ReadTypeA(const Fields& f, const std::string& budget_path,
   Fields a(t, f.owner() + " type_a", "");
   in->distribution = Distribution::kTypeA;
   if (a.Has("values")) {
-    if (auto s = a.OnlyKeys({"values"}); !s.ok()) return f.Fail(s.error().message);
+    if (auto s = a.OnlyKeys({"values", "resolution", "truncated"}); !s.ok()) {
+      return f.Fail(s.error().message);
+    }
+    METRO_ASSIGN_OR_RETURN(resolution, a.Number("resolution"));
+    METRO_ASSIGN_OR_RETURN(truncated, a.Bool("truncated"));
+    if (resolution && !(*resolution > 0.0 && std::isfinite(*resolution))) {
+      return f.Fail("'type_a.resolution' must be > 0 (the readings' quantization step), got " +
+                    fmt::format("{}", *resolution));
+    }
+    if (truncated && *truncated && !resolution) {
+      return f.Fail("'type_a.truncated' needs the readings' 'resolution'");
+    }
     const json& values = t.at("values");
     if (!values.is_array()) return f.Fail("'type_a.values' must be an array of numbers");
     std::vector<double> q;
@@ -222,6 +234,30 @@ Status ReadTypeA(const Fields& f, const std::string& budget_path,
     in->n = static_cast<int64_t>(q.size());
     in->dof = n - 1.0;
     in->note = "Type A from " + std::to_string(q.size()) + " observations";
+    if (resolution) {
+      // Digitized readings: Willink's rules (Metrologia 44 (2007) 73; stats/type_a.hpp), the
+      // observations taken as independent like the lines above.
+      TypeAOptions options;
+      options.autocorrelation = false;
+      options.quantization_step = *resolution;
+      options.truncated = truncated.value_or(false);
+      Result<TypeAResult> r = EvaluateTypeA(q.data(), q.size(), options);
+      if (!r.ok()) return f.Fail("'type_a.values': " + r.error().message);
+      in->value = r.value().mean;
+      in->u = r.value().u_mean;
+      in->note += r.value().u_mean_method == kUMeanDigitized
+                      ? fmt::format(", digitized (resolution {}{}): Willink's rules", *resolution,
+                                    options.truncated ? ", truncated" : "")
+                      : fmt::format(", resolution {}{}: spread over more than one step",
+                                    *resolution, options.truncated ? ", truncated" : "");
+    } else if (ss == 0.0) {
+      // s = 0 would state u = 0 for the mean of readings that only agree to their resolution
+      // (issue #36).
+      return f.Fail(
+          "'type_a.values' are all equal (s = 0): a Type A u of 0 is not an uncertainty; give "
+          "the readings' \"resolution\" (their quantization step: Willink's rules for "
+          "digitized readings, docs/budget-format.md) or a Type B input");
+    }
   } else if (a.Has("mean") || a.Has("std") || a.Has("n")) {
     if (auto s = a.OnlyKeys({"mean", "std", "n"}); !s.ok()) return f.Fail(s.error().message);
     METRO_ASSIGN_OR_RETURN(mean, a.RequiredNumber("mean", "mean of the observations"));

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/json_reader.hpp"
 #include "core/json_text.hpp"
@@ -68,6 +69,69 @@ std::optional<McHistogram> BinValues(std::vector<double>* values, double include
   return h;
 }
 
+// A report written before "stated" existed took its derivatives exactly unless it says
+// otherwise.
+bool DerivativesExact(const BudgetReportResult& result) {
+  return result.derivatives.find("central differences") == std::string::npos;
+}
+
+// See BudgetReportStated.
+BudgetReportStated DecideStated(const BudgetReport& r, bool derivatives_exact) {
+  const BudgetReportResult& g = r.result;
+  BudgetReportStated s;
+  s.coverage = g.coverage;
+  const auto guf = [&](std::string reason) {
+    s.method = kStatedGuf;
+    s.reason = std::move(reason);
+    s.value = g.value;
+    s.u = g.u;
+    s.interval = g.interval;
+    s.statement = g.statement;
+  };
+  if (!r.monte_carlo) {
+    guf("no Monte Carlo run: the GUF result is stated without validation (JCGM 101:2008 8.2 "
+        "needs one)");
+    return s;
+  }
+  const BudgetReportMonteCarlo& m = *r.monte_carlo;
+  std::string why;
+  if (!derivatives_exact) {
+    why = "the GUF sensitivity coefficients were taken by central differences (" + g.derivatives +
+          ")";
+  } else if (m.validation && !m.validation->validated) {
+    why = fmt::format(
+        "the GUF result is not validated (JCGM 101:2008 8.2): d_low = {}, d_high = {}, "
+        "delta = {}",
+        Short(m.validation->d_low), Short(m.validation->d_high), Short(m.validation->delta));
+  } else if (m.validation) {
+    guf("the GUF result is validated by the Monte Carlo method (JCGM 101:2008 8.2)");
+    return s;
+  } else {
+    guf("the report holds no GUF validation");
+    return s;
+  }
+  s.method = kStatedMonteCarlo;
+  s.reason = why + ": the Monte Carlo result is stated (JCGM 101:2008 8.2, 7.7)";
+  s.value = m.mean_defined ? m.value : std::numeric_limits<double>::quiet_NaN();
+  s.u = m.u_defined ? m.u : std::numeric_limits<double>::quiet_NaN();
+  s.interval = m.shortest;
+  s.coverage = m.coverage;
+  const std::string unit = r.measurand.unit.empty() ? "" : " " + r.measurand.unit;
+  const RoundedResult v = RoundForStatement(s.value, s.u);
+  // The ends to the decimal place of the value (u to two significant digits, 7.2.6).
+  RoundedInterval iv = RoundInterval(s.interval.low, s.interval.high);
+  if (std::isfinite(s.u) && s.u > 0.0) {
+    iv = {RoundForStatement(s.interval.low, s.u).value,
+          RoundForStatement(s.interval.high, s.u).value};
+  }
+  s.statement =
+      fmt::format("{} = {}, u({}) = {}, shortest {} coverage interval [{}, {}]{} (JCGM 101 7.7)",
+                  r.measurand.name, m.mean_defined ? v.value + unit : "undefined (no mean)",
+                  r.measurand.name, m.u_defined ? v.uncertainty + unit : "undefined (no variance)",
+                  Percent(s.coverage), iv.low, iv.high, unit);
+  return s;
+}
+
 }  // namespace
 
 Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* progress) {
@@ -76,6 +140,14 @@ Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* prog
   auto gum = EvaluateGum(budget);
   if (!gum.ok()) return gum.error();
   e.gum = std::move(gum).value();
+  if (!e.gum.derivatives_exact && !budget.monte_carlo.enabled) {
+    // Central differences are never the stated basis (issue #36): without a Monte Carlo run
+    // there is nothing sound to state.
+    return MakeError(budget.file, 0,
+                     "model '" + budget.model + "': no exact derivatives (" + e.gum.derivatives +
+                         "), and monte_carlo is disabled: the GUF result would rest on central "
+                         "differences; enable monte_carlo, whose result is then stated");
+  }
   e.ok = true;
   if (budget.monte_carlo.enabled) {
     McOptions options = budget.monte_carlo;
@@ -185,6 +257,7 @@ BudgetReport MakeBudgetReport(const BudgetEvaluation& e) {
     mc.message = m.message;
     r.monte_carlo = std::move(mc);
   }
+  r.stated = DecideStated(r, e.gum.derivatives_exact);
   return r;
 }
 
@@ -321,6 +394,14 @@ ordered_json ToJsonValue(const BudgetReport& r) {
   } else {
     j["monte_carlo"] = nullptr;
   }
+  const BudgetReportStated& st = r.stated;
+  j["stated"] = {{"method", st.method},
+                 {"reason", st.reason},
+                 {"value", Number(st.value)},
+                 {"u", Number(st.u)},
+                 {"interval", Interval(st.interval)},
+                 {"coverage", Number(st.coverage)},
+                 {"statement", st.statement}};
   return j;
 }
 
@@ -483,6 +564,22 @@ BudgetReport BudgetReportFromJsonValue(const JsonCursor& j) {
     if (mc.Has("message")) m.message = mc["message"].String();
     r.monte_carlo = std::move(m);
   }
+  if (j.Has("stated")) {
+    const JsonCursor st = j["stated"];
+    const std::string method = st["method"].String();
+    if (method != kStatedGuf && method != kStatedMonteCarlo && st.ok()) {
+      st["method"].Fail(fmt::format("\"{}\" or \"{}\"", kStatedGuf, kStatedMonteCarlo));
+    }
+    r.stated.method = method;
+    r.stated.reason = st["reason"].String();
+    r.stated.value = st["value"].NumberOrNaN();
+    r.stated.u = st["u"].NumberOrNaN();
+    r.stated.interval = ReadInterval(st["interval"]);
+    r.stated.coverage = st["coverage"].NumberOrNaN();
+    r.stated.statement = st["statement"].String();
+  } else {
+    r.stated = DecideStated(r, DerivativesExact(r.result));  // Written before 2026-12-02.
+  }
   return r;
 }
 
@@ -558,6 +655,9 @@ std::string BudgetReportTable(const BudgetReport& r) {
     }
     if (!m.message.empty()) out += "  " + m.message + "\n";
   }
+  out += fmt::format("\nStated ({}): {}\n  {}\n",
+                     r.stated.method == kStatedGuf ? "GUF, JCGM 100" : "Monte Carlo, JCGM 101",
+                     r.stated.statement, r.stated.reason);
   return out;
 }
 

@@ -86,17 +86,36 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
   };
 
   // The model's exact derivatives (symbolic_model.hpp), when GiNaC takes the expression and
-  // gives the evaluator's value at x (to 1e-12: the two read the expression alike).
+  // gives the evaluator's value at x: the two must read the expression alike.
   std::optional<internal::SymbolicModel> symbolic;
+  std::vector<double> c(n, 0.0);
   if (budget.model.empty()) {
     result.derivatives = "stated (no model)";
   } else {
     std::vector<std::string> names;
     for (const auto& in : budget.inputs) names.push_back(in.name);
-    Result<internal::SymbolicModel> parsed = internal::SymbolicModel::Parse(budget.model, names);
+    Result<internal::SymbolicModel> parsed =
+        internal::SymbolicModel::Parse(budget.model, names, x.data());
     Result<double> value = parsed.ok() ? parsed.value().Value(x.data()) : parsed.error();
-    if (value.ok() && !(std::fabs(value.value() - result.value) <=
-                        1e-12 * std::max(std::fabs(result.value), 1e-300))) {
+    // Sensitivity coefficients, JCGM 100 5.1.3, exact. Every coefficient is taken the same
+    // way: one the symbolic form cannot give sends them all to differences (below).
+    for (size_t i = 0; value.ok() && i < n; ++i) {
+      Result<double> ci = parsed.value().First(i, x.data());
+      if (ci.ok()) {
+        c[i] = ci.value();
+      } else {
+        value = MakeError("sensitivity to input '" + budget.inputs[i].name +
+                          "': " + ci.error().message);
+      }
+    }
+    // The evaluator rounds each operation in double: where terms cancel (JCGM 101 9.3's
+    // (mrc + dmrc)(...) - 100000 mg) its error is of the order of eps times the terms, sum_i
+    // |c_i x_i|, not of the result. A misread expression (another precedence) differs by
+    // far more.
+    double scale = std::fabs(result.value);
+    for (size_t i = 0; value.ok() && i < n; ++i) scale += std::fabs(c[i] * x[i]);
+    if (value.ok() &&
+        !(std::fabs(value.value() - result.value) <= 1e-12 * std::max(scale, 1e-300))) {
       value =
           MakeError(fmt::format("GiNaC reads the model as {} at the estimates, the evaluator "
                                 "as {}",
@@ -110,20 +129,8 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
     }
   }
 
-  // Sensitivity coefficients, JCGM 100 5.1.3: exact, else central differences (step scaled
-  // to u_i). Every coefficient is taken the same way: one the symbolic form cannot give
-  // sends them all to differences.
-  std::vector<double> c(n, 0.0);
-  for (size_t i = 0; symbolic && i < n; ++i) {
-    Result<double> ci = symbolic->First(i, x.data());
-    if (ci.ok()) {
-      c[i] = ci.value();
-      continue;
-    }
-    symbolic.reset();
-    result.derivatives = "central differences: sensitivity to input '" + budget.inputs[i].name +
-                         "': " + ci.error().message;
-  }
+  // Else central differences (step scaled to u_i).
+  std::string steps;  // The central-difference steps, input by input, for the warning.
   for (size_t i = 0; i < n; ++i) {
     if (budget.model.empty()) {
       c[i] = *budget.inputs[i].sensitivity;
@@ -135,6 +142,11 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
     const double plus = f_at({{i, h}});
     const double minus = f_at({{i, -h}});
     c[i] = (plus - minus) / (2.0 * h);
+    if (!exact) {
+      steps += fmt::format("{}'{}' h = {:.3g} (relative step h/|x| = {})",
+                           steps.empty() ? "" : ", ", budget.inputs[i].name, h,
+                           x[i] != 0.0 ? fmt::format("{:.3g}", h / std::fabs(x[i])) : "inf, x = 0");
+    }
     if (!std::isfinite(c[i])) {
       if (exact) {
         c[i] = 0.0;  // A constant: its coefficient multiplies u = 0 anyway.
@@ -145,6 +157,17 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
                            "' = " + std::to_string(x[i]) + " +- " + std::to_string(h) +
                            " (sensitivity by central differences)");
     }
+  }
+  if (!budget.model.empty() && !symbolic) {
+    // Never silent (issue #36): rounding at a small relative step, or a step across a seam,
+    // spoils a difference quotient, so the budget says so and states the Monte Carlo result.
+    result.derivatives_exact = false;
+    result.warnings.push_back(fmt::format(
+        "model '{}' has no exact derivative at the estimates ({}): sensitivity coefficients by "
+        "central differences with step_fraction {:g} of u: {}; the Monte Carlo result is the "
+        "stated one (docs/uncertainty.md, \"Derivatives\")",
+        budget.model, result.derivatives.substr(std::string("central differences: ").size()),
+        options.step_fraction, steps.empty() ? "no input has u > 0" : steps));
   }
 
   // Correlation matrix, JCGM 100 5.2.2.
@@ -249,6 +272,11 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
       // The same terms by central differences (steps u_i), and the report says so.
       symbolic.reset();
       result.derivatives += "; second-order terms by central differences: " + symbolic_error;
+      result.derivatives_exact = false;
+      result.warnings.push_back(fmt::format(
+          "model '{}': second-order terms (JCGM 100 5.1.2 note) by central differences with "
+          "steps h_i = u_i ({}); the Monte Carlo result is the stated one",
+          budget.model, symbolic_error));
       extra = second_order_terms();
     }
     if (!std::isfinite(extra)) {

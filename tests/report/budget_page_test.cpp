@@ -45,7 +45,10 @@ TEST_CASE("Budget page statement equals the JSON rounded per GUM 7.2.6", "[repor
   testing::CheckSelfContained(h);
   // The statement comes before everything else on the page.
   CHECK(h.find("id=\"statement\"") < h.find("<svg"));
-  const std::string statement = ElementText(h, "statement");
+  // At 99 % H.1's GUF is not validated (d_high = 0.67 nm > delta = 0.5 nm): the GUF
+  // statement stands below the stated Monte Carlo one.
+  const bool guf_stated = report.stated.method == kStatedGuf;
+  const std::string statement = ElementText(h, guf_stated ? "statement" : "guf-statement");
   std::smatch m;
   REQUIRE(std::regex_match(statement, m, std::regex("(\\S+) = \\((\\S+) \u00b1 (\\S+)\\) (\\S+)")));
   const RoundedResult r = RoundForStatement(report.result.value, report.result.expanded);
@@ -60,7 +63,11 @@ TEST_CASE("Budget page statement equals the JSON rounded per GUM 7.2.6", "[repor
   CHECK(h.find("k = 2.92") != std::string::npos);
   CHECK(h.find("nu_eff = 16 ") != std::string::npos);
   CHECK(h.find("coverage probability of 99 %") != std::string::npos);
-  CHECK(ElementText(h, "concise") == "l = 50000838(32) nm");
+  CHECK(h.find("l = 50000838(32) nm") != std::string::npos);
+  if (!guf_stated) {
+    CHECK(ElementText(h, "concise") ==
+          "l = " + ConciseNotation(report.monte_carlo->value, report.monte_carlo->u) + " nm");
+  }
 }
 
 TEST_CASE("Budget page prints both intervals to digits that tell their ends apart",
@@ -107,6 +114,50 @@ TEST_CASE("Budget page of JCGM 101 9.2.2 states the exact result", "[report][bud
   CHECK(ElementText(html.value(), "statement") == "Y = (0.0 \u00b1 3.9)");
   CHECK(html.value().find("from the normal distribution") != std::string::npos);
   CHECK(html.value().find("GUF validated") != std::string::npos);
+}
+
+TEST_CASE("Budget page headlines the Monte Carlo result when the GUF fails validation",
+          "[report][budget]") {
+  // JCGM 101:2008 9.3 (mass calibration): the first-order GUF is not validated; the headline
+  // is the Monte Carlo mean and shortest interval (9.3: 1.2340 mg, [1.0834, 1.3825] mg at
+  // M = 1e6), both results stay in the table below it.
+  const BudgetReport report = EvaluatedReport("jcgm101_9_3_mass.json", 200000);
+  REQUIRE(report.monte_carlo);
+  REQUIRE(report.monte_carlo->validation);
+  REQUIRE_FALSE(report.monte_carlo->validation->validated);
+  CHECK(report.stated.method == kStatedMonteCarlo);
+  Result<std::string> html = RenderBudgetReportHtml(report);
+  REQUIRE(html.ok());
+  const std::string& h = html.value();
+  const std::string statement = ElementText(h, "statement");
+  // The mean, u and the shortest interval's ends, rounded at u's second significant digit.
+  const double u = report.monte_carlo->u;
+  const RoundedResult v = RoundForStatement(report.monte_carlo->value, u);
+  const std::string low = RoundForStatement(report.monte_carlo->shortest.low, u).value;
+  const std::string high = RoundForStatement(report.monte_carlo->shortest.high, u).value;
+  CHECK(statement == "dm = " + v.value + " mg, u(dm) = " + v.uncertainty +
+                         " mg, shortest 95 % coverage interval [" + low + ", " + high +
+                         "] mg (JCGM 101 7.7)");
+  CHECK(statement == report.stated.statement);
+  CHECK(v.uncertainty == "0.075");  // 9.3: 0.0754 mg
+  CHECK(std::stod(low) == Approx(1.0834).margin(0.002));
+  CHECK(std::stod(high) == Approx(1.3825).margin(0.002));
+  // The GUF statement is below it, not stated: 9.3's u = 0.0539 mg, U = 0.1056 mg.
+  CHECK(ElementText(h, "guf-statement") == "dm = (1.23 \u00b1 0.11) mg");
+  // The GUF's +- statement is not the headline, and the verdict below says why.
+  CHECK(statement.find("\u00b1") == std::string::npos);
+  CHECK(ElementText(h, "stated-basis").find("not validated") != std::string::npos);
+  CHECK(h.find("id=\"statement\"") < h.find("id=\"results\""));
+  CHECK(h.find("Monte Carlo (JCGM 101), shortest, stated") != std::string::npos);
+  CHECK(h.find("<td>GUF (JCGM 100)</td>") != std::string::npos);
+  CHECK(h.find("GUF NOT validated") != std::string::npos);
+  // A validated budget keeps the GUF headline and says it is the stated one.
+  const BudgetReport additive = EvaluatedReport("jcgm101_9_2_2_additive.json", 200000);
+  CHECK(additive.stated.method == kStatedGuf);
+  Result<std::string> additive_html = RenderBudgetReportHtml(additive);
+  REQUIRE(additive_html.ok());
+  CHECK(additive_html.value().find("GUF (JCGM 100), stated") != std::string::npos);
+  CHECK(additive_html.value().find("id=\"guf-statement\"") == std::string::npos);
 }
 
 using testing::WithoutFooter;

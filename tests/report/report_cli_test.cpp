@@ -124,12 +124,16 @@ TEST_CASE("characterize budget --html writes the budget page with the statement 
   REQUIRE(r.exit_code == 0);
   const auto report = nlohmann::json::parse(Slurp(json));
   const std::string h = Slurp(html);
-  // The statement on the page is the JSON's result rounded per GUM 7.2.6.
+  // The GUF statement on the page is the JSON's result rounded per GUM 7.2.6; JCGM 101 9.3's
+  // GUF is not validated, so the headline is the JSON's stated Monte Carlo result.
   const RoundedResult s = RoundForStatement(report["result"]["value"].get<double>(),
                                             report["result"]["U"].get<double>());
   const std::string unit = report["measurand"]["unit"].get<std::string>();
-  const std::string statement = report["measurand"]["name"].get<std::string>() + " = (" + s.value +
-                                " \u00b1 " + s.uncertainty + ")" + (unit.empty() ? "" : " " + unit);
+  const std::string guf = report["measurand"]["name"].get<std::string>() + " = (" + s.value +
+                          " \u00b1 " + s.uncertainty + ")" + (unit.empty() ? "" : " " + unit);
+  CHECK(h.find("<span id=\"guf-statement\">" + guf + "</span>") != std::string::npos);
+  REQUIRE(report["stated"]["method"] == "monte_carlo");
+  const std::string statement = report["stated"]["statement"].get<std::string>();
   CHECK(h.find("<strong id=\"statement\">" + statement + "</strong>") != std::string::npos);
   CHECK(Count(h, "<svg") == 2);
   // The saved report renders as the same page; the budget definition is refused.

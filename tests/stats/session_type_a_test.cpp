@@ -179,3 +179,64 @@ TEST_CASE("Quaternions at pitch 89.9 deg: derived yaw and roll are warned about"
 
 }  // namespace
 }  // namespace metro
+
+namespace metro {
+namespace {
+
+TEST_CASE("A session window that hides the noise gets Willink's digitized u",
+          "[stats][type_a][digitized]") {
+  // temp_c printed to 0.01 degC: noisy for the first 100 readings (the step shows on the
+  // whole record), then 30.00 for 50 readings, then 30.00/30.01 alternating 3:1 for 40.
+  Session s;
+  s.path = "digitized";
+  Tag tag;
+  tag.sensor = 2;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> w(0.0, 0.05);
+  Quantity temp{"temp_c", "degC", QuantityOrigin::kFile, {}};
+  for (size_t i = 0; i < 190; ++i) {
+    tag.t_s.push_back(static_cast<double>(i));
+    tag.line.push_back(static_cast<uint32_t>(i + 2));
+    double v = 30.0;
+    if (i < 100) v = std::round((30.0 + w(rng)) * 100.0) / 100.0;
+    if (i >= 150 && i % 4 == 3) v = 30.01;
+    temp.values.push_back(v);
+  }
+  tag.quantities = {temp};
+  s.tags.push_back(std::move(tag));
+  const auto evaluate = [&](double from_s, double to_s) {
+    SessionTypeAOptions o;
+    o.window.from_s = from_s;
+    o.window.to_s = to_s;
+    auto r = EvaluateSessionTypeA(s, o);
+    if (!r.ok()) FAIL(r.error().ToString());
+    return Find(r.value().tags[0], "temp_c");
+  };
+  // All equal over 50 readings: u = 0.01 / sqrt(12), 49 dof, said in a warning.
+  const QuantityTypeA flat = evaluate(100.0, 149.0);
+  REQUIRE(flat.ok);
+  CHECK(flat.type_a.n == 50);
+  CHECK(flat.type_a.u_mean_available);
+  CHECK(flat.type_a.u_mean_method == std::string(kUMeanDigitized));
+  CHECK(flat.type_a.u_mean == Approx(0.01 / std::sqrt(12.0)).epsilon(1e-9));
+  CHECK(flat.type_a.u_mean_dof == 49.0);
+  CHECK(AnyContains(flat.warnings, "Willink"));
+  // Three readings: c = 1.3.
+  const QuantityTypeA three = evaluate(120.0, 122.0);
+  CHECK(three.type_a.u_mean == Approx(std::sqrt(1.3 / 12.0) * 0.01).epsilon(1e-9));
+  // One step, 30 of 30.00 and 10 of 30.01: u >= |x_mid - mean| / sqrt(3) = 0.0025 / sqrt(3).
+  const QuantityTypeA step = evaluate(150.0, 189.0);
+  CHECK(step.type_a.n == 40);
+  CHECK(step.type_a.u_mean >= 0.0025 / std::sqrt(3.0) * (1.0 - 1e-9));
+  // The noisy part is not touched: its u is what it was without any step.
+  const QuantityTypeA noisy = evaluate(0.0, 99.0);
+  CHECK(noisy.type_a.u_mean_method != std::string(kUMeanDigitized));
+  const std::vector<double> head(s.tags[0].quantities[0].values.begin(),
+                                 s.tags[0].quantities[0].values.begin() + 100);
+  auto plain = EvaluateTypeA(head.data(), head.size());
+  REQUIRE(plain.ok());
+  CHECK(noisy.type_a.u_mean == plain.value().u_mean);
+}
+
+}  // namespace
+}  // namespace metro

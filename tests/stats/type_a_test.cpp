@@ -425,6 +425,110 @@ TEST_CASE("Terms that cannot be computed are flagged, not 0 or n", "[stats][type
   }
 }
 
+// ---------------------------------------------------------------- digitized readings (#36)
+
+// GTC's type_a.estimate_digitized with independent readings (autocorrelation off).
+TypeAResult Digitized(const std::vector<double>& x, double step, bool truncated = false) {
+  TypeAOptions options;
+  options.autocorrelation = false;
+  options.quantization_step = step;
+  options.truncated = truncated;
+  auto r = EvaluateTypeA(x.data(), x.size(), options);
+  if (!r.ok()) FAIL(r.error().ToString());
+  return r.value();
+}
+
+TEST_CASE("Digitized readings reproduce GTC's four estimate_digitized examples",
+          "[stats][type_a][digitized]") {
+  // GTC (MSL), type_a.estimate_digitized doctests, after Willink, Metrologia 44 (2007) 73:
+  // step 0.0001; ureal(value, u, df) as GTC prints them.
+  struct Example {
+    std::vector<double> x;
+    double value, u;
+    double dof;
+    const char* method;
+  };
+  const std::vector<Example> examples = {
+      // Readings between -0.0055 and -0.0057 (two steps): s / sqrt(N).
+      {{-0.0056, -0.0055, -0.0056, -0.0056, -0.0056, -0.0057, -0.0057, -0.0056, -0.0056, -0.0057,
+        -0.0057},
+       -0.005627272727272727,
+       1.9497827808661e-05,
+       10,
+       kUMeanClassical},
+      // Between -0.0056 and -0.0057 (one step): max(s^2 / N, (x_mid - mean)^2 / 3), here s^2/N.
+      {{-0.0056, -0.0056, -0.0056, -0.0056, -0.0056, -0.0057, -0.0057, -0.0056, -0.0056, -0.0057,
+        -0.0057},
+       -0.005636363636363636,
+       1.52120004824377e-05,
+       10,
+       kUMeanClassical},
+      // No spread, N = 11: step / sqrt(12).
+      {std::vector<double>(11, -0.0056), -0.0056, 2.8867513459481e-05, 10, kUMeanDigitized},
+      // No spread, N = 3: sqrt(1.3 / 12) step.
+      {std::vector<double>(3, -0.0056), -0.0056, 3.2914029430219e-05, 2, kUMeanDigitized},
+  };
+  for (size_t k = 0; k < examples.size(); ++k) {
+    INFO("example " << k + 1);
+    const Example& e = examples[k];
+    const TypeAResult r = Digitized(e.x, 0.0001);
+    CHECK(r.mean == Approx(e.value).epsilon(1e-12));
+    REQUIRE(r.u_mean_available);
+    CHECK(r.u_mean == Approx(e.u).epsilon(1e-12));
+    CHECK(r.u_mean_dof == e.dof);
+    CHECK(r.u_mean_method == std::string(e.method));
+  }
+}
+
+TEST_CASE("Digitized readings follow Willink's rules in closed form",
+          "[stats][type_a][digitized]") {
+  // No spread: u = sqrt(c/12) step, c = 6.4, 1.3, 1.0 for N = 2, 3, >= 4 (any N >= 4).
+  for (const auto& [n, c] : {std::pair<size_t, double>{2, 6.4}, {3, 1.3}, {4, 1.0}, {500, 1.0}}) {
+    INFO("N = " << n);
+    const TypeAResult r = Digitized(std::vector<double>(n, 12.34), 0.01);
+    CHECK(r.u_mean == Approx(std::sqrt(c / 12.0) * 0.01).epsilon(1e-14));
+    CHECK(r.u_mean_dof == static_cast<double>(n - 1));
+    CHECK(r.u_mean_note.find("Willink") != std::string::npos);
+    // The classical numbers keep their meaning: s = 0.
+    CHECK(r.std_of_mean == 0.0);
+  }
+  // One step where the middle term wins: 99 readings of 0 and one of 1 (step 1): mean 0.01,
+  // s^2/N = 0.01^2 (s^2 = (99 * 0.01^2 + 0.99^2) / 99 = 0.01), (0.5 - 0.01)^2 / 3 larger.
+  std::vector<double> lopsided(100, 0.0);
+  lopsided[37] = 1.0;
+  const TypeAResult one = Digitized(lopsided, 1.0);
+  CHECK(one.u_mean == Approx(0.49 / std::sqrt(3.0)).epsilon(1e-14));
+  CHECK(one.u_mean_method == std::string(kUMeanDigitized));
+  CHECK(DigitizedUMean(100, 1.0, 0.0, 1.0, 0.01, 0.01) == Approx(0.49 / std::sqrt(3.0)));
+  // Truncated readings: the mean is raised by half a step (GTC's truncate), u unchanged.
+  const TypeAResult cut = Digitized(std::vector<double>(5, 2.0), 0.5, true);
+  CHECK(cut.mean == 2.25);
+  CHECK(cut.u_mean == Approx(0.5 / std::sqrt(12.0)).epsilon(1e-14));
+  // Without a step a constant series has no u of the mean for any n (n <= 3 gave 0).
+  for (size_t n : {2, 3, 4}) {
+    const std::vector<double> x(n, 7.0);
+    auto r = EvaluateTypeA(x.data(), x.size());
+    REQUIRE(r.ok());
+    CHECK_FALSE(r.value().u_mean_available);
+    CHECK(r.value().autocorr_note.find("constant series") != std::string::npos);
+  }
+  // A spread wider than one step is not touched by the step: the same numbers as without it.
+  const std::vector<double> wide = {1.0, 2.0, 4.0, 3.0, 2.0, 1.0, 3.0, 4.0};
+  TypeAOptions with_step;
+  with_step.quantization_step = 1.0;
+  auto a = EvaluateTypeA(wide.data(), wide.size(), with_step);
+  auto b = EvaluateTypeA(wide.data(), wide.size());
+  REQUIRE((a.ok() && b.ok()));
+  CHECK(a.value().u_mean == b.value().u_mean);
+  CHECK(a.value().u_mean_method == b.value().u_mean_method);
+  // A step that is not positive and finite, or truncation without a step, is refused.
+  TypeAOptions bad;
+  bad.truncated = true;
+  CHECK_FALSE(EvaluateTypeA(wide.data(), wide.size(), bad).ok());
+  bad.quantization_step = -1.0;
+  CHECK_FALSE(EvaluateTypeA(wide.data(), wide.size(), bad).ok());
+}
+
 TEST_CASE("A drift the AR fit absorbs is caught by the batch-means check",
           "[stats][type_a][u_mean]") {
   // AR(1) 0.9 plus a linear drift of D per sample (2.2 marginal sigma over the record).

@@ -48,7 +48,9 @@ void CheckRoundTrip(const std::string& text, const std::string& what) {
 void CheckKeyOrder(const nlohmann::ordered_json& j, const std::string& path) {
   static const std::map<std::string, std::vector<std::string>> kOrder = {
       {"",
-       {"schema", "budget_file", "measurand", "result", "budget", "correlations", "monte_carlo"}},
+       {"schema", "budget_file", "measurand", "result", "budget", "correlations", "monte_carlo",
+        "stated"}},
+      {"stated", {"method", "reason", "value", "u", "interval", "coverage", "statement"}},
       {"measurand", {"name", "unit", "model", "unit_check"}},
       {"measurand.unit_check", {"checked", "model_unit", "scale_known", "note"}},
       {"result",
@@ -308,6 +310,13 @@ TEST_CASE("A budget report written before 2026-11-27 still loads", "[uncertainty
   CHECK(std::isnan(r.monte_carlo->numerical_tolerance));
   CHECK_FALSE(r.monte_carlo->histogram);
   CHECK(r.result.statement == "l = (50000838 +- 92) nm, k = 2.92, p = 99 %");
+  // Without "stated" (before 2026-12-02) the stated result is decided from the report.
+  nlohmann::ordered_json without = nlohmann::ordered_json::parse(H1Text());
+  REQUIRE(without.contains("stated"));
+  without.erase("stated");
+  Result<BudgetReport> again = BudgetReportFromJson(JsonText(without, 2), "old.json");
+  REQUIRE(again.ok());
+  CHECK(JsonText(ToJsonValue(again.value()), 2) == H1Text());
   // Its page: the statement, without the histogram.
   Result<std::string> page = RenderBudgetReportHtml(r);
   REQUIRE(page.ok());

@@ -356,17 +356,8 @@ TEST_CASE("Second-order terms from exact derivatives match their closed forms",
   }
 }
 
-TEST_CASE("A model GiNaC cannot differentiate falls back to central differences, said so",
+TEST_CASE("Logarithms and _pi are read as muparser reads them, with exact derivatives",
           "[uncertainty][gum][derivatives]") {
-  const Budget b = Model("min(a, b) + a", R"({"name": "a", "value": 1, "u": 0.1},
-                                              {"name": "b", "value": 5, "u": 0.1})");
-  auto g = EvaluateGum(b);
-  REQUIRE(g.ok());
-  CHECK(g.value().derivatives ==
-        "central differences: the model uses min(), which has no derivative everywhere or is "
-        "not known to GiNaC");
-  // d/da (min(a, b) + a) = 2 away from a = b; u = 2 * 0.1.
-  CHECK(g.value().u == Approx(0.2).epsilon(1e-9));
   // muparser's ln, log10 and _pi are read alike by GiNaC.
   auto logs = EvaluateGum(Model("ln(a) + log10(b) + _pi", R"({"name": "a", "value": 2, "u": 0.1},
                                                                {"name": "b", "value": 100, "u": 1})"));
@@ -391,6 +382,158 @@ TEST_CASE("A model GiNaC cannot differentiate falls back to central differences,
                                                4.0 / (l2 * l2) / (100.0 * std::log(2.0));
     CHECK(line.sensitivity == Approx(want).epsilon(1e-13));
   }
+}
+
+// |a - b| in units of the last place of b.
+double Ulps(double a, double b) { return std::fabs(a - b) / (std::nextafter(b, 2 * b) - b); }
+
+TEST_CASE("pi in a model is differentiated exactly (issue #36)",
+          "[uncertainty][gum][derivatives]") {
+  // y = 2 pi f at f = 1e7 Hz, u(f) = 1 uHz: c = 2 pi, u_c = 2 pi 1e-6 Hz. Central
+  // differences at a step of 1e-9 Hz (1e-16 of f) gave u_c 78 % high.
+  auto g = EvaluateGum(Model("2*pi*f", R"({"name": "f", "value": 1e7, "u": 1e-6})"));
+  REQUIRE(g.ok());
+  CHECK(g.value().derivatives == "exact (symbolic, GiNaC)");
+  CHECK(g.value().derivatives_exact);
+  CHECK(g.value().warnings.empty());
+  CHECK(g.value().budget[0].sensitivity == 2.0 * M_PI);  // 2 pi rounded once
+  CHECK(Ulps(g.value().u, 2.0 * M_PI * 1e-6) <= 1.0);
+  // A phase in degrees through pi/180, as the unit check tells users to write it:
+  // y = f cos(phi pi/180), f = 1 GHz +- 1 mHz, phi = 5 deg +- 1e-9 deg.
+  const double f = 1e9, uf = 1e-3, phi = 5.0, uphi = 1e-9, rad = M_PI / 180.0;
+  auto c = EvaluateGum(Model("f*cos(phi*pi/180)", R"({"name": "f", "value": 1e9, "u": 1e-3},
+                                                     {"name": "phi", "value": 5, "u": 1e-9})"));
+  REQUIRE(c.ok());
+  CHECK(c.value().derivatives == "exact (symbolic, GiNaC)");
+  double cf = 0.0, cphi = 0.0;
+  for (const BudgetLine& line : c.value().budget) (line.name == "f" ? cf : cphi) = line.sensitivity;
+  CHECK(cf == Approx(std::cos(phi * rad)).epsilon(1e-15));
+  CHECK(cphi == Approx(-f * std::sin(phi * rad) * rad).epsilon(1e-15));
+  CHECK(c.value().u ==
+        Approx(std::hypot(std::cos(phi * rad) * uf, f * std::sin(phi * rad) * rad * uphi))
+            .epsilon(1e-15));
+  // The unit check's advice for an angle in deg ("multiply by pi/180") gives exact
+  // derivatives: y = sin(th pi/180), th = 30 deg +- 0.1 deg.
+  const Budget advised = Parse(R"json({"measurand": {"name": "y", "unit": "1",
+                                                     "model": "sin(th*pi/180)"},
+                                       "inputs": [{"name": "th", "value": 30, "u": 0.1,
+                                                   "unit": "deg"}],
+                                       "monte_carlo": false})json");
+  auto s = EvaluateGum(advised);
+  REQUIRE(s.ok());
+  CHECK(s.value().derivatives == "exact (symbolic, GiNaC)");
+  CHECK(s.value().budget[0].sensitivity == Approx(std::cos(M_PI / 6.0) * rad).epsilon(1e-15));
+}
+
+// One input a (and b) at the given values; the sensitivities against closed forms.
+struct DerivativeCase {
+  const char* model;
+  double a, b;
+  double dyda, dydb;
+};
+
+TEST_CASE("Every constant and function of the model grammar is differentiated exactly",
+          "[uncertainty][gum][derivatives]") {
+  const double a = 0.3, b = 1.7;
+  const double e = std::exp(1.0);
+  const std::vector<DerivativeCase> cases = {
+      {"pi*a + b", a, b, M_PI, 1.0},
+      {"_pi*a + b", a, b, M_PI, 1.0},
+      {"_e^a + b", a, b, std::pow(e, a) * std::log(e), 1.0},
+      {"sin(a) + b", a, b, std::cos(a), 1.0},
+      {"cos(a) + b", a, b, -std::sin(a), 1.0},
+      {"tan(a) + b", a, b, 1.0 / (std::cos(a) * std::cos(a)), 1.0},
+      {"asin(a) + b", a, b, 1.0 / std::sqrt(1.0 - a * a), 1.0},
+      {"acos(a) + b", a, b, -1.0 / std::sqrt(1.0 - a * a), 1.0},
+      {"atan(a) + b", a, b, 1.0 / (1.0 + a * a), 1.0},
+      {"sinh(a) + b", a, b, std::cosh(a), 1.0},
+      {"cosh(a) + b", a, b, std::sinh(a), 1.0},
+      {"tanh(a) + b", a, b, 1.0 / (std::cosh(a) * std::cosh(a)), 1.0},
+      {"asinh(a) + b", a, b, 1.0 / std::sqrt(a * a + 1.0), 1.0},
+      {"acosh(b) + a", a, b, 1.0, 1.0 / std::sqrt(b * b - 1.0)},
+      {"atanh(a) + b", a, b, 1.0 / (1.0 - a * a), 1.0},
+      {"exp(a) + b", a, b, std::exp(a), 1.0},
+      {"sqrt(a) + b", a, b, 0.5 / std::sqrt(a), 1.0},
+      {"log(a) + b", a, b, 1.0 / a, 1.0},
+      {"ln(a) + b", a, b, 1.0 / a, 1.0},
+      {"log10(a) + b", a, b, 1.0 / (a * std::log(10.0)), 1.0},
+      {"log2(a) + b", a, b, 1.0 / (a * std::log(2.0)), 1.0},
+      {"atan2(a, b)", a, b, b / (a * a + b * b), -a / (a * a + b * b)},
+      {"a^b", a, b, b * std::pow(a, b - 1.0), std::pow(a, b) * std::log(a)},
+      {"a^b^2", a, b, b * b * std::pow(a, b * b - 1.0), std::pow(a, b * b) * std::log(a) * 2 * b},
+      {"-a^2 + b", a, b, -2.0 * a, 1.0},
+      {"a*1e-3 + 0.1*b", a, b, 1e-3, 0.1},
+      {"sum(a, b, 2)", a, b, 1.0, 1.0},
+      {"avg(a, b, 2)", a, b, 1.0 / 3.0, 1.0 / 3.0},
+      // Piecewise: the piece that holds at the estimates.
+      {"abs(a - b)", a, b, -1.0, 1.0},
+      {"sign(a - b) * a + b", a, b, -1.0, 1.0},
+      {"rint(b) + a*b", a, b, b, a},
+      {"min(a, b)", a, b, 1.0, 0.0},
+      {"max(a, b, 1)", a, b, 0.0, 1.0},
+      {"(a < b) * b + a", a, b, 1.0, 1.0},
+      {"(a >= b) * b + a", a, b, 1.0, 0.0},
+      {"a > b ? a : b*b", a, b, 0.0, 2.0 * b},
+      {"(a > 0 && b < 1) ? a : b", a, b, 0.0, 1.0},
+      {"(a > 0 || b < 1) ? a : b", a, b, 1.0, 0.0},
+  };
+  for (const DerivativeCase& k : cases) {
+    INFO(k.model);
+    auto g = EvaluateGum(Model(k.model, fmt::format(R"({{"name": "a", "value": {}, "u": 0.01}},
+                                                       {{"name": "b", "value": {}, "u": 0.01}})",
+                                                    k.a, k.b)));
+    REQUIRE(g.ok());
+    CHECK(g.value().derivatives == "exact (symbolic, GiNaC)");
+    for (const BudgetLine& line : g.value().budget) {
+      INFO(line.name);
+      const double want = line.name == "a" ? k.dyda : k.dydb;
+      CHECK(line.sensitivity == Approx(want).epsilon(1e-14).margin(1e-300));
+    }
+  }
+}
+
+TEST_CASE("A model without a derivative at the estimates is never silent",
+          "[uncertainty][gum][derivatives]") {
+  // abs at 0, a tie of min: central differences, named in the warning with each input's
+  // relative step; with monte_carlo disabled the budget is refused.
+  for (const char* model : {"abs(a - b) + a", "min(a, b) + a"}) {
+    INFO(model);
+    const Budget b = Model(model, R"({"name": "a", "value": 2, "u": 0.1},
+                                     {"name": "b", "value": 2, "u": 0.1})");
+    auto g = EvaluateGum(b);
+    REQUIRE(g.ok());
+    CHECK_FALSE(g.value().derivatives_exact);
+    CHECK(g.value().derivatives.rfind("central differences: column 1: ", 0) == 0);
+    CHECK(g.value().derivatives.find("seam") != std::string::npos);
+    REQUIRE(g.value().warnings.size() == 1);
+    const std::string& w = g.value().warnings[0];
+    // h = 1e-3 u = 1e-4 at x = 2: relative step 5e-05.
+    CHECK(w.find("'a' h = 0.0001 (relative step h/|x| = 5e-05)") != std::string::npos);
+    CHECK(w.find("'b' h = 0.0001 (relative step h/|x| = 5e-05)") != std::string::npos);
+    CHECK(w.find("the Monte Carlo result is the stated one") != std::string::npos);
+    auto refused = EvaluateBudget(b);
+    REQUIRE_FALSE(refused.ok());
+    CHECK(refused.error().kind == ErrorKind::kInput);
+    CHECK(refused.error().message.find("enable monte_carlo") != std::string::npos);
+  }
+  // With the Monte Carlo method it runs, and the Monte Carlo result is the stated one.
+  const Budget mc = Model("abs(a - b) + a", R"({"name": "a", "value": 2, "u": 0.1},
+                                               {"name": "b", "value": 2, "u": 0.1})",
+                          20000);
+  auto e = EvaluateBudget(mc);
+  REQUIRE(e.ok());
+  const BudgetReport r = MakeBudgetReport(e.value());
+  CHECK(r.stated.method == kStatedMonteCarlo);
+  CHECK(r.stated.value == r.monte_carlo->value);
+  CHECK(r.stated.u == r.monte_carlo->u);
+  CHECK(r.stated.interval.low == r.monte_carlo->shortest.low);
+  CHECK(r.stated.reason.find("central differences") != std::string::npos);
+  // Away from the seam the same model has exact derivatives: d/da (|a - b| + a) = 2.
+  auto away = EvaluateGum(Model("abs(a - b) + a", R"({"name": "a", "value": 3, "u": 0.1},
+                                                     {"name": "b", "value": 2, "u": 0.1})"));
+  REQUIRE(away.ok());
+  CHECK(away.value().derivatives_exact);
+  CHECK(away.value().u == Approx(std::hypot(0.2, 0.1)).epsilon(1e-15));
 }
 
 }  // namespace

@@ -60,6 +60,9 @@ struct SessionAnalysis {
   // A line per requested analysis that produced nothing for a quantity ("--allan: sensor 3
   // gx_dps: <reason>"), for stderr; the report holds the same reason.
   std::vector<std::string> failures;
+  // Doubtful numbers of a requested analysis, for stderr ("--budget: ..."; the budget's
+  // central-difference derivatives, issue #36).
+  std::vector<std::string> warnings;
   // A requested analysis produced nothing for any quantity (the app exits 1, issue #21).
   bool nothing_produced = false;
 };

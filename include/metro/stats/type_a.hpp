@@ -24,6 +24,20 @@
 // rarely under strong correlation (about 82 % instead of 95 % for AR(1), phi = 0.9,
 // n = 200, with dof n_eff - 1); the AR estimator covers 94-96 % for phi <= 0.95, n >= 200.
 // For n <= 3, or with autocorrelation off, u_mean is the classical s(q_bar) with n - 1 dof.
+//
+// Digitized readings (Willink, Metrologia 44 (2007) 73; GTC's type_a.estimate_digitized):
+// with the readings' quantization step delta known (TypeAOptions::quantization_step, found
+// by QuantizationStep), a series whose spread hides the noise is evaluated by Willink's
+// rules, u_mean_method kUMeanDigitized, dof n - 1:
+//   no spread (all readings equal):   u = sqrt(c / 12) delta,  c = 6.4, 1.3, 1.0 for
+//                                     n = 2, 3, >= 4
+//   a spread of exactly one step:     u = sqrt(max(u_0^2, (x_mid - q_bar)^2 / 3)),
+//                                     x_mid = (x_max + x_min) / 2
+// where u_0 is the u_mean of the rules above (GTC and Willink: s/sqrt(n); metro keeps its
+// autocorrelation-aware value when it has one); the method stays u_0's when u_0 is the
+// larger. A wider spread is not touched. `truncated` readings (cut, not rounded, to the
+// step) raise the mean by delta / 2 (GTC's truncate), whatever the spread.
+// Without a known step a constant series has no u_mean (u_mean_available false), for every n.
 #pragma once
 
 #include <cstddef>
@@ -41,6 +55,11 @@ struct TypeAOptions {
   double max_lag_fraction = 0.25;
   // Compute n_eff and std_of_mean_autocorr.
   bool autocorrelation = true;
+  // The readings' quantization step (resolution), in the series' unit; 0: not known. With
+  // a step, a series with no spread or a spread of one step follows Willink's rules (above).
+  double quantization_step = 0.0;
+  // The readings were truncated to the step rather than rounded (needs a step).
+  bool truncated = false;
 
   bool IsValid(std::string* why) const;
 };
@@ -100,6 +119,13 @@ inline constexpr int kStationarityBatches = 10;
 inline constexpr const char* kUMeanArSpectral = "ar_spectral";
 inline constexpr const char* kUMeanClassical = "classical";
 inline constexpr const char* kUMeanBatchMeans = "batch_means";
+// Willink's rules for digitized readings (above).
+inline constexpr const char* kUMeanDigitized = "digitized_willink";
+
+// u of the mean of n >= 2 readings quantized to `step` with spread x_max - x_min, by
+// Willink's rules: sqrt(c/12) step for no spread, sqrt(max(u_0^2, (x_mid - mean)^2 / 3))
+// for a spread of one step (u_0 the u from the spread alone), u_0 otherwise.
+double DigitizedUMean(size_t n, double step, double x_min, double x_max, double mean, double u_0);
 
 // Evaluates n observations. Requires n >= 2 (one observation has no Type A evaluation)
 // and finite values; returns an Error otherwise.

@@ -54,7 +54,10 @@ struct BudgetEvaluation {
 };
 
 // GUM evaluation, then (if enabled) the Monte Carlo run and the GUF validation, each with
-// the options stored in the budget.
+// the options stored in the budget. A model without exact derivatives (gum.hpp
+// derivatives_exact false: central differences) needs the Monte Carlo method, whose result
+// is then the stated one: with monte_carlo disabled such a budget is refused (an input
+// error naming the reason).
 // `progress` (optional, not owned) hears of the Monte Carlo trials as a phase.
 Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* progress = nullptr);
 
@@ -154,10 +157,31 @@ struct BudgetReportMonteCarlo {
   std::string message;  // "" (key absent) when none.
 };
 
+// "stated": the result the budget states, the headline of the table and the page. The GUF
+// result when the Monte Carlo method validated it (JCGM 101:2008 8.2); the Monte Carlo one
+// (its mean, u and shortest coverage interval, 7.7) when the validation failed or the GUF
+// sensitivities were taken by central differences; the GUF result, said to be unvalidated,
+// when the budget ran no Monte Carlo method. Reports written before 2026-12-02 have no
+// "stated": it is decided again from their other keys when they are read.
+inline constexpr const char* kStatedGuf = "guf";
+inline constexpr const char* kStatedMonteCarlo = "monte_carlo";
+struct BudgetReportStated {
+  std::string method;                                       // kStatedGuf or kStatedMonteCarlo.
+  std::string reason;                                       // Why this one, in words.
+  double value = std::numeric_limits<double>::quiet_NaN();  // NaN: undefined (JCGM 101 6.4.9.4)
+  double u = std::numeric_limits<double>::quiet_NaN();
+  CoverageInterval interval;  // GUF: y -+ U; Monte Carlo: the shortest interval.
+  double coverage = std::numeric_limits<double>::quiet_NaN();
+  // GUF: as result.statement; Monte Carlo: "y = v unit, u(y) = u unit, shortest 95 %
+  // coverage interval [low, high] unit (JCGM 101 7.7)", rounded per JCGM 100 7.2.6.
+  std::string statement;
+};
+
 struct BudgetReport {
   std::string budget_file;
   BudgetReportMeasurand measurand;
   BudgetReportResult result;
+  BudgetReportStated stated;
   std::vector<BudgetReportLine> budget;
   std::vector<Correlation> correlations;
   std::optional<BudgetReportMonteCarlo> monte_carlo;  // null when the budget disabled it.

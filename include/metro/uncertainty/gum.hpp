@@ -51,6 +51,11 @@ struct GumResult {
   // (symbolic, GiNaC)", "stated (no model)", or "central differences: <why the model could
   // not be differentiated symbolically>" (docs/uncertainty.md, "Derivatives").
   std::string derivatives;
+  // False when any derivative was taken by central differences: the budget then states the
+  // Monte Carlo result (or is refused without one; budget_report.hpp).
+  bool derivatives_exact = true;
+  // Said on stderr by the commands: central differences, with each input's relative step.
+  std::vector<std::string> warnings;
   std::vector<BudgetLine> budget;  // Sorted by contribution, largest first.
 };
 
