@@ -51,7 +51,34 @@ Status WriteOutputs(const std::vector<std::pair<std::string, std::string_view>>&
   return Status::Ok();
 }
 
-Status CheckOutputs(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs) {
+Status CheckOutputs(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs,
+                    const std::vector<NamedPath>& updated) {
+  // Files updated in place: regular files, never an input (nor each other).
+  for (size_t i = 0; i < updated.size(); ++i) {
+    const NamedPath& file = updated[i];
+    if (file.path.empty()) continue;
+    if (Status s = CheckUpdatableFile(file.path); !s.ok()) {
+      return MakeError(fmt::format("{} {}", file.option, s.error().message));
+    }
+    for (const NamedPath& in : inputs) {
+      if (in.path.empty()) continue;
+      const std::string other = IsStdio(in.path) ? "/dev/stdin" : in.path;
+      if (file.path == in.path || IsSameFile(file.path, other)) {
+        return MakeError(fmt::format(
+            "{} {} is also an input of the command ({} {}): the command updates it in place; "
+            "name another file",
+            file.option, file.path, in.option, IsStdio(in.path) ? "- (stdin)" : in.path));
+      }
+    }
+    for (size_t j = 0; j < i; ++j) {
+      if (!updated[j].path.empty() &&
+          (file.path == updated[j].path || IsSameFile(file.path, updated[j].path))) {
+        return MakeError(fmt::format("{} and {} name the same file ({} {}, {} {})", file.option,
+                                     updated[j].option, updated[j].option, updated[j].path,
+                                     file.option, file.path));
+      }
+    }
+  }
   const char* first_stdout = nullptr;
   for (const NamedPath& out : outputs) {
     if (!IsStdio(out.path)) continue;
@@ -75,6 +102,15 @@ Status CheckOutputs(const std::vector<NamedPath>& outputs, const std::vector<Nam
         return MakeError(fmt::format(
             "{} {} is the input file: refusing to overwrite it ({} {}); name another output file",
             out.option, out.path, in.option, IsStdio(in.path) ? "- (stdin)" : in.path));
+      }
+    }
+    for (const NamedPath& file : updated) {
+      if (file.path.empty()) continue;
+      if (out.path == file.path || IsSameFile(out.path, file.path)) {
+        return MakeError(fmt::format(
+            "{} {} is the file the command updates in place ({} {}): refusing to overwrite "
+            "it; name another output file",
+            out.option, out.path, file.option, file.path));
       }
     }
     for (size_t j = 0; j < i; ++j) {

@@ -217,10 +217,14 @@ struct NamedPath {
 //   /proc or /sys, its directory exists (CheckReplaceableFile);
 // - no output is the same file as an input (through symlinks and hard links; an input `-`
 //   is the file behind stdin, if it is one) nor as another output (IsSameFile).
+// - `updated` are files the command reads and updates in place (the registry's SQLite file,
+//   an input and an output at once): each is absent or a regular file (CheckUpdatableFile),
+//   and no output and no input is one of them;
 // (The writers below print "note: replaced existing FILE" once an existing output was
 // replaced.)
 // Every error is a usage error (exit 2) and names both paths.
-Status CheckOutputs(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs);
+Status CheckOutputs(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs,
+                    const std::vector<NamedPath>& updated = {});
 
 // Standard input is read once, and as a session only: at most one input may be `-`, and
 // none with `imutk` (imu_tk pairs are read from named files).

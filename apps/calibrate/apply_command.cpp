@@ -38,7 +38,8 @@ int RunApply(const ApplyOptions& a) {
   }
   std::vector<apps::NamedPath> inputs = {{"CALIBRATION", a.calibration}, {"--tags", a.tags}};
   for (const std::string& in : a.inputs) inputs.push_back({"SESSION", in});
-  if (Status s = apps::CheckOutputs({{"-o", a.output}}, inputs); !s.ok()) {
+  if (Status s = apps::CheckOutputs({{"-o", a.output}}, inputs, RegistryFiles(a.registry.url));
+      !s.ok()) {
     return apps::PrintErrorExit(s.error());
   }
   Result<Calibration> cal = LoadCalibration(a.calibration);

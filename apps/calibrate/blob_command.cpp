@@ -78,9 +78,10 @@ int RunBlob(const BlobOptions& b) {
     apps::PrintErrorText(slot_a.error().message);
     return apps::ExitCodeFor(slot_a.error());
   }
-  for (Status s :
-       {apps::CheckOutputs({{"-o", b.output}, {"--hex", b.hex}}, {{"CALIBRATION", b.calibration}}),
-        apps::CheckBinaryStdout(b.output)}) {
+  for (Status s : {apps::CheckOutputs({{"-o", b.output}, {"--hex", b.hex}},
+                                      {{"CALIBRATION", b.calibration}, {"--tags", b.tags}},
+                                      RegistryFiles(b.registry.url)),
+                   apps::CheckBinaryStdout(b.output)}) {
     if (!s.ok()) {
       return apps::PrintErrorExit(s.error());
     }
@@ -235,6 +236,19 @@ int RunBlobAll(const BlobOptions& b) {
     one.output = fmt::format("{}/tag{}.bin", b.output, t.sensor);
     one.hex = fmt::format("{}/tag{}.hex", b.output, t.sensor);
     each.push_back(one);
+  }
+  // Every file of every tag checked before the first is written (a DIR/tag<N>.bin that is a
+  // symlink to the tags file or to calibration.json is refused, nothing written).
+  std::vector<apps::NamedPath> outputs;
+  for (const BlobOptions& one : each) {
+    outputs.push_back({fmt::format("-o (sensor {})", one.sensor), one.output});
+    outputs.push_back({fmt::format("-o (sensor {} HEX)", one.sensor), one.hex});
+  }
+  if (Status s = apps::CheckOutputs(outputs, {{"CALIBRATION", b.calibration}, {"--tags", b.tags}},
+                                    RegistryFiles(b.registry.url));
+      !s.ok()) {
+    apps::PrintErrorText(s.error().message + " (nothing written)");
+    return apps::ExitCodeFor(s.error());
   }
   std::string table =
       fmt::format("{:>6}  {:<16}  {:<16}  {}\n", "sensor", "name", "device", "blob");

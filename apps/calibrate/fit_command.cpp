@@ -84,7 +84,9 @@ int RunFit(const FitOptions& f) {
       {"--columns-file", f.load.columns_file}, {"--segments", f.segments}, {"--spec", f.spec.spec}};
   for (const std::string& in : f.inputs) inputs.push_back({"SESSION", in});
   inputs.push_back({"--tags", f.tags});
-  if (Status s = apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs); !s.ok()) {
+  if (Status s = apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs,
+                                    RegistryFiles(f.registry.url));
+      !s.ok()) {
     return apps::PrintErrorExit(s.error());
   }
   Result<std::optional<TagRegistry>> tags = LoadTagsOption(f.tags);

@@ -8,6 +8,8 @@
 #include "unix_cli.hpp"
 
 int main(int argc, char** argv) {
+  // SIGINT/SIGTERM remove the temporaries of outputs being written; SIGXFSZ is ignored.
+  metro::InstallInterruptCleanup();
   namespace app_ns = metro::calibrate_app;
   CLI::App app{"metro calibrate: IMU calibration (bias, scale, misalignment) with uncertainties"};
   app.require_subcommand(1);

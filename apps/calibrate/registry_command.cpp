@@ -11,6 +11,7 @@
 #include "metro/blob/blob.hpp"
 #include "metro/core/utc_time.hpp"
 #include "metro/registry/registry.hpp"
+#include "registry_hooks.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -35,7 +36,7 @@ Result<std::unique_ptr<Registry>> OpenForQuery(const std::string& flag) {
   if (url.find("://") == std::string::npos && ::stat(url.c_str(), &st) != 0) {
     return MakeError(url, 0, "no such registry file");
   }
-  return Registry::Open(url);
+  return Registry::OpenForQuery(url);
 }
 
 Result<uint64_t> DeviceId(const std::string& text) {
@@ -155,7 +156,8 @@ int RunDue(const RegistryQueryOptions& o) {
 }
 
 int RunExport(const RegistryQueryOptions& o) {
-  if (Status s = apps::CheckOutputs({{"-o", o.output}}, {}); !s.ok()) {
+  // The registry is the export's input: never written over.
+  if (Status s = apps::CheckOutputs({{"-o", o.output}}, RegistryFiles(o.url)); !s.ok()) {
     return Fail(s.error());
   }
   Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);

@@ -16,6 +16,13 @@ void AddRegistryOptions(CLI::App* sub, RegistryCliOptions* o) {
   sub->add_option("--operator", o->operator_name, "operator recorded with a calibration");
 }
 
+std::vector<apps::NamedPath> RegistryFiles(const std::string& flag) {
+  const std::string url = Registry::UrlFromFlagOrEnvironment(flag);
+  const std::string file = Registry::FileOf(url);
+  if (file.empty()) return {};
+  return {{flag.empty() ? "METRO_REGISTRY" : "--registry", file}};
+}
+
 OpenedRegistry OpenRegistryOption(const RegistryCliOptions& o) {
   OpenedRegistry out;
   const std::string url = Registry::UrlFromFlagOrEnvironment(o.url);

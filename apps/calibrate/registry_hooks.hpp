@@ -6,10 +6,12 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "metro/blob/from_calibration.hpp"
 #include "metro/blob/push_client.hpp"
 #include "metro/registry/registry.hpp"
+#include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
 
@@ -22,6 +24,11 @@ struct RegistryCliOptions {
 };
 
 void AddRegistryOptions(CLI::App* sub, RegistryCliOptions* options);
+
+// The registry as apps::CheckOutputs sees it (an `updated` file: read and written in place,
+// so no output or input of the command may be it): the SQLite file of --registry FLAG, else
+// of METRO_REGISTRY, named by what gave it; none for a PostgreSQL URL or without a registry.
+std::vector<apps::NamedPath> RegistryFiles(const std::string& flag);
 
 // Before the command's work: the registry (nullptr without one). A URL that cannot be opened
 // or a schema newer than the program: printed, exit_code 2.

@@ -121,7 +121,8 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
                               {{"SESSION", in.session},
                                {"--reference", a.reference},
                                {"--reference-u", reference_u_file},
-                               {"--columns-file", in.load.columns_file}});
+                               {"--columns-file", in.load.columns_file},
+                               {"--tags", in.tags}});
       !s.ok()) {
     return PrintErrorExit(s.error());
   }

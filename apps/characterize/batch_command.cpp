@@ -54,7 +54,8 @@ int RunBatchCommand(const BatchCommandOptions& o) {
   }
   for (const std::string& line : skipped) Note("note: " + line + "\n");
   // The batch page is never written over a session (nor a device, a folder, ...).
-  std::vector<NamedPath> sessions;
+  std::vector<NamedPath> sessions = {{"--tags", o.analysis.tag_registry},
+                                     {"--columns-file", o.analysis.load.columns_file}};
   for (const std::string& in : inputs.value()) sessions.push_back({"a session", in});
   if (Status s = CheckOutputs({{"--html", o.html}}, sessions); !s.ok()) {
     return PrintErrorExit(s.error());

@@ -142,9 +142,15 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
     PrintErrorText("capture: name the capture file with -o FILE");
     return kExitUsage;
   }
-  if (c.analyze && c.output == capture_path) {
-    PrintErrorText("-o and --capture name the same file");
-    return kExitUsage;
+  // The output rule before the port is opened (docs/unix.md "Outputs never destroy"): the
+  // capture and the --analyze report are regular files (never a device, the port itself, a
+  // FIFO), neither is the tags file, and they are not the same file.
+  const char* capture_option = !c.analyze && capture_path == c.output ? "-o" : "--capture";
+  if (Status s = CheckOutputs(
+          {{capture_option, capture_path}, {"-o", c.analyze ? c.output : std::string()}},
+          {{"--port", c.port}, {"--tags", c.tags}});
+      !s.ok()) {
+    return PrintErrorExit(s.error());
   }
   if (OutputExists(capture_path) && !c.force) {
     PrintErrorText(fmt::format(
@@ -169,13 +175,6 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
   // The tags file is read before the port is opened: a bad one records nothing.
   std::optional<TagRegistry> tags;
   if (!c.tags.empty()) {
-    for (const std::string& out : {capture_path, c.output}) {
-      if (!out.empty() && IsSameFile(c.tags, out)) {
-        PrintErrorText(
-            fmt::format("--tags {} is an output of the capture: name another file", c.tags));
-        return kExitUsage;
-      }
-    }
     Result<TagRegistry> loaded = TagRegistry::Load(c.tags);
     if (!loaded.ok()) return PrintErrorExit(loaded.error());
     tags = std::move(loaded).value();
@@ -197,6 +196,9 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
   observer.on_event = [&](const std::string& e) { view.Event(e); };
   capture::CaptureTally tally(c.frame_period_s);
   const capture::CaptureSummary sum = capture::RunCapture(o, observer, &tally);
+  // The capture has ended: a signal now interrupts the report being written (its temporary
+  // removed, docs/unix.md).
+  InstallInterruptCleanup();
   if (sum.input_error) {
     PrintErrorText(sum.message);
     return kExitUsage;

@@ -10,6 +10,8 @@
 #include "unix_cli.hpp"
 
 int main(int argc, char** argv) {
+  // SIGINT/SIGTERM remove the temporaries of outputs being written; SIGXFSZ is ignored.
+  metro::InstallInterruptCleanup();
   CLI::App app{"metro characterize: uncertainty evaluation of IMU sensor-tag sessions"};
   app.require_subcommand(0, 1);
   int exit_code = metro::apps::kExitOk;

@@ -9,6 +9,8 @@ not duplicated here; the saved reports in fuzz/seeds/report_fuzz/ were written b
 import copy
 import json
 import os
+import shutil
+import sqlite3
 import struct
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)))
@@ -120,6 +122,39 @@ def main():
     nan = bytearray(blob)
     nan[64:72] = struct.pack("<d", float("nan"))
     write("inspect_fuzz", "nan_constant.bin", bytes(nan))
+
+    # The calibration registry (--registry, issue #37): variants of line.sqlite, a registry
+    # written by `calibrate blob` (fuzz/seeds/README.md), with the values the re-attack used.
+    registry_variants = {
+        "schema_abc.sqlite": ["UPDATE schema_version SET version = 'abc'"],
+        "schema_huge.sqlite": ["UPDATE schema_version SET version = 99999999999"],
+        "schema_minus1.sqlite": ["UPDATE schema_version SET version = -1"],
+        "schema_two_rows.sqlite": ["INSERT INTO schema_version (version) VALUES (2)"],
+        "schema_v1.sqlite": ["UPDATE schema_version SET version = 1"],
+        "blob_seq_text.sqlite": ["UPDATE blobs SET seq = 'abc', crc = 99999999999"],
+        "constant_inf.sqlite": ["UPDATE constants SET u = 1e999 WHERE name = 'accel.b_x'"],
+        "device_not_hex.sqlite": ["UPDATE device_calibrations SET device_id = 'zz'"],
+        "covariance_not_json.sqlite": ["UPDATE calibrations SET covariance_json = '{'"],
+        "foreign.sqlite": None,
+    }
+    base = os.path.join(ROOT, "registry_fuzz", "line.sqlite")
+    for name, statements in registry_variants.items():
+        path = os.path.join(ROOT, "registry_fuzz", name)
+        if os.path.exists(path):
+            os.remove(path)
+        if statements is None:
+            db = sqlite3.connect(path)
+            db.execute("PRAGMA page_size = 512")
+            db.execute("CREATE TABLE parts (id INTEGER PRIMARY KEY, name TEXT)")
+            db.execute("INSERT INTO parts (name) VALUES ('gear')")
+        else:
+            shutil.copyfile(base, path)
+            db = sqlite3.connect(path)
+            for sql in statements:
+                db.execute(sql)
+        db.commit()
+        db.execute("VACUUM")
+        db.close()
 
 
 if __name__ == "__main__":

@@ -53,14 +53,33 @@ class Output {
   }
   Status Open(const std::string& path, bool force) {
     path_ = path;
-    const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (force ? O_TRUNC : O_EXCL);
+    // A device is refused before it is opened (opening a serial port moves its lines).
+    if (struct stat before{}; ::stat(path.c_str(), &before) == 0 && !S_ISREG(before.st_mode)) {
+      return NotRegular(KindOf(before.st_mode));
+    }
+    // Non-blocking, so a FIFO without a reader fails instead of waiting; nothing is truncated
+    // before the file is known to be a regular file (never a device, a FIFO, the port).
+    const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | O_NOCTTY | O_NONBLOCK | (force ? 0 : O_EXCL);
     fd_ = ::open(path.c_str(), flags, 0644);
     if (fd_ < 0) {
       if (errno == EEXIST) {
         return MakeError(path, 0,
                          "exists: a capture is never replaced; pass --force to replace it");
       }
+      if (errno == ENXIO) return NotRegular("is a FIFO (named pipe)");
       return MakeError(path, 0, fmt::format("cannot create: {}", std::strerror(errno)));
+    }
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0) {
+      return MakeError(path, 0, fmt::format("cannot stat: {}", std::strerror(errno)));
+    }
+    if (!S_ISREG(st.st_mode)) {
+      return NotRegular(KindOf(st.st_mode));
+    }
+    const int fl = ::fcntl(fd_, F_GETFL);
+    if (fl >= 0) ::fcntl(fd_, F_SETFL, fl & ~O_NONBLOCK);
+    if (force && ::ftruncate(fd_, 0) != 0) {
+      return MakeError(path, 0, fmt::format("cannot truncate: {}", std::strerror(errno)));
     }
     return Status::Ok();
   }
@@ -82,6 +101,21 @@ class Output {
   size_t buffered() const { return buf_.size(); }
 
  private:
+  static const char* KindOf(mode_t mode) {
+    return S_ISDIR(mode)    ? "is a directory"
+           : S_ISCHR(mode)  ? "is a character device"
+           : S_ISBLK(mode)  ? "is a block device"
+           : S_ISFIFO(mode) ? "is a FIFO (named pipe)"
+           : S_ISSOCK(mode) ? "is a socket"
+                            : "is not a regular file";
+  }
+  Status NotRegular(const char* what) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    return MakeError(
+        fmt::format("{} {}: a capture is written to a regular file; name one", path_, what));
+  }
+
   std::string path_;
   int fd_ = -1;
   std::string buf_;

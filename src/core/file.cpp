@@ -8,7 +8,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <climits>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -34,7 +37,67 @@ std::string DirectoryOf(const std::string& path) {
   return path.substr(0, slash);
 }
 
+// The temporaries the SIGINT/SIGTERM/SIGHUP handler removes (InstallInterruptCleanup). A
+// fixed table the handler can read without allocating or locking: a slot is free (0), being
+// filled (1), registered (2) or taken by the handler (3). Register fills a free slot and
+// marks it registered; Unregister frees a registered slot; the handler takes each
+// registered slot before it unlinks its path, so a slot it reads is never refilled.
+constexpr int kCleanupSlots = 64;
+struct CleanupSlot {
+  std::atomic<int> state{0};
+  char path[PATH_MAX];
+};
+CleanupSlot g_cleanup[kCleanupSlots];
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs lock-free ints");
+
+extern "C" void OnInterrupt(int signal) {
+  for (CleanupSlot& slot : g_cleanup) {
+    int registered = 2;
+    if (slot.state.compare_exchange_strong(registered, 3)) ::unlink(slot.path);
+  }
+  // End as the signal would have: its default action (restored by SA_RESETHAND), delivered
+  // when the handler returns.
+  ::signal(signal, SIG_DFL);
+  ::raise(signal);
+}
+
 }  // namespace
+
+void InstallInterruptCleanup() {
+  for (int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    // A signal the caller ignores (nohup, a background job of a script) stays ignored.
+    if (::sigaction(signal, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    struct sigaction action {};
+    action.sa_handler = OnInterrupt;
+    sigfillset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;
+    ::sigaction(signal, &action, nullptr);
+  }
+  // A write past the file size limit fails with EFBIG (the full-disk path) instead of killing.
+  ::signal(SIGXFSZ, SIG_IGN);
+}
+
+RemoveOnInterrupt::RemoveOnInterrupt(const std::string& path) { Reset(path); }
+
+RemoveOnInterrupt::~RemoveOnInterrupt() { Reset(); }
+
+void RemoveOnInterrupt::Reset(const std::string& path) {
+  if (slot_ >= 0) {
+    int registered = 2;
+    g_cleanup[slot_].state.compare_exchange_strong(registered, 0);
+    slot_ = -1;
+  }
+  if (path.empty() || path.size() >= PATH_MAX) return;
+  for (int i = 0; i < kCleanupSlots; ++i) {
+    int free_slot = 0;
+    if (!g_cleanup[i].state.compare_exchange_strong(free_slot, 1)) continue;
+    std::memcpy(g_cleanup[i].path, path.c_str(), path.size() + 1);
+    g_cleanup[i].state.store(2);
+    slot_ = i;
+    return;
+  }
+}
 
 AtomicFileWriter::AtomicFileWriter(std::string path) : path_(std::move(path)) {}
 
@@ -69,6 +132,7 @@ Status AtomicFileWriter::Open() {
     fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd_ < 0 && errno != EEXIST) break;
   }
+  if (fd_ >= 0) cleanup_.Reset(tmp_);
   if (fd_ < 0) {
     // No space or a failing device is a write that failed; anything else (no permission,
     // a read-only file system) an output that cannot be created where it was named.
@@ -118,6 +182,7 @@ Status AtomicFileWriter::Finish() {
     const std::string why = OsError("cannot flush", path_);
     ::unlink(tmp_.c_str());
     tmp_.clear();
+    cleanup_.Reset();
     return MakeIoError(why);
   }
   finished_ = true;
@@ -130,9 +195,11 @@ Status AtomicFileWriter::Publish() {
     const std::string why = OsError("cannot rename temporary file onto", path_);
     ::unlink(tmp_.c_str());
     tmp_.clear();
+    cleanup_.Reset();
     return MakeIoError(why);
   }
   tmp_.clear();
+  cleanup_.Reset();
   // Make the rename itself durable.
   const int dir_fd = ::open(DirectoryOf(target_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir_fd >= 0) {
@@ -171,13 +238,13 @@ Status WriteFilesAtomically(const std::vector<std::pair<std::string, std::string
   return Status::Ok();
 }
 
-Status CheckReplaceableFile(const std::string& path) {
-  auto refuse = [&path](const std::string& what) {
-    return MakeError(fmt::format(
-        "{} {}: metro writes an output to a new file and renames it into place, which would "
-        "replace it; name a regular file (or - for stdout, redirected where you want it)",
-        path, what));
-  };
+namespace {
+
+// The one check behind CheckReplaceableFile and CheckUpdatableFile: `path` is absent or a
+// regular file (through symlinks), its directory exists, and it is not in /dev, /proc or
+// /sys. `refuse(what)` makes the error for a file of the wrong kind.
+template <typename Refuse>
+Status CheckRegularOrAbsent(const std::string& path, const Refuse& refuse) {
   if (path.empty()) return MakeError("an output with an empty file name");
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0) {
@@ -214,6 +281,25 @@ Status CheckReplaceableFile(const std::string& path) {
     }
   }
   return Status::Ok();
+}
+
+}  // namespace
+
+Status CheckReplaceableFile(const std::string& path) {
+  return CheckRegularOrAbsent(path, [&path](const std::string& what) {
+    return MakeError(fmt::format(
+        "{} {}: metro writes an output to a new file and renames it into place, which would "
+        "replace it; name a regular file (or - for stdout, redirected where you want it)",
+        path, what));
+  });
+}
+
+Status CheckUpdatableFile(const std::string& path) {
+  return CheckRegularOrAbsent(path, [&path](const std::string& what) {
+    return MakeError(fmt::format(
+        "{} {}: metro reads and updates this file in place (a database); name a regular file", path,
+        what));
+  });
 }
 
 Result<std::string> ReadFile(const std::string& path) {

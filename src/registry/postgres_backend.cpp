@@ -106,6 +106,10 @@ class PostgresBackend : public SqlBackend {
     // serialization_failure, deadlock_detected, unique_violation of a concurrent first insert
     return last_sqlstate_ == "40001" || last_sqlstate_ == "40P01" || last_sqlstate_ == "23505";
   }
+  std::string TablesSql() const override {
+    return "SELECT table_name FROM information_schema.tables WHERE table_schema = "
+           "current_schema() AND table_type = 'BASE TABLE' ORDER BY table_name";
+  }
   std::string AutoIdColumn() const override { return "BIGSERIAL PRIMARY KEY"; }
   const char* Kind() const override { return "postgresql"; }
 
@@ -117,7 +121,7 @@ class PostgresBackend : public SqlBackend {
 
 }  // namespace
 
-Result<std::unique_ptr<SqlBackend>> OpenPostgres(const std::string& uri) {
+Result<std::unique_ptr<SqlBackend>> OpenPostgres(const std::string& uri, bool read_only) {
   PGconn* conn = PQconnectdb(uri.c_str());
   if (conn == nullptr || PQstatus(conn) != CONNECTION_OK) {
     std::string why = conn != nullptr ? PQerrorMessage(conn) : "out of memory";
@@ -127,7 +131,14 @@ Result<std::unique_ptr<SqlBackend>> OpenPostgres(const std::string& uri) {
                      fmt::format("cannot connect to the PostgreSQL registry: {}", why));
   }
   PQsetNoticeProcessor(conn, IgnoreNotice, nullptr);
-  return std::unique_ptr<SqlBackend>(std::make_unique<PostgresBackend>(conn, uri));
+  auto backend = std::make_unique<PostgresBackend>(conn, uri);
+  if (read_only) {
+    if (Status s = backend->Execute("SET default_transaction_read_only = on", {}, nullptr);
+        !s.ok()) {
+      return s.error();
+    }
+  }
+  return std::unique_ptr<SqlBackend>(std::move(backend));
 }
 
 }  // namespace metro::registry_internal

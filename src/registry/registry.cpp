@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -16,6 +18,7 @@
 #include "metro/blob/blob.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/named_constants.hpp"
+#include "metro/core/file.hpp"
 #include "metro/core/utc_time.hpp"
 #include "schema.hpp"
 #include "sql_backend.hpp"
@@ -35,18 +38,95 @@ bool IsPostgresUrl(const std::string& url) {
 
 SqlValue Opt(const std::optional<double>& v) { return v ? SqlValue(*v) : SqlValue(nullptr); }
 
-std::optional<double> OptNumber(const std::optional<std::string>& s) {
-  if (!s) return std::nullopt;
-  return std::strtod(s->c_str(), nullptr);
-}
+// The values of the rows of one table, each checked as it is read: a value metro does not
+// write there (text where a number belongs, a number out of range, NULL in a column that has
+// none, a device ID that is not 16 hex digits) is an input error naming the registry, the
+// table, the column and the value; the first one is kept, the rest read as 0 or empty.
+class Checked {
+ public:
+  Checked(const std::string& url, const char* table) : url_(url), table_(table) {}
 
-double Number(const std::optional<std::string>& s) {
-  return s ? std::strtod(s->c_str(), nullptr) : 0.0;
-}
-int64_t Integer(const std::optional<std::string>& s) {
-  return s ? std::strtoll(s->c_str(), nullptr, 10) : 0;
-}
-std::string Text(const std::optional<std::string>& s) { return s ? *s : std::string(); }
+  int64_t Integer(const std::optional<std::string>& v, const char* column, int64_t lo, int64_t hi) {
+    if (!Present(v, column, "a whole number")) return 0;
+    int64_t n = 0;
+    const char* end = v->data() + v->size();
+    const auto [at, ec] = std::from_chars(v->data(), end, n);
+    if (ec != std::errc() || at != end || v->empty()) {
+      Bad(column, *v, "a whole number");
+      return 0;
+    }
+    if (n < lo || n > hi) {
+      Bad(column, *v, fmt::format("a whole number from {} to {}", lo, hi));
+      return 0;
+    }
+    return n;
+  }
+  double Number(const std::optional<std::string>& v, const char* column) {
+    if (!Present(v, column, "a finite number")) return 0.0;
+    return Parse(*v, column);
+  }
+  std::optional<double> OptNumber(const std::optional<std::string>& v, const char* column) {
+    if (!v) return std::nullopt;
+    return Parse(*v, column);
+  }
+  std::string Text(const std::optional<std::string>& v, const char* column) {
+    return Present(v, column, "text") ? *v : std::string();
+  }
+  uint64_t Device(const std::optional<std::string>& v, const char* column) {
+    if (!Present(v, column, "a device ID (16 hex digits)")) return 0;
+    uint64_t id = 0;
+    const char* end = v->data() + v->size();
+    const auto [at, ec] = std::from_chars(v->data(), end, id, 16);
+    if (v->size() != 16 || ec != std::errc() || at != end || (*v)[0] == '+' || (*v)[0] == '-') {
+      Bad(column, *v, "a device ID (16 hex digits)");
+      return 0;
+    }
+    return id;
+  }
+  template <typename T>
+  T Named(const std::optional<std::string>& v, const char* column,
+          std::optional<T> (*parse)(const std::string&), const char* expected) {
+    if (!Present(v, column, expected)) return T{};
+    const std::optional<T> parsed = parse(*v);
+    if (!parsed) Bad(column, *v, expected);
+    return parsed.value_or(T{});
+  }
+  // Ok, or the first bad value.
+  Status status() const { return error_ ? Status(*error_) : Status::Ok(); }
+
+ private:
+  double Parse(const std::string& text, const char* column) {
+    double d = 0.0;
+    const char* end = text.data() + text.size();
+    const auto [at, ec] = std::from_chars(text.data(), end, d);
+    if (ec != std::errc() || at != end || text.empty() || !std::isfinite(d)) {
+      Bad(column, text, "a finite number");
+      return 0.0;
+    }
+    return d;
+  }
+  bool Present(const std::optional<std::string>& v, const char* column, const std::string& what) {
+    if (v) return true;
+    if (!error_) {
+      error_ = MakeError(url_, 0, fmt::format("{}.{} is NULL; expected {}", table_, column, what));
+    }
+    return false;
+  }
+  void Bad(const char* column, const std::string& value, const std::string& expected) {
+    if (error_) return;
+    const std::string shown = value.size() > 40 ? value.substr(0, 40) + "..." : value;
+    error_ = MakeError(
+        url_, 0, fmt::format("{}.{} holds '{}'; expected {}", table_, column, shown, expected));
+  }
+
+  const std::string& url_;
+  const char* table_;
+  std::optional<Error> error_;
+};
+
+constexpr int64_t kMaxId = std::numeric_limits<int64_t>::max();
+constexpr int64_t kMaxU32 = std::numeric_limits<uint32_t>::max();
+constexpr int64_t kMaxSensor = std::numeric_limits<int>::max();
 
 json SensorCovarianceJson(const SensorCalibration& c) {
   json cov = json::array();
@@ -109,9 +189,11 @@ struct Registry::Impl {
         return s.error();
       }
       if (rows.empty()) return MakeError(url, 0, "calibration vanished while recording");
-      return Integer(rows[0][0]);
+      return Id(rows[0][0], "calibrations");
     }
-    const int64_t id = Integer(rows[0][0]);
+    Result<int64_t> inserted = Id(rows[0][0], "calibrations");
+    if (!inserted.ok()) return inserted.error();
+    const int64_t id = inserted.value();
     // A tags file named the tag's device (`calibrate fit --tags`, calibration.json's
     // `device_id`): the calibration belongs to that device from now on.
     if (tag.device_id) {
@@ -161,6 +243,14 @@ struct Registry::Impl {
     return id;
   }
 
+  // A registry id read back (1 .. 2^63 - 1).
+  Result<int64_t> Id(const std::optional<std::string>& v, const char* table) {
+    Checked checked(url, table);
+    const int64_t id = checked.Integer(v, "id", 1, kMaxId);
+    if (Status s = checked.status(); !s.ok()) return s.error();
+    return id;
+  }
+
   Status Attach(const std::string& device, int64_t calibration_id, const char* source,
                 const std::string& recorded) {
     return db->Execute(
@@ -180,16 +270,27 @@ struct Registry::Impl {
     }
     if (rows.empty()) return MakeError(url, 0, fmt::format("no calibration {}", id));
     RegistryCalibration c;
-    const SqlRow& r = rows[0];
-    c.id = Integer(r[0]);
-    c.certificate_id = Text(r[1]);
-    c.sensor = static_cast<int>(Integer(r[2]));
-    c.date_utc = Text(r[3]);
-    c.recorded_utc = Text(r[4]);
-    c.tool_version = Text(r[5]);
-    c.covariance_json = Text(r[6]);
-    c.station = Text(r[7]);
-    c.operator_name = Text(r[8]);
+    {
+      Checked k(url, "calibrations");
+      const SqlRow& r = rows[0];
+      c.id = k.Integer(r[0], "id", 1, kMaxId);
+      c.certificate_id = k.Text(r[1], "certificate_id");
+      c.sensor = static_cast<int>(k.Integer(r[2], "sensor", 0, kMaxSensor));
+      c.date_utc = k.Text(r[3], "date_utc");
+      c.recorded_utc = k.Text(r[4], "recorded_utc");
+      c.tool_version = k.Text(r[5], "tool_version");
+      c.covariance_json = k.Text(r[6], "covariance_json");
+      c.station = k.Text(r[7], "station");
+      c.operator_name = k.Text(r[8], "operator_name");
+      if (Status s = k.status(); !s.ok()) return s.error();
+      if (Result<json> cov = ParseJsonText(c.covariance_json, "covariance_json");
+          !cov.ok() || !cov.value().is_object()) {
+        return MakeError(url, 0,
+                         fmt::format("calibrations.covariance_json of calibration {} is not a "
+                                     "JSON object{}",
+                                     c.id, cov.ok() ? "" : ": " + cov.error().ToString()));
+      }
+    }
     rows.clear();
     if (Status s = db->Execute("SELECT path, sha256 FROM calibration_inputs WHERE calibration_id = "
                                "? ORDER BY position",
@@ -197,7 +298,11 @@ struct Registry::Impl {
         !s.ok()) {
       return s.error();
     }
-    for (const SqlRow& x : rows) c.inputs.push_back({Text(x[0]), Text(x[1])});
+    Checked inputs(url, "calibration_inputs");
+    for (const SqlRow& x : rows) {
+      c.inputs.push_back({inputs.Text(x[0], "path"), inputs.Text(x[1], "sha256")});
+    }
+    if (Status s = inputs.status(); !s.ok()) return s.error();
     rows.clear();
     if (Status s = db->Execute(
             "SELECT name, value, u, unit FROM constants WHERE calibration_id = ? ORDER BY position",
@@ -205,8 +310,12 @@ struct Registry::Impl {
         !s.ok()) {
       return s.error();
     }
-    for (const SqlRow& x : rows)
-      c.constants.push_back({Text(x[0]), Number(x[1]), Number(x[2]), Text(x[3])});
+    Checked constants(url, "constants");
+    for (const SqlRow& x : rows) {
+      c.constants.push_back({constants.Text(x[0], "name"), constants.Number(x[1], "value"),
+                             constants.Number(x[2], "u"), constants.Text(x[3], "unit")});
+    }
+    if (Status s = constants.status(); !s.ok()) return s.error();
     rows.clear();
     if (Status s = db->Execute(
             "SELECT constant, value, u, lower_limit, upper_limit, unit, acceptance_lower, "
@@ -216,27 +325,31 @@ struct Registry::Impl {
         !s.ok()) {
       return s.error();
     }
+    Checked conformity(url, "conformity");
     for (const SqlRow& x : rows) {
       if (!c.conformity) {
         c.conformity = ConformityStatement{};
-        c.conformity->rule = ParseDecisionRule(Text(x[10])).value_or(DecisionRule::kSimple);
-        c.conformity->coverage_factor = Number(x[11]);
-        c.conformity->max_consumer_risk = Number(x[12]);
+        c.conformity->rule = conformity.Named<DecisionRule>(
+            x[10], "decision_rule", ParseDecisionRule, "simple, guarded or risk");
+        c.conformity->coverage_factor = conformity.Number(x[11], "coverage_factor");
+        c.conformity->max_consumer_risk = conformity.Number(x[12], "max_consumer_risk");
       }
       ConformityEntry e;
       e.sensor = c.sensor;
-      e.constant = Text(x[0]);
-      e.value = Number(x[1]);
-      e.u = Number(x[2]);
-      e.lower = OptNumber(x[3]);
-      e.upper = OptNumber(x[4]);
-      e.unit = Text(x[5]);
-      e.acceptance_lower = OptNumber(x[6]);
-      e.acceptance_upper = OptNumber(x[7]);
-      e.p_conformance = Number(x[8]);
-      e.decision = ParseConformityDecision(Text(x[9])).value_or(ConformityDecision::kFail);
+      e.constant = conformity.Text(x[0], "constant");
+      e.value = conformity.Number(x[1], "value");
+      e.u = conformity.Number(x[2], "u");
+      e.lower = conformity.OptNumber(x[3], "lower_limit");
+      e.upper = conformity.OptNumber(x[4], "upper_limit");
+      e.unit = conformity.Text(x[5], "unit");
+      e.acceptance_lower = conformity.OptNumber(x[6], "acceptance_lower");
+      e.acceptance_upper = conformity.OptNumber(x[7], "acceptance_upper");
+      e.p_conformance = conformity.Number(x[8], "p_conformance");
+      e.decision = conformity.Named<ConformityDecision>(x[9], "decision", ParseConformityDecision,
+                                                        "pass, fail or inconclusive");
       c.conformity->entries.push_back(std::move(e));
     }
+    if (Status s = conformity.status(); !s.ok()) return s.error();
     rows.clear();
     if (Status s = db->Execute(
             "SELECT device_id FROM device_calibrations WHERE calibration_id = ? ORDER BY device_id",
@@ -244,8 +357,9 @@ struct Registry::Impl {
         !s.ok()) {
       return s.error();
     }
-    for (const SqlRow& x : rows)
-      c.devices.push_back(std::strtoull(Text(x[0]).c_str(), nullptr, 16));
+    Checked devices(url, "device_calibrations");
+    for (const SqlRow& x : rows) c.devices.push_back(devices.Device(x[0], "device_id"));
+    if (Status s = devices.status(); !s.ok()) return s.error();
     if (!device) return c;
     const std::string dev = blob::FormatDeviceId(*device);
     rows.clear();
@@ -257,19 +371,21 @@ struct Registry::Impl {
         !s.ok()) {
       return s.error();
     }
+    Checked blobs(url, "blobs");
     for (const SqlRow& x : rows) {
       RegistryBlob b;
       b.device_id = *device;
-      b.seq = static_cast<uint32_t>(Integer(x[0]));
-      b.crc = static_cast<uint32_t>(Integer(x[1]));
-      b.accel_t_valid_min_c = OptNumber(x[2]);
-      b.accel_t_valid_max_c = OptNumber(x[3]);
-      b.gyro_t_valid_min_c = OptNumber(x[4]);
-      b.gyro_t_valid_max_c = OptNumber(x[5]);
-      b.file = Text(x[6]);
-      b.recorded_utc = Text(x[7]);
+      b.seq = static_cast<uint32_t>(blobs.Integer(x[0], "seq", 0, kMaxU32));
+      b.crc = static_cast<uint32_t>(blobs.Integer(x[1], "crc", 0, kMaxU32));
+      b.accel_t_valid_min_c = blobs.OptNumber(x[2], "accel_t_valid_min_c");
+      b.accel_t_valid_max_c = blobs.OptNumber(x[3], "accel_t_valid_max_c");
+      b.gyro_t_valid_min_c = blobs.OptNumber(x[4], "gyro_t_valid_min_c");
+      b.gyro_t_valid_max_c = blobs.OptNumber(x[5], "gyro_t_valid_max_c");
+      b.file = blobs.Text(x[6], "file");
+      b.recorded_utc = blobs.Text(x[7], "recorded_utc");
       c.blobs.push_back(b);
     }
+    if (Status s = blobs.status(); !s.ok()) return s.error();
     rows.clear();
     if (Status s = db->Execute(
             "SELECT port, ok, result, readback, recorded_utc FROM pushes WHERE calibration_id = "
@@ -278,16 +394,18 @@ struct Registry::Impl {
         !s.ok()) {
       return s.error();
     }
+    Checked pushes(url, "pushes");
     for (const SqlRow& x : rows) {
       RegistryPush p;
       p.device_id = *device;
-      p.port = Text(x[0]);
-      p.ok = Integer(x[1]) != 0;
-      p.result = Text(x[2]);
-      p.readback = Text(x[3]);
-      p.recorded_utc = Text(x[4]);
+      p.port = pushes.Text(x[0], "port");
+      p.ok = pushes.Integer(x[1], "ok", 0, 1) != 0;
+      p.result = pushes.Text(x[2], "result");
+      p.readback = pushes.Text(x[3], "readback");
+      p.recorded_utc = pushes.Text(x[4], "recorded_utc");
       c.pushes.push_back(p);
     }
+    if (Status s = pushes.status(); !s.ok()) return s.error();
     return c;
   }
 
@@ -307,7 +425,11 @@ struct Registry::Impl {
                                    blob::FormatDeviceId(device)));
     }
     std::vector<int64_t> ids;
-    for (const SqlRow& r : rows) ids.push_back(Integer(r[0]));
+    for (const SqlRow& r : rows) {
+      Result<int64_t> id = Id(r[0], "calibrations");
+      if (!id.ok()) return id.error();
+      ids.push_back(id.value());
+    }
     return ids;
   }
 };
@@ -326,18 +448,25 @@ std::string Registry::UrlFromFlagOrEnvironment(const std::string& flag) {
 
 namespace registry_internal {
 
-Result<std::unique_ptr<SqlBackend>> OpenBackend(const std::string& url) {
+Result<std::unique_ptr<SqlBackend>> OpenBackend(const std::string& url, bool read_only) {
   if (url.empty()) return MakeError("the registry URL is empty");
-  if (IsPostgresUrl(url)) return registry_internal::OpenPostgres(url);
+  if (IsPostgresUrl(url)) return registry_internal::OpenPostgres(url, read_only);
   if (url.find("://") != std::string::npos) {
     return MakeError(url, 0,
                      "unsupported registry URL; expected a file path (SQLite) or "
                      "postgresql://user@host/db");
   }
-  return registry_internal::OpenSqlite(url, /*busy_timeout_ms=*/10000);
+  // The registry is read and updated in place: never a device, a FIFO, a directory.
+  if (Status s = CheckUpdatableFile(url); !s.ok()) return s.error();
+  return registry_internal::OpenSqlite(url, /*busy_timeout_ms=*/10000, read_only);
 }
 
 }  // namespace registry_internal
+
+std::string Registry::FileOf(const std::string& url) {
+  if (url.empty() || url.find("://") != std::string::npos) return "";
+  return url;
+}
 
 Result<std::unique_ptr<Registry>> Registry::Open(const std::string& url) {
   Result<std::unique_ptr<SqlBackend>> db = registry_internal::OpenBackend(url);
@@ -348,6 +477,28 @@ Result<std::unique_ptr<Registry>> Registry::Open(const std::string& url) {
   Result<int> v = registry_internal::Migrate(impl->db.get(), kRegistrySchemaVersion, url);
   if (!v.ok()) return v.error();
   return std::unique_ptr<Registry>(new Registry(std::move(impl), kRegistrySchemaVersion));
+}
+
+Result<std::unique_ptr<Registry>> Registry::OpenForQuery(const std::string& url) {
+  Result<std::unique_ptr<SqlBackend>> db = registry_internal::OpenBackend(url, /*read_only=*/true);
+  if (!db.ok()) return db.error();
+  auto impl = std::make_unique<Impl>();
+  impl->db = std::move(db).value();
+  impl->url = url;
+  Result<int> v = registry_internal::ReadSchemaVersion(impl->db.get(), url);
+  if (!v.ok()) return v.error();
+  if (v.value() == 0) {
+    return MakeError(url, 0, "an empty database, not a metro registry (it has no tables)");
+  }
+  if (v.value() < kRegistrySchemaVersion) {
+    return MakeError(url, 0,
+                     fmt::format("the registry's schema is version {}, older than this program's "
+                                 "{}; a query changes nothing: record into it once with this "
+                                 "metro (calibrate fit, blob, push or apply --registry) to "
+                                 "migrate it",
+                                 v.value(), kRegistrySchemaVersion));
+  }
+  return std::unique_ptr<Registry>(new Registry(std::move(impl), v.value()));
 }
 
 Result<std::vector<int64_t>> Registry::RecordCalibration(const Calibration& calibration,
@@ -480,15 +631,19 @@ Result<std::vector<DueDevice>> Registry::Due(double interval_days, const std::st
       !s.ok()) {
     return s.error();
   }
-  std::map<std::string, const SqlRow*> last;
-  for (const SqlRow& r : rows) last[Text(r[0])] = &r;
+  Checked checked(impl_->url, "device_calibrations");
+  std::map<uint64_t, const SqlRow*> last;
+  for (const SqlRow& r : rows) last[checked.Device(r[0], "device_id")] = &r;
+  if (Status s = checked.status(); !s.ok()) return s.error();
   std::vector<DueDevice> out;
+  Checked calibrations(impl_->url, "calibrations");
   for (const auto& [dev, r] : last) {
     DueDevice d;
-    d.device_id = std::strtoull(dev.c_str(), nullptr, 16);
-    d.calibration_id = Integer((*r)[1]);
-    d.certificate_id = Text((*r)[2]);
-    d.last_date_utc = Text((*r)[3]);
+    d.device_id = dev;
+    d.calibration_id = calibrations.Integer((*r)[1], "id", 1, kMaxId);
+    d.certificate_id = calibrations.Text((*r)[2], "certificate_id");
+    d.last_date_utc = calibrations.Text((*r)[3], "date_utc");
+    if (Status s = calibrations.status(); !s.ok()) return s.error();
     const std::optional<std::time_t> last_t = ParseUtcIso8601(d.last_date_utc);
     if (!last_t) {
       return MakeError(impl_->url, 0,
@@ -511,7 +666,9 @@ Result<std::vector<RegistryCalibration>> Registry::All() {
   }
   std::vector<RegistryCalibration> out;
   for (const SqlRow& r : rows) {
-    Result<RegistryCalibration> c = impl_->Load(Integer(r[0]), std::nullopt);
+    Result<int64_t> id = impl_->Id(r[0], "calibrations");
+    if (!id.ok()) return id.error();
+    Result<RegistryCalibration> c = impl_->Load(id.value(), std::nullopt);
     if (!c.ok()) return c.error();
     out.push_back(std::move(c).value());
   }

@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <charconv>
 #include <chrono>
+#include <cstdint>
 #include <thread>
 
 #include "metro/registry/registry.hpp"
@@ -15,6 +18,7 @@ std::vector<std::string> MigrationTo(int version, const SqlBackend& db) {
   switch (version) {
     case 1:
       return {
+          "CREATE TABLE schema_version (version INTEGER NOT NULL)",
           "CREATE TABLE calibrations (id " + id +
               ", certificate_id TEXT NOT NULL, sensor INTEGER NOT NULL, date_utc TEXT NOT NULL, "
               "recorded_utc TEXT NOT NULL, tool_version TEXT NOT NULL, covariance_json TEXT NOT "
@@ -61,52 +65,116 @@ std::vector<std::string> MigrationTo(int version, const SqlBackend& db) {
   }
 }
 
-Result<int> ReadSchemaVersion(SqlBackend* db) {
-  if (Status s = db->Execute("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)",
-                             {}, nullptr);
-      !s.ok()) {
-    return s.error();
+std::vector<std::string> TablesOf(int version) {
+  std::vector<std::string> tables;
+  if (version >= 1) {
+    tables = {"blobs",  "calibration_inputs", "calibrations", "constants", "device_calibrations",
+              "pushes", "schema_version"};
   }
+  if (version >= 2) tables.push_back("conformity");
+  std::sort(tables.begin(), tables.end());
+  return tables;
+}
+
+namespace {
+
+std::string Expected() {
+  return fmt::format(
+      "expected one row holding a whole number from 1 to {} (this program's "
+      "version)",
+      kRegistrySchemaVersion);
+}
+
+std::string Quoted(const std::string& text) {
+  return "'" + (text.size() > 40 ? text.substr(0, 40) + "..." : text) + "'";
+}
+
+}  // namespace
+
+Result<int> ReadSchemaVersion(SqlBackend* db, const std::string& url) {
   std::vector<SqlRow> rows;
-  if (Status s = db->Execute("SELECT version FROM schema_version", {}, &rows); !s.ok()) {
-    return s.error();
+  if (Status s = db->Execute(db->TablesSql(), {}, &rows); !s.ok()) return s.error();
+  std::vector<std::string> tables;
+  for (const SqlRow& r : rows) tables.push_back(r.empty() || !r[0] ? std::string() : *r[0]);
+  std::sort(tables.begin(), tables.end());
+  if (tables.empty()) return 0;
+  if (!std::binary_search(tables.begin(), tables.end(), std::string("schema_version"))) {
+    std::string names;
+    for (size_t i = 0; i < tables.size() && i < 5; ++i) names += (i ? ", " : "") + tables[i];
+    if (tables.size() > 5) names += fmt::format(", ... ({} tables)", tables.size());
+    return MakeError(url, 0,
+                     fmt::format("not a metro registry: it has tables ({}) but no schema_version; "
+                                 "metro changes nothing in it: name a new file for the registry",
+                                 names));
   }
-  if (rows.empty() || !rows[0][0]) return 0;
-  return std::stoi(*rows[0][0]);
+  rows.clear();
+  if (Status s = db->Execute("SELECT version FROM schema_version", {}, &rows); !s.ok()) {
+    return MakeError(url, 0, "not a metro registry: " + s.error().message);
+  }
+  if (rows.size() != 1) {
+    return MakeError(url, 0,
+                     fmt::format("schema_version has {} rows; {}", rows.size(), Expected()));
+  }
+  if (rows[0].empty() || !rows[0][0]) {
+    return MakeError(url, 0, "schema_version holds NULL; " + Expected());
+  }
+  const std::string& text = *rows[0][0];
+  int64_t version = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), version);
+  if (ec != std::errc() || end != text.data() + text.size() || text.empty()) {
+    return MakeError(
+        url, 0,
+        fmt::format("schema_version holds {}, not a whole number; {}", Quoted(text), Expected()));
+  }
+  if (version > kRegistrySchemaVersion) {
+    return MakeError(url, 0,
+                     fmt::format("the registry's schema is version {}, newer than this "
+                                 "program's {}; use a newer metro",
+                                 version, kRegistrySchemaVersion));
+  }
+  if (version < 1) {
+    return MakeError(url, 0,
+                     fmt::format("schema_version holds {}, not a version metro writes; {}", version,
+                                 Expected()));
+  }
+  const int v = static_cast<int>(version);
+  for (const std::string& table : TablesOf(v)) {
+    if (!std::binary_search(tables.begin(), tables.end(), table)) {
+      return MakeError(
+          url, 0,
+          fmt::format("not a metro registry of version {}: the table {} is missing", v, table));
+    }
+  }
+  return v;
 }
 
 Result<int> Migrate(SqlBackend* db, int target, const std::string& url) {
   for (int attempt = 0;; ++attempt) {
-    int version = 0;
     Status s = db->Begin(/*exclusive=*/true);
     if (s.ok()) {
-      Result<int> v = ReadSchemaVersion(db);
-      if (!v.ok()) {
-        s = v.status();
-      } else {
-        version = v.value();
-        if (version > kRegistrySchemaVersion) {
-          db->Rollback();
-          return MakeError(url, 0,
-                           fmt::format("the registry's schema is version {}, newer than this "
-                                       "program's {}; use a newer metro",
-                                       version, kRegistrySchemaVersion));
-        }
-        if (version >= target) {
-          db->Rollback();
-          return version;
-        }
-        for (const std::string& sql : MigrationTo(version + 1, *db)) {
+      Result<int> v = ReadSchemaVersion(db, url);
+      if (!v.ok() && !db->LastErrorRetryable()) {
+        db->Rollback();
+        return v.error();
+      }
+      if (v.ok() && v.value() >= target) {
+        db->Rollback();  // Nothing to change.
+        return v.value();
+      }
+      s = v.status();
+      // Every step from the version found to this program's, in this one transaction.
+      for (int next = v.ok() ? v.value() + 1 : target + 1; s.ok() && next <= target; ++next) {
+        for (const std::string& sql : MigrationTo(next, *db)) {
           s = db->Execute(sql, {}, nullptr);
           if (!s.ok()) break;
         }
-        if (s.ok()) s = db->Commit();
       }
+      if (s.ok()) s = db->Commit();
+      if (s.ok()) return target;
     }
-    if (s.ok()) continue;  // The next version, in its own transaction.
     const bool retry = db->LastErrorRetryable();
     db->Rollback();
-    if (!retry || attempt > 200) return s.error();
+    if (!retry || attempt >= 200) return s.error();
     std::this_thread::sleep_for(std::chrono::milliseconds(5 + 5 * (attempt % 10)));
   }
 }

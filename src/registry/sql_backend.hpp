@@ -34,6 +34,9 @@ class SqlBackend {
   // transaction may be retried (SQLITE_BUSY / SQLITE_LOCKED; SQLSTATE 40001, 40P01).
   virtual bool LastErrorRetryable() const = 0;
 
+  // One statement listing the database's own tables (one column, the name), schema_version
+  // included; nothing of the engine's own (sqlite_*, the catalogs).
+  virtual std::string TablesSql() const = 0;
   // Column type of an auto-numbered primary key.
   virtual std::string AutoIdColumn() const = 0;
   // "sqlite" or "postgresql".
@@ -41,12 +44,17 @@ class SqlBackend {
 };
 
 // Opens (creating when absent) a SQLite file: WAL journal, a busy timeout, foreign keys on.
-Result<std::unique_ptr<SqlBackend>> OpenSqlite(const std::string& path, int busy_timeout_ms);
-// Connects to PostgreSQL with a libpq connection URI (postgresql://...).
-Result<std::unique_ptr<SqlBackend>> OpenPostgres(const std::string& uri);
+// `read_only`: opened read-only and never created, nothing written (not even the journal
+// mode); a WAL database in a directory the reader cannot write is opened as immutable when no
+// write-ahead log is waiting beside it.
+Result<std::unique_ptr<SqlBackend>> OpenSqlite(const std::string& path, int busy_timeout_ms,
+                                               bool read_only = false);
+// Connects to PostgreSQL with a libpq connection URI (postgresql://...); `read_only`: every
+// transaction of the session is read-only (default_transaction_read_only).
+Result<std::unique_ptr<SqlBackend>> OpenPostgres(const std::string& uri, bool read_only = false);
 
 // A SQLite path or a postgresql:// URI (registry.hpp), opened.
-Result<std::unique_ptr<SqlBackend>> OpenBackend(const std::string& url);
+Result<std::unique_ptr<SqlBackend>> OpenBackend(const std::string& url, bool read_only = false);
 
 // A double as the shortest text that reads back to the same value.
 std::string ExactDouble(double v);

@@ -1,6 +1,9 @@
 // The SQLite back end (SQLite C API, libsqlite3-dev).
 #include <fmt/format.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
+
+#include <cctype>
 
 #include "sql_backend.hpp"
 
@@ -74,7 +77,12 @@ class SqliteBackend : public SqlBackend {
   bool LastErrorRetryable() const override {
     return (last_code_ & 0xff) == SQLITE_BUSY || (last_code_ & 0xff) == SQLITE_LOCKED;
   }
+  std::string TablesSql() const override {
+    return "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite\\_%' "
+           "ESCAPE '\\' ORDER BY name";
+  }
   std::string AutoIdColumn() const override { return "INTEGER PRIMARY KEY AUTOINCREMENT"; }
+  int last_code() const { return last_code_; }
   const char* Kind() const override { return "sqlite"; }
 
  private:
@@ -90,12 +98,27 @@ class SqliteBackend : public SqlBackend {
   int last_code_ = SQLITE_OK;
 };
 
-}  // namespace
+// A SQLite URI filename for `path` (https://sqlite.org/uri.html): every byte but letters,
+// digits and / . _ - ~ percent-encoded, so ? # % in a name stay part of it.
+std::string FileUri(const std::string& path, const char* query) {
+  std::string p = path;
+  while (p.rfind("//", 0) == 0) p.erase(0, 1);  // "//x" would name a host.
+  std::string out = "file:";
+  for (unsigned char c : p) {
+    if (std::isalnum(c) || c == '/' || c == '.' || c == '_' || c == '-' || c == '~') {
+      out += static_cast<char>(c);
+    } else {
+      out += fmt::format("%{:02X}", c);
+    }
+  }
+  return out + "?" + query;
+}
 
-Result<std::unique_ptr<SqlBackend>> OpenSqlite(const std::string& path, int busy_timeout_ms) {
+Result<std::unique_ptr<SqliteBackend>> OpenSqliteConnection(const std::string& name,
+                                                            const std::string& path, int flags,
+                                                            int busy_timeout_ms) {
   sqlite3* db = nullptr;
-  const int rc = sqlite3_open_v2(
-      path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, nullptr);
+  const int rc = sqlite3_open_v2(name.c_str(), &db, flags | SQLITE_OPEN_NOMUTEX, nullptr);
   if (rc != SQLITE_OK) {
     std::string why = db != nullptr ? sqlite3_errmsg(db) : sqlite3_errstr(rc);
     sqlite3_close_v2(db);
@@ -103,7 +126,37 @@ Result<std::unique_ptr<SqlBackend>> OpenSqlite(const std::string& path, int busy
   }
   sqlite3_extended_result_codes(db, 1);
   sqlite3_busy_timeout(db, busy_timeout_ms);
-  auto backend = std::make_unique<SqliteBackend>(db, path);
+  return std::make_unique<SqliteBackend>(db, path);
+}
+
+}  // namespace
+
+Result<std::unique_ptr<SqlBackend>> OpenSqlite(const std::string& path, int busy_timeout_ms,
+                                               bool read_only) {
+  if (read_only) {
+    // Nothing is written: no journal mode, no pragma that changes the file.
+    for (const char* query : {"mode=ro", "mode=ro&immutable=1"}) {
+      Result<std::unique_ptr<SqliteBackend>> opened = OpenSqliteConnection(
+          FileUri(path, query), path, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, busy_timeout_ms);
+      if (!opened.ok()) return opened.error();
+      std::unique_ptr<SqliteBackend> backend = std::move(opened).value();
+      Status s = backend->Execute("SELECT count(*) FROM sqlite_master", {}, nullptr);
+      if (s.ok()) return std::unique_ptr<SqlBackend>(std::move(backend));
+      // A WAL database whose directory the reader cannot write (no -shm can be made): read
+      // as immutable, unless a write-ahead log with commits not yet in the file is beside it.
+      const int code = backend->last_code() & 0xff;
+      struct stat wal {};
+      const bool wal_waiting = ::stat((path + "-wal").c_str(), &wal) == 0 && wal.st_size > 0;
+      if ((code != SQLITE_READONLY && code != SQLITE_CANTOPEN) || wal_waiting) {
+        return MakeError(path, 0, "cannot open the SQLite registry: " + s.error().message);
+      }
+    }
+    return MakeError(path, 0, "cannot open the SQLite registry read-only");
+  }
+  Result<std::unique_ptr<SqliteBackend>> opened =
+      OpenSqliteConnection(path, path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, busy_timeout_ms);
+  if (!opened.ok()) return opened.error();
+  std::unique_ptr<SqliteBackend> backend = std::move(opened).value();
   // A file that is not a database fails here ("file is not a database").
   std::vector<SqlRow> mode;
   if (Status s = backend->Execute("PRAGMA journal_mode=WAL", {}, &mode); !s.ok()) {

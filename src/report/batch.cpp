@@ -313,7 +313,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
   }
   std::error_code ec;
   fs::create_directories(options.output_dir, ec);
-  if (ec || !fs::is_directory(options.output_dir)) {
+  if (ec || !fs::is_directory(options.output_dir, ec)) {
     out.error = MakeError(options.output_dir, 0,
                           fmt::format("cannot create the output directory: {}", ec.message()));
     return out;

@@ -61,6 +61,7 @@ class SvgStream {
     if (fd < 0) return;
     ::close(fd);
     path_ = name;
+    cleanup_.Reset(path_);  // Removed by SIGINT/SIGTERM too (InstallInterruptCleanup).
     plgstrm(&previous_);
     plmkstrm(&stream_);
     plsdev("svg");
@@ -113,6 +114,7 @@ class SvgStream {
   }
 
   std::string path_;
+  RemoveOnInterrupt cleanup_;  // path_ while it exists.
   PLINT previous_ = 0;
   PLINT stream_ = -1;
   bool open_ = false;

@@ -6,10 +6,12 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -373,6 +375,211 @@ TEST_CASE("Outputs: calibrate blob -o x --hex x, -o /dev/full and fit/apply/repo
   CHECK(NoTemporaries(d.path));
 }
 #endif
+
+// ------------------------------------- issue #37: the tags file, capture, signals, SIGXFSZ
+
+TEST_CASE("Outputs: the tags file a command reads is never its output", "[apps][unix][security]") {
+  Dir d;
+  const std::string tags = d / "t.json";
+  const std::string text = R"({"2": {"name": "Chest", "device_id": "9ABCDEF012345678"}})";
+  Put(tags, text);
+  fs::create_symlink(fs::absolute(tags), d / "link.json");
+  const std::string refused = " is the input file: refusing to overwrite it (--tags " + tags +
+                              "); name another output file\n";
+  struct Case {
+    std::string program, args, output;
+  };
+  std::vector<Case> cases = {
+      {METRO_CHARACTERIZE_EXE, "accuracy " + kSweep + " --tags " + tags + " -o " + tags,
+       "-o " + tags},
+      {METRO_CHARACTERIZE_EXE, "accuracy " + kSweep + " --tags " + tags + " -o " + d / "link.json",
+       "-o " + d / "link.json"},
+      {METRO_CHARACTERIZE_EXE,
+       "batch " + kChest + " -o " + d / "out --tags " + tags + " --html " + tags, "--html " + tags},
+  };
+#ifdef METRO_CALIBRATE_EXE
+  const std::string cal = kDatasets + "golden/calibration_sensor2.json";
+  cases.push_back({METRO_CALIBRATE_EXE,
+                   "blob " + cal + " --sensor 2 --tags " + tags + " -o " + tags, "-o " + tags});
+  cases.push_back(
+      {METRO_CALIBRATE_EXE,
+       "blob " + cal + " --sensor 2 --tags " + tags + " -o " + d / "t.bin --hex " + d / "link.json",
+       "--hex " + d / "link.json"});
+#endif
+  for (const Case& c : cases) {
+    INFO(c.args);
+    Run r = testing::RunProgram(c.program, c.args);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + c.output + refused);
+    CHECK(Get(tags) == text);
+  }
+#ifdef METRO_CALIBRATE_EXE
+  // --all: DIR/tag2.bin a symlink to the tags file; nothing written.
+  fs::create_directories(d / "blobs");
+  fs::create_symlink(fs::absolute(tags), d / "blobs/tag2.bin");
+  Run r = testing::RunProgram(METRO_CALIBRATE_EXE,
+                              "blob " + cal + " --all --tags " + tags + " -o " + d / "blobs");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: -o (sensor 2) " + d / "blobs/tag2.bin" +
+                     " is the input file: refusing to overwrite it (--tags " + tags +
+                     "); name another output file (nothing written)\n");
+  CHECK_FALSE(fs::exists(d / "blobs/tag2.hex"));
+  CHECK(Get(tags) == text);
+  CHECK_FALSE(fs::exists(d / "t.bin"));
+#endif
+  CHECK_FALSE(fs::exists(d / "out/summary.json"));
+}
+
+TEST_CASE("Outputs: capture -o follows the output rule before the port is opened",
+          "[apps][unix][security][capture]") {
+  Dir d;
+  const std::string fifo = d / "c.fifo";
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  const std::string capture = "capture --duration-s 1 ";
+  struct Case {
+    std::string args, error;
+  };
+  std::vector<Case> cases = {
+      // Without --force too: the device, not "pass --force".
+      {capture + "--port /dev/null -o /dev/null", "-o /dev/null is a character device"},
+      // The serial port itself (a character device), with --force.
+      {capture + "--port /dev/zero -o /dev/zero --force", "-o /dev/zero is a character device"},
+      {capture + "--port /dev/null -o " + fifo + " --force",
+       "-o " + fifo + " is a FIFO (named pipe)"},
+      // --analyze: the report is checked before anything is captured.
+      {capture + "--port metro_no_such_port --analyze --capture " + d / "c.txt -o /dev/full",
+       "-o /dev/full is a character device"},
+      {capture + "--port metro_no_such_port --analyze --capture " + d / "c.txt -o " + d / "c.txt",
+       "-o and --capture name the same file"},
+  };
+  // A block device, when the machine shows one.
+  for (const char* disk : {"/dev/loop0", "/dev/sda", "/dev/vda", "/dev/nvme0n1"}) {
+    struct stat st {};
+    if (::stat(disk, &st) == 0 && S_ISBLK(st.st_mode)) {
+      cases.push_back({capture + "--port /dev/null -o " + disk + " --force",
+                       std::string("-o ") + disk + " is a block device"});
+      break;
+    }
+  }
+  for (const Case& c : cases) {
+    INFO(c.args);
+    Run r = Characterize(c.args);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("error: " + c.error) == 0);
+  }
+  CHECK(TypeOf(fifo) == S_IFIFO);
+  CHECK(TypeOf("/dev/null") == S_IFCHR);
+  CHECK_FALSE(fs::exists(d / "c.txt"));
+  // The tags file is an input.
+  Put(d / "t.json", "{\"1\": \"Forehead\"}");
+  Run r = Characterize(capture + "--port metro_no_such_port --tags " + d / "t.json -o " +
+                       d / "t.json --force");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("error: -o " + d / "t.json" + " is the input file") == 0);
+  CHECK(Get(d / "t.json") == "{\"1\": \"Forehead\"}");
+}
+
+TEST_CASE("Outputs: under a file-size limit a run ends on the ENOSPC path, not SIGXFSZ",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string json = d / "r.json", html = d / "r.html";
+  Put(json, "old json\n");
+  Put(html, "old html\n");
+  // As "replaced together" above, but without `trap '' XFSZ`: the program ignores it itself.
+  Run r = testing::RunProgram("ulimit -f 1000; exec " + std::string(METRO_CHARACTERIZE_EXE),
+                              kChest + " --type-a -q -o " + json + " --html " + html);
+  CHECK(r.exit_code == 1);
+  CHECK(r.err == "error: cannot write '" + html + "': File too large\n");
+  CHECK(Get(json) == "old json\n");
+  CHECK(Get(html) == "old html\n");
+  CHECK(NoTemporaries(d.path));
+}
+
+TEST_CASE("Outputs: SIGTERM or SIGINT while an output is written removes its temporary",
+          "[apps][unix][security]") {
+  Dir d;
+  const std::string out = d / "big.csv";
+  for (int signal : {SIGTERM, SIGINT}) {
+    INFO(signal);
+    Put(out, "old session\n");
+    // A simulated session of 1e8 rows, streamed to its temporary for minutes.
+    const pid_t pid = ::fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+      // As a program started from a terminal (a test runner may ignore some signals).
+      for (int s : {SIGINT, SIGTERM, SIGHUP}) ::signal(s, SIG_DFL);
+      ::execl(METRO_CHARACTERIZE_EXE, METRO_CHARACTERIZE_EXE, "simulate", "-q", "-o", out.c_str(),
+              "--duration-s", "100000", "--rate-hz", "1000", static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    // Bounded wait until the temporary holds 1 MB.
+    bool writing = false;
+    for (int i = 0; i < 600 && !writing; ++i) {
+      for (const auto& e : fs::directory_iterator(d.path)) {
+        std::error_code ec;
+        writing = writing || (e.path().filename().string().rfind(".metro-", 0) == 0 &&
+                              fs::file_size(e.path(), ec) > (1u << 20));
+      }
+      if (!writing) ::usleep(50 * 1000);
+    }
+    CHECK(writing);
+    REQUIRE(::kill(pid, signal) == 0);
+    int status = 0;
+    REQUIRE(::waitpid(pid, &status, 0) == pid);
+    REQUIRE(WIFSIGNALED(status));
+    CHECK(WTERMSIG(status) == signal);
+    CHECK(NoTemporaries(d.path));
+    CHECK(Get(out) == "old session\n");
+  }
+}
+
+TEST_CASE("No escaped exception: values that would throw in tags, spec and budget files",
+          "[apps][security]") {
+  // Each class of input a command reads with a third-party parser: a value of the wrong type
+  // or past an int is refused where it is read (file, what was expected), exit 2, never
+  // "terminate called after throwing". The registry's class: tests/registry.
+  Dir d;
+  struct Case {
+    std::string program, file, text, args, error;
+  };
+  const std::string budget_head = R"({"measurand": {"name": "y", "model": "x"}, "inputs": )";
+  std::vector<Case> cases = {
+      {METRO_CHARACTERIZE_EXE, "b1.json", R"({"measurand": {"name": 5}, "inputs": []})", "budget ",
+       "b1.json: measurand: 'name' must be a string"},
+      {METRO_CHARACTERIZE_EXE, "b2.json", budget_head + R"([{"name": "x", "value": "1", "u": 1}]})",
+       "budget ", "b2.json: input 'x': 'value' must be a number"},
+      {METRO_CHARACTERIZE_EXE, "b3.json",
+       budget_head + R"([{"name": "x", "type_a": {"values": [1, "a"]}}]})", "budget ",
+       "b3.json: input 'x': 'type_a.values' must be an array of numbers"},
+      {METRO_CHARACTERIZE_EXE, "b4.json",
+       budget_head +
+           R"([{"name": "x", "value": 1, "u": 1}], "correlations": [{"a": "x", "b": "no", "r": 0.5}]})",
+       "budget ", "b4.json: correlation x/no: input 'no' is not defined"},
+      {METRO_CHARACTERIZE_EXE, "t1.json", R"({"99999999999999999999": "x"})",
+       "analyze " + kChest + " --tag-registry ",
+       "t1.json: key '99999999999999999999': expected a tag number 1..255"},
+      {METRO_CHARACTERIZE_EXE, "t2.json", R"({"2": {"name": 5}})",
+       "analyze " + kChest + " --tag-registry ", "t2.json: tag 2: name: expected a string"},
+  };
+#ifdef METRO_CALIBRATE_EXE
+  cases.push_back(
+      {METRO_CALIBRATE_EXE, "s1.json",
+       R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "unit": "LSB", "lower": "x"}]})",
+       "fit " + kChest + " -o " + d / "c.json --spec ",
+       "s1.json:1:44: tolerances[0]: 'accel.b_x': 'lower' must be a finite number"});
+  cases.push_back({METRO_CALIBRATE_EXE, "s2.json", R"({"decision_rule": 7, "tolerances": []})",
+                   "fit " + kChest + " -o " + d / "c.json --spec ",
+                   "s2.json: missing 'decision_rule'"});
+#endif
+  for (const Case& c : cases) {
+    INFO(c.args + c.file);
+    Put(d / c.file, c.text);
+    Run r = testing::RunProgram(c.program, c.args + d / c.file);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.rfind("error: " + d / c.error, 0) == 0);
+    CHECK(r.err.find("terminate") == std::string::npos);
+  }
+}
 
 // ----------------------------------------------------------------- 4. batch owns its folder
 

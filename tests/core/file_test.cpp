@@ -1,10 +1,16 @@
 #include "metro/core/file.hpp"
 
+#include <sys/resource.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -161,6 +167,141 @@ TEST_CASE("Outputs refuse devices, FIFOs, directories and /dev; the file is unto
   CHECK(missing.error().message == d / "no/such/x.json" + ": the directory " + d / "no/such" +
                                        " does not exist: create it first");
   CHECK(d.Entries() == 1);
+}
+
+TEST_CASE("A file updated in place must be a regular file or absent", "[core][security]") {
+  OutDir d;
+  const std::string fifo = d / "fifo";
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  const std::string sock = d / "sock";
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, sock.c_str(), sizeof addr.sun_path - 1);
+  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0);
+  const std::string tail =
+      ": metro reads and updates this file in place (a database); name a regular file";
+  struct Case {
+    std::string path, what;
+  };
+  for (const Case& c :
+       {Case{"/dev/null", "is a character device"}, Case{fifo, "is a FIFO (named pipe)"},
+        Case{sock, "is a socket"}, Case{d.path, "is a directory"},
+        Case{"/proc/self/x.sqlite", "is in /proc"}}) {
+    INFO(c.path);
+    Status s = CheckUpdatableFile(c.path);
+    REQUIRE_FALSE(s.ok());
+    CHECK(s.error().message == c.path + " " + c.what + tail);
+  }
+  ::close(fd);
+  REQUIRE(WriteFileAtomically(d / "reg.sqlite", "x").ok());
+  CHECK(CheckUpdatableFile(d / "reg.sqlite").ok());
+  CHECK(CheckUpdatableFile(d / "new.sqlite").ok());
+  std::filesystem::create_symlink(std::filesystem::absolute(d / "reg.sqlite"), d / "link.sqlite");
+  CHECK(CheckUpdatableFile(d / "link.sqlite").ok());
+  CHECK_FALSE(CheckUpdatableFile(d / "no/such/r.sqlite").ok());
+}
+
+// No .metro-XXXXXX temporary in `dir`.
+bool NoTemporary(const std::string& dir) {
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().filename().string().rfind(".metro-", 0) == 0) return false;
+  }
+  return true;
+}
+
+// A child process that, with or without InstallInterruptCleanup, starts replacing `path`
+// (and holds a registered temporary `plot` as a plot does), says so on a pipe and waits for
+// a signal. Returns the child's wait status after `signal` was sent.
+int InterruptedWriter(const std::string& path, const std::string& plot, bool install, int signal) {
+  int ready[2];
+  REQUIRE(::pipe(ready) == 0);
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    ::close(ready[0]);
+    // As a program started from a terminal (a test runner may ignore some signals).
+    for (int s : {SIGINT, SIGTERM, SIGHUP}) ::signal(s, SIG_DFL);
+    if (install) InstallInterruptCleanup();
+    AtomicFileWriter writer(path);
+    if (!writer.Open().ok() || !writer.Write(std::string(1 << 20, 'n')).ok()) ::_exit(3);
+    std::FILE* f = std::fopen(plot.c_str(), "w");
+    if (f == nullptr) ::_exit(4);
+    std::fclose(f);
+    RemoveOnInterrupt plot_cleanup(plot);
+    if (::write(ready[1], "r", 1) != 1) ::_exit(5);
+    for (;;) ::pause();
+  }
+  ::close(ready[1]);
+  char c = 0;
+  REQUIRE(::read(ready[0], &c, 1) == 1);
+  ::close(ready[0]);
+  REQUIRE(::kill(pid, signal) == 0);
+  int status = 0;
+  REQUIRE(::waitpid(pid, &status, 0) == pid);
+  return status;
+}
+
+TEST_CASE("SIGINT and SIGTERM while writing remove the temporaries and keep the old file",
+          "[core][security]") {
+  OutDir d;
+  const std::string path = d / "r.json";
+  const std::string plot = d / "metro_plot_test";
+  REQUIRE(WriteFileAtomically(path, "old").ok());
+  for (int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    INFO(signal);
+    const int status = InterruptedWriter(path, plot, true, signal);
+    // The process ended by the signal, as without the handler.
+    REQUIRE(WIFSIGNALED(status));
+    CHECK(WTERMSIG(status) == signal);
+    CHECK(NoTemporary(d.path));
+    CHECK_FALSE(std::filesystem::exists(plot));
+    CHECK(Contents(path) == "old");
+  }
+  // Without the handler both temporaries stay behind: what the handler removes.
+  const int status = InterruptedWriter(path, plot, false, SIGTERM);
+  REQUIRE(WIFSIGNALED(status));
+  CHECK_FALSE(NoTemporary(d.path));
+  CHECK(std::filesystem::exists(plot));
+  CHECK(Contents(path) == "old");
+}
+
+TEST_CASE("Past the file-size limit a write fails with EFBIG, not SIGXFSZ", "[core][security]") {
+  OutDir d;
+  const std::string path = d / "big.bin";
+  REQUIRE(WriteFileAtomically(path, "old").ok());
+  for (bool install : {true, false}) {
+    INFO(install);
+    const pid_t pid = ::fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+      ::signal(SIGXFSZ, SIG_DFL);
+      if (install) InstallInterruptCleanup();
+      rlimit limit{};
+      limit.rlim_cur = limit.rlim_max = 64 * 1024;
+      if (::setrlimit(RLIMIT_FSIZE, &limit) != 0) ::_exit(3);
+      Status s = WriteFileAtomically(path, std::string(1 << 20, 'x'));
+      const bool efbig = !s.ok() && s.error().kind == ErrorKind::kIo &&
+                         s.error().message.find(std::strerror(EFBIG)) != std::string::npos;
+      ::_exit(efbig ? 0 : 4);
+    }
+    int status = 0;
+    REQUIRE(::waitpid(pid, &status, 0) == pid);
+    if (install) {
+      REQUIRE(WIFEXITED(status));
+      CHECK(WEXITSTATUS(status) == 0);
+      CHECK(NoTemporary(d.path));
+    } else {
+      REQUIRE(WIFSIGNALED(status));
+      CHECK(WTERMSIG(status) == SIGXFSZ);
+    }
+    CHECK(Contents(path) == "old");
+  }
+  // The killed writer could not remove its temporary; the one that saw EFBIG did.
+  for (const auto& e : std::filesystem::directory_iterator(d.path)) {
+    if (e.path().filename().string().rfind(".metro-", 0) == 0) std::filesystem::remove(e.path());
+  }
 }
 
 TEST_CASE("WriteFilesAtomically replaces every file or none", "[core][security]") {

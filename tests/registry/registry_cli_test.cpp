@@ -1,6 +1,7 @@
 // calibrate fit --spec / --registry, calibrate blob --registry and calibrate registry ...
 // through the program (docs/conformity.md, docs/registry.md).
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,8 +13,10 @@
 #include <sstream>
 
 #include "metro/calibration/simulate.hpp"
+#include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
 #include "registry/postgres_server.hpp"
+#include "registry/sql_backend.hpp"
 #include "support/run_program.hpp"
 
 namespace metro {
@@ -185,6 +188,166 @@ TEST_CASE("calibrate fit --spec and --registry: bad input exits 2 and writes not
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("no such registry file") != std::string::npos);
   CHECK_FALSE(fs::exists(d / "missing.sqlite"));
+}
+
+const std::string kGoldenCal =
+    std::string(METRO_SOURCE_DIR) + "/datasets/golden/calibration_sensor2.json";
+
+// One statement on a SQLite file, outside the registry's checks.
+void Sql(const std::string& path, const std::string& sql) {
+  Result<std::unique_ptr<registry_internal::SqlBackend>> db = registry_internal::OpenBackend(path);
+  REQUIRE(db.ok());
+  INFO(sql);
+  REQUIRE(db.value()->Execute(sql, {}).ok());
+}
+
+// A registry holding one blob of the golden calibration (device 9ABCDEF012345678).
+std::string MakeLineRegistry(const Dir& d) {
+  const std::string line = d / "line.sqlite";
+  testing::ProgramRun r =
+      Calibrate(fmt::format("blob {} --sensor 2 --device-id 9ABCDEF012345678 -o {} --registry {}",
+                            kGoldenCal, d / "first.bin", line));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  return line;
+}
+
+TEST_CASE("The registry is never an output: -o, --hex, --html, METRO_REGISTRY, export -o",
+          "[registry][apps][security]") {
+  Dir d;
+  const std::string line = MakeLineRegistry(d);
+  const std::string before = Slurp(line);
+  REQUIRE(before.size() > 540);
+  WriteSession(d);
+  const std::string blob =
+      fmt::format("blob {} --sensor 2 --device-id 9ABCDEF012345678 ", kGoldenCal);
+  const std::string refused = " is the file the command updates in place (";
+  struct Case {
+    std::string args, output;
+  };
+  fs::create_symlink(fs::absolute(line), d / "link.sqlite");
+  for (const Case& c : {
+           Case{blob + "-o " + line + " --registry " + line, "-o " + line},
+           Case{blob + "-o " + d / "t.bin --hex " + line + " --registry " + line, "--hex " + line},
+           Case{blob + "-o " + d / "link.sqlite --registry " + line, "-o " + d / "link.sqlite"},
+           Case{"apply " + kGoldenCal + " " + d / "session.csv -o " + line + " --registry " + line,
+                "-o " + line},
+           Case{"fit " + d / "session.csv --accel-only -o " + d / "c.json --html " + line +
+                    " --registry " + line,
+                "--html " + line},
+       }) {
+    INFO(c.args);
+    testing::ProgramRun r = Calibrate(c.args);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + c.output + refused + "--registry " + line +
+                       "): refusing to overwrite it; name another output file\n");
+    CHECK(r.err.find("registry: recorded") == std::string::npos);
+  }
+  // METRO_REGISTRY names it the same way.
+  testing::ProgramRun r = testing::RunProgram("METRO_REGISTRY=" + line + " " + METRO_CALIBRATE_EXE,
+                                              blob + "-o " + line);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: -o " + line + refused + "METRO_REGISTRY " + line +
+                     "): refusing to overwrite it; name another output file\n");
+  // The export reads it: its -o cannot be it.
+  r = Calibrate(fmt::format("registry export --format json -o {} --registry {}", line, line));
+  CHECK(r.exit_code == 2);
+  CHECK(r.err == "error: -o " + line + " is the input file: refusing to overwrite it (--registry " +
+                     line + "); name another output file\n");
+  CHECK(Slurp(line) == before);
+  CHECK_FALSE(fs::exists(d / "t.bin"));
+  CHECK_FALSE(fs::exists(d / "c.json"));
+  // Nor a device, a FIFO or the calibration it reads.
+  REQUIRE(::mkfifo((d / "fifo").c_str(), 0600) == 0);
+  for (const std::string& reg : {std::string("/dev/null"), d / "fifo"}) {
+    r = Calibrate(blob + "-o " + d / "t.bin --registry " + reg);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("error: --registry " + reg + " is a") == 0);
+  }
+  r = Calibrate(blob + "-o " + d / "t.bin --registry " + kGoldenCal);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("is also an input of the command (CALIBRATION") != std::string::npos);
+  CHECK_FALSE(fs::exists(d / "t.bin"));
+}
+
+TEST_CASE("A registry with a bad schema_version exits 2 naming the value, never aborts or loops",
+          "[registry][apps][security]") {
+  Dir d;
+  const std::string line = MakeLineRegistry(d);
+  for (const std::string value : {"'abc'", "99999999999", "-1"}) {
+    INFO(value);
+    Sql(line, "UPDATE schema_version SET version = " + value);
+    const std::string before = Slurp(line);
+    for (const std::string& args :
+         {"registry history --device-id 9ABCDEF012345678 --registry " + line,
+          fmt::format("blob {} --sensor 2 --device-id 9ABCDEF012345678 -o {} --registry {}",
+                      kGoldenCal, d / "t.bin", line)}) {
+      testing::ProgramRun r =
+          testing::RunProgram("timeout 20 " + std::string(METRO_CALIBRATE_EXE), args);
+      CHECK(r.exit_code == 2);
+      CHECK(r.err.rfind("error: " + line + ": ", 0) == 0);
+      CHECK(r.err.find(value == "99999999999" ? "version 99999999999, newer than this program's 2"
+                                              : "expected one row holding a whole number from "
+                                                "1 to 2") != std::string::npos);
+      CHECK(r.err.find("terminate") == std::string::npos);
+    }
+    CHECK(Slurp(line) == before);
+    CHECK_FALSE(fs::exists(d / "t.bin"));
+  }
+}
+
+TEST_CASE("A read-only registry (file 0444 in a read-only folder) can be queried",
+          "[registry][apps][security]") {
+  Dir d;
+  const std::string made = MakeLineRegistry(d);
+  // A folder of its own under /tmp, which another user can reach.
+  char tmpl[] = "/tmp/metro_ro_registry_XXXXXX";
+  REQUIRE(::mkdtemp(tmpl) != nullptr);
+  const std::string dir = tmpl;
+  const std::string line = dir + "/line.sqlite";
+  fs::copy_file(made, line);
+  REQUIRE(::chmod(line.c_str(), 0444) == 0);
+  REQUIRE(::chmod(dir.c_str(), 0555) == 0);
+  const std::string before = Slurp(line);
+  // As root the permissions do not bind: run the query as nobody then.
+  const std::string as = ::geteuid() == 0 ? "runuser -u nobody -- " : "";
+  testing::ProgramRun r = testing::RunProgram(
+      as + METRO_CALIBRATE_EXE,
+      "registry history --device-id 9ABCDEF012345678 --json --registry " + line);
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(r.out.find("\"device_id\": \"9ABCDEF012345678\"") != std::string::npos);
+  r = testing::RunProgram(as + METRO_CALIBRATE_EXE, "registry due --all --registry " + line);
+  CHECK(r.exit_code == 0);
+  CHECK(Slurp(line) == before);
+  size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++entries;
+  CHECK(entries == 1);  // Nothing made beside it.
+  ::chmod(dir.c_str(), 0755);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("A foreign SQLite file is refused by queries and recordings, never migrated",
+          "[registry][apps][security]") {
+  Dir d;
+  const std::string foreign = d / "parts.sqlite";
+  Sql(foreign, "CREATE TABLE parts (id INTEGER)");
+  Sql(foreign, "INSERT INTO parts VALUES (1)");
+  const std::string before = Slurp(foreign);
+  for (const std::string& args :
+       {"registry history --device-id 9ABCDEF012345678 --registry " + foreign,
+        "registry export --registry " + foreign,
+        fmt::format("blob {} --sensor 2 --device-id 9ABCDEF012345678 -o {} --registry {}",
+                    kGoldenCal, d / "t.bin", foreign)}) {
+    INFO(args);
+    testing::ProgramRun r = Calibrate(args);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + foreign +
+                       ": not a metro registry: it has tables (parts) but no schema_version; "
+                       "metro changes nothing in it: name a new file for the registry\n");
+  }
+  CHECK(Slurp(foreign) == before);
+  CHECK_FALSE(fs::exists(d / "t.bin"));
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include "metro/registry/registry.hpp"
 
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -389,6 +390,190 @@ TEST_CASE("Registry: a schema newer than the program is refused", "[registry]") 
     CHECK(r.error().message.find("schema is version 99, newer than this program's 2") !=
           std::string::npos);
   });
+}
+
+// The bytes of a file ("" when absent).
+std::string Bytes(const std::string& path) {
+  Result<std::string> text = ReadFile(path);
+  return text.ok() ? text.value() : std::string();
+}
+
+// Runs one statement on the database behind `url`, outside the registry's checks.
+void RawExecute(const std::string& url, const std::string& sql) {
+  Result<std::unique_ptr<registry_internal::SqlBackend>> db = registry_internal::OpenBackend(url);
+  REQUIRE(db.ok());
+  INFO(sql);
+  REQUIRE(db.value()->Execute(sql, {}).ok());
+}
+
+TEST_CASE("Registry: a bad schema_version is refused naming the value, never migrated",
+          "[registry]") {
+  // SQLite keeps any value in any column: text, a number past an int, a negative one, a
+  // fraction, NULL-free duplicates. Each is refused by Open and OpenForQuery (no abort, no
+  // loop) and the file is left as it was.
+  const std::string expected = "expected one row holding a whole number from 1 to 2";
+  struct Case {
+    std::string update, found;
+  };
+  for (const Case& c :
+       {Case{"UPDATE schema_version SET version = 'abc'",
+             "schema_version holds 'abc', not a whole number"},
+        Case{"UPDATE schema_version SET version = 99999999999",
+             "the registry's schema is version 99999999999, newer than this program's 2"},
+        Case{"UPDATE schema_version SET version = -1", "schema_version holds -1, not a version"},
+        Case{"UPDATE schema_version SET version = 0", "schema_version holds 0, not a version"},
+        Case{"UPDATE schema_version SET version = 1.5", "schema_version holds '1.5', not a whole"},
+        Case{"INSERT INTO schema_version (version) VALUES (2)", "schema_version has 2 rows"},
+        Case{"DELETE FROM schema_version", "schema_version has 0 rows"}}) {
+    INFO(c.update);
+    SqliteFile f;
+    REQUIRE(Registry::Open(f.path()).ok());
+    RawExecute(f.path(), c.update);
+    const std::string before = Bytes(f.path());
+    for (bool query : {false, true}) {
+      Result<std::unique_ptr<Registry>> r =
+          query ? Registry::OpenForQuery(f.path()) : Registry::Open(f.path());
+      REQUIRE_FALSE(r.ok());
+      CHECK(r.error().kind == ErrorKind::kInput);
+      CHECK(r.error().file == f.path());
+      CHECK(r.error().message.find(c.found) != std::string::npos);
+      if (c.found.find("newer") == std::string::npos) {
+        CHECK(r.error().message.find(expected) != std::string::npos);
+      }
+    }
+    CHECK(Bytes(f.path()) == before);
+  }
+}
+
+TEST_CASE("Registry: -1 and a duplicate schema_version row on both back ends", "[registry]") {
+  OnBothBackends([](const std::string& url) {
+    REQUIRE(Registry::Open(url).ok());
+    RawExecute(url, "UPDATE schema_version SET version = -1");
+    Result<std::unique_ptr<Registry>> r = Registry::Open(url);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().message.find("schema_version holds -1") != std::string::npos);
+    RawExecute(url, "UPDATE schema_version SET version = 2");
+    RawExecute(url, "INSERT INTO schema_version (version) VALUES (1)");
+    r = Registry::OpenForQuery(url);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().message.find("schema_version has 2 rows") != std::string::npos);
+  });
+}
+
+TEST_CASE("Registry: a foreign database is refused, not migrated", "[registry]") {
+  SqliteFile f;
+  RawExecute(f.path(), "CREATE TABLE parts (id INTEGER, name TEXT)");
+  RawExecute(f.path(), "INSERT INTO parts VALUES (1, 'gear')");
+  const std::string before = Bytes(f.path());
+  for (bool query : {false, true}) {
+    Result<std::unique_ptr<Registry>> r =
+        query ? Registry::OpenForQuery(f.path()) : Registry::Open(f.path());
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().ToString() ==
+          f.path() +
+              ": not a metro registry: it has tables (parts) but no schema_version; metro "
+              "changes nothing in it: name a new file for the registry");
+  }
+  CHECK(Bytes(f.path()) == before);
+  // A schema_version that says 2 over tables that are not metro's is refused too.
+  RawExecute(f.path(), "CREATE TABLE schema_version (version INTEGER)");
+  RawExecute(f.path(), "INSERT INTO schema_version VALUES (2)");
+  Result<std::unique_ptr<Registry>> r = Registry::Open(f.path());
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message == "not a metro registry of version 2: the table blobs is missing");
+  // An empty database is a new registry for a recording command, not for a query.
+  SqliteFile empty;
+  { std::ofstream touch(empty.path()); }
+  r = Registry::OpenForQuery(empty.path());
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("an empty database, not a metro registry") != std::string::npos);
+  CHECK(Bytes(empty.path()).empty());
+  REQUIRE(Registry::Open(empty.path()).ok());
+  CHECK(Registry::OpenForQuery(empty.path()).ok());
+}
+
+TEST_CASE("Registry: a query writes nothing and works on a read-only file", "[registry]") {
+  SqliteFile f;
+  {
+    Result<std::unique_ptr<Registry>> r = Registry::Open(f.path());
+    REQUIRE(r.ok());
+    REQUIRE(r.value()->RecordBlob(Golden(), Id(Golden()), 2, BlobFor(kDevice, 3), {}).ok());
+  }
+  REQUIRE(::chmod(f.path().c_str(), 0444) == 0);
+  const std::string before = Bytes(f.path());
+  Result<std::unique_ptr<Registry>> r = Registry::OpenForQuery(f.path());
+  REQUIRE(r.ok());
+  Result<std::vector<RegistryCalibration>> h = r.value()->History(kDevice);
+  REQUIRE(h.ok());
+  REQUIRE(h.value().size() == 1);
+  CHECK(h.value()[0].blobs[0].seq == 3);
+  CHECK(r.value()->All().ok());
+  CHECK(r.value()->Due(365, "2030-01-01T00:00:00Z").ok());
+  // A write through the query connection is refused by SQLite itself.
+  CHECK_FALSE(r.value()->RecordBlob(Golden(), Id(Golden()), 2, BlobFor(kDevice, 4), {}).ok());
+  r = Result<std::unique_ptr<Registry>>(MakeError("closed"));
+  CHECK(Bytes(f.path()) == before);
+  // An older registry is not migrated by a query.
+  SqliteFile old;
+  {
+    Result<std::unique_ptr<registry_internal::SqlBackend>> db =
+        registry_internal::OpenBackend(old.path());
+    REQUIRE(db.ok());
+    REQUIRE(registry_internal::Migrate(db.value().get(), 1, old.path()).ok());
+  }
+  const std::string v1 = Bytes(old.path());
+  r = Registry::OpenForQuery(old.path());
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("the registry's schema is version 1, older than this program's 2; "
+                               "a query changes nothing") != std::string::npos);
+  CHECK(Bytes(old.path()) == v1);
+}
+
+TEST_CASE("Registry: a value that metro does not write is an error naming it", "[registry]") {
+  struct Case {
+    std::string sql, found;
+  };
+  for (const Case& c :
+       {Case{"UPDATE blobs SET seq = 'abc'", "blobs.seq holds 'abc'; expected a whole number"},
+        Case{"UPDATE blobs SET crc = 99999999999",
+             "blobs.crc holds '99999999999'; expected a whole number from 0 to 4294967295"},
+        Case{"UPDATE constants SET value = 'x1'", "constants.value holds 'x1'; expected a finite"},
+        Case{"UPDATE constants SET u = 1e999", "constants.u holds 'inf'; expected a finite number"},
+        Case{"UPDATE calibrations SET sensor = '2x'", "calibrations.sensor holds '2x'"},
+        Case{"UPDATE calibrations SET covariance_json = '{'",
+             "calibrations.covariance_json of calibration 1 is not a JSON object"},
+        Case{"UPDATE pushes SET ok = 7",
+             "pushes.ok holds '7'; expected a whole number from 0 to 1"},
+        Case{"INSERT INTO device_calibrations VALUES ('zz', 1, 'blob', 'x')",
+             "device_calibrations.device_id holds 'zz'; expected a device ID (16 hex digits)"}}) {
+    INFO(c.sql);
+    SqliteFile f;
+    {
+      Result<std::unique_ptr<Registry>> r = Registry::Open(f.path());
+      REQUIRE(r.ok());
+      REQUIRE(r.value()->RecordBlob(Golden(), Id(Golden()), 2, BlobFor(kDevice, 3), {}).ok());
+      RegistryPush p;
+      p.device_id = kDevice;
+      REQUIRE(r.value()->RecordPush(Golden(), Id(Golden()), 2, p, {}).ok());
+    }
+    RawExecute(f.path(), c.sql);
+    Result<std::unique_ptr<Registry>> r = Registry::OpenForQuery(f.path());
+    REQUIRE(r.ok());
+    Result<std::vector<RegistryCalibration>> h = r.value()->History(kDevice);
+    Result<std::vector<RegistryCalibration>> all = r.value()->All();
+    Result<std::vector<DueDevice>> due = r.value()->Due(365, "2030-01-01T00:00:00Z");
+    // At least one query reads the bad value; each that does names it, as an input error.
+    int refused = 0;
+    for (const Error* e : {h.ok() ? nullptr : &h.error(), all.ok() ? nullptr : &all.error(),
+                           due.ok() ? nullptr : &due.error()}) {
+      if (e == nullptr) continue;
+      ++refused;
+      CHECK(e->file == f.path());
+      CHECK(e->kind == ErrorKind::kInput);
+      CHECK(e->message.find(c.found) != std::string::npos);
+    }
+    CHECK(refused >= 1);
+  }
 }
 
 TEST_CASE("Registry: URLs that cannot be opened", "[registry]") {

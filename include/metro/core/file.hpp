@@ -32,6 +32,12 @@ Status WriteFilesAtomically(const std::vector<std::pair<std::string, std::string
 // missing directory.
 Status CheckReplaceableFile(const std::string& path);
 
+// Ok if `path` can be a file metro reads and updates in place (the registry's SQLite file):
+// it does not exist yet or is a regular file (or a symlink to one), and its directory
+// exists. Refused as CheckReplaceableFile refuses, with an error naming `path`: a directory,
+// a device, a FIFO, a socket, anything in /dev, /proc or /sys, a missing directory.
+Status CheckUpdatableFile(const std::string& path);
+
 // Reads a whole file. Errors name the path and the operating system's reason.
 Result<std::string> ReadFile(const std::string& path);
 
@@ -52,13 +58,40 @@ std::string Sha256Hex(std::string_view bytes, size_t chunk_bytes,
 // input or over another output of the same command.
 bool IsSameFile(const std::string& a, const std::string& b);
 
+// SIGINT, SIGTERM and SIGHUP while metro writes: the handler removes every temporary still
+// registered (RemoveOnInterrupt: an AtomicFileWriter's until it is published, a plot's, a
+// copy of stdin) and ends the process by the signal, as it would have ended without the
+// handler. The old outputs stay as they were (nothing was renamed over them). A signal the
+// caller ignores (SIG_IGN) stays ignored. SIGXFSZ is ignored, so a write past the file-size
+// limit (ulimit -f) fails with EFBIG and takes the full-disk path (exit 1, old outputs kept)
+// instead of killing the process. Both programs call it first in main.
+void InstallInterruptCleanup();
+
+// Registers a temporary file for the handler of InstallInterruptCleanup until Reset() or
+// destruction (which unregister it; they do not remove the file). At most 64 files are
+// registered at once; more are not (and are then left behind by a signal).
+class RemoveOnInterrupt {
+ public:
+  RemoveOnInterrupt() = default;
+  explicit RemoveOnInterrupt(const std::string& path);
+  RemoveOnInterrupt(const RemoveOnInterrupt&) = delete;
+  RemoveOnInterrupt& operator=(const RemoveOnInterrupt&) = delete;
+  ~RemoveOnInterrupt();
+  // Unregisters the file registered before, if any, and registers `path` (none if empty).
+  void Reset(const std::string& path = "");
+
+ private:
+  int slot_ = -1;
+};
+
 }  // namespace metro
 
 namespace metro {
 
 // Streams a large output to `path` atomically: chunks go to a temporary file in the same
 // directory; Commit() flushes, fsyncs and renames it over `path`. Destroying the writer
-// without a successful Commit() removes the temporary and leaves `path` untouched.
+// without a successful Commit() removes the temporary and leaves `path` untouched; so does
+// SIGINT or SIGTERM once InstallInterruptCleanup ran.
 //
 // The temporary is `.metro-XXXXXX` beside the target (O_EXCL, so never an existing file):
 // short, so any name the file system accepts for `path` works. A file that is replaced
@@ -88,6 +121,7 @@ class AtomicFileWriter {
   std::string tmp_;
   int fd_ = -1;
   bool finished_ = false;
+  RemoveOnInterrupt cleanup_;  // tmp_ while it exists.
 };
 
 }  // namespace metro

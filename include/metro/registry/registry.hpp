@@ -5,8 +5,10 @@
 //
 // URL: a plain path is a SQLite file (created when absent); "postgresql://..." or
 // "postgres://..." is a libpq connection URI. One schema for both, versioned in
-// `schema_version` and migrated forward on open (each migration one transaction); a database
-// whose version is newer than kRegistrySchemaVersion is refused. Every record is one
+// `schema_version` and migrated forward on open (all steps in one transaction); a database
+// whose version is newer than kRegistrySchemaVersion, or that is not a metro registry, is
+// refused. Every value read back is checked (a bad one is an input error naming the table,
+// the column and the value). Every record is one
 // transaction: a failure leaves nothing of it behind. Concurrent writers (several processes,
 // several stations) are safe: SQLite in WAL mode with a busy timeout and BEGIN IMMEDIATE,
 // retried on SQLITE_BUSY; PostgreSQL retried on serialization failures.
@@ -114,9 +116,21 @@ class Registry {
   // Opens `url` (see above), creating or migrating the schema. Errors (bad input, exit 2): a
   // file that is not a SQLite database or cannot be created, a server that cannot be reached,
   // a schema newer than this program.
+  // The checks of ReadSchemaVersion come first (docs/registry.md "Schema"): a database with
+  // tables but no schema_version (a foreign database) or a schema_version that is not exactly
+  // one whole number from 1 to kRegistrySchemaVersion is refused, never migrated; an older
+  // version is migrated in one transaction. A SQLite path must be absent or a regular file
+  // (CheckUpdatableFile). Nothing throws.
   static Result<std::unique_ptr<Registry>> Open(const std::string& url);
+  // For the queries: opens an existing registry without writing anything to it (a SQLite file
+  // read-only, so a read-only file or directory can be queried; PostgreSQL in read-only
+  // transactions); never creates or migrates. Errors (input): what Open refuses, an empty
+  // database, a version older than this program's (the message says how to migrate it).
+  static Result<std::unique_ptr<Registry>> OpenForQuery(const std::string& url);
   // The URL from --registry, else METRO_REGISTRY, else empty (no registry).
   static std::string UrlFromFlagOrEnvironment(const std::string& flag);
+  // The SQLite file `url` names; empty for a server URL (postgresql://...) or an empty url.
+  static std::string FileOf(const std::string& url);
 
   ~Registry();
   Registry(const Registry&) = delete;
