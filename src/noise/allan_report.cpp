@@ -11,7 +11,61 @@ namespace {
 
 std::string CsvNumber(double v) { return std::isfinite(v) ? fmt::format("{:.10g}", v) : ""; }
 
+std::string TauList(const std::vector<double>& taus) {
+  std::string out;
+  for (double t : taus) out += (out.empty() ? "" : ", ") + fmt::format("{:.3g}", t);
+  return out;
+}
+
+// The model check in a sentence (report and stderr).
+std::string ModelCheckSummary(const NoiseModelCheck& c, double fit_tau_min_s,
+                              double fit_tau_max_s) {
+  const double lo = c.tau_s.empty() ? fit_tau_min_s : c.tau_s.front();
+  const double hi = c.tau_s.empty() ? fit_tau_max_s : c.tau_s.back();
+  if (!c.tested) {
+    return fmt::format(
+        "the IEEE 952 noise model was not tested against the curve ({}): no goodness of fit "
+        "is stated, and u(mean) is not taken from the model",
+        c.not_tested);
+  }
+  const std::string stat =
+      fmt::format("chi2 = {:.4g} at {} dof, p = {:.2g}", c.chi2, c.dof, c.p_value);
+  if (!c.rejected) {
+    return fmt::format("the IEEE 952 noise model holds over tau {:.3g}-{:.3g} s ({})", lo, hi,
+                       stat);
+  }
+  std::string out = fmt::format(
+      "the IEEE 952 noise model is rejected by the Allan curve over tau {:.3g}-{:.3g} s ({}, "
+      "below the {:.2g} level)",
+      lo, hi, stat, c.alpha);
+  if (!c.contradicting_taus_s.empty()) {
+    out += fmt::format(
+        "; the points at tau {} s lie more than {:.3g} of their standard "
+        "deviations from it",
+        TauList(c.contradicting_taus_s), c.contradiction_z);
+  }
+  if (c.holds_somewhere()) {
+    std::vector<double> outside;
+    for (double t : c.tau_s) {
+      if (t < c.holds_tau_min_s || t > c.holds_tau_max_s) outside.push_back(t);
+    }
+    out += fmt::format(
+        "; it holds over tau {:.3g}-{:.3g} s (chi2 = {:.4g} at {} dof, p = {:.2g}), where the "
+        "terms are fitted; outside it (tau {} s) the curve has structure the model lacks",
+        c.holds_tau_min_s, c.holds_tau_max_s, c.holds_chi2, c.holds_dof, c.holds_p_value,
+        TauList(outside));
+  } else {
+    out += "; it holds over no stretch of the curve, and the terms describe nothing reliably";
+  }
+  return out + "; u(mean) is not taken from the model";
+}
+
 }  // namespace
+
+const char* NoiseModelStatus(const NoiseModelCheck& check) {
+  if (!check.tested) return "untested";
+  return check.rejected ? "rejected" : "holds";
+}
 
 AllanReport MakeAllanReport(const AllanCurve& curve, const NoiseFit& fit,
                             const std::string& quantity_unit) {
@@ -49,6 +103,12 @@ AllanReport MakeAllanReport(const AllanCurve& curve, const NoiseFit& fit,
     term.supported = have;
     term.tau_min_s = have ? est.tau_min_s : nan;
     term.tau_max_s = have ? est.tau_max_s : nan;
+    if (fit.success) {
+      term.model_rejected = fit.model_check.tested && fit.model_check.rejected;
+      term.u_model = have ? est.u_model : nan;
+      term.selection =
+          AllanTermSelectionReport{est.delta_chi2, est.penalty_chi2, have ? "in" : "out"};
+    }
     const ReadOff& ro = readoffs[i];
     if (ro.found) term.readoff = AllanReadOffReport{ro.value, ro.u, ro.tau_read_s};
     if (t == NoiseTerm::kRandomWalk) {
@@ -62,6 +122,35 @@ AllanReport MakeAllanReport(const AllanCurve& curve, const NoiseFit& fit,
       density.density_one_sided_conventional = have ? d * units.density.factor : nan;
       density.unit_density_conventional = units.density.unit_conventional;
       term.density = density;
+    }
+  }
+  if (fit.success) {
+    const NoiseModelCheck& c = fit.model_check;
+    AllanModelCheckReport m;
+    m.tested = c.tested;
+    if (!c.tested) m.not_tested = c.not_tested;
+    m.chi2 = c.tested ? c.chi2 : nan;
+    if (c.tested) m.dof = c.dof;
+    m.p_value = c.tested ? c.p_value : nan;
+    m.alpha = c.alpha;
+    m.rejected = c.tested && c.rejected;
+    m.tau_s = c.tau_s;
+    m.z = c.z;
+    m.contradicting_taus_s = c.contradicting_taus_s;
+    if (c.holds_somewhere()) {
+      m.tau_range_model_holds_s = std::array<double, 2>{c.holds_tau_min_s, c.holds_tau_max_s};
+      m.holds_chi2 = c.holds_chi2;
+      m.holds_dof = c.holds_dof;
+      m.holds_p_value = c.holds_p_value;
+    }
+    m.summary = ModelCheckSummary(c, fit.fit_tau_min_s, fit.fit_tau_max_s);
+    r.model_check = std::move(m);
+    if (fit.bk_joint || std::isfinite(fit.bk_correlation)) {
+      const NoiseTermEstimate& b =
+          fit.bk_joint ? fit.joint_b : fit.term(NoiseTerm::kBiasInstability);
+      const NoiseTermEstimate& k =
+          fit.bk_joint ? fit.joint_k : fit.term(NoiseTerm::kRateRandomWalk);
+      r.b_k = AllanBkReport{fit.bk_joint, fit.bk_correlation, b.value, b.u, k.value, k.u};
     }
   }
   return r;
@@ -82,6 +171,7 @@ AllanTypeALink MakeAllanTypeALink(const AllanCurve& curve, const NoiseFit& fit, 
     link.u_u_mean_allan = p.value().u_of_u;
     link.dominant_term = NoiseTermKey(p.value().dominant);
     link.extrapolated = p.value().extrapolated;
+    link.noise_model = NoiseModelStatus(fit.model_check);
   }
   return link;
 }

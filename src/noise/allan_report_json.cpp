@@ -66,7 +66,67 @@ Json ToJsonValue(const AllanNoiseTermReport& t) {
     j["density_one_sided_conventional"] = Number(d.density_one_sided_conventional);
     j["unit_density_conventional"] = d.unit_density_conventional;
   }
+  if (t.model_rejected) j["model_rejected"] = *t.model_rejected;
+  if (t.u_model) j["u_model"] = Number(*t.u_model);
+  if (t.selection) {
+    j["selection"] = {{"delta_chi2", Number(t.selection->delta_chi2)},
+                      {"penalty_chi2", Number(t.selection->penalty_chi2)},
+                      {"decision", t.selection->decision}};
+  }
   return j;
+}
+
+Json ToJsonValue(const AllanModelCheckReport& m) {
+  Json j;
+  j["tested"] = m.tested;
+  j["not_tested"] = m.not_tested ? Json(*m.not_tested) : Json(nullptr);
+  j["chi2"] = Number(m.chi2);
+  j["dof"] = m.dof ? Json(*m.dof) : Json(nullptr);
+  j["p_value"] = Number(m.p_value);
+  j["alpha"] = Number(m.alpha);
+  j["rejected"] = m.rejected;
+  j["tau_s"] = Numbers(m.tau_s);
+  j["z"] = Numbers(m.z);
+  j["contradicting_taus_s"] = Numbers(m.contradicting_taus_s);
+  if (m.tau_range_model_holds_s) {
+    j["tau_range_model_holds_s"] =
+        Json::array({(*m.tau_range_model_holds_s)[0], (*m.tau_range_model_holds_s)[1]});
+  } else {
+    j["tau_range_model_holds_s"] = nullptr;
+  }
+  j["holds_chi2"] = Number(m.holds_chi2);
+  j["holds_dof"] = m.holds_dof ? Json(*m.holds_dof) : Json(nullptr);
+  j["holds_p_value"] = Number(m.holds_p_value);
+  j["summary"] = m.summary;
+  return j;
+}
+
+AllanModelCheckReport ModelCheckFromJsonValue(const JsonCursor& c) {
+  AllanModelCheckReport m;
+  m.tested = c["tested"].Bool();
+  m.not_tested = c["not_tested"].OptionalString();
+  m.chi2 = c["chi2"].NumberOrNaN();
+  m.dof = c["dof"].OptionalInteger();
+  m.p_value = c["p_value"].NumberOrNaN();
+  m.alpha = c["alpha"].NumberOrNaN();
+  m.rejected = c["rejected"].Bool();
+  m.tau_s = c["tau_s"].NumbersOrNaN();
+  m.z = c["z"].NumbersOrNaN();
+  m.contradicting_taus_s = c["contradicting_taus_s"].NumbersOrNaN();
+  const JsonCursor range = c["tau_range_model_holds_s"];
+  if (!range.IsNull()) {
+    const std::vector<double> r = range.NumbersOrNaN();
+    if (r.size() == 2) {
+      m.tau_range_model_holds_s = std::array<double, 2>{r[0], r[1]};
+    } else {
+      range.Fail("[tau_min_s, tau_max_s]");
+    }
+  }
+  m.holds_chi2 = c["holds_chi2"].NumberOrNaN();
+  m.holds_dof = c["holds_dof"].OptionalInteger();
+  m.holds_p_value = c["holds_p_value"].NumberOrNaN();
+  m.summary = c["summary"].String();
+  return m;
 }
 
 AllanNoiseTermReport NoiseTermFromJsonValue(const JsonCursor& c) {
@@ -93,6 +153,14 @@ AllanNoiseTermReport NoiseTermFromJsonValue(const JsonCursor& c) {
     d.density_one_sided_conventional = c["density_one_sided_conventional"].NumberOrNaN();
     d.unit_density_conventional = c["unit_density_conventional"].String();
     t.density = d;
+  }
+  if (c.Has("model_rejected")) t.model_rejected = c["model_rejected"].Bool();
+  if (c.Has("u_model")) t.u_model = c["u_model"].NumberOrNaN();
+  if (c.Has("selection")) {
+    const JsonCursor sel = c["selection"];
+    t.selection =
+        AllanTermSelectionReport{sel["delta_chi2"].NumberOrNaN(), sel["penalty_chi2"].NumberOrNaN(),
+                                 sel["decision"].String()};
   }
   return t;
 }
@@ -131,6 +199,12 @@ Json ToJsonValue(const AllanReport& a) {
                         {"warnings", p.warnings}};
   if (a.gaps) j["gaps"] = ToJsonValue(*a.gaps);
   if (a.fit_error) j["fit_error"] = *a.fit_error;
+  if (a.model_check) j["model_check"] = ToJsonValue(*a.model_check);
+  if (a.b_k) {
+    j["b_k"] = {{"joint", a.b_k->joint}, {"correlation", Number(a.b_k->correlation)},
+                {"b", Number(a.b_k->b)}, {"u_b", Number(a.b_k->u_b)},
+                {"k", Number(a.b_k->k)}, {"u_k", Number(a.b_k->u_k)}};
+  }
   return j;
 }
 
@@ -170,6 +244,13 @@ AllanReport AllanReportFromJsonValue(const JsonCursor& c) {
   a.sample_period.missing_samples = p["missing_samples"].Integer();
   a.sample_period.warnings = p["warnings"].Strings();
   a.fit_error = c["fit_error"].OptionalString();
+  if (c.Has("model_check")) a.model_check = ModelCheckFromJsonValue(c["model_check"]);
+  if (c.Has("b_k")) {
+    const JsonCursor bk = c["b_k"];
+    a.b_k = AllanBkReport{bk["joint"].Bool(),    bk["correlation"].NumberOrNaN(),
+                          bk["b"].NumberOrNaN(), bk["u_b"].NumberOrNaN(),
+                          bk["k"].NumberOrNaN(), bk["u_k"].NumberOrNaN()};
+  }
   return a;
 }
 
@@ -183,6 +264,7 @@ Json ToJsonValue(const AllanTypeALink& link) {
   j["u_u_mean_allan"] = Number(link.u_u_mean_allan);
   j["dominant_term"] = link.dominant_term ? Json(*link.dominant_term) : Json(nullptr);
   j["extrapolated"] = link.extrapolated ? Json(*link.extrapolated) : Json(nullptr);
+  if (link.noise_model) j["noise_model"] = *link.noise_model;
   return j;
 }
 
@@ -196,6 +278,7 @@ AllanTypeALink AllanTypeALinkFromJsonValue(const JsonCursor& c) {
   link.u_u_mean_allan = c["u_u_mean_allan"].NumberOrNaN();
   link.dominant_term = c["dominant_term"].OptionalString();
   if (!c["extrapolated"].IsNull()) link.extrapolated = c["extrapolated"].Bool();
+  link.noise_model = c["noise_model"].OptionalString();
   return link;
 }
 

@@ -25,7 +25,53 @@ struct Point {
   double var;
   double edf;
   size_t index;  // In the curve.
+  // Model error of the sampling per unit B^2 and K^2 (NoiseFitOptions::discretization_error).
+  double excess_b = 0.0;
+  double excess_k = 0.0;
 };
+
+// ---- Model error of the sampling (issue #36) -----------------------------------------------
+//
+// The IEEE 952 factors hold at every tau = m tau0 for an integrating sampler (each sample the
+// average of the rate over its interval). Point-sampled noise reads higher at short taus:
+//   flicker (Kasdin 1992: y = (1 - z^-1)^(-1/2) of white noise of variance B^2, two-sided PSD
+//   B^2 / (2 sin(pi nu)), nu in cycles per sample): the estimator's variance is
+//     B^2 int_0^1/2 sin^2(pi m nu) g(pi m nu) / (m^2 sin^3(pi nu)) dnu
+//   with g(x) = 2 sin^2 x (Allan) or (8/3) sin^4 x (Hadamard): 1/ln2 = 1.443 times the IEEE 952
+//   factor at m = 1 (Allan, exact), 1.154 at 2, 1.050 at 4, 1.015 at 8, 1.005 at 16;
+//   random walk b_k+1 = b_k + K sqrt(tau0) w_k: AVAR = K^2 tau / 3 + K^2 tau0^2 / (6 tau)
+//   (taken for the Hadamard variance too, as an approximation).
+// Both are 0 for white phase, white rate and a ramp.
+
+// Variance per unit B^2 of point-sampled (Kasdin) flicker at m, NaN beyond m = 512 (where it is
+// within 1e-4 of the IEEE 952 factor).
+double PointSampledFlickerFactor(bool hadamard, int64_t m) {
+  static std::mutex mutex;
+  static std::vector<std::pair<int64_t, double>> cache[2];
+  if (m < 1 || m > 512) return std::nan("");
+  std::vector<std::pair<int64_t, double>>& c = cache[hadamard ? 1 : 0];
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& e : c) {
+      if (e.first == m) return e.second;
+    }
+  }
+  const double kPi = 3.14159265358979323846;
+  const int64_t nodes = 400 * m + 2000;  // ~ 400 per oscillation of sin(pi m nu)
+  const double h = 0.5 / static_cast<double>(nodes);
+  const double md = static_cast<double>(m);
+  double sum = 0.0;
+  for (int64_t i = 0; i < nodes; ++i) {  // midpoint rule
+    const double nu = (static_cast<double>(i) + 0.5) * h;
+    const double s = std::sin(kPi * nu), sm = std::sin(kPi * md * nu);
+    const double g = hadamard ? 8.0 / 3.0 * sm * sm * sm * sm : 2.0 * sm * sm;
+    sum += sm * sm * g / (md * md * s * s * s);
+  }
+  const double value = sum * h;
+  std::lock_guard<std::mutex> lock(mutex);
+  c.emplace_back(m, value);
+  return value;
+}
 // ---- Covariance of overlapping variance estimates ------------------------------------------
 //
 // For Gaussian noise an overlapping estimate is s_a^2 = sum_i d_a(i)^2 / norm_a with
@@ -288,12 +334,15 @@ Eigen::MatrixXd VarianceCovariance(const CovarianceBasis& basis,
 }
 
 struct SubsetFit {
+  bool fitted = false;  // The solve succeeded (chi2 and z are defined).
   bool admissible = false;
   std::vector<int> terms;
   Eigen::VectorXd c;
   Eigen::MatrixXd cov;
+  Eigen::MatrixXd cov_stat;  // Without the model error (discretization, relative_floor).
+  Eigen::VectorXd z;         // Standardized residuals (s^2 - model) / sqrt(Cov_ii).
   double chi2 = 0.0;
-  double bic = 0.0;
+  double score = 0.0;  // chi2 + the terms' penalties.
 };
 
 // One subset of terms by generalized least squares, iterated: the covariance of the variance
@@ -325,6 +374,12 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
   }
   Eigen::VectorXd c = Eigen::VectorXd::Zero(k);
   Eigen::MatrixXd c_cov;
+  // Model error in cov: the relative floor on the diagonal, and the sampling's excess e as one
+  // systematic pattern e e' (the excess has the same sign at every tau and shrinks with tau:
+  // a nuisance amplitude a ~ N(0, 1) times e, which the data may absorb at a chi2 cost of a^2,
+  // so a point-sampled record biases no term).
+  Eigen::VectorXd floor_diag = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd excess = Eigen::VectorXd::Zero(n);
   double chi2 = 0.0;
   for (int it = 0; it <= options.iterations; ++it) {
     const Eigen::LLT<Eigen::MatrixXd> llt(cov);
@@ -343,7 +398,25 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
     const Eigen::MatrixXd normal = aw.transpose() * aw;
     c_cov = col.cwiseInverse().asDiagonal() * normal.inverse() * col.cwiseInverse().asDiagonal();
     chi2 = llt.matrixL().solve(y - a * c).squaredNorm();
-    if (it == options.iterations) break;
+    if (it == options.iterations) {
+      const Eigen::VectorXd r = y - a * c;
+      out.z.resize(n);
+      for (int i = 0; i < n; ++i) out.z(i) = r(i) / std::sqrt(cov(i, i));
+      // The same normal matrix without the model error: u_stat.
+      Eigen::MatrixXd stat = cov;
+      stat -= excess * excess.transpose();
+      for (int i = 0; i < n; ++i) stat(i, i) -= floor_diag(i);
+      const Eigen::LLT<Eigen::MatrixXd> llt_stat(stat);
+      if (llt_stat.info() == Eigen::Success) {
+        const Eigen::MatrixXd as = llt_stat.matrixL().solve(a) * col.cwiseInverse().asDiagonal();
+        const Eigen::MatrixXd ns = as.transpose() * as;
+        out.cov_stat =
+            col.cwiseInverse().asDiagonal() * ns.inverse() * col.cwiseInverse().asDiagonal();
+      } else {
+        out.cov_stat = c_cov;
+      }
+      break;
+    }
     std::array<double, kNoiseTermCount> cfull{};
     for (int j = 0; j < k; ++j)
       cfull[static_cast<size_t>(terms[static_cast<size_t>(j)])] = std::max(0.0, c(j));
@@ -362,10 +435,20 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
     }
     for (int i = 0; i < n; ++i) {
       const double m = model[static_cast<size_t>(i)];
-      // The floor, and a guard of 1e-6 of the data where the model leaves a point without
-      // noise (a noiseless ramp, a term at zero).
-      cov(i, i) += floor2 * m * m + 1e-12 * y(i) * y(i);
+      const Point& p = pts[static_cast<size_t>(i)];
+      // The sampling's excess (point-sampled minus integrating) and the floor.
+      double e = 0.0;
+      if (options.discretization_error) {
+        e = p.excess_b * cfull[static_cast<size_t>(NoiseTerm::kBiasInstability)] +
+            p.excess_k * cfull[static_cast<size_t>(NoiseTerm::kRateRandomWalk)];
+      }
+      excess(i) = e;
+      floor_diag(i) = floor2 * m * m;
+      // A guard of 1e-6 of the data where the model leaves a point without noise (a
+      // noiseless ramp, a term at zero).
+      cov(i, i) += floor_diag(i) + 1e-12 * y(i) * y(i);
     }
+    cov += excess * excess.transpose();
   }
   const int dof = n - k;
   double scale = 1.0;
@@ -376,8 +459,12 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
   }
   out.c = c;
   out.cov = c_cov * scale;
+  if (out.cov_stat.size() == 0) out.cov_stat = c_cov;
+  out.cov_stat *= scale;
   out.chi2 = chi2;
-  out.bic = chi2 + k * std::log(static_cast<double>(n));
+  out.score = chi2;
+  for (int t : terms) out.score += options.term_penalty[static_cast<size_t>(t)];
+  out.fitted = true;
   out.admissible = true;
   for (int j = 0; j < k; ++j) {
     const double u = std::sqrt(std::max(out.cov(j, j), 0.0));
@@ -431,6 +518,200 @@ double RelativeU(const AllanCurve& curve, size_t i) {
   return half_log / z;
 }
 
+// The sums of the points [lo, lo + len) of `basis`.
+CovarianceBasis SubBasis(const CovarianceBasis& basis, size_t lo, size_t len) {
+  CovarianceBasis out;
+  out.overlapping = basis.overlapping;
+  out.hadamard = basis.hadamard;
+  const size_t n = basis.tau_s.size();
+  out.tau_s.assign(basis.tau_s.begin() + static_cast<ptrdiff_t>(lo),
+                   basis.tau_s.begin() + static_cast<ptrdiff_t>(lo + len));
+  out.norm.assign(basis.norm.begin() + static_cast<ptrdiff_t>(lo),
+                  basis.norm.begin() + static_cast<ptrdiff_t>(lo + len));
+  out.gap_scale.assign(basis.gap_scale.begin() + static_cast<ptrdiff_t>(lo),
+                       basis.gap_scale.begin() + static_cast<ptrdiff_t>(lo + len));
+  if (basis.sums.size() == n * n) {
+    out.sums.resize(len * len);
+    for (size_t a = 0; a < len; ++a) {
+      for (size_t b = 0; b < len; ++b) out.sums[a * len + b] = basis.sums[(lo + a) * n + lo + b];
+    }
+  }
+  return out;
+}
+
+// The chosen subset of terms and each term's selection statistic.
+struct Selection {
+  bool ok = false;
+  SubsetFit best;
+  std::array<double, kNoiseTermCount> delta_chi2;
+  SubsetFit with_both_bk;  // The chosen subset plus the one of B, K it lacks (if fitted).
+};
+
+// Every non-empty subset of `allowed` is fitted; among the admissible ones (each coefficient
+// positive and significant) the smallest chi2 + penalties wins.
+Selection SelectTerms(const std::vector<Point>& pts, const std::vector<int>& allowed,
+                      AllanEstimator estimator, const CovarianceBasis& basis,
+                      const NoiseFitOptions& options) {
+  Selection out;
+  out.delta_chi2.fill(std::nan(""));
+  const int n_allowed = static_cast<int>(allowed.size());
+  std::vector<SubsetFit> fits(static_cast<size_t>(1) << n_allowed);
+  int best_mask = 0;
+  for (int mask = 1; mask < (1 << n_allowed); ++mask) {
+    std::vector<int> terms;
+    for (int j = 0; j < n_allowed; ++j) {
+      if (mask & (1 << j)) terms.push_back(allowed[static_cast<size_t>(j)]);
+    }
+    if (terms.size() > pts.size()) continue;
+    SubsetFit& fit = fits[static_cast<size_t>(mask)];
+    fit = FitSubset(pts, terms, estimator, basis, options);
+    if (fit.admissible &&
+        (best_mask == 0 || fit.score < fits[static_cast<size_t>(best_mask)].score)) {
+      best_mask = mask;
+    }
+  }
+  if (best_mask == 0) return out;
+  out.ok = true;
+  out.best = fits[static_cast<size_t>(best_mask)];
+  int bit_b = 0, bit_k = 0;
+  for (int j = 0; j < n_allowed; ++j) {
+    if (allowed[static_cast<size_t>(j)] == static_cast<int>(NoiseTerm::kBiasInstability)) {
+      bit_b = 1 << j;
+    }
+    if (allowed[static_cast<size_t>(j)] == static_cast<int>(NoiseTerm::kRateRandomWalk)) {
+      bit_k = 1 << j;
+    }
+  }
+  if (bit_b != 0 && bit_k != 0 && ((best_mask & bit_b) != 0) != ((best_mask & bit_k) != 0)) {
+    out.with_both_bk = fits[static_cast<size_t>(best_mask | bit_b | bit_k)];
+  }
+  for (int j = 0; j < n_allowed; ++j) {
+    const int other = best_mask ^ (1 << j);
+    if (other == 0 || !fits[static_cast<size_t>(other)].fitted) continue;
+    const double d = fits[static_cast<size_t>(other)].chi2 - out.best.chi2;
+    out.delta_chi2[static_cast<size_t>(allowed[static_cast<size_t>(j)])] =
+        (best_mask & (1 << j)) ? d : -d;
+  }
+  return out;
+}
+
+// chi2 of a chosen subset against chi-squared with n - k dof.
+struct FitTest {
+  bool tested = false;
+  std::string not_tested;
+  int dof = 0;
+  double p_value = std::nan("");
+};
+FitTest TestFit(const SubsetFit& fit, size_t n_points) {
+  FitTest t;
+  t.dof = static_cast<int>(n_points) - static_cast<int>(fit.terms.size());
+  if (t.dof < 1) {
+    t.not_tested = fmt::format(
+        "the model cannot be tested: {} fitted taus for {} terms leave no degree of freedom",
+        n_points, fit.terms.size());
+    return t;
+  }
+  if (!std::isfinite(fit.chi2)) {
+    t.not_tested = "the model cannot be tested: chi2 is not finite";
+    return t;
+  }
+  t.tested = true;
+  t.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(t.dof), fit.chi2));
+  return t;
+}
+
+// The fit's summary from a chosen subset over `pts`.
+NoiseFit MakeNoiseFit(const Selection& sel, const std::vector<Point>& pts, AllanEstimator estimator,
+                      const NoiseFitOptions& options) {
+  const SubsetFit& best = sel.best;
+  NoiseFit out;
+  out.estimator = estimator;
+  out.chi2 = best.chi2;
+  out.n_points = static_cast<int>(pts.size());
+  out.dof = out.n_points - static_cast<int>(best.terms.size());
+  out.birge_ratio = out.dof > 0 ? std::sqrt(best.chi2 / out.dof) : 0.0;
+  out.fit_tau_min_s = pts.front().tau_s;
+  out.fit_tau_max_s = pts.back().tau_s;
+  for (NoiseTerm t : kAllNoiseTerms) {
+    NoiseTermEstimate& est = out.terms[static_cast<size_t>(t)];
+    est.delta_chi2 = sel.delta_chi2[static_cast<size_t>(t)];
+    est.penalty_chi2 = options.term_penalty[static_cast<size_t>(t)];
+  }
+  for (size_t a = 0; a < best.terms.size(); ++a) {
+    const int ta = best.terms[a];
+    const auto ia = static_cast<Eigen::Index>(a);
+    NoiseTermEstimate& est = out.terms[static_cast<size_t>(ta)];
+    const double c = best.c(ia);
+    est.supported = true;
+    est.value = std::sqrt(c);
+    est.u = std::sqrt(std::max(best.cov(ia, ia), 0.0)) / (2.0 * est.value);
+    const double u_stat = std::sqrt(std::max(best.cov_stat(ia, ia), 0.0)) / (2.0 * est.value);
+    est.u_model = std::sqrt(std::max(est.u * est.u - u_stat * u_stat, 0.0));
+    for (size_t b = 0; b < best.terms.size(); ++b) {
+      out.covariance_c[static_cast<size_t>(ta)][static_cast<size_t>(best.terms[b])] =
+          best.cov(ia, static_cast<Eigen::Index>(b));
+    }
+  }
+  // B and K: their correlation, or the joint fit when the record cannot separate them.
+  const auto index_of = [](const SubsetFit& f, NoiseTerm t) -> Eigen::Index {
+    for (size_t a = 0; a < f.terms.size(); ++a) {
+      if (f.terms[a] == static_cast<int>(t)) return static_cast<Eigen::Index>(a);
+    }
+    return -1;
+  };
+  const auto correlation = [](const Eigen::MatrixXd& cov, Eigen::Index a, Eigen::Index b) {
+    const double d = std::sqrt(cov(a, a) * cov(b, b));
+    return d > 0.0 ? cov(a, b) / d : std::nan("");
+  };
+  const Eigen::Index ib = index_of(best, NoiseTerm::kBiasInstability);
+  const Eigen::Index ik = index_of(best, NoiseTerm::kRateRandomWalk);
+  if (ib >= 0 && ik >= 0) out.bk_correlation = correlation(best.cov, ib, ik);
+  const SubsetFit& both = sel.with_both_bk;
+  if (both.fitted && !both.admissible) {
+    const Eigen::Index jb = index_of(both, NoiseTerm::kBiasInstability);
+    const Eigen::Index jk = index_of(both, NoiseTerm::kRateRandomWalk);
+    bool positive = jb >= 0 && jk >= 0;
+    for (Eigen::Index a = 0; positive && a < both.c.size(); ++a) positive = both.c(a) > 0.0;
+    if (positive) {
+      out.bk_joint = true;
+      out.bk_correlation = correlation(both.cov, jb, jk);
+      const auto fill = [&both](Eigen::Index j, NoiseTermEstimate* e) {
+        e->supported = true;
+        e->value = std::sqrt(both.c(j));
+        e->u = std::sqrt(std::max(both.cov(j, j), 0.0)) / (2.0 * e->value);
+        const double u_stat = std::sqrt(std::max(both.cov_stat(j, j), 0.0)) / (2.0 * e->value);
+        e->u_model = std::sqrt(std::max(e->u * e->u - u_stat * u_stat, 0.0));
+      };
+      fill(jb, &out.joint_b);
+      fill(jk, &out.joint_k);
+    }
+  }
+  out.success = true;
+  out.message = "ok";
+  // Tau range each term rests on.
+  for (int ta : best.terms) {
+    NoiseTermEstimate& est = out.terms[static_cast<size_t>(ta)];
+    double best_share = -1.0, best_tau = 0.0;
+    bool any = false;
+    for (const Point& p : pts) {
+      double f = 0.0;
+      NoiseBasis(estimator, static_cast<NoiseTerm>(ta), p.tau_s, &f);
+      const double share = f * est.value * est.value / ModelVariance(out, p.tau_s);
+      if (share > best_share) {
+        best_share = share;
+        best_tau = p.tau_s;
+      }
+      if (share >= kRangeShare) {
+        est.tau_min_s = any ? std::min(est.tau_min_s, p.tau_s) : p.tau_s;
+        est.tau_max_s = any ? std::max(est.tau_max_s, p.tau_s) : p.tau_s;
+        any = true;
+      }
+    }
+    if (!any) est.tau_min_s = est.tau_max_s = best_tau;
+  }
+  return out;
+}
+
 }  // namespace
 
 bool NoiseFitOptions::IsValid(std::string* why) const {
@@ -448,6 +729,14 @@ bool NoiseFitOptions::IsValid(std::string* why) const {
     return fail("the fit range needs 0 <= tau_min_s < tau_max_s");
   }
   if (iterations < 1) return fail("iterations must be >= 1");
+  for (double penalty : term_penalty) {
+    if (!(penalty >= 0.0 && std::isfinite(penalty))) return fail("term_penalty must be >= 0");
+  }
+  if (!(model_alpha > 0.0 && model_alpha < 1.0)) return fail("model_alpha must be in (0, 1)");
+  if (!(contradiction_z > 0.0 && std::isfinite(contradiction_z))) {
+    return fail("contradiction_z must be > 0");
+  }
+  if (min_holding_points < 2) return fail("min_holding_points must be >= 2");
   if (std::none_of(allow.begin(), allow.end(), [](bool b) { return b; })) {
     return fail("no noise term is allowed");
   }
@@ -491,68 +780,82 @@ Result<NoiseFit> FitNoiseTerms(const AllanCurve& curve, const NoiseFitOptions& o
                                  : curve.n_terms[p.index]);
   }
   const std::shared_ptr<const CovarianceBasis> basis = GetCovarianceBasis(key);
-  SubsetFit best;
-  const int n_allowed = static_cast<int>(allowed.size());
-  for (int mask = 1; mask < (1 << n_allowed); ++mask) {
-    std::vector<int> terms;
-    for (int j = 0; j < n_allowed; ++j) {
-      if (mask & (1 << j)) terms.push_back(allowed[static_cast<size_t>(j)]);
+  for (Point& p : pts) {
+    const int64_t m = curve.m[p.index];
+    double f_b = 0.0;
+    if (NoiseBasis(curve.estimator, NoiseTerm::kBiasInstability, p.tau_s, &f_b)) {
+      const double point = PointSampledFlickerFactor(basis->hadamard, m);
+      p.excess_b = std::isfinite(point) ? std::fabs(point - f_b) : 0.0;
     }
-    if (terms.size() > pts.size()) continue;
-    SubsetFit fit = FitSubset(pts, terms, curve.estimator, *basis, options);
-    if (fit.admissible && (!best.admissible || fit.bic < best.bic)) best = fit;
+    p.excess_k = curve.tau0_s * curve.tau0_s / (6.0 * p.tau_s);
   }
-  if (!best.admissible) {
+  const Selection full = SelectTerms(pts, allowed, curve.estimator, *basis, options);
+  if (!full.ok) {
     return MakeError(
         "noise fit: no combination of noise terms is supported by the data (every subset has a "
         "non-positive or insignificant coefficient)");
   }
-
-  NoiseFit out;
-  out.estimator = curve.estimator;
-  out.chi2 = best.chi2;
-  out.n_points = static_cast<int>(pts.size());
-  out.dof = out.n_points - static_cast<int>(best.terms.size());
-  out.birge_ratio = out.dof > 0 ? std::sqrt(best.chi2 / out.dof) : 0.0;
-  out.fit_tau_min_s = pts.front().tau_s;
-  out.fit_tau_max_s = pts.back().tau_s;
-  for (size_t a = 0; a < best.terms.size(); ++a) {
-    const int ta = best.terms[a];
-    NoiseTermEstimate& est = out.terms[static_cast<size_t>(ta)];
-    const double c = best.c(static_cast<Eigen::Index>(a));
-    est.supported = true;
-    est.value = std::sqrt(c);
-    est.u = std::sqrt(std::max(best.cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(a)),
-                               0.0)) /
-            (2.0 * est.value);
-    for (size_t b = 0; b < best.terms.size(); ++b) {
-      out.covariance_c[static_cast<size_t>(ta)][static_cast<size_t>(best.terms[b])] =
-          best.cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
-    }
+  // Goodness of fit over the whole range (issue #36).
+  NoiseModelCheck check;
+  check.alpha = options.model_alpha;
+  check.contradiction_z = options.contradiction_z;
+  const FitTest test = TestFit(full.best, pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    check.tau_s.push_back(pts[i].tau_s);
+    check.z.push_back(full.best.z(static_cast<Eigen::Index>(i)));
   }
-  out.success = true;
-  out.message = "ok";
-  // Tau range each term rests on.
-  for (int ta : best.terms) {
-    NoiseTermEstimate& est = out.terms[static_cast<size_t>(ta)];
-    double best_share = -1.0, best_tau = 0.0;
-    bool any = false;
-    for (const Point& p : pts) {
-      double f = 0.0;
-      NoiseBasis(curve.estimator, static_cast<NoiseTerm>(ta), p.tau_s, &f);
-      const double share = f * est.value * est.value / ModelVariance(out, p.tau_s);
-      if (share > best_share) {
-        best_share = share;
-        best_tau = p.tau_s;
-      }
-      if (share >= kRangeShare) {
-        est.tau_min_s = any ? std::min(est.tau_min_s, p.tau_s) : p.tau_s;
-        est.tau_max_s = any ? std::max(est.tau_max_s, p.tau_s) : p.tau_s;
-        any = true;
+  Selection chosen = full;
+  std::vector<Point> chosen_pts = pts;
+  if (!test.tested) {
+    check.not_tested = test.not_tested;
+  } else {
+    check.tested = true;
+    check.chi2 = full.best.chi2;
+    check.dof = test.dof;
+    check.p_value = test.p_value;
+    check.rejected = test.p_value < options.model_alpha;
+    for (size_t i = 0; i < pts.size(); ++i) {
+      if (std::fabs(check.z[i]) > options.contradiction_z) {
+        check.contradicting_taus_s.push_back(pts[i].tau_s);
       }
     }
-    if (!any) est.tau_min_s = est.tau_max_s = best_tau;
+    if (!check.rejected) {
+      check.holds_tau_min_s = pts.front().tau_s;
+      check.holds_tau_max_s = pts.back().tau_s;
+      check.holds_chi2 = check.chi2;
+      check.holds_dof = check.dof;
+      check.holds_p_value = check.p_value;
+    } else if (options.restrict_to_holding_range) {
+      // The widest stretch of consecutive fitted taus where a refit is accepted (the largest
+      // p-value among stretches of that width).
+      const size_t n = pts.size();
+      const size_t min_len = static_cast<size_t>(options.min_holding_points);
+      bool found = false;
+      for (size_t len = n - 1; len >= min_len && len >= 2 && !found; --len) {
+        double best_p = -1.0;
+        for (size_t lo = 0; lo + len <= n; ++lo) {
+          const std::vector<Point> sub(pts.begin() + static_cast<ptrdiff_t>(lo),
+                                       pts.begin() + static_cast<ptrdiff_t>(lo + len));
+          const CovarianceBasis sub_basis = SubBasis(*basis, lo, len);
+          Selection sel = SelectTerms(sub, allowed, curve.estimator, sub_basis, options);
+          if (!sel.ok) continue;
+          const FitTest t = TestFit(sel.best, sub.size());
+          if (!t.tested || t.p_value < options.model_alpha || t.p_value <= best_p) continue;
+          best_p = t.p_value;
+          found = true;
+          chosen = std::move(sel);
+          chosen_pts = sub;
+          check.holds_tau_min_s = sub.front().tau_s;
+          check.holds_tau_max_s = sub.back().tau_s;
+          check.holds_chi2 = chosen.best.chi2;
+          check.holds_dof = t.dof;
+          check.holds_p_value = t.p_value;
+        }
+      }
+    }
   }
+  NoiseFit out = MakeNoiseFit(chosen, chosen_pts, curve.estimator, options);
+  out.model_check = std::move(check);
   return out;
 }
 

@@ -191,6 +191,10 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
                              p.warnings};
       allan.gaps = gaps;
       if (!fit.ok()) allan.fit_error = fit.error().message;
+      // A rejected or untested noise model is said on stderr and in the report (issue #36).
+      if (allan.model_check && !(allan.model_check->tested && !allan.model_check->rejected)) {
+        jq->warnings.push_back(allan.model_check->summary);
+      }
       jq->allan = std::move(allan);
       jq->allan_type_a_link =
           MakeAllanTypeALink(curve.value(), noise_fit, t.window.t_last_s - t.window.t_first_s);

@@ -127,6 +127,27 @@ mustache::data NoiseRows(const SessionReport& report) {
     row.set("u_mean", q.type_a ? UncertaintyText(q.type_a->u_mean) : "-");
     row.set("dominant", link.dominant_term.value_or("-"));
     row.set("duration_s", ShortNumber(link.duration_s, 4));
+    // The goodness of fit of the IEEE 952 model (issue #36).
+    std::string model = "-";
+    bool model_ok = false;
+    if (const std::optional<AllanModelCheckReport>& m = q.allan->model_check; m) {
+      if (!m->tested) {
+        model = "not tested";
+      } else if (!m->rejected) {
+        model = fmt::format("holds (p = {:.2g})", m->p_value);
+        model_ok = true;
+      } else {
+        model = fmt::format("rejected (p = {:.2g})", m->p_value);
+        if (m->tau_range_model_holds_s) {
+          model += fmt::format("; holds for tau {}-{} s",
+                               ShortNumber((*m->tau_range_model_holds_s)[0], 3),
+                               ShortNumber((*m->tau_range_model_holds_s)[1], 3));
+        }
+      }
+      row.set("model_summary", m->summary);
+    }
+    row.set("model", model);
+    row.set("model_ok", model_ok);
     rows.push_back(row);
   });
   return rows;

@@ -30,7 +30,9 @@ kainjow::mustache::data TypeADetailRows(const SessionReport& report);
 // (allan_type_a_link.allan_min_dev and allan_min_tau_s, 3 significant digits; "at the last
 // tau" when the curve still falls there), the Allan-predicted u(mean) over the window
 // (allan_type_a_link.u_mean_allan, two significant digits) and the Type A u(mean) used
-// (type_a.u_mean, two significant digits).
+// (type_a.u_mean, two significant digits), and the IEEE 952 model's goodness of fit
+// (allan.model_check: "holds (p = ..)", "rejected (p = ..); holds for tau a-b s", "not
+// tested"; its summary as the cell's title).
 kainjow::mustache::data NoiseRows(const SessionReport& report);
 
 // "option_rows": the report's options as {option, value} rows (OptionRows of html_common).

@@ -61,7 +61,10 @@ TEST_CASE("Allan JSON has the report shape and white noise numbers", "[noise]") 
   CHECK(keys == std::vector<std::string>{"estimator", "tau_s", "adev", "ci_low", "ci_high", "edf",
                                          "n_terms", "n_terms_gap_free", "missing_fraction",
                                          "confidence", "alpha", "alpha_source", "noise",
-                                         "sample_period"});
+                                         "sample_period", "model_check"});
+  // White noise is what the model describes: it holds over the whole curve (issue #36).
+  CHECK(j["model_check"]["tested"] == true);
+  CHECK(j["model_check"]["rejected"] == false);
   // The level of the intervals and the noise type behind each one (white rate: alpha 0).
   CHECK(j["confidence"].get<double>() == Approx(0.683));
   REQUIRE(j["alpha"].size() == curve.value().size());

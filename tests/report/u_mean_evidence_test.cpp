@@ -80,5 +80,51 @@ TEST_CASE("Allan evidence within 2x u_mean leaves it alone", "[report][u_mean]")
   CHECK(report.sensors[0].Find("gy_dps")->type_a->u_mean == 0.1);
 }
 
+TEST_CASE("A rejected or untested noise model never replaces u_mean (issue #36)",
+          "[report][u_mean]") {
+  for (const char* status : {"rejected", "untested"}) {
+    INFO(status);
+    SessionTypeA s;
+    SessionReport report;
+    Build(0.9, 0.3, &s, &report);
+    QuantityReport& jq = *report.sensors[0].Find("gy_dps");
+    jq.allan_type_a_link->noise_model = status;
+    AllanReport allan;
+    allan.estimator = "oadev";
+    AllanModelCheckReport check;
+    check.tested = std::string(status) == "rejected";
+    check.rejected = check.tested;
+    check.chi2 = 412.0;
+    check.dof = 13;
+    check.p_value = 1e-60;
+    allan.model_check = check;
+    jq.allan = allan;
+    ApplyAllanEvidenceToUMean(&s, &report);
+    // u_mean stays the Type A value from the data alone, with its method.
+    const TypeAResult& a = s.tags[0].quantities[0].type_a;
+    CHECK(a.u_mean == 0.1);
+    CHECK(a.u_mean_method == std::string(kUMeanArSpectral));
+    CHECK(jq.type_a->u_mean == 0.1);
+    CHECK(jq.type_a->u_mean_ar_order == std::optional<int64_t>(3));
+    REQUIRE(jq.warnings.size() == 1);
+    const std::string& w = jq.warnings[0];
+    CHECK(w.find("9.0x") != std::string::npos);
+    CHECK(w.find("u_mean stays the Type A value from the data alone") != std::string::npos);
+    if (check.tested) {
+      CHECK(w.find("rejected by the Allan curve (chi2 = 412 at 13 dof, p = 1e-60") !=
+            std::string::npos);
+    } else {
+      CHECK(w.find("could not be tested") != std::string::npos);
+    }
+  }
+  // A model that holds still replaces it.
+  SessionTypeA s;
+  SessionReport report;
+  Build(0.9, 0.3, &s, &report);
+  report.sensors[0].Find("gy_dps")->allan_type_a_link->noise_model = "holds";
+  ApplyAllanEvidenceToUMean(&s, &report);
+  CHECK(s.tags[0].quantities[0].type_a.u_mean == 0.9);
+}
+
 }  // namespace
 }  // namespace metro

@@ -6,11 +6,18 @@
 // allowed terms is fitted to the variances s_i^2 by generalized least squares with the full
 // covariance of the overlapping estimates (AllanVarianceCovariance: neighbouring taus share
 // most of their data), iterated on the subset's own fitted model, plus relative_floor on the
-// diagonal; the start weights each point by its chi-squared variance 2 s^4 / edf. A subset is
-// admissible when every coefficient is positive and at least min_significance times its
-// standard uncertainty; among admissible subsets the one with the smallest
-// BIC = chi2 + k ln(n) wins. u(c) = (A' Cov^-1 A)^-1, scaled by chi2 / (n - k) (Birge) only when
-// chi2 exceeds its 95 % quantile; u of a term is u(c) / (2 sqrt(c)). Measured coverage over
+// diagonal and the model error of the sampling (discretization_error); the start weights each
+// point by its chi-squared variance 2 s^4 / edf. A subset is admissible when every coefficient
+// is positive and at least min_significance times its standard uncertainty; among admissible
+// subsets the one with the smallest chi2 + sum of its terms' penalties wins (a likelihood-ratio
+// test of each term: it enters only when it lowers chi2 by more than its penalty; issue #36;
+// before, BIC = chi2 + k ln(n)). u(c) = (A' Cov^-1 A)^-1, scaled by chi2 / (n - k) (Birge) only
+// when chi2 exceeds its 95 % quantile; u of a term is u(c) / (2 sqrt(c)).
+//
+// Goodness of fit (issue #36): chi2 of the chosen model against chi-squared with n - k dof
+// (model_check), the standardized residual of each fitted tau, and, when the model is
+// rejected, the widest stretch of fitted taus where a refit is accepted; the terms are then
+// those of that stretch. With dof 0 the model is not tested, and says so. Measured coverage over
 // simulated records with known terms: docs/noise.md section 4. Non-overlapping curves (adev,
 // hdev) keep the diagonal chi-squared weights. Points without an EDF get edf = 1. With
 // thin_to_octave the fit uses points at least a factor 1.9 apart. Each term reports the tau
@@ -32,6 +39,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -49,6 +57,25 @@ struct NoiseFitOptions {
   double tau_max_s = 1e300;
   bool thin_to_octave = true;
   int iterations = 8;  // IRLS passes; >= 1.
+  // Model error of the sampling (issue #36): the IEEE 952 factors are those of an integrating
+  // sampler; a point-sampled flicker (Kasdin 1992) or random walk reads higher at the shortest
+  // taus. The difference of the two discretizations at each fitted tau, from the subset's own
+  // B and K, is added on the diagonal as model error, so no term rests on the model holding
+  // better than that (and a Q or N is not invented to explain it).
+  bool discretization_error = true;
+  // A term enters only when it lowers chi2 by more than its penalty (indexed by NoiseTerm):
+  // the chosen subset minimizes chi2 + sum of its terms' penalties. Defaults: the chi-squared
+  // 1-dof quantiles 0.95 (3.841) for N, B, K and 0.99 (6.635) for Q and R, a likelihood-ratio
+  // test of each term at 5 % (1 %). Each >= 0.
+  std::array<double, kNoiseTermCount> term_penalty = {6.635, 3.841, 3.841, 3.841, 6.635};
+  // Goodness of fit: the fitted model is rejected when P(chi2_dof >= chi2) < model_alpha.
+  double model_alpha = 0.01;  // In (0, 1).
+  // A point contradicts the model when |standardized residual| > contradiction_z.
+  double contradiction_z = 2.576;  // > 0.
+  // When the model is rejected over the whole range, fit the terms only in the widest
+  // stretch of consecutive fitted taus (at least min_holding_points) where it is accepted.
+  bool restrict_to_holding_range = true;
+  int min_holding_points = 4;  // >= 2.
 
   bool IsValid(std::string* why) const;
 };
@@ -59,6 +86,43 @@ struct NoiseTermEstimate {
   double u = 0.0;          // Standard uncertainty, base units.
   double tau_min_s = 0.0;  // Where the term carries >= 25 % of the fitted variance.
   double tau_max_s = 0.0;
+  double u_model = 0.0;  // The part of u from the model error (discretization, relative_floor):
+                         // sqrt(u^2 - u_stat^2), u_stat from the covariance without it.
+  // Selection statistic: for a kept term, chi2 of the chosen subset without it minus chi2 of
+  // the chosen subset; for a term left out, chi2 of the chosen subset minus chi2 with it
+  // added. NaN when that other subset has no fit. The term is in when it exceeds
+  // penalty_chi2 (and every coefficient is positive and significant).
+  double delta_chi2 = std::nan("");
+  double penalty_chi2 = 0.0;
+};
+
+// Goodness of fit of the chosen model against the curve it was fitted to, with the covariance
+// the GLS used (AllanVarianceCovariance of the fitted model plus the model error):
+// chi2 = r' Cov^-1 r with r the residuals of the variances, against chi-squared with
+// dof = points - terms (issue #36). The defaults read as "not tested".
+struct NoiseModelCheck {
+  bool tested = false;     // false: nothing below is a goodness of fit (see not_tested).
+  std::string not_tested;  // Why the model could not be tested (dof 0, ...).
+  double chi2 = std::nan("");
+  int dof = 0;
+  double p_value = std::nan("");  // P(chi2_dof >= chi2).
+  double alpha = std::nan("");    // Rejected when p_value < alpha.
+  bool rejected = false;
+  std::vector<double> tau_s;  // The fitted taus and their standardized residuals
+  std::vector<double> z;      // (s^2 - model) / sqrt(Cov_ii).
+  double contradiction_z = std::nan("");
+  std::vector<double> contradicting_taus_s;  // |z| > contradiction_z.
+  // Where the model holds: the whole fitted range when it is not rejected, else the widest
+  // stretch of fitted taus where a refit is accepted (then the terms are fitted there only),
+  // NaN when there is none; with the test in that stretch.
+  double holds_tau_min_s = std::nan("");
+  double holds_tau_max_s = std::nan("");
+  double holds_chi2 = std::nan("");
+  int holds_dof = 0;
+  double holds_p_value = std::nan("");
+
+  bool holds() const { return tested && !rejected; }
+  bool holds_somewhere() const { return std::isfinite(holds_tau_min_s); }
 };
 
 // Summary of the fit; the defaults read as failure.
@@ -75,6 +139,17 @@ struct NoiseFit {
   double birge_ratio = 0.0;  // sqrt(chi2 / dof), 0 when dof = 0.
   double fit_tau_min_s = 0.0;
   double fit_tau_max_s = 0.0;
+  // B and K (issue #36). Both kept: the correlation of their squared coefficients in the
+  // fit. One kept while the subset with both has both coefficients positive but not both
+  // significant: the record cannot separate them, and bk_joint holds that fit's B and K (u
+  // from its covariance) with their correlation; the kept term alone is the chosen model.
+  double bk_correlation = std::nan("");
+  bool bk_joint = false;
+  NoiseTermEstimate joint_b, joint_k;
+
+  // The test over the whole fit range. When it rejects the model and a holding stretch was
+  // found, terms, covariance_c, chi2 and fit_tau_* are those of the fit in that stretch.
+  NoiseModelCheck model_check;
 
   const NoiseTermEstimate& term(NoiseTerm t) const { return terms[static_cast<int>(t)]; }
 };

@@ -6,7 +6,11 @@
 // noise terms and predicts the deviation of the mean over the window's duration,
 // "allan_type_a_link".u_mean_allan. Where that is more than 2x u_mean, u_mean takes the
 // Allan value with u_mean_dof = (1/2) (u / u(u))^2 (JCGM 100:2008 G.4.2), at most n - 1,
-// u_mean_method "allan_noise_model", and a warning names the dominant noise term. This
+// u_mean_method "allan_noise_model", and a warning names the dominant noise term. Only a model
+// that passed its goodness-of-fit test ("allan_type_a_link".noise_model "holds"; issue #36)
+// does so: a rejected or untested model leaves u_mean the Type A value from the data alone,
+// with a warning that names the evidence (allan.model_check.summary). A link without
+// noise_model (a report from before issue #36) is taken as it was then. This
 // lives in the report layer because it needs both the stats and the noise results.
 #pragma once
 
