@@ -225,6 +225,14 @@ Result<ModelKind> SelectModel(ImuSensor imu, const std::array<Trial, 3>& trials,
   if (!t.status.ok()) return t.status.error();
   *check = ci::CheckChosenModel(imu, LadderFitOf(imu, chosen, t, temperature), automatic,
                                 comparisons, robust);
+  if (automatic && check->model_rejected) {
+    // Auto found no model the data accept: a larger model that could not be fitted says
+    // what the record lacks (as --model full did before auto), rather than constants to refuse.
+    for (auto k = std::rbegin(kLadder); k != std::rend(kLadder) && *k != chosen; ++k) {
+      const Trial& larger = trials[static_cast<size_t>(*k)];
+      if (larger.tried && !larger.status.ok()) return larger.status.error();
+    }
+  }
   return chosen;
 }
 
