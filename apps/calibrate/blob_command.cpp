@@ -39,7 +39,7 @@ struct BlobOptions {
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
   bool accept_rejected_model = false;  // --accept-rejected-model (issue #36)
-  RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
+  RegistryCliOptions registry;         // --registry, --station, --operator (docs/registry.md)
 };
 
 // "0x3B000" or "241664" -> address; a page-aligned slot A whose slot B (the next page) lies

@@ -29,10 +29,10 @@ struct FitOptions {
   // --temperature, --loss, --loss-scale, --accel-only, --min-static-s: the library's options
   // and defaults, bound directly (--accel-model none is fit_accel = false).
   CalibrationOptions calibration;
-  std::string segments;         // Annotated segments instead of the detector.
-  std::string html;             // Calibration certificate (docs/reports.md).
+  std::string segments;                // Annotated segments instead of the detector.
+  std::string html;                    // Calibration certificate (docs/reports.md).
   bool accept_rejected_model = false;  // --accept-rejected-model: certify them anyway.
-  std::string tags;             // --tags FILE: device IDs into calibration.json.
+  std::string tags;                    // --tags FILE: device IDs into calibration.json.
   apps::LoadCliOptions load;    // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
   SpecCliOptions spec;          // --spec, --fail-on-nonconformity (docs/conformity.md)
   RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)

@@ -35,10 +35,10 @@ struct PushCliOptions {
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
   bool accept_rejected_model = false;  // --accept-rejected-model (issue #36)
-  std::string tags;             // --tags FILE
-  bool any_device = false;      // --any-device: write to whichever tag answers
-  bool all = false;             // --all: every tag of calibration.json, one after another
-  RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
+  std::string tags;                    // --tags FILE
+  bool any_device = false;             // --any-device: write to whichever tag answers
+  bool all = false;                    // --all: every tag of calibration.json, one after another
+  RegistryCliOptions registry;         // --registry, --station, --operator (docs/registry.md)
 };
 
 int RunPushAll(const PushCliOptions& c);

@@ -16,8 +16,8 @@ namespace {
 
 struct ReportOptions {
   std::string calibration;
-  std::string html;  // Calibration certificate (docs/reports.md).
-  std::string tags;  // --tags FILE: the tags' names, device IDs and profiles.
+  std::string html;                    // Calibration certificate (docs/reports.md).
+  std::string tags;                    // --tags FILE: the tags' names, device IDs and profiles.
   bool accept_rejected_model = false;  // --accept-rejected-model: certify them anyway.
 };
 

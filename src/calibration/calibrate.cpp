@@ -51,9 +51,10 @@ bool CalibrationOptions::IsValid(std::string* why) const {
                             gravity_mps2));
   }
   if (gravity_u_mps2 && !(*gravity_u_mps2 >= 0 && *gravity_u_mps2 < 0.5)) {
-    return fail(fmt::format("gravity_u_mps2 = {} is not a standard uncertainty of gravity "
-                            "(0 .. 0.5 m/s^2)",
-                            *gravity_u_mps2));
+    return fail(
+        fmt::format("gravity_u_mps2 = {} is not a standard uncertainty of gravity "
+                    "(0 .. 0.5 m/s^2)",
+                    *gravity_u_mps2));
   }
   if (!(accel_fs_g > 0)) return fail("accel_fs_g must be > 0 (2, 4, 8 or 16 for an MPU6050)");
   if (!(gyro_fs_dps > 0)) {
@@ -155,8 +156,8 @@ Status RunAccelTrial(ModelKind kind, const CalibrationOptions& o, const std::str
 }
 
 Status RunGyroTrial(ModelKind kind, const CalibrationOptions& o, const ci::SensorSolution& accel,
-                    double gyro_nominal, const std::string& unit, int sensor,
-                    ci::TagProblemData* d, Trial* t) {
+                    double gyro_nominal, const std::string& unit, int sensor, ci::TagProblemData* d,
+                    Trial* t) {
   CalibrationOptions og = o;
   og.gyro_model = kind;
   t->tried = true;
@@ -316,9 +317,8 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
     t.status = RunAccelTrial(k, o, records.accel_unit, hint, out.sensor, &d, &t);
   }
   ModelCheck accel_check;
-  Result<ModelKind> accel_kind =
-      SelectModel(ImuSensor::kAccel, accel_trials, accel_auto, compare, o.accel_model,
-                  d.temperature, robust, &accel_check);
+  Result<ModelKind> accel_kind = SelectModel(ImuSensor::kAccel, accel_trials, accel_auto, compare,
+                                             o.accel_model, d.temperature, robust, &accel_check);
   if (!accel_kind.ok()) return accel_kind.error();
   oc.accel_model = accel_kind.value();
   Trial& at = accel_trials[static_cast<size_t>(oc.accel_model)];
@@ -353,9 +353,8 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
       t.rotations = d.rotations;
       t.rotation_segments = d.rotation_segments;
     }
-    Result<ModelKind> gyro_kind =
-        SelectModel(ImuSensor::kGyro, gyro_trials, gyro_auto, compare, o.gyro_model,
-                    d.temperature, robust, &gyro_check);
+    Result<ModelKind> gyro_kind = SelectModel(ImuSensor::kGyro, gyro_trials, gyro_auto, compare,
+                                              o.gyro_model, d.temperature, robust, &gyro_check);
     if (!gyro_kind.ok()) return gyro_kind.error();
     oc.gyro_model = gyro_kind.value();
     Trial& gt = gyro_trials[static_cast<size_t>(oc.gyro_model)];
@@ -412,8 +411,7 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
   if (d.has_gyro) {
     ci::Unscale(d.gyro_ref, ImuSensor::kGyro, oc.gyro_model, d.temperature, &x, &gyro.covariance);
   }
-  ci::Unscale(d.accel_ref, ImuSensor::kAccel, oc.accel_model, d.temperature, &x,
-              &accel.covariance);
+  ci::Unscale(d.accel_ref, ImuSensor::kAccel, oc.accel_model, d.temperature, &x, &accel.covariance);
   Result<SensorCalibration> accel_cal =
       ci::AssembleAccel(d, x, accel, fit, temperature, records.accel_unit, oc, out.sensor);
   if (!accel_cal.ok()) return accel_cal.error();

@@ -1126,7 +1126,8 @@ Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptio
     if (with_gyro) extra.push_back(gyro_m);
     Eigen::MatrixXd sens = Eigen::MatrixXd::Zero(pg, 9);
     if (!extra.empty()) {
-      std::optional<Eigen::MatrixXd> s_m = HeldTermSensitivity(&problem, out.free_blocks, pg, extra);
+      std::optional<Eigen::MatrixXd> s_m =
+          HeldTermSensitivity(&problem, out.free_blocks, pg, extra);
       if (s_m) {
         Eigen::Index col = 0;
         if (with_accel) {

@@ -38,13 +38,13 @@ std::string FormatModelCheck(const ModelCheck& m, const std::string& indent) {
       out += c.note + "\n";
       continue;
     }
-    out += c.test == "F" ? fmt::format("F = {:.4g} (dof {:g}, {:.4g})", c.statistic, c.dof1, c.dof2)
-                         : fmt::format("chi-square difference {:.4g} (dof {:g})", c.statistic,
-                                       c.dof1);
-    out += fmt::format(", p {}: {} {}\n",
-                       c.p_value < 1e-16 ? std::string("< 1e-16")
-                                         : fmt::format("= {:.3g}", c.p_value),
-                       c.rejected ? "rejects" : "accepts", ModelKindName(c.smaller));
+    out += c.test == "F"
+               ? fmt::format("F = {:.4g} (dof {:g}, {:.4g})", c.statistic, c.dof1, c.dof2)
+               : fmt::format("chi-square difference {:.4g} (dof {:g})", c.statistic, c.dof1);
+    out +=
+        fmt::format(", p {}: {} {}\n",
+                    c.p_value < 1e-16 ? std::string("< 1e-16") : fmt::format("= {:.3g}", c.p_value),
+                    c.rejected ? "rejects" : "accepts", ModelKindName(c.smaller));
   }
   if (m.type_b) {
     out += fmt::format("{}  Type B in u: {} +-{:g} rad ({}, u = {:.4g} rad) from {}\n", indent,
@@ -60,8 +60,7 @@ std::vector<std::string> ModelRejectedConstants(const Calibration& cal) {
   for (const TagCalibration& t : cal.tags) {
     for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
       if (c->has_value() && (*c)->model_check && (*c)->model_check->model_rejected) {
-        out.push_back(fmt::format("sensor {} {}: {}", t.sensor,
-                                  ImuSensorName((*c)->model.sensor),
+        out.push_back(fmt::format("sensor {} {}: {}", t.sensor, ImuSensorName((*c)->model.sensor),
                                   (*c)->model_check->reason));
       }
     }

@@ -140,12 +140,14 @@ ModelCheck CheckChosenModel(ImuSensor imu, const LadderFit& chosen, bool auto_se
   if (exact) {
     m.status = "exact_fit";
     evidence = chosen.orientations > 0
-                   ? fmt::format("the {} '{}' model has {} parameters for {} distinct "
-                                 "orientations: the fit is exact and nothing tests the model",
-                                 sensor_name, name, chosen.parameters, chosen.orientations)
-                   : fmt::format("the {} '{}' model leaves no residual degrees of freedom: the "
-                                 "fit is exact and nothing tests the model",
-                                 sensor_name, name);
+                   ? fmt::format(
+                         "the {} '{}' model has {} parameters for {} distinct "
+                         "orientations: the fit is exact and nothing tests the model",
+                         sensor_name, name, chosen.parameters, chosen.orientations)
+                   : fmt::format(
+                         "the {} '{}' model leaves no residual degrees of freedom: the "
+                         "fit is exact and nothing tests the model",
+                         sensor_name, name);
   } else if (chosen.chi2 < 0) {
     m.status = "not_tested";
     m.reason = robust ? "a robust loss gives no chi-square against the noise of the data: the "
@@ -157,16 +159,16 @@ ModelCheck CheckChosenModel(ImuSensor imu, const LadderFit& chosen, bool auto_se
     m.status = "rejected";
     std::string parts;
     if (rejected_by_noise) {
-      parts = fmt::format("its residuals are {:.3g} times their noise (chi-square {:.4g} over "
-                          "{:.4g} dof, {})",
-                          std::sqrt(chosen.chi2 / chosen.chi2_dof), chosen.chi2, chosen.chi2_dof,
-                          PText(m.p_value));
+      parts = fmt::format(
+          "its residuals are {:.3g} times their noise (chi-square {:.4g} over "
+          "{:.4g} dof, {})",
+          std::sqrt(chosen.chi2 / chosen.chi2_dof), chosen.chi2, chosen.chi2_dof, PText(m.p_value));
     }
     if (rejected_by_comparison) {
       parts += fmt::format("{}the '{}' model fits significantly better ({} = {:.4g}, {})",
                            parts.empty() ? "" : "; ", ModelKindName(against->larger),
-                           against->test == "F" ? "F" : "chi-square difference",
-                           against->statistic, PText(against->p_value));
+                           against->test == "F" ? "F" : "chi-square difference", against->statistic,
+                           PText(against->p_value));
     }
     evidence = fmt::format("the data reject the {} '{}' model: {}", sensor_name, name, parts);
   } else {
@@ -200,11 +202,11 @@ ModelCheck CheckChosenModel(ImuSensor imu, const LadderFit& chosen, bool auto_se
             "edges of a cube), or give --accept-rejected-model to use them anyway",
             evidence);
       } else {
-        m.reason = fmt::format(
-            "{}; no larger model is fitted, and u includes the misfit ({})", evidence,
-            imu == ImuSensor::kAccel
-                ? "a between-orientation component when the orientations disagree"
-                : "the covariance is scaled by the residuals' own scatter");
+        m.reason =
+            fmt::format("{}; no larger model is fitted, and u includes the misfit ({})", evidence,
+                        imu == ImuSensor::kAccel
+                            ? "a between-orientation component when the orientations disagree"
+                            : "the covariance is scaled by the residuals' own scatter");
       }
       break;
   }

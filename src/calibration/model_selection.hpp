@@ -14,8 +14,8 @@ namespace metro::calibration_internal {
 struct LadderFit {
   ModelKind kind = ModelKind::kFull;
   bool fitted = false;
-  std::string why;     // Why it could not be fitted (the fit's error message).
-  double chi2 = -1;    // Against the noise (SensorSolution::chi2); -1 when not measured.
+  std::string why;   // Why it could not be fitted (the fit's error message).
+  double chi2 = -1;  // Against the noise (SensorSolution::chi2); -1 when not measured.
   double chi2_dof = 0;
   int parameters = 0;
   int orientations = 0;  // Accelerometer: distinct orientations; 0 when not counted.

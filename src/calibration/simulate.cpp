@@ -151,10 +151,9 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
   std::string why;
   if (!o.IsValid(&why)) return MakeError("invalid simulation options: " + why);
   SimulatedSession out;
-  out.truth =
-      o.random_truth ? DrawImuTruth(o.seed, o.accel_fs_g, o.gyro_fs_dps, o.temperature,
-                                     o.accel_cross_axis, o.gyro_cross_axis)
-                     : o.truth;
+  out.truth = o.random_truth ? DrawImuTruth(o.seed, o.accel_fs_g, o.gyro_fs_dps, o.temperature,
+                                            o.accel_cross_axis, o.gyro_cross_axis)
+                             : o.truth;
   if (o.temperature) {
     const double t_mid = 0.5 * (o.temp_start_c + o.temp_end_c);
     out.truth.accel.has_temperature = out.truth.gyro.has_temperature = true;

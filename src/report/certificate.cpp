@@ -221,8 +221,8 @@ void SetModelCheck(const SensorCalibration& c, const CertificateOptions& options
                                                         : "as given",
                                  mc.status);
   if (mc.chi2 >= 0) {
-    line += fmt::format("; residuals against the noise: chi-square {} over {} dof", Short(mc.chi2, 4),
-                        Short(mc.chi2_dof, 4));
+    line += fmt::format("; residuals against the noise: chi-square {} over {} dof",
+                        Short(mc.chi2, 4), Short(mc.chi2_dof, 4));
     if (mc.p_value >= 0) line += fmt::format(", p = {}", Short(mc.p_value, 3));
   }
   check.set("line", line + ".");
@@ -648,12 +648,12 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       sensors.push_back(SensorData(**c, t.sensor, gravity, cal.gravity_mps2, options));
       const Coverage cov = SensorCoverage(**c, options.coverage_probability);
       coverage_lines.push_back(
-          cov.k > 0.0 ? fmt::format("sensor {} {}: k = {} at {} degrees of freedom", t.sensor,
-                                    ImuSensorName((*c)->model.sensor), Short(cov.k, 4),
-                                    std::isinf(cov.dof) ? std::string("infinite")
-                                                        : Short(cov.dof, 6))
-                      : fmt::format("sensor {} {}: no U (fewer than 1 degree of freedom)",
-                                    t.sensor, ImuSensorName((*c)->model.sensor)));
+          cov.k > 0.0
+              ? fmt::format("sensor {} {}: k = {} at {} degrees of freedom", t.sensor,
+                            ImuSensorName((*c)->model.sensor), Short(cov.k, 4),
+                            std::isinf(cov.dof) ? std::string("infinite") : Short(cov.dof, 6))
+              : fmt::format("sensor {} {}: no U (fewer than 1 degree of freedom)", t.sensor,
+                            ImuSensorName((*c)->model.sensor)));
     }
     td.set("sensors", sensors);
     tags.push_back(td);

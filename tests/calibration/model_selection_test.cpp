@@ -8,8 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <tuple>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "metro/calibration/calibrate.hpp"
@@ -58,8 +58,8 @@ TEST_CASE("Model comparison: F-test when the larger model does not fit its noise
   // full: chi-square 50 over 10 dof, above its 99 % point 23.21: F = (delta / 3) / (50 / 10).
   // At the tabulated 5 % point of F(3, 10), 3.7083, p = 0.05.
   const ci::LadderFit full = Fitted(ModelKind::kFull, 50.0, 10.0, 9);
-  const ModelComparison at = ci::CompareModels(
-      Fitted(ModelKind::kScale, 50.0 + 3 * 3.7083 * 5.0, 13.0, 6), full);
+  const ModelComparison at =
+      ci::CompareModels(Fitted(ModelKind::kScale, 50.0 + 3 * 3.7083 * 5.0, 13.0, 6), full);
   CHECK(at.test == "F");
   CHECK(at.statistic == Approx(3.7083));
   CHECK(at.dof1 == 3);
@@ -134,7 +134,7 @@ struct SimCase {
   double gyro_cross = 0.015;
   int poses = 26;
   PoseSet set = PoseSet::kCube;
-  bool automatic = true;                 // --model auto; else `model` for both sensors.
+  bool automatic = true;  // --model auto; else `model` for both sensors.
   ModelKind model = ModelKind::kScale;
 };
 
@@ -142,10 +142,10 @@ struct SimCase {
 // model_rejected, and per sensor and constant class (b, k, m) the truth within 2u of the
 // constants that are not.
 struct TagRun {
-  std::map<std::string, int> chosen;                         // "accel full" -> tags
-  std::map<std::string, int> refused;                        // "accel" -> tags
-  std::map<std::string, std::pair<int, int>> inside;         // "accel b" -> (within, total)
-  std::string refusal;                                       // The first refused fit's error.
+  std::map<std::string, int> chosen;                  // "accel full" -> tags
+  std::map<std::string, int> refused;                 // "accel" -> tags
+  std::map<std::string, std::pair<int, int>> inside;  // "accel b" -> (within, total)
+  std::string refusal;                                // The first refused fit's error.
   double Rate(const std::string& key) const {
     const auto it = inside.find(key);
     return it == inside.end() || it->second.second == 0
@@ -245,7 +245,6 @@ TEST_CASE("Model auto chooses the full model on tags with cross-axis terms, scal
   CHECK(wo.chosen["accel scale"] + wo.chosen["gyro scale"] >= 2 * tags - 1);
 }
 
-
 // Issue #36 point 3: a scale model the data reject, or an exact fit, on tags with realistic
 // cross-axis terms. Before, the gyroscope's scale factors lay within 2u on 0-52 % of such tags
 // and the accelerometer's constants with 6 orientations on 0-7 %; with the Type B term for the
@@ -293,7 +292,8 @@ TEST_CASE("A rejected or exact scale model covers the truth with its cross-axis 
   CheckTypeBCoverage(6, 15.0 / 18.0);
 }
 
-TEST_CASE("Coverage of the cross-axis Type B over 100 tags per case", "[.][coverage][calibration]") {
+TEST_CASE("Coverage of the cross-axis Type B over 100 tags per case",
+          "[.][coverage][calibration]") {
   // 100 tags x 3 axes: the issue's floor 92 %. Prints docs/calibration-model.md's table.
   CheckTypeBCoverage(100, 0.92);
 }

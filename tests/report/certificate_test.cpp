@@ -478,7 +478,6 @@ TEST_CASE("Certificate bad input is refused with a message", "[report][certifica
   CHECK(r.error().ToString() == bad.path() + ":3:19: gravity_mps2: expected a number, found true");
 }
 
-
 // Issue #36 point 7: the k stated comes from the dof it names. A u that claims to rest on the
 // poses' noise (coverage_factor_95 1.96) while the residuals are 4 times that noise (7 dof,
 // reduced chi-square 15.7) gets Student's t at those 7 dof, and the text names them.
@@ -547,8 +546,9 @@ TEST_CASE("Certificate refuses model_rejected constants unless accepted, and say
   REQUIRE(html.ok());
   CHECK(Unescape(html.value()).find("stated only because --accept-rejected-model was given") !=
         std::string::npos);
-  CHECK(Unescape(html.value()).find("Stated with --accept-rejected-model although marked "
-                                    "model_rejected: sensor") != std::string::npos);
+  CHECK(Unescape(html.value())
+            .find("Stated with --accept-rejected-model although marked "
+                  "model_rejected: sensor") != std::string::npos);
 }
 }  // namespace
 }  // namespace metro

@@ -136,11 +136,11 @@ struct ModelComparison {
 // sqrt(3), JCGM 100:2008 4.3.7), propagated to every constant through the fit's Jacobian
 // (d theta / d m = -(J^T J)^-1 J^T J_m; JCGM 100:2008 5.1.2) and added to the covariance.
 struct CrossAxisTypeB {
-  std::string source;  // The spec, e.g. "MPU-6000/6050 datasheet PS-MPU-6000A-00 rev 3.4 ...".
-  double half_width = 0;             // Of each term [rad, = fraction of the sensitivity].
-  std::string distribution;          // "rectangular".
-  double u = 0;                      // half_width / sqrt(3).
-  std::vector<std::string> terms;    // The omitted terms, e.g. "accel.a_yz", "gyro.g_xz".
+  std::string source;     // The spec, e.g. "MPU-6000/6050 datasheet PS-MPU-6000A-00 rev 3.4 ...".
+  double half_width = 0;  // Of each term [rad, = fraction of the sensitivity].
+  std::string distribution;        // "rectangular".
+  double u = 0;                    // half_width / sqrt(3).
+  std::vector<std::string> terms;  // The omitted terms, e.g. "accel.a_yz", "gyro.g_xz".
 };
 
 // How far a sensor's fitted model is supported by the data (issue #36), calibration.json's
@@ -155,9 +155,9 @@ struct ModelCheck {
   std::string selection;  // "auto" (--model auto) or "given".
   std::vector<ModelComparison> comparisons;
   std::string status;
-  double chi2 = -1;      // Of the fitted model against the noise; -1 when not measured.
-  double chi2_dof = 0;   // Its degrees of freedom (m - p; the gyroscope's sum of E_g).
-  double p_value = -1;   // P(chi2(dof) >= chi2); -1 when not measured.
+  double chi2 = -1;     // Of the fitted model against the noise; -1 when not measured.
+  double chi2_dof = 0;  // Its degrees of freedom (m - p; the gyroscope's sum of E_g).
+  double p_value = -1;  // P(chi2(dof) >= chi2); -1 when not measured.
   std::optional<CrossAxisTypeB> type_b;
   bool model_rejected = false;
   std::string reason;  // Why (status other than "accepted"), and what to do.
