@@ -67,8 +67,10 @@ inline std::string CalibrationTagLines(const Calibration& cal) {
 // The certificate of calibration.json at `path`, rendered for `cal` (the file's calibration
 // with the tags file applied) as RenderJsonFileHtml renders the file itself: the certificate id
 // the hash of the file's own bytes (what `fit` printed and the registry recorded).
-inline Result<std::string> RenderCertificateFor(const Calibration& cal, const std::string& path) {
+inline Result<std::string> RenderCertificateFor(const Calibration& cal, const std::string& path,
+                                                bool accept_rejected_model = false) {
   CertificateOptions certificate;
+  certificate.accept_rejected_model = accept_rejected_model;
   Result<std::string> sha = Sha256File(path);
   if (sha.ok()) certificate.certificate_id = sha.value().substr(0, 16);
   return RenderCalibrationCertificate(cal, certificate);

@@ -38,7 +38,8 @@ struct BlobOptions {
   bool all = false;     // --all: every tag of calibration.json into the directory -o
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
-  RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
+  bool accept_rejected_model = false;  // --accept-rejected-model (issue #36)
+  RegistryCliOptions registry;         // --registry, --station, --operator (docs/registry.md)
 };
 
 // "0x3B000" or "241664" -> address; a page-aligned slot A whose slot B (the next page) lies
@@ -117,6 +118,7 @@ int RunBlob(const BlobOptions& b) {
   o.profile = ResolveProfile(b.profile, tags.value(), b.sensor);
   o.accel_fs_g = b.accel_fs_g;
   o.gyro_fs_dps = b.gyro_fs_dps;
+  o.accept_rejected_model = b.accept_rejected_model;
   std::vector<std::string> warnings;
   Result<blob::BlobContents> contents =
       blob::BlobContentsFromCalibration(cal.value(), o, &warnings);
@@ -220,6 +222,7 @@ int RunBlobAll(const BlobOptions& b) {
     o.profile = ResolveProfile(b.profile, tags.value(), t.sensor);
     o.accel_fs_g = b.accel_fs_g;
     o.gyro_fs_dps = b.gyro_fs_dps;
+    o.accept_rejected_model = b.accept_rejected_model;
     Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal.value(), o);
     Result<std::vector<uint8_t>> bytes = contents.ok()
                                              ? blob::WriteBlob(contents.value())
@@ -301,6 +304,9 @@ void AddBlobCommand(CLI::App& app, int* exit_code) {
                   "upper end of the temperature validity range (default: the fitted span + 5 "
                   "degC)");
   AddSensorProfileOptions(sub, &o->profile, &o->accel_fs_g, &o->gyro_fs_dps);
+  sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
+                "write constants calibration.json marks model_rejected (a model the data reject "
+                "or an exact fit; docs/calibration-model.md) anyway");
   AddRegistryOptions(sub, &o->registry);
   sub->callback([o, exit_code] { *exit_code = RunBlob(*o); });
 }

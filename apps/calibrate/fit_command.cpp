@@ -1,4 +1,4 @@
-// calibrate fit SESSION... -o calibration.json [--sensor N] [--model bias|scale|full] ...
+// calibrate fit SESSION... -o calibration.json [--sensor N] [--model auto|bias|scale|full] ...
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -29,9 +29,10 @@ struct FitOptions {
   // --temperature, --loss, --loss-scale, --accel-only, --min-static-s: the library's options
   // and defaults, bound directly (--accel-model none is fit_accel = false).
   CalibrationOptions calibration;
-  std::string segments;         // Annotated segments instead of the detector.
-  std::string html;             // Calibration certificate (docs/reports.md).
-  std::string tags;             // --tags FILE: device IDs into calibration.json.
+  std::string segments;                // Annotated segments instead of the detector.
+  std::string html;                    // Calibration certificate (docs/reports.md).
+  bool accept_rejected_model = false;  // --accept-rejected-model: certify them anyway.
+  std::string tags;                    // --tags FILE: device IDs into calibration.json.
   apps::LoadCliOptions load;    // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
   SpecCliOptions spec;          // --spec, --fail-on-nonconformity (docs/conformity.md)
   RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
@@ -44,7 +45,7 @@ int RunFit(const FitOptions& f) {
     apps::PrintErrorText("--accel-model none and --accel-only leave nothing to calibrate");
     return kExitUsage;
   }
-  if (accel_none && o.gyro_model != ModelKind::kBias) {
+  if (accel_none && (o.gyro_model != ModelKind::kBias || o.gyro_auto)) {
     apps::PrintErrorText(
         "--accel-model none evaluates the gyroscope's bias at rest from one static record: give "
         "--gyro-model bias (a scale or misalignment needs poses, rotations and the "
@@ -141,7 +142,22 @@ int RunFit(const FitOptions& f) {
   if (int rc = ApplySpec(spec.spec, &cal.value()); rc != kExitOk) return rc;
   std::string html;
   if (!f.html.empty()) {
-    Result<std::string> rendered = RenderCalibrationCertificate(cal.value());
+    // Constants marked model_rejected are not certified without --accept-rejected-model (an
+    // input decision, exit 2; nothing is written).
+    const std::vector<std::string> rejected = ModelRejectedConstants(cal.value());
+    if (!rejected.empty() && !f.accept_rejected_model) {
+      std::string list;
+      for (const std::string& r : rejected) list += (list.empty() ? " " : "; ") + r;
+      apps::PrintErrorText(fmt::format(
+          "the certificate refuses constants marked model_rejected (nothing written):{}. Refit "
+          "as the reason says, drop --html to write calibration.json alone, or give "
+          "--accept-rejected-model to certify them with that notice",
+          list));
+      return kExitUsage;
+    }
+    CertificateOptions certificate;
+    certificate.accept_rejected_model = f.accept_rejected_model;
+    Result<std::string> rendered = RenderCalibrationCertificate(cal.value(), certificate);
     if (!rendered.ok()) {
       // The certificate of the fit just made: a failure is the run's, not the input's.
       return apps::PrintErrorExit(rendered.error().WithKind(ErrorKind::kFailed));
@@ -224,36 +240,56 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
   CalibrationOptions& c = o->calibration;
   sub->add_option("--sensor", c.sensor, "calibrate only this tag (0 = every tag)");
   // --model sets both sensors' model unless --accel-model or --gyro-model names its own
-  // (callbacks run once the whole command line is parsed, so the counts are final).
+  // (callbacks run once the whole command line is parsed, so the counts are final). The
+  // default is auto (issue #36): the smallest model of bias < scale < full the data accept.
+  c.accel_auto = true;
+  c.gyro_auto = true;
+  c.compare_models = true;
   const auto model_kind = [](const std::string& name) { return *ParseModelKind(name); };
   sub->add_option_function<std::string>(
          "--model",
          [o, sub, model_kind](const std::string& v) {
-           if (sub->count("--accel-model") == 0) o->calibration.accel_model = model_kind(v);
-           if (sub->count("--gyro-model") == 0) o->calibration.gyro_model = model_kind(v);
+           const bool automatic = v == "auto";
+           if (sub->count("--accel-model") == 0) {
+             o->calibration.accel_auto = automatic;
+             if (!automatic) o->calibration.accel_model = model_kind(v);
+           }
+           if (sub->count("--gyro-model") == 0) {
+             o->calibration.gyro_auto = automatic;
+             if (!automatic) o->calibration.gyro_model = model_kind(v);
+           }
          },
-         "bias | scale | full, for both sensors")
-      ->check(CLI::IsMember({"bias", "scale", "full"}));
+         "auto (default: the smallest model the data accept) | bias | scale | full, for both "
+         "sensors")
+      ->check(CLI::IsMember({"auto", "bias", "scale", "full"}));
   sub->add_option_function<std::string>(
          "--accel-model",
          [o, model_kind](const std::string& v) {
+           o->calibration.accel_auto = v == "auto";
            if (v == "none") {
              o->calibration.fit_accel = false;  // The accel model stays --model's (unused).
-           } else {
+           } else if (v != "auto") {
              o->calibration.accel_model = model_kind(v);
            }
          },
-         "override --model for the accelerometer: bias | scale | full, or none (with "
+         "override --model for the accelerometer: auto | bias | scale | full, or none (with "
          "--gyro-model bias: the gyroscope's bias at rest from one static record)")
-      ->check(CLI::IsMember({"bias", "scale", "full", "none"}));
+      ->check(CLI::IsMember({"auto", "bias", "scale", "full", "none"}));
   sub->add_option_function<std::string>(
          "--gyro-model",
-         [o, model_kind](const std::string& v) { o->calibration.gyro_model = model_kind(v); },
-         "override --model for the gyroscope: bias | scale | full")
-      ->check(CLI::IsMember({"bias", "scale", "full"}));
+         [o, model_kind](const std::string& v) {
+           o->calibration.gyro_auto = v == "auto";
+           if (v != "auto") o->calibration.gyro_model = model_kind(v);
+         },
+         "override --model for the gyroscope: auto | bias | scale | full")
+      ->check(CLI::IsMember({"auto", "bias", "scale", "full"}));
   sub->add_option("--gravity-mps2", c.gravity_mps2,
                   "local gravity [m/s^2] (default: standard gravity 9.80665, CGPM 1901)")
       ->check(CLI::PositiveNumber);
+  sub->add_option_function<double>(
+      "--gravity-u-mps2", [o](double v) { o->calibration.gravity_u_mps2 = v; },
+      "standard uncertainty of --gravity-mps2 [m/s^2], stated in calibration.json and in the "
+      "certificate's accelerometer budget");
   sub->add_option("--accel-fs-g", c.accel_fs_g, "accelerometer full scale of raw counts [g]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -286,6 +322,9 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
                   "kind,start_s,end_s[,table_rate_dps][,input] (docs/calibration-model.md)")
       ->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
+  sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
+                "certify constants marked model_rejected (a model the data reject or an exact "
+                "fit), with that notice on the certificate");
   AddTagsOption(sub, &o->tags);
   AddSpecOptions(sub, &o->spec);
   AddRegistryOptions(sub, &o->registry);

@@ -34,10 +34,11 @@ struct PushCliOptions {
   std::string profile;  // "" = the tags file's, else mpu6050
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
-  std::string tags;             // --tags FILE
-  bool any_device = false;      // --any-device: write to whichever tag answers
-  bool all = false;             // --all: every tag of calibration.json, one after another
-  RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
+  bool accept_rejected_model = false;  // --accept-rejected-model (issue #36)
+  std::string tags;                    // --tags FILE
+  bool any_device = false;             // --any-device: write to whichever tag answers
+  bool all = false;                    // --all: every tag of calibration.json, one after another
+  RegistryCliOptions registry;         // --registry, --station, --operator (docs/registry.md)
 };
 
 int RunPushAll(const PushCliOptions& c);
@@ -104,6 +105,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   bo.profile = ResolveProfile(c.profile, tags, c.sensor);
   bo.accel_fs_g = c.accel_fs_g;
   bo.gyro_fs_dps = c.gyro_fs_dps;
+  bo.accept_rejected_model = c.accept_rejected_model;
   // Whether the blob format can represent the constants does not depend on the tag's device
   // id or seq: checked here, with the firmware's own rules (WriteBlob), before any port is
   // opened. The push builds the blob again for the tag that answers.
@@ -287,6 +289,9 @@ void AddPushCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--retries", o->retries, "resends of one request (default 5)")
       ->check(CLI::Range(0, 100));
   AddSensorProfileOptions(sub, &o->profile, &o->accel_fs_g, &o->gyro_fs_dps);
+  sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
+                "send constants calibration.json marks model_rejected (a model the data reject "
+                "or an exact fit; docs/calibration-model.md) anyway");
   AddRegistryOptions(sub, &o->registry);
   sub->callback([o, exit_code] { *exit_code = RunPush(*o); });
 }

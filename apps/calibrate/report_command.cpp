@@ -16,8 +16,9 @@ namespace {
 
 struct ReportOptions {
   std::string calibration;
-  std::string html;  // Calibration certificate (docs/reports.md).
-  std::string tags;  // --tags FILE: the tags' names, device IDs and profiles.
+  std::string html;                    // Calibration certificate (docs/reports.md).
+  std::string tags;                    // --tags FILE: the tags' names, device IDs and profiles.
+  bool accept_rejected_model = false;  // --accept-rejected-model: certify them anyway.
 };
 
 int RunReport(const ReportOptions& r) {
@@ -49,10 +50,21 @@ int RunReport(const ReportOptions& r) {
                     fmt::format("tags ({}):\n{}", r.tags, apps::CalibrationTagLines(named)));
   }
   if (!r.html.empty()) {
-    // The certificate reloads the recorded inputs when their SHA-256 still matches; with
-    // --tags it names the tags from the file.
-    Result<std::string> html = tags.value() ? apps::RenderCertificateFor(named, r.calibration)
-                                            : RenderJsonFileHtml(r.calibration);
+    // Constants marked model_rejected are not certified without --accept-rejected-model.
+    const std::vector<std::string> rejected = ModelRejectedConstants(named);
+    if (!rejected.empty() && !r.accept_rejected_model) {
+      std::string list;
+      for (const std::string& x : rejected) list += (list.empty() ? " " : "; ") + x;
+      apps::PrintErrorText(fmt::format(
+          "{}: the certificate refuses constants marked model_rejected (not written):{}. Refit "
+          "as the reason says, or give --accept-rejected-model to certify them with that notice",
+          r.calibration, list));
+      return kExitUsage;
+    }
+    // The certificate's id is the hash of the file's own bytes; with --tags it names the tags
+    // from the file.
+    Result<std::string> html =
+        apps::RenderCertificateFor(named, r.calibration, r.accept_rejected_model);
     // The certificate of a calibration.json that loaded: a render failure is the run's.
     Status s = html.ok() ? WriteFileAtomically(r.html, html.value())
                          : Status(html.error().WithKind(ErrorKind::kFailed));
@@ -73,6 +85,9 @@ void AddReportCommand(CLI::App& app, int* exit_code) {
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
+  sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
+                "certify constants marked model_rejected (a model the data reject or an exact "
+                "fit), with that notice on the certificate");
   AddTagsOption(sub, &o->tags);
   sub->callback([o, exit_code] { *exit_code = RunReport(*o); });
 }

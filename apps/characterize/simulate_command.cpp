@@ -241,6 +241,15 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
                   "calibration: static poses (cube faces, corners, edges, cycled)")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  sub->add_option("--accel-cross-axis", o->calibration.accel_cross_axis,
+                  "calibration: the accelerometer's cross-axis terms are drawn uniform in +- this "
+                  "(0.02 = the MPU6050 datasheet's 2 %; 0 = none)")
+      ->check(CLI::Range(0.0, 0.1))
+      ->capture_default_str();
+  sub->add_option("--gyro-cross-axis", o->calibration.gyro_cross_axis,
+                  "calibration: the gyroscope's cross-axis terms are drawn uniform in +- this")
+      ->check(CLI::Range(0.0, 0.1))
+      ->capture_default_str();
   sub->add_option("--pose-dwell-s", o->calibration.dwell_s,
                   "calibration: still time per pose (the first twice as long)")
       ->check(CLI::PositiveNumber)

@@ -409,6 +409,13 @@ Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
   for (const auto& [src, dst] :
        {std::pair{&tag->accel, &b.accel}, std::pair{&tag->gyro, &b.gyro}}) {
     if (!*src) continue;
+    if ((*src)->model_check && (*src)->model_check->model_rejected) {
+      const std::string what =
+          fmt::format("sensor {} {}: the constants are marked model_rejected: {}", o.sensor,
+                      ImuSensorName((*src)->model.sensor), (*src)->model_check->reason);
+      if (!o.accept_rejected_model) return MakeError(what);
+      if (warnings != nullptr) warnings->push_back(what + "; written (--accept-rejected-model)");
+    }
     std::vector<std::string> sensor_warnings;
     Result<SensorConstants> s = SensorConstantsFromCalibration(**src, o, &sensor_warnings);
     if (!s.ok()) return MakeError(fmt::format("sensor {} {}", o.sensor, s.error().message));

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <ctime>
 #include <exception>
@@ -11,6 +12,7 @@
 #include <map>
 
 #include "calibration/calibrate_stages.hpp"
+#include "calibration/model_selection.hpp"
 #include "calibration/parameter_blocks.hpp"
 #include "metro/calibration/gyro_bias.hpp"
 #include "metro/core/utc_time.hpp"
@@ -48,6 +50,12 @@ bool CalibrationOptions::IsValid(std::string* why) const {
     return fail(fmt::format("gravity_mps2 = {} is not a gravity on Earth (9.7 .. 9.9 m/s^2)",
                             gravity_mps2));
   }
+  if (gravity_u_mps2 && !(*gravity_u_mps2 >= 0 && *gravity_u_mps2 < 0.5)) {
+    return fail(
+        fmt::format("gravity_u_mps2 = {} is not a standard uncertainty of gravity "
+                    "(0 .. 0.5 m/s^2)",
+                    *gravity_u_mps2));
+  }
   if (!(accel_fs_g > 0)) return fail("accel_fs_g must be > 0 (2, 4, 8 or 16 for an MPU6050)");
   if (!(gyro_fs_dps > 0)) {
     return fail("gyro_fs_dps must be > 0 (250, 500, 1000 or 2000 for an MPU6050)");
@@ -57,7 +65,7 @@ bool CalibrationOptions::IsValid(std::string* why) const {
   if (sensor < 0) return fail("sensor must be >= 0 (0 = every tag)");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(max_rotation_s > 0)) return fail("max_rotation_s must be > 0");
-  if (!fit_accel && (!fit_gyro || gyro_model != ModelKind::kBias)) {
+  if (!fit_accel && (!fit_gyro || gyro_model != ModelKind::kBias || gyro_auto)) {
     return fail(
         "without the accelerometer (accel model none) only the gyroscope's bias at rest is "
         "evaluated: give the gyroscope model bias");
@@ -92,6 +100,170 @@ const TagCalibration* Calibration::FindTag(int sensor) const {
 
 namespace {
 
+// One model of a sensor's ladder (issue #36), fitted in its own parameter blocks.
+struct Trial {
+  bool tried = false;
+  Status status;
+  ci::ParameterBlocks x;
+  ci::Fit fit;
+  ci::SensorSolution solution;
+  Eigen::Vector3d ref = Eigen::Vector3d::Ones();  // accel_ref or gyro_ref of the trial.
+  std::vector<std::string> warnings;
+  // Gyroscope: the rotations as the trial left them (exclusions) and its segments.
+  std::vector<ci::RotationData> rotations;
+  std::vector<const Segment*> rotation_segments;
+  std::vector<Segment> segments;
+};
+
+constexpr ModelKind kLadder[] = {ModelKind::kBias, ModelKind::kScale, ModelKind::kFull};
+
+// The blocks `blocks` (into `from`) as the same blocks of `to`.
+std::vector<double*> Rebase(const std::vector<double*>& blocks, const ci::ParameterBlocks& from,
+                            ci::ParameterBlocks* to) {
+  std::vector<double*> out;
+  const double* base = from[ci::ParameterBlocks::kAccelBias];
+  for (double* b : blocks) {
+    out.push_back((*to)[ci::ParameterBlocks::kAccelBias] + (static_cast<const double*>(b) - base));
+  }
+  return out;
+}
+
+// A trial's model as determined: the covariance in input units passes CheckDetermined.
+Status CheckTrialDetermined(ImuSensor imu, ModelKind kind, const ci::TagProblemData& d,
+                            const Trial& t, const std::string& unit, int sensor) {
+  ci::ParameterBlocks x = t.x;
+  Eigen::MatrixXd cov = t.solution.covariance;
+  ci::Unscale(t.ref, imu, kind, d.temperature, &x, &cov);
+  return ci::CheckDetermined(
+      ci::MakeSensorCalibration(imu, kind, d.temperature, d.t_ref_c, unit, x, cov), sensor);
+}
+
+Status RunAccelTrial(ModelKind kind, const CalibrationOptions& o, const std::string& unit,
+                     const std::string& hint, int sensor, ci::TagProblemData* d, Trial* t) {
+  CalibrationOptions ok = o;
+  ok.accel_model = kind;
+  t->tried = true;
+  Result<ci::SensorStart> start = ci::StartAccel(d->statics, d->target_norm, unit, d->temperature,
+                                                 ok, sensor, &t->warnings, hint);
+  if (!start.ok()) return start.error();
+  t->ref = start.value().scale;
+  d->accel_ref = t->ref;
+  ci::SetScaledStart(ImuSensor::kAccel, start.value(), &t->x);
+  Result<ci::SensorSolution> solved = ci::SolveAccel(*d, ok, sensor, &t->x, &t->fit);
+  if (!solved.ok()) return solved.error();
+  t->solution = std::move(solved).value();
+  return CheckTrialDetermined(ImuSensor::kAccel, kind, *d, *t, unit, sensor);
+}
+
+Status RunGyroTrial(ModelKind kind, const CalibrationOptions& o, const ci::SensorSolution& accel,
+                    double gyro_nominal, const std::string& unit, int sensor, ci::TagProblemData* d,
+                    Trial* t) {
+  CalibrationOptions og = o;
+  og.gyro_model = kind;
+  t->tried = true;
+  Status motion =
+      ci::CheckGyroMotion(d->tables.size(), d->rotations.size(), kind, d->temperature, sensor);
+  if (!motion.ok()) return motion;
+  Result<ci::GyroStart> start =
+      ci::StartGyro(d->statics, d->tables, d->rotations, t->x, gyro_nominal, kind, sensor);
+  if (!start.ok()) return start.error();
+  ci::ApplyGyroStart(start.value(), d, &t->x, &t->fit);
+  t->ref = d->gyro_ref;
+  Result<ci::SensorSolution> solved = ci::SolveGyro(*d, og, sensor, accel, &t->x, &t->fit);
+  if (!solved.ok()) return solved.error();
+  // Rotations that contradict the rest are excluded one at a time (the worst first) and the
+  // gyroscope solved again, while the rest still determine the model.
+  for (int round = 0; round < 5 && o.loss == LossKind::kTrivial; ++round) {
+    const std::optional<size_t> bad = ci::ContradictingRotation(t->fit, d->rotations.size());
+    if (!bad) break;
+    if (!ci::CheckGyroMotion(d->tables.size(), d->rotations.size() - 1, kind, d->temperature,
+                             sensor)
+             .ok()) {
+      break;
+    }
+    t->warnings.push_back(ci::ExcludeRotation(*bad, t->fit, d, &t->segments, sensor));
+    solved = ci::SolveGyro(*d, og, sensor, accel, &t->x, &t->fit);
+    if (!solved.ok()) return solved.error();
+  }
+  t->solution = std::move(solved).value();
+  return CheckTrialDetermined(ImuSensor::kGyro, kind, *d, *t, unit, sensor);
+}
+
+ci::LadderFit LadderFitOf(ImuSensor imu, ModelKind kind, const Trial& t, bool temperature) {
+  ci::LadderFit f;
+  f.kind = kind;
+  f.fitted = t.tried && t.status.ok();
+  if (t.tried && !t.status.ok()) f.why = t.status.error().message;
+  f.parameters = ci::ParameterBlocks::FreeCount(imu, kind, temperature);
+  if (f.fitted) {
+    f.chi2 = t.solution.chi2;
+    f.chi2_dof = t.solution.chi2_dof;
+    f.orientations = t.solution.orientations;
+  }
+  return f;
+}
+
+// The ladder's comparisons, the chosen model (auto) and its standing; `given` when not auto.
+// Returns the chosen model, or the error of the given one (or, auto, of the smallest) when it
+// could not be fitted.
+Result<ModelKind> SelectModel(ImuSensor imu, const std::array<Trial, 3>& trials, bool automatic,
+                              bool compare, ModelKind given, bool temperature, bool robust,
+                              ModelCheck* check) {
+  std::vector<ci::LadderFit> fits;
+  for (ModelKind k : kLadder) {
+    const Trial& t = trials[static_cast<size_t>(k)];
+    if (t.tried) fits.push_back(LadderFitOf(imu, k, t, temperature));
+  }
+  ModelKind chosen = given;
+  if (automatic) {
+    const bool any = std::any_of(fits.begin(), fits.end(), [](const auto& f) { return f.fitted; });
+    if (!any) return trials[static_cast<size_t>(fits.front().kind)].status.error();
+  }
+  const std::vector<ModelComparison> comparisons =
+      compare ? ci::CompareLadder(fits) : std::vector<ModelComparison>{};
+  if (automatic) chosen = ci::ChooseModel(fits, comparisons);
+  const Trial& t = trials[static_cast<size_t>(chosen)];
+  if (!t.status.ok()) return t.status.error();
+  *check = ci::CheckChosenModel(imu, LadderFitOf(imu, chosen, t, temperature), automatic,
+                                comparisons, robust);
+  if (automatic && check->model_rejected) {
+    // Auto found no model the data accept: a larger model that could not be fitted says
+    // what the record lacks (as --model full did before auto), rather than constants to refuse.
+    for (auto k = std::rbegin(kLadder); k != std::rend(kLadder) && *k != chosen; ++k) {
+      const Trial& larger = trials[static_cast<size_t>(*k)];
+      if (larger.tried && !larger.status.ok()) return larger.status.error();
+    }
+  }
+  return chosen;
+}
+
+std::vector<std::string> CrossAxisTerms(ImuSensor imu, bool accel_terms, bool gyro_terms) {
+  std::vector<std::string> out;
+  const std::vector<std::string> a =
+      ci::ParameterBlocks::FreeNames(ImuSensor::kAccel, ModelKind::kFull, false);
+  const std::vector<std::string> g =
+      ci::ParameterBlocks::FreeNames(ImuSensor::kGyro, ModelKind::kFull, false);
+  if (accel_terms) {
+    for (size_t i = 6; i < a.size(); ++i) out.push_back("accel." + a[i]);
+  }
+  if (gyro_terms && imu == ImuSensor::kGyro) {
+    for (size_t i = 6; i < g.size(); ++i) out.push_back("gyro." + g[i]);
+  }
+  return out;
+}
+
+// cov += S_active u^2 S_active^T (the columns of S for the active terms; JCGM 100:2008 5.1.2
+// with independent rectangular inputs).
+void AddCrossAxisTypeB(const Eigen::MatrixXd& sensitivity, const std::vector<int>& columns,
+                       double u, Eigen::MatrixXd* cov) {
+  if (sensitivity.rows() != cov->rows()) return;
+  for (int c : columns) {
+    if (c >= sensitivity.cols()) continue;
+    const Eigen::VectorXd s = sensitivity.col(c);
+    *cov += u * u * s * s.transpose();
+  }
+}
+
 // The stages of calibrate_stages.hpp, in order.
 Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
                                         const CalibrationOptions& o) {
@@ -122,71 +294,135 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
   d.temperature = temperature.fit;
   d.t_ref_c = temperature.t_ref_c;
 
-  // Accelerometer: start, fit.
-  Result<ci::SensorStart> accel_start =
-      ci::StartAccel(d.statics, d.target_norm, records.accel_unit, d.temperature, o, out.sensor,
-                     &out.warnings, ci::PoseShortfallHint(d.records));
-  if (!accel_start.ok()) return accel_start.error();
-  ci::ParameterBlocks x;
-  d.accel_ref = accel_start.value().scale;
-  ci::SetScaledStart(ImuSensor::kAccel, accel_start.value(), &x);
-  ci::Fit fit;
-  Result<ci::SensorSolution> accel_solved = ci::SolveAccel(d, o, out.sensor, &x, &fit);
-  if (!accel_solved.ok()) return accel_solved.error();
-  ci::SensorSolution accel = std::move(accel_solved).value();
+  // Which models are fitted (issue #36): the whole ladder when comparing or choosing.
+  const bool robust = o.loss != LossKind::kTrivial;
+  const bool accel_auto = o.accel_auto && !robust;
+  const bool gyro_auto = o.gyro_auto && !robust;
+  const bool compare = (o.compare_models || o.accel_auto || o.gyro_auto) && !robust;
+  if (robust && (o.accel_auto || o.gyro_auto)) {
+    out.warnings.push_back(fmt::format(
+        "sensor {}: --model auto compares the models on their chi-square against the noise, "
+        "which a robust loss does not give: the '{}' accelerometer and '{}' gyroscope models "
+        "are fitted as given",
+        out.sensor, ModelKindName(o.accel_model), ModelKindName(o.gyro_model)));
+  }
+  CalibrationOptions oc = o;
+
+  // Accelerometer: start and fit of each model, then the chosen one.
+  const std::string hint = ci::PoseShortfallHint(d.records);
+  std::array<Trial, 3> accel_trials;
+  for (ModelKind k : kLadder) {
+    if (!compare && k != o.accel_model) continue;
+    Trial& t = accel_trials[static_cast<size_t>(k)];
+    t.status = RunAccelTrial(k, o, records.accel_unit, hint, out.sensor, &d, &t);
+  }
+  ModelCheck accel_check;
+  Result<ModelKind> accel_kind = SelectModel(ImuSensor::kAccel, accel_trials, accel_auto, compare,
+                                             o.accel_model, d.temperature, robust, &accel_check);
+  if (!accel_kind.ok()) return accel_kind.error();
+  oc.accel_model = accel_kind.value();
+  Trial& at = accel_trials[static_cast<size_t>(oc.accel_model)];
+  ci::ParameterBlocks x = at.x;
+  ci::Fit fit = at.fit;
+  ci::SensorSolution accel = at.solution;
+  accel.free_blocks = Rebase(at.solution.free_blocks, at.x, &x);
+  d.accel_ref = at.ref;
+  for (const std::string& w : at.warnings) out.warnings.push_back(w);
   for (const std::string& w : accel.warnings) out.warnings.push_back(w);
 
-  // Gyroscope: rotations, start, fit with the accelerometer held.
+  // Gyroscope: rotations, then start and fit of each model with the accelerometer held.
   ci::SensorSolution gyro;
+  ModelCheck gyro_check;
   if (d.has_gyro) {
     ci::RotationSet rotations = ci::BuildRotations(d.records, d.statics, temperature, d.accel_ref,
                                                    o.max_rotation_s, &out.segments);
-    d.rotations = std::move(rotations.data);
-    d.rotation_segments = std::move(rotations.segments);
-    Status motion = ci::CheckGyroMotion(d.tables.size(), d.rotations.size(), o.gyro_model,
-                                        d.temperature, out.sensor);
-    if (!motion.ok()) return motion.error();
     const double gyro_nominal =
         NominalScale(ImuSensor::kGyro, records.gyro_unit, o.gyro_fs_dps).value();
-    Result<ci::GyroStart> start =
-        ci::StartGyro(d.statics, d.tables, d.rotations, x, gyro_nominal, o.gyro_model, out.sensor);
-    if (!start.ok()) return start.error();
-    ci::ApplyGyroStart(start.value(), &d, &x, &fit);
-    Result<ci::SensorSolution> gyro_solved = ci::SolveGyro(d, o, out.sensor, accel, &x, &fit);
-    if (!gyro_solved.ok()) return gyro_solved.error();
-    // Rotations that contradict the rest are excluded one at a time (the worst first) and the
-    // gyroscope solved again, while the rest still determine the model.
-    for (int round = 0; round < 5 && o.loss == LossKind::kTrivial; ++round) {
-      const std::optional<size_t> bad = ci::ContradictingRotation(fit, d.rotations.size());
-      if (!bad) break;
-      if (!ci::CheckGyroMotion(d.tables.size(), d.rotations.size() - 1, o.gyro_model, d.temperature,
-                               out.sensor)
-               .ok()) {
-        break;
-      }
-      out.warnings.push_back(ci::ExcludeRotation(*bad, fit, &d, &out.segments, out.sensor));
-      gyro_solved = ci::SolveGyro(d, o, out.sensor, accel, &x, &fit);
-      if (!gyro_solved.ok()) return gyro_solved.error();
+    std::array<Trial, 3> gyro_trials;
+    for (ModelKind k : kLadder) {
+      if (!compare && k != o.gyro_model) continue;
+      Trial& t = gyro_trials[static_cast<size_t>(k)];
+      d.rotations = rotations.data;
+      d.rotation_segments = rotations.segments;
+      t.x = x;
+      t.fit = fit;
+      t.segments = out.segments;
+      ci::SensorSolution held = accel;
+      held.free_blocks = Rebase(accel.free_blocks, x, &t.x);
+      t.status = RunGyroTrial(k, oc, held, gyro_nominal, records.gyro_unit, out.sensor, &d, &t);
+      t.rotations = d.rotations;
+      t.rotation_segments = d.rotation_segments;
     }
-    gyro = std::move(gyro_solved).value();
+    Result<ModelKind> gyro_kind = SelectModel(ImuSensor::kGyro, gyro_trials, gyro_auto, compare,
+                                              o.gyro_model, d.temperature, robust, &gyro_check);
+    if (!gyro_kind.ok()) return gyro_kind.error();
+    oc.gyro_model = gyro_kind.value();
+    Trial& gt = gyro_trials[static_cast<size_t>(oc.gyro_model)];
+    x = gt.x;
+    fit = gt.fit;
+    gyro = gt.solution;
+    d.rotations = gt.rotations;
+    d.rotation_segments = gt.rotation_segments;
+    d.gyro_ref = gt.ref;
+    // Element by element: d.rotation_segments point into out.segments.
+    for (size_t i = 0; i < out.segments.size() && i < gt.segments.size(); ++i) {
+      out.segments[i] = gt.segments[i];
+    }
+    for (const std::string& w : gt.warnings) out.warnings.push_back(w);
     for (const std::string& w : gyro.warnings) out.warnings.push_back(w);
+  }
+
+  // The Type B for the cross-axis terms a rejected or exact scale model leaves out (issue #36),
+  // added to the covariances after the gyroscope took the accelerometer's (noise) covariance.
+  const bool accel_type_b = accel_check.type_b.has_value();
+  if (accel_type_b) {
+    accel_check.type_b->terms = CrossAxisTerms(ImuSensor::kAccel, true, false);
+    AddCrossAxisTypeB(accel.cross_axis_sensitivity, {0, 1, 2}, accel_check.type_b->u,
+                      &accel.covariance);
+  }
+  if (d.has_gyro) {
+    const bool gyro_own = gyro_check.type_b.has_value();
+    std::vector<int> columns;
+    if (accel_type_b) columns = {0, 1, 2};
+    if (gyro_own) {
+      for (int c = 3; c < 9; ++c) columns.push_back(c);
+    }
+    if (!columns.empty() && gyro.cross_axis_sensitivity.cols() == 9) {
+      if (!gyro_check.type_b) {
+        gyro_check.type_b = ci::DatasheetCrossAxis();
+        gyro_check.reason += fmt::format(
+            "{}u includes the Type B term of the accelerometer's cross-axis terms, which its "
+            "'{}' model leaves out, carried through the rotations",
+            gyro_check.reason.empty() ? "" : "; ", ModelKindName(oc.accel_model));
+      }
+      gyro_check.type_b->terms = CrossAxisTerms(ImuSensor::kGyro, accel_type_b, gyro_own);
+      AddCrossAxisTypeB(gyro.cross_axis_sensitivity, columns, gyro_check.type_b->u,
+                        &gyro.covariance);
+    }
+  }
+  for (const ModelCheck* c : {&accel_check, &gyro_check}) {
+    if (!c->reason.empty() && c->status != "accepted") {
+      out.warnings.push_back(fmt::format("sensor {}: {}", out.sensor, c->reason));
+    }
   }
 
   // Back to input units, and the results.
   out.iterations = fit.iterations;
   if (d.has_gyro) {
-    ci::Unscale(d.gyro_ref, ImuSensor::kGyro, o.gyro_model, d.temperature, &x, &gyro.covariance);
+    ci::Unscale(d.gyro_ref, ImuSensor::kGyro, oc.gyro_model, d.temperature, &x, &gyro.covariance);
   }
-  ci::Unscale(d.accel_ref, ImuSensor::kAccel, o.accel_model, d.temperature, &x, &accel.covariance);
+  ci::Unscale(d.accel_ref, ImuSensor::kAccel, oc.accel_model, d.temperature, &x, &accel.covariance);
   Result<SensorCalibration> accel_cal =
-      ci::AssembleAccel(d, x, accel, fit, temperature, records.accel_unit, o, out.sensor);
+      ci::AssembleAccel(d, x, accel, fit, temperature, records.accel_unit, oc, out.sensor);
   if (!accel_cal.ok()) return accel_cal.error();
   out.accel = std::move(accel_cal).value();
+  if (compare || accel_check.status != "accepted") out.accel->model_check = accel_check;
   if (d.has_gyro) {
     Result<SensorCalibration> gyro_cal =
-        ci::AssembleGyro(d, x, gyro, fit, temperature, records.gyro_unit, o, out.sensor);
+        ci::AssembleGyro(d, x, gyro, fit, temperature, records.gyro_unit, oc, out.sensor);
     if (!gyro_cal.ok()) return gyro_cal.error();
     out.gyro = std::move(gyro_cal).value();
+    if (compare || gyro_check.status != "accepted") out.gyro->model_check = gyro_check;
   }
   if (!fit.converged) {
     out.warnings.push_back(fmt::format(
@@ -394,6 +630,7 @@ Result<Calibration> CalibrateSessions(const std::vector<const Session*>& session
   cal.gravity_mps2 = options.gravity_mps2;
   cal.gravity_source =
       options.gravity_given || options.gravity_mps2 != kStandardGravityMps2 ? "given" : "standard";
+  cal.gravity_u_mps2 = options.gravity_u_mps2;
   cal.tool_version = std::string(kToolName) + " " + kVersion;
   cal.date_utc = UtcIso8601Now();
   std::map<int, std::vector<const Tag*>> by_sensor;

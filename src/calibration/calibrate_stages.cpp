@@ -231,6 +231,25 @@ Status RankAndCovariance(ceres::Problem* problem, ImuSensor imu, ModelKind kind,
 
 }  // namespace
 
+std::optional<Eigen::MatrixXd> HeldTermSensitivity(ceres::Problem* problem,
+                                                   const std::vector<double*>& free_blocks, int p,
+                                                   const std::vector<double*>& held) {
+  for (double* b : held) {
+    if (!problem->HasParameterBlock(b)) return std::nullopt;
+  }
+  for (double* b : held) problem->SetParameterBlockVariable(b);
+  std::vector<double*> blocks = free_blocks;
+  blocks.insert(blocks.end(), held.begin(), held.end());
+  std::optional<Eigen::MatrixXd> j = DenseJacobian(problem, blocks);
+  for (double* b : held) problem->SetParameterBlockConstant(b);
+  if (!j || j->cols() <= p) return std::nullopt;
+  const Eigen::MatrixXd jf = j->leftCols(p);
+  const Eigen::MatrixXd jh = j->rightCols(j->cols() - p);
+  Eigen::MatrixXd out = -(jf.transpose() * jf).ldlt().solve(jf.transpose() * jh);
+  if (!out.allFinite()) return std::nullopt;
+  return out;
+}
+
 std::optional<Eigen::MatrixXd> DenseJacobian(ceres::Problem* problem,
                                              const std::vector<double*>& blocks) {
   ceres::Problem::EvaluateOptions eo;
@@ -961,6 +980,12 @@ Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOpti
     Status honest = HonestAccelCovariance(d, *x, o, sensor, *fit, &problem, &out);
     if (!honest.ok()) return honest.error();
   }
+  if (o.accel_model != ModelKind::kFull) {
+    // How the solution moves with the cross-axis terms the model holds at 0 (issue #36).
+    double* held = x->Get(ImuSensor::kAccel, PB::kMisalignment);
+    std::optional<Eigen::MatrixXd> s_m = HeldTermSensitivity(&problem, out.free_blocks, pa, {held});
+    if (s_m) out.cross_axis_sensitivity = std::move(*s_m);
+  }
   return out;
 }
 
@@ -1080,6 +1105,41 @@ Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptio
   if (o.loss == LossKind::kTrivial) {
     Status chi2 = GyroNoiseChiSquare(d, *x, o, sensor, *fit, accel, &problem, &out);
     if (!chi2.ok()) return chi2.error();
+  }
+  if (o.accel_model != ModelKind::kFull || o.gyro_model != ModelKind::kFull) {
+    // How the solution moves with the cross-axis terms the models hold at 0 (issue #36):
+    // the gyroscope's own directly; the accelerometer's through the gravity directions of the
+    // rotations and through the accelerometer's constants, d theta_g / d m_a =
+    // -(G_g^T G_g)^-1 G_g^T (G_a d theta_a / d m_a + G_m_a).
+    const Eigen::Index pa = static_cast<Eigen::Index>(accel.parameters);
+    double* accel_m = x->Get(ImuSensor::kAccel, PB::kMisalignment);
+    double* gyro_m = x->Get(ImuSensor::kGyro, PB::kMisalignment);
+    bool with_accel = o.accel_model != ModelKind::kFull && problem.HasParameterBlock(accel_m) &&
+                      accel.cross_axis_sensitivity.rows() == pa &&
+                      accel.cross_axis_sensitivity.cols() == 3;
+    for (double* b : accel.free_blocks) with_accel = with_accel && problem.HasParameterBlock(b);
+    std::vector<double*> extra;
+    if (with_accel) {
+      extra = accel.free_blocks;
+      extra.push_back(accel_m);
+    }
+    const bool with_gyro = o.gyro_model != ModelKind::kFull && problem.HasParameterBlock(gyro_m);
+    if (with_gyro) extra.push_back(gyro_m);
+    Eigen::MatrixXd sens = Eigen::MatrixXd::Zero(pg, 9);
+    if (!extra.empty()) {
+      std::optional<Eigen::MatrixXd> s_m =
+          HeldTermSensitivity(&problem, out.free_blocks, pg, extra);
+      if (s_m) {
+        Eigen::Index col = 0;
+        if (with_accel) {
+          sens.leftCols(3) =
+              s_m->middleCols(col, pa) * accel.cross_axis_sensitivity + s_m->middleCols(pa, 3);
+          col = pa + 3;
+        }
+        if (with_gyro) sens.rightCols(6) = s_m->middleCols(col, 6);
+      }
+    }
+    out.cross_axis_sensitivity = std::move(sens);
   }
   // ... plus the accelerometer's uncertainty carried by the rotations.
   Status pr = PropagateAccelUncertainty(&problem, out.free_blocks, pg, accel, &out.covariance);

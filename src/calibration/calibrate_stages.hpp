@@ -230,6 +230,14 @@ Status CheckGyroMotion(size_t table_runs, size_t rotations, ModelKind gyro_model
 std::optional<Eigen::MatrixXd> DenseJacobian(ceres::Problem* problem,
                                              const std::vector<double*>& blocks);
 
+// The implicit-function sensitivity of the free parameters to blocks the fit holds:
+// -(J_f^T J_f)^-1 J_f^T J_h, J_f the whitened Jacobian of `problem` over `free_blocks` (p
+// columns) and J_h over `held` (made variable only to evaluate it, constant again after);
+// columns in the order of `held`'s parameters. nullopt when the Jacobian cannot be formed.
+std::optional<Eigen::MatrixXd> HeldTermSensitivity(ceres::Problem* problem,
+                                                   const std::vector<double*>& free_blocks, int p,
+                                                   const std::vector<double*>& held);
+
 // kAccel/kGyro: unweighted start fits; kAccelFinal/kGyroFinal: whitened by the group standard
 // deviations of the start fits, with the robust loss when one is chosen. The accelerometer is
 // held in the gyroscope stages (the gravity norm alone determines it, as in imu_tk); its
@@ -252,6 +260,19 @@ struct SensorSolution {
   int dof = -1;               // Residual degrees of freedom when not m - p (distinct orientations).
   bool u_from_noise = false;  // The covariance rests on the poses' noise alone (k = 1.96).
   std::vector<std::string> warnings;
+  // The residuals against the noise of the data (HonestAccelCovariance: sum r_i^2 / sigma_i^2
+  // with m - p dof; GyroNoiseChiSquare: sum chi2_g with sum E_g dof); chi2 -1 when not
+  // measured (a robust loss, poses without noise). The model comparisons use them.
+  double chi2 = -1;
+  double chi2_dof = 0;
+  int orientations = 0;  // Accelerometer: distinct orientations (0 when not counted).
+  // d theta / d m (rows: the free parameters, FreeNames order, scaled; columns: the omitted
+  // misalignment terms, accelerometer a_yz a_zy a_zx then, for the gyroscope, g_yz .. g_yx):
+  // how the solution moves with cross-axis terms the model holds at 0 (-(J^T J)^-1 J^T J_m
+  // of the whitened fit; for the gyroscope the accelerometer's terms also act through the
+  // accelerometer's constants). Columns of terms the model frees are 0; empty for the full
+  // model. CrossAxisTypeB (calibrate.hpp) multiplies it by the spec's u.
+  Eigen::MatrixXd cross_axis_sensitivity;
 };
 
 // The accelerometer's covariance from the noise of each pose and the number of distinct

@@ -22,6 +22,54 @@ std::string ValueU(double v, double u) {
   return fmt::format("{:.7g} (fixed)", v);
 }
 
+}  // namespace
+
+std::string FormatModelCheck(const ModelCheck& m, const std::string& indent) {
+  std::string out = fmt::format("{}model check ({}): {}", indent, m.selection, m.status);
+  if (m.chi2 >= 0) {
+    out += fmt::format(", chi-square {:.4g} over {:.4g} dof", m.chi2, m.chi2_dof);
+    if (m.p_value >= 0) out += fmt::format(" (p = {:.3g})", m.p_value);
+  }
+  if (m.model_rejected) out += ", model_rejected";
+  out += "\n";
+  for (const ModelComparison& c : m.comparisons) {
+    out += fmt::format("{}  {} vs {}: ", indent, ModelKindName(c.smaller), ModelKindName(c.larger));
+    if (c.test.empty()) {
+      out += c.note + "\n";
+      continue;
+    }
+    out += c.test == "F"
+               ? fmt::format("F = {:.4g} (dof {:g}, {:.4g})", c.statistic, c.dof1, c.dof2)
+               : fmt::format("chi-square difference {:.4g} (dof {:g})", c.statistic, c.dof1);
+    out +=
+        fmt::format(", p {}: {} {}\n",
+                    c.p_value < 1e-16 ? std::string("< 1e-16") : fmt::format("= {:.3g}", c.p_value),
+                    c.rejected ? "rejects" : "accepts", ModelKindName(c.smaller));
+  }
+  if (m.type_b) {
+    out += fmt::format("{}  Type B in u: {} +-{:g} rad ({}, u = {:.4g} rad) from {}\n", indent,
+                       fmt::join(m.type_b->terms, " "), m.type_b->half_width,
+                       m.type_b->distribution, m.type_b->u, m.type_b->source);
+  }
+  if (!m.reason.empty()) out += fmt::format("{}  {}\n", indent, m.reason);
+  return out;
+}
+
+std::vector<std::string> ModelRejectedConstants(const Calibration& cal) {
+  std::vector<std::string> out;
+  for (const TagCalibration& t : cal.tags) {
+    for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
+      if (c->has_value() && (*c)->model_check && (*c)->model_check->model_rejected) {
+        out.push_back(fmt::format("sensor {} {}: {}", t.sensor, ImuSensorName((*c)->model.sensor),
+                                  (*c)->model_check->reason));
+      }
+    }
+  }
+  return out;
+}
+
+namespace {
+
 void ReportSensor(const SensorCalibration& c, std::string* out) {
   const SensorModel& m = c.model;
   const char* axes = "xyz";
@@ -59,6 +107,7 @@ void ReportSensor(const SensorCalibration& c, std::string* out) {
   }
   *out += fmt::format("    residual rms {} {}, reduced chi^2 {:.3f}\n", Fixed(c.residual_rms, 4),
                       c.residual_unit, c.reduced_chi2);
+  if (c.model_check) *out += FormatModelCheck(*c.model_check, "    ");
   for (const ResidualGroup& g : c.groups) {
     *out +=
         fmt::format("      {:<18} n = {:<6} rms {} {}\n", g.kind, g.count, Fixed(g.rms, 4), g.unit);

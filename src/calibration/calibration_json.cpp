@@ -49,6 +49,44 @@ json SegmentJson(const Segment& s) {
   return j;
 }
 
+json ModelCheckJson(const ModelCheck& m) {
+  json j;
+  j["selection"] = m.selection;
+  j["status"] = m.status;
+  j["model_rejected"] = m.model_rejected;
+  if (m.chi2 >= 0) {
+    j["chi2"] = m.chi2;
+    j["chi2_dof"] = m.chi2_dof;
+  }
+  if (m.p_value >= 0) j["p_value"] = m.p_value;
+  if (!m.reason.empty()) j["reason"] = m.reason;
+  json comparisons = json::array();
+  for (const ModelComparison& c : m.comparisons) {
+    json cj;
+    cj["smaller"] = ModelKindName(c.smaller);
+    cj["larger"] = ModelKindName(c.larger);
+    if (!c.test.empty()) {
+      cj["test"] = c.test;
+      cj["statistic"] = c.statistic;
+      cj["dof1"] = c.dof1;
+      cj["dof2"] = c.dof2;
+      cj["p_value"] = c.p_value;
+      cj["rejected"] = c.rejected;
+    }
+    if (!c.note.empty()) cj["note"] = c.note;
+    comparisons.push_back(std::move(cj));
+  }
+  j["comparisons"] = comparisons;
+  if (m.type_b) {
+    j["type_b"] = {{"source", m.type_b->source},
+                   {"half_width_rad", m.type_b->half_width},
+                   {"distribution", m.type_b->distribution},
+                   {"u_rad", m.type_b->u},
+                   {"terms", m.type_b->terms}};
+  }
+  return j;
+}
+
 json SensorJson(const SensorCalibration& c) {
   const SensorModel& m = c.model;
   json j;
@@ -85,6 +123,7 @@ json SensorJson(const SensorCalibration& c) {
                              {"before", c.static_residuals->before},
                              {"after", c.static_residuals->after}};
   }
+  if (c.model_check) j["model_check"] = ModelCheckJson(*c.model_check);
   j["parameters"] = c.parameter_names;
   j["covariance"] = Mat(c.covariance);
   j["correlation"] = Mat(c.Correlation());
@@ -286,6 +325,52 @@ std::vector<Segment> SegmentsFromJson(const JsonCursor& j) {
   return out;
 }
 
+std::optional<ModelKind> ModelKindFromJson(const JsonCursor& j) {
+  const std::optional<ModelKind> k = ParseModelKind(j.String());
+  if (j.ok() && !k) j.Fail("\"bias\", \"scale\" or \"full\"");
+  return k;
+}
+
+ModelCheck ModelCheckFromJson(const JsonCursor& j) {
+  ModelCheck m;
+  m.selection = j["selection"].String();
+  m.status = j["status"].String();
+  m.model_rejected = j["model_rejected"].Bool();
+  m.chi2 = j["chi2"].OptionalNumber().value_or(-1.0);
+  m.chi2_dof = j["chi2_dof"].OptionalNumber().value_or(0.0);
+  m.p_value = j["p_value"].OptionalNumber().value_or(-1.0);
+  m.reason = j["reason"].OptionalString().value_or("");
+  const JsonCursor comparisons = j["comparisons"];
+  if (!comparisons.IsArray()) comparisons.Fail("an array of model comparisons");
+  for (size_t i = 0; i < comparisons.Size() && comparisons.IsArray(); ++i) {
+    const JsonCursor cj = comparisons[i];
+    ModelComparison c;
+    c.smaller = ModelKindFromJson(cj["smaller"]).value_or(ModelKind::kScale);
+    c.larger = ModelKindFromJson(cj["larger"]).value_or(ModelKind::kFull);
+    c.test = cj["test"].OptionalString().value_or("");
+    if (!c.test.empty()) {
+      c.statistic = cj["statistic"].Number();
+      c.dof1 = cj["dof1"].Number();
+      c.dof2 = cj["dof2"].Number();
+      c.p_value = cj["p_value"].Number();
+      c.rejected = cj["rejected"].Bool();
+    }
+    c.note = cj["note"].OptionalString().value_or("");
+    m.comparisons.push_back(std::move(c));
+  }
+  if (j.Has("type_b")) {
+    const JsonCursor b = j["type_b"];
+    CrossAxisTypeB t;
+    t.source = b["source"].String();
+    t.half_width = b["half_width_rad"].Number();
+    t.distribution = b["distribution"].String();
+    t.u = b["u_rad"].Number();
+    t.terms = b["terms"].Strings();
+    m.type_b = std::move(t);
+  }
+  return m;
+}
+
 std::optional<SensorCalibration> SensorFromJson(const JsonCursor& j, ImuSensor sensor) {
   if (!j.IsObject()) {
     j.Fail(fmt::format("an object (the {} calibration)", ImuSensorLongName(sensor)));
@@ -358,6 +443,7 @@ std::optional<SensorCalibration> SensorFromJson(const JsonCursor& j, ImuSensor s
     }
     c.static_residuals = std::move(s);
   }
+  if (j.Has("model_check")) c.model_check = ModelCheckFromJson(j["model_check"]);
   c.covariance = SquareMatrix(j["covariance"]);
   c.parameter_names = j["parameters"].Strings();
   if (j.ok() && static_cast<Eigen::Index>(c.parameter_names.size()) != c.covariance.rows()) {
@@ -509,6 +595,7 @@ json ToJsonValue(const Calibration& cal) {
   j["date_utc"] = cal.date_utc;
   j["gravity_mps2"] = cal.gravity_mps2;
   if (!cal.gravity_source.empty()) j["gravity_source"] = cal.gravity_source;
+  if (cal.gravity_u_mps2) j["gravity_u_mps2"] = *cal.gravity_u_mps2;
   json inputs = json::array();
   for (const InputFile& f : cal.inputs) {
     json in = {{"path", f.path}, {"sha256", f.sha256}};
@@ -573,6 +660,12 @@ Calibration CalibrationFromJsonValue(const JsonCursor& j) {
     cal.gravity_source = j["gravity_source"].String();
     if (j.ok() && cal.gravity_source != "standard" && cal.gravity_source != "given") {
       j["gravity_source"].Fail("\"standard\" or \"given\"");
+    }
+  }
+  if (j.Has("gravity_u_mps2")) {
+    cal.gravity_u_mps2 = j["gravity_u_mps2"].Number();
+    if (j.ok() && !(*cal.gravity_u_mps2 >= 0 && *cal.gravity_u_mps2 < 0.5)) {
+      j["gravity_u_mps2"].Fail("a standard uncertainty of gravity, 0 <= u < 0.5 m/s^2");
     }
   }
   if (j.Has("inputs")) {

@@ -127,6 +127,10 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
     chi2_within += e * e / (sigma[i] * sigma[i]);
     chi2_all += fit.r_accel[i] * fit.r_accel[i] / (sigma[i] * sigma[i]);
   }
+  // The residuals against the noise, for the model comparisons (issue #36).
+  solution->chi2 = chi2_all;
+  solution->chi2_dof = static_cast<double>(static_cast<int>(m) - p);
+  solution->orientations = clusters;
   const int dof_within = static_cast<int>(m) - clusters;
   const double f = dof_within >= 3 ? std::max(1.0, chi2_within / dof_within) : 1.0;
   double between = 0, noise_of_means = 0;
@@ -383,6 +387,8 @@ Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
   }
   if (!(expected > 0)) return Status::Ok();
   solution->reduced_chi2 = chi2 / expected;
+  solution->chi2 = chi2;
+  solution->chi2_dof = expected;
   const boost::math::chi_squared law(expected);
   if (chi2 > boost::math::quantile(law, 0.99)) {
     std::string parts;

@@ -104,10 +104,15 @@ bool SimulationOptions::IsValid(std::string* why) const {
   }
   if (!(table_run_s > 0)) return fail("table_run_s must be > 0");
   if (sensor < 1) return fail("sensor must be >= 1");
+  if (!(accel_cross_axis >= 0 && accel_cross_axis <= 0.1) ||
+      !(gyro_cross_axis >= 0 && gyro_cross_axis <= 0.1)) {
+    return fail("cross-axis half-widths must be within 0 .. 0.1 (10 %)");
+  }
   return true;
 }
 
-ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool temperature) {
+ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool temperature,
+                      double accel_cross_axis, double gyro_cross_axis) {
   pcg64 rng(seed);
   ImuTruth t;
   SensorModel& a = t.accel;
@@ -119,7 +124,8 @@ ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool
   a.bias =
       Eigen::Vector3d(Uniform(rng, 0.050), Uniform(rng, 0.050), Uniform(rng, 0.080)) * lsb_per_g;
   for (int i = 0; i < 3; ++i) a.scale[i] = (1.0 + Uniform(rng, 0.03)) / lsb_per_g;
-  a.misalignment = {Uniform(rng, 0.02), Uniform(rng, 0.02), Uniform(rng, 0.02)};
+  a.misalignment = {Uniform(rng, accel_cross_axis), Uniform(rng, accel_cross_axis),
+                    Uniform(rng, accel_cross_axis)};
   SensorModel& g = t.gyro;
   g.sensor = ImuSensor::kGyro;
   g.kind = ModelKind::kFull;
@@ -129,7 +135,7 @@ ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool
   for (int i = 0; i < 3; ++i) g.bias[i] = Uniform(rng, 20.0) * lsb_per_dps;
   for (int i = 0; i < 3; ++i) g.scale[i] = (1.0 + Uniform(rng, 0.03)) / lsb_per_dps;
   g.misalignment.clear();
-  for (int i = 0; i < 6; ++i) g.misalignment.push_back(Uniform(rng, 0.02));
+  for (int i = 0; i < 6; ++i) g.misalignment.push_back(Uniform(rng, gyro_cross_axis));
   if (temperature) {
     a.has_temperature = true;
     g.has_temperature = true;
@@ -145,8 +151,9 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
   std::string why;
   if (!o.IsValid(&why)) return MakeError("invalid simulation options: " + why);
   SimulatedSession out;
-  out.truth =
-      o.random_truth ? DrawImuTruth(o.seed, o.accel_fs_g, o.gyro_fs_dps, o.temperature) : o.truth;
+  out.truth = o.random_truth ? DrawImuTruth(o.seed, o.accel_fs_g, o.gyro_fs_dps, o.temperature,
+                                            o.accel_cross_axis, o.gyro_cross_axis)
+                             : o.truth;
   if (o.temperature) {
     const double t_mid = 0.5 * (o.temp_start_c + o.temp_end_c);
     out.truth.accel.has_temperature = out.truth.gyro.has_temperature = true;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <limits>
 
@@ -61,23 +62,76 @@ Coverage SensorCoverage(const SensorCalibration& c, double p) {
   Coverage out;
   const double z975 = CoverageFactor(0.95, std::numeric_limits<double>::infinity());
   const std::string q = Short(0.5 * (1.0 + p), 4);
-  if (c.dof >= 1 && std::abs(c.coverage_factor_95 - z975) < 1e-9) {
+  // u rests on the poses' noise alone only when the residuals agree with that noise: with a
+  // reduced chi-square above the 99 % point of its law at the fit's dof the noise does not
+  // explain the scatter, and k is Student's t at that dof (issue #36).
+  const bool noise_agrees =
+      c.dof >= 1 &&
+      c.reduced_chi2 * c.dof <=
+          boost::math::quantile(boost::math::chi_squared(static_cast<double>(c.dof)), 0.99);
+  if (c.dof >= 1 && std::abs(c.coverage_factor_95 - z975) < 1e-9 && noise_agrees) {
     out.dof = std::numeric_limits<double>::infinity();
     out.k = CoverageFactor(p, out.dof);
     out.text = fmt::format(
-        "k = t_{}(inf) = {} (the uncertainty rests on the poses' noise alone, hundreds of "
-        "samples each: infinite degrees of freedom, JCGM 100:2008 G.6.6; the fit's own dof is {})",
-        q, Short(out.k, 4), c.dof);
+        "k = t_{}(inf) = {}: the uncertainty rests on the poses' noise (hundreds of samples "
+        "each), so its degrees of freedom are taken as infinite (JCGM 100:2008 G.6.6); the "
+        "residuals agree with that noise (reduced chi-square {} at the fit's {} dof)",
+        q, Short(out.k, 4), Short(c.reduced_chi2, 3), c.dof);
   } else if (c.dof >= 1) {
     out.dof = c.dof;
     out.k = CoverageFactor(p, out.dof);
     out.text = fmt::format(
-        "k = t_{}({}) = {} (Student's t at the fit's {} degrees of freedom, JCGM 100:2008 G.3.2)",
-        q, c.dof, Short(out.k, 4), c.dof);
+        "k = t_{}({}) = {} (Student's t at the fit's {} degrees of freedom, JCGM 100:2008 "
+        "G.3.2){}",
+        q, c.dof, Short(out.k, 4), c.dof,
+        std::abs(c.coverage_factor_95 - z975) < 1e-9
+            ? fmt::format("; the residuals are {} times the poses' noise (reduced chi-square "
+                          "{}), so u does not rest on that noise alone",
+                          Short(std::sqrt(c.reduced_chi2), 3), Short(c.reduced_chi2, 3))
+            : std::string());
   } else {
     out.text = fmt::format(
         "no coverage factor: the fit has {} degrees of freedom (fewer than 1), so only u is stated",
         c.dof);
+  }
+  return out;
+}
+
+// The standard uncertainty of the gravity value the accelerometer was fitted to (issue #36):
+// the fit's target norm is g / g_n, which scales M (and K) by the same factor and leaves the
+// biases and misalignment terms unchanged, so u(g) / g is a relative uncertainty of every
+// scale factor, sensitivity and element of M.
+struct GravityU {
+  double u_mps2 = 0.0;
+  std::string text;
+};
+GravityU GravityUncertainty(const Calibration& cal) {
+  GravityU out;
+  const std::string g = Short(cal.gravity_mps2, 8);
+  if (cal.gravity_u_mps2) {
+    out.u_mps2 = *cal.gravity_u_mps2;
+    out.text = fmt::format("u(g) = {} m/s^2 as stated (calibrate fit --gravity-u-mps2)",
+                           Short(out.u_mps2, 3));
+  } else if (cal.gravity_source == "given") {
+    // The value as written (shortest round trip), read as rounded to its last digit.
+    const std::string written = fmt::format("{}", cal.gravity_mps2);
+    const size_t dot = written.find('.');
+    const int decimals = dot == std::string::npos ? 0 : static_cast<int>(written.size() - dot - 1);
+    const double half = 0.5 * std::pow(10.0, -decimals);
+    out.u_mps2 = half / std::sqrt(3.0);
+    out.text = fmt::format(
+        "u(g) = {} m/s^2: the given value {} m/s^2 read as rounded to its last digit (+-{} "
+        "m/s^2, rectangular, JCGM 100:2008 4.3.7); give --gravity-u-mps2 to state its own u",
+        Short(out.u_mps2, 3), written, Short(half, 3));
+  } else {
+    constexpr double kHalfWidth = 0.03;  // 9.777 .. 9.837 m/s^2.
+    out.u_mps2 = kHalfWidth / std::sqrt(3.0);
+    out.text = fmt::format(
+        "u(g) = {} m/s^2: standard gravity {} m/s^2 stands for the local gravity, which lies "
+        "within +-{} m/s^2 of it at the Earth's surface (9.780 at the equator to 9.832 m/s^2 at "
+        "the poles at sea level, 0.003 m/s^2 less per km of height), rectangular (JCGM 100:2008 "
+        "4.3.7); give the local value with --gravity-mps2 and --gravity-u-mps2",
+        Short(out.u_mps2, 3), g, kHalfWidth);
   }
   return out;
 }
@@ -154,8 +208,69 @@ Result<std::string> ResidualPlot(const StaticResiduals& r, bool accel) {
 constexpr const char* kRefit =
     "re-run `calibrate fit` on the input records to get them (docs/calibration-format.md)";
 
-mustache::data SensorData(const SensorCalibration& c, int sensor,
-                          const CertificateOptions& options) {
+// The model check of a sensor (issue #36): the comparisons and the chosen model's standing.
+void SetModelCheck(const SensorCalibration& c, const CertificateOptions& options,
+                   mustache::data* d) {
+  if (!c.model_check) return;
+  const ModelCheck& mc = *c.model_check;
+  mustache::data check;
+  std::string line = fmt::format("Model '{}' ({}): {}", ModelKindName(c.model.kind),
+                                 mc.selection == "auto" ? "chosen by --model auto, the smallest "
+                                                          "model of bias < scale < full the data "
+                                                          "accept"
+                                                        : "as given",
+                                 mc.status);
+  if (mc.chi2 >= 0) {
+    line += fmt::format("; residuals against the noise: chi-square {} over {} dof",
+                        Short(mc.chi2, 4), Short(mc.chi2_dof, 4));
+    if (mc.p_value >= 0) line += fmt::format(", p = {}", Short(mc.p_value, 3));
+  }
+  check.set("line", line + ".");
+  mustache::data rows{mustache::data::type::list};
+  for (const ModelComparison& cmp : mc.comparisons) {
+    mustache::data row;
+    row.set("pair", fmt::format("{} vs {}", ModelKindName(cmp.smaller), ModelKindName(cmp.larger)));
+    if (cmp.test.empty()) {
+      row.set("test", "-");
+      row.set("statistic", "-");
+      row.set("dof", "-");
+      row.set("p", "-");
+      row.set("decision", cmp.note);
+    } else {
+      row.set("test", cmp.test == "F" ? "F" : "chi-square difference");
+      row.set("statistic", Short(cmp.statistic, 4));
+      row.set("dof", cmp.test == "F" ? fmt::format("{}, {}", Short(cmp.dof1, 3), Short(cmp.dof2, 4))
+                                     : Short(cmp.dof1, 3));
+      row.set("p", cmp.p_value < 1e-16 ? std::string("< 1e-16") : Short(cmp.p_value, 3));
+      row.set("decision", fmt::format("{} {}", cmp.rejected ? "rejects" : "accepts",
+                                      ModelKindName(cmp.smaller)));
+    }
+    rows.push_back(row);
+  }
+  check.set("comparisons", rows);
+  check.set("has_comparisons", !mc.comparisons.empty());
+  if (mc.type_b) {
+    std::string terms;
+    for (const std::string& t : mc.type_b->terms) terms += (terms.empty() ? "" : ", ") + t;
+    check.set("type_b",
+              fmt::format("u includes a Type B term for the cross-axis sensitivity the model "
+                          "leaves out: {} each +-{} rad, {} (u = {} rad), from {}; propagated to "
+                          "every constant through the fit's Jacobian (JCGM 100:2008 5.1.2).",
+                          terms, Short(mc.type_b->half_width, 3), mc.type_b->distribution,
+                          Short(mc.type_b->u, 3), mc.type_b->source));
+  }
+  if (!mc.reason.empty() && mc.status != "accepted") check.set("reason", mc.reason);
+  if (mc.model_rejected && options.accept_rejected_model) {
+    check.set("rejected",
+              "These constants are marked model_rejected and are stated only because "
+              "--accept-rejected-model was given: their U does not cover what the model leaves "
+              "out.");
+  }
+  d->set("model_check", check);
+}
+
+mustache::data SensorData(const SensorCalibration& c, int sensor, const GravityU& gravity,
+                          double gravity_mps2, const CertificateOptions& options) {
   const SensorModel& m = c.model;
   const Coverage coverage = SensorCoverage(c, options.coverage_probability);
   const double k = coverage.k;
@@ -175,10 +290,16 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
     rows.push_back(
         ResultRow(fmt::format("bias b0_{}", kAxes[a]), m.input_unit, m.bias[a], c.bias_u[a], k));
   }
+  // The accelerometer's scale factors and sensitivities with the gravity value's relative
+  // uncertainty (GravityUncertainty): u_c^2 = u^2 + (x u(g) / g)^2, JCGM 100:2008 5.1.2.
+  const double rel_g = accel ? gravity.u_mps2 / gravity_mps2 : 0.0;
+  const auto with_g = [rel_g](double x, double u) {
+    return u > 0.0 ? std::hypot(u, x * rel_g) : u;
+  };
   const std::string scale_unit = fmt::format("{}/{}", m.output_unit, m.input_unit);
   for (int a = 0; a < 3; ++a) {
-    rows.push_back(
-        ResultRow(fmt::format("scale k_{}", kAxes[a]), scale_unit, m.scale[a], c.scale_u[a], k));
+    rows.push_back(ResultRow(fmt::format("scale k_{}", kAxes[a]), scale_unit, m.scale[a],
+                             with_g(m.scale[a], c.scale_u[a]), k));
   }
   static const char* kAccelTerms[3] = {"a_yz", "a_zy", "a_zx"};
   static const char* kGyroTerms[6] = {"g_yz", "g_zy", "g_xz", "g_zx", "g_xy", "g_yx"};
@@ -198,9 +319,18 @@ mustache::data SensorData(const SensorCalibration& c, int sensor,
   for (int a = 0; a < 3; ++a) {
     rows.push_back(ResultRow(fmt::format("sensitivity 1/k_{}", kAxes[a]),
                              fmt::format("{}/{}", m.input_unit, m.output_unit), c.sensitivity[a],
-                             c.sensitivity_u[a], k));
+                             with_g(c.sensitivity[a], c.sensitivity_u[a]), k));
   }
   d.set("rows", rows);
+  if (accel) {
+    d.set("gravity_budget",
+          fmt::format("Gravity value: {}. Its relative uncertainty {} % is included in u and U of "
+                      "the scale factors and sensitivities (the fit's target norm g / g_n scales "
+                      "M and leaves the biases and misalignment terms unchanged); the "
+                      "covariance in calibration.json is the fit's alone.",
+                      gravity.text, Short(100.0 * rel_g, 3)));
+  }
+  SetModelCheck(c, options, &d);
   mustache::data groups{mustache::data::type::list};
   for (const ResidualGroup& g : c.groups) {
     mustache::data row;
@@ -438,6 +568,16 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
                                                  const CertificateOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
+  const std::vector<std::string> rejected = ModelRejectedConstants(cal);
+  if (!rejected.empty() && !options.accept_rejected_model) {
+    std::string list;
+    for (const std::string& r : rejected) list += (list.empty() ? "" : "; ") + r;
+    return MakeError(fmt::format(
+        "certificate: constants marked model_rejected cannot be certified: {}. Refit, or give "
+        "--accept-rejected-model to state them with that notice",
+        list));
+  }
+  const GravityU gravity = GravityUncertainty(cal);
   const std::string certificate_id =
       options.certificate_id.empty() ? CalibrationCertificateId(cal) : options.certificate_id;
   mustache::data data;
@@ -498,17 +638,22 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
   mustache::data conditions{mustache::data::type::list};
   mustache::data condition_notes{mustache::data::type::list};
   mustache::data warnings{mustache::data::type::list};
-  int min_dof = std::numeric_limits<int>::max();
+  std::vector<std::string> coverage_lines;
   for (const TagCalibration& t : cal.tags) {
     mustache::data td;
     td.set("sensor", std::to_string(t.sensor));
     mustache::data sensors{mustache::data::type::list};
     for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
       if (!c->has_value()) continue;
-      sensors.push_back(SensorData(**c, t.sensor, options));
-      if ((*c)->dof < min_dof) {
-        min_dof = (*c)->dof;
-      }
+      sensors.push_back(SensorData(**c, t.sensor, gravity, cal.gravity_mps2, options));
+      const Coverage cov = SensorCoverage(**c, options.coverage_probability);
+      coverage_lines.push_back(
+          cov.k > 0.0
+              ? fmt::format("sensor {} {}: k = {} at {} degrees of freedom", t.sensor,
+                            ImuSensorName((*c)->model.sensor), Short(cov.k, 4),
+                            std::isinf(cov.dof) ? std::string("infinite") : Short(cov.dof, 6))
+              : fmt::format("sensor {} {}: no U (fewer than 1 degree of freedom)", t.sensor,
+                            ImuSensorName((*c)->model.sensor)));
     }
     td.set("sensors", sensors);
     tags.push_back(td);
@@ -566,17 +711,28 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
   validity.push_back(mustache::data(
       "They are valid within the temperature range of section 4; outside it (or away from "
       "t_ref without a temperature term) the biases may differ by more than U."));
-  if (min_dof != std::numeric_limits<int>::max()) {
+  if (!coverage_lines.empty()) {
+    std::string list;
+    for (const std::string& l : coverage_lines) list += (list.empty() ? "" : "; ") + l;
     validity.push_back(mustache::data(fmt::format(
-        "Each U = k u has a coverage probability of about {} % with k from Student's t at the "
-        "degrees of freedom of its fit (section 3; JCGM 100:2008 G.3.2, G.6.6); the smallest "
-        "dof of a fit is {}.",
-        Short(100.0 * options.coverage_probability, 4), min_dof)));
+        "Each U = k u has a coverage probability of about {} % with k = t_{}(nu), Student's t "
+        "at the degrees of freedom nu named with it (section 3; JCGM 100:2008 G.3.2, G.6.6): "
+        "{}.",
+        Short(100.0 * options.coverage_probability, 4),
+        Short(0.5 * (1.0 + options.coverage_probability), 4), list)));
   }
-  validity.push_back(mustache::data(
-      "Uncertainties are Type A from the fit residuals; they do not include the reference "
-      "(gravity value, table rate) uncertainty or long-term drift of the tag (traceability "
-      "below)."));
+  validity.push_back(mustache::data(fmt::format(
+      "Uncertainties are Type A from the fit, plus the Type B terms section 3 names (the "
+      "gravity value's for the accelerometer's scale factors: {}; the cross-axis terms a model "
+      "leaves out); they do not include the table rate's uncertainty or long-term drift of the "
+      "tag (traceability below).",
+      gravity.text)));
+  if (!rejected.empty()) {
+    for (const std::string& r : rejected) {
+      validity.push_back(mustache::data(
+          "Stated with --accept-rejected-model although marked model_rejected: " + r));
+    }
+  }
   data.set("validity", validity);
   SetConformity(cal, &data);
 

@@ -380,6 +380,9 @@ struct CoverageCase {
   int records = 1;
   double min_static_s = 1.0;
   std::vector<double> table_rates_dps = {};
+  // u includes the Type B for cross-axis terms an exact or rejected scale model leaves out
+  // (issue #36) while the truth has none: only the lower bound applies.
+  bool type_b = false;
 };
 
 // Truth within 2u per constant class (b, k, m) of the tallied sensor, over `tags` simulated
@@ -447,7 +450,7 @@ void CheckCoverage(const char* sensor, const std::vector<CoverageCase>& cases, i
       line += fmt::format(" {} {:.1f} %", key, 100 * rate);
       INFO(c.name << " " << key << " within 2u: " << rate << " of " << counts.second);
       CHECK(rate >= 0.91);
-      CHECK(rate <= 0.985);
+      if (!c.type_b) CHECK(rate <= 0.985);
     }
     std::printf("%s (warnings in %d of %d tags)\n", line.c_str(), warned, tags);
     std::fflush(stdout);
@@ -482,7 +485,19 @@ TEST_CASE("Gyroscope u holds over simulated tags in every case", "[calibration][
           {"1 s poses, full", full, full, 26, PoseSet::kCube, 1.0, 1.0, 1, 0.4},
           {"3x noise, full", full, full, 26, PoseSet::kCube, 2.0, 3.0},
           {"9 orientations x2, full", full, full, 9, PoseSet::kCube, 2.0, 1.0, 2},
-          {"6 faces x3, scale", ModelKind::kScale, ModelKind::kScale, 18, PoseSet::kFaces},
+          // The accelerometer's fit is exact (6 orientations, 6 parameters): the gyroscope
+          // carries the Type B of its cross-axis terms through the rotations (100 %).
+          {"6 faces x3, scale",
+           ModelKind::kScale,
+           ModelKind::kScale,
+           18,
+           PoseSet::kFaces,
+           2.0,
+           1.0,
+           1,
+           1.0,
+           {},
+           true},
           {"table at 26 poses, full",
            full,
            full,

@@ -478,5 +478,77 @@ TEST_CASE("Certificate bad input is refused with a message", "[report][certifica
   CHECK(r.error().ToString() == bad.path() + ":3:19: gravity_mps2: expected a number, found true");
 }
 
+// Issue #36 point 7: the k stated comes from the dof it names. A u that claims to rest on the
+// poses' noise (coverage_factor_95 1.96) while the residuals are 4 times that noise (7 dof,
+// reduced chi-square 15.7) gets Student's t at those 7 dof, and the text names them.
+TEST_CASE("Certificate: k comes from the dof it names, gravity's u is in U",
+          "[report][certificate]") {
+  Calibration cal = ThroughJson(Fit().cal);
+  SensorCalibration& a = *cal.tags.front().accel;
+  a.dof = 7;
+  a.reduced_chi2 = 15.7;
+  a.coverage_factor_95 = 1.959963984540054;
+  Result<std::string> html = RenderCalibrationCertificate(cal);
+  REQUIRE(html.ok());
+  const std::string h = Unescape(html.value());
+  const double t7 = 2.364624251592785;  // t_0.975(7), tables of Student's t.
+  CHECK(CoverageFactor(0.95, 7.0) == Approx(t7).epsilon(1e-9));
+  CHECK(h.find(fmt::format("k = t_0.975(7) = {:.4g} (Student's t at the fit's 7 degrees of "
+                           "freedom",
+                           t7)) != std::string::npos);
+  CHECK(h.find(fmt::format("<td class=\"num coverage-k\">{:.4g}</td>", t7)) != std::string::npos);
+  CHECK(h.find("k = t_0.975(inf)") == std::string::npos);
+  // With residuals that agree with the noise, infinite dof, named as such.
+  a.reduced_chi2 = 1.1;
+  html = RenderCalibrationCertificate(cal);
+  REQUIRE(html.ok());
+  CHECK(Unescape(html.value()).find("k = t_0.975(inf) = 1.96") != std::string::npos);
+  CHECK(Unescape(html.value()).find("accel: k = 1.96 at infinite degrees of freedom") !=
+        std::string::npos);
+  // Gravity: standard gravity stands for a local value within +-0.03 m/s^2, rectangular: the
+  // scale factor's u is sqrt(u_fit^2 + (k u_g / g)^2), u_g = 0.03 / sqrt(3).
+  cal.gravity_source = "standard";
+  cal.gravity_u_mps2.reset();
+  html = RenderCalibrationCertificate(cal);
+  REQUIRE(html.ok());
+  const std::string g = Unescape(html.value());
+  const double u_g = 0.03 / std::sqrt(3.0);
+  const double u_k = std::hypot(a.scale_u[0], a.model.scale[0] * u_g / cal.gravity_mps2);
+  CHECK(u_k > 3 * a.scale_u[0]);  // The gravity term dominates the fit's own.
+  CHECK(g.find("<td>scale k_x</td><td>g/LSB</td><td class=\"num\">" +
+               RoundForStatement(a.model.scale[0], 1.96 * u_k).value + "</td><td class=\"num\">" +
+               RoundForStatement(a.model.scale[0], u_k).uncertainty) != std::string::npos);
+  CHECK(g.find("u(g) = 0.0173 m/s^2: standard gravity") != std::string::npos);
+  // A stated u(g) replaces the assumption.
+  cal.gravity_u_mps2 = 1e-5;
+  html = RenderCalibrationCertificate(cal);
+  REQUIRE(html.ok());
+  CHECK(Unescape(html.value()).find("u(g) = 1e-05 m/s^2 as stated") != std::string::npos);
+}
+
+TEST_CASE("Certificate refuses model_rejected constants unless accepted, and says so",
+          "[report][certificate]") {
+  Calibration cal = ThroughJson(Fit().cal);
+  ModelCheck m;
+  m.selection = "given";
+  m.status = "rejected";
+  m.model_rejected = true;
+  m.reason = "the data reject the accelerometer 'bias' model";
+  cal.tags.front().accel->model_check = m;
+  Result<std::string> html = RenderCalibrationCertificate(cal);
+  REQUIRE_FALSE(html.ok());
+  CHECK(html.error().kind == ErrorKind::kInput);
+  CHECK_THAT(html.error().message, Catch::Contains("model_rejected"));
+  CHECK_THAT(html.error().message, Catch::Contains("--accept-rejected-model"));
+  CertificateOptions o;
+  o.accept_rejected_model = true;
+  html = RenderCalibrationCertificate(cal, o);
+  REQUIRE(html.ok());
+  CHECK(Unescape(html.value()).find("stated only because --accept-rejected-model was given") !=
+        std::string::npos);
+  CHECK(Unescape(html.value())
+            .find("Stated with --accept-rejected-model although marked "
+                  "model_rejected: sensor") != std::string::npos);
+}
 }  // namespace
 }  // namespace metro

@@ -77,6 +77,11 @@ struct BlobFromCalibrationOptions {
   // Declared full-scale settings (`--accel-fs-g`, `--gyro-fs-dps`); unset: from M (above).
   std::optional<double> accel_fs_g;
   std::optional<double> gyro_fs_dps;
+  // Constants calibration.json marks `model_rejected` (model_check, issue #36: a model the data
+  // reject, or an exact fit, whose u does not cover what it leaves out) are refused (an input
+  // error naming the reason) unless this is set (`--accept-rejected-model`); then written with
+  // a warning.
+  bool accept_rejected_model = false;
 
   // sensor >= 1, seq in 1..kSeqMax, dlpf_cfg <= 6, each t_valid end that is set within
   // -40 .. 85 and, both set, t_valid_min_c + 2 <= t_valid_max_c (ValidityOptions::IsValid),

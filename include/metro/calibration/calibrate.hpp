@@ -43,11 +43,24 @@ std::optional<LossKind> ParseLossKind(std::string_view name);
 struct CalibrationOptions {
   ModelKind accel_model = ModelKind::kFull;
   ModelKind gyro_model = ModelKind::kFull;
+  // `--model auto` (issue #36; docs/calibration-model.md "Model selection"): fit the smallest
+  // model of the ladder bias < scale < full that the data accept (accel_model / gyro_model
+  // are then ignored). With the least-squares loss only: a robust loss has no chi-square on
+  // the noise, so auto keeps accel_model / gyro_model with a warning.
+  bool accel_auto = false;
+  bool gyro_auto = false;
+  // Fit every model of the ladder and compare each with the next larger one
+  // (SensorCalibration::model_check.comparisons); implied by accel_auto / gyro_auto.
+  // `calibrate fit` always compares; false keeps a library fit to the one model given.
+  bool compare_models = false;
   double gravity_mps2 = kStandardGravityMps2;  // Local gravity; the accel target norm is
                                                // gravity_mps2 / 9.80665 g.
   // True when the user gave gravity_mps2 (`--gravity-mps2`), even as 9.80665: the calibration
   // records gravity_source "given"; false and 9.80665: "standard" (any other value: "given").
   bool gravity_given = false;
+  // Standard uncertainty of gravity_mps2 [m/s^2] (`--gravity-u-mps2`), recorded in
+  // calibration.json for the certificate's accelerometer budget; unset: not stated.
+  std::optional<double> gravity_u_mps2;
   double accel_fs_g = 2.0;     // Full-scale setting of raw (LSB) accelerometer data.
   double gyro_fs_dps = 250.0;  // Full-scale setting of raw (LSB) gyroscope data.
   TemperatureMode temperature = TemperatureMode::kAuto;
@@ -99,6 +112,57 @@ struct StaticResiduals {
   std::vector<double> after;
 };
 
+// One nested-model comparison (issue #36): `smaller` against `larger` on the same residuals,
+// measured against the noise of the data. When the larger model describes the data to its
+// noise (its chi-square below the 99 % point of its law), the chi-square difference
+// chi2_smaller - chi2_larger ~ chi2(p_larger - p_smaller) (test "chi2_difference", dof2 0);
+// otherwise the F-test F = (delta chi2 / delta p) / (chi2_larger / dof_larger)
+// ~ F(delta p, dof_larger) (test "F"), which scales by the larger model's own misfit.
+// `rejected`: the smaller model is rejected at the 5 % level (p_value < 0.05).
+struct ModelComparison {
+  ModelKind smaller = ModelKind::kScale;
+  ModelKind larger = ModelKind::kFull;
+  std::string test;  // "chi2_difference" or "F"; empty when not computed (`note` says why).
+  double statistic = 0;
+  double dof1 = 0;  // Added parameters (the chi-square's dof, or F's numerator).
+  double dof2 = 0;  // F's denominator (the larger model's residual dof); 0 for chi2_difference.
+  double p_value = 1;
+  bool rejected = false;
+  std::string note;
+};
+
+// The Type B term for the cross-axis sensitivity a model leaves out (issue #36), from a stated
+// spec: every omitted misalignment term m is uniform in +-half_width (u = half_width /
+// sqrt(3), JCGM 100:2008 4.3.7), propagated to every constant through the fit's Jacobian
+// (d theta / d m = -(J^T J)^-1 J^T J_m; JCGM 100:2008 5.1.2) and added to the covariance.
+struct CrossAxisTypeB {
+  std::string source;     // The spec, e.g. "MPU-6000/6050 datasheet PS-MPU-6000A-00 rev 3.4 ...".
+  double half_width = 0;  // Of each term [rad, = fraction of the sensitivity].
+  std::string distribution;        // "rectangular".
+  double u = 0;                    // half_width / sqrt(3).
+  std::vector<std::string> terms;  // The omitted terms, e.g. "accel.a_yz", "gyro.g_xz".
+};
+
+// How far a sensor's fitted model is supported by the data (issue #36), calibration.json's
+// `model_check`. status: "accepted" (the model describes the data to its noise and no larger
+// model is needed), "rejected" (its chi-square above the 99 % point of its law, or a
+// comparison rejects it against a larger model), "exact_fit" (as many parameters as distinct
+// orientations: nothing tests it). A rejected or exact scale model carries `type_b`; a
+// rejected full model carries the misfit in u (between-orientation component, residual
+// scatter); a rejected or exact bias model, and an exact full model, are `model_rejected`:
+// `calibrate blob`, `push` and the certificate refuse them without --accept-rejected-model.
+struct ModelCheck {
+  std::string selection;  // "auto" (--model auto) or "given".
+  std::vector<ModelComparison> comparisons;
+  std::string status;
+  double chi2 = -1;     // Of the fitted model against the noise; -1 when not measured.
+  double chi2_dof = 0;  // Its degrees of freedom (m - p; the gyroscope's sum of E_g).
+  double p_value = -1;  // P(chi2(dof) >= chi2); -1 when not measured.
+  std::optional<CrossAxisTypeB> type_b;
+  bool model_rejected = false;
+  std::string reason;  // Why (status other than "accepted"), and what to do.
+};
+
 struct SensorCalibration {
   SensorModel model;
   // Standard uncertainties (k = 1) of the constants, in the units of the constants;
@@ -134,6 +198,10 @@ struct SensorCalibration {
   // Set by CalibrateSessions (empty lists when no static segment was used); absent in files
   // written before metro recorded it.
   std::optional<StaticResiduals> static_residuals;
+
+  // The model comparisons and the chosen model's standing (issue #36); absent in files written
+  // before metro made them, and for the gyroscope's bias at rest.
+  std::optional<ModelCheck> model_check;
 
   // The M that apply, the report and the blob use: `matrix` when read from a file.
   Eigen::Matrix3d M() const { return matrix ? *matrix : model.Matrix(); }
@@ -213,6 +281,10 @@ struct Calibration {
   // the 3rd CGPM, 1901), "given" (`calibrate fit --gravity-mps2`, the user's local value), or
   // empty (a file written before metro recorded it). calibration.json's `gravity_source`.
   std::string gravity_source;
+  // The standard uncertainty of gravity_mps2 when the user stated it (`calibrate fit
+  // --gravity-u-mps2`); calibration.json's `gravity_u_mps2`, absent otherwise (the certificate
+  // then states the u it assumes, docs/calibration-model.md "Gravity").
+  std::optional<double> gravity_u_mps2;
   std::vector<InputFile> inputs;
   std::string tool_version;
   std::string date_utc;  // ISO 8601, e.g. "2024-05-01T12:00:00Z".

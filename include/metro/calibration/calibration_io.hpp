@@ -47,6 +47,16 @@ std::string CalibrationCertificateId(const Calibration& calibration);
 // residuals and the segments.
 std::string FormatCalibrationReport(const Calibration& calibration);
 
+// A sensor's model check (issue #36) as the report prints it, each line starting with
+// `indent`: status, chi-square, each comparison's test, statistic, dof, p-value and decision,
+// the Type B term and the reason.
+std::string FormatModelCheck(const ModelCheck& check, const std::string& indent);
+
+// "sensor N accel: <reason>" for every sensor calibration.json marks model_rejected
+// (ModelCheck): what `calibrate blob`, `push` and the certificate refuse without
+// --accept-rejected-model. Empty when none is.
+std::vector<std::string> ModelRejectedConstants(const Calibration& calibration);
+
 // ---- Temperature validity range ----------------------------------------------------------
 //
 // The tag clamps the die temperature to [t_valid_min_c, t_valid_max_c] before it evaluates the

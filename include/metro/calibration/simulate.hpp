@@ -61,6 +61,11 @@ struct SimulationOptions {
   bool temperature = false;         // temp_c column, ramp temp_start_c -> temp_end_c.
   double temp_start_c = 25.0;
   double temp_end_c = 35.0;
+  // Half-widths of the drawn cross-axis (misalignment) terms, uniform in +-each [rad]: the
+  // datasheet's 2 % by default; 0 draws a truth without cross-axis terms (the scale model
+  // holds), 0.01 / 0.015 the realistic terms of issue #36.
+  double accel_cross_axis = 0.02;
+  double gyro_cross_axis = 0.02;
   bool random_truth = true;  // Draw the truth; else use `truth` as given.
   ImuTruth truth;            // Used when !random_truth (units LSB -> g and LSB -> deg/s).
 
@@ -77,7 +82,10 @@ struct SimulatedSession {
 
 // Draws a truth per the datasheet tolerances above (full models, temperature terms included
 // when `temperature`).
-ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool temperature);
+// The cross-axis terms are uniform in +-accel_cross_axis and +-gyro_cross_axis (the same
+// random draws whatever the half-widths, so other constants do not change with them).
+ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool temperature,
+                      double accel_cross_axis = 0.02, double gyro_cross_axis = 0.02);
 
 Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& options);
 

@@ -28,6 +28,10 @@ struct CertificateOptions {
   // hash of the JSON as `fit` writes it. A certificate rendered from a file passes the file's
   // own hash, so it carries the id the registry records (docs/registry.md).
   std::string certificate_id;
+  // Constants calibration.json marks model_rejected (ModelCheck, issue #36) are refused (an
+  // input error naming them) unless this is set (`--accept-rejected-model`); then stated with
+  // a notice in their section and in the validity section.
+  bool accept_rejected_model = false;
 
   bool IsValid(std::string* why) const;
 };
