@@ -302,7 +302,7 @@ Status CheckUpdatableFile(const std::string& path) {
   });
 }
 
-Result<std::string> ReadFile(const std::string& path) {
+Result<std::string> ReadFile(const std::string& path, int64_t max_bytes) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return MakeError(OsError("cannot open", path));
   struct stat st {};
@@ -314,6 +314,16 @@ Result<std::string> ReadFile(const std::string& path) {
   if (S_ISDIR(st.st_mode)) {
     ::close(fd);
     return MakeError(path + ": is a directory, expected a file");
+  }
+  auto too_large = [&](const std::string& what) {
+    return MakeError(path, 0,
+                     fmt::format("{}: more than {} bytes, which no file of this kind holds; "
+                                 "expected a text document of at most that size",
+                                 what, max_bytes));
+  };
+  if (S_ISREG(st.st_mode) && st.st_size > max_bytes) {
+    ::close(fd);
+    return too_large(fmt::format("{} bytes", static_cast<int64_t>(st.st_size)));
   }
   std::string out;
   if (st.st_size > 0) out.reserve(static_cast<size_t>(st.st_size));
@@ -327,6 +337,10 @@ Result<std::string> ReadFile(const std::string& path) {
       return MakeError(why);
     }
     if (n == 0) break;
+    if (n > max_bytes - static_cast<int64_t>(out.size())) {
+      ::close(fd);
+      return too_large("still reading");
+    }
     out.append(buffer, static_cast<size_t>(n));
   }
   // A regular file written to or truncated while it was read gives no text at all.

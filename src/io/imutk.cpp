@@ -25,7 +25,7 @@ struct ImuTkFile {
 bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r'; }
 
 Result<ImuTkFile> ReadImuTkFile(const std::string& path, const LoadOptions& options) {
-  auto text_or = ReadFile(path);
+  auto text_or = ReadFile(path, internal::kMaxRecordingBytes);
   if (!text_or.ok()) return text_or.error();
   const std::string& text = text_or.value();
   if (text.empty()) return MakeError(path, 0, "empty file: expected imu_tk lines 't x y z'");

@@ -110,7 +110,7 @@ std::string FormatReceiverLine(int sensor, NewDataFlag flag, const ReceiverPaylo
 namespace internal {
 
 Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& options) {
-  auto text_or = ReadFile(path);
+  auto text_or = ReadFile(path, kMaxRecordingBytes);
   if (!text_or.ok()) return text_or.error();
   const std::string& text = text_or.value();
   if (text.empty()) return MakeError(path, 0, "empty file: expected receiver capture lines");

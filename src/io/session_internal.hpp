@@ -11,6 +11,10 @@
 
 namespace metro::internal {
 
+// What a recording read whole into memory (a receiver capture, an imu_tk text file) may
+// hold: 4 GiB, the bound of a stream (stdin_input.hpp), above a day of 15 tags' captures.
+inline constexpr int64_t kMaxRecordingBytes = int64_t{4} << 30;
+
 // `allow_clean_path` = false forces the general (sequential-distribution) loader; the
 // result is the same either way (tests compare the two). `hash`: also sets the session's
 // sha256 (hashed on a second thread from the parser's own mapping of the file). `format`:

@@ -63,6 +63,28 @@ TEST_CASE("WriteFileAtomically replaces a file and ReadFile reads it back", "[co
   std::remove(path.c_str());
 }
 
+TEST_CASE("ReadFile reads at most its bound: a larger file before reading, a device at it",
+          "[core][security]") {
+  const std::string path = "metro_file_bounded_" + std::to_string(::getpid()) + ".txt";
+  REQUIRE(WriteFileAtomically(path, std::string(100, 'x')).ok());
+  REQUIRE(ReadFile(path, 100).ok());
+  CHECK(ReadFile(path, 100).value().size() == 100);
+  Result<std::string> r = ReadFile(path, 99);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().file == path);
+  CHECK_THAT(r.error().message, Catch::StartsWith("100 bytes: more than 99 bytes"));
+  // An endless device stops at the bound (--columns-file /dev/zero reached 11 GB, issue #37),
+  // the default bound included.
+  r = ReadFile("/dev/zero", 1 << 20);
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message, Catch::StartsWith("still reading: more than 1048576 bytes"));
+  r = ReadFile("/dev/zero");
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().message,
+             Catch::Contains("more than " + std::to_string(kMaxDocumentBytes) + " bytes"));
+  std::remove(path.c_str());
+}
+
 TEST_CASE("File errors name the path", "[core]") {
   auto missing = ReadFile("/nonexistent/metro/x.csv");
   REQUIRE_FALSE(missing.ok());

@@ -38,8 +38,15 @@ Status CheckReplaceableFile(const std::string& path);
 // a device, a FIFO, a socket, anything in /dev, /proc or /sys, a missing directory.
 Status CheckUpdatableFile(const std::string& path);
 
-// Reads a whole file. Errors name the path and the operating system's reason.
-Result<std::string> ReadFile(const std::string& path);
+// What ReadFile reads at most by default: 64 MiB, far above any document metro reads whole
+// (reports, budgets, calibration.json, tags, specs, segments, column maps: kilobytes to a few
+// megabytes), so /dev/zero or an endless FIFO named as one stops at once or at the bound.
+inline constexpr int64_t kMaxDocumentBytes = int64_t{64} << 20;
+
+// Reads a whole file of at most max_bytes (a regular file larger than that is refused before
+// it is read; a FIFO or device when it reaches the bound). Errors name the path and the
+// operating system's reason, or the bound.
+Result<std::string> ReadFile(const std::string& path, int64_t max_bytes = kMaxDocumentBytes);
 
 // Lower-case hex SHA-256 of a byte string and of a file's contents.
 std::string Sha256Hex(std::string_view bytes);
