@@ -28,7 +28,7 @@ report_fuzz       32768  2500
 push_client_fuzz   2048   100
 intel_hex_fuzz     4096   110
 inspect_fuzz       4096   550
-registry_fuzz     40960   300
+registry_fuzz     40960  1000
 "
 all_targets=$(awk 'NF {print $1}' <<<"$table")
 targets="${*:-$all_targets}"
