@@ -29,18 +29,25 @@ constexpr int kValueDigits = 7;
 // series keeps its envelope. Non-finite values are left out.
 void Decimate(const std::vector<double>& t, const std::vector<double>& v, size_t max_points,
               SeriesPlotData* out) {
+  const size_t n_pairs = std::min(t.size(), v.size());
+  size_t n = 0;
+  for (size_t i = 0; i < n_pairs; ++i) n += std::isfinite(v[i]) && std::isfinite(t[i]) ? 1 : 0;
+  // The finite pairs' positions: an index only when some pair is not finite (a whole
+  // column's index is as large as the column).
   std::vector<size_t> finite;
-  finite.reserve(v.size());
-  for (size_t i = 0; i < std::min(t.size(), v.size()); ++i) {
-    if (std::isfinite(v[i]) && std::isfinite(t[i])) finite.push_back(i);
+  if (n < n_pairs) {
+    finite.reserve(n);
+    for (size_t i = 0; i < n_pairs; ++i) {
+      if (std::isfinite(v[i]) && std::isfinite(t[i])) finite.push_back(i);
+    }
   }
+  auto at = [&](size_t i) { return finite.empty() ? i : finite[i]; };
   auto keep = [&](size_t i) {
     out->t_s.push_back(Rounded(t[i], kTimeDigits));
     out->values.push_back(Rounded(v[i], kValueDigits));
   };
-  const size_t n = finite.size();
   if (n <= max_points) {
-    for (size_t i : finite) keep(i);
+    for (size_t i = 0; i < n; ++i) keep(at(i));
     return;
   }
   const size_t buckets = std::max<size_t>(1, max_points / 2);
@@ -50,32 +57,50 @@ void Decimate(const std::vector<double>& t, const std::vector<double>& v, size_t
     if (hi <= lo) continue;
     size_t i_min = lo, i_max = lo;
     for (size_t i = lo; i < hi; ++i) {
-      if (v[finite[i]] < v[finite[i_min]]) i_min = i;
-      if (v[finite[i]] > v[finite[i_max]]) i_max = i;
+      if (v[at(i)] < v[at(i_min)]) i_min = i;
+      if (v[at(i)] > v[at(i_max)]) i_max = i;
     }
-    keep(finite[std::min(i_min, i_max)]);
-    if (i_min != i_max) keep(finite[std::max(i_min, i_max)]);
+    keep(at(std::min(i_min, i_max)));
+    if (i_min != i_max) keep(at(std::max(i_min, i_max)));
   }
 }
 
 // The window's observations as the evaluation used them: finite, angles unwrapped when the
-// evaluation unwrapped them.
-std::vector<double> WindowValues(const Quantity& q, size_t first, size_t end, bool unwrapped) {
-  std::vector<double> x(q.values.begin() + static_cast<std::ptrdiff_t>(first),
-                        q.values.begin() + static_cast<std::ptrdiff_t>(end));
+// evaluation unwrapped them. A view into the column when it needs neither (no copy).
+struct WindowView {
+  std::vector<double> copy;
+  const double* data = nullptr;
+  size_t size = 0;
+  const double* begin() const { return data; }
+  const double* end() const { return data + size; }
+};
+
+WindowView WindowValues(const Quantity& q, size_t first, size_t end, bool unwrapped) {
+  WindowView w;
+  const double* begin = q.values.data() + first;
+  const double* stop = q.values.data() + end;
+  if (!unwrapped && std::all_of(begin, stop, [](double v) { return std::isfinite(v); })) {
+    w.data = begin;
+    w.size = end - first;
+    return w;
+  }
+  w.copy.assign(begin, stop);
+  std::vector<double>& x = w.copy;
   x.erase(std::remove_if(x.begin(), x.end(), [](double v) { return !std::isfinite(v); }), x.end());
   if (unwrapped) UnwrapDegInPlace(&x);
-  return x;
+  w.data = x.data();
+  w.size = x.size();
+  return w;
 }
 
 // Bins of the window's values (sqrt(n) of them, 10..60, unless the options fix the number).
 // Quantized data (the packets' 0.01 deg, raw counts): bins a whole number of steps wide and
 // centred on the steps, never narrower than one step, so no bin is empty or doubled by where
 // the lattice falls (the histogram of 0.01 deg data looked non-normal).
-HistogramPlotData Histogram(const std::vector<double>& x, double mean, bool unwrapped,
+HistogramPlotData Histogram(const WindowView& x, double mean, bool unwrapped,
                             const PlotDataOptions& options) {
   HistogramPlotData h;
-  const size_t n = x.size();
+  const size_t n = x.size;
   h.n = static_cast<int64_t>(n);
   const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
   const double lo = *lo_it, hi = *hi_it;
@@ -84,7 +109,7 @@ HistogramPlotData Histogram(const std::vector<double>& x, double mean, bool unwr
                  : std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 10, 60);
   double width = (hi - lo) / bins;
   double first_edge = lo;
-  const double step = QuantizationStep(x);
+  const double step = QuantizationStep(x.data, x.size);
   if (step > 0.0) {
     width = std::max(1.0, std::ceil(width / step - 1e-9)) * step;
     first_edge = lo - 0.5 * step;
@@ -153,8 +178,8 @@ Result<QuantityPlotData> ComputeQuantityPlotData(const Tag& tag, const Quantity&
   if (end < n_record) series.window_end_t_s = Rounded(tag.t_s[end], kTimeDigits);
 
   const bool unwrapped = result.angle_handling == "unwrapped";
-  const std::vector<double> x = WindowValues(q, first, end, unwrapped);
-  const size_t n = x.size();
+  const WindowView x = WindowValues(q, first, end, unwrapped);
+  const size_t n = x.size;
   const double s = result.type_a.std;
   const bool spread = n >= 2 && std::isfinite(s) && s > 0.0 &&
                       *std::max_element(x.begin(), x.end()) > *std::min_element(x.begin(), x.end());
@@ -165,7 +190,7 @@ Result<QuantityPlotData> ComputeQuantityPlotData(const Tag& tag, const Quantity&
       std::min(static_cast<size_t>(options.max_autocorrelation_lag), n >= 8 ? n / 4 : size_t{0});
   if (spread && max_lag >= 2) {
     std::vector<double> rho(max_lag + 1);
-    Autocorrelation(x.data(), n, max_lag, rho.data());
+    Autocorrelation(x.data, n, max_lag, rho.data());
     AutocorrelationPlotData a;
     a.n = static_cast<int64_t>(n);
     a.band = 1.96 / std::sqrt(static_cast<double>(n));

@@ -2,24 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace metro {
+namespace {
 
-double QuantizationStep(const std::vector<double>& x) {
-  std::vector<double> v;
-  v.reserve(x.size());
-  for (double d : x) {
-    if (std::isfinite(d)) v.push_back(d);
-  }
-  std::sort(v.begin(), v.end());
-  if (v.size() < 5) return 0.0;
-  // Values closer than the doubles' own rounding (1e-9 of the data's scale) are one value.
-  const double scale = std::max({std::fabs(v.front()), std::fabs(v.back()), v.back() - v.front()});
-  const double same = 1e-9 * scale;
-  std::vector<double> gaps;
-  for (size_t i = 0; i + 1 < v.size(); ++i) {
-    if (v[i + 1] - v[i] > same) gaps.push_back(v[i + 1] - v[i]);
-  }
+// Values closer than the doubles' own rounding (1e-9 of the data's scale) are one value.
+constexpr double kSameFraction = 1e-9;
+// A gap is a whole multiple of the step when its ratio is within this of an integer.
+constexpr double kWholeTolerance = 1e-3;
+
+// The decision on the gaps between consecutive distinct values, in ascending order.
+double StepOfGaps(const std::vector<double>& gaps) {
   if (gaps.size() < 4) return 0.0;
   const double q = *std::min_element(gaps.begin(), gaps.end());
   // Values printed with a fixed number of decimals differ by whole multiples of that step up
@@ -27,9 +21,98 @@ double QuantizationStep(const std::vector<double>& x) {
   size_t whole = 0;
   for (double g : gaps) {
     const double ratio = g / q;
-    if (std::fabs(ratio - std::round(ratio)) <= 1e-3) ++whole;
+    if (std::fabs(ratio - std::round(ratio)) <= kWholeTolerance) ++whole;
   }
   return static_cast<double>(whole) >= 0.95 * static_cast<double>(gaps.size()) ? q : 0.0;
+}
+
+// The gaps the definition names, by sorting every finite value.
+std::vector<double> GapsBySorting(const double* x, size_t n, double same) {
+  std::vector<double> v;
+  v.reserve(n);
+  for (const double* p = x; p != x + n; ++p) {
+    const double d = *p;
+    if (std::isfinite(d)) v.push_back(d);
+  }
+  std::sort(v.begin(), v.end());
+  std::vector<double> gaps;
+  for (size_t i = 0; i + 1 < v.size(); ++i) {
+    if (v[i + 1] - v[i] > same) gaps.push_back(v[i + 1] - v[i]);
+  }
+  return gaps;
+}
+
+// The same gaps without a sort when the values sit on a lattice: a strided sample's smallest
+// gap q is tried as the lattice step; if every value lies within 1e-3 q of lo + k q and the
+// values at each k agree to `same`, a bucket per k orders them, and the gap between two
+// occupied buckets is the lowest value of the upper one less the highest of the lower one:
+// exactly the difference the sorted array would give. Returns false (the caller sorts) when
+// the sample finds no candidate, a value is off the lattice, a bucket spreads, or the range
+// holds too many buckets.
+bool GapsOnLattice(const double* x, size_t n, double lo, double hi, double same,
+                   std::vector<double>* gaps) {
+  constexpr size_t kSample = 4096;
+  constexpr double kMaxBuckets = 1 << 22;
+  std::vector<double> sample;
+  sample.reserve(kSample + 1);
+  const size_t stride = std::max<size_t>(1, n / kSample);
+  for (size_t i = 0; i < n; i += stride) {
+    if (std::isfinite(x[i])) sample.push_back(x[i]);
+  }
+  std::sort(sample.begin(), sample.end());
+  double q = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i + 1 < sample.size(); ++i) {
+    const double g = sample[i + 1] - sample[i];
+    if (g > same) q = std::min(q, g);
+  }
+  if (!std::isfinite(q) || (hi - lo) / q > kMaxBuckets) return false;
+  const size_t buckets = static_cast<size_t>(std::llround((hi - lo) / q)) + 1;
+  std::vector<double> low(buckets, std::numeric_limits<double>::infinity());
+  std::vector<double> high(buckets, -std::numeric_limits<double>::infinity());
+  for (const double* p = x; p != x + n; ++p) {
+    const double v = *p;
+    if (!std::isfinite(v)) continue;
+    const double k = (v - lo) / q;
+    const double r = std::round(k);
+    if (std::fabs(k - r) > kWholeTolerance || r < 0.0 || r >= static_cast<double>(buckets)) {
+      return false;
+    }
+    const size_t b = static_cast<size_t>(r);
+    low[b] = std::min(low[b], v);
+    high[b] = std::max(high[b], v);
+  }
+  double previous_high = -std::numeric_limits<double>::infinity();
+  for (size_t b = 0; b < buckets; ++b) {
+    if (!(low[b] <= high[b])) continue;  // empty
+    if (high[b] - low[b] > same) return false;
+    if (std::isfinite(previous_high)) gaps->push_back(low[b] - previous_high);
+    previous_high = high[b];
+  }
+  return true;
+}
+
+}  // namespace
+
+double QuantizationStep(const std::vector<double>& x) {
+  return QuantizationStep(x.data(), x.size());
+}
+
+double QuantizationStep(const double* x, size_t n) {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -lo;
+  size_t finite = 0;
+  for (const double* p = x; p != x + n; ++p) {
+    const double d = *p;
+    if (!std::isfinite(d)) continue;
+    ++finite;
+    lo = std::min(lo, d);
+    hi = std::max(hi, d);
+  }
+  if (finite < 5) return 0.0;
+  const double same = kSameFraction * std::max({std::fabs(lo), std::fabs(hi), hi - lo});
+  std::vector<double> gaps;
+  if (!GapsOnLattice(x, n, lo, hi, same, &gaps)) gaps = GapsBySorting(x, n, same);
+  return StepOfGaps(gaps);
 }
 
 }  // namespace metro

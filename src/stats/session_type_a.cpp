@@ -324,8 +324,9 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
         r.warnings.push_back(fmt::format(
             "{}: {} of {} samples ({:.0f} %) dropped, until the remaining transient biases the "
             "mean by at most {:.2g} u (it biased the whole window's mean by {:.2g} u)",
-            what, s.samples, n_window, 100.0 * s.samples / n_window, s.bias_over_u_kept,
-            s.bias_over_u_uncut));
+            what, s.samples, n_window,
+            100.0 * static_cast<double>(s.samples) / static_cast<double>(n_window),
+            s.bias_over_u_kept, s.bias_over_u_uncut));
       }
     }
     if (driver != nullptr && options.window.settle_tag_wide) {

@@ -44,6 +44,12 @@ namespace metro {
 struct ArSpectralOptions {
   // Largest order tried; 0: min(floor(10 log10 n), floor(n / 10)).
   int max_order = 0;
+  // How Burg's sums are formed (the same estimates either way, to rounding):
+  // kLagProducts reads the record once for its lag products and forms each order's sums as
+  // quadratic forms in O(p^2) (Vos 2013), falling back to the lattice when cancellation
+  // would cost accuracy; kLattice runs the textbook error-series lattice, O(n) per order.
+  enum class Method { kLagProducts, kLattice };
+  Method method = Method::kLagProducts;
 };
 
 struct ArSpectralResult {
@@ -56,6 +62,7 @@ struct ArSpectralResult {
   double u_mean = 0.0;               // sqrt(S(0) / n), unit of the series.
   double dof = 0.0;                  // nu = 1 / (2 R^2), at most n - 1.
   double relative_u_of_u = 0.0;      // R.
+  int lattice_fallbacks = 0;         // 1 when kLagProducts handed over to the lattice.
 };
 
 // Requires n >= 4 finite values that are not all equal; returns an Error otherwise.
