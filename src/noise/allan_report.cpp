@@ -176,6 +176,22 @@ AllanTypeALink MakeAllanTypeALink(const AllanCurve& curve, const NoiseFit& fit, 
   return link;
 }
 
+AllanModelCheckReport UnfittedModelCheck(const AllanCurve& curve, const std::string& why) {
+  AllanModelCheckReport m;
+  m.tested = false;
+  m.not_tested = "no IEEE 952 model could be fitted to the curve: " + why;
+  const std::string range =
+      curve.tau_s.empty()
+          ? std::string()
+          : fmt::format(" over tau {:.3g}-{:.3g} s", curve.tau_s.front(), curve.tau_s.back());
+  m.summary = fmt::format(
+      "the IEEE 952 noise model could not be fitted to the Allan curve{} ({}): no goodness of "
+      "fit is stated, no tau range where it holds was found (none could be tested), and u(mean) "
+      "is not taken from a model",
+      range, why);
+  return m;
+}
+
 std::vector<double> MissingFractions(const AllanCurve& curve) {
   std::vector<double> f(curve.size(), 0.0);
   for (size_t i = 0; i < curve.size() && i < curve.n_terms_gap_free.size(); ++i) {

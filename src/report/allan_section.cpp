@@ -190,7 +190,11 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
                              p.max_abs_jitter_s, static_cast<int64_t>(p.missing_samples),
                              p.warnings};
       allan.gaps = gaps;
-      if (!fit.ok()) allan.fit_error = fit.error().message;
+      if (!fit.ok()) {
+        allan.fit_error = fit.error().message;
+        // No model at all: the report says so as for a model it could not test (issue #36).
+        allan.model_check = UnfittedModelCheck(curve.value(), fit.error().message);
+      }
       // A rejected or untested noise model is said on stderr and in the report (issue #36).
       if (allan.model_check && !(allan.model_check->tested && !allan.model_check->rejected)) {
         jq->warnings.push_back(allan.model_check->summary);

@@ -209,6 +209,11 @@ AllanReport MakeAllanReport(const AllanCurve& curve, const NoiseFit& fit,
 
 AllanTypeALink MakeAllanTypeALink(const AllanCurve& curve, const NoiseFit& fit, double duration_s);
 
+// "allan.model_check" when no IEEE 952 model could be fitted to the curve at all (FitNoiseTerms
+// failed with `why`): tested false, not_tested and summary say so, no tau range where the model
+// holds (issue #36: a model that cannot be tested says so and states no goodness of fit).
+AllanModelCheckReport UnfittedModelCheck(const AllanCurve& curve, const std::string& why);
+
 std::string AllanCurveCsv(const AllanCurve& curve, const std::string& quantity_unit);
 
 // 1 - n_terms / n_terms_gap_free at each tau (0 where nothing is missing).
