@@ -96,6 +96,7 @@ Status MakeSessionAnalysisOptions(const AnalysisCliOptions& o, int threads,
   type_a.sensors = o.sensors;
   type_a.quantities = o.quantities;
   type_a.threads = threads;
+  out->plot.threads = threads;
   std::string why;
   if (!out->IsValid(&why)) return MakeError(why);
   if (!o.tag_registry.empty()) {

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <utility>
 
+#include "core/parallel.hpp"
 #include "metro/core/angles.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/report/session_report.hpp"
@@ -205,15 +207,22 @@ Result<SessionPlotData> ComputeSessionPlotData(const Session& session, const Ses
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
   SessionPlotData out;
-  int plotted = 0;
-  for (const TagTypeA& t : type_a.tags) {
-    std::vector<std::optional<QuantityPlotData>>& row = out.quantities.emplace_back();
-    row.resize(t.quantities.size());
+  // The quantities to plot, in report order (max_quantities counts in this order), then
+  // computed at once; the first failure in report order is the one reported.
+  struct Job {
+    size_t tag_index, quantity_index;
+    const Tag* tag;
+    const Quantity* column;
+  };
+  std::vector<Job> jobs;
+  for (size_t k = 0; k < type_a.tags.size(); ++k) {
+    const TagTypeA& t = type_a.tags[k];
+    out.quantities.emplace_back().resize(t.quantities.size());
     const Tag* tag = session.FindTag(t.sensor);
     for (size_t j = 0; j < t.quantities.size(); ++j) {
       const QuantityTypeA& q = t.quantities[j];
       if (!q.ok || !options.Selects(q.name)) continue;
-      if (plotted >= options.max_quantities) {
+      if (static_cast<int>(jobs.size()) >= options.max_quantities) {
         ++out.not_plotted;
         continue;
       }
@@ -222,11 +231,23 @@ Result<SessionPlotData> ComputeSessionPlotData(const Session& session, const Ses
         return MakeFailedError(fmt::format("plot data: sensor {} has no column {} in {}", t.sensor,
                                            q.name, session.path));
       }
-      Result<QuantityPlotData> data = ComputeQuantityPlotData(*tag, *column, t.window, q, options);
-      if (!data.ok()) return data.error().WithContext(fmt::format("sensor {}", t.sensor));
-      row[j] = std::move(data).value();
-      ++plotted;
+      jobs.push_back({k, j, tag, column});
     }
+  }
+  std::vector<std::optional<Error>> errors(jobs.size());
+  internal::ParallelFor(jobs.size(), options.threads, [&](size_t i) {
+    const Job& job = jobs[i];
+    const TagTypeA& t = type_a.tags[job.tag_index];
+    Result<QuantityPlotData> data = ComputeQuantityPlotData(
+        *job.tag, *job.column, t.window, t.quantities[job.quantity_index], options);
+    if (!data.ok()) {
+      errors[i] = data.error().WithContext(fmt::format("sensor {}", t.sensor));
+      return;
+    }
+    out.quantities[job.tag_index][job.quantity_index] = std::move(data).value();
+  });
+  for (std::optional<Error>& e : errors) {
+    if (e) return std::move(*e);
   }
   return out;
 }

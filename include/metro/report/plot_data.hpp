@@ -32,6 +32,7 @@ struct PlotDataOptions {
   int max_series_points = 1000;       // Longer records are kept as min/max per bucket.
   int histogram_bins = 0;             // 0: sqrt(n), clamped to 10..60.
   int max_autocorrelation_lag = 200;  // Also at most n/4.
+  int threads = 0;                    // Quantities computed at once; 0: all cores.
 
   bool IsValid(std::string* why) const;
   // Whether quantity `name` is one the options select (before max_quantities).
