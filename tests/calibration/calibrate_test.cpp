@@ -457,7 +457,7 @@ void CheckCoverage(const char* sensor, const std::vector<CoverageCase>& cases, i
   }
 }
 
-TEST_CASE("Accelerometer u holds over simulated tags in every case", "[calibration]") {
+TEST_CASE("Accelerometer u holds over simulated tags in every case", "[calibration][slow]") {
   const ModelKind full = ModelKind::kFull;
   CheckCoverage("accel",
                 {

@@ -18,7 +18,7 @@ namespace {
 
 constexpr double kTau0 = 0.01;  // 100 Hz
 
-TEST_CASE("The model check accepts records the IEEE 952 model describes", "[noise]") {
+TEST_CASE("The model check accepts records the IEEE 952 model describes", "[noise][slow]") {
   // N + B + K through an integrating sampler (noise_simulation.hpp: the model is exact at
   // every tau), 20 min at 100 Hz. Under the model p is uniform: at alpha = 0.01 three or more
   // rejections in 10 records have probability 1e-4, and the mean of 10 p-values lies in

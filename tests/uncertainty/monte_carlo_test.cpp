@@ -709,7 +709,7 @@ std::string Summary(const char* name, const SeedSweep& s) {
          std::to_string(s.trials.front()) + " - " + std::to_string(s.trials.back());
 }
 
-TEST_CASE("JCGM 101 9.3 reference intervals by quadrature", "[uncertainty][mc]") {
+TEST_CASE("JCGM 101 9.3 reference intervals by quadrature", "[uncertainty][mc][slow]") {
   // Quadrature of order 24 and 32 agree to 2e-6 mg. The references from 2 x 1e8
   // draws: symmetric [1.0844, 1.3836] mg, reproduced to their rounding; shortest [1.0843,
   // 1.3834] mg, a discrete JCGM 101 7.7 minimiser, which at 2e8 trials still wanders by
