@@ -153,7 +153,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   blob::PushSummary s = blob::PushCalibration(port.value().get(), cal, bo, expect, po, progress);
   bar.Finish();
   for (const std::string& w : s.warnings) {
-    apps::PrintText(stderr, fmt::format("warning: {}\n", EscapeControlChars(w)));
+    apps::PrintWarning(w);
   }
   // What the tag and the link did: notes (not under --quiet), except on failure.
   const bool notes = !s.ok || !apps::Quiet();
@@ -196,7 +196,9 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   } else {
     apps::PrintText(stderr, fmt::format("FAILED: {}\n", message));
   }
-  apps::PrintText(stderr, blob::PushRecoveryAdvice(s, c.port, c.calibration, c.sensor));
+  // One command per line: the port and file names are data (escaped).
+  apps::PrintText(stderr, blob::PushRecoveryAdvice(s, EscapeControlChars(c.port),
+                                                   EscapeControlChars(c.calibration), c.sensor));
   return s.input_error ? kExitUsage : kExitFailed;
 }
 
@@ -241,9 +243,11 @@ int RunPushAll(const PushCliOptions& c) {
     const int rc = RunPush(one, &outcome);
     if (outcome.empty()) outcome = rc == kExitUsage ? "refused (see above)" : "failed (see above)";
     worst = std::max(worst, rc);
-    table += fmt::format("{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
-                         tags ? tags->Name(one.sensor) : TagRegistry::Default().Name(one.sensor),
-                         one.device_id, outcome);
+    // One row per tag: the name is the tags file's data (escaped).
+    table += fmt::format(
+        "{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
+        EscapeControlChars(tags ? tags->Name(one.sensor) : TagRegistry::Default().Name(one.sensor)),
+        one.device_id, outcome);
   }
   // The table is the result: on stdout.
   apps::PrintText(stdout, table);
