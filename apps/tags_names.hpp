@@ -14,6 +14,7 @@
 #include "metro/calibration/calibrate.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/status.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/io/tag_registry.hpp"
 #include "metro/report/certificate.hpp"
 
@@ -56,9 +57,11 @@ inline Status ApplyTagsToCalibration(const TagRegistry& tags, const std::string&
 inline std::string CalibrationTagLines(const Calibration& cal) {
   std::string out;
   for (const TagCalibration& t : cal.tags) {
-    out += fmt::format("  sensor {}: {}", t.sensor, t.name.empty() ? "(no name)" : t.name);
+    // One line per tag: the name is the tags file's data (escaped).
+    out += fmt::format("  sensor {}: {}", t.sensor,
+                       t.name.empty() ? "(no name)" : EscapeControlChars(t.name));
     if (t.device_id) out += ", device " + blob::FormatDeviceId(*t.device_id);
-    if (!t.profile.empty()) out += ", profile " + t.profile;
+    if (!t.profile.empty()) out += ", profile " + EscapeControlChars(t.profile);
     out += "\n";
   }
   return out;

@@ -85,6 +85,13 @@ inline void PrintErrorText(std::string_view message) {
   std::fwrite(line.data(), 1, line.size(), stderr);
 }
 
+// Prints "<prefix>warning: <text>" to stderr on one line: a warning is one record, so a
+// newline in the data it quotes (a tag name, a file name, a label) is shown as \n.
+inline void PrintWarning(std::string_view text, std::string_view prefix = "") {
+  const std::string line = std::string(prefix) + "warning: " + EscapeControlChars(text) + "\n";
+  std::fwrite(line.data(), 1, line.size(), stderr);
+}
+
 // Prints `text` (a note, "wrote FILE", a summary) to stderr unless --quiet.
 inline void Note(std::string_view text) {
   if (!Quiet()) PrintText(stderr, text);

@@ -73,7 +73,7 @@ int RunApply(const ApplyOptions& a) {
   // The validity ranges' warnings and the samples outside a range always print; a session
   // entirely within its ranges is a note.
   for (const std::string& w : summary.value().warnings) {
-    apps::PrintText(stderr, fmt::format("warning: {}\n", w));
+    apps::PrintWarning(w);
   }
   for (const SensorTemperatureCount& t : summary.value().temperature) {
     if (t.outside() > 0 || t.missing > 0) {

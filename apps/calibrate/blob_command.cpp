@@ -127,7 +127,7 @@ int RunBlob(const BlobOptions& b) {
     return apps::ExitCodeFor(contents.error());
   }
   for (const std::string& w : warnings) {
-    apps::PrintText(stderr, fmt::format("warning: {}\n", w));
+    apps::PrintWarning(w);
   }
   Result<std::vector<uint8_t>> bytes = blob::WriteBlob(contents.value());
   if (!bytes.ok()) {
@@ -257,10 +257,10 @@ int RunBlobAll(const BlobOptions& b) {
       fmt::format("{:>6}  {:<16}  {:<16}  {}\n", "sensor", "name", "device", "blob");
   for (const BlobOptions& one : each) {
     if (int rc = RunBlob(one); rc != kExitOk) return rc;
-    table += fmt::format(
-        "{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
-        tags.value() ? tags.value()->Name(one.sensor) : TagRegistry::Default().Name(one.sensor),
-        one.device_id, one.output);
+    table += fmt::format("{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
+                         EscapeControlChars(tags.value() ? tags.value()->Name(one.sensor)
+                                                         : TagRegistry::Default().Name(one.sensor)),
+                         one.device_id, EscapeControlChars(one.output));
   }
   apps::Note(table);
   return kExitOk;

@@ -204,9 +204,9 @@ int RunFit(const FitOptions& f) {
     }
     for (const std::string& w : t.warnings) {
       if (apps::Quiet()) {
-        apps::PrintText(stderr, fmt::format("warning: sensor {}: {}\n", t.sensor, w));
+        apps::PrintWarning(fmt::format("sensor {}: {}", t.sensor, w));
       } else {
-        apps::PrintText(stderr, fmt::format("  warning: {}\n", w));
+        apps::PrintWarning(w, "  ");
       }
     }
   }

@@ -84,12 +84,14 @@ int RunInspect(const InspectCliOptions& c) {
       const uint64_t id = slot.contents->device_id;
       const std::optional<int> sensor = tags.value()->SensorOfDevice(id);
       if (sensor) {
-        apps::Note(fmt::format("slot {}: device {} is sensor {} ({}) in {}\n", slot.label,
-                               blob::FormatDeviceId(id), *sensor, tags.value()->Name(*sensor),
-                               c.tags));
+        // One line each: the tag's name and the file's are data (escaped).
+        apps::Note(fmt::format(
+            "slot {}: device {} is sensor {} ({}) in {}\n", slot.label, blob::FormatDeviceId(id),
+            *sensor, EscapeControlChars(tags.value()->Name(*sensor)), EscapeControlChars(c.tags)));
       } else {
-        apps::PrintText(stderr, fmt::format("warning: slot {}: device {} is no tag's in {}\n",
-                                            slot.label, blob::FormatDeviceId(id), c.tags));
+        apps::PrintText(stderr,
+                        fmt::format("warning: slot {}: device {} is no tag's in {}\n", slot.label,
+                                    blob::FormatDeviceId(id), EscapeControlChars(c.tags)));
       }
     }
   }

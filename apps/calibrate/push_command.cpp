@@ -153,7 +153,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   blob::PushSummary s = blob::PushCalibration(port.value().get(), cal, bo, expect, po, progress);
   bar.Finish();
   for (const std::string& w : s.warnings) {
-    apps::PrintText(stderr, fmt::format("warning: {}\n", EscapeControlChars(w)));
+    apps::PrintWarning(w);
   }
   // What the tag and the link did: notes (not under --quiet), except on failure.
   const bool notes = !s.ok || !apps::Quiet();
@@ -182,21 +182,28 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
     }
     return recorded;
   }
+  const bool lied = s.contradiction != blob::TagContradiction::kNone;
   if (outcome != nullptr) {
-    *outcome = s.commit == blob::CommitState::kUnknown     ? "outcome unknown"
+    *outcome = lied ? "MISMATCH: " + blob::TagContradictionName(s.contradiction)
+               : s.commit == blob::CommitState::kUnknown   ? "outcome unknown"
                : s.commit == blob::CommitState::kCommitted ? "UNVERIFIED"
                                                            : "FAILED";
   }
   // An unknown outcome or a live but unchecked calibration is not a failure to write: the
-  // message says what the tag may hold (docs/calibration-blob.md section 11).
-  if (s.commit == blob::CommitState::kUnknown) {
+  // message says what the tag may hold (docs/calibration-blob.md section 11). A tag that
+  // contradicted what it acknowledged is neither (issue #37).
+  if (lied) {
+    apps::PrintText(stderr, fmt::format("MISMATCH: {}\n", message));
+  } else if (s.commit == blob::CommitState::kUnknown) {
     apps::PrintText(stderr, message + "\n");
   } else if (s.commit == blob::CommitState::kCommitted) {
     apps::PrintText(stderr, fmt::format("UNVERIFIED: {}\n", message));
   } else {
     apps::PrintText(stderr, fmt::format("FAILED: {}\n", message));
   }
-  apps::PrintText(stderr, blob::PushRecoveryAdvice(s, c.port, c.calibration, c.sensor));
+  // One command per line: the port and file names are data (escaped).
+  apps::PrintText(stderr, blob::PushRecoveryAdvice(s, EscapeControlChars(c.port),
+                                                   EscapeControlChars(c.calibration), c.sensor));
   return s.input_error ? kExitUsage : kExitFailed;
 }
 
@@ -241,9 +248,11 @@ int RunPushAll(const PushCliOptions& c) {
     const int rc = RunPush(one, &outcome);
     if (outcome.empty()) outcome = rc == kExitUsage ? "refused (see above)" : "failed (see above)";
     worst = std::max(worst, rc);
-    table += fmt::format("{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
-                         tags ? tags->Name(one.sensor) : TagRegistry::Default().Name(one.sensor),
-                         one.device_id, outcome);
+    // One row per tag: the name is the tags file's data (escaped).
+    table += fmt::format(
+        "{:>6}  {:<16}  {:<16}  {}\n", one.sensor,
+        EscapeControlChars(tags ? tags->Name(one.sensor) : TagRegistry::Default().Name(one.sensor)),
+        one.device_id, outcome);
   }
   // The table is the result: on stdout.
   apps::PrintText(stdout, table);

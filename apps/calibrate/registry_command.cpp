@@ -45,8 +45,12 @@ Result<uint64_t> DeviceId(const std::string& text) {
   return id;
 }
 
-std::string Csv(const std::string& field) {
-  if (field.find_first_of(",\"\n\r") == std::string::npos) return field;
+// One CSV row per record and line: a field's control characters are escaped (a newline in a
+// station name is written as \n; the JSON export keeps the text exactly), then the field is
+// quoted when it holds a comma or a quote.
+std::string Csv(const std::string& data) {
+  const std::string field = EscapeControlChars(data);
+  if (field.find_first_of(",\"") == std::string::npos) return field;
   std::string out = "\"";
   for (char c : field) out += c == '"' ? std::string("\"\"") : std::string(1, c);
   return out + "\"";
@@ -68,18 +72,21 @@ int RunHistory(const RegistryQueryOptions& o) {
   }
   std::string out = fmt::format("device {}: {} calibration(s)\n", blob::FormatDeviceId(id.value()),
                                 h.value().size());
+  // One record per line: every string read from the registry is data (escaped), whoever
+  // wrote the file.
+  const auto text = [](const std::string& data) { return EscapeControlChars(data); };
   for (const RegistryCalibration& c : h.value()) {
-    out += fmt::format("  {} certificate {} sensor {} (registry id {}){}{}\n", c.date_utc,
-                       c.certificate_id, c.sensor, c.id,
-                       c.station.empty() ? "" : ", station " + c.station,
-                       c.operator_name.empty() ? "" : ", operator " + c.operator_name);
+    out += fmt::format("  {} certificate {} sensor {} (registry id {}){}{}\n", text(c.date_utc),
+                       text(c.certificate_id), c.sensor, c.id,
+                       c.station.empty() ? "" : ", station " + text(c.station),
+                       c.operator_name.empty() ? "" : ", operator " + text(c.operator_name));
     for (const RegistryBlob& b : c.blobs) {
-      out += fmt::format("    blob seq {} CRC-32 0x{:08X} -> {} ({})\n", b.seq, b.crc, b.file,
-                         b.recorded_utc);
+      out += fmt::format("    blob seq {} CRC-32 0x{:08X} -> {} ({})\n", b.seq, b.crc, text(b.file),
+                         text(b.recorded_utc));
     }
     for (const RegistryPush& p : c.pushes) {
-      out += fmt::format("    push {} via {}: {} ({})\n", p.ok ? "OK" : "FAILED", p.port, p.result,
-                         p.recorded_utc);
+      out += fmt::format("    push {} via {}: {} ({})\n", p.ok ? "OK" : "FAILED", text(p.port),
+                         text(p.result), text(p.recorded_utc));
     }
     if (c.conformity) {
       int fails = 0;
@@ -110,14 +117,15 @@ int RunDrift(const RegistryQueryOptions& o) {
     apps::PrintText(stdout, ToJson(d.value()) + "\n");
     return kExitOk;
   }
+  const auto text = [](const std::string& data) { return EscapeControlChars(data); };
   std::string out = fmt::format("device {}: {} ({}) -> {} ({})\n", blob::FormatDeviceId(id.value()),
-                                d.value().from.date_utc, d.value().from.certificate_id,
-                                d.value().to.date_utc, d.value().to.certificate_id);
+                                text(d.value().from.date_utc), text(d.value().from.certificate_id),
+                                text(d.value().to.date_utc), text(d.value().to.certificate_id));
   out += fmt::format("  {:<12} {:>14} {:>14} {:>12} {:>10} {:>8}  {}\n", "constant", "from", "to",
                      "change", "u_change", "E_n", "unit");
   for (const DriftConstant& k : d.value().constants) {
-    out += fmt::format("  {:<12} {:>14.7g} {:>14.7g} {:>12.4g} {:>10.3g} {:>8.3g}  {}{}\n", k.name,
-                       k.from, k.to, k.change, k.u_change, k.en, k.unit,
+    out += fmt::format("  {:<12} {:>14.7g} {:>14.7g} {:>12.4g} {:>10.3g} {:>8.3g}  {}{}\n",
+                       text(k.name), k.from, k.to, k.change, k.u_change, k.en, text(k.unit),
                        k.flagged ? "  |E_n| > 1" : "");
   }
   apps::PrintText(stdout, out);
@@ -147,7 +155,7 @@ int RunDue(const RegistryQueryOptions& o) {
                                 o.all ? "listed" : "due", now, o.interval_days);
   for (const DueDevice& d : due.value()) {
     out += fmt::format("  {}  last {}  due {}  {}\n", blob::FormatDeviceId(d.device_id),
-                       d.last_date_utc, d.due_utc,
+                       EscapeControlChars(d.last_date_utc), EscapeControlChars(d.due_utc),
                        d.overdue_days > 0 ? fmt::format("overdue {:.1f} days", d.overdue_days)
                                           : fmt::format("in {:.1f} days", -d.overdue_days));
   }

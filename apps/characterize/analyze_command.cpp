@@ -126,7 +126,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
   }
   // An analysis asked for that produced nothing for a quantity says so here (issue #21).
   for (const std::string& f : analysis.failures) PrintErrorText(f);
-  for (const std::string& w : analysis.warnings) PrintText(stderr, "warning: " + w + "\n");
+  for (const std::string& w : analysis.warnings) PrintWarning(w);
   // No curve at all: no --allan-csv (an empty file would read as an analysis that ran).
   const std::string allan_csv_path = analysis.allan_csv.empty() ? std::string() : o.allan_csv;
   if (!o.allan_csv.empty() && allan_csv_path.empty()) {

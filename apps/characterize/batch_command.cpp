@@ -52,7 +52,7 @@ int RunBatchCommand(const BatchCommandOptions& o) {
   if (!inputs.ok()) {
     return PrintErrorExit(inputs.error());
   }
-  for (const std::string& line : skipped) Note("note: " + line + "\n");
+  for (const std::string& line : skipped) Note("note: " + EscapeControlChars(line) + "\n");
   // The batch page is never written over a session (nor a device, a folder, ...).
   std::vector<NamedPath> sessions = {{"--tags", o.analysis.tag_registry},
                                      {"--columns-file", o.analysis.load.columns_file}};
@@ -66,7 +66,7 @@ int RunBatchCommand(const BatchCommandOptions& o) {
   options.on_progress = [&progress](size_t, size_t) { progress.Advance(); };
   const BatchSummary summary = RunBatch(inputs.value(), options);
   progress.Finish();
-  for (const std::string& line : summary.skipped) Note("note: " + line + "\n");
+  for (const std::string& line : summary.skipped) Note("note: " + EscapeControlChars(line) + "\n");
   if (!summary.error.message.empty()) {
     PrintError(summary.error);
     return summary.items.empty() ? kExitUsage : kExitFailed;

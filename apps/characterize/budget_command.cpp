@@ -63,12 +63,10 @@ int RunBudget(const BudgetOptions& options) {
   // Named before any trial is drawn (JCGM 101 6.4.9.4, docs/uncertainty.md).
   if (budget.value().monte_carlo.enabled) {
     for (const std::string& name : InputsWithoutVariance(budget.value())) {
-      apps::PrintText(
-          stderr,
-          fmt::format(
-              "warning: input {} has no variance in the Monte Carlo method (t with nu <= 2): u(y) "
-              "will be undefined, the coverage intervals are still reported\n",
-              name));
+      apps::PrintWarning(
+          fmt::format("input {} has no variance in the Monte Carlo method (t with nu <= 2): u(y) "
+                      "will be undefined, the coverage intervals are still reported",
+                      name));
     }
   }
   TerminalProgress progress(stderr, apps::CliProgressOptions());  // The Monte Carlo trials.
@@ -79,7 +77,7 @@ int RunBudget(const BudgetOptions& options) {
     return apps::PrintErrorExit(evaluation.error());
   }
   for (const std::string& w : evaluation.value().gum.warnings) {
-    apps::PrintText(stderr, fmt::format("warning: {}: {}\n", options.budget_path, w));
+    apps::PrintWarning(fmt::format("{}: {}", options.budget_path, w));
   }
   const BudgetReport report = MakeBudgetReport(evaluation.value());
   const std::string json = ToJson(report) + "\n";

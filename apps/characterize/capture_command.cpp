@@ -51,9 +51,11 @@ std::string NamesFooter(const std::vector<capture::TagLiveRow>& rows, const TagR
   std::vector<int> sensors;
   for (const capture::TagLiveRow& r : rows) sensors.push_back(r.sensor);
   std::sort(sensors.begin(), sensors.end());
-  std::string out = fmt::format("names ({}):", tags_path);
+  // One line: the names and the file name are data (escaped).
+  std::string out = fmt::format("names ({}):", EscapeControlChars(tags_path));
   for (size_t i = 0; i < sensors.size(); ++i) {
-    out += fmt::format("{} {} {}", i == 0 ? "" : ",", sensors[i], tags->Name(sensors[i]));
+    out += fmt::format("{} {} {}", i == 0 ? "" : ",", sensors[i],
+                       EscapeControlChars(tags->Name(sensors[i])));
   }
   return out + "\n";
 }
@@ -93,7 +95,7 @@ class LiveView {
   }
   void Event(const std::string& text) {
     drawn_lines_ = 0;  // The event stays above the next drawing.
-    PrintText(stderr, "note: " + text + "\n");
+    PrintText(stderr, "note: " + EscapeControlChars(text) + "\n");  // One event, one line.
   }
   std::map<int, double> rates() const { return rates_.RatesHz(); }
 

@@ -58,8 +58,10 @@ int RunConvert(const ConvertOptions& o) {
     JoinSummary summary;
     session = JoinSessionsOnTime(parts, &summary);
     for (size_t i = 0; session.ok() && i < parts.size(); ++i) {
-      const std::string line = fmt::format("joined {}: {} samples, {} in no joined row",
-                                           parts[i].path, summary.samples[i], summary.unmatched[i]);
+      // One line, in the note and in the file's comment: the file name is data (escaped).
+      const std::string line =
+          fmt::format("joined {}: {} samples, {} in no joined row",
+                      EscapeControlChars(parts[i].path), summary.samples[i], summary.unmatched[i]);
       join_comments += "# " + line + "\n";
       Note(line + "\n");
     }
@@ -68,9 +70,10 @@ int RunConvert(const ConvertOptions& o) {
     return PrintErrorExit(session.error());
   }
   const Session& s = session.value();
-  // Provenance and the frame counts, which session.csv rows cannot carry, as comments.
-  std::string text = fmt::format("# metro convert: {} ({}, sha256 {})\n", s.path,
-                                 SessionFormatName(s.format), s.sha256);
+  // Provenance and the frame counts, which session.csv rows cannot carry, as comments (one
+  // line each: a newline in the input's name must not start a data row).
+  std::string text = fmt::format("# metro convert: {} ({}, sha256 {})\n",
+                                 EscapeControlChars(s.path), SessionFormatName(s.format), s.sha256);
   if (s.format == SessionFormat::kReceiver) {
     text += fmt::format("# frame_period_s {}\n", s.frame_period_s);
     for (const Tag& t : s.tags) {

@@ -14,6 +14,7 @@
 
 #include "core/json_text.hpp"
 #include "metro/blob/intel_hex.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/core/utc_time.hpp"
 #include "metro_fw/blob.h"
 
@@ -474,13 +475,15 @@ Result<InspectReport> InspectFile(const std::string& path, const InspectOptions&
 }
 
 std::string FormatInspect(const InspectReport& report) {
-  std::string out = fmt::format("{} ({})\n", report.file, report.format);
+  // Each line is one record: the file name and the blob's strings are data, so their control
+  // characters are escaped (a "\nresult: valid" in a label must not print as a line of its own).
+  std::string out = fmt::format("{} ({})\n", EscapeControlChars(report.file), report.format);
   for (size_t i = 0; i < report.slots.size(); ++i) {
     const SlotReport& s = report.slots[i];
-    out +=
-        fmt::format("slot {}{}: {} - {}{}\n", s.label,
-                    s.address ? fmt::format(" @0x{:05X}", s.address) : std::string(), s.code_name,
-                    s.message, static_cast<int>(i) == report.active ? " [active]" : "");
+    out += fmt::format("slot {}{}: {} - {}{}\n", s.label,
+                       s.address ? fmt::format(" @0x{:05X}", s.address) : std::string(),
+                       s.code_name, EscapeControlChars(s.message),
+                       static_cast<int>(i) == report.active ? " [active]" : "");
     if (!s.contents) continue;
     const BlobContents& c = *s.contents;
     out += fmt::format("  format {}.{}  seq {}  device {}  flags 0x{:02X}{}  crc32 0x{:08X}\n",
@@ -488,7 +491,8 @@ std::string FormatInspect(const InspectReport& report) {
                        c.provisional ? " (provisional)" : "", c.crc32);
     const MetaConstants& m = c.meta;
     out += fmt::format("  meta: reference '{}', tag '{}', g_local {:.6f} m/s^2, cal_time {}\n",
-                       m.reference_id, m.tag_label, m.g_local_mps2, m.cal_time_utc_s);
+                       EscapeControlChars(m.reference_id), EscapeControlChars(m.tag_label),
+                       m.g_local_mps2, m.cal_time_utc_s);
     out += fmt::format(
         "    calibrated {}, due {}; tool {}.{}.{} commit {}; procedure {}, k = {:.1f}\n",
         IsoDateUtc(m.cal_time_utc_s), IsoDateUtc(m.due_time_utc_s), m.tool_version >> 16,
@@ -513,7 +517,9 @@ std::string FormatInspect(const InspectReport& report) {
       if (sensor) out += SensorText(*sensor, v.name == std::string("accel"));
     }
   }
-  for (const std::string& why : report.refusals) out += "refused: " + why + "\n";
+  for (const std::string& why : report.refusals) {
+    out += "refused: " + EscapeControlChars(why) + "\n";
+  }
   if (!report.refusals.empty()) {
     out += fmt::format("result: REFUSED ({} problem{}): do not program this file\n",
                        report.refusals.size(), report.refusals.size() == 1 ? "" : "s");

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "metro/core/rounding.hpp"
+#include "metro/core/terminal_text.hpp"
 
 namespace metro {
 
@@ -229,18 +230,20 @@ std::string TermAt(const SensorCalibration& c, double t_c) {
 
 std::string FormatCalibrationReport(const Calibration& cal) {
   std::string out;
-  out +=
-      fmt::format("calibration ({}), {}, {}\n", kCalibrationSchema, cal.tool_version, cal.date_utc);
+  // One record per line: the strings are calibration.json's data (escaped).
+  const auto text = [](const std::string& data) { return EscapeControlChars(data); };
+  out += fmt::format("calibration ({}), {}, {}\n", kCalibrationSchema, text(cal.tool_version),
+                     text(cal.date_utc));
   out += fmt::format("gravity {} m/s^2\n", cal.gravity_mps2);
   for (const InputFile& f : cal.inputs) {
-    out += fmt::format("input {} sha256 {}\n", f.path, f.sha256);
+    out += fmt::format("input {} sha256 {}\n", text(f.path), text(f.sha256));
   }
   for (const TagCalibration& t : cal.tags) {
     out += fmt::format("sensor {}: static detector factor {}, {} saturated samples excluded\n",
                        t.sensor, t.threshold_factor, t.saturated_samples);
     if (t.accel) ReportSensor(*t.accel, &out);
     if (t.gyro) ReportSensor(*t.gyro, &out);
-    for (const std::string& w : t.warnings) out += "  warning: " + w + "\n";
+    for (const std::string& w : t.warnings) out += "  warning: " + text(w) + "\n";
   }
   return out;
 }

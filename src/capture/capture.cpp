@@ -17,6 +17,7 @@
 
 #include "metro/blob/serial_port.hpp"
 #include "metro/core/angles.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/core/utc_time.hpp"
 #include "metro/stats/session_type_a.hpp"
 
@@ -382,7 +383,7 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
   out.Append(fmt::format(
       "# metro capture of the central receiver (docs/capture.md)\n# port: {}\n# baud: {}\n"
       "# start_utc: {}\n# version: {}\n",
-      options.port, options.baud, UtcIso8601Now(), options.version));
+      EscapeControlChars(options.port), options.baud, UtcIso8601Now(), options.version));
 
   LineSorter sorter;
   Status write_status = Status::Ok();
@@ -437,7 +438,8 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
         port.reset();
         const size_t partial = sorter.pending_bytes();
         sorter.Restart();
-        out.Append(fmt::format("# port lost at {}: {}{}\n", UtcIso8601Now(), got.error().message,
+        out.Append(fmt::format("# port lost at {}: {}{}\n", UtcIso8601Now(),
+                               EscapeControlChars(got.error().message),
                                partial > 0 ? fmt::format(" ({} bytes of an unfinished line "
                                                          "dropped)",
                                                          partial)

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "metro/core/rounding.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/noise/allan_report.hpp"
 #include "metro/report/console_text.hpp"
@@ -236,11 +237,12 @@ std::string AllanSummaryTable(const SessionReport& report) {
       std::string minimum = "-";
       if (q.allan_type_a_link && std::isfinite(q.allan_type_a_link->allan_min_dev)) {
         const AllanTypeALink& link = *q.allan_type_a_link;
-        minimum = fmt::format("{} {} at {:.3g} s{}", ConsoleNumber(link.allan_min_dev), q.unit,
-                              link.allan_min_tau_s, link.allan_min_at_end ? " (last tau)" : "");
+        minimum = fmt::format("{} {} at {:.3g} s{}", ConsoleNumber(link.allan_min_dev),
+                              EscapeControlChars(q.unit), link.allan_min_tau_s,
+                              link.allan_min_at_end ? " (last tau)" : "");
       }
-      out += fmt::format("{:>6} {:<18} {:<28} {:<28} {:<28} {}\n", s.sensor, q.name,
-                         term(allan.term(NoiseTerm::kRandomWalk)),
+      out += fmt::format("{:>6} {:<18} {:<28} {:<28} {:<28} {}\n", s.sensor,
+                         EscapeControlChars(q.name), term(allan.term(NoiseTerm::kRandomWalk)),
                          term(allan.term(NoiseTerm::kBiasInstability)),
                          term(allan.term(NoiseTerm::kRateRandomWalk)), minimum);
     }

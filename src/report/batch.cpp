@@ -476,7 +476,10 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
   }
   summary.sessions_failed = static_cast<int64_t>(out.failed);
   std::string table;
-  for (const std::string& w : warnings) table += w + "\n";
+  // One record per line: tag names, quantities, units and file names are data (a session
+  // file named "s\nFAILED x.csv" must not print a line of its own), escaped field by field.
+  const auto text = [](const std::string& data) { return EscapeControlChars(data); };
+  for (const std::string& w : warnings) table += text(w) + "\n";
   table += fmt::format("{} sessions, {} failed\n", inputs.size(), out.failed);
   table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10}\n", "sensor", "tag",
                        "quantity", "unit", "n", "mean of means", "std of means", "worst n_eff/n");
@@ -524,7 +527,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
                                 ? RoundForStatement(mean, has_std ? std_of_means : 0.0)
                                 : RoundedResult{"-", "-"};
     table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10.3f}\n", key.first,
-                         acc.tag_name, key.second, acc.unit, n, r.value,
+                         text(acc.tag_name), text(key.second), text(acc.unit), n, r.value,
                          has_std ? r.uncertainty : "-", acc.worst_ratio);
   }
   // Per tag: receiver counts; packet_loss_ratio = (stale + never) / frames (docs/formats.md).
@@ -540,7 +543,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
                              static_cast<int64_t>(acc.sessions_without_fresh)});
     if (!receiver) continue;
     tag_table += fmt::format(
-        "{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>8.2f} %{}\n", sensor, acc.tag_name,
+        "{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>8.2f} %{}\n", sensor, text(acc.tag_name),
         acc.sessions, acc.frames, acc.fresh, acc.stale, acc.never, 100.0 * loss,
         acc.sessions_without_fresh > 0
             ? fmt::format("  no fresh packet in {} session(s)", acc.sessions_without_fresh)
@@ -552,7 +555,9 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
     table += tag_table;
   }
   for (const BatchItem& item : out.items) {
-    if (!item.ok) table += fmt::format("FAILED {}: {}\n", item.input, item.error.ToString());
+    if (!item.ok) {
+      table += fmt::format("FAILED {}: {}\n", text(item.input), text(item.error.ToString()));
+    }
   }
   const fs::path dir(options.output_dir);
   // Both or neither. Tag names and file names in the table are data: escaped, so that

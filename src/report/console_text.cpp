@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <map>
 
+#include "metro/core/terminal_text.hpp"
+
 namespace metro {
 namespace {
 
@@ -71,8 +73,11 @@ std::string GroupedWarnings(const std::vector<WarningLine>& warnings, const std:
   for (const std::string& kind : order) {
     const std::vector<const WarningLine*>& g = groups[kind];
     const WarningLine& first = *g.front();
-    out += first.subject.empty() ? fmt::format("{}{}\n", indent, first.message)
-                                 : fmt::format("{}{}: {}\n", indent, first.subject, first.message);
+    // One warning, one line: its subject and text quote data (names, file names).
+    const std::string message = EscapeControlChars(first.message);
+    out += first.subject.empty()
+               ? fmt::format("{}{}\n", indent, message)
+               : fmt::format("{}{}: {}\n", indent, EscapeControlChars(first.subject), message);
     if (g.size() == 1) continue;
     // The others, by their head ("sensor 2"), in order: "sensor 2 qx, qy; sensor 3 qw".
     std::string names, head;
@@ -86,7 +91,8 @@ std::string GroupedWarnings(const std::vector<WarningLine>& warnings, const std:
         names += ", " + (rest.empty() ? h : rest);
       }
     }
-    out += fmt::format("{}  and {} more like it: {}\n", indent, g.size() - 1, names);
+    out += fmt::format("{}  and {} more like it: {}\n", indent, g.size() - 1,
+                       EscapeControlChars(names));
   }
   return out;
 }

@@ -1,5 +1,6 @@
 #include "metro/report/session_analysis.hpp"
 
+#include "metro/core/terminal_text.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/report/batch.hpp"
 #include "metro/report/plot_data.hpp"
@@ -69,7 +70,9 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
   Result<int> plots = AddPlotData(out.session, out.type_a, options.plot, &out.report);
   if (!plots.ok()) return fail(plots.error(), false);
   out.table.clear();
-  for (const std::string& w : NoFreshPacketWarnings(out.report)) out.table += w + "\n";
+  for (const std::string& w : NoFreshPacketWarnings(out.report)) {
+    out.table += EscapeControlChars(w) + "\n";  // One line: it names the tag.
+  }
   out.table += TypeAReportTable(out.report);
   if (!options.budget_path.empty()) {
     auto budget =

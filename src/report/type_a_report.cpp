@@ -9,6 +9,7 @@
 
 #include "mean_coverage.hpp"
 #include "metro/core/rounding.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
 #include "metro/report/allan_section.hpp"
 #include "metro/report/console_text.hpp"
@@ -169,23 +170,30 @@ SessionReport MakeSessionReport(const Session& session, const SessionTypeA& resu
 std::string TypeAReportTable(const SessionReport& report) {
   std::string out;
   auto it = std::back_inserter(out);
-  fmt::format_to(it, "{} ({}, {} rows, {} rejected)\n", report.input.path, report.input.format,
-                 report.input.rows, report.input.rejected_rows);
-  for (const std::string& note : report.input.notes) fmt::format_to(it, "  note: {}\n", note);
+  // One record per line: names, units, paths and notes are data, their control characters
+  // escaped (a tag named "Chest\nsensor 3 ..." must not print a row of its own).
+  const auto text = [](const std::string& data) { return EscapeControlChars(data); };
+  fmt::format_to(it, "{} ({}, {} rows, {} rejected)\n", text(report.input.path),
+                 report.input.format, report.input.rows, report.input.rejected_rows);
+  for (const std::string& note : report.input.notes) {
+    fmt::format_to(it, "  note: {}\n", text(note));
+  }
   fmt::format_to(it, "{:>6} {:<16} {:<18} {:<6} {:>8} {:>14} {:>10} {:>10} {:>10} {:>10}\n",
                  "sensor", "name", "quantity", "unit", "n", "mean", "s", "s(mean)", "n_eff",
                  "u(mean)");
   for (const SensorReport& s : report.sensors) {
     if (s.quantities.empty()) {
       fmt::format_to(it, "{:>6} {:<16} (no observations: frames {}, stale {}, never {})\n",
-                     s.sensor, s.name, s.frames, s.stale, s.never);
+                     s.sensor, text(s.name), s.frames, s.stale, s.never);
     }
+    const std::string name = text(s.name);
     for (const QuantityReport& q : s.quantities) {
       // The unit as the report states it ("1" for the quaternion's dimensionless components).
-      const std::string unit = q.unit.empty() ? "1" : q.unit;
+      const std::string unit = text(q.unit.empty() ? "1" : q.unit);
+      const std::string quantity = text(q.name);
       if (!q.type_a) {
-        fmt::format_to(it, "{:>6} {:<16} {:<18} {:<6} {}\n", s.sensor, s.name, q.name, unit,
-                       q.error);
+        fmt::format_to(it, "{:>6} {:<16} {:<18} {:<6} {}\n", s.sensor, name, quantity, unit,
+                       text(q.error));
         continue;
       }
       const TypeAReport& a = *q.type_a;
@@ -203,7 +211,7 @@ std::string TypeAReportTable(const SessionReport& report) {
       }
       fmt::format_to(
           it, "{:>6} {:<16} {:<18} {:<6} {:>8} {:>14} {:>10.3g} {:>10.2g} {:>10} {:>10}\n",
-          s.sensor, s.name, q.name, unit, a.n, value, a.std, a.std_of_mean, n_eff, uncertainty);
+          s.sensor, name, quantity, unit, a.n, value, a.std, a.std_of_mean, n_eff, uncertainty);
     }
   }
   out += AllanSummaryTable(report);

@@ -9,7 +9,9 @@
 #include "core/json_reader.hpp"
 #include "core/json_text.hpp"
 #include "metro/core/rounding.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "uncertainty/budget_report_json.hpp"
+#include "uncertainty/model_quote.hpp"
 
 namespace metro {
 namespace {
@@ -143,10 +145,10 @@ Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* prog
   if (!e.gum.derivatives_exact && !budget.monte_carlo.enabled) {
     // Central differences are never the stated basis (issue #36): without a Monte Carlo run
     // there is nothing sound to state.
-    return MakeError(budget.file, 0,
-                     "model '" + budget.model + "': no exact derivatives (" + e.gum.derivatives +
-                         "), and monte_carlo is disabled: the GUF result would rest on central "
-                         "differences; enable monte_carlo, whose result is then stated");
+    return internal::ModelError(
+        budget, "no exact derivatives (" + e.gum.derivatives +
+                    "), and monte_carlo is disabled: the GUF result would rest on central "
+                    "differences; enable monte_carlo, whose result is then stated");
   }
   e.ok = true;
   if (budget.monte_carlo.enabled) {
@@ -593,7 +595,34 @@ ordered_json BudgetReportJson(const BudgetEvaluation& e) {
   return ToJsonValue(MakeBudgetReport(e));
 }
 
-std::string BudgetReportTable(const BudgetReport& r) {
+namespace {
+
+// `report` with every string it holds from the budget (names, units, the model, statements
+// that quote them) escaped for a console table: one record per line whatever the budget's
+// strings hold (a name "x\nResult ..." must not print a line of its own).
+BudgetReport EscapedForConsole(BudgetReport report) {
+  auto escape = [](std::string* text) { *text = EscapeControlChars(*text); };
+  for (std::string* text : {&report.measurand.name, &report.measurand.unit, &report.measurand.model,
+                            &report.result.dof_note, &report.result.statement,
+                            &report.stated.reason, &report.stated.statement}) {
+    escape(text);
+  }
+  for (BudgetReportLine& l : report.budget) {
+    escape(&l.name);
+    escape(&l.distribution);
+    if (l.unit_conversion) {
+      escape(&l.unit_conversion->from);
+      escape(&l.unit_conversion->to);
+    }
+  }
+  if (report.monte_carlo) escape(&report.monte_carlo->message);
+  return report;
+}
+
+}  // namespace
+
+std::string BudgetReportTable(const BudgetReport& report) {
+  const BudgetReport r = EscapedForConsole(report);
   const BudgetReportResult& g = r.result;
   const std::string& measurand = r.measurand.name;
   const std::string unit = r.measurand.unit.empty() ? "" : " " + r.measurand.unit;
