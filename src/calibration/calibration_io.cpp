@@ -232,6 +232,14 @@ std::string FormatCalibrationReport(const Calibration& cal) {
   out +=
       fmt::format("calibration ({}), {}, {}\n", kCalibrationSchema, cal.tool_version, cal.date_utc);
   out += fmt::format("gravity {} m/s^2\n", cal.gravity_mps2);
+  // Constants marked model_rejected first, where no one scrolls past them (issue #36).
+  const std::vector<std::string> rejected = ModelRejectedConstants(cal);
+  if (!rejected.empty()) {
+    out +=
+        "MODEL_REJECTED: these constants are not certified; calibrate blob, push and the "
+        "certificate refuse them unless --accept-rejected-model:\n";
+    for (const std::string& r : rejected) out += "  " + r + "\n";
+  }
   for (const InputFile& f : cal.inputs) {
     out += fmt::format("input {} sha256 {}\n", f.path, f.sha256);
   }

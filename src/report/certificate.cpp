@@ -265,8 +265,35 @@ void SetModelCheck(const SensorCalibration& c, const CertificateOptions& options
               "These constants are marked model_rejected and are stated only because "
               "--accept-rejected-model was given: their U does not cover what the model leaves "
               "out.");
+  } else if (mc.model_rejected) {
+    check.set("rejected",
+              "These constants are marked model_rejected and are not certified: this page is a "
+              "view of calibration.json; their U does not cover what the model leaves out, and "
+              "calibrate blob, calibrate push and the certificate refuse them unless "
+              "--accept-rejected-model.");
   }
   d->set("model_check", check);
+}
+
+// The view's banner (CertificateOptions::view): each sensor whose constants are marked
+// model_rejected, with its model, status and reason.
+mustache::data RejectedBanner(const Calibration& cal) {
+  mustache::data banner;
+  mustache::data rows{mustache::data::type::list};
+  for (const TagCalibration& t : cal.tags) {
+    for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
+      if (!c->has_value() || !(*c)->model_check || !(*c)->model_check->model_rejected) continue;
+      const ModelCheck& mc = *(*c)->model_check;
+      mustache::data row;
+      row.set("sensor",
+              fmt::format("sensor {} {}", t.sensor, ImuSensorLongName((*c)->model.sensor)));
+      row.set("model", fmt::format("'{}' model, {}", ModelKindName((*c)->model.kind), mc.status));
+      row.set("reason", mc.reason);
+      rows.push_back(row);
+    }
+  }
+  banner.set("rows", rows);
+  return banner;
 }
 
 mustache::data SensorData(const SensorCalibration& c, int sensor, const GravityU& gravity,
@@ -569,7 +596,8 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
   const std::vector<std::string> rejected = ModelRejectedConstants(cal);
-  if (!rejected.empty() && !options.accept_rejected_model) {
+  const bool not_certificate = !rejected.empty() && !options.accept_rejected_model;
+  if (not_certificate && !options.view) {
     std::string list;
     for (const std::string& r : rejected) list += (list.empty() ? "" : "; ") + r;
     return MakeError(fmt::format(
@@ -589,6 +617,10 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     items += fmt::format("{}sensor {}", items.empty() ? "" : ", ", t.sensor);
   }
   data.set("print_id", certificate_id);
+  data.set("print_label",
+           not_certificate ? "Calibration report (not a certificate)" : "Calibration certificate");
+  data.set("id_label", not_certificate ? "calibration.json (not a certificate)" : "certificate");
+  if (not_certificate) data.set("rejected_banner", RejectedBanner(cal));
   data.set("item_rows", ItemRows(cal));
   data.set("date_issue_utc", UtcIso8601Now());
   data.set("date_utc", cal.date_utc);
@@ -727,11 +759,13 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       "leaves out); they do not include the table rate's uncertainty or long-term drift of the "
       "tag (traceability below).",
       gravity.text)));
-  if (!rejected.empty()) {
-    for (const std::string& r : rejected) {
-      validity.push_back(mustache::data(
-          "Stated with --accept-rejected-model although marked model_rejected: " + r));
-    }
+  for (const std::string& r : rejected) {
+    validity.push_back(mustache::data(
+        not_certificate
+            ? "Not certified (marked model_rejected; this page is a view, not a "
+              "certificate): " +
+                  r
+            : "Stated with --accept-rejected-model although marked model_rejected: " + r));
   }
   data.set("validity", validity);
   SetConformity(cal, &data);
@@ -739,8 +773,9 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
   Result<std::string> body = report_internal::RenderTemplate("certificate", std::move(data));
   if (!body.ok()) return body;
   return report_internal::RenderPage(
-      "Calibration certificate",
-      fmt::format("{} - {} - certificate {}", kCalibrationSchema, items, certificate_id),
+      not_certificate ? "Calibration report (not a certificate)" : "Calibration certificate",
+      fmt::format("{} - {} - {} {}", kCalibrationSchema, items,
+                  not_certificate ? "calibration.json" : "certificate", certificate_id),
       body.value());
 }
 
