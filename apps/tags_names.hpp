@@ -71,9 +71,11 @@ inline std::string CalibrationTagLines(const Calibration& cal) {
 // with the tags file applied) as RenderJsonFileHtml renders the file itself: the certificate id
 // the hash of the file's own bytes (what `fit` printed and the registry recorded).
 inline Result<std::string> RenderCertificateFor(const Calibration& cal, const std::string& path,
-                                                bool accept_rejected_model = false) {
+                                                bool accept_rejected_model = false,
+                                                bool view = false) {
   CertificateOptions certificate;
   certificate.accept_rejected_model = accept_rejected_model;
+  certificate.view = view;
   Result<std::string> sha = Sha256File(path);
   if (sha.ok()) certificate.certificate_id = sha.value().substr(0, 16);
   return RenderCalibrationCertificate(cal, certificate);

@@ -57,8 +57,10 @@ int RunReport(const ReportOptions& r) {
       for (const std::string& x : rejected) list += (list.empty() ? " " : "; ") + x;
       apps::PrintErrorText(fmt::format(
           "{}: the certificate refuses constants marked model_rejected (not written):{}. Refit "
-          "as the reason says, or give --accept-rejected-model to certify them with that notice",
-          r.calibration, list));
+          "as the reason says, or give --accept-rejected-model to certify them with that notice; "
+          "to view the file as a page (not a certificate): characterize report {} --html "
+          "PAGE.html",
+          r.calibration, list, r.calibration));
       return kExitUsage;
     }
     // The certificate's id is the hash of the file's own bytes; with --tags it names the tags

@@ -48,12 +48,27 @@ Result<std::string> RenderWithTags(const ReportCommandOptions& o) {
     if (Status s = ApplyTagsToCalibration(tags.value(), o.tags, &cal.value()); !s.ok()) {
       return s.error();
     }
-    return RenderCertificateFor(cal.value(), o.json);
+    return RenderCertificateFor(cal.value(), o.json, false, /*view=*/true);
   }
   return MakeError(o.json, 0,
                    fmt::format("--tags names the tags of a session report ({}) or a "
                                "calibration.json ({}); this is a {} document",
                                kReportSchema, kCalibrationSchema, schema));
+}
+
+// A calibration.json with constants marked model_rejected renders as a view, not a certificate
+// (issue #36): said on stderr, with what refuses them.
+void RejectedModelNote(const std::string& path) {
+  Result<std::string> text = ReadFile(path);
+  if (!text.ok() || JsonSchemaOf(text.value()) != kCalibrationSchema) return;
+  Result<Calibration> cal = CalibrationFromJson(text.value(), path);
+  if (!cal.ok()) return;
+  for (const std::string& r : ModelRejectedConstants(cal.value())) {
+    PrintText(stderr, fmt::format("warning: {}: {} (the page is a view, not a certificate; "
+                                  "calibrate blob, push and the certificate refuse these "
+                                  "constants unless --accept-rejected-model)\n",
+                                  path, EscapeControlChars(r)));
+  }
 }
 
 int RunReportCommand(const ReportCommandOptions& o) {
@@ -77,6 +92,7 @@ int RunReportCommand(const ReportCommandOptions& o) {
     return PrintErrorExit(s.error());
   }
   Note(fmt::format("wrote {}\n", IsStdio(o.html) ? "stdout" : o.html));
+  RejectedModelNote(o.json);
   return kExitOk;
 }
 

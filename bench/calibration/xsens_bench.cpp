@@ -1,10 +1,13 @@
 // End-to-end calibration of imu_tk's Xsens record: load the two text files, segment, fit the
 // accelerometer and gyroscope, compute the covariances and render calibration.json.
 //
-//   metro_bench_calibration_xsens [REPEATS] [DATASET_DIR]
+//   metro_bench_calibration_xsens [REPEATS] [DATASET_DIR] [auto|one]
 //
 // Prints per-stage wall times (median and minimum over REPEATS, default 7) and the fit
-// figures that the comparison with imu_tk needs (static intervals, residuals).
+// figures that the comparison with imu_tk needs (static intervals, residuals). `auto` (the
+// default) fits as `calibrate fit` does since issue #36: the model ladder bias < scale < full
+// of both sensors, compared and chosen (--model auto); `one`: the library's default, the full
+// models alone without comparison (what `calibrate fit` did before issue #36).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -33,8 +36,14 @@ int main(int argc, char** argv) {
   const int repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 7;
   const std::string dir =
       argc > 2 ? argv[2] : std::string(METRO_EXTERNAL_DATA_DIR) + "/imu_tk_xsens";
+  const std::string mode = argc > 3 ? argv[3] : "auto";
+  if (mode != "auto" && mode != "one") {
+    fmt::print(stderr, "error: the third argument is auto or one, not {}\n", mode);
+    return 2;
+  }
   metro::CalibrationOptions options;
   options.gravity_mps2 = 9.81744;  // As imu_tk's test program for this record.
+  options.accel_auto = options.gyro_auto = options.compare_models = mode == "auto";
   std::vector<double> load_s, fit_s, json_s, total_s;
   metro::Calibration last;
   for (int r = 0; r < repeats; ++r) {
@@ -61,7 +70,8 @@ int main(int argc, char** argv) {
     last = std::move(cal).value();
   }
   const metro::TagCalibration& t = last.tags.front();
-  fmt::print("imu_tk Xsens record, {} repeats (median / min wall time)\n", repeats);
+  fmt::print("imu_tk Xsens record, {} repeats (median / min wall time), models: {}\n", repeats,
+             mode == "auto" ? "auto (the ladder, as calibrate fit)" : "full only");
   fmt::print("  load both files     {:.3f} / {:.3f} s\n", Median(load_s),
              *std::min_element(load_s.begin(), load_s.end()));
   fmt::print("  calibrate           {:.3f} / {:.3f} s\n", Median(fit_s),

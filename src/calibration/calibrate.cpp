@@ -10,6 +10,7 @@
 #include <exception>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "calibration/calibrate_stages.hpp"
 #include "calibration/model_selection.hpp"
@@ -155,17 +156,24 @@ Status RunAccelTrial(ModelKind kind, const CalibrationOptions& o, const std::str
   return CheckTrialDetermined(ImuSensor::kAccel, kind, *d, *t, unit, sensor);
 }
 
+// `scaled_start` keeps StartGyro's result for the scale and full models, which is the same for
+// both (the isotropic scale search on the rotations, a tenth of the whole fit on imu_tk's
+// Xsens record): computed by the first of them, reused by the other.
 Status RunGyroTrial(ModelKind kind, const CalibrationOptions& o, const ci::SensorSolution& accel,
                     double gyro_nominal, const std::string& unit, int sensor, ci::TagProblemData* d,
-                    Trial* t) {
+                    std::optional<Result<ci::GyroStart>>* scaled_start, Trial* t) {
   CalibrationOptions og = o;
   og.gyro_model = kind;
   t->tried = true;
   Status motion =
       ci::CheckGyroMotion(d->tables.size(), d->rotations.size(), kind, d->temperature, sensor);
   if (!motion.ok()) return motion;
-  Result<ci::GyroStart> start =
-      ci::StartGyro(d->statics, d->tables, d->rotations, t->x, gyro_nominal, kind, sensor);
+  std::optional<Result<ci::GyroStart>> own;
+  std::optional<Result<ci::GyroStart>>* cache = kind == ModelKind::kBias ? &own : scaled_start;
+  if (!cache->has_value()) {
+    *cache = ci::StartGyro(d->statics, d->tables, d->rotations, t->x, gyro_nominal, kind, sensor);
+  }
+  const Result<ci::GyroStart>& start = **cache;
   if (!start.ok()) return start.error();
   ci::ApplyGyroStart(start.value(), d, &t->x, &t->fit);
   t->ref = d->gyro_ref;
@@ -322,6 +330,8 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
   if (!accel_kind.ok()) return accel_kind.error();
   oc.accel_model = accel_kind.value();
   Trial& at = accel_trials[static_cast<size_t>(oc.accel_model)];
+  // What only the chosen model's report needs (its cross-axis sensitivity), on its own blocks.
+  ci::CompleteAccelUncertainty(oc.accel_model, &at.x, &at.solution);
   ci::ParameterBlocks x = at.x;
   ci::Fit fit = at.fit;
   ci::SensorSolution accel = at.solution;
@@ -339,6 +349,7 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
     const double gyro_nominal =
         NominalScale(ImuSensor::kGyro, records.gyro_unit, o.gyro_fs_dps).value();
     std::array<Trial, 3> gyro_trials;
+    std::optional<Result<ci::GyroStart>> scaled_start;
     for (ModelKind k : kLadder) {
       if (!compare && k != o.gyro_model) continue;
       Trial& t = gyro_trials[static_cast<size_t>(k)];
@@ -349,7 +360,8 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
       t.segments = out.segments;
       ci::SensorSolution held = accel;
       held.free_blocks = Rebase(accel.free_blocks, x, &t.x);
-      t.status = RunGyroTrial(k, oc, held, gyro_nominal, records.gyro_unit, out.sensor, &d, &t);
+      t.status = RunGyroTrial(k, oc, held, gyro_nominal, records.gyro_unit, out.sensor, &d,
+                              &scaled_start, &t);
       t.rotations = d.rotations;
       t.rotation_segments = d.rotation_segments;
     }
@@ -358,6 +370,14 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
     if (!gyro_kind.ok()) return gyro_kind.error();
     oc.gyro_model = gyro_kind.value();
     Trial& gt = gyro_trials[static_cast<size_t>(oc.gyro_model)];
+    {
+      // The chosen model's stated covariance and cross-axis sensitivity, on its own blocks (the
+      // ladder's fits carry only what the comparison and CheckDetermined need).
+      ci::SensorSolution held = accel;
+      held.free_blocks = Rebase(accel.free_blocks, x, &gt.x);
+      Status done = ci::CompleteGyroUncertainty(oc, out.sensor, held, &gt.x, &gt.solution);
+      if (!done.ok()) return done.error();
+    }
     x = gt.x;
     fit = gt.fit;
     gyro = gt.solution;

@@ -125,12 +125,8 @@ double Rms(const std::vector<double>& r) {
   return std::sqrt(ss / static_cast<double>(r.size()));
 }
 
-// Rank of the whitened Jacobian over the free blocks; names the null direction on failure.
-Status CheckRank(ceres::Problem* problem, const std::vector<double*>& free_blocks,
-                 const std::vector<std::string>& names) {
-  std::optional<Eigen::MatrixXd> jac = DenseJacobian(problem, free_blocks);
-  if (!jac) return MakeFailedError("could not evaluate the Jacobian at the solution");
-  Eigen::MatrixXd& j = *jac;
+// Rank of the whitened Jacobian `j` over the free blocks; names the null direction on failure.
+Status CheckRankOf(Eigen::MatrixXd j, const std::vector<std::string>& names) {
   for (Eigen::Index c = 0; c < j.cols(); ++c) {
     const double n = j.col(c).norm();
     if (n > 0) j.col(c) /= n;
@@ -156,13 +152,30 @@ Status CheckRank(ceres::Problem* problem, const std::vector<double*>& free_block
       sv.size() > 0 && sv(0) > 0 ? sv(last) / sv(0) : 0.0, list));
 }
 
-// Covariance of the free parameters from Ceres's Covariance API, scaled by the residual
-// variance s^2 = 2 cost / (m - p) (Type A, JCGM 100:2008 4.2.3 and G.4; the groups are
-// whitened, so s^2 is the reduced chi-square). robust_scale > 0 (a robust loss of that scale):
-// s^2 from the blocks the loss keeps (below).
-Result<Eigen::MatrixXd> ScaledCovariance(ceres::Problem* problem,
-                                         const std::vector<double*>& free_blocks, int p, int m,
-                                         double robust_scale, double* reduced_chi2) {
+Status CheckRank(ceres::Problem* problem, const std::vector<double*>& free_blocks,
+                 const std::vector<std::string>& names) {
+  std::optional<Eigen::MatrixXd> jac = DenseJacobian(problem, free_blocks);
+  if (!jac) return MakeFailedError("could not evaluate the Jacobian at the solution");
+  return CheckRankOf(std::move(*jac), names);
+}
+
+std::vector<std::string> QualifiedFreeNames(ImuSensor imu, ModelKind kind, bool temperature) {
+  std::vector<std::string> names;
+  for (const std::string& n : PB::FreeNames(imu, kind, temperature)) {
+    names.push_back(std::string(ImuSensorName(imu)) + "." + n);
+  }
+  return names;
+}
+
+constexpr const char* kNoCovariance =
+    "degenerate calibration: Ceres could not compute the parameter covariance (the "
+    "Jacobian is rank deficient); the data do not determine every constant: collect more "
+    "varied poses and rotations";
+
+// The residual variance s^2 = 2 cost / (m - p) of a whitened fit (Type A, JCGM 100:2008 4.2.3
+// and G.4; the groups are whitened, so s^2 is the reduced chi-square). robust_scale > 0 (a
+// robust loss of that scale): s^2 from the blocks the loss keeps (below).
+double ResidualVariance(ceres::Problem* problem, int p, int m, double robust_scale) {
   double cost = 0;
   problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
   int dof = m - p;
@@ -192,19 +205,20 @@ Result<Eigen::MatrixXd> ScaledCovariance(ceres::Problem* problem,
     dof = count - p;
     s2 = dof > 0 ? ss / static_cast<double>(dof) : 0.0;
   }
-  *reduced_chi2 = s2;
+  return s2;
+}
+
+// (J^T J)^-1 of the free parameters from Ceres's Covariance API (DENSE_SVD, no pseudo-inverse),
+// times s2.
+Result<Eigen::MatrixXd> CeresCovariance(ceres::Problem* problem,
+                                        const std::vector<double*>& free_blocks, int p, double s2) {
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   co.null_space_rank = 0;
   co.num_threads = 1;
   ceres::Covariance covariance(co);
   std::vector<const double*> cblocks(free_blocks.begin(), free_blocks.end());
-  if (!covariance.Compute(cblocks, problem)) {
-    return MakeFailedError(
-        "degenerate calibration: Ceres could not compute the parameter covariance (the "
-        "Jacobian is rank deficient); the data do not determine every constant: collect more "
-        "varied poses and rotations");
-  }
+  if (!covariance.Compute(cblocks, problem)) return MakeFailedError(kNoCovariance);
   int block_total = 0;
   for (const double* b : cblocks) block_total += problem->ParameterBlockSize(b);
   METRO_CHECK(block_total == p);
@@ -213,14 +227,38 @@ Result<Eigen::MatrixXd> ScaledCovariance(ceres::Problem* problem,
   return Eigen::MatrixXd(cov * s2);
 }
 
+// (J^T J)^-1 of the whitened Jacobian `j` by its SVD, refused as Ceres's DENSE_SVD refuses it
+// (a singular value below sqrt(1e-14), Ceres's min_reciprocal_condition_number, times the
+// largest), times s2: the covariance a model of the ladder needs for the comparison and
+// CheckDetermined, from a Jacobian already evaluated. It equals CeresCovariance to rounding.
+Result<Eigen::MatrixXd> DenseSvdCovariance(const Eigen::MatrixXd& j, double s2) {
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(j, Eigen::ComputeThinV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  if (sv.size() < j.cols() || sv.size() == 0 || !(sv(0) > 0)) {
+    return MakeFailedError(kNoCovariance);
+  }
+  Eigen::VectorXd inv2(sv.size());
+  for (Eigen::Index i = 0; i < sv.size(); ++i) {
+    if (sv(i) / sv(0) < std::sqrt(1e-14)) return MakeFailedError(kNoCovariance);
+    inv2(i) = 1.0 / (sv(i) * sv(i));
+  }
+  return Eigen::MatrixXd(svd.matrixV() * inv2.asDiagonal() * svd.matrixV().transpose() * s2);
+}
+
+// Covariance of the free parameters from Ceres's Covariance API scaled by the residual
+// variance (ResidualVariance); *reduced_chi2 = s^2.
+Result<Eigen::MatrixXd> ScaledCovariance(ceres::Problem* problem,
+                                         const std::vector<double*>& free_blocks, int p, int m,
+                                         double robust_scale, double* reduced_chi2) {
+  const double s2 = ResidualVariance(problem, p, m, robust_scale);
+  *reduced_chi2 = s2;
+  return CeresCovariance(problem, free_blocks, p, s2);
+}
+
 // Rank and covariance of a final stage's problem; errors name the tag.
 Status RankAndCovariance(ceres::Problem* problem, ImuSensor imu, ModelKind kind, bool temperature,
                          int sensor, double robust_scale, SensorSolution* s) {
-  std::vector<std::string> names;
-  for (const std::string& n : PB::FreeNames(imu, kind, temperature)) {
-    names.push_back(std::string(ImuSensorName(imu)) + "." + n);
-  }
-  Status rank = CheckRank(problem, s->free_blocks, names);
+  Status rank = CheckRank(problem, s->free_blocks, QualifiedFreeNames(imu, kind, temperature));
   if (!rank.ok()) return rank.error().WithContext(fmt::format("sensor {}", sensor));
   Result<Eigen::MatrixXd> c = ScaledCovariance(problem, s->free_blocks, s->parameters, s->residuals,
                                                robust_scale, &s->reduced_chi2);
@@ -969,7 +1007,8 @@ Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOpti
         GroupSigma(fit->r_accel, static_cast<double>(m - pa) / static_cast<double>(m), robust);
   }
   // Final: whitened (robust loss if chosen), rank, covariance.
-  ceres::Problem problem;
+  out.problem = std::make_shared<ceres::Problem>();
+  ceres::Problem& problem = *out.problem;
   Status s =
       SolveStage(Stage::kAccelFinal, d, o, x, fit, &problem, &out.free_blocks, &out.residuals);
   if (!s.ok()) return s.error();
@@ -980,13 +1019,21 @@ Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOpti
     Status honest = HonestAccelCovariance(d, *x, o, sensor, *fit, &problem, &out);
     if (!honest.ok()) return honest.error();
   }
-  if (o.accel_model != ModelKind::kFull) {
+  out.complete = o.accel_model == ModelKind::kFull;
+  if (out.complete) out.problem.reset();
+  return out;
+}
+
+void CompleteAccelUncertainty(ModelKind accel_model, ParameterBlocks* x, SensorSolution* s) {
+  if (!s->complete && s->problem && accel_model != ModelKind::kFull) {
     // How the solution moves with the cross-axis terms the model holds at 0 (issue #36).
     double* held = x->Get(ImuSensor::kAccel, PB::kMisalignment);
-    std::optional<Eigen::MatrixXd> s_m = HeldTermSensitivity(&problem, out.free_blocks, pa, {held});
-    if (s_m) out.cross_axis_sensitivity = std::move(*s_m);
+    std::optional<Eigen::MatrixXd> s_m =
+        HeldTermSensitivity(s->problem.get(), s->free_blocks, s->parameters, {held});
+    if (s_m) s->cross_axis_sensitivity = std::move(*s_m);
   }
-  return out;
+  s->complete = true;
+  s->problem.reset();
 }
 
 namespace {
@@ -1046,6 +1093,17 @@ std::string ExcludeRotation(size_t index, const Fit& fit, TagProblemData* d,
   return warning;
 }
 
+namespace {
+
+// cov_g += S cov_a S^T, S = -(G_g^T G_g)^-1 G_g^T G_a.
+void AddAccelShare(const Eigen::MatrixXd& gg, const Eigen::MatrixXd& ga,
+                   const Eigen::MatrixXd& cov_a, Eigen::MatrixXd* cov_g) {
+  const Eigen::MatrixXd sens = -(gg.transpose() * gg).ldlt().solve(gg.transpose() * ga);
+  *cov_g += sens * cov_a * sens.transpose();
+}
+
+}  // namespace
+
 Status PropagateAccelUncertainty(ceres::Problem* gyro_problem,
                                  const std::vector<double*>& gyro_free, int pg,
                                  const SensorSolution& accel, Eigen::MatrixXd* cov_g) {
@@ -1064,11 +1122,9 @@ Status PropagateAccelUncertainty(ceres::Problem* gyro_problem,
   std::vector<double*> all = gyro_free;
   all.insert(all.end(), accel_in_gyro.begin(), accel_in_gyro.end());
   std::optional<Eigen::MatrixXd> j = DenseJacobian(gyro_problem, all);
+  for (double* b : accel_in_gyro) gyro_problem->SetParameterBlockConstant(b);
   if (!j) return MakeFailedError("could not evaluate the gyroscope Jacobian at the solution");
-  const Eigen::MatrixXd gg = j->leftCols(pg);
-  const Eigen::MatrixXd ga = j->rightCols(accel.parameters);
-  const Eigen::MatrixXd sens = -(gg.transpose() * gg).ldlt().solve(gg.transpose() * ga);
-  *cov_g += sens * accel.covariance * sens.transpose();
+  AddAccelShare(j->leftCols(pg), j->rightCols(accel.parameters), accel.covariance, cov_g);
   return Status::Ok();
 }
 
@@ -1094,18 +1150,65 @@ Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptio
       fit->s_rotation = GroupSigma(fit->r_rotation, ratio * 2.0 / 3.0, robust);
     }
   }
-  // Final: whitened, rank, covariance with the accelerometer held ...
-  ceres::Problem problem;
+  // Final: whitened, with the accelerometer held ...
+  out.problem = std::make_shared<ceres::Problem>();
+  ceres::Problem& problem = *out.problem;
   Status s =
       SolveStage(Stage::kGyroFinal, d, o, x, fit, &problem, &out.free_blocks, &out.residuals);
   if (!s.ok()) return s.error();
-  Status rc = RankAndCovariance(&problem, ImuSensor::kGyro, o.gyro_model, d.temperature, sensor,
-                                o.loss == LossKind::kTrivial ? 0.0 : o.loss_scale, &out);
-  if (!rc.ok()) return rc.error();
-  if (o.loss == LossKind::kTrivial) {
-    Status chi2 = GyroNoiseChiSquare(d, *x, o, sensor, *fit, accel, &problem, &out);
+  // ... its whitened Jacobian over the free blocks and, when the problem holds them all
+  // (rotations), over the accelerometer's free blocks: evaluated once each for the rank, the
+  // covariance and the chi-square below (each apart, as the gyroscope's own with the
+  // accelerometer held: the rotations' value then comes from the accelerometer's plain
+  // directions, not its jets, and the chi-square stays the same to the last digit) ...
+  std::optional<Eigen::MatrixXd> jac = DenseJacobian(&problem, out.free_blocks);
+  if (!jac || jac->cols() != pg) {
+    return MakeFailedError("could not evaluate the Jacobian at the solution")
+        .WithContext(fmt::format("sensor {}", sensor));
+  }
+  out.jacobian_free = std::move(*jac);
+  std::vector<double*> held;
+  for (double* b : accel.free_blocks) {
+    if (problem.HasParameterBlock(b)) held.push_back(b);
+  }
+  if (!held.empty() && held.size() == accel.free_blocks.size()) {
+    for (double* b : held) problem.SetParameterBlockVariable(b);
+    std::optional<Eigen::MatrixXd> ga = DenseJacobian(&problem, held);
+    for (double* b : held) problem.SetParameterBlockConstant(b);
+    if (ga && ga->rows() == out.jacobian_free.rows()) out.jacobian_accel = std::move(*ga);
+  }
+  // ... rank, residual variance, the covariance for the comparison and CheckDetermined ...
+  Status rank = CheckRankOf(out.jacobian_free,
+                            QualifiedFreeNames(ImuSensor::kGyro, o.gyro_model, d.temperature));
+  if (!rank.ok()) return rank.error().WithContext(fmt::format("sensor {}", sensor));
+  out.s2 = ResidualVariance(&problem, pg, out.residuals, robust ? o.loss_scale : 0.0);
+  out.reduced_chi2 = out.s2;
+  Result<Eigen::MatrixXd> cov = DenseSvdCovariance(out.jacobian_free, out.s2);
+  if (!cov.ok()) return cov.error().WithContext(fmt::format("sensor {}", sensor));
+  out.covariance = std::move(cov).value();
+  out.complete = false;
+  // ... the residuals against the noise ...
+  if (!robust) {
+    Status chi2 = GyroNoiseChiSquare(d, *x, o, sensor, *fit, accel, &out);
     if (!chi2.ok()) return chi2.error();
   }
+  // ... plus the accelerometer's uncertainty carried by the rotations (as
+  // PropagateAccelUncertainty, from these Jacobians).
+  if (out.jacobian_accel.cols() == accel.covariance.rows() && out.jacobian_accel.size() > 0) {
+    AddAccelShare(out.jacobian_free, out.jacobian_accel, accel.covariance, &out.covariance);
+  }
+  return out;
+}
+
+Status CompleteGyroUncertainty(const CalibrationOptions& o, int sensor, const SensorSolution& accel,
+                               ParameterBlocks* x, SensorSolution* s) {
+  if (s->complete) return Status::Ok();
+  METRO_CHECK(s->problem != nullptr);
+  ceres::Problem& problem = *s->problem;
+  const int pg = s->parameters;
+  Result<Eigen::MatrixXd> cov = CeresCovariance(&problem, s->free_blocks, pg, s->s2);
+  if (!cov.ok()) return cov.error().WithContext(fmt::format("sensor {}", sensor));
+  s->covariance = std::move(cov).value();
   if (o.accel_model != ModelKind::kFull || o.gyro_model != ModelKind::kFull) {
     // How the solution moves with the cross-axis terms the models hold at 0 (issue #36):
     // the gyroscope's own directly; the accelerometer's through the gravity directions of the
@@ -1127,8 +1230,7 @@ Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptio
     if (with_gyro) extra.push_back(gyro_m);
     Eigen::MatrixXd sens = Eigen::MatrixXd::Zero(pg, 9);
     if (!extra.empty()) {
-      std::optional<Eigen::MatrixXd> s_m =
-          HeldTermSensitivity(&problem, out.free_blocks, pg, extra);
+      std::optional<Eigen::MatrixXd> s_m = HeldTermSensitivity(&problem, s->free_blocks, pg, extra);
       if (s_m) {
         Eigen::Index col = 0;
         if (with_accel) {
@@ -1139,12 +1241,15 @@ Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptio
         if (with_gyro) sens.rightCols(6) = s_m->middleCols(col, 6);
       }
     }
-    out.cross_axis_sensitivity = std::move(sens);
+    s->cross_axis_sensitivity = std::move(sens);
   }
-  // ... plus the accelerometer's uncertainty carried by the rotations.
-  Status pr = PropagateAccelUncertainty(&problem, out.free_blocks, pg, accel, &out.covariance);
+  Status pr = PropagateAccelUncertainty(&problem, s->free_blocks, pg, accel, &s->covariance);
   if (!pr.ok()) return pr.error();
-  return out;
+  s->complete = true;
+  s->problem.reset();
+  s->jacobian_free.resize(0, 0);
+  s->jacobian_accel.resize(0, 0);
+  return Status::Ok();
 }
 
 // ---- Assembly ---------------------------------------------------------------------------

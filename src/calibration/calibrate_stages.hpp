@@ -18,6 +18,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -273,6 +274,19 @@ struct SensorSolution {
   // accelerometer's constants). Columns of terms the model frees are 0; empty for the full
   // model. CrossAxisTypeB (calibrate.hpp) multiplies it by the spec's u.
   Eigen::MatrixXd cross_axis_sensitivity;
+
+  // What the chosen model's uncertainty still needs after the model comparison (gyroscope;
+  // CompleteGyroUncertainty): the final stage's problem over the solved blocks, the residual
+  // variance s^2 that scales Ceres's covariance, and the whitened Jacobians of that problem
+  // over the free blocks (`jacobian_free`) and over the held accelerometer's free blocks
+  // (`jacobian_accel`, empty when the problem does not hold every one of them).
+  std::shared_ptr<ceres::Problem> problem;
+  double s2 = 0;
+  Eigen::MatrixXd jacobian_free, jacobian_accel;
+  // False after SolveGyro: `covariance` is the one the model comparison and CheckDetermined
+  // need, s^2 (J^T J)^-1 from the Jacobian above plus the accelerometer's share, and
+  // cross_axis_sensitivity is not formed; CompleteGyroUncertainty makes both the stated ones.
+  bool complete = true;
 };
 
 // The accelerometer's covariance from the noise of each pose and the number of distinct
@@ -315,19 +329,36 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
 // scatter (JCGM 100:2008 4.2.3), which holds any excess over the noise: u grows with it.
 // Only for the trivial loss; a pose without measurable noise leaves reduced_chi2 as the
 // scaled fit's, with a warning.
+// `solution` holds the whitened Jacobians of the final stage (SensorSolution::jacobian_free,
+// jacobian_accel).
 Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
                           const CalibrationOptions& o, int sensor, const Fit& fit,
-                          const SensorSolution& accel, ceres::Problem* problem,
-                          SensorSolution* solution);
+                          const SensorSolution& accel, SensorSolution* solution);
 
-// The accelerometer: unweighted fit, whitened final fit, rank, covariance.
+// The accelerometer: unweighted fit, whitened final fit, rank, covariance; the cross-axis
+// sensitivity of a model other than full follows in CompleteAccelUncertainty (the chosen
+// model's alone).
 Result<SensorSolution> SolveAccel(const TagProblemData& d, const CalibrationOptions& o, int sensor,
                                   ParameterBlocks* x, Fit* fit);
 
+// The cross_axis_sensitivity of the accelerometer's solution `s` (x: the blocks it solved), for
+// a model other than full; the problem it was solved on is released.
+void CompleteAccelUncertainty(ModelKind accel_model, ParameterBlocks* x, SensorSolution* s);
+
 // The gyroscope with the accelerometer held: two re-weighted passes, whitened final fit, rank,
-// covariance, plus the accelerometer's uncertainty (PropagateAccelUncertainty).
+// the chi-square against the noise, and the covariance the model comparison and CheckDetermined
+// need (SensorSolution::complete false; one evaluation of the Jacobian). The ladder fits every
+// model this way and completes the chosen one's uncertainty alone (issue #36: three Ceres
+// covariances made `calibrate fit` slower).
 Result<SensorSolution> SolveGyro(const TagProblemData& d, const CalibrationOptions& o, int sensor,
                                  const SensorSolution& accel, ParameterBlocks* x, Fit* fit);
+
+// The gyroscope's stated uncertainty (s->complete): Ceres's covariance of the kept problem times
+// s^2 (DENSE_SVD, no pseudo-inverse), the cross_axis_sensitivity of models other than full,
+// plus the accelerometer's uncertainty (PropagateAccelUncertainty); releases the problem.
+// `o` gives both sensors' models, x the blocks the solution was solved on.
+Status CompleteGyroUncertainty(const CalibrationOptions& o, int sensor, const SensorSolution& accel,
+                               ParameterBlocks* x, SensorSolution* s);
 
 // Rotations that contradict the rest (issue #23): an orientation change the gyroscope did not
 // see (the tag re-seated between poses), a knock, a burst. Their gravity-direction residual

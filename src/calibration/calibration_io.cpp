@@ -235,6 +235,14 @@ std::string FormatCalibrationReport(const Calibration& cal) {
   out += fmt::format("calibration ({}), {}, {}\n", kCalibrationSchema, text(cal.tool_version),
                      text(cal.date_utc));
   out += fmt::format("gravity {} m/s^2\n", cal.gravity_mps2);
+  // Constants marked model_rejected first, where no one scrolls past them (issue #36).
+  const std::vector<std::string> rejected = ModelRejectedConstants(cal);
+  if (!rejected.empty()) {
+    out +=
+        "MODEL_REJECTED: these constants are not certified; calibrate blob, push and the "
+        "certificate refuse them unless --accept-rejected-model:\n";
+    for (const std::string& r : rejected) out += "  " + r + "\n";
+  }
   for (const InputFile& f : cal.inputs) {
     out += fmt::format("input {} sha256 {}\n", text(f.path), text(f.sha256));
   }

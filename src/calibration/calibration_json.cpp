@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/json_text.hpp"
+#include "metro/calibration/gravity_u.hpp"
 #include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/utc_time.hpp"
@@ -87,7 +88,9 @@ json ModelCheckJson(const ModelCheck& m) {
   return j;
 }
 
-json SensorJson(const SensorCalibration& c) {
+// `gravity`: the accelerometer's (gravity_u.hpp) gives `gravity_uncertainty` and the
+// `*_u_with_gravity` keys; nullptr for the gyroscope.
+json SensorJson(const SensorCalibration& c, const GravityUncertainty* gravity) {
   const SensorModel& m = c.model;
   json j;
   j["model"] = ModelKindName(m.kind);
@@ -124,6 +127,17 @@ json SensorJson(const SensorCalibration& c) {
                              {"after", c.static_residuals->after}};
   }
   if (c.model_check) j["model_check"] = ModelCheckJson(*c.model_check);
+  if (gravity != nullptr) {
+    const GravityShare share = GravityShareOf(c, *gravity);
+    j["gravity_uncertainty"] = {{"gravity_mps2", gravity->gravity_mps2},
+                                {"u_mps2", gravity->u_mps2},
+                                {"u_relative", gravity->Relative()},
+                                {"basis", gravity->basis},
+                                {"statement", gravity->statement}};
+    j["scale_u_with_gravity"] = Vec(share.scale_u);
+    j["sensitivity_u_with_gravity"] = Vec(share.sensitivity_u);
+    j["matrix_u_with_gravity"] = Mat(share.matrix_u);
+  }
   j["parameters"] = c.parameter_names;
   j["covariance"] = Mat(c.covariance);
   j["correlation"] = Mat(c.Correlation());
@@ -371,7 +385,61 @@ ModelCheck ModelCheckFromJson(const JsonCursor& j) {
   return m;
 }
 
-std::optional<SensorCalibration> SensorFromJson(const JsonCursor& j, ImuSensor sensor) {
+// `gravity_uncertainty` and `*_u_with_gravity` (accelerometer) say what the file's gravity and
+// u give (gravity_u.hpp), or the file is refused; they are derived, so nothing is kept.
+void CheckGravityShare(const JsonCursor& j, const GravityUncertainty& gravity,
+                       const SensorCalibration& c) {
+  const JsonCursor g = j["gravity_uncertainty"];
+  if (!g.IsObject()) {
+    g.Fail("an object (the gravity value's uncertainty: gravity_mps2, u_mps2, basis)");
+    return;
+  }
+  const auto agree = [](double a, double b, double rel) {
+    return std::fabs(a - b) <= rel * std::max(std::fabs(a), std::fabs(b)) + 1e-300;
+  };
+  const double g_mps2 = g["gravity_mps2"].Number();
+  const double u_mps2 = g["u_mps2"].Number();
+  const std::string basis = g["basis"].String();
+  if (!j.ok()) return;
+  if (!agree(g_mps2, gravity.gravity_mps2, kRedundantRelTolerance)) {
+    g["gravity_mps2"].Fail(fmt::format("{:.17g}, the file's gravity_mps2", gravity.gravity_mps2));
+    return;
+  }
+  if (!agree(u_mps2, gravity.u_mps2, kRedundantRelTolerance) || basis != gravity.basis) {
+    g["u_mps2"].Fail(fmt::format(
+        "{:.17g} ({}), the u the file's gravity_mps2, gravity_source and gravity_u_mps2 give "
+        "(docs/calibration-model.md \"Gravity\")",
+        gravity.u_mps2, gravity.basis));
+    return;
+  }
+  const GravityShare want = GravityShareOf(c, gravity);
+  const std::pair<const char*, const Eigen::Vector3d*> vectors[] = {
+      {"scale_u_with_gravity", &want.scale_u}, {"sensitivity_u_with_gravity", &want.sensitivity_u}};
+  for (const auto& [key, w] : vectors) {
+    const Eigen::Vector3d file = Vec3(j[key]);
+    for (size_t a = 0; a < 3 && j.ok(); ++a) {
+      const double v = (*w)[static_cast<Eigen::Index>(a)];
+      if (!agree(file[static_cast<Eigen::Index>(a)], v, kRedundantRelTolerance)) {
+        j[key][a].Fail(fmt::format("{:.17g}, sqrt(u^2 + (x u(g) / g)^2) of the file's values", v));
+      }
+    }
+  }
+  const Eigen::MatrixXd mu = SquareMatrix(j["matrix_u_with_gravity"]);
+  if (j.ok() && mu.rows() != 3) j["matrix_u_with_gravity"].Fail("a 3 x 3 matrix");
+  for (size_t r = 0; r < 3 && j.ok(); ++r) {
+    for (size_t k = 0; k < 3 && j.ok(); ++k) {
+      const double v = want.matrix_u(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k));
+      // matrix_u's central differences may differ in the last digits between builds.
+      if (!agree(mu(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)), v, 1e-6)) {
+        j["matrix_u_with_gravity"][r][k].Fail(
+            fmt::format("{:.17g}, sqrt(u^2 + (M u(g) / g)^2) of the file's values", v));
+      }
+    }
+  }
+}
+
+std::optional<SensorCalibration> SensorFromJson(const JsonCursor& j, ImuSensor sensor,
+                                                const GravityUncertainty& gravity) {
   if (!j.IsObject()) {
     j.Fail(fmt::format("an object (the {} calibration)", ImuSensorLongName(sensor)));
     return std::nullopt;
@@ -476,6 +544,14 @@ std::optional<SensorCalibration> SensorFromJson(const JsonCursor& j, ImuSensor s
   if (!j.ok()) return std::nullopt;
   CheckUncertainties(j, &c);
   if (!j.ok()) return std::nullopt;
+  if (j.Has("gravity_uncertainty")) {
+    if (sensor != ImuSensor::kAccel) {
+      j["gravity_uncertainty"].Fail("absent: only the accelerometer is fitted to gravity");
+      return std::nullopt;
+    }
+    CheckGravityShare(j, gravity, c);
+    if (!j.ok()) return std::nullopt;
+  }
   if (j.Has("residual_groups")) {
     const JsonCursor groups = j["residual_groups"];
     if (!groups.IsArray()) groups.Fail("an array of residual groups");
@@ -549,7 +625,7 @@ std::vector<RecordConditions> RecordConditionsFromJson(const JsonCursor& j) {
   return out;
 }
 
-TagCalibration TagFromJson(const JsonCursor& tj) {
+TagCalibration TagFromJson(const JsonCursor& tj, const GravityUncertainty& gravity) {
   TagCalibration t;
   if (!tj.IsObject()) {
     tj.Fail("an object (a tag calibration)");
@@ -573,8 +649,8 @@ TagCalibration TagFromJson(const JsonCursor& tj) {
     tj.Fail("a tag calibration with 'accel' or 'gyro'");
     return t;
   }
-  if (tj.Has("accel")) t.accel = SensorFromJson(tj["accel"], ImuSensor::kAccel);
-  if (tj.Has("gyro") && tj.ok()) t.gyro = SensorFromJson(tj["gyro"], ImuSensor::kGyro);
+  if (tj.Has("accel")) t.accel = SensorFromJson(tj["accel"], ImuSensor::kAccel, gravity);
+  if (tj.Has("gyro") && tj.ok()) t.gyro = SensorFromJson(tj["gyro"], ImuSensor::kGyro, gravity);
   t.threshold_factor = tj["threshold_factor"].OptionalNumber().value_or(0.0);
   t.saturated_samples = static_cast<int>(tj["saturated_samples"].OptionalInteger().value_or(0));
   t.iterations = static_cast<int>(tj["iterations"].OptionalInteger().value_or(0));
@@ -606,6 +682,8 @@ json ToJsonValue(const Calibration& cal) {
     inputs.push_back(in);
   }
   j["inputs"] = inputs;
+  // The gravity value's u in the accelerometer's (issue #36 point 7), from the fields above.
+  const GravityUncertainty gravity = GravityUncertaintyOf(cal);
   json tags = json::array();
   for (const TagCalibration& t : cal.tags) {
     json tj;
@@ -630,8 +708,8 @@ json ToJsonValue(const Calibration& cal) {
       }
       tj["record_conditions"] = records;
     }
-    if (t.accel) tj["accel"] = SensorJson(*t.accel);
-    if (t.gyro) tj["gyro"] = SensorJson(*t.gyro);
+    if (t.accel) tj["accel"] = SensorJson(*t.accel, &gravity);
+    if (t.gyro) tj["gyro"] = SensorJson(*t.gyro, nullptr);
     tags.push_back(tj);
   }
   j["tags"] = tags;
@@ -685,7 +763,10 @@ Calibration CalibrationFromJsonValue(const JsonCursor& j) {
     tags.Fail("a non-empty array of tag calibrations");
     return cal;
   }
-  for (size_t i = 0; i < tags.Size() && j.ok(); ++i) cal.tags.push_back(TagFromJson(tags[i]));
+  const GravityUncertainty gravity = GravityUncertaintyOf(cal);
+  for (size_t i = 0; i < tags.Size() && j.ok(); ++i) {
+    cal.tags.push_back(TagFromJson(tags[i], gravity));
+  }
   if (j.ok() && (j.Has("conformity") || j.Has("conformity_rule"))) {
     cal.conformity = ConformityFromJsonValue(j["conformity"], j["conformity_rule"]);
   }

@@ -204,8 +204,7 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
 
 Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
                           const CalibrationOptions& o, int sensor, const Fit& fit,
-                          const SensorSolution& accel, ceres::Problem* problem,
-                          SensorSolution* solution) {
+                          const SensorSolution& accel, SensorSolution* solution) {
   const size_t ns = d.statics.size(), nt = d.tables.size(), nr = d.rotations.size();
   if (ns == 0 || fit.r_static.size() != 3 * ns || fit.r_table.size() != nt ||
       fit.r_rotation.size() != 3 * nr) {
@@ -255,8 +254,8 @@ Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
   // basis of the plane normal to gravity at the rotation's end pose).
   const Eigen::Index m3 = static_cast<Eigen::Index>(3 * ns), mt = static_cast<Eigen::Index>(nt);
   const Eigen::Index mr = static_cast<Eigen::Index>(2 * nr), mp = m3 + mt + mr;
-  std::optional<Eigen::MatrixXd> jw = DenseJacobian(problem, solution->free_blocks);
-  if (!jw || jw->rows() != m3 + mt + static_cast<Eigen::Index>(3 * nr)) return Status::Ok();
+  const Eigen::MatrixXd* jw = &solution->jacobian_free;
+  if (jw->rows() != m3 + mt + static_cast<Eigen::Index>(3 * nr)) return Status::Ok();
   const Eigen::Index p = jw->cols();
   Eigen::MatrixXd j(mp, p);
   Eigen::VectorXd r(mp), w2(mp);
@@ -334,15 +333,11 @@ Status GyroNoiseChiSquare(const TagProblemData& d, const ParameterBlocks& x,
   }
   // The accelerometer's parameter error moves every gravity direction at once:
   // + G_a cov_a G_a^T, G_a the rotations' Jacobian over the accelerometer's free parameters.
-  std::vector<double*> held;
-  for (double* b : accel.free_blocks) {
-    if (problem->HasParameterBlock(b)) held.push_back(b);
-  }
-  if (nr > 0 && !held.empty() && held.size() == accel.free_blocks.size()) {
-    for (double* b : held) problem->SetParameterBlockVariable(b);
-    const std::optional<Eigen::MatrixXd> ga = DenseJacobian(problem, held);
-    for (double* b : held) problem->SetParameterBlockConstant(b);
-    if (ga && ga->rows() == jw->rows() && ga->cols() == accel.covariance.rows()) {
+  // (The final stage's Jacobian over the accelerometer's free blocks, SolveGyro; empty when the
+  // problem does not hold them all.)
+  const Eigen::MatrixXd* ga = &solution->jacobian_accel;
+  if (nr > 0 && ga->size() > 0) {
+    if (ga->rows() == jw->rows() && ga->cols() == accel.covariance.rows()) {
       Eigen::MatrixXd gp(mr, ga->cols());
       for (size_t a = 0; a < nr; ++a) {
         gp.middleRows(static_cast<Eigen::Index>(2 * a), 2) =

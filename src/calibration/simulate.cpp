@@ -104,6 +104,7 @@ bool SimulationOptions::IsValid(std::string* why) const {
   }
   if (!(table_run_s > 0)) return fail("table_run_s must be > 0");
   if (sensor < 1) return fail("sensor must be >= 1");
+  if (!(pose_tilt_deg >= 0 && pose_tilt_deg <= 45)) return fail("pose_tilt_deg must be 0 .. 45");
   if (!(accel_cross_axis >= 0 && accel_cross_axis <= 0.1) ||
       !(gyro_cross_axis >= 0 && gyro_cross_axis <= 0.1)) {
     return fail("cross-axis half-widths must be within 0 .. 0.1 (10 %)");
@@ -165,7 +166,18 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
 
   // Timeline.
   std::vector<Phase> phases;
-  const std::vector<Eigen::Vector3d> dirs = PoseDirections(o.pose_set, o.poses);
+  std::vector<Eigen::Vector3d> dirs = PoseDirections(o.pose_set, o.poses);
+  if (o.pose_tilt_deg > 0) {
+    pcg64 tilt_rng(o.seed ^ 0x5851f42d4c957f2dULL);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (Eigen::Vector3d& u : dirs) {
+      const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+      const double azimuth = 2.0 * kPi * unit(tilt_rng);
+      const double angle = o.pose_tilt_deg * kPi / 180.0 * unit(tilt_rng);
+      const Eigen::Vector3d axis = std::cos(azimuth) * e1 + std::sin(azimuth) * e2;
+      u = Eigen::AngleAxisd(angle, axis) * u;
+    }
+  }
   Eigen::Matrix3d current = Eigen::Matrix3d::Identity();
   for (size_t i = 0; i < dirs.size(); ++i) {
     const Eigen::Matrix3d align =
@@ -330,6 +342,7 @@ std::string CalibrationTruthJson(const SimulationOptions& o, const SimulatedSess
     j["temp_start_c"] = o.temp_start_c;
     j["temp_end_c"] = o.temp_end_c;
   }
+  if (o.pose_tilt_deg > 0) j["pose_tilt_deg"] = o.pose_tilt_deg;
   j["accel"] = TruthSensorJson(sim.truth.accel);
   j["gyro"] = TruthSensorJson(sim.truth.gyro);
   return j.dump(2) + "\n";

@@ -9,6 +9,7 @@
 
 #include "html_templates.hpp"
 #include "metro/calibration/calibration_io.hpp"
+#include "metro/calibration/gravity_u.hpp"
 #include "metro/core/device_id.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/core/utc_time.hpp"
@@ -93,45 +94,6 @@ Coverage SensorCoverage(const SensorCalibration& c, double p) {
     out.text = fmt::format(
         "no coverage factor: the fit has {} degrees of freedom (fewer than 1), so only u is stated",
         c.dof);
-  }
-  return out;
-}
-
-// The standard uncertainty of the gravity value the accelerometer was fitted to (issue #36):
-// the fit's target norm is g / g_n, which scales M (and K) by the same factor and leaves the
-// biases and misalignment terms unchanged, so u(g) / g is a relative uncertainty of every
-// scale factor, sensitivity and element of M.
-struct GravityU {
-  double u_mps2 = 0.0;
-  std::string text;
-};
-GravityU GravityUncertainty(const Calibration& cal) {
-  GravityU out;
-  const std::string g = Short(cal.gravity_mps2, 8);
-  if (cal.gravity_u_mps2) {
-    out.u_mps2 = *cal.gravity_u_mps2;
-    out.text = fmt::format("u(g) = {} m/s^2 as stated (calibrate fit --gravity-u-mps2)",
-                           Short(out.u_mps2, 3));
-  } else if (cal.gravity_source == "given") {
-    // The value as written (shortest round trip), read as rounded to its last digit.
-    const std::string written = fmt::format("{}", cal.gravity_mps2);
-    const size_t dot = written.find('.');
-    const int decimals = dot == std::string::npos ? 0 : static_cast<int>(written.size() - dot - 1);
-    const double half = 0.5 * std::pow(10.0, -decimals);
-    out.u_mps2 = half / std::sqrt(3.0);
-    out.text = fmt::format(
-        "u(g) = {} m/s^2: the given value {} m/s^2 read as rounded to its last digit (+-{} "
-        "m/s^2, rectangular, JCGM 100:2008 4.3.7); give --gravity-u-mps2 to state its own u",
-        Short(out.u_mps2, 3), written, Short(half, 3));
-  } else {
-    constexpr double kHalfWidth = 0.03;  // 9.777 .. 9.837 m/s^2.
-    out.u_mps2 = kHalfWidth / std::sqrt(3.0);
-    out.text = fmt::format(
-        "u(g) = {} m/s^2: standard gravity {} m/s^2 stands for the local gravity, which lies "
-        "within +-{} m/s^2 of it at the Earth's surface (9.780 at the equator to 9.832 m/s^2 at "
-        "the poles at sea level, 0.003 m/s^2 less per km of height), rectangular (JCGM 100:2008 "
-        "4.3.7); give the local value with --gravity-mps2 and --gravity-u-mps2",
-        Short(out.u_mps2, 3), g, kHalfWidth);
   }
   return out;
 }
@@ -265,11 +227,38 @@ void SetModelCheck(const SensorCalibration& c, const CertificateOptions& options
               "These constants are marked model_rejected and are stated only because "
               "--accept-rejected-model was given: their U does not cover what the model leaves "
               "out.");
+  } else if (mc.model_rejected) {
+    check.set("rejected",
+              "These constants are marked model_rejected and are not certified: this page is a "
+              "view of calibration.json; their U does not cover what the model leaves out, and "
+              "calibrate blob, calibrate push and the certificate refuse them unless "
+              "--accept-rejected-model.");
   }
   d->set("model_check", check);
 }
 
-mustache::data SensorData(const SensorCalibration& c, int sensor, const GravityU& gravity,
+// The view's banner (CertificateOptions::view): each sensor whose constants are marked
+// model_rejected, with its model, status and reason.
+mustache::data RejectedBanner(const Calibration& cal) {
+  mustache::data banner;
+  mustache::data rows{mustache::data::type::list};
+  for (const TagCalibration& t : cal.tags) {
+    for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
+      if (!c->has_value() || !(*c)->model_check || !(*c)->model_check->model_rejected) continue;
+      const ModelCheck& mc = *(*c)->model_check;
+      mustache::data row;
+      row.set("sensor",
+              fmt::format("sensor {} {}", t.sensor, ImuSensorLongName((*c)->model.sensor)));
+      row.set("model", fmt::format("'{}' model, {}", ModelKindName((*c)->model.kind), mc.status));
+      row.set("reason", mc.reason);
+      rows.push_back(row);
+    }
+  }
+  banner.set("rows", rows);
+  return banner;
+}
+
+mustache::data SensorData(const SensorCalibration& c, int sensor, const GravityUncertainty& gravity,
                           double gravity_mps2, const CertificateOptions& options) {
   const SensorModel& m = c.model;
   const Coverage coverage = SensorCoverage(c, options.coverage_probability);
@@ -326,9 +315,11 @@ mustache::data SensorData(const SensorCalibration& c, int sensor, const GravityU
     d.set("gravity_budget",
           fmt::format("Gravity value: {}. Its relative uncertainty {} % is included in u and U of "
                       "the scale factors and sensitivities (the fit's target norm g / g_n scales "
-                      "M and leaves the biases and misalignment terms unchanged); the "
-                      "covariance in calibration.json is the fit's alone.",
-                      gravity.text, Short(100.0 * rel_g, 3)));
+                      "M and leaves the biases and misalignment terms unchanged); "
+                      "calibration.json states them as scale_u_with_gravity and "
+                      "sensitivity_u_with_gravity beside its gravity_uncertainty, its "
+                      "covariance is the fit's alone.",
+                      gravity.statement, Short(100.0 * rel_g, 3)));
   }
   SetModelCheck(c, options, &d);
   mustache::data groups{mustache::data::type::list};
@@ -569,7 +560,8 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
   const std::vector<std::string> rejected = ModelRejectedConstants(cal);
-  if (!rejected.empty() && !options.accept_rejected_model) {
+  const bool not_certificate = !rejected.empty() && !options.accept_rejected_model;
+  if (not_certificate && !options.view) {
     std::string list;
     for (const std::string& r : rejected) list += (list.empty() ? "" : "; ") + r;
     return MakeError(fmt::format(
@@ -577,7 +569,7 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
         "--accept-rejected-model to state them with that notice",
         list));
   }
-  const GravityU gravity = GravityUncertainty(cal);
+  const GravityUncertainty gravity = GravityUncertaintyOf(cal);
   const std::string certificate_id =
       options.certificate_id.empty() ? CalibrationCertificateId(cal) : options.certificate_id;
   mustache::data data;
@@ -589,6 +581,10 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     items += fmt::format("{}sensor {}", items.empty() ? "" : ", ", t.sensor);
   }
   data.set("print_id", certificate_id);
+  data.set("print_label",
+           not_certificate ? "Calibration report (not a certificate)" : "Calibration certificate");
+  data.set("id_label", not_certificate ? "calibration.json (not a certificate)" : "certificate");
+  if (not_certificate) data.set("rejected_banner", RejectedBanner(cal));
   data.set("item_rows", ItemRows(cal));
   data.set("date_issue_utc", UtcIso8601Now());
   data.set("date_utc", cal.date_utc);
@@ -726,12 +722,14 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       "gravity value's for the accelerometer's scale factors: {}; the cross-axis terms a model "
       "leaves out); they do not include the table rate's uncertainty or long-term drift of the "
       "tag (traceability below).",
-      gravity.text)));
-  if (!rejected.empty()) {
-    for (const std::string& r : rejected) {
-      validity.push_back(mustache::data(
-          "Stated with --accept-rejected-model although marked model_rejected: " + r));
-    }
+      gravity.statement)));
+  for (const std::string& r : rejected) {
+    validity.push_back(mustache::data(
+        not_certificate
+            ? "Not certified (marked model_rejected; this page is a view, not a "
+              "certificate): " +
+                  r
+            : "Stated with --accept-rejected-model although marked model_rejected: " + r));
   }
   data.set("validity", validity);
   SetConformity(cal, &data);
@@ -739,8 +737,9 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
   Result<std::string> body = report_internal::RenderTemplate("certificate", std::move(data));
   if (!body.ok()) return body;
   return report_internal::RenderPage(
-      "Calibration certificate",
-      fmt::format("{} - {} - certificate {}", kCalibrationSchema, items, certificate_id),
+      not_certificate ? "Calibration report (not a certificate)" : "Calibration certificate",
+      fmt::format("{} - {} - {} {}", kCalibrationSchema, items,
+                  not_certificate ? "calibration.json" : "certificate", certificate_id),
       body.value());
 }
 

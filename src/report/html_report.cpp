@@ -289,8 +289,10 @@ Result<std::string> RenderJsonTextHtml(std::string_view text, const std::string&
   if (schema == kCalibrationSchema) {
     Result<Calibration> cal = CalibrationFromJson(text, json_path);
     if (!cal.ok()) return cal.error();
-    // The id of the file's own bytes: what `fit` printed and the registry recorded.
+    // The id of the file's own bytes: what `fit` printed and the registry recorded. A view:
+    // constants marked model_rejected are shown under a banner, not refused (issue #36).
     CertificateOptions certificate;
+    certificate.view = true;
     Result<std::string> sha = Sha256File(json_path);
     if (sha.ok()) certificate.certificate_id = sha.value().substr(0, 16);
     return RenderCalibrationCertificate(cal.value(), certificate);

@@ -136,6 +136,9 @@ struct SimCase {
   PoseSet set = PoseSet::kCube;
   bool automatic = true;  // --model auto; else `model` for both sensors.
   ModelKind model = ModelKind::kScale;
+  bool gyro = true;  // False: the accelerometer alone (--accel-only).
+  double dwell_s = 2.0;
+  double tilt_deg = 0.0;  // SimulationOptions::pose_tilt_deg
 };
 
 // Over simulated tags: per sensor the model chosen, the tags whose constants are marked
@@ -184,8 +187,9 @@ TagRun RunTags(const SimCase& c, int tags, uint64_t seed) {
     so.seed = seed + static_cast<uint64_t>(tag);
     so.poses = c.poses;
     so.pose_set = c.set;
-    so.dwell_s = 2.0;
+    so.dwell_s = c.dwell_s;
     so.move_s = 1.5;
+    so.pose_tilt_deg = c.tilt_deg;
     so.accel_cross_axis = c.accel_cross;
     so.gyro_cross_axis = c.gyro_cross;
     Result<SimulatedSession> sim = SimulateCalibrationSession(so);
@@ -194,9 +198,16 @@ TagRun RunTags(const SimCase& c, int tags, uint64_t seed) {
     o.accel_auto = o.gyro_auto = c.automatic;
     o.compare_models = true;
     o.accel_model = o.gyro_model = c.model;
+    o.fit_gyro = c.gyro;
     Result<TagCalibration> r = CalibrateTag({&sim.value().session.tags.front()}, o);
     if (!r.ok() && r.error().message.find("degenerate calibration") != std::string::npos) {
       ++run.refused["fit (degenerate)"];  // No constants at all: nothing to cover.
+      if (run.refusal.empty()) run.refusal = r.error().message;
+      continue;
+    }
+    if (!r.ok() && r.error().kind == ErrorKind::kInput &&
+        r.error().message.find("hand rotations") != std::string::npos) {
+      ++run.refused["fit (too few rotations)"];  // Refused, saying what to record.
       if (run.refusal.empty()) run.refusal = r.error().message;
       continue;
     }
@@ -204,6 +215,7 @@ TagRun RunTags(const SimCase& c, int tags, uint64_t seed) {
     for (const auto& [cal, truth, name] :
          {std::tuple{&r.value().accel, &sim.value().truth.accel, "accel"},
           std::tuple{&r.value().gyro, &sim.value().truth.gyro, "gyro"}}) {
+      if (!c.gyro && std::string(name) == "gyro") continue;
       REQUIRE(cal->has_value());
       REQUIRE((*cal)->model_check);
       ++run.chosen[fmt::format("{} {}", name, ModelKindName((*cal)->model.kind))];
@@ -296,6 +308,167 @@ TEST_CASE("Coverage of the cross-axis Type B over 100 tags per case",
           "[.][coverage][calibration]") {
   // 100 tags x 3 axes: the issue's floor 92 %. Prints docs/calibration-model.md's table.
   CheckTypeBCoverage(100, 0.92);
+}
+
+// Issue #36 "Done when": exactly 6 axis-aligned orientations (+x, -x, +y, -y, +z, -z, one stop
+// each: the common 6-position protocol) on tags with realistic cross-axis terms (accelerometer
+// +-1 %, gyroscope +-1.5 %). The scale model is then an exact fit (6 parameters, 6 gravity-norm
+// equations): nothing tests it, its u gets the cross-axis Type B. Each constant class, pooled
+// over tags and axes, must lie within 2u at the rate given, or the constants be marked
+// model_rejected (refused by blob and push) or the fit refused.
+const std::vector<SimCase>& SixFaceCases() {
+  static const std::vector<SimCase> cases = [] {
+    SimCase scale{"6 faces once, --model scale"};
+    scale.poses = 6;
+    scale.set = PoseSet::kFaces;
+    scale.automatic = false;
+    SimCase automatic{"6 faces once, --model auto"};
+    automatic.poses = 6;
+    automatic.set = PoseSet::kFaces;
+    // The accelerometer alone: every tag's constants (with the gyroscope, a fit that five
+    // rotations cannot determine is refused as a whole).
+    SimCase accel_scale = scale;
+    accel_scale.name = "6 faces once, accelerometer only, --model scale";
+    accel_scale.gyro = false;
+    SimCase accel_auto = automatic;
+    accel_auto.name = "6 faces once, accelerometer only, --model auto";
+    accel_auto.gyro = false;
+    SimCase tilted = accel_scale;
+    tilted.name = "6 faces once tilted up to 3 deg, accelerometer only, --model scale";
+    tilted.tilt_deg = 3.0;
+    SimCase tilted_auto = accel_auto;
+    tilted_auto.name = "6 faces once tilted up to 3 deg, accelerometer only, --model auto";
+    tilted_auto.tilt_deg = 3.0;
+    SimCase long_dwell = accel_scale;
+    long_dwell.name = "6 faces once, 30 s each, accelerometer only, --model scale";
+    long_dwell.dwell_s = 30.0;
+    SimCase long_tilted = tilted;
+    long_tilted.name =
+        "6 faces once tilted up to 3 deg, 30 s each, accelerometer only, --model scale";
+    long_tilted.dwell_s = 30.0;
+    return std::vector<SimCase>{scale,  automatic,   accel_scale, accel_auto,
+                                tilted, tilted_auto, long_dwell,  long_tilted};
+  }();
+  return cases;
+}
+
+void CheckSixFaceCoverage(int tags, double min_rate) {
+  uint64_t seed = 9100;
+  for (const SimCase& c : SixFaceCases()) {
+    const TagRun run = RunTags(c, tags, seed);
+    seed += 1000;
+    const std::string line = Describe(c, run, tags);
+    std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+    INFO(line);
+    // Every tag gave constants (covered or marked model_rejected) or was refused as a whole.
+    int sensors = 0, refused = 0;
+    for (const auto& [key, n] : run.chosen) sensors += n;
+    for (const auto& [key, n] : run.refused) refused += key.rfind("fit", 0) == 0 ? n : 0;
+    const int per_tag = c.gyro ? 2 : 1;
+    CHECK(sensors + per_tag * refused == per_tag * tags);
+    for (const auto& [key, counts] : run.inside) {
+      INFO(key);
+      CHECK(run.Rate(key) >= min_rate);
+    }
+  }
+}
+
+TEST_CASE("Six axis-aligned orientations with cross-axis terms: constants within 2u",
+          "[calibration][model]") {
+  // 20 tags x 3 axes = 60 constants per class and sensor: at a true 95 % at least 53 lie within
+  // 2u with probability 98.9 % (binomial); the issue measured 0-7 % before the Type B.
+  CheckSixFaceCoverage(20, 53.0 / 60.0);
+}
+
+TEST_CASE("Six axis-aligned orientations: coverage over 100 tags per case",
+          "[.][coverage][calibration]") {
+  // 100 tags x 3 axes: the issue's floor 92 %. Prints docs/calibration-model.md's rows.
+  CheckSixFaceCoverage(100, 0.92);
+}
+
+// Issue #36 "Done when": --model auto chooses the full model on tags with cross-axis terms and
+// the scale model on tags without, at the usual pose counts (the simulator's cube: the 6 faces,
+// then the 8 corners, then the 12 edges). Counts per sensor; a comparison rejects a true scale
+// model at its 5 % level, so of the choices without cross-axis terms at most a few are full.
+struct ChoiceCounts {
+  int tags = 0;
+  std::map<std::string, int> chosen;  // "accel full" -> tags, from TagRun
+  std::map<std::string, int> marked;  // "accel" -> tags whose constants are model_rejected
+  int refused = 0;                    // Fits refused as a whole (degenerate).
+  int Chosen(const std::string& key) const {
+    const auto it = chosen.find(key);
+    return it == chosen.end() ? 0 : it->second;
+  }
+  int Marked(const std::string& key) const {
+    const auto it = marked.find(key);
+    return it == marked.end() ? 0 : it->second;
+  }
+};
+
+ChoiceCounts CountChoices(int poses, double accel_cross, double gyro_cross, int tags,
+                          uint64_t seed) {
+  SimCase c{"auto"};
+  c.poses = poses;
+  c.accel_cross = accel_cross;
+  c.gyro_cross = gyro_cross;
+  const TagRun run = RunTags(c, tags, seed);
+  ChoiceCounts out;
+  out.tags = tags;
+  out.chosen = run.chosen;
+  for (const auto& [key, n] : run.refused) {
+    if (key.rfind("fit", 0) == 0) {
+      out.refused += n;
+    } else {
+      out.marked[key] = n;
+    }
+  }
+  return out;
+}
+
+// `max_missed_full`: tags with cross-axis terms on which a sensor may keep the scale model (drawn
+// uniform in +-1 % / +-1.5 %, some tags' terms are too small for their poses to show);
+// `max_false_full`: tags without them on which a sensor may take the full model.
+void CheckAutoChoices(const std::vector<int>& pose_counts, int tags, int max_missed_full,
+                      int max_false_full) {
+  uint64_t seed = 12000;
+  for (int poses : pose_counts) {
+    const ChoiceCounts w = CountChoices(poses, 0.01, 0.015, tags, seed);
+    const ChoiceCounts wo = CountChoices(poses, 0.0, 0.0, tags, seed + 500);
+    seed += 1000;
+    const std::string line = fmt::format(
+        "{} poses, {} tags: with cross-axis terms accel full {} scale {} (model_rejected {}), "
+        "gyro full {} scale {} (model_rejected {}), fits refused {}; without: accel full {} "
+        "scale {} (model_rejected {}), gyro full {} scale {} (model_rejected {}), fits refused "
+        "{}",
+        poses, tags, w.Chosen("accel full"), w.Chosen("accel scale"), w.Marked("accel"),
+        w.Chosen("gyro full"), w.Chosen("gyro scale"), w.Marked("gyro"), w.refused,
+        wo.Chosen("accel full"), wo.Chosen("accel scale"), wo.Marked("accel"),
+        wo.Chosen("gyro full"), wo.Chosen("gyro scale"), wo.Marked("gyro"), wo.refused);
+    std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+    INFO(line);
+    CHECK(w.refused == 0);
+    CHECK(wo.refused == 0);
+    CHECK(w.Chosen("accel full") >= tags - max_missed_full);
+    CHECK(w.Chosen("gyro full") >= tags - max_missed_full);
+    CHECK(wo.Chosen("accel scale") >= tags - max_false_full);
+    CHECK(wo.Chosen("gyro scale") >= tags - max_false_full);
+  }
+}
+
+TEST_CASE("Model auto at 9 to 26 orientations: full with cross-axis terms, scale without",
+          "[calibration][model]") {
+  // 5 tags per pose count and truth: every tag with cross-axis terms full; without, at most one
+  // full per sensor and pose count (5 % each: two or more of 5 with probability 2.3 %).
+  CheckAutoChoices({9, 12, 18, 26}, 5, 0, 1);
+}
+
+TEST_CASE("Model auto choices over 100 tags per pose count", "[.][coverage][calibration]") {
+  // 5 % of 100 choices is 5 (standard deviation 2.2): at most 12 full without cross-axis terms;
+  // with them, at most 3 of 100 tags keep the scale model. Prints docs/calibration-model.md's
+  // table.
+  CheckAutoChoices({9, 12, 18, 26}, 100, 3, 12);
 }
 
 }  // namespace

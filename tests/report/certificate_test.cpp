@@ -550,5 +550,39 @@ TEST_CASE("Certificate refuses model_rejected constants unless accepted, and say
             .find("Stated with --accept-rejected-model although marked "
                   "model_rejected: sensor") != std::string::npos);
 }
+
+TEST_CASE("A view of calibration.json shows model_rejected constants under a banner",
+          "[report][certificate]") {
+  Calibration cal = ThroughJson(Fit().cal);
+  CertificateOptions view;
+  view.view = true;
+  // Without rejected constants the view is the certificate.
+  Result<std::string> html = RenderCalibrationCertificate(cal, view);
+  REQUIRE(html.ok());
+  CHECK(html.value().find("<title>Calibration certificate</title>") != std::string::npos);
+  CHECK(html.value().find("model-rejected") == std::string::npos);
+  ModelCheck m;
+  m.selection = "given";
+  m.status = "rejected";
+  m.model_rejected = true;
+  m.reason = "the data reject the accelerometer 'bias' model";
+  cal.tags.front().accel->model_check = m;
+  html = RenderCalibrationCertificate(cal, view);
+  REQUIRE(html.ok());
+  const std::string page = Unescape(html.value());
+  CHECK(page.find("<title>Calibration report (not a certificate)</title>") != std::string::npos);
+  const size_t banner = page.find("Not a certificate: constants marked model_rejected");
+  REQUIRE(banner != std::string::npos);
+  CHECK(banner < page.find("1. Identification"));
+  CHECK(page.find("<b>sensor " + std::to_string(cal.tags.front().sensor) + " accelerometer</b> ('" +
+                  ModelKindName(cal.tags.front().accel->model.kind) +
+                  "' model, rejected): the data reject the accelerometer 'bias' model") !=
+        std::string::npos);
+  CHECK(page.find("These constants are marked model_rejected and are not certified") !=
+        std::string::npos);
+  CHECK(page.find("Not certified (marked model_rejected; this page is a view, not a "
+                  "certificate): sensor") != std::string::npos);
+  CHECK(page.find("Calibration certificate") == std::string::npos);
+}
 }  // namespace
 }  // namespace metro

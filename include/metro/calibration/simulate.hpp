@@ -66,6 +66,11 @@ struct SimulationOptions {
   // holds), 0.01 / 0.015 the realistic terms of issue #36.
   double accel_cross_axis = 0.02;
   double gyro_cross_axis = 0.02;
+  // A pose's gravity direction tilted from its nominal one (a tag placed by hand on a face that
+  // is not level, issue #36): by an angle uniform in 0 .. pose_tilt_deg about a horizontal axis
+  // of uniform direction, drawn from its own stream (0: the nominal directions, and every other
+  // draw as without it).
+  double pose_tilt_deg = 0.0;
   bool random_truth = true;  // Draw the truth; else use `truth` as given.
   ImuTruth truth;            // Used when !random_truth (units LSB -> g and LSB -> deg/s).
 

@@ -32,6 +32,12 @@ struct CertificateOptions {
   // input error naming them) unless this is set (`--accept-rejected-model`); then stated with
   // a notice in their section and in the validity section.
   bool accept_rejected_model = false;
+  // A view of calibration.json, not a certificate (`characterize report`, issue #36): constants
+  // marked model_rejected do not stop the page; it is then titled "Calibration report (not a
+  // certificate)", opens with a banner naming each rejected sensor and the reason, and says in
+  // the sensor's section and under validity that they are not certified. Without rejected
+  // constants the view is the certificate.
+  bool view = false;
 
   bool IsValid(std::string* why) const;
 };
