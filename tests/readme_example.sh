@@ -19,10 +19,16 @@ if [ -z "$block" ]; then
   exit 1
 fi
 scratch="$(mktemp -d "$build_dir/readme_example.XXXXXX")"
-trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$scratch"' EXIT
+trap 'rm -rf "$scratch"' EXIT
 cd "$scratch"
 ln -s "$build_dir" build
 ln -s "$source_dir/datasets" datasets
 printf '%s\n' "== README: $heading" "$block"
-bash -euo pipefail -c "$block"
+# The block runs in its own process group, killed as a whole at the end: a program it left
+# running (a simulator it started with `&`) would otherwise keep ctest's pipe open until the
+# test's timeout.
+setsid -w bash -euo pipefail -c "$block" &
+block_pid=$!
+trap 'kill -- -"$block_pid" 2>/dev/null || true; rm -rf "$scratch"' EXIT
+wait "$block_pid"
 echo "== README example '$heading': all commands succeeded"

@@ -357,8 +357,15 @@ int main(int argc, char** argv) {
                                                0.5 * metro::kSimMaxObservations / lines_per_s);
   if (std::string why; !sim.IsValid(&why)) return Usage(why);
 
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
+  // Without SA_RESTART (std::signal sets it): a write blocked on a full pseudo-terminal,
+  // whose reader has gone, returns EINTR on SIGTERM and the loop sees g_stop; with it the
+  // write restarted and the program never ended (a README example hung its ctest for 600 s).
+  struct sigaction stop {};
+  stop.sa_handler = OnSignal;
+  sigemptyset(&stop.sa_mask);
+  stop.sa_flags = 0;
+  sigaction(SIGTERM, &stop, nullptr);
+  sigaction(SIGINT, &stop, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
 
   Streamer st;

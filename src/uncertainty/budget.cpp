@@ -638,9 +638,11 @@ Error ModelError(const Budget& budget, const Error& model_error) {
   const size_t at =
       model_error.column > 0 ? static_cast<size_t>(model_error.column - 1) : std::string::npos;
   const std::string& what = model_error.message;
-  const char* join = what.rfind("uses ", 0) == 0 || what.rfind("evaluates ", 0) == 0 ? " "
-                     : what.rfind("column ", 0) == 0                                 ? ", "
-                                                                                     : ": ";
+  const char* join =
+      what.rfind("uses ", 0) == 0 || what.rfind("evaluates ", 0) == 0 || what.rfind("is ", 0) == 0
+          ? " "
+      : what.rfind("column ", 0) == 0 ? ", "
+                                      : ": ";
   const std::string message = "model '" + Excerpt(budget.model, at) + "'" + join + what;
   if (budget.model_line == 0) return MakeError(budget.file, 0, message);
   // JSON strings hold no line break: the byte's line is the opening quote's.
