@@ -4,6 +4,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <utility>
 
@@ -169,7 +170,10 @@ Result<JsonDocument> JsonDocument::Parse(std::string text, std::string file) {
 
 std::pair<int64_t, int64_t> JsonDocument::LineColumnOf(
     const std::vector<JsonPathStep>& path) const {
-  const std::string_view text = text_;
+  return TextLineColumn(text_, JsonValueOffset(text_, path));
+}
+
+size_t JsonValueOffset(std::string_view text, const std::vector<JsonPathStep>& path) {
   size_t at = SkipSpace(text, 0);
   for (const JsonPathStep& step : path) {
     if (at >= text.size()) break;
@@ -182,7 +186,44 @@ std::pair<int64_t, int64_t> JsonDocument::LineColumnOf(
     if (next == kNpos) break;
     at = next;
   }
-  return TextLineColumn(text, at);
+  return at;
+}
+
+size_t JsonStringByteOffset(std::string_view literal, size_t index) {
+  const auto hex4 = [&literal](size_t i) -> long {
+    if (i + 4 > literal.size()) return -1;
+    const std::string digits(literal.substr(i, 4));
+    char* end = nullptr;
+    const long v = std::strtol(digits.c_str(), &end, 16);
+    return end == digits.c_str() + 4 ? v : -1;
+  };
+  size_t i = literal.empty() || literal[0] != '"' ? 0 : 1;
+  size_t decoded = 0;
+  while (i < literal.size() && literal[i] != '"' && decoded < index) {
+    if (literal[i] != '\\' || i + 1 >= literal.size()) {
+      ++i;
+      ++decoded;
+      continue;
+    }
+    if (literal[i + 1] != 'u') {
+      i += 2;
+      ++decoded;
+      continue;
+    }
+    const long cp = hex4(i + 2);
+    const long low = cp >= 0xD800 && cp < 0xDC00 && i + 7 < literal.size() &&
+                             literal[i + 6] == '\\' && literal[i + 7] == 'u'
+                         ? hex4(i + 8)
+                         : -1;
+    if (low >= 0xDC00 && low < 0xE000) {
+      i += 12;  // A surrogate pair: one code point above U+FFFF, 4 bytes.
+      decoded += 4;
+    } else {
+      i += 6;
+      decoded += cp < 0x80 ? 1 : cp < 0x800 ? 2 : 3;
+    }
+  }
+  return i;
 }
 
 JsonCursor::JsonCursor(const JsonDocument& document)

@@ -45,6 +45,16 @@ class JsonDocument {
   nlohmann::ordered_json root_;
 };
 
+// The byte offset in JSON `text` of the value at `path`, or of its nearest ancestor present
+// (what JsonDocument::LineColumnOf reports as a line and column), found by walking the text:
+// strings are skipped and brackets counted, so the text need not be parsed again.
+size_t JsonValueOffset(std::string_view text, const std::vector<JsonPathStep>& path);
+
+// `literal` a JSON string as written, from its opening quote: the offset in `literal` of
+// byte `index` of the decoded string, an escape counting as the UTF-8 bytes it stands for
+// (\n one, \u00e9 two, a surrogate pair four); past the end, the closing quote's offset.
+size_t JsonStringByteOffset(std::string_view literal, size_t index);
+
 // A cursor on one value of a JsonDocument. Reads never throw: a missing value or one of the
 // wrong type records the FIRST error of the whole reading (shared by every cursor made from
 // one root cursor) at the value's file:line:column with its path, and gives a default (0,

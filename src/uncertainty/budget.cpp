@@ -11,11 +11,15 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <tuple>
 
+#include "core/json_reader.hpp"
 #include "core/json_text.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/stats/type_a.hpp"
 #include "uncertainty/model.hpp"
+#include "uncertainty/model_quote.hpp"
 #include "uncertainty/model_units.hpp"
 
 namespace metro {
@@ -628,6 +632,31 @@ bool McOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace internal {
+
+Error ModelError(const Budget& budget, const Error& model_error) {
+  const size_t at =
+      model_error.column > 0 ? static_cast<size_t>(model_error.column - 1) : std::string::npos;
+  const std::string& what = model_error.message;
+  const bool reads_on =
+      what.rfind("uses ", 0) == 0 || what.rfind("evaluates ", 0) == 0 || what.rfind("is ", 0) == 0;
+  const char* join = reads_on ? " " : what.rfind("column ", 0) == 0 ? ", " : ": ";
+  const std::string message = "model '" + Excerpt(budget.model, at) + "'" + join + what;
+  if (budget.model_line == 0) return MakeError(budget.file, 0, message);
+  // JSON strings hold no line break: the byte's line is the opening quote's.
+  const size_t offset = at == std::string::npos ? 0 : JsonStringByteOffset(budget.model_json, at);
+  return MakeError(budget.file, budget.model_line,
+                   budget.model_column + static_cast<int64_t>(offset), message);
+}
+
+Error ModelError(const Budget& budget, const std::string& what) {
+  return ModelError(budget, MakeError(what));
+}
+
+std::string QuotedModel(const Budget& budget) { return "'" + Excerpt(budget.model) + "'"; }
+
+}  // namespace internal
+
 Status ValidateBudget(const Budget& budget) {
   const std::string& path = budget.file;
   std::string why;
@@ -725,12 +754,11 @@ Status ValidateBudget(const Budget& budget) {
     }
   }
   auto model = internal::MeasurementModel::FromExpression(budget.model, names);
-  if (!model.ok()) return MakeError(path, 0, model.error().message);
+  if (!model.ok()) return internal::ModelError(budget, model.error());
   const double y = model.value().Evaluate(x.data());
   if (!std::isfinite(y)) {
-    return MakeError(path, 0,
-                     "model '" + budget.model + "' evaluates to " + std::to_string(y) +
-                         " at the input estimates");
+    return internal::ModelError(budget,
+                                "evaluates to " + std::to_string(y) + " at the input estimates");
   }
   if (auto units = CheckBudgetUnits(budget); !units.ok()) return units.error();
   return Status();
@@ -776,10 +804,10 @@ Result<BudgetUnits> CheckBudgetUnits(const Budget& budget) {
     x.push_back(in.value);
   }
   auto model = internal::MeasurementModel::FromExpression(budget.model, names);
-  if (!model.ok()) return MakeError(path, 0, model.error().message);
+  if (!model.ok()) return internal::ModelError(budget, model.error());
   auto checked =
       internal::CheckModelUnits(budget.model, names, units, x, model.value().Evaluate(x.data()));
-  if (!checked.ok()) return MakeError(path, 0, checked.error().message);
+  if (!checked.ok()) return internal::ModelError(budget, checked.error());
   const internal::ModelUnit& m = checked.value();
   result.checked = true;
   result.scale_known = m.scale_known && !m.constant;
@@ -788,18 +816,20 @@ Result<BudgetUnits> CheckBudgetUnits(const Budget& budget) {
   if (measurand && !m.constant) {
     const std::optional<UnitConversion> c = m.unit.ConversionTo(*measurand);
     if (!c) {
-      return MakeError(path, 0,
+      // At the model's opening quote (no position for a budget built in code).
+      return MakeError(path, budget.model_line, budget.model_column,
                        "measurand '" + budget.measurand + "' is declared in '" + budget.unit +
-                           "' but the model '" + budget.model + "' gives " + m.unit.ToString() +
-                           " (" + m.unit.Definition() + "): incompatible dimensions");
+                           "' but the model " + internal::QuotedModel(budget) + " gives " +
+                           m.unit.ToString() + " (" + m.unit.Definition() +
+                           "): incompatible dimensions");
     }
     if (m.scale_known && !c->IsIdentity()) {
-      return MakeError(path, 0,
-                       fmt::format("measurand '{}' is declared in '{}' but the model '{}' gives "
+      return MakeError(path, budget.model_line, budget.model_column,
+                       fmt::format("measurand '{}' is declared in '{}' but the model {} gives "
                                    "{} (1 {} = {:.6g} {}{}): declare the measurand in the "
                                    "model's unit or convert the model with a factor",
-                                   budget.measurand, budget.unit, budget.model, m.unit.ToString(),
-                                   m.unit.ToString(), c->factor, budget.unit,
+                                   budget.measurand, budget.unit, internal::QuotedModel(budget),
+                                   m.unit.ToString(), m.unit.ToString(), c->factor, budget.unit,
                                    c->offset != 0.0 ? fmt::format(" + {:.6g}", c->offset) : ""));
     }
   }
@@ -836,6 +866,16 @@ Result<Budget> ParseBudget(const std::string& json_text, const std::string& budg
   budget.measurand = mname;
   budget.unit = munit;
   budget.model = model;
+  if (!model.empty()) {
+    // Where the model is written, for errors at its byte (budget.hpp).
+    const size_t at = JsonValueOffset(json_text, {std::string("measurand"), std::string("model")});
+    if (at < json_text.size() && json_text[at] == '"') {
+      size_t end = at + 1;
+      while (end < json_text.size() && json_text[end] != '"') end += json_text[end] == '\\' ? 2 : 1;
+      budget.model_json = json_text.substr(at, std::min(end + 1, json_text.size()) - at);
+      std::tie(budget.model_line, budget.model_column) = TextLineColumn(json_text, at);
+    }
+  }
   budget.description = description;
   METRO_ASSIGN_OR_RETURN(coverage_opt, top.Number("coverage"));
   const double coverage = coverage_opt ? *coverage_opt : 0.95;

@@ -11,6 +11,7 @@
 #include "metro/core/rounding.hpp"
 #include "metro/core/terminal_text.hpp"
 #include "uncertainty/budget_report_json.hpp"
+#include "uncertainty/model_quote.hpp"
 
 namespace metro {
 namespace {
@@ -144,10 +145,10 @@ Result<BudgetEvaluation> EvaluateBudget(const Budget& budget, ProgressSink* prog
   if (!e.gum.derivatives_exact && !budget.monte_carlo.enabled) {
     // Central differences are never the stated basis (issue #36): without a Monte Carlo run
     // there is nothing sound to state.
-    return MakeError(budget.file, 0,
-                     "model '" + budget.model + "': no exact derivatives (" + e.gum.derivatives +
-                         "), and monte_carlo is disabled: the GUF result would rest on central "
-                         "differences; enable monte_carlo, whose result is then stated");
+    return internal::ModelError(
+        budget, "no exact derivatives (" + e.gum.derivatives +
+                    "), and monte_carlo is disabled: the GUF result would rest on central "
+                    "differences; enable monte_carlo, whose result is then stated");
   }
   e.ok = true;
   if (budget.monte_carlo.enabled) {

@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "uncertainty/model.hpp"
+#include "uncertainty/model_quote.hpp"
 #include "uncertainty/symbolic_model.hpp"
 
 namespace metro {
@@ -33,7 +34,7 @@ Result<internal::MeasurementModel> BuildModel(const Budget& budget) {
   std::vector<std::string> names;
   for (const auto& in : budget.inputs) names.push_back(in.name);
   auto model = internal::MeasurementModel::FromExpression(budget.model, names);
-  if (!model.ok()) return MakeError(budget.file, 0, model.error().message);
+  if (!model.ok()) return internal::ModelError(budget, model.error());
   return model;
 }
 
@@ -163,10 +164,11 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
     // spoils a difference quotient, so the budget says so and states the Monte Carlo result.
     result.derivatives_exact = false;
     result.warnings.push_back(fmt::format(
-        "model '{}' has no exact derivative at the estimates ({}): sensitivity coefficients by "
+        "model {} has no exact derivative at the estimates ({}): sensitivity coefficients by "
         "central differences with step_fraction {:g} of u: {}; the Monte Carlo result is the "
         "stated one (docs/uncertainty.md, \"Derivatives\")",
-        budget.model, result.derivatives.substr(std::string("central differences: ").size()),
+        internal::QuotedModel(budget),
+        result.derivatives.substr(std::string("central differences: ").size()),
         options.step_fraction, steps.empty() ? "no input has u > 0" : steps));
   }
 
@@ -274,9 +276,9 @@ Result<GumResult> EvaluateGum(const Budget& budget, const GumOptions& options) {
       result.derivatives += "; second-order terms by central differences: " + symbolic_error;
       result.derivatives_exact = false;
       result.warnings.push_back(fmt::format(
-          "model '{}': second-order terms (JCGM 100 5.1.2 note) by central differences with "
+          "model {}: second-order terms (JCGM 100 5.1.2 note) by central differences with "
           "steps h_i = u_i ({}); the Monte Carlo result is the stated one",
-          budget.model, symbolic_error));
+          internal::QuotedModel(budget), symbolic_error));
       extra = second_order_terms();
     }
     if (!std::isfinite(extra)) {

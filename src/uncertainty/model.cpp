@@ -7,6 +7,8 @@
 #include <deque>
 #include <utility>
 
+#include "metro/core/terminal_text.hpp"
+
 namespace metro {
 namespace internal {
 namespace {
@@ -19,6 +21,44 @@ bool IsIdentifier(const std::string& name) {
     if (!alpha(c) && c != '_' && !(c >= '0' && c <= '9')) return false;
   }
   return true;
+}
+
+// An error about the model's text at byte `at` of it (npos: the whole model): the message
+// says what without quoting the model, and column = at + 1 (0 for the whole model) tells the
+// budget where (model.hpp, "Errors").
+Error ModelTextError(size_t at, std::string what) {
+  Error e = MakeError(std::move(what));
+  e.column = at == std::string::npos ? 0 : static_cast<int64_t>(at) + 1;
+  return e;
+}
+
+// The first place `name` stands as a whole identifier in `expression` (npos when none).
+size_t IdentifierAt(const std::string& expression, const std::string& name) {
+  const auto part = [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+  };
+  for (size_t at = expression.find(name); at != std::string::npos;
+       at = expression.find(name, at + 1)) {
+    const size_t end = at + name.size();
+    if ((at == 0 || !part(expression[at - 1])) &&
+        (end >= expression.size() || !part(expression[end]))) {
+      return at;
+    }
+  }
+  return std::string::npos;
+}
+
+// muparser's message with its token quoted once and short: a message that holds the token
+// ("Unexpected token "x" found at position 4") gets the token cut to 40 bytes in place; a
+// message without it ("Expression too long.") gets none (the budget quotes the model).
+std::string MuParserMessage(const mu::Parser::exception_type& e) {
+  std::string message = e.GetMsg();
+  const std::string token = e.GetToken();
+  if (const size_t at = token.empty() ? std::string::npos : message.find(token);
+      at != std::string::npos && token.size() > 40) {
+    message.replace(at, token.size(), Excerpt(token, 0, 40));
+  }
+  return message;
 }
 
 bool SameValue(double a, double b) {
@@ -304,7 +344,7 @@ std::unique_ptr<MeasurementModel::ScalarParser> NewParser(const std::string& exp
       return nullptr;
     }
   } catch (const mu::Parser::exception_type& e) {
-    *why = e.GetMsg();
+    *why = MuParserMessage(e);
     return nullptr;
   }
   return p;
@@ -386,10 +426,19 @@ Result<MeasurementModel> MeasurementModel::FromExpression(const std::string& exp
       continue;
     }
     if (before == '<' || before == '>' || before == '!') continue;
-    return MakeError(fmt::format(
-        "model '{}': '=' at position {} assigns; a model is one expression of its inputs (no "
-        "assignment: write the right-hand side alone, or == to compare)",
-        expression, i + 1));
+    return ModelTextError(
+        i, fmt::format("'=' at position {} assigns; a model is one expression of its inputs (no "
+                       "assignment: write the right-hand side alone, or == to compare)",
+                       i + 1));
+  }
+  // muparser refuses an expression of MaxLenExpression (20000) bytes or more with its whole
+  // text as the token (a 1 MB model was echoed twice in one message).
+  const size_t longest = static_cast<size_t>(mu::MaxLenExpression) - 1;
+  if (expression.size() > longest) {
+    return ModelTextError(
+        longest, fmt::format("{} bytes; muparser reads a model of at most {} bytes (write a "
+                             "shorter expression, e.g. with fewer terms or shorter input names)",
+                             expression.size(), longest));
   }
   // Pass 1: find identifiers that are not inputs (muparser calls the factory for them).
   std::pair<std::vector<std::string>, std::deque<double>> unknown;
@@ -406,27 +455,31 @@ Result<MeasurementModel> MeasurementModel::FromExpression(const std::string& exp
     if (unknown.first.empty()) {
       probe.Eval();
       if (probe.GetNumResults() > 1) {
-        return MakeError(fmt::format(
-            "model '{}': {} comma-separated expressions; a model is one expression (commas "
-            "only between a function's arguments, e.g. max(a, b))",
-            expression, probe.GetNumResults()));
+        return ModelTextError(
+            expression.find(','),
+            fmt::format("{} comma-separated expressions; a model is one expression (commas "
+                        "only between a function's arguments, e.g. max(a, b))",
+                        probe.GetNumResults()));
       }
     }
   } catch (const mu::Parser::exception_type& e) {
     const std::string token = e.GetToken();
-    return MakeError("model '" + expression + "': " + e.GetMsg() +
-                     (token.empty() ? std::string() : " (near '" + token + "')"));
+    const std::string message = MuParserMessage(e);
+    const bool quoted = token.empty() || message.find(Excerpt(token, 0, 40)) != std::string::npos;
+    return ModelTextError(e.GetPos() >= 0 ? static_cast<size_t>(e.GetPos()) : std::string::npos,
+                          quoted ? message : message + " (near '" + Excerpt(token, 0, 40) + "')");
   }
   if (!unknown.first.empty()) {
     std::string list;
     for (const auto& name : unknown.first) list += (list.empty() ? "'" : ", '") + name + "'";
-    return MakeError(
-        "model '" + expression + "' uses " + list +
-        (unknown.first.size() == 1 ? ", which is not an input" : ", which are not inputs"));
+    return ModelTextError(
+        IdentifierAt(expression, unknown.first.front()),
+        "uses " + list +
+            (unknown.first.size() == 1 ? ", which is not an input" : ", which are not inputs"));
   }
   std::string why;
   auto parser = NewParser(expression, names, &why);
-  if (!parser) return MakeError("model '" + expression + "': " + why);
+  if (!parser) return ModelTextError(std::string::npos, why);
 
   MeasurementModel model;
   model.expression_ = expression;

@@ -27,7 +27,11 @@ class BlockProgram;
 class MeasurementModel {
  public:
   // Parses `expression` over the variables `names` (in input order). Errors name the
-  // undefined identifiers or quote muparser's syntax message.
+  // undefined identifiers or quote muparser's syntax message, but never the expression
+  // itself: an error about its text has `column` = the 1-based byte of the expression it is
+  // about (0: the whole expression), and the caller quotes the expression once, cut around
+  // that byte (ModelError in budget.cpp: file:line:column of that byte in the budget).
+  // An expression longer than muparser's limit (19999 bytes) is refused before parsing.
   static Result<MeasurementModel> FromExpression(const std::string& expression,
                                                  const std::vector<std::string>& names);
   // y = sum_i coefficients[i] * x_i.

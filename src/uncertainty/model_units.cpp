@@ -7,6 +7,8 @@
 #include <functional>
 #include <utility>
 
+#include "metro/core/terminal_text.hpp"
+
 namespace metro {
 namespace internal {
 namespace {
@@ -43,14 +45,19 @@ class Checker {
 
  private:
   Error Fail(size_t at, const std::string& what) const {
-    return MakeError(fmt::format("model '{}', column {}: {}", text_, at + 1, what));
+    // The model is quoted by the caller (once, cut around the column): model.hpp, "Errors".
+    Error e = MakeError(fmt::format("column {}: {}", at + 1, what));
+    e.column = static_cast<int64_t>(at) + 1;
+    return e;
   }
 
   std::string Quote(const Term& t) const {
     std::string s = text_.substr(t.begin, t.end - t.begin);
     const auto first = s.find_first_not_of(' ');
     const auto last = s.find_last_not_of(' ');
-    return "'" + (first == std::string::npos ? s : s.substr(first, last - first + 1)) + "'";
+    // A long term is cut (the message stays one short line).
+    return "'" +
+           Excerpt(first == std::string::npos ? s : s.substr(first, last - first + 1), 0, 60) + "'";
   }
 
   std::string Describe(const Term& t) const {
@@ -561,10 +568,10 @@ Result<ModelUnit> CheckModelUnits(const std::string& expression,
   if (std::isfinite(mine) && std::isfinite(muparser_value) &&
       std::fabs(mine - muparser_value) >
           1e-9 * std::fmax(1.0, std::fmax(std::fabs(mine), std::fabs(muparser_value)))) {
-    return MakeError(fmt::format(
-        "model '{}': the unit check reads it as {} at the estimates but muparser as {}; "
-        "parenthesise the model so that both read it alike",
-        expression, Significant(mine), Significant(muparser_value)));
+    return MakeError(
+        fmt::format("the unit check reads it as {} at the estimates but muparser as {}; "
+                    "parenthesise the model so that both read it alike",
+                    Significant(mine), Significant(muparser_value)));
   }
   ModelUnit result;
   result.constant = t.kind == Kind::kConstant;

@@ -36,8 +36,9 @@ struct ModelUnit {
 
 // `units[i]` is the unit of input `names[i]` (nullopt when not stated: an error if the model
 // uses it); `values[i]` its estimate; `muparser_value` muparser's f at those estimates.
-// Errors quote the model and the column (1-based) of the offending operator or function,
-// and name the terms and their units.
+// Errors name the column (1-based) of the offending operator or function ("column 3: a sum:
+// ..."; Error::column is that column) and the terms and their units; the caller quotes the
+// model (model.hpp, "Errors").
 Result<ModelUnit> CheckModelUnits(const std::string& expression,
                                   const std::vector<std::string>& names,
                                   const std::vector<std::optional<PhysicalUnit>>& units,

@@ -18,6 +18,7 @@
 #include "core/parallel.hpp"
 #include "uncertainty/mc_sampling.hpp"
 #include "uncertainty/model.hpp"
+#include "uncertainty/model_quote.hpp"
 
 namespace metro {
 namespace {
@@ -676,11 +677,11 @@ Error NanError(const Budget& budget, const NanReport& nan, int64_t trials) {
   for (size_t i = 0; i < budget.inputs.size() && i < nan.inputs.size(); ++i) {
     at += (i ? ", " : "") + budget.inputs[i].name + " = " + std::to_string(nan.inputs[i]);
   }
-  return MakeError(budget.file, 0,
-                   "model '" + (budget.model.empty() ? std::string("sum c_i x_i") : budget.model) +
-                       "' is NaN or infinite in " + std::to_string(nan.count) + " of " +
-                       std::to_string(trials) + " Monte Carlo trials (first at " + at +
-                       "); restrict the input distributions to the model's domain");
+  const std::string what = "is NaN or infinite in " + std::to_string(nan.count) + " of " +
+                           std::to_string(trials) + " Monte Carlo trials (first at " + at +
+                           "); restrict the input distributions to the model's domain";
+  if (budget.model.empty()) return MakeError(budget.file, 0, "model 'sum c_i x_i' " + what);
+  return internal::ModelError(budget, what);
 }
 
 }  // namespace
@@ -769,7 +770,7 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
       budget.model.empty()
           ? Result<internal::MeasurementModel>(internal::MeasurementModel::Linear(c))
           : internal::MeasurementModel::FromExpression(budget.model, names);
-  if (!parsed.ok()) return MakeError(budget.file, 0, parsed.error().message);
+  if (!parsed.ok()) return internal::ModelError(budget, parsed.error());
   auto plan_result = MakePlan(budget);
   if (!plan_result.ok()) return plan_result.error();
   Plan plan = std::move(plan_result).value();

@@ -1,6 +1,7 @@
 // characterize budget / --budget: units are quantities (issue #21 part 5). A model that mixes
 // units and a session quantity in an incompatible unit exit 2 naming the file and the input;
 // a session's pitch in degrees used as an input in rad is converted and the conversion shown.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -28,8 +29,29 @@ TEST_CASE("characterize budget refuses a model adding rad to deg with exit 2", "
   const auto r = Characterize("budget " + budget.path());
   CHECK(r.exit_code == 2);
   CHECK(r.out.empty());
-  CHECK(r.err.find(budget.path() + ": model 'a + b', column 3: a sum: 'a' (rad) and 'b' (deg) "
-                                   "are in different units") != std::string::npos);
+  // The '+' (column 3 of the model) at file:line:column.
+  CHECK(r.err.find(budget.path() + ":1:56: model 'a + b', column 3: a sum: 'a' (rad) and 'b' "
+                                   "(deg) are in different units") != std::string::npos);
+}
+
+TEST_CASE("characterize budget quotes a 1 MB model once, cut, at file:line:column",
+          "[apps][security][issue37]") {
+  // issue #37: the error echoed the whole model twice, 2 MB on one line.
+  std::string model = "x";
+  while (model.size() < 1000000) model += " + x";
+  TempFile budget("{\"measurand\": {\"name\": \"y\",\n \"model\": \"" + model +
+                      "\"}, \"inputs\": [{\"name\": \"x\", \"value\": 1, \"u\": 0.1}]}",
+                  ".json");
+  const auto r = Characterize("budget " + budget.path());
+  CHECK(r.exit_code == 2);
+  CHECK(r.out.empty());
+  INFO(r.err.substr(0, 500));
+  CHECK(r.err.size() < 500);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  // Byte 19999 of the model (past muparser's limit), the model starting at line 2 column 12.
+  CHECK(r.err.rfind("error: " + budget.path() + ":2:20011: model '...", 0) == 0);
+  CHECK(r.err.find("1000001 bytes; muparser reads a model of at most 19999 bytes") !=
+        std::string::npos);
 }
 
 TEST_CASE("characterize budget refuses a measurand unit the model does not give", "[apps][units]") {

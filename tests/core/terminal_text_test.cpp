@@ -38,5 +38,24 @@ TEST_CASE("EscapeControlChars is idempotent; the KeepLines form keeps newlines a
   CHECK(EscapeControlCharsKeepLines("a\rb") == "a\\rb");
 }
 
+TEST_CASE("Excerpt quotes a long text by a window around a byte, cut with ellipses",
+          "[core][security][issue37]") {
+  CHECK(Excerpt("x + y", 2) == "x + y");  // Short: whole.
+  CHECK(Excerpt("a\nb", 0) == "a\\nb");   // Escaped like EscapeControlChars.
+  // 1000 'a', then "ERR", then 1000 'b': 12 bytes around "ERR", a third of them before it.
+  const std::string text = std::string(1000, 'a') + "ERR" + std::string(1000, 'b');
+  CHECK(Excerpt(text, 1000, 12) == "...aaaaERRbbbbb...");
+  // From the start, and a window that ends at the text's end keeps its width.
+  CHECK(Excerpt(text, std::string::npos, 6) == "aaaaaa...");
+  CHECK(Excerpt(text, text.size() - 1, 6) == "...bbbbbb");
+  // The default width: 120 bytes of the text plus the two ellipses.
+  CHECK(Excerpt(text, 1000).size() == 126);
+  // A UTF-8 sequence is never cut: U+00E9 (2 bytes) at the window's edges.
+  const std::string accents =
+      std::string(10, 'a') + "\xc3\xa9\xc3\xa9\xc3\xa9" + std::string(10, 'b');
+  const std::string cut = Excerpt(accents, 10, 5);
+  CHECK(cut.find("\\x") == std::string::npos);  // No escaped half sequence.
+}
+
 }  // namespace
 }  // namespace metro

@@ -1,6 +1,8 @@
 // Budget parsing: Type A / Type B standard uncertainties and every class of bad input.
 #include "metro/uncertainty/budget.hpp"
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
@@ -190,6 +192,61 @@ TEST_CASE("Bad input: a model that assigns or has several results", "[uncertaint
   }
 }
 
+TEST_CASE("Bad input: an error in a long model quotes it once, cut around its column",
+          "[uncertainty][budget][security][issue37]") {
+  // issue #37: a 1 MB model was echoed twice in one message (muparser's "Expression too long"
+  // with the whole expression as its token), 2 MB on one line and no line or column.
+  // The model starts on line 2 at column 12 (after ` "model": "`).
+  auto parse = [](const std::string& model, const std::string& inputs) {
+    return ParseBudget("{\"measurand\": {\"name\": \"y\",\n \"model\": \"" + model +
+                           "\"}, \"inputs\": [" + inputs + "]}",
+                       "b.json");
+  };
+  const std::string x = R"({"name": "x", "value": 1, "u": 0.1})";
+  std::string model = "x";
+  while (model.size() < 1000000) model += " + x";
+  Result<Budget> b = parse(model, x);
+  REQUIRE_FALSE(b.ok());
+  std::string text = b.error().ToString();
+  INFO(text.substr(0, 400));
+  // At byte 19999 of the model (past muparser's limit), column 12 + 19999.
+  CHECK(text.rfind("b.json:2:20011: model '...", 0) == 0);
+  CHECK(text.find(fmt::format("': {} bytes; muparser reads a model of at most 19999 bytes",
+                              model.size())) != std::string::npos);
+  CHECK(text.size() < 400);
+  CHECK(text.find("model '") == text.rfind("model '"));  // Quoted once.
+
+  // An undefined name at the end of a 15000-byte model: its column, the quote around it.
+  model = "x";
+  while (model.size() < 15000) model += " + x";
+  model += " + zz";
+  b = parse(model, x);
+  REQUIRE_FALSE(b.ok());
+  text = b.error().ToString();
+  INFO(text);
+  const size_t zz = model.size() - 2;  // byte of 'zz'
+  CHECK(text.rfind(fmt::format("b.json:2:{}: model '...", 12 + zz), 0) == 0);
+  CHECK(text.find(" + x + zz' uses 'zz', which is not an input") != std::string::npos);
+  CHECK(text.size() < 250);
+
+  // A syntax error: muparser's position, its message once (no "near" repeating the token).
+  b = parse(model.substr(0, 15000) + " + (2", x);
+  REQUIRE_FALSE(b.ok());
+  text = b.error().ToString();
+  INFO(text);
+  CHECK(text.rfind("b.json:2:", 0) == 0);
+  CHECK(text.size() < 300);
+
+  // An escape before the error counts as the byte it stands for: "\u0020" is 1 byte of the
+  // model (a space) but 6 of the file.
+  b = ParseBudget(
+      "{\"measurand\": {\"name\": \"y\", \"model\": \"x +\\u0020zz\"}, \"inputs\": [" + x + "]}",
+      "b.json");
+  REQUIRE_FALSE(b.ok());
+  // The opening quote is column 38; 'zz' is byte 4 of the model, 10 of the literal.
+  CHECK(b.error().ToString() == "b.json:1:48: model 'x + zz' uses 'zz', which is not an input");
+}
+
 TEST_CASE("Bad input: max_trials beyond the memory cap", "[uncertainty][budget]") {
   ExpectError(P(R"({"name": "x", "value": 0, "u": 1})",
                 R"(, "monte_carlo": {"adaptive": true, "max_trials": 1000000000000000})"),
@@ -299,8 +356,9 @@ TEST_CASE("A model adding rad to deg is refused, naming both inputs",
   ExpectError(WithUnits("a + b", "rad",
                         R"({"name": "a", "value": 0.5, "u": 0.01, "unit": "rad"},
                            {"name": "b", "value": 30, "u": 0.1, "unit": "deg"})"),
-              "b.json: model 'a + b', column 3: a sum: 'a' (rad) and 'b' (deg) are in different "
-              "units (1 rad = 57.2958 deg)");
+              // The '+' at column 3 of the model, whose first byte is column 54 of the file.
+              "b.json:1:56: model 'a + b', column 3: a sum: 'a' (rad) and 'b' (deg) are in "
+              "different units (1 rad = 57.2958 deg)");
   ExpectError(WithUnits("a + b", "m",
                         R"({"name": "a", "value": 1, "u": 0.01, "unit": "m"},
                            {"name": "b", "value": 2, "u": 0.1, "unit": "s"})"),
@@ -312,6 +370,8 @@ TEST_CASE("The measurand's unit must be the model's", "[uncertainty][budget][uni
   // A kg model declared in mg: refused with the factor (1 kg = 1e6 mg), not relabelled.
   ExpectError(WithUnits("m", "mg", kg),
               "measurand 'y' is declared in 'mg' but the model 'm' gives kg (1 kg = 1e+06 mg)");
+  // At the model's opening quote, column 52 (issue #37).
+  CHECK(WithUnits("m", "mg", kg).error().ToString().rfind("b.json:1:52: measurand 'y'", 0) == 0);
   ExpectError(WithUnits("m", "m/s^2", kg), "incompatible dimensions");
   REQUIRE(WithUnits("m", "kg", kg).ok());
   // A constant factor converts: 1e6*m is in mg (checked by dimension).

@@ -7,6 +7,7 @@
 // for errors, notes and tables).
 #pragma once
 
+#include <algorithm>
 #include <string>
 #include <string_view>
 
@@ -22,6 +23,14 @@ inline std::string EscapeControlChars(std::string_view text);
 // The same for text the program laid out in lines itself (a table, a report): "\n" and
 // "\t" are kept, everything else is escaped as above.
 inline std::string EscapeControlCharsKeepLines(std::string_view text);
+
+// At most `width` bytes of `text` around byte `at` (0-based; npos or past the end: from the
+// start), "..." where it was cut, control characters escaped (EscapeControlChars): how a
+// message quotes a long input, once, on one line (a 1 MB model is quoted by the 120 bytes
+// around its error). The cut keeps UTF-8 sequences whole; `at` lies about a third into the
+// window, so the text before the error and after it both show.
+inline std::string Excerpt(std::string_view text, size_t at = std::string_view::npos,
+                           size_t width = 120);
 
 namespace internal {
 
@@ -96,6 +105,21 @@ inline std::string EscapeControlChars(std::string_view text) {
 
 inline std::string EscapeControlCharsKeepLines(std::string_view text) {
   return internal::EscapeControl(text, true);
+}
+
+inline std::string Excerpt(std::string_view text, size_t at, size_t width) {
+  if (text.size() <= width) return EscapeControlChars(text);
+  if (at >= text.size()) at = 0;
+  size_t begin = at > width / 3 ? at - width / 3 : 0;
+  size_t end = std::min(text.size(), begin + width);
+  begin = end - width;  // A window that ends at the text's end still holds `width` bytes.
+  auto continuation = [&text](size_t i) {
+    return i < text.size() && (static_cast<unsigned char>(text[i]) & 0xC0) == 0x80;
+  };
+  while (begin > 0 && continuation(begin)) --begin;  // Start at a sequence's lead byte.
+  while (end < text.size() && continuation(end)) --end;
+  return (begin > 0 ? "..." : "") + EscapeControlChars(text.substr(begin, end - begin)) +
+         (end < text.size() ? "..." : "");
 }
 
 }  // namespace metro

@@ -146,6 +146,12 @@ struct Budget {
   std::string measurand;
   std::string unit;
   std::string model;  // Empty: y = sum c_i x_i.
+  // Where `model` is written in `file` (ParseBudget; 0 and "" for a budget built in code): the
+  // line and column of its opening quote and the JSON string as written there (escapes not
+  // decoded), so that an error in the model names the file:line:column of its byte.
+  int64_t model_line = 0;
+  int64_t model_column = 0;
+  std::string model_json;
   std::string description;
   std::vector<BudgetInput> inputs;
   std::vector<Correlation> correlations;
