@@ -182,14 +182,19 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
     }
     return recorded;
   }
+  const bool lied = s.contradiction != blob::TagContradiction::kNone;
   if (outcome != nullptr) {
-    *outcome = s.commit == blob::CommitState::kUnknown     ? "outcome unknown"
+    *outcome = lied ? "MISMATCH: " + blob::TagContradictionName(s.contradiction)
+               : s.commit == blob::CommitState::kUnknown   ? "outcome unknown"
                : s.commit == blob::CommitState::kCommitted ? "UNVERIFIED"
                                                            : "FAILED";
   }
   // An unknown outcome or a live but unchecked calibration is not a failure to write: the
-  // message says what the tag may hold (docs/calibration-blob.md section 11).
-  if (s.commit == blob::CommitState::kUnknown) {
+  // message says what the tag may hold (docs/calibration-blob.md section 11). A tag that
+  // contradicted what it acknowledged is neither (issue #37).
+  if (lied) {
+    apps::PrintText(stderr, fmt::format("MISMATCH: {}\n", message));
+  } else if (s.commit == blob::CommitState::kUnknown) {
     apps::PrintText(stderr, message + "\n");
   } else if (s.commit == blob::CommitState::kCommitted) {
     apps::PrintText(stderr, fmt::format("UNVERIFIED: {}\n", message));

@@ -109,14 +109,13 @@ int RecordPushResult(Registry* registry, const Calibration& calibration,
   p.port = port;
   p.ok = summary.ok;
   p.result = summary.message;
-  p.readback = summary.ok ? "verified: every byte read back equal"
-               : summary.commit == blob::CommitState::kCommitted
-                   ? "committed, read-back not finished"
-               : summary.commit == blob::CommitState::kUnknown ? "outcome unknown"
-                                                               : "not committed";
+  p.readback = blob::PushReadBackText(summary);
+  const bool lied = summary.contradiction != blob::TagContradiction::kNone;
   return RegistryResult(registry->RecordPush(calibration, id.value(), sensor, p, options.Context()),
                         fmt::format("push to device {} ({})", blob::FormatDeviceId(*device),
-                                    summary.ok ? "OK" : "failed"));
+                                    summary.ok ? "OK"
+                                    : lied     ? "MISMATCH: the tag contradicted itself"
+                                               : "failed"));
 }
 
 }  // namespace metro::calibrate_app

@@ -4,7 +4,7 @@
 //
 //   metro_sim_tag [--device-id HEX16] [--flash FILE] [--drop-frame K] [--dup-frame K]
 //                 [--corrupt-frame K] [--drop-response K] [--hangup-after N]
-//                 [--flash-write-error N]
+//                 [--flash-write-error N] [--lie readback|execute-seq|get-crc|info-crc]
 //
 // Prints "pty: /dev/pts/N" on stdout once the terminal (raw, 230400 baud) is ready, then
 // serves until SIGTERM/SIGINT or the hang-up fault. Frame numbers count the SLIP frames
@@ -15,6 +15,10 @@
 //   --drop-response K     the tag's K-th answer is lost on the way back
 //   --hangup-after N      after answering frame N the tag closes the link and exits
 //   --flash-write-error N the N-th flash write fails (CAL_EXECUTE answers FLASH_ERROR)
+//   --lie WHAT            the tag lies in its answers (the receiver's own state is honest):
+//                         readback: CAL_READ's first data byte is changed; execute-seq:
+//                         CAL_EXECUTE's SUCCESS names seq + 1; get-crc: CAL_GET_CRC's CRC-32
+//                         is changed; info-crc: GET_INFO's active CRC-32 is changed
 //   --flash FILE          the two 1024-byte slot pages (A then B): loaded when the file exists,
 //                         saved after each committed update and at exit.
 // Exit status: 0 after a signal or the hang-up (and --help), 2 for bad arguments, 1 for a
@@ -53,6 +57,7 @@ struct Options {
   std::set<long> drop_frames, dup_frames, corrupt_frames, drop_responses;
   long hangup_after = -1;
   long flash_write_error = -1;
+  std::set<std::string> lies;  // --lie
 };
 
 struct Sim {
@@ -90,9 +95,51 @@ int FlashWrite(void* ctx, uint32_t addr, const uint8_t* src, uint32_t len) {
   return 0;
 }
 
-int Send(void* ctx, const uint8_t* data, uint32_t len) {
+// The answer `data` (one SLIP-encoded frame, as metro_fw_push sends it) with the --lie faults
+// applied, encoded again with a valid CRC-16: a tag that lies, not a link that corrupts.
+std::vector<uint8_t> Lie(const Options& o, const uint8_t* data, uint32_t len) {
+  std::vector<uint8_t> frame;
+  for (uint32_t i = 0; i < len; ++i) {
+    if (data[i] == METRO_FW_SLIP_END) continue;
+    if (data[i] == METRO_FW_SLIP_ESC && i + 1 < len) {
+      frame.push_back(data[++i] == METRO_FW_SLIP_ESC_END ? METRO_FW_SLIP_END : METRO_FW_SLIP_ESC);
+    } else {
+      frame.push_back(data[i]);
+    }
+  }
+  const int n = metro_fw_frame_parse(frame.data(), static_cast<uint32_t>(frame.size()));
+  if (n < 1 || o.lies.empty()) return std::vector<uint8_t>(data, data + len);
+  const uint8_t op = frame[0] & static_cast<uint8_t>(~METRO_FW_PUSH_RESPONSE_BIT);
+  std::vector<uint8_t> p(frame.begin() + 4, frame.begin() + 4 + n);  // result, then the rest
+  const bool success = p[0] == METRO_FW_RES_SUCCESS;
+  if (success && op == METRO_FW_OP_CAL_READ && o.lies.count("readback") && p.size() > 1) {
+    p[1] ^= 0x01;
+  } else if (success && op == METRO_FW_OP_CAL_EXECUTE && o.lies.count("execute-seq") &&
+             p.size() >= 6) {
+    ++p[2];  // seq u32 at 2..5, little-endian (seq + 1 unless its low byte is 0xFF)
+  } else if (success && op == METRO_FW_OP_CAL_GET_CRC && o.lies.count("get-crc") && p.size() >= 7) {
+    p[3] ^= 0x01;  // crc32 at 3..6
+  } else if (success && op == METRO_FW_OP_GET_INFO && o.lies.count("info-crc") && p.size() >= 22 &&
+             p[3] != 0xFF) {
+    p[18] ^= 0x01;  // active_crc32 at 18..21, with an active slot
+  }
+  std::vector<uint8_t> out(2 * METRO_FW_PUSH_MAX_FRAME + 2);
+  uint32_t out_len = 0;
+  if (metro_fw_frame_encode(frame[0], frame[1], p.data(), static_cast<uint32_t>(p.size()),
+                            out.data(), static_cast<uint32_t>(out.size()),
+                            &out_len) != METRO_FW_OK) {
+    return std::vector<uint8_t>(data, data + len);
+  }
+  out.resize(out_len);
+  return out;
+}
+
+int Send(void* ctx, const uint8_t* in, uint32_t in_len) {
   auto* s = static_cast<Sim*>(ctx);
   if (s->opt.drop_responses.count(++s->responses) != 0) return 0;
+  const std::vector<uint8_t> answer = Lie(s->opt, in, in_len);
+  const uint8_t* data = answer.data();
+  const uint32_t len = static_cast<uint32_t>(answer.size());
   uint32_t done = 0;
   while (done < len) {
     const ssize_t n = ::write(s->master, data + done, len - done);
@@ -156,6 +203,12 @@ int main(int argc, char** argv) {
   app.add_option("--flash-write-error", o.flash_write_error,
                  "the N-th flash write fails: CAL_EXECUTE answers FLASH_ERROR (default: never)")
       ->check(CLI::PositiveNumber);
+  std::vector<std::string> lies;
+  app.add_option("--lie", lies,
+                 "the tag lies in its answers: readback (CAL_READ's first data byte changed), "
+                 "execute-seq (CAL_EXECUTE's SUCCESS names seq + 1), get-crc (CAL_GET_CRC's "
+                 "CRC-32 changed), info-crc (GET_INFO's active CRC-32 changed)")
+      ->check(CLI::IsMember({"readback", "execute-seq", "get-crc", "info-crc"}));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -171,6 +224,7 @@ int main(int argc, char** argv) {
   o.dup_frames.insert(dup.begin(), dup.end());
   o.corrupt_frames.insert(corrupt.begin(), corrupt.end());
   o.drop_responses.insert(drop_response.begin(), drop_response.end());
+  o.lies.insert(lies.begin(), lies.end());
   if (!o.flash_file.empty()) {
     std::ifstream in(o.flash_file, std::ios::binary);
     if (in.good()) {

@@ -57,6 +57,20 @@ Error Refused(uint8_t op, uint8_t result, const std::string& detail = "") {
 
 }  // namespace
 
+std::string TagContradictionName(TagContradiction contradiction) {
+  switch (contradiction) {
+    case TagContradiction::kNone:
+      return "";
+    case TagContradiction::kReadBackDiffers:
+      return "read-back differs";
+    case TagContradiction::kCrcDiffers:
+      return "CRC-32 differs";
+    case TagContradiction::kSeqDiffers:
+      return "seq differs";
+  }
+  return "";
+}
+
 std::string PushResultName(uint8_t result) {
   switch (result) {
     case METRO_FW_RES_SUCCESS:
@@ -263,6 +277,7 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
         fmt::format("blob of {} bytes: expected a multiple of 4 in 36..1024", blob.size()));
   }
   commit_ = CommitState::kNotSent;
+  contradiction_ = TagContradiction::kNone;
   const uint16_t total = static_cast<uint16_t>(blob.size());
   const uint32_t crc = metro_fw_crc32(0, blob.data(), total);
   const uint32_t seq = Get32(blob, 12);
@@ -319,10 +334,12 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
     const uint32_t have_crc = Get32(g.value().payload, 2);
     if (have == total && have_crc == crc) break;
     if (pass == 1) {
-      return MakeError(fmt::format(
-          "CAL_GET_CRC: the tag holds {} bytes with CRC-32 0x{:08X}, expected {} bytes with "
-          "0x{:08X}, after a full resend",
-          have, have_crc, total, crc));
+      // Every CAL_WRITE was acknowledged twice over: the tag's answer contradicts them.
+      contradiction_ = TagContradiction::kCrcDiffers;
+      return MakeError(
+          fmt::format("CAL_GET_CRC: the tag acknowledged every byte but holds {} bytes with CRC-32 "
+                      "0x{:08X}, expected {} bytes with 0x{:08X}, after a full resend",
+                      have, have_crc, total, crc));
     }
   }
 
@@ -333,7 +350,10 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
     commit_ = CommitState::kCommitted;
     slot = e.value().payload[0];
     if (Get32(e.value().payload, 1) != seq) {
-      return MakeError(fmt::format("CAL_EXECUTE: the tag reports seq {}, expected {}",
+      // SUCCESS for another seq than the one sent: what the tag holds is unknown.
+      commit_ = CommitState::kUnknown;
+      contradiction_ = TagContradiction::kSeqDiffers;
+      return MakeError(fmt::format("CAL_EXECUTE: the tag answered SUCCESS with seq {}, sent {}",
                                    Get32(e.value().payload, 1), seq));
     }
   } else if (e.ok() && e.value().result != METRO_FW_RES_FLASH_ERROR &&
@@ -354,6 +374,13 @@ Result<int> PushClient::Push(const std::vector<uint8_t>& blob, const PushProgres
       commit_ = CommitState::kNotDone;
       return MakeError(fmt::format("{}; GET_INFO: the tag still holds seq {}", what.message,
                                    info.value().active_seq));
+    } else if (info.value().active_seq == seq) {
+      // The pushed seq with other bytes than were acknowledged.
+      contradiction_ = TagContradiction::kCrcDiffers;
+      return MakeError(fmt::format(
+          "{}; GET_INFO: the tag holds seq {} with CRC-32 0x{:08X}, but the blob sent as seq {} "
+          "has 0x{:08X}",
+          what.message, seq, info.value().active_crc32, seq, Get32(blob, total - 4u)));
     } else {
       return MakeError(fmt::format("{}; GET_INFO: the tag holds seq {} with CRC-32 0x{:08X}",
                                    what.message, info.value().active_seq,
@@ -378,6 +405,7 @@ Status PushClient::ReadBack(const std::vector<uint8_t>& blob, const PushProgress
     }
     for (size_t i = 0; i < len; ++i) {
       if (r.value().payload[i] != blob[offset + i]) {
+        contradiction_ = TagContradiction::kReadBackDiffers;
         return MakeError(
             fmt::format("read-back: byte {} of the active slot is 0x{:02X}, sent 0x{:02X}",
                         offset + i, r.value().payload[i], blob[offset + i]));
@@ -443,8 +471,17 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
     Status back = client.ReadBack(s.blob, progress);
     s.stats = client.stats();
     if (!back.ok()) {
-      s.message = fmt::format("the tag holds seq {} with this blob's CRC-32, but {}", s.seq,
-                              back.error().message);
+      s.contradiction = client.contradiction();
+      if (s.contradiction != TagContradiction::kNone) {
+        s.contradiction_detail = back.error().message;
+        s.message = fmt::format(
+            "the tag contradicts itself: GET_INFO reports seq {} with this blob's CRC-32, but "
+            "{}; what it runs is unknown until its flash is read over SWD",
+            s.seq, back.error().message);
+      } else {
+        s.message = fmt::format("the tag holds seq {} with this blob's CRC-32, but {}", s.seq,
+                                back.error().message);
+      }
       return s;
     }
     s.ok = true;
@@ -462,8 +499,16 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
   Result<int> slot = client.Push(s.blob, progress);
   s.stats = client.stats();
   s.commit = client.commit_state();
+  s.contradiction = client.contradiction();
   if (!slot.ok()) {
-    if (s.commit == CommitState::kUnknown) {
+    if (s.contradiction != TagContradiction::kNone) {
+      // Neither a refusal nor a lost answer: the tag's word cannot be trusted.
+      s.contradiction_detail = slot.error().message;
+      s.message = fmt::format(
+          "the tag contradicts itself ({}) pushing seq {}: {}; what it runs is unknown until "
+          "its flash is read over SWD",
+          TagContradictionName(s.contradiction), s.seq, slot.error().message);
+    } else if (s.commit == CommitState::kUnknown) {
       s.message =
           fmt::format("outcome unknown: the tag may hold seq {} ({})", s.seq, slot.error().message);
     } else if (s.commit == CommitState::kCommitted) {
@@ -486,6 +531,26 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
   return s;
 }
 
+std::string PushReadBackText(const PushSummary& s) {
+  if (s.ok) return "verified: every byte read back equal";
+  switch (s.contradiction) {
+    case TagContradiction::kReadBackDiffers: {
+      const std::string prefix = "read-back: ";
+      const std::string& d = s.contradiction_detail;
+      return "differs: " + (d.rfind(prefix, 0) == 0 ? d.substr(prefix.size()) : d);
+    }
+    case TagContradiction::kCrcDiffers:
+    case TagContradiction::kSeqDiffers:
+      return "not read back: the tag contradicted itself (" +
+             TagContradictionName(s.contradiction) + "): " + s.contradiction_detail;
+    case TagContradiction::kNone:
+      break;
+  }
+  return s.commit == CommitState::kCommitted ? "committed, read-back not finished"
+         : s.commit == CommitState::kUnknown ? "outcome unknown"
+                                             : "not committed";
+}
+
 uint32_t WiredPathSeq(const PushSummary& s) {
   const uint64_t seq = s.seq != 0 ? uint64_t{s.seq} : uint64_t{s.tag.active_seq} + 1;
   return seq >= 1 && seq <= kSeqMax ? static_cast<uint32_t>(seq) : 1u;
@@ -495,7 +560,9 @@ std::string PushRecoveryAdvice(const PushSummary& s, const std::string& port,
                                const std::string& calibration_path, int sensor) {
   if (s.ok || s.input_error || !s.tag_answered) return "";
   std::string out;
-  if (s.commit == CommitState::kUnknown || s.commit == CommitState::kCommitted) {
+  // A tag that contradicted itself would answer a second push alike: only SWD tells.
+  if (s.contradiction == TagContradiction::kNone &&
+      (s.commit == CommitState::kUnknown || s.commit == CommitState::kCommitted)) {
     out += fmt::format(
         "to find out: calibrate push --port {} {} --sensor {} --device-id {} --seq {} (a tag "
         "that holds this blob is only read back and compared; one that does not gets seq {})\n",

@@ -3,11 +3,14 @@
 // lost answers, a stale seq, a disconnect mid-transfer, a flash error and a silent tag.
 #include "metro/blob/push_client.hpp"
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <deque>
 #include <functional>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "blob/blob_test_support.hpp"
@@ -32,6 +35,9 @@ class LossyTag : public ByteStream {
   std::set<int> drop_frames, dup_frames, corrupt_frames, drop_answers;
   int hangup_after = -1;  // frames
   std::function<void()> after_execute;
+  // A tag that lies: rewrites the payload (result byte first) of its answer to `op` before it
+  // is framed again with a valid CRC-16.
+  std::function<void(uint8_t op, std::vector<uint8_t>* payload)> lie;
   int frames = 0, answers = 0;
   bool hung_up = false;
 
@@ -76,7 +82,24 @@ class LossyTag : public ByteStream {
   static int Send(void* ctx, const uint8_t* data, uint32_t len) {
     auto* self = static_cast<LossyTag*>(ctx);
     if (self->drop_answers.count(++self->answers)) return 0;
-    self->out_.insert(self->out_.end(), data, data + len);
+    if (!self->lie) {
+      self->out_.insert(self->out_.end(), data, data + len);
+      return 0;
+    }
+    SlipDecoder decoder(METRO_FW_PUSH_MAX_FRAME);
+    std::optional<SlipDecoder::Frame> f;
+    for (uint32_t i = 0; i < len && !f; ++i) f = decoder.Feed(data[i]);
+    REQUIRE(f);
+    const int n = metro_fw_frame_parse(f->bytes.data(), static_cast<uint32_t>(f->bytes.size()));
+    REQUIRE(n >= 1);
+    std::vector<uint8_t> payload(f->bytes.begin() + 4, f->bytes.begin() + 4 + n);
+    self->lie(static_cast<uint8_t>(f->bytes[0] & ~METRO_FW_PUSH_RESPONSE_BIT), &payload);
+    std::vector<uint8_t> enc(2 * METRO_FW_PUSH_MAX_FRAME + 2);
+    uint32_t enc_len = 0;
+    REQUIRE(metro_fw_frame_encode(f->bytes[0], f->bytes[1], payload.data(),
+                                  static_cast<uint32_t>(payload.size()), enc.data(),
+                                  static_cast<uint32_t>(enc.size()), &enc_len) == METRO_FW_OK);
+    self->out_.insert(self->out_.end(), enc.begin(), enc.begin() + enc_len);
     return 0;
   }
   metro_fw_flash flash_if_;
@@ -508,6 +531,94 @@ TEST_CASE("Push: a link lost after CAL_EXECUTE is an unknown outcome, not a fail
           "tag 9ABCDEF012345678 already holds this calibration: seq 8 in slot B, 356 bytes read "
           "back identical; nothing written");
     CHECK(again.frames == 1 + 23);  // GET_INFO and the reads, no write
+  }
+}
+
+TEST_CASE("Push: a tag that contradicts what it acknowledged is labelled so, not unverified",
+          "[blob][push][security][issue37]") {
+  // issue #37: "the tag committed seq 8, but the read-back did not finish (read-back: byte 0
+  // ...)" for a read-back that finished and differed; a plain failure for a tag naming another
+  // seq or CRC-32.
+  Calibration cal;
+  cal.date_utc = "2024-05-01T12:00:00Z";
+  TagCalibration t;
+  t.sensor = 2;
+  SensorCalibration a;
+  a.model.sensor = ImuSensor::kAccel;
+  a.model.kind = ModelKind::kBias;
+  a.model.input_unit = "LSB";
+  a.model.output_unit = "g";
+  a.model.scale = Eigen::Vector3d::Constant(1.0 / 16384.0);
+  t.accel = a;
+  cal.tags.push_back(t);
+  BlobFromCalibrationOptions bo;
+  bo.sensor = 2;
+  bo.seq = 8;
+  RamFlash flash;
+  flash.Program(METRO_FW_SLOT_A_ADDR, Blob(7));
+  LossyTag tag(&flash);
+  PushOptions o = Fast();
+  o.max_retries = 2;
+  SECTION("read-back differs") {
+    tag.lie = [](uint8_t op, std::vector<uint8_t>* p) {
+      if (op == METRO_FW_OP_CAL_READ && p->size() > 1) (*p)[1] ^= 0x01;  // its first data byte
+    };
+    const PushSummary s = PushCalibration(&tag, cal, bo, std::nullopt, o);
+    CHECK_FALSE(s.ok);
+    CHECK(s.contradiction == TagContradiction::kReadBackDiffers);
+    CHECK(s.commit == CommitState::kCommitted);  // It said SUCCESS: the flash is written.
+    const std::string detail = fmt::format("byte 0 of the active slot is 0x{:02X}, sent 0x{:02X}",
+                                           s.blob[0] ^ 1, s.blob[0]);
+    CHECK(s.message == "the tag contradicts itself (read-back differs) pushing seq 8: read-back: " +
+                           detail + "; what it runs is unknown until its flash is read over SWD");
+    CHECK(PushReadBackText(s) == "differs: " + detail);
+    // The same push again would be answered alike: the advice is the wired path alone.
+    const std::string advice = PushRecoveryAdvice(s, "/dev/ttyACM0", "cal.json", 2);
+    CHECK(advice.find("to find out") == std::string::npos);
+    CHECK(advice.rfind("to program over SWD instead: calibrate blob cal.json --sensor 2", 0) == 0);
+  }
+  SECTION("seq differs") {
+    tag.lie = [](uint8_t op, std::vector<uint8_t>* p) {
+      if (op == METRO_FW_OP_CAL_EXECUTE && p->size() >= 6 && (*p)[0] == METRO_FW_RES_SUCCESS) {
+        ++(*p)[2];  // seq 8 -> 9
+      }
+    };
+    const PushSummary s = PushCalibration(&tag, cal, bo, std::nullopt, o);
+    CHECK_FALSE(s.ok);
+    CHECK(s.contradiction == TagContradiction::kSeqDiffers);
+    CHECK(s.commit == CommitState::kUnknown);
+    CHECK(s.message ==
+          "the tag contradicts itself (seq differs) pushing seq 8: CAL_EXECUTE: the tag answered "
+          "SUCCESS with seq 9, sent 8; what it runs is unknown until its flash is read over SWD");
+    CHECK(PushReadBackText(s) ==
+          "not read back: the tag contradicted itself (seq differs): CAL_EXECUTE: the tag "
+          "answered SUCCESS with seq 9, sent 8");
+  }
+  SECTION("CRC-32 differs: CAL_GET_CRC") {
+    tag.lie = [](uint8_t op, std::vector<uint8_t>* p) {
+      if (op == METRO_FW_OP_CAL_GET_CRC && p->size() >= 7) (*p)[3] ^= 0x01;
+    };
+    const PushSummary s = PushCalibration(&tag, cal, bo, std::nullopt, o);
+    CHECK_FALSE(s.ok);
+    CHECK(s.contradiction == TagContradiction::kCrcDiffers);
+    CHECK(s.commit == CommitState::kNotSent);  // Nothing executed: the old blob stays.
+    CHECK(s.message.rfind("the tag contradicts itself (CRC-32 differs) pushing seq 8: CAL_GET_CRC: "
+                          "the tag acknowledged every byte but holds 356 bytes with CRC-32 0x",
+                          0) == 0);
+    CHECK(SlotBytes(flash, 0, Blob(7).size()) == Blob(7));
+  }
+  SECTION("CRC-32 differs: GET_INFO after a lost CAL_EXECUTE answer") {
+    // GET_INFO 1, CREATE 2, CAL_WRITE 3..25 (356 bytes), GET_CRC 26, EXECUTE 27 and its two
+    // resends lost; GET_INFO (answer 30) names seq 8 with another CRC-32.
+    tag.drop_answers = {27, 28, 29};
+    tag.lie = [&tag](uint8_t op, std::vector<uint8_t>* p) {
+      if (op == METRO_FW_OP_GET_INFO && tag.answers > 1 && p->size() >= 22) (*p)[18] ^= 0x01;
+    };
+    const PushSummary s = PushCalibration(&tag, cal, bo, std::nullopt, o);
+    CHECK_FALSE(s.ok);
+    CHECK(s.contradiction == TagContradiction::kCrcDiffers);
+    CHECK(s.message.find("; GET_INFO: the tag holds seq 8 with CRC-32 0x") != std::string::npos);
+    CHECK(s.message.find("but the blob sent as seq 8 has 0x") != std::string::npos);
   }
 }
 

@@ -482,6 +482,76 @@ TEST_CASE("pty: calibrate push --all pushes each tag to its own device", "[blob]
   std::remove(cal.c_str());
 }
 
+TEST_CASE("pty: a lying tag's push is labelled MISMATCH and recorded so in the registry",
+          "[blob][push][apps][security][issue37]") {
+  // issue #37: a tag that acknowledged the blob but read back other bytes was labelled
+  // "UNVERIFIED: ... the read-back did not finish" and recorded as "committed, read-back not
+  // finished"; one that named another seq or CRC-32 was a plain FAILED.
+  const std::vector<uint8_t> golden = Bytes(kGolden + "tag_sensor2.bin");  // seq 3
+  const std::string flash = "metro_pty_liar_flash.bin";
+  const std::string reg = "metro_pty_liar_registry.sqlite";
+  struct Case {
+    const char* lie;
+    const char* line;      // stderr's final line
+    const char* readback;  // the registry's push record
+  };
+  const std::vector<Case> cases = {
+      {"readback",
+       "MISMATCH: the tag contradicts itself (read-back differs) pushing seq 3: read-back: byte 0 "
+       "of the active slot is 0x48, sent 0x49; what it runs is unknown until its flash is read "
+       "over SWD",
+       "differs: byte 0 of the active slot is 0x48, sent 0x49"},
+      {"execute-seq",
+       "MISMATCH: the tag contradicts itself (seq differs) pushing seq 3: CAL_EXECUTE: the tag "
+       "answered SUCCESS with seq 4, sent 3",
+       "not read back: the tag contradicted itself (seq differs): CAL_EXECUTE: the tag answered "
+       "SUCCESS with seq 4, sent 3"},
+      {"get-crc",
+       "MISMATCH: the tag contradicts itself (CRC-32 differs) pushing seq 3: CAL_GET_CRC: "
+       "the tag acknowledged every byte but holds 540 bytes with CRC-32",
+       "not read back: the tag contradicted itself (CRC-32 differs): CAL_GET_CRC: the tag "
+       "acknowledged every byte"},
+  };
+  for (const Case& c : cases) {
+    SECTION(c.lie) {
+      std::remove(flash.c_str());
+      std::remove(reg.c_str());
+      // The line recorded the device's blob first, so its history shows the push.
+      testing::ProgramRun blob = testing::RunProgram(
+          METRO_CALIBRATE_EXE, "blob " + kGolden +
+                                   "calibration_sensor2.json --sensor 2 --device-id "
+                                   "9ABCDEF012345678 -o metro_pty_liar.bin --registry " +
+                                   reg);
+      REQUIRE(blob.exit_code == 0);
+      std::remove("metro_pty_liar.bin");
+      SimTag sim(flash, {"--lie", c.lie});
+      Run r = Push(sim.pty(), "--seq 3 --timeout-ms 200 --retries 1 --registry " + reg);
+      INFO(r.err);
+      CHECK(r.exit_code == 1);
+      CHECK(Has(r.err, c.line));
+      CHECK_FALSE(Has(r.err, "OK:"));
+      CHECK_FALSE(Has(r.err, "UNVERIFIED"));
+      CHECK_FALSE(Has(r.err, "FAILED"));
+      CHECK_FALSE(Has(r.err, "to find out"));  // A second push would be answered alike.
+      CHECK(Has(r.err, "to program over SWD instead: calibrate blob "));
+      CHECK(Has(r.err,
+                "registry: recorded push to device 9ABCDEF012345678 (MISMATCH: the tag "
+                "contradicted itself)"));
+      sim.Stop();
+      testing::ProgramRun h =
+          testing::RunProgram(METRO_CALIBRATE_EXE, "registry history --json --registry " + reg +
+                                                       " --device-id 9ABCDEF012345678");
+      INFO(h.out + h.err);
+      REQUIRE(h.exit_code == 0);
+      const std::string json = h.out;
+      CHECK(Has(json, "\"ok\": false"));
+      CHECK(Has(json, std::string("\"readback\": \"") + c.readback));
+    }
+  }
+  std::remove(flash.c_str());
+  for (const char* suffix : {"", "-shm", "-wal"}) std::remove((reg + suffix).c_str());
+}
+
 #endif  // METRO_CALIBRATE_EXE
 
 }  // namespace metro::blob

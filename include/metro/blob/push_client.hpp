@@ -88,6 +88,25 @@ enum class CommitState {
   kCommitted,  // The tag answered SUCCESS, or GET_INFO shows the pushed seq and CRC-32.
 };
 
+// A tag that contradicts what it acknowledged (issue #37: a lying tag's push was labelled
+// "UNVERIFIED ... the read-back did not finish", or FAILED like a refusal). Frames are CRC-16
+// checked and retried, so this is no link fault: the tag's own word cannot be trusted, and
+// what it runs is unknown until its flash is read out over SWD.
+enum class TagContradiction {
+  kNone,
+  // It acknowledged the blob (CAL_EXECUTE answered SUCCESS, or GET_INFO showed the pushed seq
+  // and CRC-32) but CAL_READ returns other bytes.
+  kReadBackDiffers,
+  // It acknowledged every CAL_WRITE but CAL_GET_CRC reports another length or CRC-32 (after a
+  // full resend), or GET_INFO reports the pushed seq with another CRC-32.
+  kCrcDiffers,
+  // CAL_EXECUTE answered SUCCESS naming another seq (version) than the pushed blob's.
+  kSeqDiffers,
+};
+
+// "read-back differs", "CRC-32 differs", "seq differs" ("" for kNone).
+std::string TagContradictionName(TagContradiction contradiction);
+
 // Name of a push result code, e.g. "STALE_SEQ" (0x05).
 std::string PushResultName(uint8_t result);
 
@@ -114,6 +133,8 @@ class PushClient {
 
   const PushStats& stats() const { return stats_; }
   CommitState commit_state() const { return commit_; }
+  // Set by Push or ReadBack when the tag contradicted what it acknowledged (the error says how).
+  TagContradiction contradiction() const { return contradiction_; }
 
  private:
   struct Response {
@@ -131,6 +152,7 @@ class PushClient {
   std::vector<uint8_t> rx_;  // Bytes read but not yet decoded.
   size_t rx_pos_ = 0;
   CommitState commit_ = CommitState::kNotSent;
+  TagContradiction contradiction_ = TagContradiction::kNone;
 };
 
 // What `calibrate push` reports.  Defaults read as failure.
@@ -141,8 +163,11 @@ struct PushSummary {
   // calibration is live but the read-back did not finish.
   CommitState commit = CommitState::kNotSent;
   bool already_held = false;  // The tag already held this blob (--seq N): only read back.
-  std::string message;        // Final status, one line.
-  TagInfo tag;                // From GET_INFO (valid once the tag answered).
+  // Not kNone: the tag contradicted what it acknowledged (never ok; `message` says how).
+  TagContradiction contradiction = TagContradiction::kNone;
+  std::string contradiction_detail;  // How, in one line: "read-back: byte 156 of ...".
+  std::string message;               // Final status, one line.
+  TagInfo tag;                       // From GET_INFO (valid once the tag answered).
   bool tag_answered = false;
   uint32_t seq = 0;  // Of the pushed blob.
   int slot = -1;     // Written by the tag.
@@ -162,6 +187,13 @@ PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
                             BlobFromCalibrationOptions blob_options,
                             std::optional<uint64_t> expect_device_id, const PushOptions& options,
                             const PushProgress& progress = {});
+
+// What the read-back found, as the registry's push record keeps it (docs/registry.md):
+// "verified: every byte read back equal", "differs: byte 156 of the active slot is 0x4F, sent
+// 0x54" (a tag that acknowledged the blob), "not read back: the tag reported seq 5 for seq 4"
+// or "... another CRC-32 ..." (a tag that contradicted itself before), "committed, read-back
+// not finished", "outcome unknown" or "not committed".
+std::string PushReadBackText(const PushSummary& summary);
 
 // The seq for the wired path (`calibrate blob --seq S --hex` and nrfjprog --sectorerase, which
 // erases both slot pages: the blob in A, the tombstone in B): the pushed seq, else the tag's
