@@ -656,6 +656,11 @@ Calibration CalibrationFromJsonValue(const JsonCursor& j) {
   cal.gravity_mps2 = j["gravity_mps2"].Number();
   cal.tool_version = j["tool_version"].OptionalString().value_or("");
   cal.date_utc = j["date_utc"].OptionalString().value_or("");
+  // The date of the calibration goes into the blob and the certificate: refused here, at its
+  // position, rather than when a blob is made (issue #37).
+  if (j.ok() && !cal.date_utc.empty() && !ParseUtcIso8601(cal.date_utc)) {
+    j["date_utc"].Fail("an ISO 8601 UTC time such as \"2026-05-01T12:00:00Z\"");
+  }
   if (j.Has("gravity_source")) {
     cal.gravity_source = j["gravity_source"].String();
     if (j.ok() && cal.gravity_source != "standard" && cal.gravity_source != "given") {

@@ -2,14 +2,18 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <boost/math/distributions/normal.hpp>
 #include <cmath>
 #include <set>
+#include <vector>
 
 #include "calibration/calibration_json.hpp"
+#include "core/json_reader.hpp"
 #include "core/json_text.hpp"
 #include "metro/calibration/named_constants.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/core/units.hpp"
 
 namespace metro {
@@ -25,6 +29,46 @@ const char* const kSpecShape =
     "expected {\"tolerances\": [{\"constant\": \"accel.b_x\", \"lower\": -300, \"upper\": 300, "
     "\"unit\": \"LSB\"}], \"decision_rule\": \"simple\"|\"guarded\"|\"risk\"[, "
     "\"coverage_factor\": 2][, \"max_consumer_risk\": 0.023]}";
+
+// How a JSON value looks in a message: a string quoted, anything else as JSON, cut short.
+std::string Shown(const json& value) {
+  if (value.is_string()) return "'" + Excerpt(value.get<std::string>(), 0, 60) + "'";
+  return Excerpt(JsonText(value), 0, 60);
+}
+
+// Levenshtein distance (insertions, deletions, substitutions of bytes).
+size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t k = 0; k <= b.size(); ++k) row[k] = k;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t k = 1; k <= b.size(); ++k) {
+      const size_t up = row[k];
+      row[k] = std::min({row[k] + 1, row[k - 1] + 1, diagonal + (a[i - 1] != b[k - 1] ? 1 : 0)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// " (did you mean 'x'?)" for the name of `names` nearest to `name` when it is within a third
+// of its length (a typo), else "".
+std::string NearestName(const std::string& name, const std::set<std::string>& names) {
+  std::string best;
+  size_t best_distance = std::string::npos;
+  for (const std::string& n : names) {
+    const size_t d = EditDistance(name, n);
+    if (d < best_distance) {
+      best = n;
+      best_distance = d;
+    }
+  }
+  if (best.empty() || best_distance == 0 || 3 * best_distance > std::max<size_t>(name.size(), 3)) {
+    return "";
+  }
+  return " (did you mean '" + best + "'?)";
+}
 
 bool IsLsbUnit(const std::string& unit) {
   return unit.find("LSB") != std::string::npos || unit.find("lsb") != std::string::npos;
@@ -96,96 +140,146 @@ Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::s
   Result<json> parsed = ParseJsonText(text, path);
   if (!parsed.ok()) return parsed.error();
   const json& j = parsed.value();
-  if (!j.is_object())
-    return SpecError(path, 1, 1, std::string("a spec is an object; ") + kSpecShape);
+  // Every error at the value it is about (or the object that lacks it), with what was expected
+  // and the shape of a spec (docs/conformity.md).
+  const auto at = [&](const std::vector<JsonPathStep>& where, const std::string& message) {
+    const auto [line, column] = TextLineColumn(text, JsonValueOffset(text, where));
+    return SpecError(path, line, column, message);
+  };
+  const auto shape = [](const std::string& message) { return message + "; " + kSpecShape; };
+  if (!j.is_object()) return at({}, shape("a spec is a JSON object"));
   static const std::set<std::string> kTop = {"tolerances", "decision_rule", "coverage_factor",
                                              "max_consumer_risk", "description"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     if (!kTop.count(it.key())) {
-      return SpecError(path, 0, 0,
-                       fmt::format("unknown key '{}'; the spec keys are tolerances, "
-                                   "decision_rule, coverage_factor, max_consumer_risk, "
-                                   "description",
-                                   it.key()));
+      return at({it.key()}, fmt::format("unknown key '{}'; expected tolerances, decision_rule, "
+                                        "coverage_factor, max_consumer_risk or description{}",
+                                        it.key(), NearestName(it.key(), kTop)));
     }
   }
   ConformitySpec spec;
   spec.path = path;
-  if (!j.contains("decision_rule") || !j["decision_rule"].is_string()) {
-    return SpecError(path, 0, 0, std::string("missing 'decision_rule'; ") + kSpecShape);
-  }
-  const std::optional<DecisionRule> rule = ParseDecisionRule(j["decision_rule"].get<std::string>());
+  if (!j.contains("decision_rule")) return at({}, shape("missing 'decision_rule'"));
+  const std::optional<DecisionRule> rule =
+      j["decision_rule"].is_string() ? ParseDecisionRule(j["decision_rule"].get<std::string>())
+                                     : std::nullopt;
   if (!rule) {
-    return SpecError(path, 0, 0,
-                     fmt::format("decision_rule '{}' is not simple, guarded or risk",
-                                 j["decision_rule"].get<std::string>()));
+    return at({"decision_rule"},
+              fmt::format("decision_rule {} is not simple, guarded or risk; expected "
+                          "\"decision_rule\": \"simple\" (or \"guarded\" with \"coverage_factor\": "
+                          "2, or \"risk\" with \"max_consumer_risk\": 0.023)",
+                          Shown(j["decision_rule"])));
   }
   spec.rule = *rule;
   if (j.contains("coverage_factor")) {
-    if (!j["coverage_factor"].is_number()) {
-      return SpecError(path, 0, 0, "'coverage_factor' must be a number (e.g. 2)");
+    const json& k = j["coverage_factor"];
+    if (!k.is_number() || !std::isfinite(k.get<double>()) || !(k.get<double>() > 0.0)) {
+      return at(
+          {"coverage_factor"},
+          fmt::format("coverage_factor {}: expected a number > 0, e.g. \"coverage_factor\": 2 "
+                      "(w = k u, JCGM 106 8.3.2)",
+                      Shown(k)));
     }
-    spec.coverage_factor = j["coverage_factor"].get<double>();
+    spec.coverage_factor = k.get<double>();
   }
   if (j.contains("max_consumer_risk")) {
-    if (!j["max_consumer_risk"].is_number()) {
-      return SpecError(path, 0, 0, "'max_consumer_risk' must be a number (e.g. 0.023)");
+    const json& r = j["max_consumer_risk"];
+    if (!r.is_number()) {
+      return at({"max_consumer_risk"},
+                fmt::format("max_consumer_risk {}: expected a number in (0, 0.5), e.g. "
+                            "\"max_consumer_risk\": 0.023",
+                            Shown(r)));
     }
-    spec.max_consumer_risk = j["max_consumer_risk"].get<double>();
+    spec.max_consumer_risk = r.get<double>();
   }
-  if (!j.contains("tolerances") || !j["tolerances"].is_array() || j["tolerances"].empty()) {
-    return SpecError(path, 0, 0,
-                     std::string("'tolerances' must be a non-empty array; ") + kSpecShape);
+  if (spec.rule == DecisionRule::kRisk &&
+      !(spec.max_consumer_risk > 0.0 && spec.max_consumer_risk < 0.5)) {
+    return at(j.contains("max_consumer_risk") ? std::vector<JsonPathStep>{"max_consumer_risk"}
+                                              : std::vector<JsonPathStep>{"decision_rule"},
+              "the risk rule needs max_consumer_risk in (0, 0.5); expected \"decision_rule\": "
+              "\"risk\", \"max_consumer_risk\": 0.023");
+  }
+  if (!j.contains("tolerances")) return at({}, shape("missing 'tolerances'"));
+  if (!j["tolerances"].is_array() || j["tolerances"].empty()) {
+    return at({"tolerances"},
+              shape(fmt::format("'tolerances' is {}: expected a non-empty array of entries",
+                                Shown(j["tolerances"]))));
   }
   static const std::set<std::string> kEntry = {"constant", "lower", "upper", "unit"};
+  constexpr const char* kEntryShape =
+      "expected {\"constant\": \"accel.b_x\", \"lower\": -300, \"upper\": 300, \"unit\": "
+      "\"LSB\"} (one limit may be absent)";
   std::set<std::string> names;
   for (size_t i = 0; i < j["tolerances"].size(); ++i) {
     const json& e = j["tolerances"][i];
     // A pair, not a structured binding: C++17 lambdas cannot capture those (clang refuses).
-    const std::pair<int64_t, int64_t> at = TopLevelArrayElementLineColumn(text, "tolerances", i);
+    const std::pair<int64_t, int64_t> entry = TopLevelArrayElementLineColumn(text, "tolerances", i);
     auto fail = [&](const std::string& what) {
-      return SpecError(path, at.first, at.second, fmt::format("tolerances[{}]: {}", i, what));
+      return SpecError(path, entry.first, entry.second, fmt::format("tolerances[{}]: {}", i, what));
+    };
+    auto fail_at = [&](const std::string& key, const std::string& what) {
+      return at({"tolerances", i, key}, fmt::format("tolerances[{}]: {}", i, what));
     };
     if (!e.is_object()) {
-      return fail("expected an object {\"constant\", \"lower\", \"upper\", \"unit\"}");
+      return at({"tolerances", i},
+                fmt::format("tolerances[{}] is {}: {}", i, Shown(e), kEntryShape));
     }
     for (auto it = e.begin(); it != e.end(); ++it) {
       if (!kEntry.count(it.key())) {
-        return fail(
-            fmt::format("unknown key '{}'; an entry has constant, lower, upper, unit", it.key()));
+        return fail_at(it.key(), fmt::format("unknown key '{}'; an entry has constant, lower, "
+                                             "upper, unit{}: {}",
+                                             it.key(), NearestName(it.key(), kEntry), kEntryShape));
       }
     }
     Tolerance t;
-    t.line = at.first;
-    t.column = at.second;
-    if (!e.contains("constant") || !e["constant"].is_string()) {
-      return fail("missing 'constant' (a name such as \"accel.b_x\")");
+    t.line = entry.first;
+    t.column = entry.second;
+    if (!e.contains("constant")) {
+      return fail(
+          fmt::format("missing 'constant' (a name such as \"accel.b_x\"): {}", kEntryShape));
+    }
+    if (!e["constant"].is_string()) {
+      return fail_at("constant", fmt::format("'constant' is {}: expected a name such as "
+                                             "\"accel.b_x\" (docs/conformity.md)",
+                                             Shown(e["constant"])));
     }
     t.constant = e["constant"].get<std::string>();
-    if (!names.insert(t.constant).second)
-      return fail(fmt::format("'{}' is given twice", t.constant));
-    if (!e.contains("unit") || !e["unit"].is_string()) {
-      return fail(
-          fmt::format("'{}': missing 'unit' (e.g. \"LSB\", \"g_n/LSB\", \"rad\")", t.constant));
+    if (!names.insert(t.constant).second) {
+      return fail_at("constant", fmt::format("'{}' is given twice; expected one entry per "
+                                             "constant, with both limits",
+                                             t.constant));
+    }
+    if (!e.contains("unit")) {
+      return fail(fmt::format("'{}': missing 'unit' (e.g. \"LSB\", \"g_n/LSB\", \"rad\"): {}",
+                              t.constant, kEntryShape));
+    }
+    if (!e["unit"].is_string()) {
+      return fail_at("unit", fmt::format("'{}': 'unit' is {}: expected a unit such as \"LSB\", "
+                                         "\"g_n/LSB\" or \"rad\"",
+                                         t.constant, Shown(e["unit"])));
     }
     t.unit = e["unit"].get<std::string>();
     for (const char* key : {"lower", "upper"}) {
       if (!e.contains(key) || e[key].is_null()) continue;
       if (!e[key].is_number() || !std::isfinite(e[key].get<double>())) {
-        return fail(fmt::format("'{}': '{}' must be a finite number", t.constant, key));
+        return fail_at(key, fmt::format("'{}': '{}' is {}: expected a finite number (or null "
+                                        "for no limit), e.g. \"{}\": {}",
+                                        t.constant, key, Shown(e[key]), key,
+                                        std::string(key) == "lower" ? "-300" : "300"));
       }
       (std::string(key) == "lower" ? t.lower : t.upper) = e[key].get<double>();
     }
     if (!t.lower && !t.upper) {
-      return fail(fmt::format("'{}' has neither 'lower' nor 'upper'", t.constant));
+      return fail(fmt::format("'{}' has neither 'lower' nor 'upper': {}", t.constant, kEntryShape));
     }
     if (t.lower && t.upper && *t.lower > *t.upper) {
-      return fail(fmt::format("'{}': lower {} > upper {}", t.constant, *t.lower, *t.upper));
+      return fail(fmt::format("'{}': lower {} > upper {}; expected lower <= upper", t.constant,
+                              *t.lower, *t.upper));
     }
     spec.tolerances.push_back(std::move(t));
   }
   std::string why;
-  if (!spec.IsValid(&why)) return SpecError(path, 0, 0, why);
+  if (!spec.IsValid(&why)) return at({}, why);  // Checked above, field by field.
   return spec;
 }
 
@@ -306,18 +400,29 @@ Result<ConformityStatement> EvaluateConformity(const Calibration& calibration,
       }
       if (c == nullptr) {
         std::string have;
-        for (const NamedConstant& n : constants) have += (have.empty() ? "" : " ") + n.name;
-        return fail(fmt::format("sensor {} has no constant '{}'; it has: {}", tag.sensor,
-                                t.constant, have));
+        std::set<std::string> known;
+        for (const NamedConstant& n : constants) {
+          have += (have.empty() ? "" : " ") + n.name;
+          known.insert(n.name);
+        }
+        return fail(fmt::format("sensor {} has no constant '{}'{}; it has: {}", tag.sensor,
+                                t.constant, NearestName(t.constant, known), have));
       }
       Result<PhysicalUnit> from = PhysicalUnit::Parse(c->unit);
       Result<PhysicalUnit> to = PhysicalUnit::Parse(t.unit);
-      if (!to.ok()) return fail(fmt::format("'{}': unit: {}", t.constant, to.error().message));
+      if (!to.ok()) {
+        return fail(
+            fmt::format("'{}': unit: {}; expected the constant's unit \"{}\" or one "
+                        "convertible to it",
+                        t.constant, to.error().message, c->unit));
+      }
       if (!from.ok()) return from.error();
       const std::optional<UnitConversion> conv = from.value().ConversionTo(to.value());
       if (!conv || IsLsbUnit(c->unit) != IsLsbUnit(t.unit)) {
-        return fail(fmt::format("'{}': unit '{}' does not match the constant's unit '{}'",
-                                t.constant, t.unit, c->unit));
+        return fail(
+            fmt::format("'{}': unit '{}' does not match the constant's unit '{}'; "
+                        "expected \"unit\": \"{}\" or a unit convertible to it",
+                        t.constant, t.unit, c->unit, c->unit));
       }
       ConformityEntry e = DecideConformity(
           t.constant, conv->ConvertValue(c->value), std::abs(conv->ConvertDifference(c->u)),

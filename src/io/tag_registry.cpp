@@ -4,9 +4,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/json_reader.hpp"
 #include "core/json_text.hpp"
 #include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/terminal_text.hpp"
 
 namespace metro {
 
@@ -30,7 +32,12 @@ Result<TagRegistry> TagRegistry::Load(const std::string& path) {
   constexpr const char* kShape =
       R"(expected a JSON object {"1": "Forehead", "2": {"name": "Chest", "device_id": )"
       R"("12345678 9ABCDEF0", "profile": "mpu6050"}, ...})";
-  if (!j.is_object()) return MakeError(path, 0, kShape);
+  // Every error at the value it is about: file:line:column, what was expected, the shape.
+  const auto at = [&](const std::vector<JsonPathStep>& where, const std::string& message) {
+    const auto [line, column] = TextLineColumn(text.value(), JsonValueOffset(text.value(), where));
+    return MakeError(path, line, column, message);
+  };
+  if (!j.is_object()) return at({}, kShape);
   TagRegistry r = Default();
   std::map<uint64_t, int> devices;
   for (const auto& [key, value] : j.items()) {
@@ -43,7 +50,9 @@ Result<TagRegistry> TagRegistry::Load(const std::string& path) {
       sensor = 0;
     }
     if (sensor < 1 || sensor > 255) {
-      return MakeError(path, 0, fmt::format("key '{}': expected a tag number 1..255", key));
+      return at({key}, fmt::format("key '{}': expected a tag number 1..255 as the key, e.g. "
+                                   "\"2\": \"Chest\"",
+                                   EscapeControlChars(key)));
     }
     TagEntry e{sensor, "", {}, ""};
     if (value.is_string()) {
@@ -51,29 +60,37 @@ Result<TagRegistry> TagRegistry::Load(const std::string& path) {
     } else if (value.is_object()) {
       for (const auto& [field, v] : value.items()) {
         if (field != "name" && field != "device_id" && field != "profile") {
-          return MakeError(path, 0,
-                           fmt::format("tag {}: unknown key '{}'; expected name, device_id, "
-                                       "profile",
-                                       sensor, field));
+          return at({key, field},
+                    fmt::format("tag {}: unknown key '{}'; expected name, device_id, profile: "
+                                "\"{}\": {{\"name\": \"Chest\", \"device_id\": \"12345678 "
+                                "9ABCDEF0\", \"profile\": \"mpu6050\"}}",
+                                sensor, EscapeControlChars(field), sensor));
         }
         if (!v.is_string()) {
-          return MakeError(path, 0, fmt::format("tag {}: {}: expected a string", sensor, field));
+          return at({key, field}, fmt::format("tag {}: {}: expected a string, e.g. \"{}\": {}",
+                                              sensor, field, field,
+                                              field == "name"        ? "\"Chest\""
+                                              : field == "device_id" ? "\"12345678 9ABCDEF0\""
+                                                                     : "\"mpu6050\""));
         }
       }
       if (!value.contains("name")) {
-        return MakeError(path, 0, fmt::format("tag {}: expected a name", sensor));
+        return at({key}, fmt::format("tag {}: expected a name: \"{}\": {{\"name\": \"Chest\", "
+                                     "...}}",
+                                     sensor, sensor));
       }
       e.name = value["name"].get<std::string>();
       if (value.contains("device_id")) {
         Result<uint64_t> id = ParseDeviceIdText(value["device_id"].get<std::string>());
         if (!id.ok()) {
-          return MakeError(path, 0,
-                           fmt::format("tag {}: device_id: {}", sensor, id.error().message));
+          return at({key, "device_id"},
+                    fmt::format("tag {}: device_id: {}", sensor, id.error().message));
         }
         if (const auto it = devices.find(id.value()); it != devices.end()) {
-          return MakeError(path, 0,
-                           fmt::format("tag {}: device_id {} is tag {}'s already", sensor,
-                                       FormatDeviceIdText(id.value()), it->second));
+          return at({key, "device_id"},
+                    fmt::format("tag {}: device_id {} is tag {}'s already; expected one device "
+                                "per tag",
+                                sensor, FormatDeviceIdText(id.value()), it->second));
         }
         devices[id.value()] = sensor;
         e.device_id = id.value();
@@ -81,16 +98,16 @@ Result<TagRegistry> TagRegistry::Load(const std::string& path) {
       if (value.contains("profile")) {
         e.profile = value["profile"].get<std::string>();
         if (e.profile != "mpu6050" && e.profile != "generic") {
-          return MakeError(
-              path, 0,
-              fmt::format("tag {}: profile '{}': expected mpu6050 or generic", sensor, e.profile));
+          return at({key, "profile"},
+                    fmt::format("tag {}: profile '{}': expected mpu6050 or generic", sensor,
+                                EscapeControlChars(e.profile)));
         }
       }
     } else {
-      return MakeError(path, 0,
-                       fmt::format("tag {}: expected a name string or an object with name, "
-                                   "device_id, profile",
-                                   sensor));
+      return at({key}, fmt::format("tag {}: expected a name string or an object with name, "
+                                   "device_id, profile: \"{}\": \"Chest\" or \"{}\": {{\"name\": "
+                                   "\"Chest\", \"device_id\": \"12345678 9ABCDEF0\"}}",
+                                   sensor, sensor, sensor));
     }
     r.tags_[sensor] = std::move(e);
   }

@@ -11,6 +11,7 @@
 #include "metro/calibration/simulate.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
+#include "support/text_position.hpp"
 
 namespace metro {
 namespace {
@@ -281,6 +282,22 @@ TEST_CASE("calibration.json: matrix that disagrees with scale and misalignment i
         "'misalignment' (difference -1.81e-10, tolerance 4.44e-16 relative, the double rounding "
         "of both: the redundant fields disagree, docs/calibration-format.md), found the number "
         "7.2e-07");
+}
+
+TEST_CASE("calibration.json: a date_utc that is no ISO 8601 time is refused at its position",
+          "[calibration][security][issue37]") {
+  // issue #37: it was refused only when a blob was made, without line and column.
+  std::string text = GoldenCalibrationJson().dump(2);
+  const std::string key = "\"date_utc\": \"";
+  const size_t at = text.find(key);
+  REQUIRE(at != std::string::npos);
+  text.replace(at + key.size(), text.find('"', at + key.size()) - at - key.size(), "May 1st");
+  Result<Calibration> r = CalibrationFromJson(text, "c.json");
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().ToString() ==
+        "c.json:" + testing::LineColumn(text, at + key.size() - 1) +
+            ": date_utc: expected an ISO 8601 UTC time such as \"2026-05-01T12:00:00Z\", found "
+            "the string \"May 1st\"");
 }
 
 TEST_CASE("calibration.json: the matrix tolerance is the double rounding, 2^-51 relative",

@@ -4,10 +4,13 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/named_constants.hpp"
 #include "support/temp_file.hpp"
+#include "support/text_position.hpp"
 
 namespace metro {
 namespace {
@@ -190,8 +193,8 @@ TEST_CASE("Conformity: bad specs are refused at file:line:column", "[calibration
   e = evaluate(
       "{\"decision_rule\": \"simple\", \"tolerances\": [{\"constant\": \"accel.b_w\", \"upper\": "
       "1, \"unit\": \"LSB\"}]}");
-  CHECK(e.find(":1:44: sensor 2 has no constant 'accel.b_w'; it has: accel.b_x") !=
-        std::string::npos);
+  CHECK(e.find(":1:44: sensor 2 has no constant 'accel.b_w' (did you mean 'accel.b_x'?); it "
+               "has: accel.b_x") != std::string::npos);
   // Unit of another dimension, and a dimensionless unit that is not a count.
   e = evaluate(
       "{\"decision_rule\": \"simple\", \"tolerances\": [{\"constant\": \"accel.b_x\", \"upper\": "
@@ -219,6 +222,111 @@ TEST_CASE("Conformity: bad specs are refused at file:line:column", "[calibration
   CHECK(e.find("unknown key 'tolerance'") != std::string::npos);
   e = evaluate("{\"decision_rule\": \"simple\", \"tolerances\": [}");
   CHECK(e.find("invalid JSON") != std::string::npos);
+}
+
+TEST_CASE("Conformity: every class of bad spec at file:line:column with the expected shape",
+          "[calibration][conformity][issue37]") {
+  // issue #37: the rule, coverage factor, risk and tolerances errors had no line and column.
+  // `at` is the text the error points at (its first occurrence in the spec), located here
+  // independently of the reader; `message` follows "path:line:column: ".
+  Result<Calibration> cal = LoadCalibration(kGolden);
+  REQUIRE(cal.ok());
+  const std::string shape =
+      R"(expected {"tolerances": [{"constant": "accel.b_x", "lower": -300, "upper": 300, )"
+      R"("unit": "LSB"}], "decision_rule": "simple"|"guarded"|"risk"[, "coverage_factor": 2][, )"
+      R"("max_consumer_risk": 0.023]})";
+  const std::string entry =
+      R"(expected {"constant": "accel.b_x", "lower": -300, "upper": 300, "unit": "LSB"} (one )"
+      R"(limit may be absent))";
+  const std::string ok = R"({"constant": "accel.b_x", "upper": 1, "unit": "LSB"})";
+  struct Case {
+    std::string spec;
+    std::string at;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"[1]", "[1]", "a spec is a JSON object; " + shape},
+      {R"({"decision_rule": "simple", "tolerance": []})", "[]",
+       "unknown key 'tolerance'; expected tolerances, decision_rule, coverage_factor, "
+       "max_consumer_risk or description (did you mean 'tolerances'?)"},
+      {R"({"tolerances": [)" + ok + "]}", "{", "missing 'decision_rule'; " + shape},
+      {R"({"decision_rule": "strict", "tolerances": [)" + ok + "]}", R"("strict")",
+       R"(decision_rule 'strict' is not simple, guarded or risk; expected "decision_rule": )"
+       R"("simple" (or "guarded" with "coverage_factor": 2, or "risk" with )"
+       R"("max_consumer_risk": 0.023))"},
+      {R"({"decision_rule": 1, "tolerances": [)" + ok + "]}", "1,",
+       R"(decision_rule 1 is not simple, guarded or risk; expected "decision_rule": )"
+       R"("simple" (or "guarded" with "coverage_factor": 2, or "risk" with )"
+       R"("max_consumer_risk": 0.023))"},
+      {R"({"decision_rule": "guarded", "coverage_factor": -1, "tolerances": [)" + ok + "]}", "-1",
+       R"(coverage_factor -1: expected a number > 0, e.g. "coverage_factor": 2 (w = k u, JCGM )"
+       R"(106 8.3.2))"},
+      {R"({"decision_rule": "risk", "max_consumer_risk": "low", "tolerances": [)" + ok + "]}",
+       R"("low")",
+       R"(max_consumer_risk 'low': expected a number in (0, 0.5), e.g. "max_consumer_risk": )"
+       R"(0.023)"},
+      {R"({"decision_rule": "risk", "tolerances": [)" + ok + "]}", R"("risk")",
+       R"(the risk rule needs max_consumer_risk in (0, 0.5); expected "decision_rule": "risk", )"
+       R"("max_consumer_risk": 0.023)"},
+      {R"({"decision_rule": "risk", "max_consumer_risk": 0.7, "tolerances": [)" + ok + "]}", "0.7",
+       R"(the risk rule needs max_consumer_risk in (0, 0.5); expected "decision_rule": "risk", )"
+       R"("max_consumer_risk": 0.023)"},
+      {R"({"decision_rule": "simple"})", "{", "missing 'tolerances'; " + shape},
+      {R"({"decision_rule": "simple", "tolerances": {}})", "{}",
+       "'tolerances' is {}: expected a non-empty array of entries; " + shape},
+      {R"({"decision_rule": "simple", "tolerances": [3]})", "3]", "tolerances[0] is 3: " + entry},
+      {R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "uper": 1}]})", "1}",
+       "tolerances[0]: unknown key 'uper'; an entry has constant, lower, upper, unit (did "
+       "you mean 'upper'?): " +
+           entry},
+      {R"({"decision_rule": "simple", "tolerances": [{"upper": 1, "unit": "LSB"}]})", R"({"upper")",
+       R"(tolerances[0]: missing 'constant' (a name such as "accel.b_x"): )" + entry},
+      {R"({"decision_rule": "simple", "tolerances": [{"constant": 7, "upper": 1}]})", "7,",
+       R"(tolerances[0]: 'constant' is 7: expected a name such as "accel.b_x" )"
+       R"((docs/conformity.md))"},
+      {R"({"decision_rule": "simple", "tolerances": [)" + ok +
+           R"(, {"unit": "LSB", "constant": "accel.b_x", "upper": 2}]})",
+       R"("accel.b_x", "upper": 2)",
+       "tolerances[1]: 'accel.b_x' is given twice; expected one entry per constant, with both "
+       "limits"},
+      {R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "upper": 1}]})",
+       R"({"constant")",
+       R"(tolerances[0]: 'accel.b_x': missing 'unit' (e.g. "LSB", "g_n/LSB", "rad"): )" + entry},
+      {R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "unit": 1}]})", "1}",
+       R"(tolerances[0]: 'accel.b_x': 'unit' is 1: expected a unit such as "LSB", "g_n/LSB" )"
+       R"(or "rad")"},
+      {R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "upper": "x", )"
+       R"("unit": "LSB"}]})",
+       R"("x")",
+       R"(tolerances[0]: 'accel.b_x': 'upper' is 'x': expected a finite number (or null for no )"
+       R"(limit), e.g. "upper": 300)"},
+      {R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "unit": "LSB"}]})",
+       R"({"constant")", "tolerances[0]: 'accel.b_x' has neither 'lower' nor 'upper': " + entry},
+      {R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "lower": 5, )"
+       R"("upper": 1, "unit": "LSB"}]})",
+       R"({"constant")", "tolerances[0]: 'accel.b_x': lower 5 > upper 1; expected lower <= upper"},
+      // Checked against the calibration (EvaluateConformity), at the entry.
+      {R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "upper": 1, )"
+       R"("unit": "m/s^2"}]})",
+       R"({"constant")",
+       R"('accel.b_x': unit 'm/s^2' does not match the constant's unit 'LSB'; expected "unit": )"
+       R"("LSB" or a unit convertible to it)"},
+  };
+  for (const Case& c : cases) {
+    testing::TempFile f(c.spec, ".json");
+    std::string error;
+    Result<ConformitySpec> spec = LoadConformitySpec(f.path());
+    if (!spec.ok()) {
+      error = spec.error().ToString();
+    } else {
+      Result<ConformityStatement> st = EvaluateConformity(cal.value(), spec.value());
+      if (!st.ok()) error = st.error().ToString();
+    }
+    INFO(c.spec);
+    const size_t at = c.spec.find(c.at);
+    REQUIRE(at != std::string::npos);
+    CHECK(error == f.path() + ":" + testing::LineColumn(c.spec, at) + ": " + c.message);
+  }
 }
 
 TEST_CASE("Conformity: named constants carry the units of calibration.json",

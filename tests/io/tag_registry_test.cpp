@@ -6,6 +6,7 @@
 #include <string>
 
 #include "support/temp_file.hpp"
+#include "support/text_position.hpp"
 
 namespace metro {
 
@@ -35,37 +36,49 @@ TEST_CASE("Tags file: names, device IDs in both orders and profiles", "[io]") {
   CHECK(t.Entries().size() == 16);
 }
 
-TEST_CASE("Tags file: bad input names the file and the tag", "[io]") {
+TEST_CASE("Tags file: bad input names the file, line and column, the tag and the shape",
+          "[io][issue37]") {
+  // issue #37: each error was "tags.json: ..." without line and column. `at` is the text the
+  // error points at (its first occurrence), located here independently of the reader.
   struct Case {
     const char* json;
+    const char* at;
     const char* message;
   };
   const Case cases[] = {
-      {R"([1])",
+      {R"([1])", "[1]",
        R"(expected a JSON object {"1": "Forehead", "2": {"name": "Chest", "device_id": "12345678 9ABCDEF0", "profile": "mpu6050"}, ...})"},
-      {R"({"0": "x"})", "key '0': expected a tag number 1..255"},
-      {R"({"2": 5})", "tag 2: expected a name string or an object with name, device_id, profile"},
-      {R"({"2": {"device_id": "9ABCDEF012345678"}})", "tag 2: expected a name"},
-      {R"({"2": {"name": "C", "serial": "x"}})",
-       "tag 2: unknown key 'serial'; expected name, device_id, profile"},
-      {R"({"2": {"name": "C", "device_id": 5}})", "tag 2: device_id: expected a string"},
-      {R"({"2": {"name": "C", "device_id": "123"}})",
+      {R"({"0": "x"})", R"("x")",
+       R"(key '0': expected a tag number 1..255 as the key, e.g. "2": "Chest")"},
+      {R"({"2": 5})", "5",
+       R"(tag 2: expected a name string or an object with name, device_id, profile: "2": "Chest" or "2": {"name": "Chest", "device_id": "12345678 9ABCDEF0"})"},
+      {R"({"2": {"device_id": "9ABCDEF012345678"}})", R"({"device_id")",
+       R"(tag 2: expected a name: "2": {"name": "Chest", ...})"},
+      {R"({"2": {"name": "C", "serial": "x"}})", R"("x")",
+       R"(tag 2: unknown key 'serial'; expected name, device_id, profile: "2": {"name": "Chest", "device_id": "12345678 9ABCDEF0", "profile": "mpu6050"})"},
+      {R"({"2": {"name": "C", "device_id": 5}})", "5",
+       R"(tag 2: device_id: expected a string, e.g. "device_id": "12345678 9ABCDEF0")"},
+      {R"({"2": {"name": "C", "device_id": "123"}})", R"("123")",
        "tag 2: device_id: device id '123': expected 16 hex digits, DEVICEID[1] then DEVICEID[0] "
        "(e.g. 9ABCDEF012345678), or the two words `nrfjprog --memrd 0x10000060 --n 8` prints, "
        "DEVICEID[0] then DEVICEID[1] (e.g. 12345678 9ABCDEF0), with or without 0x"},
-      {R"({"2": {"name": "C", "profile": "bmi160"}})",
+      {R"({"2": {"name": "C", "profile": "bmi160"}})", R"("bmi160")",
        "tag 2: profile 'bmi160': expected mpu6050 or generic"},
       {R"({"2": {"name": "C", "device_id": "9ABCDEF012345678"},
            "3": {"name": "D", "device_id": "12345678 9abcdef0"}})",
-       "tag 3: device_id 9ABCDEF012345678 is tag 2's already"},
+       R"("12345678 9abcdef0")",
+       "tag 3: device_id 9ABCDEF012345678 is tag 2's already; expected one device per tag"},
   };
   for (const Case& c : cases) {
     testing::TempFile file(c.json, ".json");
     Result<TagRegistry> r = TagRegistry::Load(file.path());
     INFO(c.json);
     REQUIRE_FALSE(r.ok());
-    CHECK(r.error().file == file.path());
-    CHECK(r.error().message == c.message);
+    const std::string text = c.json;
+    const size_t at = text.find(c.at);
+    REQUIRE(at != std::string::npos);
+    CHECK(r.error().ToString() ==
+          file.path() + ":" + testing::LineColumn(text, at) + ": " + c.message);
   }
 }
 
