@@ -638,11 +638,9 @@ Error ModelError(const Budget& budget, const Error& model_error) {
   const size_t at =
       model_error.column > 0 ? static_cast<size_t>(model_error.column - 1) : std::string::npos;
   const std::string& what = model_error.message;
-  const char* join =
-      what.rfind("uses ", 0) == 0 || what.rfind("evaluates ", 0) == 0 || what.rfind("is ", 0) == 0
-          ? " "
-      : what.rfind("column ", 0) == 0 ? ", "
-                                      : ": ";
+  const bool reads_on =
+      what.rfind("uses ", 0) == 0 || what.rfind("evaluates ", 0) == 0 || what.rfind("is ", 0) == 0;
+  const char* join = reads_on ? " " : what.rfind("column ", 0) == 0 ? ", " : ": ";
   const std::string message = "model '" + Excerpt(budget.model, at) + "'" + join + what;
   if (budget.model_line == 0) return MakeError(budget.file, 0, message);
   // JSON strings hold no line break: the byte's line is the opening quote's.
@@ -818,14 +816,15 @@ Result<BudgetUnits> CheckBudgetUnits(const Budget& budget) {
   if (measurand && !m.constant) {
     const std::optional<UnitConversion> c = m.unit.ConversionTo(*measurand);
     if (!c) {
-      return MakeError(path, 0,
+      // At the model's opening quote (no position for a budget built in code).
+      return MakeError(path, budget.model_line, budget.model_column,
                        "measurand '" + budget.measurand + "' is declared in '" + budget.unit +
                            "' but the model " + internal::QuotedModel(budget) + " gives " +
                            m.unit.ToString() + " (" + m.unit.Definition() +
                            "): incompatible dimensions");
     }
     if (m.scale_known && !c->IsIdentity()) {
-      return MakeError(path, 0,
+      return MakeError(path, budget.model_line, budget.model_column,
                        fmt::format("measurand '{}' is declared in '{}' but the model {} gives "
                                    "{} (1 {} = {:.6g} {}{}): declare the measurand in the "
                                    "model's unit or convert the model with a factor",

@@ -15,7 +15,8 @@ namespace metro::internal {
 // byte of the model it is about, 0 for the whole model) as an error of the budget's file:
 // "model '<excerpt around that byte>' <what>" at the line and column of that byte in the file
 // (of the model's opening quote for the whole model; no line for a budget built in code).
-// `what` follows the quote with a space when it reads on ("uses 'z', ..."), a comma before
+// `what` follows the quote with a space when it reads on ("uses 'z', ...", "evaluates to ...",
+// "is NaN ..."), a comma before
 // "column N: ..." and a colon otherwise.
 Error ModelError(const Budget& budget, const Error& model_error);
 

@@ -156,7 +156,7 @@ TEST_CASE("Fleet: characterize names the tags from a tags file with device IDs",
   testing::ProgramRun r = testing::RunProgram(
       METRO_CHARACTERIZE_EXE, kDatasets + "static_chest.csv --type-a -q -o - --tags " + tags);
   CHECK(r.exit_code == 2);
-  // Column 40: the value's opening quote (39 bytes precede it on line 1).
+  // At the device_id's value, line 1 column 40 (issue #37).
   CHECK(r.err.find("error: " + tags + ":1:40: tag 2: device_id: device id '12345678': expected") ==
         0);
   std::remove(tags.c_str());

@@ -557,19 +557,19 @@ TEST_CASE("No escaped exception: values that would throw in tags, spec and budge
        "budget ", "b4.json: correlation x/no: input 'no' is not defined"},
       {METRO_CHARACTERIZE_EXE, "t1.json", R"({"99999999999999999999": "x"})",
        "analyze " + kChest + " --tag-registry ",
-       "t1.json: key '99999999999999999999': expected a tag number 1..255"},
+       "t1.json:1:26: key '99999999999999999999': expected a tag number 1..255"},
       {METRO_CHARACTERIZE_EXE, "t2.json", R"({"2": {"name": 5}})",
-       "analyze " + kChest + " --tag-registry ", "t2.json: tag 2: name: expected a string"},
+       "analyze " + kChest + " --tag-registry ", "t2.json:1:16: tag 2: name: expected a string"},
   };
 #ifdef METRO_CALIBRATE_EXE
   cases.push_back(
       {METRO_CALIBRATE_EXE, "s1.json",
        R"({"decision_rule": "simple", "tolerances": [{"constant": "accel.b_x", "unit": "LSB", "lower": "x"}]})",
        "fit " + kChest + " -o " + d / "c.json --spec ",
-       "s1.json:1:44: tolerances[0]: 'accel.b_x': 'lower' must be a finite number"});
+       "s1.json:1:94: tolerances[0]: 'accel.b_x': 'lower' is 'x': expected a finite number"});
   cases.push_back({METRO_CALIBRATE_EXE, "s2.json", R"({"decision_rule": 7, "tolerances": []})",
                    "fit " + kChest + " -o " + d / "c.json --spec ",
-                   "s2.json: missing 'decision_rule'"});
+                   "s2.json:1:19: decision_rule 7 is not simple, guarded or risk"});
 #endif
   for (const Case& c : cases) {
     INFO(c.args + c.file);

@@ -370,6 +370,8 @@ TEST_CASE("The measurand's unit must be the model's", "[uncertainty][budget][uni
   // A kg model declared in mg: refused with the factor (1 kg = 1e6 mg), not relabelled.
   ExpectError(WithUnits("m", "mg", kg),
               "measurand 'y' is declared in 'mg' but the model 'm' gives kg (1 kg = 1e+06 mg)");
+  // At the model's opening quote, column 52 (issue #37).
+  CHECK(WithUnits("m", "mg", kg).error().ToString().rfind("b.json:1:52: measurand 'y'", 0) == 0);
   ExpectError(WithUnits("m", "m/s^2", kg), "incompatible dimensions");
   REQUIRE(WithUnits("m", "kg", kg).ok());
   // A constant factor converts: 1e6*m is in mg (checked by dimension).
