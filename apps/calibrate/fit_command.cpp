@@ -150,8 +150,9 @@ int RunFit(const FitOptions& f) {
       for (const std::string& r : rejected) list += (list.empty() ? " " : "; ") + r;
       apps::PrintErrorText(fmt::format(
           "the certificate refuses constants marked model_rejected (nothing written):{}. Refit "
-          "as the reason says, drop --html to write calibration.json alone, or give "
-          "--accept-rejected-model to certify them with that notice",
+          "as the reason says, drop --html to write calibration.json alone (`characterize "
+          "report calibration.json --html PAGE.html` then shows it as a page that is not a "
+          "certificate), or give --accept-rejected-model to certify them with that notice",
           list));
       return kExitUsage;
     }
