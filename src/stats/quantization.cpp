@@ -52,7 +52,8 @@ std::vector<double> GapsBySorting(const double* x, size_t n, double same) {
 bool GapsOnLattice(const double* x, size_t n, double lo, double hi, double same,
                    std::vector<double>* gaps) {
   constexpr size_t kSample = 4096;
-  constexpr double kMaxBuckets = 1 << 22;
+  // At most 2^20 buckets (16 MB of bounds) and 4 per value: beyond that a sort is cheaper.
+  const double max_buckets = std::min(double{1 << 20}, 4.0 * static_cast<double>(n));
   std::vector<double> sample;
   sample.reserve(kSample + 1);
   const size_t stride = std::max<size_t>(1, n / kSample);
@@ -65,7 +66,7 @@ bool GapsOnLattice(const double* x, size_t n, double lo, double hi, double same,
     const double g = sample[i + 1] - sample[i];
     if (g > same) q = std::min(q, g);
   }
-  if (!std::isfinite(q) || (hi - lo) / q > kMaxBuckets) return false;
+  if (!std::isfinite(q) || (hi - lo) / q > max_buckets) return false;
   const size_t buckets = static_cast<size_t>(std::llround((hi - lo) / q)) + 1;
   std::vector<double> low(buckets, std::numeric_limits<double>::infinity());
   std::vector<double> high(buckets, -std::numeric_limits<double>::infinity());

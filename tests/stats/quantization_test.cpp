@@ -70,7 +70,7 @@ TEST_CASE("Quantization step without a sort equals the sorted definition bit for
     const double v = normal(rng);
     decimals[i] = std::round((12.0 + 0.3 * v) * 1e4) / 1e4;  // printed with 4 decimals
     counts[i] = std::round(800.0 * v);                       // raw counts
-    wide[i] = std::round(3e6 * v);                           // > 2^22 buckets: sorted
+    wide[i] = std::round(3e6 * v);                           // > 2^20 buckets: sorted
     // Even counts, with an odd one every 5000 samples (the sample's step is 2, the data's 1).
     rare_odd[i] = 2.0 * std::round(50.0 * v) + (i % 5000 == 17 ? 1.0 : 0.0);
     off[i] = decimals[i] + (i == n / 2 ? 3e-5 : 0.0);  // one value off the lattice
@@ -79,7 +79,7 @@ TEST_CASE("Quantization step without a sort equals the sorted definition bit for
   decimals[10] = std::numeric_limits<double>::quiet_NaN();
   cases.emplace_back("4 decimals with a NaN", decimals);
   cases.emplace_back("raw counts", counts);
-  cases.emplace_back("counts over 2^22 steps", wide);
+  cases.emplace_back("counts over 2^20 steps", wide);
   cases.emplace_back("even counts with rare odd ones", rare_odd);
   cases.emplace_back("one value off the lattice", off);
   cases.emplace_back("continuous", continuous);
