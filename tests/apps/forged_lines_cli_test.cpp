@@ -16,6 +16,7 @@
 #include "metro/blob/blob.hpp"
 #include "metro/core/file.hpp"
 #include "support/run_program.hpp"
+#include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
@@ -33,22 +34,8 @@ Run Characterize(const std::string& args) {
 }
 Run Calibrate(const std::string& args) { return testing::RunProgram(METRO_CALIBRATE_EXE, args); }
 
-struct Dir {
-  Dir() {
-    static int counter = 0;
-    path = "metro_forged_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~Dir() { fs::remove_all(path); }
-  std::string operator/(const std::string& name) const { return path + "/" + name; }
-  std::string path;
-};
-
-void Put(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
+using Dir = testing::WorkDir;
+using testing::Put;
 
 std::string Get(const std::string& path) {
   Result<std::string> text = ReadFile(path);

@@ -23,6 +23,7 @@
 #include "metro/core/file.hpp"
 #include "metro/report/batch.hpp"
 #include "support/run_program.hpp"
+#include "support/temp_file.hpp"
 
 namespace metro {
 namespace {
@@ -39,23 +40,8 @@ Run Characterize(const std::string& args) {
   return testing::RunProgram(METRO_CHARACTERIZE_EXE, args);
 }
 
-// A fresh directory in the build's working directory, removed at the end.
-struct Dir {
-  Dir() {
-    static int counter = 0;
-    path = "metro_outputs_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~Dir() { fs::remove_all(path); }
-  std::string operator/(const std::string& name) const { return path + "/" + name; }
-  std::string path;
-};
-
-void Put(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
+using Dir = testing::WorkDir;
+using testing::Put;
 
 std::string Get(const std::string& path) {
   Result<std::string> text = ReadFile(path);

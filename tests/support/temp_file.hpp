@@ -55,4 +55,30 @@ class ScratchFolder {
   std::string path_;
 };
 
+// A fresh folder in the working directory (the build's, under ctest), unique per instance,
+// removed with its contents at the end; `dir / "name"` is a path inside it.
+class WorkDir {
+ public:
+  WorkDir() {
+    static std::atomic<int> counter{0};
+    path = "metro_work_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  WorkDir(const WorkDir&) = delete;
+  WorkDir& operator=(const WorkDir&) = delete;
+  ~WorkDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  std::string operator/(const std::string& name) const { return path + "/" + name; }
+  std::string path;
+};
+
+// Writes `text` to `path` byte for byte (replacing it).
+inline void Put(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
 }  // namespace metro::testing
