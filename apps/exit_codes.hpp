@@ -1,4 +1,5 @@
-// Exit codes shared by the metro programs (STYLE.md rule 16, docs/unix.md "Exit codes").
+// Exit codes shared by the metro programs (docs/architecture.md "Conventions", docs/unix.md
+// "Exit codes").
 #pragma once
 
 #include "metro/core/status.hpp"
