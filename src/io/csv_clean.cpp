@@ -6,7 +6,7 @@
 // instruction (DecimalRows, AVX-512), and the stages are appended to the tag columns in
 // block order as they complete. No buffer or column asks for transparent huge pages (on a
 // VM whose host takes back free huge pages, a cold huge page faults in at ~1 GB/s; both
-// loaders measured faster without them: docs/benchmarks.md, "Huge pages").
+// loaders measured faster without them: docs/benchmarks-history.md, "Huge pages").
 #include <fast_float/fast_float.h>
 #include <sys/mman.h>
 
@@ -60,7 +60,7 @@ struct CleanBlock {
 
 // Bytes per clean-path block. Its stage holds about as many bytes of numbers, half a 1 MB
 // L2; with the block's text and the columns it is appended to it does not stay there
-// whole, but 128 kB to 8 MB blocks measured no faster (docs/benchmarks.md, "One-pass
+// whole, but 128 kB to 8 MB blocks measured no faster (docs/benchmarks-history.md, "One-pass
 // clean path and block size").
 constexpr size_t kCleanBlockBytes = size_t{512} << 10;
 

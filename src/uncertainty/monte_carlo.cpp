@@ -809,7 +809,7 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
   if (!options.adaptive) {
     // Left uninitialised: the workers write (and first touch) every value. No huge-page
     // advice: 10^7 trials measured 0.36 s without it and 0.43 s with it, back to back on
-    // the project's VM (docs/benchmarks.md, "Huge pages").
+    // the project's VM (docs/benchmarks-history.md, "Huge pages").
     const size_t m = static_cast<size_t>(options.trials);
     std::unique_ptr<double[]> values(new double[m]);
     std::vector<ChunkMoments> chunk_moments;

@@ -154,7 +154,7 @@ struct Session {
   Session& operator=(Session&&) = default;
   // A session of hundreds of MB returns its column pages to the system on all cores
   // before they are freed: freed the usual way they keep one core busy for tens of
-  // milliseconds while the others wait (docs/benchmarks.md, "Returning column pages").
+  // milliseconds while the others wait (docs/benchmarks-history.md, "Returning column pages").
   ~Session();
 };
 
