@@ -1,0 +1,141 @@
+// Issue #37 point 6, "errors at file:line:column": the checks `calibrate blob`, `push` and
+// `apply` make after calibration.json (and the tags file, and the session) were read point at
+// the value they are about, with what was expected, exit 2 and nothing written. Each input is
+// the golden calibration.json with one value edited by hand (or a hand-written tags file or
+// session); the expected line:column is counted by hand from the edited text and checked again
+// with testing::LineColumn, which shares no code with the library's JSON walker.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <string>
+
+#include "metro/core/file.hpp"
+#include "support/run_program.hpp"
+#include "support/temp_file.hpp"
+#include "support/text_position.hpp"
+
+namespace metro {
+namespace {
+
+using Run = testing::ProgramRun;
+using Dir = testing::WorkDir;
+using testing::Put;
+
+const std::string kGoldenCal =
+    std::string(METRO_SOURCE_DIR) + "/datasets/golden/calibration_sensor2.json";
+
+Run Calibrate(const std::string& args) { return testing::RunProgram(METRO_CALIBRATE_EXE, args); }
+
+// The golden calibration.json (tag 2: LSB input, a temperature term, no device ID) with the first
+// `old` replaced by `replacement`.
+std::string GoldenWith(const std::string& old, const std::string& replacement) {
+  Result<std::string> text = ReadFile(kGoldenCal);
+  REQUIRE(text.ok());
+  std::string s = text.value();
+  const size_t at = s.find(old);
+  REQUIRE(at != std::string::npos);
+  return s.replace(at, old.size(), replacement);
+}
+
+// line:column of the first byte after the first `marker` in `text`.
+std::string After(const std::string& text, const std::string& marker) {
+  const size_t at = text.find(marker);
+  REQUIRE(at != std::string::npos);
+  return testing::LineColumn(text, at + marker.size());
+}
+
+bool Exists(const std::string& path) { return std::filesystem::exists(path); }
+
+}  // namespace
+
+TEST_CASE("calibrate blob and push point at the calibration.json value a check refuses",
+          "[apps][blob][calibration][issue37]") {
+  Dir d;
+  const std::string cal = d / "c.json";
+  const std::string out = d / "tag.bin";
+  const std::string port = d / "no-such-tty";
+  const std::string id = " --device-id 9ABCDEF012345678";
+
+  SECTION("constants marked model_rejected: at their model_check's model_rejected") {
+    // The accelerometer's object (line 13) gets a model_check on line 366, the line of its
+    // input_unit: 8 spaces, then 53 characters up to the value, which is at column 62.
+    const std::string text = GoldenWith(
+        "        \"input_unit\": \"LSB\",",
+        "        \"model_check\": {\"comparisons\": [], \"model_rejected\": true, \"reason\": "
+        "\"hand-written\", \"selection\": \"given\", \"status\": \"rejected\"},\n"
+        "        \"input_unit\": \"LSB\",");
+    Put(cal, text);
+    REQUIRE(After(text, "\"model_rejected\": ") == "366:62");
+    Run r = Calibrate("blob " + cal + " --sensor 2" + id + " -o " + out);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + cal +
+                       ":366:62: sensor 2 accel: the constants are marked model_rejected: "
+                       "hand-written; expected \"model_rejected\": false (constants of a model the "
+                       "data accept: refit, e.g. calibrate fit --model auto), or "
+                       "--accept-rejected-model to use these anyway\n");
+    CHECK_FALSE(Exists(out));
+    r = Calibrate("push --port " + port + " " + cal + " --sensor 2" + id);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("error: " + cal +
+                                        ":366:62: sensor 2 accel: the "
+                                        "constants are marked model_rejected: hand-written; "
+                                        "expected \"model_rejected\": false"));
+    CHECK_THAT(r.err, Catch::EndsWith("(nothing sent; " + port + " not opened)\n"));
+    CHECK_FALSE(Exists(port));
+  }
+
+  SECTION("a date_utc the blob cannot carry: at the value (line 2, after 14 characters)") {
+    const std::string text = GoldenWith("\"date_utc\": \"2026-11-21T09:35:57Z\"",
+                                        "\"date_utc\": \"2107-01-01T00:00:00Z\"");
+    Put(cal, text);
+    REQUIRE(After(text, "\"date_utc\": ") == "2:15");
+    const Run r =
+        Calibrate("blob " + cal + " --sensor 2" + id + " -o " + out + " --hex " + d / "tag.hex");
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + cal +
+                       ":2:15: 'date_utc' '2107-01-01T00:00:00Z' is outside 1970..2106 (u32 "
+                       "seconds); expected a time from 1970-01-01T00:00:00Z to "
+                       "2106-02-07T06:28:15Z, e.g. 2024-05-01T12:00:00Z\n");
+    CHECK_FALSE(Exists(out));
+    CHECK_FALSE(Exists(d / "tag.hex"));
+  }
+
+  SECTION("a constant out of range for the blob: at the element (bias_per_c[1], line 703)") {
+    // The accelerometer's temperature.bias_per_c opens on line 701; element [1] is on line 703
+    // after 12 spaces.
+    const std::string text = GoldenWith("            1.6176133738518415,", "            120.5,");
+    Put(cal, text);
+    REQUIRE(After(text, "\"bias_per_c\": [\n            3.5561378779786703,\n            ") ==
+            "703:13");
+    Run r = Calibrate("blob " + cal + " --sensor 2" + id + " -o " + out);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("error: " + cal +
+                                        ":703:13: sensor 2 accel: the temperature coefficient "
+                                        "b1_y = 120.5 LSB/degC"));
+    CHECK_THAT(r.err, Catch::Contains("expected |b1| <= 80 LSB/degC"));
+    CHECK_FALSE(Exists(out));
+    r = Calibrate("push --port " + port + " " + cal + " --sensor 2" + id);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("error: " + cal +
+                                        ":703:13: sensor 2 accel: the "
+                                        "temperature coefficient b1_y = 120.5 LSB/degC"));
+  }
+
+  SECTION("a sensor calibration.json lacks: at its tags array, with the sensors it has") {
+    const std::string text = GoldenWith("", "");
+    Put(cal, text);
+    REQUIRE(After(text, "  \"tags\": ") == "11:11");
+    Run r = Calibrate("blob " + cal + " --sensor 7" + id + " -o " + out);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + cal +
+                       ":11:11: calibration has no sensor 7 (it has: 2); expected --sensor 2\n");
+    CHECK_FALSE(Exists(out));
+    r = Calibrate("push --port " + port + " " + cal + " --sensor 7" + id);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + cal +
+                       ":11:11: calibration has no sensor 7 (it has: 2); expected --sensor 2 "
+                       "(nothing sent; " +
+                       port + " not opened)\n");
+  }
+}
+
+}  // namespace metro
