@@ -138,4 +138,58 @@ TEST_CASE("calibrate blob and push point at the calibration.json value a check r
   }
 }
 
+TEST_CASE("A device ID calibration.json and the tags file disagree on: both positions",
+          "[apps][tags][calibration][issue37]") {
+  Dir d;
+  // Tag 2's object gets a device_id on line 2286 (the line of its "sensor"): 6 spaces and
+  // `"device_id": ` before the value, at column 20.
+  const std::string cal = d / "c.json";
+  const std::string text = GoldenWith("      \"sensor\": 2,",
+                                      "      \"device_id\": \"0011223344556677\",\n"
+                                      "      \"sensor\": 2,");
+  Put(cal, text);
+  REQUIRE(After(text, "\"device_id\": ") == "2286:20");
+
+  SECTION("calibrate blob: the tags file gives that device to another tag") {
+    // `{"5": {"name": "Left Leg", "device_id": ` is 40 characters: the value at 1:41.
+    const std::string tags = d / "t.json";
+    const std::string tags_text =
+        R"({"5": {"name": "Left Leg", "device_id": "0x0011223344556677"}})";
+    Put(tags, tags_text);
+    REQUIRE(After(tags_text, "\"device_id\": ") == "1:41");
+    const std::string out = d / "tag.bin";
+    const Run r = Calibrate("blob " + cal + " --sensor 2 --tags " + tags + " -o " + out);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + cal +
+                       ":2286:20: device 0011223344556677 is sensor 5's in the tags file (" + tags +
+                       ":1:41), not sensor 2's; expected one device per tag: sensor 2's own "
+                       "device, or the calibration of sensor 5\n");
+    CHECK_FALSE(Exists(out));
+  }
+
+  SECTION("calibrate apply: the tags file gives the sensor another device") {
+    // The device_id on line 3 after 8 spaces and `"device_id": `: column 22.
+    const std::string tags = d / "t.json";
+    const std::string tags_text =
+        "{\n  \"2\": {\"name\": \"Chest\",\n        \"device_id\": \"0x1111111111111111\"}\n}\n";
+    Put(tags, tags_text);
+    REQUIRE(After(tags_text, "\"device_id\": ") == "3:22");
+    const std::string session = d / "s.csv";
+    Put(session,
+        "t_s,sensor,ax_lsb,ay_lsb,az_lsb,gx_lsb,gy_lsb,gz_lsb,temp_c\n"
+        "0.00,2,0,0,16384,0,0,0,25\n0.01,2,0,0,16384,0,0,0,25\n");
+    const std::string out = d / "applied.csv";
+    const Run r = Calibrate("apply " + cal + " " + session + " -o " + out + " --tags " + tags);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + cal +
+                       ":2286:20: sensor 2 is device 0011223344556677 in calibration.json but "
+                       "device 1111111111111111 in " +
+                       tags +
+                       ":3:22: this calibration was made for another tag; expected the "
+                       "calibration of device 1111111111111111 (or a tags file that gives sensor "
+                       "2 device 0011223344556677)\n");
+    CHECK_FALSE(Exists(out));
+  }
+}
+
 }  // namespace metro
