@@ -192,4 +192,40 @@ TEST_CASE("A device ID calibration.json and the tags file disagree on: both posi
   }
 }
 
+TEST_CASE("calibrate apply points at the session's header cell a calibration cannot use",
+          "[apps][calibration][issue37]") {
+  // The golden calibration takes raw counts (_lsb) and has a temperature term (temp_c).
+  Dir d;
+  const std::string out = d / "applied.csv";
+  const std::string session = d / "s.csv";
+
+  SECTION("the accelerometer in g where the calibration takes LSB: at ax_g, field 3") {
+    Put(session,
+        "t_s,sensor,ax_g,ay_g,az_g,gx_lsb,gy_lsb,gz_lsb,temp_c\n"
+        "0.00,2,0,0,1,0,0,0,25\n0.01,2,0,0,1,0,0,0,25\n");
+    const Run r = Calibrate("apply " + kGoldenCal + " " + session + " -o " + out);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + session +
+                       ":1:3: sensor 2: the accel calibration takes LSB input (_lsb columns) but "
+                       "the session has no ax_lsb column; it has ax_g (unit g) instead: expected "
+                       "the columns the calibration takes, ax_lsb, ay_lsb, az_lsb (a session in "
+                       "the unit of the calibration's records)\n");
+    CHECK_FALSE(Exists(out));
+  }
+
+  SECTION("no temp_c for a temperature term: at the header line (line 2 after a comment)") {
+    Put(session,
+        "# bench log, written by hand\n"
+        "t_s,sensor,ax_lsb,ay_lsb,az_lsb,gx_lsb,gy_lsb,gz_lsb\n"
+        "0.00,2,0,0,16384,0,0,0\n0.01,2,0,0,16384,0,0,0\n");
+    const Run r = Calibrate("apply " + kGoldenCal + " " + session + " -o " + out);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err == "error: " + session +
+                       ":2:1: sensor 2: the accel calibration has a temperature term but the "
+                       "session has no temp_c column; expected temp_c (degC) in the header, as "
+                       "in the calibration's records\n");
+    CHECK_FALSE(Exists(out));
+  }
+}
+
 }  // namespace metro
