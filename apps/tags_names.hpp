@@ -12,6 +12,7 @@
 
 #include "metro/blob/blob.hpp"
 #include "metro/calibration/calibrate.hpp"
+#include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/status.hpp"
 #include "metro/core/terminal_text.hpp"
@@ -21,7 +22,8 @@
 namespace metro::apps {
 
 // Gives each tag of `cal` the tags file's name, its profile when the file names one, and its
-// device ID where calibration.json records none. Input errors (exit 2), naming `tags_path`:
+// device ID where calibration.json records none. Input errors (exit 2) at the file:line:column
+// of calibration.json's device_id, naming the tags file's entry at its own (or `tags_path`):
 // calibration.json's device ID for a sensor differs from the file's for that sensor, or the
 // file gives that device to another sensor (the calibration belongs to another tag).
 inline Status ApplyTagsToCalibration(const TagRegistry& tags, const std::string& tags_path,
@@ -29,19 +31,32 @@ inline Status ApplyTagsToCalibration(const TagRegistry& tags, const std::string&
   for (TagCalibration& t : cal->tags) {
     const TagEntry* entry = tags.Find(t.sensor);
     if (t.device_id) {
+      CalibrationPath at = CalibrationTagPath(*cal, t.sensor);
+      at.emplace_back(std::string("device_id"));
+      // The tags file's entry by its position when it has one.
+      const auto where = [&tags_path](const TagEntry& e) {
+        return e.file.empty() ? tags_path : e.DeviceIdPosition();
+      };
       if (entry != nullptr && entry->device_id && *entry->device_id != *t.device_id) {
-        return MakeError(fmt::format(
-            "sensor {} is device {} in calibration.json but device {} in {}: this calibration "
-            "was made for another tag",
-            t.sensor, blob::FormatDeviceId(*t.device_id), blob::FormatDeviceId(*entry->device_id),
-            tags_path));
+        return CalibrationErrorAt(
+            *cal, at,
+            fmt::format("sensor {} is device {} in calibration.json but device {} in {}: this "
+                        "calibration was made for another tag; expected the calibration of "
+                        "device {} (or a tags file that gives sensor {} device {})",
+                        t.sensor, blob::FormatDeviceId(*t.device_id),
+                        blob::FormatDeviceId(*entry->device_id), where(*entry),
+                        blob::FormatDeviceId(*entry->device_id), t.sensor,
+                        blob::FormatDeviceId(*t.device_id)));
       }
       const std::optional<int> owner = tags.SensorOfDevice(*t.device_id);
       if (owner && *owner != t.sensor) {
-        return MakeError(fmt::format(
-            "sensor {} of calibration.json is device {}, which {} gives sensor {}: this "
-            "calibration was made for another tag",
-            t.sensor, blob::FormatDeviceId(*t.device_id), tags_path, *owner));
+        return CalibrationErrorAt(
+            *cal, at,
+            fmt::format("sensor {} of calibration.json is device {}, which {} gives sensor {}: "
+                        "this calibration was made for another tag; expected one device per "
+                        "tag: the calibration of sensor {}'s own device",
+                        t.sensor, blob::FormatDeviceId(*t.device_id), where(*tags.Find(*owner)),
+                        *owner, t.sensor));
       }
     }
     if (entry == nullptr) continue;

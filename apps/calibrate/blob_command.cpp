@@ -95,8 +95,7 @@ int RunBlob(const BlobOptions& b) {
   Result<std::optional<uint64_t>> resolved =
       ResolveDeviceId(b.device_id, tags.value(), cal.value(), b.sensor);
   if (!resolved.ok()) {
-    apps::PrintErrorText(resolved.error().message);
-    return apps::ExitCodeFor(resolved.error());
+    return apps::PrintErrorExit(resolved.error());
   }
   if (!resolved.value()) {
     apps::PrintErrorText(fmt::format(
@@ -123,7 +122,7 @@ int RunBlob(const BlobOptions& b) {
   Result<blob::BlobContents> contents =
       blob::BlobContentsFromCalibration(cal.value(), o, &warnings);
   if (!contents.ok()) {
-    apps::PrintErrorText(fmt::format("{}: {}", b.calibration, contents.error().ToString()));
+    apps::PrintErrorText(CalibrationErrorText(b.calibration, contents.error()));
     return apps::ExitCodeFor(contents.error());
   }
   for (const std::string& w : warnings) {
@@ -131,7 +130,7 @@ int RunBlob(const BlobOptions& b) {
   }
   Result<std::vector<uint8_t>> bytes = blob::WriteBlob(contents.value());
   if (!bytes.ok()) {
-    apps::PrintErrorText(fmt::format("{}: {}", b.calibration, bytes.error().ToString()));
+    apps::PrintErrorText(CalibrationErrorText(b.calibration, bytes.error()));
     return apps::ExitCodeFor(bytes.error());
   }
   const std::vector<uint8_t>& v = bytes.value();
@@ -228,8 +227,8 @@ int RunBlobAll(const BlobOptions& b) {
                                              ? blob::WriteBlob(contents.value())
                                              : Result<std::vector<uint8_t>>(contents.error());
     if (!bytes.ok()) {
-      apps::PrintErrorText(
-          fmt::format("{}: {} (nothing written)", b.calibration, bytes.error().ToString()));
+      apps::PrintErrorText(CalibrationErrorText(b.calibration, bytes.error()) +
+                           " (nothing written)");
       return apps::ExitCodeFor(bytes.error());
     }
     BlobOptions one = b;

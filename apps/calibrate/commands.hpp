@@ -2,11 +2,14 @@
 // app; the callback runs the command and records its exit code.
 #pragma once
 
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
 
 #include "exit_codes.hpp"
+#include "metro/core/status.hpp"
 
 namespace metro::calibrate_app {
 
@@ -21,6 +24,13 @@ void AddBlobCommand(CLI::App& app, int* exit_code);
 void AddInspectCommand(CLI::App& app, int* exit_code);
 void AddPushCommand(CLI::App& app, int* exit_code);
 void AddRegistryCommand(CLI::App& app, int* exit_code);
+
+// An error about calibration.json `calibration` as printed: at the file:line:column of the
+// value when the library found it there (CalibrationErrorAt), else after the file's name.
+inline std::string CalibrationErrorText(const std::string& calibration, const Error& error) {
+  return error.file.empty() ? fmt::format("{}: {}", calibration, error.ToString())
+                            : error.ToString();
+}
 
 // --profile mpu6050|generic, --accel-fs-g G, --gyro-fs-dps D of `blob` and `push`: the nominal
 // sensitivity a blob section declares (metro::blob::SensorProfile, docs/calibration-blob.md 10).

@@ -72,16 +72,15 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   Calibration cal;
   if (!LoadPushInputs(c, &tags, &cal)) return kExitUsage;
   if (cal.FindTag(c.sensor) == nullptr) {
-    apps::PrintText(
-        stderr, fmt::format("error: {}: calibration has no sensor {}\n", c.calibration, c.sensor));
+    apps::PrintErrorText(CalibrationErrorText(c.calibration, NoSensorError(cal, c.sensor)) +
+                         fmt::format(" (nothing sent; {} not opened)", c.port));
     return kExitUsage;
   }
   // The tag the push must reach (docs/calibration-blob.md 1.1): a push to a tag whose device ID
   // is not known is refused unless --any-device.
   Result<std::optional<uint64_t>> resolved = ResolveDeviceId(c.device_id, tags, cal, c.sensor);
   if (!resolved.ok()) {
-    apps::PrintErrorText(resolved.error().message);
-    return apps::ExitCodeFor(resolved.error());
+    return apps::PrintErrorExit(resolved.error());
   }
   if (c.any_device && !c.device_id.empty()) {
     apps::PrintErrorText("--any-device and --device-id contradict each other: give one");
@@ -117,8 +116,8 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
                                              ? blob::WriteBlob(contents.value())
                                              : Result<std::vector<uint8_t>>(contents.error());
     if (!bytes.ok()) {
-      apps::PrintErrorText(fmt::format("{}: {} (nothing sent; {} not opened)", c.calibration,
-                                       bytes.error().ToString(), c.port));
+      apps::PrintErrorText(fmt::format("{} (nothing sent; {} not opened)",
+                                       CalibrationErrorText(c.calibration, bytes.error()), c.port));
       return apps::ExitCodeFor(bytes.error());
     }
   }

@@ -11,6 +11,7 @@
 #include "metro/blob/blob.hpp"
 #include "metro/blob/from_calibration.hpp"
 #include "metro/calibration/calibrate.hpp"
+#include "metro/calibration/calibration_io.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/tag_registry.hpp"
 
@@ -34,7 +35,9 @@ inline Result<std::optional<TagRegistry>> LoadTagsOption(const std::string& path
 // The device ID a command addresses for `sensor`: --device-id when given, else the tags file's,
 // else calibration.json's tag `device_id`; nullopt when none is known. Errors: a --device-id
 // that does not parse, and a --device-id or calibration.json ID the tags file gives another tag
-// or that disagrees with the file's ID for the sensor.
+// or that disagrees with the file's ID for the sensor; an ID from calibration.json is refused at
+// its file:line:column there, naming the tags file's entry at its own, an ID from --device-id at
+// the tags file's entry.
 inline Result<std::optional<uint64_t>> ResolveDeviceId(const std::string& flag_text,
                                                        const std::optional<TagRegistry>& tags,
                                                        const Calibration& cal, int sensor) {
@@ -46,23 +49,48 @@ inline Result<std::optional<uint64_t>> ResolveDeviceId(const std::string& flag_t
     id = parsed.value();
     source = "--device-id";
   }
+  // An error at the tags file's entry (the device_id of sensor `owner`).
+  const auto at_entry = [](const TagEntry& entry, std::string message) {
+    return MakeError(entry.file, entry.device_id_line, entry.device_id_column, std::move(message));
+  };
   const TagEntry* entry = tags ? tags->Find(sensor) : nullptr;
   if (entry != nullptr && entry->device_id) {
     if (id && *id != *entry->device_id) {
-      return MakeError(fmt::format("{} {} is not sensor {}'s device {} in the tags file", source,
-                                   blob::FormatDeviceId(*id), sensor,
-                                   blob::FormatDeviceId(*entry->device_id)));
+      return at_entry(*entry,
+                      fmt::format("{} {} is not sensor {}'s device {} in the tags file; expected "
+                                  "--device-id {} (or the tags file's entry for that device)",
+                                  source, blob::FormatDeviceId(*id), sensor,
+                                  blob::FormatDeviceId(*entry->device_id),
+                                  blob::FormatDeviceId(*entry->device_id)));
     }
     id = entry->device_id;
     if (source.empty()) source = "the tags file";
   }
   const TagCalibration* t = cal.FindTag(sensor);
-  if (!id && t != nullptr && t->device_id) id = t->device_id;
+  if (!id && t != nullptr && t->device_id) {
+    id = t->device_id;
+    source = "calibration.json";
+  }
   if (id && tags) {
     const std::optional<int> owner = tags->SensorOfDevice(*id);
     if (owner && *owner != sensor) {
-      return MakeError(fmt::format("device {} is sensor {}'s in the tags file, not sensor {}'s",
-                                   blob::FormatDeviceId(*id), *owner, sensor));
+      const TagEntry& other = *tags->Find(*owner);
+      const std::string expected = fmt::format(
+          "; expected one device per tag: sensor {}'s own device, or the calibration of sensor "
+          "{}",
+          sensor, *owner);
+      if (source == "calibration.json") {
+        CalibrationPath path = CalibrationTagPath(cal, sensor);
+        path.emplace_back(std::string("device_id"));
+        return CalibrationErrorAt(
+            cal, path,
+            fmt::format("device {} is sensor {}'s in the tags file ({}), not sensor {}'s{}",
+                        blob::FormatDeviceId(*id), *owner, other.DeviceIdPosition(), sensor,
+                        expected));
+      }
+      return at_entry(
+          other, fmt::format("{} {} is sensor {}'s in the tags file, not sensor {}'s{}", source,
+                             blob::FormatDeviceId(*id), *owner, sensor, expected));
     }
   }
   return id;

@@ -66,7 +66,10 @@ Result<uint32_t> ParseDateUtc(const std::string& text) {
         fmt::format("'date_utc' is '{}'; expected ISO 8601 UTC like 2024-05-01T12:00:00Z", text));
   }
   if (*t < 0 || *t > 0xFFFFFFFF) {
-    return MakeError(fmt::format("'date_utc' '{}' is outside 1970..2106 (u32 seconds)", text));
+    return MakeError(
+        fmt::format("'date_utc' '{}' is outside 1970..2106 (u32 seconds); expected a time from "
+                    "1970-01-01T00:00:00Z to 2106-02-07T06:28:15Z, e.g. 2024-05-01T12:00:00Z",
+                    text));
   }
   return static_cast<uint32_t>(*t);
 }
@@ -94,9 +97,12 @@ bool FirmwareUses(const SensorConstants& s, ImuSensor sensor) {
 
 // Why no section v2.0 holds `s` (its s_nom, input and b0 as tried last), naming the figures and
 // what the format holds (docs/calibration-blob.md 3.1).
+// *where receives the path, in the sensor's object of calibration.json, of the value the
+// refusal is about (`matrix`, a row of it, `bias[i]`, `temperature.bias_per_c[i]`; empty: the
+// object).
 std::string GenericRefusal(const SensorConstants& s, ImuSensor sensor, const Eigen::Matrix3d& m_c,
                            double nominal_out, const std::string& source,
-                           const std::string& write_error) {
+                           const std::string& write_error, CalibrationPath* where) {
   const bool accel = sensor == ImuSensor::kAccel;
   const char* lsb_unit = accel ? "LSB/g" : "LSB/(deg/s)";
   const char* si_unit = accel ? "m/s^2" : "rad/s";
@@ -107,6 +113,7 @@ std::string GenericRefusal(const SensorConstants& s, ImuSensor sensor, const Eig
                   ImuSensorName(sensor), 1.0 / nominal_out, lsb_unit, source);
   const std::string tail = "; the blob format cannot represent it (docs/calibration-blob.md 3.1)";
   if (!(s_nom >= kSNomMinSiPerLsb && s_nom < kSNomMaxSiPerLsb)) {
+    *where = {std::string("matrix")};
     return fmt::format(
         "{} is outside what a section v2.0 can declare, {:.4g} .. {:.4g} {} (s_nom 2^-14 .. "
         "2^-7 {} per LSB, so that M and the output fit the tag's fixed-point apply){}",
@@ -115,6 +122,7 @@ std::string GenericRefusal(const SensorConstants& s, ImuSensor sensor, const Eig
   for (int i = 0; i < 3; ++i) {
     const double ratio = m_c.row(i).norm() / nominal_out;
     if (std::fabs(ratio - 1.0) > kSensitivityTolerance) {
+      *where = {std::string("matrix"), static_cast<size_t>(i)};
       return fmt::format(
           "{}: row {} of M has {:.4g} {}, {:+.1f} % from it; a section holds M only when every "
           "row norm lies within +-10 % of its nominal, i.e. {:.4g} .. {:.4g} {}{}",
@@ -131,6 +139,7 @@ std::string GenericRefusal(const SensorConstants& s, ImuSensor sensor, const Eig
     const double b0_abs = s.b0_lsb[i] + (s.input == kInputOffsetBinary ? 32768.0 : 0.0);
     const double bound = std::fabs(s.b0_lsb[i]) + std::fabs(s.b1_lsb_per_c[i]) * d;
     if (bound > bias_limit) {
+      *where = {std::string("bias"), i};
       return fmt::format(
           "the {} bias b0_{} = {:.6g} LSB ({:+.6g} from the signed input's zero 0, {:+.6g} from "
           "an unsigned input's mid-scale 32768; with the temperature term up to {:.6g} LSB over "
@@ -140,6 +149,7 @@ std::string GenericRefusal(const SensorConstants& s, ImuSensor sensor, const Eig
           tail);
     }
     if (std::fabs(s.b1_lsb_per_c[i]) > tempco_limit) {
+      *where = {std::string("temperature"), std::string("bias_per_c"), i};
       return fmt::format(
           "the {} temperature coefficient b1_{} = {:.6g} LSB/degC is beyond the {} LSB/degC a "
           "section v2.0 holds (|b1| + 2 |b2| D){}",
@@ -253,12 +263,20 @@ Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m) {
       accel ? "16384, 8192, 4096 or 2048 LSB/g" : "131, 65.5, 32.8 or 16.4 LSB/(deg/s)"));
 }
 
-Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& c,
-                                                       const BlobFromCalibrationOptions& options,
-                                                       std::vector<std::string>* warnings) {
+namespace {
+
+// SensorConstantsFromCalibration; on an error *where receives the path, in the sensor's object
+// of calibration.json, of the value it is about (empty: the object itself).
+Result<SensorConstants> SensorConstantsAt(const SensorCalibration& c,
+                                          const BlobFromCalibrationOptions& options,
+                                          std::vector<std::string>* warnings,
+                                          CalibrationPath* where) {
   const SensorModel& model = c.model;
+  where->clear();
+  const auto at = [where](CalibrationPath path) { *where = std::move(path); };
   const char* name = ImuSensorName(model.sensor);
   if (model.input_unit != "LSB") {
+    at({std::string("input_unit")});
     return MakeError(
         fmt::format("{}: input_unit is '{}'; the tag applies the constants to raw counts, so the "
                     "calibration must be fitted on LSB data",
@@ -271,12 +289,14 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   Result<uint8_t> fs = NominalFsSel(model.sensor, m_c, options);
   // generic: a section v2.0 declares the nominal itself when no FS_SEL of v1.0 fits (below)
   if (!fs.ok() && !generic) {
+    at({std::string("matrix")});
     return MakeError(fmt::format(
         "{}: {}; another IMU: --profile generic, whose section v2.0 declares its own nominal "
         "sensitivity",
         name, fs.error().message));
   }
   if (model.kind != ModelKind::kBias && c.matrix_u.isZero(0.0)) {
+    at({std::string("matrix_u")});
     return MakeError(fmt::format(
         "{}: 'matrix_u' is missing or zero; the blob stores the uncertainty of every element of M",
         name));
@@ -298,6 +318,7 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
     const double per_unit = accel ? 1000.0 * NominalOutPerLsb(model.sensor, s.fs_sel)
                                   : NominalOutPerLsb(model.sensor, s.fs_sel);
     const char* unit = accel ? "mg/degC" : "deg/s/degC";
+    at({std::string("temperature"), std::string("bias_per_c"), static_cast<size_t>(i)});
     return MakeError(fmt::format(
         "{}: the temperature coefficient b1_{} = {:.6g} LSB/degC ({:.3g} {}) exceeds the "
         "plausibility limit {} LSB/degC ({:.3g} {} at fs_sel {}; docs/calibration-blob.md "
@@ -330,7 +351,10 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
   if (s.resid_rms_si == 0.0 && c.residual_unit == unit) s.resid_rms_si = si * c.residual_rms;
   Result<TemperatureValidity> validity =
       TemperatureValidityRange(c, ValidityOptions{options.t_valid_min_c, options.t_valid_max_c});
-  if (!validity.ok()) return validity.error();  // names the sensor
+  if (!validity.ok()) {  // names the sensor
+    at({std::string("static_pose_temperature")});
+    return validity.error();
+  }
   s.t_valid_min_c = validity.value().min_c;
   s.t_valid_max_c = validity.value().max_c;
   if (warnings != nullptr) {
@@ -383,7 +407,17 @@ Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& 
     }
   }
   return MakeError(fmt::format(
-      "{}: {}", name, GenericRefusal(tried, model.sensor, m_c, nominal_out, source, write_error)));
+      "{}: {}", name,
+      GenericRefusal(tried, model.sensor, m_c, nominal_out, source, write_error, where)));
+}
+
+}  // namespace
+
+Result<SensorConstants> SensorConstantsFromCalibration(const SensorCalibration& c,
+                                                       const BlobFromCalibrationOptions& options,
+                                                       std::vector<std::string>* warnings) {
+  CalibrationPath where;
+  return SensorConstantsAt(c, options, warnings, &where);
 }
 
 Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
@@ -392,14 +426,10 @@ Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
   std::string why;
   if (!o.IsValid(&why)) return MakeError("blob options: " + why);
   const TagCalibration* tag = cal.FindTag(o.sensor);
-  if (tag == nullptr) {
-    std::string have;
-    for (const TagCalibration& t : cal.tags)
-      have += (have.empty() ? "" : ", ") + std::to_string(t.sensor);
-    return MakeError(fmt::format("calibration has no sensor {} (it has: {})", o.sensor, have));
-  }
+  if (tag == nullptr) return NoSensorError(cal, o.sensor);
   if (!tag->accel && !tag->gyro) {
-    return MakeError(
+    return CalibrationErrorAt(
+        cal, CalibrationTagPath(cal, o.sensor),
         fmt::format("sensor {} has neither an accel nor a gyro calibration", o.sensor));
   }
   BlobContents b;
@@ -409,16 +439,30 @@ Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
   for (const auto& [src, dst] :
        {std::pair{&tag->accel, &b.accel}, std::pair{&tag->gyro, &b.gyro}}) {
     if (!*src) continue;
+    const ImuSensor imu = (*src)->model.sensor;
+    // Errors about the sensor's constants point at the value in calibration.json.
+    const auto at = [&](const CalibrationPath& inside, std::string message) {
+      CalibrationPath path = CalibrationSensorPath(cal, o.sensor, imu);
+      path.insert(path.end(), inside.begin(), inside.end());
+      return CalibrationErrorAt(cal, path, std::move(message));
+    };
     if ((*src)->model_check && (*src)->model_check->model_rejected) {
       const std::string what =
           fmt::format("sensor {} {}: the constants are marked model_rejected: {}", o.sensor,
-                      ImuSensorName((*src)->model.sensor), (*src)->model_check->reason);
-      if (!o.accept_rejected_model) return MakeError(what);
+                      ImuSensorName(imu), (*src)->model_check->reason);
+      if (!o.accept_rejected_model) {
+        return at({std::string("model_check"), std::string("model_rejected")},
+                  what +
+                      "; expected \"model_rejected\": false (constants of a model the data "
+                      "accept: refit, e.g. calibrate fit --model auto), or "
+                      "--accept-rejected-model to use these anyway");
+      }
       if (warnings != nullptr) warnings->push_back(what + "; written (--accept-rejected-model)");
     }
     std::vector<std::string> sensor_warnings;
-    Result<SensorConstants> s = SensorConstantsFromCalibration(**src, o, &sensor_warnings);
-    if (!s.ok()) return MakeError(fmt::format("sensor {} {}", o.sensor, s.error().message));
+    CalibrationPath where;
+    Result<SensorConstants> s = SensorConstantsAt(**src, o, &sensor_warnings, &where);
+    if (!s.ok()) return at(where, fmt::format("sensor {} {}", o.sensor, s.error().message));
     *dst = s.value();
     for (const std::string& w : sensor_warnings) {
       if (warnings != nullptr) warnings->push_back(fmt::format("sensor {} {}", o.sensor, w));
@@ -427,7 +471,7 @@ Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
 
   MetaConstants& m = b.meta;
   Result<uint32_t> t = ParseDateUtc(cal.date_utc);
-  if (!t.ok()) return t.error();
+  if (!t.ok()) return CalibrationErrorAt(cal, {std::string("date_utc")}, t.error().message);
   m.cal_time_utc_s = t.value();
   const uint64_t due = uint64_t{t.value()} + o.due_after_s;
   m.due_time_utc_s = static_cast<uint32_t>(std::min<uint64_t>(due, 0xFFFFFFFFu));
@@ -462,7 +506,20 @@ Result<BlobContents> BlobContentsFromCalibration(const Calibration& cal,
   const double k95 = first.coverage_factor_95 > 0 ? first.coverage_factor_95 : 2.0;
   m.unc_k_x10 = static_cast<uint8_t>(std::clamp(std::lround(10.0 * k95), 1L, 255L));
   m.tag_label = fmt::format("tag{}", o.sensor).substr(0, 8);
-  if (!b.IsValid(&why)) return MakeError("calibration blob: " + why);
+  if (!b.IsValid(&why)) {
+    return CalibrationErrorAt(cal, CalibrationTagPath(cal, o.sensor), "calibration blob: " + why);
+  }
+  // The tag firmware's own check of each section (WriteBlob's), last (as WriteBlob would), so
+  // that its refusal points at the sensor's object.
+  for (const auto& [section, imu] :
+       {std::pair{&b.accel, ImuSensor::kAccel}, std::pair{&b.gyro, ImuSensor::kGyro}}) {
+    if (!*section || FirmwareUses(**section, imu)) continue;
+    BlobContents alone;
+    alone.seq = 1;
+    (imu == ImuSensor::kAccel ? alone.accel : alone.gyro) = *section;
+    return CalibrationErrorAt(cal, CalibrationSensorPath(cal, o.sensor, imu),
+                              WriteBlob(alone).error().message);
+  }
   return b;
 }
 

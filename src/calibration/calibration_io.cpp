@@ -145,11 +145,36 @@ const Quantity* FindColumn(const Tag& tag, const std::string& name) {
   return nullptr;
 }
 
-// Applies one sensor calibration to `tag`; with a temp_c column, *count receives how its
-// temperatures met the validity range.
+// The first quantity of `tag` whose name starts with `prefix` ("ax_", "temp_"), or nullptr.
+const Quantity* FindColumnPrefix(const Tag& tag, const std::string& prefix) {
+  for (const Quantity& q : tag.quantities) {
+    if (q.name.rfind(prefix, 0) == 0) return &q;
+  }
+  return nullptr;
+}
+
+// An error about a column of `session` at its header cell: file:line:field of the header field
+// named `name`, or of the header's first field when `name` is empty or not in the header; the
+// file alone for a session without a header line (a receiver capture, imu_tk).
+Error HeaderCellError(const Session& session, const std::string& name, std::string message) {
+  const InputDialect& d = session.input;
+  if (d.header_line <= 0) return MakeError(session.path, 0, std::move(message));
+  int64_t field = 1;
+  for (size_t f = 0; f < d.header_names.size() && !name.empty(); ++f) {
+    if (d.header_names[f] == name) {
+      field = static_cast<int64_t>(f) + 1;
+      break;
+    }
+  }
+  return MakeError(session.path, d.header_line, field, std::move(message));
+}
+
+// Applies one sensor calibration to `tag` of `session`; with a temp_c column, *count receives
+// how its temperatures met the validity range. A missing column is refused at the header cell
+// of the column it would replace (the axis in another unit), else at the header line.
 Status ApplySensor(const SensorCalibration& c, const TemperatureValidity& validity,
-                   const std::string& file, Tag* tag,
-                   std::optional<SensorTemperatureCount>* count) {
+                   const Session& session, Tag* tag, std::optional<SensorTemperatureCount>* count) {
+  const std::string& file = session.path;
   const ImuSensor sensor = c.model.sensor;
   const std::vector<std::string> in_names = InputColumns(sensor, c.model.input_unit);
   if (in_names.empty()) {
@@ -164,19 +189,34 @@ Status ApplySensor(const SensorCalibration& c, const TemperatureValidity& validi
     const std::string& name = in_names[static_cast<size_t>(a)];
     in[a] = FindColumn(*tag, name);
     if (in[a] == nullptr) {
-      return MakeError(file, 0,
-                       fmt::format("sensor {}: the {} calibration takes {} input (_{} columns) "
-                                   "but the session has no {} column",
-                                   tag->sensor, ImuSensorName(sensor), c.model.input_unit,
-                                   InputUnit(sensor, c.model.input_unit)->suffix, name));
+      // The nearest supported shape: the session's own column of that axis names its unit.
+      const Quantity* other = FindColumnPrefix(*tag, name.substr(0, name.find('_') + 1));
+      const std::string expected =
+          fmt::format("expected the columns the calibration takes, {}", fmt::join(in_names, ", "));
+      return HeaderCellError(
+          session, other != nullptr ? other->name : "",
+          fmt::format(
+              "sensor {}: the {} calibration takes {} input (_{} columns) but the session "
+              "has no {} column; {}",
+              tag->sensor, ImuSensorName(sensor), c.model.input_unit,
+              InputUnit(sensor, c.model.input_unit)->suffix, name,
+              other != nullptr
+                  ? fmt::format("it has {} (unit {}) instead: {} (a session in the unit "
+                                "of the calibration's records)",
+                                other->name, other->unit.empty() ? "?" : other->unit, expected)
+                  : expected + " in the header"));
     }
   }
   const Quantity* temp = FindColumn(*tag, "temp_c");
   if (c.model.has_temperature && temp == nullptr) {
-    return MakeError(file, 0,
-                     fmt::format("sensor {}: the {} calibration has a temperature term but the "
-                                 "session has no temp_c column",
-                                 tag->sensor, ImuSensorName(sensor)));
+    const Quantity* other = FindColumnPrefix(*tag, "temp_");
+    return HeaderCellError(
+        session, other != nullptr ? other->name : "",
+        fmt::format("sensor {}: the {} calibration has a temperature term but the session has no "
+                    "temp_c column; {}expected temp_c (degC) in the header, as in the "
+                    "calibration's records",
+                    tag->sensor, ImuSensorName(sensor),
+                    other != nullptr ? fmt::format("it has {} instead: ", other->name) : ""));
   }
   const size_t n = tag->size();
   std::vector<double> out[3];
@@ -424,7 +464,7 @@ Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* s
         summary.warnings.push_back(fmt::format("sensor {} {}", tag.sensor, w));
       }
       std::optional<SensorTemperatureCount> count;
-      Status s = ApplySensor(**c, validity.value(), session->path, &tag, &count);
+      Status s = ApplySensor(**c, validity.value(), *session, &tag, &count);
       if (!s.ok()) return s.error();
       if (count) summary.temperature.push_back(*count);
     }

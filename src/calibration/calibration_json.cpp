@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <utility>
 
 #include "core/json_text.hpp"
@@ -776,7 +777,49 @@ Calibration CalibrationFromJsonValue(const JsonCursor& j) {
 std::string ToJson(const Calibration& calibration) { return JsonText(ToJsonValue(calibration), 2); }
 
 Result<Calibration> CalibrationFromJson(std::string_view text, const std::string& file) {
-  return ReadJsonText<Calibration>(text, file, CalibrationFromJsonValue);
+  Result<Calibration> cal = ReadJsonText<Calibration>(text, file, CalibrationFromJsonValue);
+  if (!cal.ok()) return cal;
+  // Kept for the checks made after reading (CalibrationErrorAt): positions are found in the
+  // text only when an error is reported, so reading stays linear in the file.
+  cal.value().source_file = file;
+  cal.value().source_text = std::make_shared<const std::string>(text);
+  return cal;
+}
+
+Error CalibrationErrorAt(const Calibration& calibration, const CalibrationPath& path,
+                         std::string message) {
+  if (calibration.source_file.empty() || calibration.source_text == nullptr) {
+    return MakeError(std::move(message));
+  }
+  const std::vector<JsonPathStep> steps(path.begin(), path.end());
+  const std::string& text = *calibration.source_text;
+  const auto [line, column] = TextLineColumn(text, JsonValueOffset(text, steps));
+  return MakeError(calibration.source_file, line, column, std::move(message));
+}
+
+Error NoSensorError(const Calibration& calibration, int sensor) {
+  std::string have;
+  for (const TagCalibration& t : calibration.tags) {
+    have += (have.empty() ? "" : ", ") + std::to_string(t.sensor);
+  }
+  return CalibrationErrorAt(
+      calibration, {std::string("tags")},
+      fmt::format("calibration has no sensor {} (it has: {}); expected --sensor {}{}", sensor, have,
+                  calibration.tags.empty() ? 0 : calibration.tags.front().sensor,
+                  calibration.tags.size() > 1 ? " or another of its sensors" : ""));
+}
+
+CalibrationPath CalibrationTagPath(const Calibration& calibration, int sensor) {
+  for (size_t i = 0; i < calibration.tags.size(); ++i) {
+    if (calibration.tags[i].sensor == sensor) return {std::string("tags"), i};
+  }
+  return {std::string("tags")};
+}
+
+CalibrationPath CalibrationSensorPath(const Calibration& calibration, int sensor, ImuSensor imu) {
+  CalibrationPath path = CalibrationTagPath(calibration, sensor);
+  path.emplace_back(std::string(ImuSensorName(imu)));
+  return path;
 }
 
 std::string FormatCalibrationJson(const Calibration& calibration) {

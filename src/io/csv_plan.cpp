@@ -800,6 +800,8 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
     plan.names.push_back(name);
     plan.info.push_back(name.empty() ? ColumnInfo{} : ClassifyColumn(name));
   }
+  dialect.header_line = header->line_number;
+  dialect.header_names = plan.names;
   const size_t nf = plan.names.size();
   plan.numeric_slot.assign(nf, -1);
   plan.text_slot.assign(nf, -1);

@@ -94,6 +94,11 @@ Result<TagRegistry> TagRegistry::Load(const std::string& path) {
         }
         devices[id.value()] = sensor;
         e.device_id = id.value();
+        const auto [line, column] =
+            TextLineColumn(text.value(), JsonValueOffset(text.value(), {key, "device_id"}));
+        e.file = path;
+        e.device_id_line = line;
+        e.device_id_column = column;
       }
       if (value.contains("profile")) {
         e.profile = value["profile"].get<std::string>();
@@ -112,6 +117,11 @@ Result<TagRegistry> TagRegistry::Load(const std::string& path) {
     r.tags_[sensor] = std::move(e);
   }
   return r;
+}
+
+std::string TagEntry::DeviceIdPosition() const {
+  if (file.empty()) return "";
+  return fmt::format("{}:{}:{}", file, device_id_line, device_id_column);
 }
 
 std::string TagRegistry::Name(int sensor) const {

@@ -14,6 +14,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "support/run_program.hpp"
+#include "support/text_position.hpp"
 
 namespace metro {
 namespace {
@@ -63,7 +64,14 @@ TEST_CASE("Fleet: a tags file gives calibrate fit and blob each tag's device ID"
   std::ofstream(moved) << R"({"3": {"name": "Left Arm", "device_id": "9ABCDEF012345678"}})";
   r = run("blob " + cal + " --sensor 2 --tags " + moved + " -o metro_fleet_d.bin");
   CHECK(r.exit_code == 2);
-  CHECK(r.err == "error: device 9ABCDEF012345678 is sensor 3's in the tags file, not sensor 2's\n");
+  // At calibration.json's device_id, naming the tags file's (`{"3": {"name": "Left Arm",
+  // "device_id": ` is 40 characters).
+  const std::string cal_text = ReadFile(cal).value();
+  const std::string cal_at = testing::LineColumn(cal_text, cal_text.find("\"device_id\": ") + 13);
+  CHECK(r.err == "error: " + cal + ":" + cal_at +
+                     ": device 9ABCDEF012345678 is sensor 3's in the tags file (" + moved +
+                     ":1:41), not sensor 2's; expected one device per tag: sensor 2's own "
+                     "device, or the calibration of sensor 3\n");
   CHECK_FALSE(std::ifstream("metro_fleet_d.bin").good());
   std::remove(moved.c_str());
 

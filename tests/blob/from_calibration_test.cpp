@@ -187,7 +187,7 @@ TEST_CASE("Mapping: bad input is refused with its reason", "[blob]") {
   BlobFromCalibrationOptions o = Options();
   o.sensor = 3;
   CHECK(BlobContentsFromCalibration(cal, o).error().message ==
-        "calibration has no sensor 3 (it has: 2)");
+        "calibration has no sensor 3 (it has: 2); expected --sensor 2");
   o = Options();
   o.seq = 0;
   CHECK(BlobContentsFromCalibration(cal, o).error().message ==

@@ -120,7 +120,10 @@ TEST_CASE("calibrate blob and inspect refuse bad input with the reason", "[blob]
         "0x\n");
   r = Calibrate("blob " + cal + " --sensor 7 --device-id 9ABCDEF012345678 -o x.bin");
   CHECK(r.exit_code == 2);
-  CHECK(r.err == "error: " + cal + ": calibration has no sensor 7 (it has: 2)\n");
+  // At calibration.json's "tags" (line 11, after `  "tags": `).
+  CHECK(r.err == "error: " + cal +
+                     ":11:11: calibration has no sensor 7 (it has: 2); expected "
+                     "--sensor 2\n");
   r = Calibrate("blob " + cal +
                 " --sensor 2 --device-id 9ABCDEF012345678 -o x.bin --hex x.hex "
                 "--slot-address 0x3B001");

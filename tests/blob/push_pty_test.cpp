@@ -422,9 +422,11 @@ TEST_CASE("pty: calibrate push reaches only a known device", "[blob][push][apps]
     // --device-id against the tags file's ID for the sensor: refused before the port.
     r = Push(sim.pty(), "--device-id 9ABCDEF012345678 --tags " + tags);
     CHECK(r.exit_code == 2);
-    CHECK(Has(r.err,
-              "error: --device-id 9ABCDEF012345678 is not sensor 2's device "
-              "0000000100000000 in the tags file"));
+    // At the tags file's device_id: `{"2": {"name": "Chest", "device_id": ` is 37 characters.
+    CHECK(
+        Has(r.err, "error: " + tags +
+                       ":1:38: --device-id 9ABCDEF012345678 is not sensor 2's device "
+                       "0000000100000000 in the tags file; expected --device-id 0000000100000000"));
   }
   std::remove(flash.c_str());
   std::remove(tags.c_str());

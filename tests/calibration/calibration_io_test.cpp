@@ -239,9 +239,14 @@ TEST_CASE("Apply refuses a tag without calibration or without the input columns"
   physical.tags.front().quantities.front().name = "ax_g";
   Result<ApplySummary> p = ApplyCalibration(f.cal, &physical);
   REQUIRE_FALSE(p.ok());
-  CHECK(p.error().message ==
-        "sensor 1: the accel calibration takes LSB input (_lsb columns) but the session has no "
-        "ax_lsb column");
+  CHECK_THAT(p.error().message,
+             Catch::StartsWith("sensor 1: the accel calibration takes LSB input (_lsb columns) "
+                               "but the session has no ax_lsb column; it has ax_g (unit "));
+  CHECK_THAT(p.error().message,
+             Catch::EndsWith("instead: expected the columns the calibration takes, ax_lsb, "
+                             "ay_lsb, az_lsb (a session in the unit of the calibration's "
+                             "records)"));
+  CHECK(p.error().line == 0);  // A session built in memory has no header line to point at.
 }
 
 TEST_CASE("The report names every constant with its uncertainty", "[calibration]") {

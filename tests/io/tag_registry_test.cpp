@@ -34,6 +34,12 @@ TEST_CASE("Tags file: names, device IDs in both orders and profiles", "[io]") {
   CHECK(t.SensorOfDevice(0x9ABCDEF012345678ull) == 2);
   CHECK_FALSE(t.SensorOfDevice(1).has_value());
   CHECK(t.Entries().size() == 16);
+  // Where each device_id is written (for errors that name it beside calibration.json's): tag 2's
+  // value after `{"2": {"name": "Chest", "device_id": ` (37 characters), tag 16's on line 3 after
+  // 10 spaces and `"16": {"name": "Spare", "device_id": ` (37).
+  CHECK(t.Find(2)->DeviceIdPosition() == file.path() + ":1:38");
+  CHECK(t.Find(16)->DeviceIdPosition() == file.path() + ":3:48");
+  CHECK(t.Find(3)->DeviceIdPosition().empty());
 }
 
 TEST_CASE("Tags file: bad input names the file, line and column, the tag and the shape",

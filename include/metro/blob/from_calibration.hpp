@@ -123,8 +123,13 @@ Result<SensorConstants> SensorConstantsFromCalibration(
 // raw_data_sha256 hex), g_local_mps2 = gravity_mps2, temp_mean/min/max_c = the first sensor's
 // static_pose_temperature (without one t_ref_c of a temperature model, else 0), procedure_id 1
 // (calibrate fit), unc_k_x10 = round(10 * coverage_factor_95), tag_label "tag<N>"). Errors name
-// the file's key; WriteBlob then checks the firmware's limits. Warnings (the validity ranges',
-// "sensor N accel: ...") are appended to *warnings when it is not null.
+// the file's key, with what was expected, and for a calibration read from a file are at the
+// file:line:column of the value they are about (CalibrationErrorAt, calibration_io.hpp): a
+// missing sensor at `tags`, constants marked model_rejected at their `model_rejected`, a
+// constant the blob cannot hold at it (or at its sensor object), a date_utc outside 1970..2106
+// at it; each section is checked with the firmware's rules (WriteBlob) before it is taken.
+// Warnings (the validity ranges', "sensor N accel: ...") are appended to *warnings when it is
+// not null.
 Result<BlobContents> BlobContentsFromCalibration(const Calibration& calibration,
                                                  const BlobFromCalibrationOptions& options,
                                                  std::vector<std::string>* warnings = nullptr);

@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -292,6 +293,13 @@ struct Calibration {
   // Statements of conformity with a spec (`calibrate fit --spec`, docs/conformity.md); absent
   // when no spec was given.
   std::optional<ConformityStatement> conformity;
+  // The calibration.json this was read from (CalibrationFromJson, LoadCalibration in
+  // calibration_io.hpp): its name and its text as read, so that a check made after reading
+  // (`calibrate blob`, `push`, `apply`) can name the file:line:column of the value it is about
+  // (CalibrationErrorAt). Empty for a calibration made by a fit or built in memory. Not part
+  // of the calibration: ToJson ignores it.
+  std::string source_file;
+  std::shared_ptr<const std::string> source_text;
 
   const TagCalibration* FindTag(int sensor) const;
 };

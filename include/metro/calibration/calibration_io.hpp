@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "metro/calibration/calibrate.hpp"
@@ -39,6 +40,28 @@ Result<Calibration> CalibrationFromJson(std::string_view text, const std::string
 // ToJson with a trailing newline: the bytes `calibrate fit` writes.
 std::string FormatCalibrationJson(const Calibration& calibration);
 Result<Calibration> LoadCalibration(const std::string& path);
+
+// ---- Positions in calibration.json, for checks made after reading ------------------------
+//
+// A path to a value of calibration.json: member names and array indices, e.g.
+// {"tags", size_t{0}, "accel", "temperature", "bias_per_c", size_t{1}}.
+using CalibrationPath = std::vector<std::variant<std::string, size_t>>;
+
+// An input error (ErrorKind::kInput) with `message` at `file:line:column` of the value at `path`
+// in the calibration.json `calibration` was read from (Calibration::source_file), or of its
+// nearest ancestor present there (the tag object for a key the tag lacks, the top object for a
+// missing top-level key). A calibration not read from a file (a fit's, one built in memory):
+// the message alone, without file, line or column.
+Error CalibrationErrorAt(const Calibration& calibration, const CalibrationPath& path,
+                         std::string message);
+// "calibration has no sensor 7 (it has: 2, 3); expected --sensor 2 or another of its sensors",
+// at calibration.json's `tags` (CalibrationErrorAt): a command asked for a tag the file lacks.
+Error NoSensorError(const Calibration& calibration, int sensor);
+// The path of the tag calibration of `sensor` ({"tags", i}: tags are kept in file order), or
+// {"tags"} when the calibration has none.
+CalibrationPath CalibrationTagPath(const Calibration& calibration, int sensor);
+// The path of the tag's accel or gyro object ({"tags", i, "accel"}).
+CalibrationPath CalibrationSensorPath(const Calibration& calibration, int sensor, ImuSensor imu);
 // The certificate id: the first 16 hex digits of the SHA-256 of FormatCalibrationJson (the
 // certificate's section 1 and the registry's `certificate_id`).
 std::string CalibrationCertificateId(const Calibration& calibration);

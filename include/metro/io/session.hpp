@@ -56,6 +56,11 @@ struct InputDialect {
   bool bom = false;                // A UTF-8 byte-order mark was skipped.
   bool quoted = false;             // Some header field was quoted.
   bool header_in_comment = false;  // The header line started with '#' (EuRoC).
+  // The header line (1-based; 0 for input without one: a receiver capture, imu_tk) and the
+  // column name each of its fields was given, in field order ("" for a field left out), so
+  // that a check made after loading can point at a header cell: file:line:field.
+  int64_t header_line = 0;
+  std::vector<std::string> header_names;
   // Every header name that is not already canonical, with the name it was given.
   std::vector<ColumnMapping> mapping;
   // Time: the source column and its unit ("s", "ms", "us", "ns"), or "rate" when the

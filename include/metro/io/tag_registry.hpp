@@ -28,6 +28,14 @@ struct TagEntry {
   std::string name;
   std::optional<uint64_t> device_id;  // (DEVICEID[1] << 32) | DEVICEID[0]
   std::string profile;                // "mpu6050", "generic", or "" (not given)
+  // Where device_id is written: the tags file and the 1-based line and column of its value,
+  // for errors that name both it and another file's ID; empty and 0 without a device_id.
+  std::string file;
+  int64_t device_id_line = 0;
+  int64_t device_id_column = 0;
+
+  // "tags.json:3:19", or "" for an entry without a device_id.
+  std::string DeviceIdPosition() const;
 };
 
 class TagRegistry {
