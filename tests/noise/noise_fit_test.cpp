@@ -1,5 +1,6 @@
 #include "metro/noise/noise_fit.hpp"
 
+#include <boost/math/special_functions/polygamma.hpp>
 #include <catch2/catch.hpp>
 #include <cmath>
 
@@ -37,6 +38,17 @@ AllanCurve ModelCurve(AllanEstimator e, double q, double n, double b, double k, 
     c.alpha_source.push_back(AlphaSource::kFixed);
   }
   return c;
+}
+
+// The flicker generator's aliasing sum (noise_simulation.hpp) against its closed form:
+// sum_k |u + k|^-3 = zeta(3, u) + zeta(3, 1 - u) = -(psi''(u) + psi''(1 - u)) / 2.
+TEST_CASE("The flicker generator's aliasing sum is the Hurwitz zeta closed form", "[noise]") {
+  for (double u : {1.0 / (1 << 23), 1e-4, 0.01, 0.1, 0.25, 0.4999, 0.5, 0.75, 0.99}) {
+    INFO("u " << u);
+    const double closed =
+        -0.5 * (boost::math::polygamma(2, u) + boost::math::polygamma(2, 1.0 - u));
+    CHECK(testing::AliasedCubeSum(u) == Approx(closed).epsilon(1e-11));
+  }
 }
 
 TEST_CASE("Noise model factors are IEEE 952 Annex C", "[noise]") {

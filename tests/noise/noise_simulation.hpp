@@ -111,6 +111,26 @@ inline std::vector<double> ImuRate(size_t n, double tau0_s, double n_coef, doubl
   return y;
 }
 
+// sum_{k >= 0} (a + k)^-3, the Hurwitz zeta(3, a), for a >= 8 by Euler-Maclaurin:
+// 1/(2a^2) + 1/(2a^3) + 1/(4a^4) - 1/(12a^6) + 1/(12a^8), next term -0.15 a^-10 (< 2e-10 here).
+inline double HurwitzZeta3Tail(double a) {
+  const double r = 1.0 / a, r2 = r * r;
+  return r2 * (0.5 + r * (0.5 + r * (0.25 + r2 * (-1.0 / 12.0 + r2 / 12.0))));
+}
+
+// The aliasing sum sum_k |u + k|^-3 over all integers k, 0 < u < 1: the 17 nearest terms
+// exactly, the tails by HurwitzZeta3Tail. Within 6e-12 of -(psi''(u) + psi''(1 - u)) / 2
+// (Boost polygamma) at 1 h bins; the former 401-term sum of std::pow took about 30 s of CPU per
+// test process for the 2^22 bins of a 1 h record, this one 0.3 s.
+inline double AliasedCubeSum(double u) {
+  double s = 0.0;
+  for (int k = -8; k <= 8; ++k) {
+    const double a = std::fabs(u + k);
+    s += 1.0 / (a * a * a);
+  }
+  return s + HurwitzZeta3Tail(9.0 + u) + HurwitzZeta3Tail(9.0 - u);
+}
+
 // Flicker rate averaged over each sample interval (see the file comment), B in [q].
 inline std::vector<double> FlickerAveragedFftw(size_t n, double tau0_s, double b_coef,
                                                uint64_t seed) {
@@ -138,9 +158,7 @@ inline std::vector<double> FlickerAveragedFftw(size_t n, double tau0_s, double b
       auto a = std::make_shared<std::vector<double>>(bins, 0.0);
       for (size_t j = 1; j < bins; ++j) {
         const double u = static_cast<double>(j) / static_cast<double>(size);
-        double zeta = 0.0;
-        for (int k = -200; k <= 200; ++k) zeta += std::pow(std::fabs(u + k), -3.0);
-        zeta += 2.0 / (2.0 * 200.5 * 200.5);  // tails beyond |k| = 200
+        const double zeta = AliasedCubeSum(u);
         const double sin_u = std::sin(M_PI * u);
         const double psd = sin_u * sin_u / (2.0 * M_PI * M_PI * M_PI) * zeta;  // S / (B^2 tau0)
         (*a)[j] = std::sqrt(2.0 * psd / static_cast<double>(size));  // df = 1 / (size tau0)
