@@ -37,7 +37,8 @@ inline Result<std::optional<TagRegistry>> LoadTagsOption(const std::string& path
 // that does not parse, and a --device-id or calibration.json ID the tags file gives another tag
 // or that disagrees with the file's ID for the sensor; an ID from calibration.json is refused at
 // its file:line:column there, naming the tags file's entry at its own, an ID from --device-id at
-// the tags file's entry.
+// the tags file's entry; and a --device-id or tags-file ID other than the device calibration.json
+// says the tag was calibrated on, at calibration.json's device_id.
 inline Result<std::optional<uint64_t>> ResolveDeviceId(const std::string& flag_text,
                                                        const std::optional<TagRegistry>& tags,
                                                        const Calibration& cal, int sensor) {
@@ -70,6 +71,22 @@ inline Result<std::optional<uint64_t>> ResolveDeviceId(const std::string& flag_t
   if (!id && t != nullptr && t->device_id) {
     id = t->device_id;
     source = "calibration.json";
+  }
+  // A calibration made on one device is never written or pushed for another: the constants
+  // are that tag's own (as `calibrate apply` refuses it).
+  if (id && t != nullptr && t->device_id && *t->device_id != *id) {
+    CalibrationPath path = CalibrationTagPath(cal, sensor);
+    path.emplace_back(std::string("device_id"));
+    const std::string from =
+        source == "--device-id" || entry == nullptr ? source : entry->DeviceIdPosition();
+    return CalibrationErrorAt(
+        cal, path,
+        fmt::format("sensor {} was calibrated on device {}, but {} gives device {}: this "
+                    "calibration was made for another tag; expected --device-id {} (the "
+                    "calibrated tag), or a calibration of device {}",
+                    sensor, blob::FormatDeviceId(*t->device_id), from,
+                    blob::FormatDeviceId(*id), blob::FormatDeviceId(*t->device_id),
+                    blob::FormatDeviceId(*id)));
   }
   if (id && tags) {
     const std::optional<int> owner = tags->SensorOfDevice(*id);

@@ -167,6 +167,38 @@ TEST_CASE("A device ID calibration.json and the tags file disagree on: both posi
     CHECK_FALSE(Exists(out));
   }
 
+  SECTION("calibrate blob and push: --device-id or the tags file names another device") {
+    // One tag's constants are never written or pushed for another chip (as apply refuses).
+    const std::string out = d / "tag.bin";
+    const std::string port = d / "no-such-tty";
+    const std::string expected_tail =
+        " gives device 1111111111111111: this calibration was made for another tag; expected "
+        "--device-id 0011223344556677 (the calibrated tag), or a calibration of device "
+        "1111111111111111\n";
+    const Run flag =
+        Calibrate("blob " + cal + " --sensor 2 --device-id 1111111111111111 -o " + out);
+    CHECK(flag.exit_code == 2);
+    CHECK(flag.err == "error: " + cal +
+                          ":2286:20: sensor 2 was calibrated on device 0011223344556677, but "
+                          "--device-id" +
+                          expected_tail);
+    CHECK_FALSE(Exists(out));
+    const std::string tags = d / "t.json";
+    const std::string tags_text =
+        "{\n  \"2\": {\"name\": \"Chest\",\n        \"device_id\": \"0x1111111111111111\"}\n}\n";
+    Put(tags, tags_text);
+    const Run file = Calibrate("push " + cal + " --sensor 2 --tags " + tags + " --port " + port);
+    CHECK(file.exit_code == 2);
+    CHECK(file.err == "error: " + cal +
+                          ":2286:20: sensor 2 was calibrated on device 0011223344556677, but " +
+                          tags + ":3:22" + expected_tail);
+    // The calibrated device itself is accepted.
+    const Run same =
+        Calibrate("blob " + cal + " --sensor 2 --device-id 0011223344556677 -o " + out);
+    CHECK(same.exit_code == 0);
+    CHECK(Exists(out));
+  }
+
   SECTION("calibrate apply: the tags file gives the sensor another device") {
     // The device_id on line 3 after 8 spaces and `"device_id": `: column 22.
     const std::string tags = d / "t.json";
