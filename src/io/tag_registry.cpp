@@ -19,7 +19,12 @@ TagRegistry TagRegistry::Default() {
       {5, "Left Wrist"},    {6, "Right Wrist"}, {7, "Left Hand"},   {8, "Right Hand"},
       {9, "Sacral (Back)"}, {10, "Left Knee"},  {11, "Right Knee"}, {12, "Left Ankle"},
       {13, "Right Ankle"},  {14, "Left Foot"},  {15, "Right Foot"}};
-  for (const auto& [sensor, name] : names) r.tags_[sensor] = TagEntry{sensor, name, {}, ""};
+  for (const auto& [sensor, name] : names) {
+    TagEntry e;
+    e.sensor = sensor;
+    e.name = name;
+    r.tags_[sensor] = std::move(e);
+  }
   return r;
 }
 
@@ -54,7 +59,8 @@ Result<TagRegistry> TagRegistry::Load(const std::string& path) {
                                    "\"2\": \"Chest\"",
                                    EscapeControlChars(key)));
     }
-    TagEntry e{sensor, "", {}, ""};
+    TagEntry e;
+    e.sensor = sensor;
     if (value.is_string()) {
       e.name = value.get<std::string>();
     } else if (value.is_object()) {
