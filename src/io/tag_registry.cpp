@@ -23,6 +23,7 @@ TagRegistry TagRegistry::Default() {
     TagEntry e;
     e.sensor = sensor;
     e.name = name;
+    e.thesis_default = true;
     r.tags_[sensor] = std::move(e);
   }
   return r;
@@ -133,6 +134,28 @@ std::string TagEntry::DeviceIdPosition() const {
 std::string TagRegistry::Name(int sensor) const {
   const auto it = tags_.find(sensor);
   return it != tags_.end() ? it->second.name : fmt::format("tag {}", sensor);
+}
+
+bool IsThesisTagFormat(SessionFormat format) {
+  switch (format) {
+    case SessionFormat::kAuto:
+    case SessionFormat::kCsv:
+    case SessionFormat::kReceiver:
+      return true;
+    case SessionFormat::kImuTk:
+    case SessionFormat::kEuroc:
+    case SessionFormat::kRaw:
+    case SessionFormat::kPhyphox:
+    case SessionFormat::kSensorLogger:
+      return false;
+  }
+  return true;
+}
+
+std::string TagRegistry::Name(int sensor, SessionFormat format) const {
+  const TagEntry* e = Find(sensor);
+  if (IsThesisTagFormat(format) || (e != nullptr && !e->thesis_default)) return Name(sensor);
+  return fmt::format("sensor {}", sensor);
 }
 
 const TagEntry* TagRegistry::Find(int sensor) const {

@@ -1,6 +1,6 @@
 // End-to-end: the load flags every command shares (apps/load_cli.hpp), convert's among them,
-// and convert's join of the per-sensor files of one recording, each asserting the numbers that
-// come out.
+// convert's join of the per-sensor files of one recording, each asserting the numbers that
+// come out, and the names third-party files' sensors are given.
 #include <catch2/catch.hpp>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -157,6 +157,56 @@ TEST_CASE("convert --imutk and the older --from imutk read imu_tk's pair alike",
   auto one = Characterize("convert --imutk " + acc.path() + " -o -");
   CHECK(one.exit_code == 2);
   CHECK_THAT(one.err, Catch::Contains("--imutk takes two inputs: ACC GYRO"));
+}
+
+TEST_CASE("A third-party file's sensor is 'sensor N', not a thesis tag's body part",
+          "[apps][formats][issue39]") {
+  // Thesis Table 5.2 names the thesis tags (sensor 1 Forehead, 2 Chest): a EuRoC flight, a
+  // phyphox and a Sensor Logger phone, and raw MPU6050 prints are sensor 1 of another IMU
+  // (the flags each file needs as in real_records_cli_test.cpp).
+  struct File {
+    std::string args;
+    std::string format;
+  };
+  const std::vector<File> files = {
+      {kEuroc, "euroc"},
+      {kExternal + "phyphox_deadreckoning_walk/Gyroscope.csv --format phyphox --column "
+                   "'X (rad/s)=gx_rads' --column 'Y (rad/s)=gy_rads' --column 'Z (rad/s)=gz_rads'",
+       "phyphox"},
+      {kExternal + "sensorlogger_kalmannet_static/noise_Gyr.csv --column x=gx_rads --column "
+                   "y=gy_rads --column z=gz_rads",
+       "sensorlogger"},
+      {kExternal + "mpu6050_imucalibration_static_7min/example_data_tinit_calc.csv", "raw"}};
+  for (const auto& [args, format] : files) {
+    INFO(args);
+    auto r = Characterize(args + " --type-a -o -");
+    REQUIRE(r.exit_code == 0);
+    const auto report = nlohmann::json::parse(r.out);
+    CHECK(report["input"]["format"] == format);
+    REQUIRE(report["sensors"].size() == 1);
+    CHECK(report["sensors"][0]["sensor"] == 1);
+    CHECK(report["sensors"][0]["name"] == "sensor 1");
+  }
+  // The thesis tags' own file keeps its tag's name.
+  auto chest = Characterize(kDatasets + "static_chest.csv --type-a -o -");
+  REQUIRE(chest.exit_code == 0);
+  CHECK(nlohmann::json::parse(chest.out)["sensors"][0]["name"] == "Chest");
+  // A tags file that names the sensor names it whatever the file.
+  TempFile tags(R"({"1": "ADIS16448 on the MAV"})", ".json");
+  auto named = Characterize(kEuroc + " --type-a --tags " + tags.path() + " -o -");
+  REQUIRE(named.exit_code == 0);
+  CHECK(nlohmann::json::parse(named.out)["sensors"][0]["name"] == "ADIS16448 on the MAV");
+  // The page of a EuRoC report named after the fact by a file that names another tag.
+  const std::string report = "metro_formats_cli_euroc_report.json";
+  const std::string page = "metro_formats_cli_euroc_report.html";
+  REQUIRE(Characterize(kEuroc + " --type-a -q -o " + report).exit_code == 0);
+  TempFile other(R"({"2": "Bench Tag"})", ".json");
+  auto html = Characterize("report " + report + " --html " + page + " --tags " + other.path());
+  REQUIRE(html.exit_code == 0);
+  CHECK(Slurp(page).find("Forehead") == std::string::npos);
+  CHECK(Slurp(page).find("sensor 1") != std::string::npos);
+  std::remove(report.c_str());
+  std::remove(page.c_str());
 }
 
 }  // namespace
