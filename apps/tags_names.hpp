@@ -21,13 +21,32 @@
 
 namespace metro::apps {
 
+// The format a calibration's tags are named for (IsThesisTagFormat): a thesis tags' format
+// when any record is one or does not say (files written before metro recorded it), otherwise
+// the first record's (a calibration fitted only from other tools' files: imu_tk, EuRoC, ...).
+inline SessionFormat CalibrationRecordsFormat(const Calibration& cal) {
+  SessionFormat records = SessionFormat::kCsv;
+  for (size_t i = 0; i < cal.inputs.size(); ++i) {
+    SessionFormat f = SessionFormat::kCsv;
+    if (!ParseSessionFormat(cal.inputs[i].format, &f) || IsThesisTagFormat(f)) {
+      return SessionFormat::kCsv;
+    }
+    if (i == 0) records = f;
+  }
+  return records;
+}
+
 // Gives each tag of `cal` the tags file's name, its profile when the file names one, and its
-// device ID where calibration.json records none. Input errors (exit 2) at the file:line:column
-// of calibration.json's device_id, naming the tags file's entry at its own (or `tags_path`):
-// calibration.json's device ID for a sensor differs from the file's for that sensor, or the
-// file gives that device to another sensor (the calibration belongs to another tag).
+// device ID where calibration.json records none. A calibration fitted only from other tools'
+// files is not a thesis tag's: a default body-part name does not apply to it, and its tags keep
+// the name calibration.json gives them (CalibrationRecordsFormat). Input
+// errors (exit 2) at the file:line:column of calibration.json's device_id, naming the tags file's
+// entry at its own (or `tags_path`): calibration.json's device ID for a sensor differs from the
+// file's for that sensor, or the file gives that device to another sensor (the calibration belongs
+// to another tag).
 inline Status ApplyTagsToCalibration(const TagRegistry& tags, const std::string& tags_path,
                                      Calibration* cal) {
+  const SessionFormat records = CalibrationRecordsFormat(*cal);
   for (TagCalibration& t : cal->tags) {
     const TagEntry* entry = tags.Find(t.sensor);
     if (t.device_id) {
@@ -60,7 +79,7 @@ inline Status ApplyTagsToCalibration(const TagRegistry& tags, const std::string&
       }
     }
     if (entry == nullptr) continue;
-    t.name = entry->name;
+    if (IsThesisTagFormat(records) || !entry->thesis_default) t.name = entry->name;
     if (!entry->profile.empty()) t.profile = entry->profile;
     if (!t.device_id) t.device_id = entry->device_id;
   }

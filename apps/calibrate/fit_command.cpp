@@ -16,6 +16,7 @@
 #include "metro/report/certificate.hpp"
 #include "registry_hooks.hpp"
 #include "tags_cli.hpp"
+#include "tags_names.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -130,12 +131,14 @@ int RunFit(const FitOptions& f) {
   if (!cal.ok()) {
     return apps::PrintErrorExit(cal.error());
   }
-  // calibration.json carries each tag's device ID, name and profile from the tags file.
+  // calibration.json carries each tag's device ID, name and profile from the tags file (a
+  // default body-part name only for the thesis tags' own records: none for other tools').
+  const bool thesis_records = IsThesisTagFormat(apps::CalibrationRecordsFormat(cal.value()));
   for (TagCalibration& t : cal.value().tags) {
     const TagEntry* entry = tags.value() ? tags.value()->Find(t.sensor) : nullptr;
     if (entry != nullptr) {
       t.device_id = entry->device_id;
-      t.name = entry->name;
+      if (thesis_records || !entry->thesis_default) t.name = entry->name;
       t.profile = entry->profile;
     }
   }

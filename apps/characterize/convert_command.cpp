@@ -1,6 +1,8 @@
-// characterize convert INPUT... -o session.csv [--from auto|receiver|csv|imutk|euroc|raw|
-//   phyphox|sensorlogger]: one session to canonical session.csv, several files of one
-//   recording joined on time, or imu_tk's two files.
+// characterize convert INPUT... -o session.csv [--format auto|csv|receiver|euroc|raw|phyphox|
+//   sensorlogger] [--imutk]: one session to canonical session.csv, several files of one
+//   recording joined on time, or imu_tk's two files. --format is the flag every command that
+//   loads a session has (load_cli.hpp); --from FORMAT is its older spelling here (--from imutk:
+//   --imutk).
 #include <fmt/format.h>
 
 #include "commands.hpp"
@@ -15,20 +17,21 @@ namespace {
 
 struct ConvertOptions {
   std::vector<std::string> inputs;
-  std::string from = "auto";
+  std::string from;    // --from FORMAT, the older spelling of --format (and of --imutk).
+  bool imutk = false;  // --imutk: the inputs are imu_tk's two files, ACC GYRO.
   std::string output;
-  LoadCliOptions load;  // Its --format is --from here.
+  LoadCliOptions load;  // --format and the other load flags.
 };
 
 int RunConvert(const ConvertOptions& o) {
+  LoadCliOptions flags = o.load;
+  if (!o.from.empty() && o.from != "imutk") flags.format = o.from;
+  const bool imutk = o.imutk || o.from == "imutk";
   LoadOptions load;
-  if (Status s = MakeLoadOptions(o.load, &load); !s.ok()) {
+  if (Status s = MakeLoadOptions(flags, &load); !s.ok()) {
     return PrintErrorExit(s.error());
   }
-  if (o.from != "imutk" && !ParseSessionFormat(o.from, &load.format)) {
-    return PrintErrorExit(MakeError("--from " + o.from + ": unknown format"));
-  }
-  if (Status s = CheckStdinInputs(o.inputs, o.from == "imutk"); !s.ok()) {
+  if (Status s = CheckStdinInputs(o.inputs, imutk); !s.ok()) {
     return PrintErrorExit(s.error());
   }
   std::vector<NamedPath> inputs = {{"--columns-file", o.load.columns_file}};
@@ -38,9 +41,10 @@ int RunConvert(const ConvertOptions& o) {
   }
   Result<Session> session = MakeError("no input");
   std::string join_comments;
-  if (o.from == "imutk") {
+  if (imutk) {
     if (o.inputs.size() != 2) {
-      return PrintErrorExit(MakeError("--from imutk takes two inputs: ACC GYRO"));
+      return PrintErrorExit(MakeError(std::string(o.imutk ? "--imutk" : "--from imutk") +
+                                      " takes two inputs: ACC GYRO"));
     }
     session = LoadImuTk(o.inputs[0], o.inputs[1], load);
   } else if (o.inputs.size() == 1) {
@@ -104,17 +108,21 @@ void AddConvertCommand(CLI::App& app, int* exit_code) {
       "imu_tk's two files) into canonical session.csv; several files are joined on time");
   sub->add_option("inputs", o->inputs,
                   "INPUT, several files of one recording (joined on time), or ACC GYRO with "
-                  "--from imutk; - reads stdin")
+                  "--imutk; - reads stdin")
       ->required()
       ->check(ExistingFileOrStdin());
-  sub->add_option("--from", o->from, "input format")
+  sub->add_option("-o,--output", o->output, "session.csv to write (- for stdout)")->required();
+  // The load flags, --format among them, as every command that loads a session has them.
+  AddLoadCliOptions(sub, &o->load);
+  CLI::Option* format = sub->get_option("--format");
+  CLI::Option* imutk =
+      sub->add_flag("--imutk", o->imutk, "the inputs are imu_tk's two files: ACC GYRO")
+          ->excludes(format);
+  sub->add_option("--from", o->from, "the older spelling of --format (--from imutk: --imutk)")
       ->check(CLI::IsMember(
           {"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox", "sensorlogger"}))
-      ->capture_default_str();
-  sub->add_option("-o,--output", o->output, "session.csv to write (- for stdout)")->required();
-  // The load flags; the input format is --from here.
-  AddLoadCliOptions(sub, &o->load);
-  sub->remove_option(sub->get_option("--format"));
+      ->excludes(format)
+      ->excludes(imutk);
   sub->callback([o, exit_code] { *exit_code = RunConvert(*o); });
 }
 

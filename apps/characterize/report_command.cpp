@@ -36,9 +36,12 @@ Result<std::string> RenderWithTags(const ReportCommandOptions& o) {
   if (schema == kReportSchema) {
     Result<SessionReport> report = SessionReportFromJson(text.value(), o.json);
     if (!report.ok()) return report.error();
-    // Each sensor's name from the tags file, as `characterize analyze --tags FILE` names them.
+    // Each sensor's name from the tags file, as `characterize analyze --tags FILE` names them
+    // (for the report's input format: a third-party file's sensors are not thesis tags).
+    SessionFormat format = SessionFormat::kCsv;
+    ParseSessionFormat(report.value().input.format, &format);
     for (SensorReport& s : report.value().sensors) {
-      s.name = tags.value().Name(static_cast<int>(s.sensor));
+      s.name = tags.value().Name(static_cast<int>(s.sensor), format);
     }
     return RenderSessionReportHtml(report.value());
   }

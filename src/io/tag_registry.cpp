@@ -19,7 +19,13 @@ TagRegistry TagRegistry::Default() {
       {5, "Left Wrist"},    {6, "Right Wrist"}, {7, "Left Hand"},   {8, "Right Hand"},
       {9, "Sacral (Back)"}, {10, "Left Knee"},  {11, "Right Knee"}, {12, "Left Ankle"},
       {13, "Right Ankle"},  {14, "Left Foot"},  {15, "Right Foot"}};
-  for (const auto& [sensor, name] : names) r.tags_[sensor] = TagEntry{sensor, name, {}, ""};
+  for (const auto& [sensor, name] : names) {
+    TagEntry e;
+    e.sensor = sensor;
+    e.name = name;
+    e.thesis_default = true;
+    r.tags_[sensor] = std::move(e);
+  }
   return r;
 }
 
@@ -54,7 +60,8 @@ Result<TagRegistry> TagRegistry::Load(const std::string& path) {
                                    "\"2\": \"Chest\"",
                                    EscapeControlChars(key)));
     }
-    TagEntry e{sensor, "", {}, ""};
+    TagEntry e;
+    e.sensor = sensor;
     if (value.is_string()) {
       e.name = value.get<std::string>();
     } else if (value.is_object()) {
@@ -127,6 +134,28 @@ std::string TagEntry::DeviceIdPosition() const {
 std::string TagRegistry::Name(int sensor) const {
   const auto it = tags_.find(sensor);
   return it != tags_.end() ? it->second.name : fmt::format("tag {}", sensor);
+}
+
+bool IsThesisTagFormat(SessionFormat format) {
+  switch (format) {
+    case SessionFormat::kAuto:
+    case SessionFormat::kCsv:
+    case SessionFormat::kReceiver:
+      return true;
+    case SessionFormat::kImuTk:
+    case SessionFormat::kEuroc:
+    case SessionFormat::kRaw:
+    case SessionFormat::kPhyphox:
+    case SessionFormat::kSensorLogger:
+      return false;
+  }
+  return true;
+}
+
+std::string TagRegistry::Name(int sensor, SessionFormat format) const {
+  const TagEntry* e = Find(sensor);
+  if (IsThesisTagFormat(format) || (e != nullptr && !e->thesis_default)) return Name(sensor);
+  return fmt::format("sensor {}", sensor);
 }
 
 const TagEntry* TagRegistry::Find(int sensor) const {

@@ -124,7 +124,7 @@ SessionReport MakeSessionReport(const Session& session, const SessionTypeA& resu
   for (const TagTypeA& t : result.tags) {
     SensorReport s;
     s.sensor = t.sensor;
-    s.name = registry.Name(t.sensor);
+    s.name = registry.Name(t.sensor, session.format);
     s.frames = t.counts.frames;
     s.fresh = t.counts.fresh;
     s.stale = t.counts.stale;

@@ -1,10 +1,12 @@
-// End-to-end: the load flags every command shares (apps/load_cli.hpp) and convert's join of
-// the per-sensor files of one recording, each asserting the numbers that come out.
+// End-to-end: the load flags every command shares (apps/load_cli.hpp), convert's among them,
+// convert's join of the per-sensor files of one recording, each asserting the numbers that
+// come out, and the names third-party files' sensors are given.
 #include <catch2/catch.hpp>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
@@ -13,6 +15,10 @@ namespace metro {
 namespace {
 
 using testing::TempFile;
+
+const std::string kDatasets = std::string(METRO_SOURCE_DIR) + "/datasets/";
+const std::string kExternal = std::string(METRO_EXTERNAL_DATA_DIR) + "/";
+const std::string kEuroc = kExternal + "euroc_v1_01_easy_imu0_kimera/data.csv";
 
 testing::ProgramRun Characterize(const std::string& args) {
   return testing::RunProgram(METRO_CHARACTERIZE_EXE, args);
@@ -83,6 +89,124 @@ TEST_CASE("convert joins Sensor Logger's per-sensor files on time", "[apps][form
   CHECK(j["input"]["time"]["unit"] == "ns");
   CHECK(Slurp(out).find("t_ns,sensor,gz_rads") != std::string::npos);
   std::remove(out.c_str());
+}
+
+// The first line of `text` (a refused command's error).
+std::string FirstLine(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+TEST_CASE("convert --format accepts and refuses what characterize SESSION --format does",
+          "[apps][formats][issue39]") {
+  // The values docs/formats.md lists for --format, and values it does not: imu_tk's pair is a
+  // flag of its own (--imutk), names are case-sensitive, an empty value is no format.
+  const std::vector<std::string> accepted = {"auto", "csv",     "receiver",    "euroc",
+                                             "raw",  "phyphox", "sensorlogger"};
+  const std::vector<std::string> refused = {"imutk", "bogus", "CSV", "''"};
+  // A thesis session.csv and a EuRoC file: each value reads one, the other or neither.
+  for (const std::string& file : {kDatasets + "static_chest.csv", kEuroc}) {
+    for (const std::string& value : accepted) {
+      INFO(file << " --format " << value);
+      auto main = Characterize(file + " --type-a --format " + value + " -o -");
+      auto convert = Characterize("convert " + file + " --format " + value + " -o -");
+      CHECK(main.exit_code == convert.exit_code);
+      // A value that does not fit the file: the same error from the same loader.
+      if (main.exit_code != 0) {
+        CHECK(main.exit_code == 2);
+        CHECK(FirstLine(main.err) == FirstLine(convert.err));
+      }
+    }
+    for (const std::string& value : refused) {
+      INFO(file << " --format " << value);
+      auto main = Characterize(file + " --type-a --format " + value + " -o -");
+      auto convert = Characterize("convert " + file + " --format " + value + " -o -");
+      CHECK(main.exit_code == 2);
+      CHECK(convert.exit_code == 2);
+      CHECK_THAT(main.err, Catch::Contains("--format"));
+      CHECK(FirstLine(main.err) == FirstLine(convert.err));
+    }
+  }
+  // Where the format fits: session.csv as csv or detected, EuRoC as euroc or detected.
+  CHECK(Characterize("convert " + kDatasets + "static_chest.csv --format csv -o -").exit_code == 0);
+  CHECK(Characterize("convert " + kEuroc + " --format euroc -o -").exit_code == 0);
+  CHECK(Characterize(kEuroc + " --type-a --format euroc -o -").exit_code == 0);
+  // convert's older --from FORMAT still works and writes what --format writes.
+  auto from = Characterize("convert " + kEuroc + " --from euroc -o -");
+  auto format = Characterize("convert " + kEuroc + " --format euroc -o -");
+  REQUIRE(from.exit_code == 0);
+  CHECK(from.out == format.out);
+  CHECK(Characterize("convert " + kEuroc + " --from bogus -o -").exit_code == 2);
+  CHECK(Characterize("convert " + kEuroc + " --from euroc --format euroc -o -").exit_code == 2);
+}
+
+TEST_CASE("convert --imutk and the older --from imutk read imu_tk's pair alike",
+          "[apps][formats][issue39]") {
+  // Two samples of imu_tk's whitespace-separated `timestamp_s x y z` raw counts.
+  TempFile acc("0.00 10 20 16384\n0.01 12 22 16380\n", "_acc.txt");
+  TempFile gyro("0.00 1 2 3\n0.01 4 5 6\n", "_gyro.txt");
+  auto flag = Characterize("convert --imutk " + acc.path() + " " + gyro.path() + " -o -");
+  auto from = Characterize("convert --from imutk " + acc.path() + " " + gyro.path() + " -o -");
+  REQUIRE(flag.exit_code == 0);
+  CHECK(flag.out == from.out);
+  CHECK(flag.out.find("\n0.01,1,12,22,16380,4,5,6") != std::string::npos);
+  // imutk is not a --format value (it takes two files), and the flag excludes --format.
+  CHECK(Characterize("convert --format imutk " + acc.path() + " " + gyro.path() + " -o -")
+            .exit_code == 2);
+  auto both =
+      Characterize("convert --imutk --format csv " + acc.path() + " " + gyro.path() + " -o -");
+  CHECK(both.exit_code == 2);
+  CHECK_THAT(both.err, Catch::Contains("--format"));
+  auto one = Characterize("convert --imutk " + acc.path() + " -o -");
+  CHECK(one.exit_code == 2);
+  CHECK_THAT(one.err, Catch::Contains("--imutk takes two inputs: ACC GYRO"));
+}
+
+TEST_CASE("A third-party file's sensor is 'sensor N', not a thesis tag's body part",
+          "[apps][formats][issue39]") {
+  // Thesis Table 5.2 names the thesis tags (sensor 1 Forehead, 2 Chest): a EuRoC flight, a
+  // phyphox and a Sensor Logger phone, and raw MPU6050 prints are sensor 1 of another IMU
+  // (the flags each file needs as in real_records_cli_test.cpp).
+  struct File {
+    std::string args;
+    std::string format;
+  };
+  const std::vector<File> files = {
+      {kEuroc, "euroc"},
+      {kExternal + "phyphox_deadreckoning_walk/Gyroscope.csv --format phyphox --column "
+                   "'X (rad/s)=gx_rads' --column 'Y (rad/s)=gy_rads' --column 'Z (rad/s)=gz_rads'",
+       "phyphox"},
+      {kExternal + "sensorlogger_kalmannet_static/noise_Gyr.csv --column x=gx_rads --column "
+                   "y=gy_rads --column z=gz_rads",
+       "sensorlogger"},
+      {kExternal + "mpu6050_imucalibration_static_7min/example_data_tinit_calc.csv", "raw"}};
+  for (const auto& [args, format] : files) {
+    INFO(args);
+    auto r = Characterize(args + " --type-a -o -");
+    REQUIRE(r.exit_code == 0);
+    const auto report = nlohmann::json::parse(r.out);
+    CHECK(report["input"]["format"] == format);
+    REQUIRE(report["sensors"].size() == 1);
+    CHECK(report["sensors"][0]["sensor"] == 1);
+    CHECK(report["sensors"][0]["name"] == "sensor 1");
+  }
+  // The thesis tags' own file keeps its tag's name.
+  auto chest = Characterize(kDatasets + "static_chest.csv --type-a -o -");
+  REQUIRE(chest.exit_code == 0);
+  CHECK(nlohmann::json::parse(chest.out)["sensors"][0]["name"] == "Chest");
+  // A tags file that names the sensor names it whatever the file.
+  TempFile tags(R"({"1": "ADIS16448 on the MAV"})", ".json");
+  auto named = Characterize(kEuroc + " --type-a --tags " + tags.path() + " -o -");
+  REQUIRE(named.exit_code == 0);
+  CHECK(nlohmann::json::parse(named.out)["sensors"][0]["name"] == "ADIS16448 on the MAV");
+  // The page of a EuRoC report named after the fact by a file that names another tag.
+  const std::string report = "metro_formats_cli_euroc_report.json";
+  const std::string page = "metro_formats_cli_euroc_report.html";
+  REQUIRE(Characterize(kEuroc + " --type-a -q -o " + report).exit_code == 0);
+  TempFile other(R"({"2": "Bench Tag"})", ".json");
+  auto html = Characterize("report " + report + " --html " + page + " --tags " + other.path());
+  REQUIRE(html.exit_code == 0);
+  CHECK(Slurp(page).find("Forehead") == std::string::npos);
+  CHECK(Slurp(page).find("sensor 1") != std::string::npos);
+  std::remove(report.c_str());
+  std::remove(page.c_str());
 }
 
 }  // namespace

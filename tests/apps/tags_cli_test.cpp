@@ -138,6 +138,32 @@ TEST_CASE("calibrate apply --tags refuses a calibration made for another tag (ex
 }
 
 #ifdef METRO_CHARACTERIZE_EXE
+TEST_CASE("A calibration fitted from imu_tk's files gets no thesis body-part name",
+          "[apps][tags][issue39]") {
+  // IMU-TK's Xsens record is sensor 1 of an Xsens IMU, not the thesis's tag 1 (Forehead).
+  const std::string xsens = std::string(METRO_EXTERNAL_DATA_DIR) + "/imu_tk_xsens/";
+  const std::string pair = xsens + "xsens_acc.mat " + xsens + "xsens_gyro.mat";
+  const std::string other = Scratch() + "metro_tags_cli_xsens_other.json";
+  WriteText(other, R"({"2": "Bench Tag"})");
+  const std::string cal = Scratch() + "metro_tags_cli_xsens.json";
+  Run r = Calibrate("fit --imutk " + pair + " -q -o " + cal + " --tags " + other);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  auto tag = nlohmann::json::parse(Slurp(cal))["tags"][0];
+  CHECK(tag["sensor"] == 1);
+  CHECK_FALSE(tag.contains("name"));
+  // Named after the fact with the same file: still no body-part name.
+  r = Calibrate("report " + cal + " --tags " + other);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.out, Catch::Contains("tags (" + other + "):\n  sensor 1: (no name)\n"));
+  // A tags file that names sensor 1 names it.
+  const std::string named = Scratch() + "metro_tags_cli_xsens_named.json";
+  WriteText(named, R"({"1": "Xsens MTi"})");
+  r = Calibrate("fit --imutk " + pair + " -q -o " + cal + " --tags " + named);
+  REQUIRE(r.exit_code == 0);
+  CHECK(nlohmann::json::parse(Slurp(cal))["tags"][0]["name"] == "Xsens MTi");
+}
+
 TEST_CASE("characterize report --tags names the tags of a session report and a calibration",
           "[apps][tags]") {
   auto characterize = [](const std::string& args) {

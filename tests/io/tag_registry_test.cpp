@@ -42,6 +42,29 @@ TEST_CASE("Tags file: names, device IDs in both orders and profiles", "[io]") {
   CHECK(t.Find(3)->DeviceIdPosition().empty());
 }
 
+TEST_CASE("Tags file: the default body-part names name only the thesis tags' own files",
+          "[io][issue39]") {
+  testing::TempFile file(R"({"1": "ADIS16448"})", ".json");
+  Result<TagRegistry> r = TagRegistry::Load(file.path());
+  REQUIRE(r.ok());
+  const TagRegistry& t = r.value();
+  // A receiver capture and session.csv: thesis Table 5.2 (2 Chest), as Name(sensor).
+  CHECK(t.Name(2, SessionFormat::kReceiver) == "Chest");
+  CHECK(t.Name(2, SessionFormat::kCsv) == "Chest");
+  CHECK(t.Name(40, SessionFormat::kCsv) == "tag 40");
+  // Another tool's file: the file's name where it gives one, "sensor N" otherwise.
+  for (SessionFormat f :
+       {SessionFormat::kEuroc, SessionFormat::kPhyphox, SessionFormat::kSensorLogger,
+        SessionFormat::kRaw, SessionFormat::kImuTk}) {
+    INFO(SessionFormatName(f));
+    CHECK_FALSE(IsThesisTagFormat(f));
+    CHECK(t.Name(1, f) == "ADIS16448");
+    CHECK(t.Name(2, f) == "sensor 2");
+    CHECK(t.Name(40, f) == "sensor 40");
+    CHECK(TagRegistry::Default().Name(1, f) == "sensor 1");
+  }
+}
+
 TEST_CASE("Tags file: bad input names the file, line and column, the tag and the shape",
           "[io][issue37]") {
   // issue #37: each error was "tags.json: ..." without line and column. `at` is the text the

@@ -141,8 +141,9 @@ struct AccuracyReport {
 };
 
 // `session` and `reference` (may be null) name the inputs in the report's `input` section;
-// `tags` names the evaluated tag there (`input.tag`: its name, and its device ID when the tags
-// file gives one; docs/formats.md "Tags file").
+// `tags` names the evaluated tag there (`input.tag`: its name for the session's format, see
+// TagRegistry::Name, and its device ID when the tags file gives one; docs/formats.md "Tags
+// file").
 AccuracyReport MakeAccuracyReport(const AccuracyResult& result, const Session& session,
                                   const Session* reference,
                                   const TagRegistry& tags = TagRegistry::Default());

@@ -11,6 +11,11 @@
 // device_id takes every spelling of core/device_id.hpp (metro's 16 digits or nrfjprog's two
 // words); profile is "mpu6050" or "generic" (`calibrate blob --profile`). Two tags with one
 // device ID are refused.
+//
+// The default names are the thesis tags' body parts: they name only the files those tags
+// write (a receiver capture, session.csv). Another tool's file (EuRoC, phyphox, Sensor Logger,
+// raw-count prints, imu_tk) is some other IMU: Name(sensor, format) gives it "sensor N" unless
+// a tags file names that sensor.
 #pragma once
 
 #include <cstdint>
@@ -20,6 +25,7 @@
 #include <vector>
 
 #include "metro/core/status.hpp"
+#include "metro/io/session.hpp"
 
 namespace metro {
 
@@ -28,6 +34,7 @@ struct TagEntry {
   std::string name;
   std::optional<uint64_t> device_id;  // (DEVICEID[1] << 32) | DEVICEID[0]
   std::string profile;                // "mpu6050", "generic", or "" (not given)
+  bool thesis_default = false;        // A default name (thesis Table 5.2), not the file's.
   // Where device_id is written: the tags file and the 1-based line and column of its value,
   // for errors that name both it and another file's ID; empty and 0 without a device_id.
   std::string file;
@@ -37,6 +44,11 @@ struct TagEntry {
   // "tags.json:3:19", or "" for an entry without a device_id.
   std::string DeviceIdPosition() const;
 };
+
+// True for the files the thesis tags write, which the default names belong to: a receiver
+// capture and session.csv (kAuto too: a format not yet known). False for other tools' files
+// (kEuroc, kPhyphox, kSensorLogger, kRaw, kImuTk).
+bool IsThesisTagFormat(SessionFormat format);
 
 class TagRegistry {
  public:
@@ -48,6 +60,10 @@ class TagRegistry {
 
   // The tag's name, or "tag N" when the registry has none.
   std::string Name(int sensor) const;
+  // The name of `sensor` in a session read as `format`: Name(sensor) for the thesis tags'
+  // own files (IsThesisTagFormat); for another tool's file the tags file's name, or
+  // "sensor N" where only a default body-part name would apply.
+  std::string Name(int sensor, SessionFormat format) const;
   // The tag's entry (the default's or the file's), or nullptr.
   const TagEntry* Find(int sensor) const;
   // The sensor whose device ID this is, if any tag has it.

@@ -14,8 +14,9 @@ namespace metro {
 // The report of `result`, the Type A evaluation of `session` with `options` (echoed under
 // "options" so a report says how it was made): input, options, and per tag and quantity the
 // window, the Type A terms with the mean's expanded uncertainty (coverage, k, U_mean) and the
-// warnings. The settle and Allan stages add their keys (settle_report.hpp,
-// allan_section.hpp).
+// warnings. Each tag is named by `registry` for the session's format (TagRegistry::Name: a
+// third-party file's sensor is "sensor N", not a thesis tag's body part). The settle and
+// Allan stages add their keys (settle_report.hpp, allan_section.hpp).
 SessionReport MakeSessionReport(const Session& session, const SessionTypeA& result,
                                 const SessionTypeAOptions& options, const TagRegistry& registry);
 
