@@ -84,9 +84,8 @@ inline Result<std::optional<uint64_t>> ResolveDeviceId(const std::string& flag_t
         fmt::format("sensor {} was calibrated on device {}, but {} gives device {}: this "
                     "calibration was made for another tag; expected --device-id {} (the "
                     "calibrated tag), or a calibration of device {}",
-                    sensor, blob::FormatDeviceId(*t->device_id), from,
-                    blob::FormatDeviceId(*id), blob::FormatDeviceId(*t->device_id),
-                    blob::FormatDeviceId(*id)));
+                    sensor, blob::FormatDeviceId(*t->device_id), from, blob::FormatDeviceId(*id),
+                    blob::FormatDeviceId(*t->device_id), blob::FormatDeviceId(*id)));
   }
   if (id && tags) {
     const std::optional<int> owner = tags->SensorOfDevice(*id);

@@ -329,9 +329,10 @@ int64_t EnvInt(const char* name, int64_t fallback) {
 }
 
 // The measurement run of docs/noise.md section 4: 100 one-hour and 40 six-hour records per
-// case by default, with the checks of the sized run when every case runs. METRO_NOISE_RECORDS_1H / _6H, METRO_NOISE_SEED_1H / _6H (seed blocks:
-// 1000 and 5000 by default, those of the [slow] test) and METRO_NOISE_CASES (comma-separated
-// names, e.g. "K,N+B+K,all"; 0 records skips a duration) repeat it on other records.
+// case by default, with the checks of the sized run when every case runs. METRO_NOISE_RECORDS_1H /
+// _6H, METRO_NOISE_SEED_1H / _6H (seed blocks: 1000 and 5000 by default, those of the [slow] test)
+// and METRO_NOISE_CASES (comma-separated names, e.g. "K,N+B+K,all"; 0 records skips a duration)
+// repeat it on other records.
 TEST_CASE("Noise-term coverage, measurement run", "[.][noise-coverage]") {
   const std::string only = std::getenv("METRO_NOISE_CASES") ? std::getenv("METRO_NOISE_CASES") : "";
   auto wanted = [&](const Case& c) {
