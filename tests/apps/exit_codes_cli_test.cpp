@@ -10,6 +10,7 @@
 #include <fstream>
 #include <string>
 
+#include "support/bundled_fit.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 
@@ -41,14 +42,10 @@ Run Characterize(const std::string& args) {
 }
 #endif
 
-// calibration.json fitted from the bundled calibration session (once per test binary run).
+// calibration.json fitted from the bundled calibration session (once per build for all the
+// test processes, support/bundled_fit.hpp).
 const std::string& FittedCalibration() {
-  static const std::string path = [] {
-    const std::string p = Scratch() + "metro_exit_codes_cal.json";
-    const Run r = Calibrate("fit " + kDatasets + "calibration_session.csv -q -o " + p);
-    REQUIRE(r.exit_code == 0);
-    return p;
-  }();
+  static const std::string path = testing::BundledFit("");
   return path;
 }
 

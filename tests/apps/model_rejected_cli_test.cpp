@@ -5,6 +5,7 @@
 #include <string>
 
 #include "metro/core/file.hpp"
+#include "support/bundled_fit.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 
@@ -33,13 +34,9 @@ std::string Slurp(const std::string& path) {
 
 // The bundled session under --model bias: both sensors' bias models are rejected (the data need
 // the scale factors), so both are marked model_rejected.
+// Fitted once per build for all the test processes (support/bundled_fit.hpp).
 const std::string& RejectedCalibration() {
-  static const std::string path = [] {
-    const std::string p = Scratch() + "rejected.json";
-    const Run r = Calibrate("fit " + kDatasets + "calibration_session.csv --model bias -q -o " + p);
-    REQUIRE(r.exit_code == 0);
-    return p;
-  }();
+  static const std::string path = testing::BundledFit("--model bias");
   return path;
 }
 

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "metro/core/file.hpp"
+#include "support/bundled_fit.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 
@@ -50,13 +51,9 @@ void WriteText(const std::string& path, const std::string& text) {
 
 // The bundled calibration session is of tag 2; fitted without a tags file, calibration.json
 // has no device ID and no name.
+// Fitted once per build for all the test processes (support/bundled_fit.hpp).
 const std::string& PlainCalibration() {
-  static const std::string path = [] {
-    const std::string p = Scratch() + "metro_tags_cli_cal.json";
-    const Run r = Calibrate("fit " + kDatasets + "calibration_session.csv -q -o " + p);
-    REQUIRE(r.exit_code == 0);
-    return p;
-  }();
+  static const std::string path = testing::BundledFit("");
   return path;
 }
 
