@@ -261,7 +261,7 @@ void CheckPooled(const std::array<Pooled, 5>& pooled) {
 // Issue #22 part 4: the u of every fitted IEEE 952 term covers the truth at its stated level,
 // and terms absent from the signal are not invented. Cases: each term alone, N+B, N+K, N+R,
 // N+B+K, all five, at 100 Hz. This run of every `scripts/test` is sized (issue #39): 16
-// one-hour and 4 six-hour records per case, 96-120 pooled records per term, with the bounds
+// one-hour and 4 six-hour records per case, 40-120 pooled records per term, with the bounds
 // set for those counts; the full-size run (100 one-hour and 40 six-hour records per case, the
 // figures of docs/noise.md section 4) is the hidden "Noise-term coverage, measurement run"
 // with the same checks. Prints the table (run with -s).
