@@ -321,10 +321,14 @@ Status HonestAccelCovariance(const TagProblemData& d, const ParameterBlocks& x,
 //     pose, and dphi the integrated rate noise, variance s_w^2 sum dt_k^2 (s_w^2 the rate
 //     samples' long-run variance at the static poses); plus G_a cov_a G_a^T, the
 //     accelerometer's parameter error (G_a the rotations' Jacobian over its parameters).
-// The fit is weighted least squares (W: 1 / each group's scatter), so group g's chi-square
-// r_g^T S_gg^-1 r_g has the expectation E_g = tr(S_gg^-1 (M S M^T)_gg), M = I - J A^-1 J^T W,
-// A = J^T W J. reduced_chi2 = sum chi2_g / sum E_g: about 1 when the model describes the data
-// to its noise; above the 99 % point of the chi-square law with sum E_g degrees of freedom a
+// The fit is weighted least squares (W: 1 / each group's scatter); the chi-square is that of
+// the generalized least-squares step from its solution in S's metric (A = J^T S^-1 J,
+// r_G = r - J A^-1 J^T S^-1 r, chi2 = r_G^T S^-1 r_G): chi-squared with m - p dof for
+// Gaussian noise and a model linear near the solution, and the difference of nested models'
+// chi-squares chi-squared with their difference in p (the model comparisons). Group g's share
+// r_G,g^T S_gg^-1 r_G,g has the expectation E_g = n_g - tr(S_gg^-1 J_g A^-1 J_g^T), the E_g
+// adding up to m - p. reduced_chi2 = chi2 / (m - p): about 1 when the model describes the data
+// to its noise; above the 99 % point of the chi-square law with m - p degrees of freedom a
 // warning names each group's ratio. The covariance stays the one scaled by each group's own
 // scatter (JCGM 100:2008 4.2.3), which holds any excess over the noise: u grows with it.
 // Only for the trivial loss; a pose without measurable noise leaves reduced_chi2 as the

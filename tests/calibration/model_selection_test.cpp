@@ -465,10 +465,11 @@ TEST_CASE("Model auto at 9 to 26 orientations: full with cross-axis terms, scale
 }
 
 TEST_CASE("Model auto choices over 100 tags per pose count", "[.][coverage][calibration]") {
-  // 5 % of 100 choices is 5 (standard deviation 2.2): at most 12 full without cross-axis terms;
-  // with them, at most 3 of 100 tags keep the scale model. Prints docs/calibration-model.md's
-  // table.
-  CheckAutoChoices({9, 12, 18, 26}, 100, 3, 12);
+  // 5 % of 100 choices is 5 (standard deviation 2.2): at most 10 full without cross-axis terms
+  // (11 or more with probability 1.1 % per sensor and pose count; the gyroscope's comparison
+  // on the weighted fit's residuals took 11 at 9 orientations); with them, at most 3 of 100
+  // tags keep the scale model. Prints docs/calibration-model.md's table.
+  CheckAutoChoices({9, 12, 18, 26}, 100, 3, 10);
 }
 
 }  // namespace
