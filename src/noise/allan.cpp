@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "core/parallel.hpp"
+#include "core/simd_clones.hpp"
 #include "metro/noise/edf.hpp"
 #include "metro/noise/noise_id.hpp"
 #include "noise/allan_internal.hpp"
@@ -61,18 +62,9 @@ inline double AddLanes(const Lanes4& s0, const Lanes4& s1) {
   return ((s0[0] + s0[1]) + (s0[2] + s0[3])) + ((s1[0] + s1[1]) + (s1[2] + s1[3]));
 }
 
-// The sanitizer build keeps the default path only, so CI runs the tests on both paths (the
-// plain build takes AVX2 on a CPU that has it). Under ThreadSanitizer the clones' resolver,
-// instrumented, would run before the sanitizer's runtime starts (a crash at load).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
-    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-#define METRO_ALLAN_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define METRO_ALLAN_CLONES
-#endif
 
 // sum_{i=i0}^{i1-1} (x[i+2m] - 2 x[i+m] + x[i])^2 in eight lanes.
-METRO_ALLAN_CLONES
+METRO_SIMD_CLONES
 double SumSecondDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) {
   const double* a = x + i0;
   const double* b = x + i0 + m;
@@ -104,7 +96,7 @@ double SumSecondDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) 
 }
 
 // sum_{i=i0}^{i1-1} (x[i+3m] - 3 x[i+2m] + 3 x[i+m] - x[i])^2 in eight lanes.
-METRO_ALLAN_CLONES
+METRO_SIMD_CLONES
 double SumThirdDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) {
   const double* a = x + i0;
   const double* b = x + i0 + m;

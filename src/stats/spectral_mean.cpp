@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <vector>
+
+#include "core/simd_clones.hpp"
 
 namespace metro {
 namespace {
@@ -43,12 +46,63 @@ struct BurgSums {
   double energy = 0.0;
 };
 
-// The textbook lattice: the error series themselves, two passes over the record per order.
+// Four lanes of a sum (term t to lane (t - first) mod 4, the last n mod 4 to lane 0), so the
+// order of the additions is fixed in the source and both METRO_SIMD_CLONES paths agree.
+using Lanes4 = double __attribute__((vector_size(32)));
+
+inline void Load4(const double* p, Lanes4* v) { std::memcpy(v, p, sizeof(Lanes4)); }
+inline void Store4(double* p, const Lanes4& v) { std::memcpy(p, &v, sizeof(Lanes4)); }
+inline double AddLanes(const Lanes4& s) { return (s[0] + s[1]) + (s[2] + s[3]); }
+
+// One order of the lattice, m -> m + 1 with reflection coefficient k, from the errors of
+// order m (fo, bo, valid from t = m) into fn, bn (from t = m + 1):
+//   fn(t) = fo(t) - k bo(t-1),   bn(t) = bo(t-1) - k fo(t),
+// and Burg's sums of order m + 1 over t = m+2..n-1 in the same pass: fn(t) bn(t-1), with
+// bn(t-1) formed again from the old errors so no term waits for the previous one.
+METRO_SIMD_CLONES
+void LatticeStep(const double* __restrict fo, const double* __restrict bo, size_t m, size_t n,
+                 double k, double* __restrict fn, double* __restrict bn, double* cross,
+                 double* energy) {
+  const size_t first = m + 1;
+  if (first < n) {
+    fn[first] = fo[first] - k * bo[first - 1];
+    bn[first] = bo[first - 1] - k * fo[first];
+  }
+  Lanes4 c = {0.0, 0.0, 0.0, 0.0}, e = c;
+  const Lanes4 kv = {k, k, k, k};
+  size_t t = first + 1;
+  for (; t + 4 <= n; t += 4) {
+    Lanes4 f0, f1, b1, b2;
+    Load4(fo + t, &f0);
+    Load4(fo + t - 1, &f1);
+    Load4(bo + t - 1, &b1);
+    Load4(bo + t - 2, &b2);
+    const Lanes4 f_new = f0 - kv * b1;
+    const Lanes4 b_prev = b2 - kv * f1;
+    Store4(fn + t, f_new);
+    Store4(bn + t, b1 - kv * f0);
+    c += f_new * b_prev;
+    e += f_new * f_new + b_prev * b_prev;
+  }
+  for (; t < n; ++t) {
+    const double f_new = fo[t] - k * bo[t - 1];
+    const double b_prev = bo[t - 2] - k * fo[t - 1];
+    fn[t] = f_new;
+    bn[t] = bo[t - 1] - k * fo[t];
+    c[0] += f_new * b_prev;
+    e[0] += f_new * f_new + b_prev * b_prev;
+  }
+  *cross = AddLanes(c);
+  *energy = AddLanes(e);
+}
+
+// The textbook lattice: the error series themselves, one pass over the record per order
+// (LatticeStep), the errors of the new order written beside the old ones.
 class ErrorSeriesBurg {
  public:
-  // The errors of the order-m filter a (a[0] = 1) of the centred series d.
+  // The errors of the order-m filter a (a[0] = 1) of the centred series d, and their sums.
   ErrorSeriesBurg(const std::vector<double>& d, const std::vector<double>& a)
-      : f_(d.size()), b_(d.size()) {
+      : f_(d.size()), b_(d.size()), f_next_(d.size()), b_next_(d.size()) {
     const size_t n = d.size();
     const size_t m = a.size() - 1;
     for (size_t t = m; t < n; ++t) {
@@ -60,27 +114,37 @@ class ErrorSeriesBurg {
       f_[t] = ft;
       b_[t] = bt;
     }
-  }
-  BurgSums Sums(size_t m) const {
-    BurgSums s;
-    for (size_t t = m + 1; t < f_.size(); ++t) {
-      s.cross += f_[t] * b_[t - 1];
-      s.energy += f_[t] * f_[t] + b_[t - 1] * b_[t - 1];
+    for (size_t t = m + 1; t < n; ++t) {
+      sums_.cross += f_[t] * b_[t - 1];
+      sums_.energy += f_[t] * f_[t] + b_[t - 1] * b_[t - 1];
     }
-    return s;
   }
+  // Burg's sums of the current order.
+  BurgSums Sums() const { return sums_; }
   // Order m -> m + 1 with reflection coefficient k.
   void Update(size_t m, double k) {
-    for (size_t t = f_.size() - 1; t > m; --t) {
-      const double ft = f_[t];
-      f_[t] = ft - k * b_[t - 1];
-      b_[t] = b_[t - 1] - k * ft;
-    }
+    LatticeStep(f_.data(), b_.data(), m, f_.size(), k, f_next_.data(), b_next_.data(),
+                &sums_.cross, &sums_.energy);
+    f_.swap(f_next_);
+    b_.swap(b_next_);
   }
 
  private:
-  std::vector<double> f_, b_;
+  std::vector<double> f_, b_, f_next_, b_next_;
+  BurgSums sums_;
 };
+
+// acc[l] = sum_{t=t0}^{t1-1} x_t x_{t+l} for l < lags, each lag's terms added in t order
+// (vectors run across the lags, so every path gives the same bits).
+METRO_SIMD_CLONES
+void BlockLagProducts(const double* x, size_t t0, size_t t1, size_t lags, double* acc) {
+  for (size_t l = 0; l < lags; ++l) acc[l] = 0.0;
+  for (size_t t = t0; t < t1; ++t) {
+    const double xt = x[t];
+    const double* xs = x + t;
+    for (size_t l = 0; l < lags; ++l) acc[l] += xt * xs[l];
+  }
+}
 
 // The same sums from the series' lag products (Vos, "A fast implementation of Burg's
 // method", 2013): each sum is a quadratic form a' S a whose entries are windowed lag sums
@@ -108,15 +172,8 @@ class LagProductBurg {
     const size_t full = n_ > l_count ? n_ - l_count + 1 : 0;
     std::vector<double> block(l_count);
     for (size_t t0 = 0; t0 < full; t0 += kBlock) {
-      std::fill(block.begin(), block.end(), 0.0);
-      double* acc = block.data();
-      const size_t t1 = std::min(full, t0 + kBlock);
-      for (size_t t = t0; t < t1; ++t) {
-        const double xt = x[t];
-        const double* xs = x + t;
-        for (size_t l = 0; l < l_count; ++l) acc[l] += xt * xs[l];
-      }
-      for (size_t l = 0; l < l_count; ++l) c_[l] += acc[l];
+      BlockLagProducts(x, t0, std::min(full, t0 + kBlock), l_count, block.data());
+      for (size_t l = 0; l < l_count; ++l) c_[l] += block[l];
     }
     for (size_t t = full; t < n_; ++t) {
       for (size_t l = 0; l + t < n_; ++l) c_[l] += static_cast<Wide>(x[t]) * x[t + l];
@@ -234,7 +291,7 @@ Result<ArSpectralResult> ArSpectralMeanUncertainty(const double* values, size_t 
         ++best.lattice_fallbacks;
       }
     }
-    if (lattice) s = lattice->Sums(m);
+    if (lattice) s = lattice->Sums();
     if (!(s.energy > 0.0)) break;
     const double k = 2.0 * s.cross / s.energy;  // |k| <= 1 (Cauchy-Schwarz): stationary.
     // Levinson update: a'_j = a_j - k a_{p-j}, a'_p = -k (phi_p = k).
@@ -255,6 +312,17 @@ Result<ArSpectralResult> ArSpectralMeanUncertainty(const double* values, size_t 
       best.phi.assign(a.size() - 1, 0.0);
       for (size_t j = 1; j < a.size(); ++j) best.phi[j - 1] = -a[j];
       best.innovation_variance = e;
+    }
+    // The AIC order's innovation variance is at most e exp(2 p / n) (spectral_mean.hpp); the
+    // margin covers the rounding of the AIC comparisons.
+    if (options.stop_below_innovation_variance > 0.0 &&
+        e * std::exp(2.0 * p / dn) * (1.0 + 1e-9) < options.stop_below_innovation_variance) {
+      ArSpectralResult stopped;
+      stopped.order = p;
+      stopped.innovation_variance = e;
+      stopped.lattice_fallbacks = best.lattice_fallbacks;
+      stopped.stopped_below = true;
+      return stopped;
     }
   }
   double sum_phi = 0.0;

@@ -11,6 +11,7 @@
 #include <memory>
 #include <mutex>
 
+#include "core/simd_clones.hpp"
 #include "metro/stats/spectral_mean.hpp"
 
 namespace metro {
@@ -49,22 +50,13 @@ inline void Load4(const double* p, Lanes4* v) { std::memcpy(v, p, sizeof(Lanes4)
 
 inline double AddLanes(const Lanes4& s) { return (s[0] + s[1]) + (s[2] + s[3]); }
 
-// The sanitizer build keeps the default path only, so CI runs the tests on both paths (the
-// plain build takes AVX2 on a CPU that has it). Under ThreadSanitizer the clones' resolver,
-// instrumented, would run before the sanitizer's runtime starts (a crash at load).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
-    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-#define METRO_TYPE_A_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define METRO_TYPE_A_CLONES
-#endif
 
 // The lane of term i of a sum over i = 0..n-1: i mod 4, except that the n mod 4 terms past
 // the last full group of four go to lane 0.
 inline size_t LaneOf(size_t i, size_t n) { return i < n - n % 4 ? i % 4 : 0; }
 
 // Sum of x in four lanes (pairwise-like accuracy).
-METRO_TYPE_A_CLONES
+METRO_SIMD_CLONES
 double Sum4(const double* x, size_t n) {
   Lanes4 s = {0.0, 0.0, 0.0, 0.0};
   size_t i = 0;
@@ -84,7 +76,7 @@ double Sum4(const double* x, size_t n) {
 // in four lanes (LaneOf), so the nine products per i are independent of each other and of
 // the previous i. s1 and p[0] add the same terms in the same order as a plain four-lane
 // loop would.
-METRO_TYPE_A_CLONES
+METRO_SIMD_CLONES
 void CentredLagSums(const double* x, size_t n, double centre, double* s1, double* p) {
   constexpr size_t kChunk = 512;  // A multiple of 4.
   alignas(32) double e[kChunk + kDirectLags];
@@ -146,7 +138,7 @@ const FftPlans& PlansForSize(size_t size) {
 // sum[j] += conj(X[j]) * (X[j] + (-1)^j N[j]) for j = 0..bins-1 (bins odd), on interleaved
 // (re, im) arrays: re += Xr Yr + Xi Yi, im += Xr Yi - Xi Yr. Two bins per vector (j even,
 // then j odd); the same operations, in the same order, as the scalar form.
-METRO_TYPE_A_CLONES
+METRO_SIMD_CLONES
 void AccumulateCrossSpectrum(const double* cur, const double* nxt, size_t bins, double* sum) {
   const Lanes4 sign = {1.0, 1.0, -1.0, -1.0};
   size_t j = 0;
@@ -459,17 +451,23 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
     return r;
   }
   // metro's u_mean: the AR(p) spectral density at frequency zero (spectral_mean.hpp).
-  auto ar = ArSpectralMeanUncertainty(values, n);
-  if (ar.ok()) {
+  // A series the AR model predicts almost exactly (innovations below 1e-6 of the variance:
+  // a deterministic pattern, not noise) has no noise to test the batch means against; the
+  // fit stops as soon as that is certain (the remaining orders would change nothing).
+  constexpr double kDeterministicInnovationRatio = 1e-6;
+  ArSpectralOptions ar_options;
+  ar_options.stop_below_innovation_variance = kDeterministicInnovationRatio * r.variance;
+  auto ar = ArSpectralMeanUncertainty(values, n, ar_options);
+  const bool deterministic =
+      ar.ok() && (ar.value().stopped_below ||
+                  ar.value().innovation_variance < kDeterministicInnovationRatio * r.variance);
+  if (ar.ok() && !ar.value().stopped_below) {
     r.u_mean = ar.value().u_mean;
     r.u_mean_ar = r.u_mean;
     r.u_mean_dof = ar.value().dof;
     r.u_mean_method = kUMeanArSpectral;
     r.ar_order = ar.value().order;
   }
-  // A series the AR model predicts almost exactly (innovations below 1e-6 of the variance:
-  // a deterministic pattern, not noise) has no noise to test the batch means against.
-  const bool deterministic = ar.ok() && ar.value().innovation_variance < 1e-6 * r.variance;
   if (deterministic) {
     // Its spectral density at zero is no noise model (a period-5 pattern gave u_mean 2e-17):
     // the classical s(mean), which never understates a pattern's spread, stands instead.

@@ -50,6 +50,13 @@ struct ArSpectralOptions {
   // would cost accuracy; kLattice runs the textbook error-series lattice, O(n) per order.
   enum class Method { kLagProducts, kLattice };
   Method method = Method::kLagProducts;
+  // > 0: stop as soon as the AIC order's innovation variance is known to lie below this
+  // value (in the squared unit of the series): with e_p the innovation variance at the order
+  // p reached, AIC's choice p* has e_p* <= e_p exp(2 (p - p*) / n) <= e_p exp(2 p / n)
+  // (Akaike 1974: n ln e_p* + 2 p* <= n ln e_p + 2 p). The result then holds that order and
+  // e_p with `stopped_below` set; phi, u_mean and the rest are not computed. Type A uses it
+  // to tell a deterministic pattern from noise without fitting every order.
+  double stop_below_innovation_variance = 0.0;
 };
 
 struct ArSpectralResult {
@@ -63,6 +70,7 @@ struct ArSpectralResult {
   double dof = 0.0;                  // nu = 1 / (2 R^2), at most n - 1.
   double relative_u_of_u = 0.0;      // R.
   int lattice_fallbacks = 0;         // 1 when kLagProducts handed over to the lattice.
+  bool stopped_below = false;        // ArSpectralOptions::stop_below_innovation_variance.
 };
 
 // Requires n >= 4 finite values that are not all equal; returns an Error otherwise.

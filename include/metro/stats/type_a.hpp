@@ -107,7 +107,9 @@ struct TypeAResult {
   // "batch_means" and drift_detected is set; the session report warns. Not made when the AR
   // innovations are below 1e-6 of the variance (a deterministic pattern, no noise).
   double u_mean_batch = 0.0;  // 0 when not computed.
-  double u_mean_ar = 0.0;     // The AR spectral u before the check (0: not computed).
+  // The AR spectral u before the check; 0 when not computed (a deterministic pattern stops
+  // the fit before it, spectral_mean.hpp).
+  double u_mean_ar = 0.0;
   bool drift_detected = false;
 };
 
