@@ -62,7 +62,6 @@ inline double AddLanes(const Lanes4& s0, const Lanes4& s1) {
   return ((s0[0] + s0[1]) + (s0[2] + s0[3])) + ((s1[0] + s1[1]) + (s1[2] + s1[3]));
 }
 
-
 // sum_{i=i0}^{i1-1} (x[i+2m] - 2 x[i+m] + x[i])^2 in eight lanes.
 METRO_SIMD_CLONES
 double SumSecondDifferences(const double* x, int64_t m, int64_t i0, int64_t i1) {

@@ -123,8 +123,8 @@ class ErrorSeriesBurg {
   BurgSums Sums() const { return sums_; }
   // Order m -> m + 1 with reflection coefficient k.
   void Update(size_t m, double k) {
-    LatticeStep(f_.data(), b_.data(), m, f_.size(), k, f_next_.data(), b_next_.data(),
-                &sums_.cross, &sums_.energy);
+    LatticeStep(f_.data(), b_.data(), m, f_.size(), k, f_next_.data(), b_next_.data(), &sums_.cross,
+                &sums_.energy);
     f_.swap(f_next_);
     b_.swap(b_next_);
   }

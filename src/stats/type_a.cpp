@@ -50,7 +50,6 @@ inline void Load4(const double* p, Lanes4* v) { std::memcpy(v, p, sizeof(Lanes4)
 
 inline double AddLanes(const Lanes4& s) { return (s[0] + s[1]) + (s[2] + s[3]); }
 
-
 // The lane of term i of a sum over i = 0..n-1: i mod 4, except that the n mod 4 terms past
 // the last full group of four go to lane 0.
 inline size_t LaneOf(size_t i, size_t n) { return i < n - n % 4 ? i % 4 : 0; }
