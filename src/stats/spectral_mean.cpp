@@ -134,6 +134,40 @@ class ErrorSeriesBurg {
   BurgSums sums_;
 };
 
+// sum x_i in four lanes (lane i mod 4, the last n mod 4 terms in lane 0).
+METRO_SIMD_CLONES
+double LaneSum(const double* x, size_t n) {
+  Lanes4 s = {0.0, 0.0, 0.0, 0.0};
+  const size_t body = n / 4 * 4;
+  for (size_t i = 0; i < body; i += 4) {
+    Lanes4 v;
+    Load4(x + i, &v);
+    s += v;
+  }
+  for (size_t i = body; i < n; ++i) s[0] += x[i];
+  return AddLanes(s);
+}
+
+// d_i = x_i - centre, and sum d_i^2 in four lanes (as LaneSum).
+METRO_SIMD_CLONES
+double CentreAndSquare(const double* x, size_t n, double centre, double* d) {
+  Lanes4 s = {0.0, 0.0, 0.0, 0.0};
+  const Lanes4 c = {centre, centre, centre, centre};
+  const size_t body = n / 4 * 4;
+  for (size_t i = 0; i < body; i += 4) {
+    Lanes4 v;
+    Load4(x + i, &v);
+    v -= c;
+    Store4(d + i, v);
+    s += v * v;
+  }
+  for (size_t i = body; i < n; ++i) {
+    d[i] = x[i] - centre;
+    s[0] += d[i] * d[i];
+  }
+  return AddLanes(s);
+}
+
 // acc[l] = sum_{t=t0}^{t1-1} x_t x_{t+l} for l < lags: four lags at a time, each in four
 // lanes over t (lane (t - t0) mod 4, the last (t1 - t0) mod 4 terms in lane 0), so the
 // accumulators stay in registers and every METRO_SIMD_CLONES path gives the same bits.
@@ -286,15 +320,9 @@ Result<ArSpectralResult> ArSpectralMeanUncertainty(const double* values, size_t 
     return MakeError(fmt::format("{} observations: an autoregressive fit needs at least 4", n));
   }
   const double dn = static_cast<double>(n);
-  double mean = 0.0;
-  for (size_t i = 0; i < n; ++i) mean += values[i];
-  mean /= dn;
+  const double mean = LaneSum(values, n) / dn;
   std::vector<double> d(n);
-  double e0 = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    d[i] = values[i] - mean;
-    e0 += d[i] * d[i];
-  }
+  const double e0 = CentreAndSquare(values, n, mean, d.data());
   if (!std::isfinite(e0)) return MakeError("the series is not finite");
   if (e0 == 0.0) return MakeError("a constant series has no autocorrelation");
   const int max_order = std::min(options.max_order > 0 ? options.max_order : DefaultMaxOrder(n),
