@@ -24,17 +24,6 @@ std::mutex& FftwPlannerMutex() {
   return mutex;
 }
 
-// Smallest 2^a 3^b 5^c 7^d >= n: sizes FFTW transforms fastest.
-size_t NextFastFftSize(size_t n) {
-  for (size_t m = std::max<size_t>(n, 1);; ++m) {
-    size_t r = m;
-    for (size_t p : {2u, 3u, 5u, 7u}) {
-      while (r % p == 0) r /= p;
-    }
-    if (r == 1) return m;
-  }
-}
-
 // Lags computed directly (in the fused pass) before switching to the FFT.
 constexpr size_t kDirectLags = 8;
 
@@ -287,39 +276,17 @@ bool TypeAOptions::IsValid(std::string* why) const {
 
 void Autocorrelation(const double* x, size_t n, size_t max_lag, double* rho) {
   METRO_CHECK(n >= 1 && max_lag < n);
-  double mean = 0.0;
-  for (size_t i = 0; i < n; ++i) mean += x[i];
-  mean /= static_cast<double>(n);
-  // Zero padding to >= n + max_lag makes the circular correlation linear for those lags.
-  const size_t size = NextFastFftSize(n + max_lag + 1);
-  double* buffer = fftw_alloc_real(size);
-  fftw_complex* spectrum = fftw_alloc_complex(size / 2 + 1);
-  fftw_plan forward, backward;
-  {
-    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    forward = fftw_plan_dft_r2c_1d(static_cast<int>(size), buffer, spectrum, FFTW_ESTIMATE);
-    backward = fftw_plan_dft_c2r_1d(static_cast<int>(size), spectrum, buffer, FFTW_ESTIMATE);
-  }
-  for (size_t i = 0; i < n; ++i) buffer[i] = x[i] - mean;
-  std::fill(buffer + n, buffer + size, 0.0);
-  fftw_execute(forward);
-  for (size_t k = 0; k < size / 2 + 1; ++k) {
-    const double re = spectrum[k][0];
-    const double im = spectrum[k][1];
-    spectrum[k][0] = re * re + im * im;
-    spectrum[k][1] = 0.0;
-  }
-  fftw_execute(backward);
-  const double c0 = buffer[0];
-  for (size_t k = 0; k <= max_lag; ++k) rho[k] = c0 > 0.0 ? buffer[k] / c0 : 0.0;
+  const double mean = Sum4(x, n) / static_cast<double>(n);
+  // The block lag sums of the Type A evaluation, with a block of at least max_lag (a power of
+  // two, at least 256): O(n log max_lag) and cached plans, where a transform of the whole
+  // zero-padded series cost O(n log n) and a new plan per call.
+  size_t block = 256;
+  while (block < max_lag) block *= 2;
+  std::unique_ptr<FftWorkspace> owned;
+  const double* c = BlockLagSums(x, mean, n, &WorkspaceFor(block, &owned));
+  const double c0 = c[0];
+  for (size_t k = 0; k <= max_lag; ++k) rho[k] = c0 > 0.0 ? c[k] / c0 : 0.0;
   rho[0] = 1.0;
-  {
-    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    fftw_destroy_plan(forward);
-    fftw_destroy_plan(backward);
-  }
-  fftw_free(buffer);
-  fftw_free(spectrum);
 }
 
 namespace {
