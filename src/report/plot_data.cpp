@@ -57,10 +57,26 @@ void Decimate(const std::vector<double>& t, const std::vector<double>& v, size_t
     const size_t lo = b * n / buckets;
     const size_t hi = (b + 1) * n / buckets;
     if (hi <= lo) continue;
+    // The first lowest and the first highest value of the bucket.
     size_t i_min = lo, i_max = lo;
-    for (size_t i = lo; i < hi; ++i) {
-      if (v[at(i)] < v[at(i_min)]) i_min = i;
-      if (v[at(i)] > v[at(i_max)]) i_max = i;
+    if (finite.empty()) {
+      double v_min = v[lo], v_max = v[lo];
+      for (size_t i = lo + 1; i < hi; ++i) {
+        const double x = v[i];
+        if (x < v_min) {
+          v_min = x;
+          i_min = i;
+        }
+        if (x > v_max) {
+          v_max = x;
+          i_max = i;
+        }
+      }
+    } else {
+      for (size_t i = lo; i < hi; ++i) {
+        if (v[at(i)] < v[at(i_min)]) i_min = i;
+        if (v[at(i)] > v[at(i_max)]) i_max = i;
+      }
     }
     keep(at(std::min(i_min, i_max)));
     if (i_min != i_max) keep(at(std::max(i_min, i_max)));
@@ -99,13 +115,11 @@ WindowView WindowValues(const Quantity& q, size_t first, size_t end, bool unwrap
 // Quantized data (the packets' 0.01 deg, raw counts): bins a whole number of steps wide and
 // centred on the steps, never narrower than one step, so no bin is empty or doubled by where
 // the lattice falls (the histogram of 0.01 deg data looked non-normal).
-HistogramPlotData Histogram(const WindowView& x, double mean, bool unwrapped,
+HistogramPlotData Histogram(const WindowView& x, double lo, double hi, double mean, bool unwrapped,
                             const PlotDataOptions& options) {
   HistogramPlotData h;
   const size_t n = x.size;
   h.n = static_cast<int64_t>(n);
-  const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
-  const double lo = *lo_it, hi = *hi_it;
   int bins = options.histogram_bins > 0
                  ? options.histogram_bins
                  : std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 10, 60);
@@ -183,9 +197,14 @@ Result<QuantityPlotData> ComputeQuantityPlotData(const Tag& tag, const Quantity&
   const WindowView x = WindowValues(q, first, end, unwrapped);
   const size_t n = x.size;
   const double s = result.type_a.std;
-  const bool spread = n >= 2 && std::isfinite(s) && s > 0.0 &&
-                      *std::max_element(x.begin(), x.end()) > *std::min_element(x.begin(), x.end());
-  if (spread) data.histogram = Histogram(x, result.type_a.mean, unwrapped, options);
+  double lo = 0.0, hi = 0.0;
+  if (n >= 1) {
+    const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
+    lo = *lo_it;
+    hi = *hi_it;
+  }
+  const bool spread = n >= 2 && std::isfinite(s) && s > 0.0 && hi > lo;
+  if (spread) data.histogram = Histogram(x, lo, hi, result.type_a.mean, unwrapped, options);
 
   // Sample autocorrelation (the same estimator as the Type A evaluation's n_eff, Zhang 2006).
   const size_t max_lag =
