@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "core/simd_clones.hpp"
+
 namespace metro {
 namespace {
 
@@ -42,6 +44,29 @@ std::vector<double> GapsBySorting(const double* x, size_t n, double same) {
   return gaps;
 }
 
+// Each finite value's bucket round((v - lo) / q): its lowest and highest value. False when a
+// value lies more than kWholeTolerance q off the lattice or outside [0, buckets). The
+// quotient is formed as a product with 1 / q: it differs from (v - lo) / q by about an ulp,
+// which moves round() only near a half-integer, and those values are off the lattice either
+// way (the caller then sorts), so the buckets are those of the division.
+METRO_SIMD_CLONES
+bool FillBuckets(const double* x, size_t n, double lo, double q, size_t buckets, double* low,
+                 double* high) {
+  const double inv_q = 1.0 / q;
+  const double top = static_cast<double>(buckets);
+  for (size_t i = 0; i < n; ++i) {
+    const double v = x[i];
+    if (!std::isfinite(v)) continue;
+    const double k = (v - lo) * inv_q;
+    const double r = std::round(k);
+    if (std::fabs(k - r) > kWholeTolerance || r < 0.0 || r >= top) return false;
+    const size_t b = static_cast<size_t>(r);
+    low[b] = std::min(low[b], v);
+    high[b] = std::max(high[b], v);
+  }
+  return true;
+}
+
 // The same gaps without a sort when the values sit on a lattice: a strided sample's smallest
 // gap q is tried as the lattice step; if every value lies within 1e-3 q of lo + k q and the
 // values at each k agree to `same`, a bucket per k orders them, and the gap between two
@@ -70,18 +95,7 @@ bool GapsOnLattice(const double* x, size_t n, double lo, double hi, double same,
   const size_t buckets = static_cast<size_t>(std::llround((hi - lo) / q)) + 1;
   std::vector<double> low(buckets, std::numeric_limits<double>::infinity());
   std::vector<double> high(buckets, -std::numeric_limits<double>::infinity());
-  for (const double* p = x; p != x + n; ++p) {
-    const double v = *p;
-    if (!std::isfinite(v)) continue;
-    const double k = (v - lo) / q;
-    const double r = std::round(k);
-    if (std::fabs(k - r) > kWholeTolerance || r < 0.0 || r >= static_cast<double>(buckets)) {
-      return false;
-    }
-    const size_t b = static_cast<size_t>(r);
-    low[b] = std::min(low[b], v);
-    high[b] = std::max(high[b], v);
-  }
+  if (!FillBuckets(x, n, lo, q, buckets, low.data(), high.data())) return false;
   double previous_high = -std::numeric_limits<double>::infinity();
   for (size_t b = 0; b < buckets; ++b) {
     if (!(low[b] <= high[b])) continue;  // empty
