@@ -45,7 +45,7 @@ constexpr FunctionInfo kFunctions[] = {
      [](double x) { return x > 0.0   ? 1.0
                            : x < 0.0 ? -1.0
                                      : 0.0; }},
-    {"rint", ModelFunction::kRint, 1, [](double x) { return std::rint(x); }},
+    {"rint", ModelFunction::kRint, 1, [](double x) { return std::floor(x + 0.5); }},
     {"atan2", ModelFunction::kAtan2, 2, nullptr},
     {"min", ModelFunction::kMin, -1, nullptr},
     {"max", ModelFunction::kMax, -1, nullptr},

@@ -75,7 +75,7 @@ enum class ModelFunction {
   kAtan2,  // atan2(y, x).
   kAbs,
   kSign,
-  kRint,  // The C library's: ties to even.
+  kRint,  // muparser's: floor(x + 0.5), halves up (not the C library's ties to even).
   kMin,
   kMax,
   kSum,

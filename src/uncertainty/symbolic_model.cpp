@@ -251,12 +251,12 @@ class Builder {
         return node.function == ModelFunction::kAbs ? s * u : GiNaC::ex(s);
       }
       case ModelFunction::kRint: {
-        // muparser's rint is the C library's (ties to even, in double): a step function.
+        // muparser's rint is floor(x + 0.5) in double (model_grammar.hpp): a step function.
         const double v = At(u, at).to_double();
         if (Varies(u) && std::fabs(v - std::trunc(v)) == 0.5) {
           Fail(at, "rint() of a half-integer at the estimates (a seam: no derivative there)");
         }
-        return GiNaC::numeric(std::rint(v));
+        return GiNaC::numeric(std::floor(v + 0.5));
       }
       case ModelFunction::kMin:
       case ModelFunction::kMax: {
