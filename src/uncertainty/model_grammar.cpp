@@ -42,9 +42,7 @@ constexpr FunctionInfo kFunctions[] = {
     {"log2", ModelFunction::kLog2, 1, [](double x) { return std::log2(x); }},
     {"abs", ModelFunction::kAbs, 1, [](double x) { return std::fabs(x); }},
     {"sign", ModelFunction::kSign, 1,
-     [](double x) { return x > 0.0   ? 1.0
-                           : x < 0.0 ? -1.0
-                                     : 0.0; }},
+     [](double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }},
     {"rint", ModelFunction::kRint, 1, [](double x) { return std::floor(x + 0.5); }},
     {"atan2", ModelFunction::kAtan2, 2, nullptr},
     {"min", ModelFunction::kMin, -1, nullptr},
@@ -357,9 +355,9 @@ double Evaluate(const ModelSyntax& syntax, size_t n, const double* x) {
     case ModelNode::Kind::kInput:
       return x[node.input];
     case ModelNode::Kind::kPi:
-      return 3.14159265358979323846;
+      return kModelPi;
     case ModelNode::Kind::kE:
-      return 2.71828182845904523536;
+      return kModelE;
     case ModelNode::Kind::kSign:
       return node.negative ? -child(0) : child(0);
     case ModelNode::Kind::kPower:
@@ -369,12 +367,8 @@ double Evaluate(const ModelSyntax& syntax, size_t n, const double* x) {
       for (size_t k = 0; k < node.ops.size(); ++k) v = ApplyOperator(node.ops[k], v, child(k + 1));
       return v;
     }
-    case ModelNode::Kind::kIf: {
-      const double c = child(0);
-      const double a = child(1);
-      const double b = child(2);
-      return c != 0.0 ? a : b;
-    }
+    case ModelNode::Kind::kIf:
+      return child(0) != 0.0 ? child(1) : child(2);
     case ModelNode::Kind::kCall: {
       std::vector<double> args;
       for (size_t k = 0; k < node.children.size(); ++k) args.push_back(child(k));

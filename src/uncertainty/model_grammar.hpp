@@ -37,6 +37,10 @@ namespace internal {
 
 constexpr int kMaxModelDepth = 256;
 
+// pi (and _pi) and _e in double, where a reader of the tree evaluates in double.
+constexpr double kModelPi = 3.14159265358979323846;
+constexpr double kModelE = 2.71828182845904523536;
+
 // The binary operators of a chain, by level: or, and, comparisons, + -, * /.
 enum class ModelOperator {
   kOr,

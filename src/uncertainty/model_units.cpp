@@ -165,10 +165,10 @@ class Checker {
         t.value = values_[node.input];
         return t;
       case ModelNode::Kind::kPi:
-        t.value = 3.14159265358979323846;
+        t.value = kModelPi;
         return t;
       case ModelNode::Kind::kE:
-        t.value = 2.71828182845904523536;
+        t.value = kModelE;
         return t;
       case ModelNode::Kind::kSign: {
         auto operand = Walk(node.children[0]);
