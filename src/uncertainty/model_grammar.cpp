@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <initializer_list>
+#include <iterator>
 #include <stdexcept>
 #include <utility>
 
@@ -72,12 +73,16 @@ constexpr OperatorInfo kOperators[] = {
     {ModelOperator::kDivide, "/", [](double a, double b) { return a / b; }},
 };
 
-const OperatorInfo& Operator(ModelOperator op) {
-  for (const OperatorInfo& o : kOperators) {
-    if (o.op == op) return o;
+// kOperators is in the order of ModelOperator, so an operator is its index.
+constexpr bool InEnumOrder() {
+  for (size_t i = 0; i < std::size(kOperators); ++i) {
+    if (static_cast<size_t>(kOperators[i].op) != i) return false;
   }
-  return kOperators[0];  // Unreachable: every operator is in the table.
+  return true;
 }
+static_assert(InEnumOrder());
+
+const OperatorInfo& Operator(ModelOperator op) { return kOperators[static_cast<size_t>(op)]; }
 
 bool IsDigit(char c) { return c >= '0' && c <= '9'; }
 bool IsNameStart(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; }
@@ -94,7 +99,9 @@ struct SyntaxError : std::runtime_error {
 class Parser {
  public:
   Parser(const std::string& text, const std::vector<std::string>& names)
-      : text_(text), names_(names) {}
+      : text_(text), names_(names) {
+    syntax_.nodes.reserve(text.size() / 2 + 1);  // At most one node per token.
+  }
 
   ModelSyntax Run() {
     Ternary();
@@ -167,31 +174,33 @@ class Parser {
   // (so "<=" before "<").
   template <typename Next>
   size_t Chain(Next next, std::initializer_list<ModelOperator> ops) {
-    ModelNode node;
-    node.kind = ModelNode::Kind::kChain;
-    node.lead = pos_;
-    node.children.push_back((this->*next)());
+    const size_t lead = pos_;
+    const size_t first = (this->*next)();
+    ModelNode node;  // Built at the first operator: most terms are one operand.
     for (;;) {
       SkipSpace();
       const size_t at = pos_;
-      bool found = false;
-      for (const ModelOperator op : ops) {
+      const ModelOperator* found = nullptr;
+      for (const ModelOperator& op : ops) {
         const char* op_text = ModelOperatorText(op);
-        const size_t n = std::char_traits<char>::length(op_text);
-        if (text_.compare(pos_, n, op_text) != 0) continue;
-        pos_ += n;
-        node.ops.push_back(op);
-        node.op_at.push_back(at);
-        found = true;
-        break;
+        if (pos_ < text_.size() && text_[pos_] == op_text[0] &&
+            text_.compare(pos_, std::char_traits<char>::length(op_text), op_text) == 0) {
+          found = &op;
+          break;
+        }
       }
-      if (!found) break;
+      if (found == nullptr) break;
+      pos_ += std::char_traits<char>::length(ModelOperatorText(*found));
+      if (node.children.empty()) node.children.push_back(first);
+      node.ops.push_back(*found);
+      node.op_at.push_back(at);
       node.children.push_back((this->*next)());
     }
-    if (node.children.size() == 1) return node.children[0];
-    node.begin = Node(node.children.front()).begin;
+    if (node.children.empty()) return first;
+    node.kind = ModelNode::Kind::kChain;
+    node.lead = lead;
+    node.begin = node.at = Node(first).begin;
     node.end = Node(node.children.back()).end;
-    node.at = node.begin;
     return Add(std::move(node));
   }
 
