@@ -2,12 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
-#include <cstdlib>
-#include <functional>
 #include <utility>
 
 #include "metro/core/terminal_text.hpp"
+#include "uncertainty/model_grammar.hpp"
 
 namespace metro {
 namespace internal {
@@ -29,19 +29,16 @@ struct Term {
 
 std::string Significant(double x) { return fmt::format("{:.6g}", x); }
 
+// Gives each node of the model's syntax tree (model_grammar.hpp) a unit and its value at the
+// estimates, children first, left to right.
 class Checker {
  public:
-  Checker(const std::string& expression, const std::vector<std::string>& names,
+  Checker(const std::string& expression, const ModelSyntax& syntax,
+          const std::vector<std::string>& names,
           const std::vector<std::optional<PhysicalUnit>>& units, const std::vector<double>& values)
-      : text_(expression), names_(names), units_(units), values_(values) {}
+      : text_(expression), syntax_(syntax), names_(names), units_(units), values_(values) {}
 
-  Result<Term> Run() {
-    auto t = Ternary();
-    if (!t.ok()) return t;
-    SkipSpace();
-    if (pos_ != text_.size()) return Fail(pos_, "unexpected '" + text_.substr(pos_, 1) + "'");
-    return t;
-  }
+  Result<Term> Run() { return Walk(syntax_.root()); }
 
  private:
   Error Fail(size_t at, const std::string& what) const {
@@ -63,18 +60,6 @@ class Checker {
   std::string Describe(const Term& t) const {
     return Quote(t) + " (" + t.unit.ToString() +
            (t.kind == Kind::kScaleFree ? " up to a factor" : "") + ")";
-  }
-
-  void SkipSpace() {
-    while (pos_ < text_.size() && (text_[pos_] == ' ' || text_[pos_] == '\t')) ++pos_;
-  }
-
-  bool Accept(const char* op) {
-    SkipSpace();
-    const size_t n = std::char_traits<char>::length(op);
-    if (text_.compare(pos_, n, op) != 0) return false;
-    pos_ += n;
-    return true;
   }
 
   // Terms that must share one unit: a sum, a comparison, min/max/sum/avg/atan2, ?: branches.
@@ -127,131 +112,6 @@ class Checker {
   }
 
   // Nesting (parentheses, arguments, signs, exponents) is bounded so that a hostile model
-  // cannot exhaust the stack.
-  class Depth {
-   public:
-    explicit Depth(int* depth) : depth_(depth) { ++*depth_; }
-    ~Depth() { --*depth_; }
-    Depth(const Depth&) = delete;
-    Depth& operator=(const Depth&) = delete;
-
-   private:
-    int* depth_;
-  };
-  static constexpr int kMaxDepth = 256;
-
-  Result<Term> Ternary() {
-    const Depth guard(&depth_);
-    if (depth_ > kMaxDepth)
-      return Fail(pos_, "nested too deeply (parentheses, arguments and signs beyond 256 levels)");
-    auto c = LogicOr();
-    if (!c.ok()) return c;
-    SkipSpace();
-    const size_t at = pos_;
-    if (!Accept("?")) return c;
-    auto a = Ternary();
-    if (!a.ok()) return a;
-    if (!Accept(":")) return Fail(pos_, "expected ':' of '?'");
-    auto b = Ternary();
-    if (!b.ok()) return b;
-    auto r = Same(a.value(), b.value(), at, "the branches of ?:");
-    if (!r.ok()) return r;
-    Term t = r.value();
-    t.value = c.value().value != 0.0 ? a.value().value : b.value().value;
-    t.begin = c.value().begin;
-    return t;
-  }
-
-  // a op b with a dimensionless 0/1 result; ops that compare need one unit.
-  Result<Term> Binary(std::function<Result<Term>()> next,
-                      const std::vector<std::pair<const char*, int>>& ops, bool compare) {
-    auto left = next();
-    if (!left.ok()) return left;
-    Term a = left.value();
-    for (;;) {
-      SkipSpace();
-      const size_t at = pos_;
-      int op = -1;
-      for (const auto& [text, code] : ops) {
-        // '<' must not take the '<' of '<='; '&' / '|' never appear alone.
-        if (text_.compare(pos_, std::char_traits<char>::length(text), text) == 0) {
-          op = code;
-          pos_ += std::char_traits<char>::length(text);
-          break;
-        }
-      }
-      if (op < 0) return a;
-      auto right = next();
-      if (!right.ok()) return right;
-      const Term& b = right.value();
-      Term r;
-      if (compare) {
-        auto same = Same(a, b, at, "a comparison");
-        if (!same.ok()) return same;
-      }
-      r.kind =
-          a.kind == Kind::kConstant && b.kind == Kind::kConstant ? Kind::kConstant : Kind::kExact;
-      r.begin = a.begin;
-      r.end = b.end;
-      switch (op) {
-        case 0:
-          r.value = (a.value != 0.0) || (b.value != 0.0);
-          break;
-        case 1:
-          r.value = (a.value != 0.0) && (b.value != 0.0);
-          break;
-        case 2:
-          r.value = a.value == b.value;
-          break;
-        case 3:
-          r.value = a.value != b.value;
-          break;
-        case 4:
-          r.value = a.value <= b.value;
-          break;
-        case 5:
-          r.value = a.value >= b.value;
-          break;
-        case 6:
-          r.value = a.value < b.value;
-          break;
-        default:
-          r.value = a.value > b.value;
-          break;
-      }
-      a = r;
-    }
-  }
-
-  Result<Term> LogicOr() {
-    return Binary([this] { return LogicAnd(); }, {{"||", 0}}, false);
-  }
-  Result<Term> LogicAnd() {
-    return Binary([this] { return Compare(); }, {{"&&", 1}}, false);
-  }
-  Result<Term> Compare() {
-    return Binary([this] { return Additive(); },
-                  {{"==", 2}, {"!=", 3}, {"<=", 4}, {">=", 5}, {"<", 6}, {">", 7}}, true);
-  }
-
-  Result<Term> Additive() {
-    auto left = Multiplicative();
-    if (!left.ok()) return left;
-    Term a = left.value();
-    for (;;) {
-      SkipSpace();
-      const size_t at = pos_;
-      if (pos_ >= text_.size() || (text_[pos_] != '+' && text_[pos_] != '-')) return a;
-      const bool plus = text_[pos_++] == '+';
-      auto right = Multiplicative();
-      if (!right.ok()) return right;
-      auto r = Same(a, right.value(), at, plus ? "a sum" : "a difference");
-      if (!r.ok()) return r;
-      const double v = plus ? a.value + right.value().value : a.value - right.value().value;
-      a = r.value();
-      a.value = v;
-    }
-  }
 
   Result<Term> Product(const Term& a, const Term& b, bool divide, size_t at) const {
     Term r;
@@ -277,50 +137,116 @@ class Checker {
     return r;
   }
 
-  Result<Term> Multiplicative() {
-    auto left = Unary();
+  // A term's text is its node's, parentheses included.
+  Result<Term> Walk(size_t n) {
+    const ModelNode& node = syntax_.nodes[n];
+    Result<Term> t = Unit(node);
+    if (!t.ok()) return t;
+    Term r = t.value();
+    r.begin = node.begin;
+    r.end = node.end;
+    return r;
+  }
+
+  Result<Term> Unit(const ModelNode& node) {
+    Term t;
+    switch (node.kind) {
+      case ModelNode::Kind::kNumber:
+        t.value = node.number;
+        return t;
+      case ModelNode::Kind::kInput:
+        if (!units_[node.input]) {
+          return MakeError("input '" + names_[node.input] +
+                           "' states no unit, while other quantities of the budget do; every "
+                           "input of the model needs one (\"1\" for a pure number)");
+        }
+        t.kind = Kind::kExact;
+        t.unit = *units_[node.input];
+        t.value = values_[node.input];
+        return t;
+      case ModelNode::Kind::kPi:
+        t.value = kModelPi;
+        return t;
+      case ModelNode::Kind::kE:
+        t.value = kModelE;
+        return t;
+      case ModelNode::Kind::kSign: {
+        auto operand = Walk(node.children[0]);
+        if (!operand.ok()) return operand;
+        t = operand.value();
+        if (node.negative) t.value = -t.value;
+        return t;
+      }
+      case ModelNode::Kind::kPower:
+        return Power(node);
+      case ModelNode::Kind::kChain:
+        return Chain(node);
+      case ModelNode::Kind::kIf: {
+        auto c = Walk(node.children[0]);
+        if (!c.ok()) return c;
+        auto a = Walk(node.children[1]);
+        if (!a.ok()) return a;
+        auto b = Walk(node.children[2]);
+        if (!b.ok()) return b;
+        auto r = Same(a.value(), b.value(), node.at, "the branches of ?:");
+        if (!r.ok()) return r;
+        t = r.value();
+        t.value = c.value().value != 0.0 ? a.value().value : b.value().value;
+        return t;
+      }
+      case ModelNode::Kind::kCall:
+        return Call(node);
+    }
+    return t;
+  }
+
+  // + - need one unit, * / multiply units, comparisons need one unit and give a 0/1 number,
+  // as do && and ||.
+  Result<Term> Chain(const ModelNode& node) {
+    auto left = Walk(node.children[0]);
     if (!left.ok()) return left;
     Term a = left.value();
-    for (;;) {
-      SkipSpace();
-      const size_t at = pos_;
-      if (pos_ >= text_.size() || (text_[pos_] != '*' && text_[pos_] != '/')) return a;
-      const bool divide = text_[pos_++] == '/';
-      auto right = Unary();
+    for (size_t k = 0; k < node.ops.size(); ++k) {
+      const ModelOperator op = node.ops[k];
+      const size_t at = node.op_at[k];
+      auto right = Walk(node.children[k + 1]);
       if (!right.ok()) return right;
-      auto product = Product(a, right.value(), divide, at);
-      if (!product.ok()) return product;
-      a = product.value();
+      const Term& b = right.value();
+      const double v = ApplyOperator(op, a.value, b.value);
+      if (op == ModelOperator::kAdd || op == ModelOperator::kSubtract) {
+        auto r = Same(a, b, at, op == ModelOperator::kAdd ? "a sum" : "a difference");
+        if (!r.ok()) return r;
+        a = r.value();
+        a.value = v;
+        continue;
+      }
+      if (op == ModelOperator::kMultiply || op == ModelOperator::kDivide) {
+        auto r = Product(a, b, op == ModelOperator::kDivide, at);
+        if (!r.ok()) return r;
+        a = r.value();
+        continue;
+      }
+      if (op != ModelOperator::kOr && op != ModelOperator::kAnd) {
+        auto same = Same(a, b, at, "a comparison");
+        if (!same.ok()) return same;
+      }
+      Term r;
+      r.kind =
+          a.kind == Kind::kConstant && b.kind == Kind::kConstant ? Kind::kConstant : Kind::kExact;
+      r.begin = a.begin;
+      r.end = b.end;
+      r.value = v;
+      a = r;
     }
+    return a;
   }
 
-  // Signs bind less tightly than ^ (muparser: -2^2 = -4).
-  Result<Term> Unary() {
-    const Depth guard(&depth_);
-    if (depth_ > kMaxDepth)
-      return Fail(pos_, "nested too deeply (parentheses, arguments and signs beyond 256 levels)");
-    SkipSpace();
-    const size_t at = pos_;
-    if (pos_ < text_.size() && (text_[pos_] == '-' || text_[pos_] == '+')) {
-      const bool minus = text_[pos_++] == '-';
-      auto t = Unary();
-      if (!t.ok()) return t;
-      Term r = t.value();
-      r.begin = at;
-      if (minus) r.value = -r.value;
-      return r;
-    }
-    return Power();
-  }
-
-  Result<Term> Power() {
-    auto base = Primary();
+  Result<Term> Power(const ModelNode& node) {
+    auto base = Walk(node.children[0]);
     if (!base.ok()) return base;
-    SkipSpace();
-    const size_t at = pos_;
-    if (!Accept("^")) return base;
-    auto exponent = Unary();  // Right-associative: 2^3^2 = 2^9; 2^-1 is allowed.
+    auto exponent = Walk(node.children[1]);
     if (!exponent.ok()) return exponent;
+    const size_t at = node.at;
     const Term& a = base.value();
     const Term& p = exponent.value();
     Term r;
@@ -363,81 +289,26 @@ class Checker {
                                 Describe(a), Significant(p.value)));
   }
 
-  Result<Term> Number() {
-    const size_t at = pos_;
-    const char* start = text_.c_str() + pos_;
-    char* stop = nullptr;
-    const double v = std::strtod(start, &stop);
-    if (stop == start) return Fail(at, "expected a number");
-    pos_ += static_cast<size_t>(stop - start);
-    Term t;
-    t.value = v;
-    t.begin = at;
-    t.end = pos_;
-    return t;
-  }
-
-  Result<Term> Call(const std::string& name, size_t at) {
+  Result<Term> Call(const ModelNode& node) {
     std::vector<Term> args;
-    SkipSpace();
-    if (!Accept(")")) {
-      for (;;) {
-        auto a = Ternary();
-        if (!a.ok()) return a;
-        args.push_back(a.value());
-        if (Accept(",")) continue;
-        if (Accept(")")) break;
-        return Fail(pos_, "expected ',' or ')' in the arguments of " + name + "()");
-      }
+    std::vector<double> values;
+    bool constant_args = true;
+    for (size_t k : node.children) {
+      auto a = Walk(k);
+      if (!a.ok()) return a;
+      args.push_back(a.value());
+      values.push_back(a.value().value);
+      constant_args = constant_args && a.value().kind == Kind::kConstant;
     }
+    const std::string& name = node.text;
+    const size_t at = node.at;
     Term r;
-    r.begin = at;
-    r.end = pos_;
-    const auto arity = [&](size_t n) -> Status {
-      if (args.size() == n) return Status();
-      return Fail(at, fmt::format("{}() takes {} argument{}", name, n, n == 1 ? "" : "s"));
-    };
-    const auto constant_args = [&] {
-      for (const Term& a : args) {
-        if (a.kind != Kind::kConstant) return false;
-      }
-      return true;
-    };
-    using F = double (*)(double);
-    static const std::vector<std::pair<std::string, F>> kNumberFunctions = {
-        {"sin", [](double x) { return std::sin(x); }},
-        {"cos", [](double x) { return std::cos(x); }},
-        {"tan", [](double x) { return std::tan(x); }},
-        {"asin", [](double x) { return std::asin(x); }},
-        {"acos", [](double x) { return std::acos(x); }},
-        {"atan", [](double x) { return std::atan(x); }},
-        {"sinh", [](double x) { return std::sinh(x); }},
-        {"cosh", [](double x) { return std::cosh(x); }},
-        {"tanh", [](double x) { return std::tanh(x); }},
-        {"asinh", [](double x) { return std::asinh(x); }},
-        {"acosh", [](double x) { return std::acosh(x); }},
-        {"atanh", [](double x) { return std::atanh(x); }},
-        {"exp", [](double x) { return std::exp(x); }},
-        {"ln", [](double x) { return std::log(x); }},
-        {"log", [](double x) { return std::log(x); }},  // muparser: log is ln.
-        {"log10", [](double x) { return std::log10(x); }},
-        {"log2", [](double x) { return std::log2(x); }},
-    };
-    for (const auto& [fname, f] : kNumberFunctions) {
-      if (fname != name) continue;
-      if (Status s = arity(1); !s.ok()) return s.error();
-      if (Status s = NeedNumber(args[0], at, name); !s.ok()) return s.error();
-      r.value = f(args[0].value);
-      r.kind = constant_args() ? Kind::kConstant : Kind::kExact;
-      return r;  // 1 (asin/acos/atan: rad, the same unit).
-    }
-    if (name == "sqrt" || name == "abs" || name == "rint" || name == "sign") {
-      if (Status s = arity(1); !s.ok()) return s.error();
-      const Term& a = args[0];
-      r.kind = a.kind;
-      r.unit = a.unit;
-      if (name == "sqrt") {
-        r.value = std::sqrt(a.value);
+    r.value = ApplyFunction(node.function, values);
+    const Term& a = args[0];
+    switch (node.function) {
+      case ModelFunction::kSqrt:
+        r.kind = a.kind;
+        r.unit = a.unit;
         if (a.kind != Kind::kConstant) {
           auto root = a.unit.Root(2);
           if (!root.ok()) {
@@ -445,112 +316,47 @@ class Checker {
           }
           r.unit = root.value();
         }
-      } else if (name == "abs") {
-        r.value = std::fabs(a.value);
-      } else if (name == "rint") {
-        r.value = std::rint(a.value);
-      } else {
-        r.value = a.value > 0.0 ? 1.0 : a.value < 0.0 ? -1.0 : 0.0;
-        r.unit = PhysicalUnit::One();
-        if (a.kind != Kind::kConstant) r.kind = Kind::kExact;
+        return r;
+      case ModelFunction::kAbs:
+      case ModelFunction::kRint:
+        r.kind = a.kind;
+        r.unit = a.unit;
+        return r;
+      case ModelFunction::kSign:
+        r.kind = a.kind == Kind::kConstant ? Kind::kConstant : Kind::kExact;
+        return r;
+      case ModelFunction::kMin:
+      case ModelFunction::kMax:
+      case ModelFunction::kSum:
+      case ModelFunction::kAvg:
+      case ModelFunction::kAtan2: {
+        Term acc = a;
+        for (size_t i = 1; i < args.size(); ++i) {
+          auto same = Same(acc, args[i], at, "the arguments of " + name + "()");
+          if (!same.ok()) return same;
+          acc.kind = same.value().kind;
+          acc.unit = same.value().unit;
+        }
+        r.kind = acc.kind;
+        r.unit = acc.unit;
+        if (node.function == ModelFunction::kAtan2) {
+          r.unit = PhysicalUnit::One();
+          if (r.kind != Kind::kConstant) r.kind = Kind::kExact;
+        }
+        return r;
       }
-      return r;
+      default:  // sin ... log2 take a number and give 1 (asin/acos/atan: rad, the same unit).
+        if (Status s = NeedNumber(a, at, name); !s.ok()) return s.error();
+        r.kind = constant_args ? Kind::kConstant : Kind::kExact;
+        return r;
     }
-    if (name == "min" || name == "max" || name == "sum" || name == "avg" || name == "atan2") {
-      if (name == "atan2") {
-        if (Status s = arity(2); !s.ok()) return s.error();
-      } else if (args.empty()) {
-        return Fail(at, name + "() needs at least one argument");
-      }
-      Term acc = args[0];
-      for (size_t i = 1; i < args.size(); ++i) {
-        auto same = Same(acc, args[i], at, "the arguments of " + name + "()");
-        if (!same.ok()) return same;
-        acc.kind = same.value().kind;
-        acc.unit = same.value().unit;
-      }
-      r.kind = acc.kind;
-      r.unit = acc.unit;
-      double v = args[0].value;
-      for (size_t i = 1; i < args.size(); ++i) {
-        const double x = args[i].value;
-        if (name == "min") v = std::fmin(v, x);
-        if (name == "max") v = std::fmax(v, x);
-        if (name == "sum" || name == "avg") v += x;
-      }
-      if (name == "avg") v /= static_cast<double>(args.size());
-      if (name == "atan2") {
-        v = std::atan2(args[0].value, args[1].value);
-        r.unit = PhysicalUnit::One();
-        if (r.kind != Kind::kConstant) r.kind = Kind::kExact;
-      }
-      r.value = v;
-      return r;
-    }
-    return Fail(at, "function '" + name + "' has no unit rule");
-  }
-
-  Result<Term> Primary() {
-    SkipSpace();
-    const size_t at = pos_;
-    if (pos_ >= text_.size()) return Fail(at, "unexpected end of the model");
-    const char c = text_[pos_];
-    if (c == '(') {
-      ++pos_;
-      auto t = Ternary();
-      if (!t.ok()) return t;
-      if (!Accept(")")) return Fail(pos_, "expected ')'");
-      Term r = t.value();
-      r.begin = at;
-      r.end = pos_;
-      return r;
-    }
-    if ((c >= '0' && c <= '9') || c == '.') return Number();
-    const auto name_char = [](char x) {
-      return (x >= 'a' && x <= 'z') || (x >= 'A' && x <= 'Z') || (x >= '0' && x <= '9') || x == '_';
-    };
-    if (!name_char(c)) return Fail(at, "unexpected '" + std::string(1, c) + "'");
-    size_t end = pos_;
-    while (end < text_.size() && name_char(text_[end])) ++end;
-    const std::string name = text_.substr(pos_, end - pos_);
-    pos_ = end;
-    SkipSpace();
-    if (pos_ < text_.size() && text_[pos_] == '(') {
-      ++pos_;
-      return Call(name, at);
-    }
-    Term t;
-    t.begin = at;
-    t.end = end;
-    for (size_t i = 0; i < names_.size(); ++i) {
-      if (names_[i] != name) continue;
-      if (!units_[i]) {
-        return MakeError("input '" + name +
-                         "' states no unit, while other quantities of the budget do; every input "
-                         "of the model needs one (\"1\" for a pure number)");
-      }
-      t.kind = Kind::kExact;
-      t.unit = *units_[i];
-      t.value = values_[i];
-      return t;
-    }
-    if (name == "pi" || name == "_pi") {
-      t.value = 3.14159265358979323846;
-      return t;
-    }
-    if (name == "_e") {
-      t.value = 2.71828182845904523536;
-      return t;
-    }
-    return Fail(at, "'" + name + "' is not an input");
   }
 
   const std::string& text_;
+  const ModelSyntax& syntax_;
   const std::vector<std::string>& names_;
   const std::vector<std::optional<PhysicalUnit>>& units_;
   const std::vector<double>& values_;
-  size_t pos_ = 0;
-  int depth_ = 0;
 };
 
 }  // namespace
@@ -559,7 +365,9 @@ Result<ModelUnit> CheckModelUnits(const std::string& expression,
                                   const std::vector<std::string>& names,
                                   const std::vector<std::optional<PhysicalUnit>>& units,
                                   const std::vector<double>& values, double muparser_value) {
-  Checker checker(expression, names, units, values);
+  Result<ModelSyntax> syntax = ParseModel(expression, names);
+  if (!syntax.ok()) return syntax.error();
+  Checker checker(expression, syntax.value(), names, units, values);
   auto term = checker.Run();
   if (!term.ok()) return term.error();
   const Term& t = term.value();

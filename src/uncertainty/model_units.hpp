@@ -1,8 +1,7 @@
 // The unit check of a measurement model y = f(x) (docs/budget-format.md, "Units").
 //
-// The expression is read with muparser's grammar and precedence (a small recursive-descent
-// parser: ?: lowest, then ||, &&, comparisons, + -, * / and the signs, ^ right-associative and
-// highest) and every subexpression is given a unit from its inputs' units:
+// The expression's syntax tree (model_grammar.hpp: muparser's grammar, read once for this and
+// the exact derivatives) is walked and every subexpression given a unit from its inputs':
 //   - sums, differences, comparisons, min/max/sum/avg/atan2 and the branches of ?: need the
 //     same unit in every term (rad + deg is refused although both are plane angles);
 //   - products and quotients multiply units; x^p needs a constant p (integer or 1/k) unless x

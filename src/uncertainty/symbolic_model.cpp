@@ -11,6 +11,8 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "uncertainty/model_grammar.hpp"
+
 namespace metro {
 namespace internal {
 namespace {
@@ -45,39 +47,20 @@ struct NotExact : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Reads the expression with muparser's grammar (the same as model_units.cpp's unit checker:
-// ?: lowest, then ||, &&, comparisons, + -, * /, signs, ^ right-associative with a signed
-// exponent) into a GiNaC expression, choosing the pieces of piecewise functions at x0.
-class Reader {
+// The GiNaC expression of a model's syntax tree (model_grammar.hpp), with the pieces of
+// piecewise functions chosen at x0. Nodes are read children first, left to right.
+class Builder {
  public:
-  Reader(const std::string& text, const std::vector<std::string>& names,
-         const std::vector<GiNaC::symbol>& symbols, const double* x0)
-      : text_(text), names_(names), symbols_(symbols) {
+  Builder(const ModelSyntax& syntax, const std::vector<GiNaC::symbol>& symbols, const double* x0)
+      : syntax_(syntax), symbols_(symbols) {
     for (size_t i = 0; i < symbols.size(); ++i) at_[symbols[i]] = GiNaC::numeric(x0[i]);
   }
 
-  GiNaC::ex Run() {
-    GiNaC::ex e = Ternary();
-    SkipSpace();
-    if (pos_ != text_.size()) Fail(pos_, "unexpected '" + text_.substr(pos_, 1) + "'");
-    return e;
-  }
+  GiNaC::ex Run() { return Build(syntax_.root()); }
 
  private:
-  [[noreturn]] void Fail(size_t at, const std::string& what) const {
+  [[noreturn]] static void Fail(size_t at, const std::string& what) {
     throw NotExact(fmt::format("column {}: {}", at + 1, what));
-  }
-
-  void SkipSpace() {
-    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
-  }
-
-  bool Accept(const char* op) {
-    SkipSpace();
-    const size_t n = std::char_traits<char>::length(op);
-    if (text_.compare(pos_, n, op) != 0) return false;
-    pos_ += n;
-    return true;
   }
 
   // The value of e at x0 (30 digits); a piece is chosen by it.
@@ -97,18 +80,6 @@ class Reader {
     return false;
   }
 
-  GiNaC::ex Ternary() {
-    const size_t at = pos_;
-    GiNaC::ex c = LogicOr();
-    if (!Accept("?")) return c;
-    GiNaC::ex a = Ternary();
-    if (!Accept(":")) Fail(pos_, "expected ':' of '?'");
-    GiNaC::ex b = Ternary();
-    const bool taken = !At(c, at).is_zero();
-    if (!taken && Varies(c)) Fail(at, "the condition of ?: is 0 at the estimates (a seam)");
-    return taken ? a : b;
-  }
-
   // A truth value for && and ||: constant near x0 unless the operand is 0 there and varies.
   bool Truth(const GiNaC::ex& e, size_t at) const {
     const bool truth = !At(e, at).is_zero();
@@ -116,143 +87,67 @@ class Reader {
     return truth;
   }
 
-  GiNaC::ex LogicOr() {
-    const size_t at = pos_;
-    GiNaC::ex a = LogicAnd();
-    while (Accept("||")) {
-      GiNaC::ex b = LogicAnd();
-      a = (Truth(a, at) || Truth(b, at)) ? 1 : 0;
-    }
-    return a;
-  }
-
-  GiNaC::ex LogicAnd() {
-    const size_t at = pos_;
-    GiNaC::ex a = Compare();
-    while (Accept("&&")) {
-      GiNaC::ex b = Compare();
-      a = (Truth(a, at) && Truth(b, at)) ? 1 : 0;
-    }
-    return a;
-  }
-
-  GiNaC::ex Compare() {
-    GiNaC::ex a = Additive();
-    for (;;) {
-      SkipSpace();
-      const size_t at = pos_;
-      static const char* const kOps[] = {"==", "!=", "<=", ">=", "<", ">"};
-      int op = -1;
-      for (int k = 0; k < 6; ++k) {
-        if (text_.compare(pos_, std::char_traits<char>::length(kOps[k]), kOps[k]) == 0) {
-          op = k;
-          pos_ += std::char_traits<char>::length(kOps[k]);
-          break;
+  GiNaC::ex Build(size_t n) {
+    const ModelNode& node = syntax_.nodes[n];
+    switch (node.kind) {
+      case ModelNode::Kind::kNumber:
+        return Number(node);
+      case ModelNode::Kind::kInput:
+        return symbols_[node.input];
+      case ModelNode::Kind::kPi:
+        return GiNaC::Pi;
+      case ModelNode::Kind::kE:
+        return GiNaC::exp(GiNaC::ex(1));
+      case ModelNode::Kind::kSign: {
+        const GiNaC::ex t = Build(node.children[0]);
+        return node.negative ? -t : t;
+      }
+      case ModelNode::Kind::kPower: {
+        const GiNaC::ex base = Build(node.children[0]);
+        return GiNaC::pow(base, Build(node.children[1]));
+      }
+      case ModelNode::Kind::kChain:
+        return Chain(node);
+      case ModelNode::Kind::kIf: {
+        const GiNaC::ex c = Build(node.children[0]);
+        const GiNaC::ex a = Build(node.children[1]);
+        const GiNaC::ex b = Build(node.children[2]);
+        const bool taken = !At(c, node.lead).is_zero();
+        if (!taken && Varies(c)) {
+          Fail(node.lead, "the condition of ?: is 0 at the estimates (a seam)");
         }
+        return taken ? a : b;
       }
-      if (op < 0) return a;
-      GiNaC::ex b = Additive();
-      const GiNaC::numeric va = At(a, at), vb = At(b, at);
-      if (va == vb && Varies(a - b)) {
-        Fail(at, fmt::format("the comparison '{}' is between equal values at the estimates (a "
-                             "seam)",
-                             kOps[op]));
-      }
-      bool r = false;
-      switch (op) {
-        case 0:
-          r = va == vb;
-          break;
-        case 1:
-          r = va != vb;
-          break;
-        case 2:
-          r = va <= vb;
-          break;
-        case 3:
-          r = va >= vb;
-          break;
-        case 4:
-          r = va < vb;
-          break;
-        default:
-          r = va > vb;
-          break;
-      }
-      a = r ? 1 : 0;
+      case ModelNode::Kind::kCall:
+        return Call(node);
     }
+    Fail(node.at, "unknown node");
   }
 
-  GiNaC::ex Additive() {
-    GiNaC::ex a = Multiplicative();
-    for (;;) {
-      SkipSpace();
-      if (pos_ >= text_.size() || (text_[pos_] != '+' && text_[pos_] != '-')) return a;
-      const bool plus = text_[pos_++] == '+';
-      GiNaC::ex b = Multiplicative();
-      a = plus ? a + b : a - b;
-    }
-  }
-
-  GiNaC::ex Multiplicative() {
-    GiNaC::ex a = Unary();
-    for (;;) {
-      SkipSpace();
-      if (pos_ >= text_.size() || (text_[pos_] != '*' && text_[pos_] != '/')) return a;
-      const bool divide = text_[pos_++] == '/';
-      GiNaC::ex b = Unary();
-      a = divide ? a / b : a * b;
-    }
-  }
-
-  // Signs bind less tightly than ^ (muparser: -2^2 = -4).
-  GiNaC::ex Unary() {
-    SkipSpace();
-    if (pos_ < text_.size() && (text_[pos_] == '-' || text_[pos_] == '+')) {
-      const bool minus = text_[pos_++] == '-';
-      GiNaC::ex t = Unary();
-      return minus ? -t : t;
-    }
-    return Power();
-  }
-
-  GiNaC::ex Power() {
-    GiNaC::ex base = Primary();
-    if (!Accept("^")) return base;
-    GiNaC::ex exponent = Unary();  // Right-associative: 2^3^2 = 2^9; 2^-1 is allowed.
-    return GiNaC::pow(base, exponent);
-  }
-
-  // A decimal number read exactly: digits, a fraction and an exponent as a rational.
-  GiNaC::ex Number() {
-    const size_t at = pos_;
+  // A decimal literal read exactly: digits, a fraction and an exponent as a rational.
+  GiNaC::ex Number(const ModelNode& node) const {
+    const std::string& text = node.text;
     std::string digits;
     long scale = 0;
-    while (pos_ < text_.size() && std::isdigit(static_cast<unsigned char>(text_[pos_]))) {
-      digits += text_[pos_++];
+    size_t k = 0;
+    for (; k < text.size() && std::isdigit(static_cast<unsigned char>(text[k])); ++k) {
+      digits += text[k];
     }
-    if (pos_ < text_.size() && text_[pos_] == '.') {
-      ++pos_;
-      while (pos_ < text_.size() && std::isdigit(static_cast<unsigned char>(text_[pos_]))) {
-        digits += text_[pos_++];
+    if (k < text.size() && text[k] == '.') {
+      for (++k; k < text.size() && std::isdigit(static_cast<unsigned char>(text[k])); ++k) {
+        digits += text[k];
         --scale;
       }
     }
-    if (digits.empty()) Fail(at, "expected a number");
-    if (pos_ < text_.size() && (text_[pos_] == 'e' || text_[pos_] == 'E')) {
-      size_t k = pos_ + 1;
-      bool negative = false;
-      if (k < text_.size() && (text_[k] == '+' || text_[k] == '-')) negative = text_[k++] == '-';
-      const size_t first = k;
+    if (k < text.size()) {  // The exponent: e or E, a sign, digits (model_grammar.cpp).
+      const bool negative = text[++k] == '-';
+      if (text[k] == '+' || text[k] == '-') ++k;
       long exponent = 0;
-      while (k < text_.size() && std::isdigit(static_cast<unsigned char>(text_[k]))) {
-        if (exponent > 100000) Fail(at, "a number's exponent is out of range");
-        exponent = 10 * exponent + (text_[k++] - '0');
+      for (; k < text.size(); ++k) {
+        if (exponent > 100000) Fail(node.at, "a number's exponent is out of range");
+        exponent = 10 * exponent + (text[k] - '0');
       }
-      if (k > first) {
-        scale += negative ? -exponent : exponent;
-        pos_ = k;
-      }
+      scale += negative ? -exponent : exponent;
     }
     const size_t nonzero = digits.find_first_not_of('0');
     const GiNaC::numeric mantissa(nonzero == std::string::npos ? "0"
@@ -260,142 +155,137 @@ class Reader {
     return mantissa * GiNaC::numeric(10).power(GiNaC::numeric(scale));
   }
 
-  std::vector<GiNaC::ex> Arguments(const std::string& name) {
-    std::vector<GiNaC::ex> args;
-    if (Accept(")")) return args;
-    for (;;) {
-      args.push_back(Ternary());
-      if (Accept(",")) continue;
-      if (Accept(")")) return args;
-      Fail(pos_, "expected ',' or ')' in the arguments of " + name + "()");
-    }
-  }
-
-  GiNaC::ex Call(const std::string& name, size_t at) {
-    const std::vector<GiNaC::ex> args = Arguments(name);
-    const auto need = [&](size_t n) {
-      if (args.size() != n) {
-        Fail(at, fmt::format("{}() takes {} argument{}", name, n, n == 1 ? "" : "s"));
-      }
-    };
-    using F = GiNaC::ex (*)(const GiNaC::ex&);
-    static const std::map<std::string, F> kSmooth = {
-        {"sin", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::sin(u); }},
-        {"cos", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::cos(u); }},
-        {"tan", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::tan(u); }},
-        {"asin", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::asin(u); }},
-        {"acos", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::acos(u); }},
-        {"atan", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::atan(u); }},
-        {"sinh", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::sinh(u); }},
-        {"cosh", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::cosh(u); }},
-        {"tanh", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::tanh(u); }},
-        {"asinh", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::asinh(u); }},
-        {"acosh", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::acosh(u); }},
-        {"atanh", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::atanh(u); }},
-        {"exp", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::exp(u); }},
-        {"sqrt", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::sqrt(u); }},
-        // muparser's log is the natural logarithm, like ln.
-        {"log", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::log(u); }},
-        {"ln", [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::log(u); }},
-        {"log10",
-         [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::log(u) / GiNaC::log(GiNaC::ex(10)); }},
-        {"log2",
-         [](const GiNaC::ex& u) -> GiNaC::ex { return GiNaC::log(u) / GiNaC::log(GiNaC::ex(2)); }},
-    };
-    if (auto it = kSmooth.find(name); it != kSmooth.end()) {
-      need(1);
-      return it->second(args[0]);
-    }
-    if (name == "atan2") {  // muparser's atan2(y, x).
-      need(2);
-      return GiNaC::atan2(args[0], args[1]);
-    }
-    if (name == "sum" || name == "avg") {
-      if (args.empty()) Fail(at, name + "() needs at least one argument");
-      GiNaC::ex s = 0;
-      for (const GiNaC::ex& a : args) s += a;
-      return name == "sum" ? s : s / static_cast<int>(args.size());
-    }
-    if (name == "abs" || name == "sign") {
-      need(1);
-      const GiNaC::numeric v = At(args[0], at);
-      if (v.is_zero() && Varies(args[0])) {
-        Fail(at, name + "() of 0 at the estimates (a seam: no derivative there)");
-      }
-      const int s = v.is_zero() ? 0 : (v.is_positive() ? 1 : -1);
-      return name == "abs" ? s * args[0] : GiNaC::ex(s);
-    }
-    if (name == "rint") {
-      need(1);
-      // muparser's rint is the C library's (ties to even, in double): a step function.
-      const double v = At(args[0], at).to_double();
-      if (Varies(args[0]) && std::fabs(v - std::trunc(v)) == 0.5) {
-        Fail(at, "rint() of a half-integer at the estimates (a seam: no derivative there)");
-      }
-      return GiNaC::numeric(std::rint(v));
-    }
-    if (name == "min" || name == "max") {
-      if (args.empty()) Fail(at, name + "() needs at least one argument");
-      size_t best = 0;
-      GiNaC::numeric best_value = At(args[0], at);
-      bool tie = false;
-      for (size_t k = 1; k < args.size(); ++k) {
-        const GiNaC::numeric v = At(args[k], at);
-        if (v == best_value) {
-          tie = tie || Varies(args[k] - args[best]);
-        } else if (name == "min" ? v < best_value : v > best_value) {
-          best = k;
-          best_value = v;
-          tie = false;
+  // A comparison, && or || is the constant it has at x0; + - * / stay symbolic.
+  GiNaC::ex Chain(const ModelNode& node) {
+    GiNaC::ex a = Build(node.children[0]);
+    for (size_t k = 0; k < node.ops.size(); ++k) {
+      const ModelOperator op = node.ops[k];
+      const GiNaC::ex b = Build(node.children[k + 1]);
+      switch (op) {
+        case ModelOperator::kAdd:
+          a = a + b;
+          break;
+        case ModelOperator::kSubtract:
+          a = a - b;
+          break;
+        case ModelOperator::kMultiply:
+          a = a * b;
+          break;
+        case ModelOperator::kDivide:
+          a = a / b;
+          break;
+        case ModelOperator::kOr:
+          a = (Truth(a, node.lead) || Truth(b, node.lead)) ? 1 : 0;
+          break;
+        case ModelOperator::kAnd:
+          a = (Truth(a, node.lead) && Truth(b, node.lead)) ? 1 : 0;
+          break;
+        default: {  // A comparison.
+          const size_t at = node.op_at[k];
+          const GiNaC::numeric va = At(a, at), vb = At(b, at);
+          if (va == vb && Varies(a - b)) {
+            Fail(at, fmt::format("the comparison '{}' is between equal values at the estimates "
+                                 "(a seam)",
+                                 ModelOperatorText(op)));
+          }
+          bool r = false;
+          if (op == ModelOperator::kEqual) r = va == vb;
+          if (op == ModelOperator::kNotEqual) r = va != vb;
+          if (op == ModelOperator::kLessEqual) r = va <= vb;
+          if (op == ModelOperator::kGreaterEqual) r = va >= vb;
+          if (op == ModelOperator::kLess) r = va < vb;
+          if (op == ModelOperator::kGreater) r = va > vb;
+          a = r ? 1 : 0;
         }
       }
-      if (tie) Fail(at, name + "() has a tie at the estimates (a seam: no derivative there)");
-      return args[best];
+    }
+    return a;
+  }
+
+  GiNaC::ex Call(const ModelNode& node) {
+    std::vector<GiNaC::ex> args;
+    for (size_t k : node.children) args.push_back(Build(k));
+    const std::string& name = node.text;
+    const size_t at = node.at;
+    const GiNaC::ex& u = args[0];
+    using F = GiNaC::ex (*)(const GiNaC::ex&);
+    static const std::map<ModelFunction, F> kSmooth = {
+        {ModelFunction::kSin, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::sin(x); }},
+        {ModelFunction::kCos, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::cos(x); }},
+        {ModelFunction::kTan, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::tan(x); }},
+        {ModelFunction::kAsin, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::asin(x); }},
+        {ModelFunction::kAcos, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::acos(x); }},
+        {ModelFunction::kAtan, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::atan(x); }},
+        {ModelFunction::kSinh, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::sinh(x); }},
+        {ModelFunction::kCosh, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::cosh(x); }},
+        {ModelFunction::kTanh, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::tanh(x); }},
+        {ModelFunction::kAsinh, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::asinh(x); }},
+        {ModelFunction::kAcosh, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::acosh(x); }},
+        {ModelFunction::kAtanh, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::atanh(x); }},
+        {ModelFunction::kExp, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::exp(x); }},
+        {ModelFunction::kSqrt, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::sqrt(x); }},
+        {ModelFunction::kLog, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::log(x); }},
+        {ModelFunction::kLn, [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::log(x); }},
+        {ModelFunction::kLog10,
+         [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::log(x) / GiNaC::log(GiNaC::ex(10)); }},
+        {ModelFunction::kLog2,
+         [](const GiNaC::ex& x) -> GiNaC::ex { return GiNaC::log(x) / GiNaC::log(GiNaC::ex(2)); }},
+    };
+    if (auto it = kSmooth.find(node.function); it != kSmooth.end()) return it->second(u);
+    switch (node.function) {
+      case ModelFunction::kAtan2:
+        return GiNaC::atan2(u, args[1]);
+      case ModelFunction::kSum:
+      case ModelFunction::kAvg: {
+        GiNaC::ex s = 0;
+        for (const GiNaC::ex& a : args) s += a;
+        return node.function == ModelFunction::kSum ? s : s / static_cast<int>(args.size());
+      }
+      case ModelFunction::kAbs:
+      case ModelFunction::kSign: {
+        const GiNaC::numeric v = At(u, at);
+        if (v.is_zero() && Varies(u)) {
+          Fail(at, name + "() of 0 at the estimates (a seam: no derivative there)");
+        }
+        const int s = v.is_zero() ? 0 : (v.is_positive() ? 1 : -1);
+        return node.function == ModelFunction::kAbs ? s * u : GiNaC::ex(s);
+      }
+      case ModelFunction::kRint: {
+        // muparser's rint is floor(x + 0.5) in double (model_grammar.hpp): a step function.
+        const double v = At(u, at).to_double();
+        if (Varies(u) && std::fabs(v - std::trunc(v)) == 0.5) {
+          Fail(at, "rint() of a half-integer at the estimates (a seam: no derivative there)");
+        }
+        return GiNaC::numeric(std::floor(v + 0.5));
+      }
+      case ModelFunction::kMin:
+      case ModelFunction::kMax: {
+        const bool min = node.function == ModelFunction::kMin;
+        size_t best = 0;
+        GiNaC::numeric best_value = At(args[0], at);
+        bool tie = false;
+        for (size_t k = 1; k < args.size(); ++k) {
+          const GiNaC::numeric v = At(args[k], at);
+          if (v == best_value) {
+            tie = tie || Varies(args[k] - args[best]);
+          } else if (min ? v < best_value : v > best_value) {
+            best = k;
+            best_value = v;
+            tie = false;
+          }
+        }
+        if (tie) Fail(at, name + "() has a tie at the estimates (a seam: no derivative there)");
+        return args[best];
+      }
+      default:
+        break;
     }
     Fail(at, "the function " + name + "() is not known to the exact derivatives");
   }
 
-  GiNaC::ex Primary() {
-    SkipSpace();
-    const size_t at = pos_;
-    if (pos_ >= text_.size()) Fail(at, "unexpected end of the model");
-    const char c = text_[pos_];
-    if (c == '(') {
-      ++pos_;
-      GiNaC::ex e = Ternary();
-      if (!Accept(")")) Fail(pos_, "expected ')'");
-      return e;
-    }
-    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') return Number();
-    if (!(std::isalpha(static_cast<unsigned char>(c)) || c == '_')) {
-      Fail(at, "unexpected '" + std::string(1, c) + "'");
-    }
-    size_t end = pos_;
-    while (end < text_.size() &&
-           (std::isalnum(static_cast<unsigned char>(text_[end])) || text_[end] == '_')) {
-      ++end;
-    }
-    const std::string name = text_.substr(pos_, end - pos_);
-    pos_ = end;
-    SkipSpace();
-    if (pos_ < text_.size() && text_[pos_] == '(') {
-      ++pos_;
-      return Call(name, at);
-    }
-    for (size_t i = 0; i < names_.size(); ++i) {
-      if (names_[i] == name) return symbols_[i];
-    }
-    // metro defines pi for muparser (model.cpp) unless an input has that name.
-    if (name == "pi" || name == "_pi") return GiNaC::Pi;
-    if (name == "_e") return GiNaC::exp(GiNaC::ex(1));
-    Fail(at, "'" + name + "' is not an input");
-  }
-
-  const std::string& text_;
-  const std::vector<std::string>& names_;
+  const ModelSyntax& syntax_;
   const std::vector<GiNaC::symbol>& symbols_;
   GiNaC::exmap at_;
-  size_t pos_ = 0;
 };
 
 }  // namespace
@@ -475,7 +365,9 @@ Result<SymbolicModel> SymbolicModel::Parse(const std::string& expression,
     auto impl = std::make_shared<Impl>();
     for (const std::string& name : names) impl->symbols.emplace_back(name);
     const Precision precision;
-    impl->f = Reader(expression, names, impl->symbols, x0).Run();
+    Result<ModelSyntax> syntax = ParseModel(expression, names);
+    if (!syntax.ok()) return MakeError(syntax.error().message);
+    impl->f = Builder(syntax.value(), impl->symbols, x0).Run();
     return SymbolicModel(std::move(impl));
   } catch (const std::exception& error) {
     return MakeError(error.what());

@@ -2,19 +2,17 @@
 // sensitivity coefficients c_i = df/dx_i (JCGM 100:2008 5.1.3) and the second-order terms
 // of the JCGM 100 5.1.2 note (d2f/dx_i dx_j, d3f/dx_i dx_j^2).
 //
-// The expression is read with muparser's grammar (the evaluator's: precedence, signs binding
-// less tightly than ^, right-associative ^, ?:) into a GiNaC expression (Debian libginac-dev)
-// over one symbol per input name, differentiated symbolically; each derivative is evaluated
+// The expression's syntax tree (model_grammar.hpp: muparser's grammar, read once for this and
+// the unit check) becomes a GiNaC expression (Debian libginac-dev) over one symbol per input
+// name, differentiated symbolically; each derivative is evaluated
 // at the input estimates in GiNaC's arbitrary-precision floating point (30 significant
 // digits) and rounded to double once. Central differences, which rounding erases when u_i is
 // tiny beside |x_i| (f = fm at 1e7 +- 1e-6 Hz gave u_c 86 % high, issue #22; 2*pi*f at 1e7
 // +- 1e-6 Hz 78 % high, issue #36), are never used for a model read here.
 //
-// Everything the budget grammar takes (docs/budget-format.md) is read: + - * / ^, signs,
-// parentheses, numbers (read exactly: 0.1 is 1/10), the input names, the constants pi (when
-// no input is called pi), _pi and _e, the functions sin cos tan asin acos atan sinh cosh tanh
-// asinh acosh atanh exp sqrt log ln log10 log2 atan2 sum avg, and the piecewise ones abs,
-// sign, rint, min, max, the comparisons == != < > <= >=, && || and ?:. A piecewise part is
+// Everything the grammar takes is read: numbers exactly (0.1 is 1/10), pi and _pi as GiNaC's
+// Pi, _e as exp(1), the smooth functions as GiNaC's, and the piecewise parts (abs, sign, rint,
+// min, max, the comparisons, && || and ?:) as below. A piecewise part is
 // replaced by the piece that holds at the estimates x0 given to Parse (abs(u) by u or -u,
 // min(a, b) by the smaller, a comparison or sign() by its constant value, c ? a : b by the
 // branch taken): the derivatives are exact at x0 and near it, where the same pieces hold.
@@ -39,8 +37,8 @@ namespace internal {
 class SymbolicModel {
  public:
   // The model around x0 (x0[names.size()], the input estimates: it chooses the pieces of
-  // piecewise functions). Errors: a construct muparser takes that is not read here, a seam
-  // at x0, or an expression too long or deep (each message says which).
+  // piecewise functions). Errors: the grammar's (ParseModel), a seam at x0, or an expression
+  // too long or deep (each message says which).
   static Result<SymbolicModel> Parse(const std::string& expression,
                                      const std::vector<std::string>& names, const double* x0);
 
