@@ -10,7 +10,7 @@
 
 namespace {
 
-class ScriptedTag : public metro::blob::ByteStream {
+class ScriptedTag : public metro::serial::ByteStream {
  public:
   ScriptedTag(const uint8_t* data, size_t size) : data_(data), size_(size) {}
   metro::Status Write(const uint8_t*, size_t) override { return metro::Status::Ok(); }

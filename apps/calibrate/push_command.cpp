@@ -12,8 +12,8 @@
 #include "commands.hpp"
 #include "metro/blob/from_calibration.hpp"
 #include "metro/blob/push_client.hpp"
-#include "metro/blob/serial_port.hpp"
 #include "metro/calibration/calibration_io.hpp"
+#include "metro/serial/serial_port.hpp"
 #include "registry_hooks.hpp"
 #include "tags_cli.hpp"
 
@@ -123,7 +123,7 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   }
   OpenedRegistry registry = OpenRegistryOption(c.registry);
   if (registry.exit_code != 0) return registry.exit_code;
-  Result<std::unique_ptr<blob::SerialPort>> port = blob::SerialPort::Open(c.port);
+  Result<std::unique_ptr<serial::SerialPort>> port = serial::SerialPort::Open(c.port);
   if (!port.ok()) {
     apps::PrintErrorText(port.error().ToString());
     // The tag cannot be reached through the port: the push failed (exit 1,

@@ -6,9 +6,9 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "metro/calibration/simulate.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/sim/calibration_session.hpp"
 #include "metro/sim/static_session.hpp"
 #include "metro/sim/table_session.hpp"
 #include "output.hpp"

@@ -152,7 +152,7 @@ bool PushOptions::IsValid(std::string* why) const {
   return true;
 }
 
-PushClient::PushClient(ByteStream* stream, PushOptions options)
+PushClient::PushClient(serial::ByteStream* stream, PushOptions options)
     : stream_(stream),
       options_(options),
       // A random first txn, so a new session rarely repeats the tag's last (op, txn).
@@ -416,7 +416,7 @@ Status PushClient::ReadBack(const std::vector<uint8_t>& blob, const PushProgress
   return Status::Ok();
 }
 
-PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
+PushSummary PushCalibration(serial::ByteStream* stream, const Calibration& calibration,
                             BlobFromCalibrationOptions blob_options,
                             std::optional<uint64_t> expect_device_id, const PushOptions& options,
                             const PushProgress& progress) {

@@ -15,10 +15,10 @@
 #include <ctime>
 #include <memory>
 
-#include "metro/blob/serial_port.hpp"
 #include "metro/core/angles.hpp"
 #include "metro/core/terminal_text.hpp"
 #include "metro/core/utc_time.hpp"
+#include "metro/serial/serial_port.hpp"
 #include "metro/stats/session_type_a.hpp"
 
 namespace metro::capture {
@@ -366,13 +366,13 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
   };
   auto stopped = [&] { return options.stop != nullptr && *options.stop != 0; };
 
-  Result<std::unique_ptr<blob::SerialPort>> opened =
-      blob::SerialPort::Open(options.port, options.baud);
+  Result<std::unique_ptr<serial::SerialPort>> opened =
+      serial::SerialPort::Open(options.port, options.baud);
   if (!opened.ok()) {
     sum.message = opened.error().ToString();
     return sum;
   }
-  std::unique_ptr<blob::SerialPort> port = std::move(opened).value();
+  std::unique_ptr<serial::SerialPort> port = std::move(opened).value();
   Output out;
   if (Status s = out.Open(options.output, options.force); !s.ok()) {
     sum.message = s.error().ToString();
@@ -459,8 +459,8 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
       SleepUnlessStopped(std::min(wait_ms, 50), options.stop);
       if (SecondsSince(last_attempt) >= options.reconnect_interval_s) {
         last_attempt = Clock::now();
-        Result<std::unique_ptr<blob::SerialPort>> again =
-            blob::SerialPort::Open(options.port, options.baud);
+        Result<std::unique_ptr<serial::SerialPort>> again =
+            serial::SerialPort::Open(options.port, options.baud);
         if (again.ok()) {
           port = std::move(again).value();
           ++sum.reopened;

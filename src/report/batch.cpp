@@ -1,9 +1,7 @@
 #include "metro/report/batch.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <glob.h>
-#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -25,6 +23,7 @@
 #include "metro/core/version.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/report/html_report.hpp"
+#include "metro/stats/circular.hpp"
 
 namespace metro {
 
@@ -154,79 +153,17 @@ std::string NotASessionFile(const std::string& path) {
 
 }  // namespace
 
-CircularStatistics CircularStatisticsDeg(const std::vector<double>& angles_deg) {
-  CircularStatistics out;
-  const size_t n = angles_deg.size();
-  if (n == 0) return out;
-  constexpr double kRadPerDeg = M_PI / 180.0;
-  double c = 0.0, s = 0.0;
-  for (double a : angles_deg) {
-    c += std::cos(a * kRadPerDeg);
-    s += std::sin(a * kRadPerDeg);
-  }
-  c /= static_cast<double>(n);
-  s /= static_cast<double>(n);
-  // Mardia & Jupp (2000) 2.2.1 (mean direction), 2.3.1 (R), 2.3.2 (circular std).
-  out.resultant_length = std::min(1.0, std::hypot(c, s));
-  // R below rounding noise (e.g. 0 and 180 deg): no mean direction.
-  if (out.resultant_length > 1e-12) out.mean_deg = WrapDeg180(std::atan2(s, c) / kRadPerDeg);
-  out.std_deg = std::sqrt(-2.0 * std::log(out.resultant_length)) / kRadPerDeg;
-  if (n >= 2) {
-    out.sample_std_deg =
-        out.std_deg * std::sqrt(static_cast<double>(n) / static_cast<double>(n - 1));
-  }
-  return out;
-}
-
-std::vector<std::string> NoFreshPacketWarnings(const SessionReport& report,
-                                               const std::string& prefix) {
-  std::vector<std::string> out;
-  for (const SensorReport& s : report.sensors) {
-    if (s.frames <= 0 || s.fresh != 0) continue;
-    out.push_back(
-        fmt::format("{}WARNING sensor {} ({}): no fresh packet in {} frames (stale {}, never {}): "
-                    "packet_loss_ratio 1.0, no observations; the tag never connected or was lost",
-                    prefix, s.sensor, s.name, s.frames, s.stale, s.never));
-  }
-  return out;
-}
-
-FileLock::~FileLock() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
 Result<FileLock> LockBatchDirectory(const std::string& output_dir) {
   const std::string path = (fs::path(output_dir) / kBatchLockName).string();
-  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    return MakeError(output_dir, 0,
-                     fmt::format("cannot create the lock file {}: {}", path, std::strerror(errno)));
-  }
-  FileLock lock(fd);
-  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-    const int err = errno;
-    if (err != EWOULDBLOCK) {
-      return MakeError(output_dir, 0, fmt::format("cannot lock {}: {}", path, std::strerror(err)));
-    }
-    // The holder wrote who it is when it took the lock.
-    char holder[256] = {};
-    const ssize_t n = ::pread(fd, holder, sizeof holder - 1, 0);
-    std::string who = n > 0 ? std::string(holder, static_cast<size_t>(n)) : std::string();
-    while (!who.empty() && (who.back() == '\n' || who.back() == ' ')) who.pop_back();
-    return MakeError(
-        output_dir, 0,
-        fmt::format("the output directory is in use by another batch ({}): wait for it to "
-                    "finish or give another -o",
-                    who.empty() ? "its lock file " + path : EscapeControlChars(who)));
-  }
-  char host[128] = {};
-  ::gethostname(host, sizeof host - 1);
-  const std::string who = fmt::format("pid {} on {}, since {}", ::getpid(), host,
-                                      static_cast<long long>(::time(nullptr)));
-  if (::ftruncate(fd, 0) == 0) {
-    [[maybe_unused]] const ssize_t written = ::pwrite(fd, who.data(), who.size(), 0);
-  }
-  return Result<FileLock>(std::move(lock));
+  Result<FileLockAttempt> attempt = TryLockFile(path);
+  if (!attempt.ok()) return MakeError(output_dir, 0, attempt.error().message);
+  if (attempt.value().lock) return Result<FileLock>(std::move(*attempt.value().lock));
+  const std::string& who = attempt.value().holder;
+  return MakeError(
+      output_dir, 0,
+      fmt::format("the output directory is in use by another batch ({}): wait for it to "
+                  "finish or give another -o",
+                  who.empty() ? "its lock file " + path : EscapeControlChars(who)));
 }
 
 bool BatchOptions::IsValid(std::string* why) const {

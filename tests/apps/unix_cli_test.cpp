@@ -9,10 +9,10 @@
 #include <sstream>
 #include <string>
 
-#include "metro/calibration/simulate.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/version.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/sim/calibration_session.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 

@@ -11,9 +11,9 @@
 #include <tuple>
 
 #include "metro/calibration/calibration_io.hpp"
-#include "metro/calibration/simulate.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/sim/calibration_session.hpp"
 #include "metro_fw/blob.h"
 #include "metro_fw/fixed.h"
 #include "support/run_program.hpp"

@@ -27,7 +27,7 @@ constexpr uint32_t kIdWords[2] = {0x12345678u, 0x9ABCDEF0u};  // testing::kDevic
 
 // The tag behind a lossy link. Faults count the PC's SLIP frames and the tag's answers from 1.
 // Read never waits: an empty queue is an immediate timeout, so retries cost no time.
-class LossyTag : public ByteStream {
+class LossyTag : public serial::ByteStream {
  public:
   explicit LossyTag(RamFlash* flash) : flash_if_(flash->Interface()) {
     REQUIRE(metro_fw_push_init(&push_, &flash_if_, kIdWords, &LossyTag::Send, this) == METRO_FW_OK);
@@ -364,7 +364,7 @@ namespace {
 
 // A tag that answers every request at once with what `answer` returns (result byte and
 // payload), through the firmware's own frame encoder: for answers the real receiver never gives.
-class ScriptedTag : public ByteStream {
+class ScriptedTag : public serial::ByteStream {
  public:
   std::function<std::vector<uint8_t>(uint8_t op, const std::vector<uint8_t>& payload)> answer;
   std::map<uint8_t, int> requests;  // frames received per op

@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "metro/blob/push_client.hpp"
-#include "metro/blob/serial_port.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
+#include "metro/serial/serial_port.hpp"
 #include "support/run_program.hpp"
 
 extern char** environ;
@@ -91,10 +91,10 @@ TEST_CASE("pty: the push client over SerialPort updates the simulated tag", "[bl
   const std::vector<uint8_t> golden = Bytes(kGolden + "tag_sensor2.bin");
   {
     SimTag sim(flash, {"--drop-frame", "7", "--corrupt-frame", "20", "--drop-response", "40"});
-    Result<std::unique_ptr<SerialPort>> port = SerialPort::Open(sim.pty());
+    Result<std::unique_ptr<serial::SerialPort>> port = serial::SerialPort::Open(sim.pty());
     REQUIRE(port.ok());
     // Another program cannot take the port while it is open.
-    Result<std::unique_ptr<SerialPort>> second = SerialPort::Open(sim.pty());
+    Result<std::unique_ptr<serial::SerialPort>> second = serial::SerialPort::Open(sim.pty());
     REQUIRE_FALSE(second.ok());
     CHECK(second.error().message.find("in use by another program") != std::string::npos);
     PushOptions o;
@@ -131,7 +131,7 @@ TEST_CASE("pty: the simulated tag takes a blob with a section v2.0 (issue #25)",
   std::remove(flash.c_str());
   {
     SimTag sim(flash, {});
-    Result<std::unique_ptr<SerialPort>> port = SerialPort::Open(sim.pty());
+    Result<std::unique_ptr<serial::SerialPort>> port = serial::SerialPort::Open(sim.pty());
     REQUIRE(port.ok());
     PushOptions o;
     o.timeout_ms = 200;
@@ -146,16 +146,16 @@ TEST_CASE("pty: the simulated tag takes a blob with a section v2.0 (issue #25)",
 }
 
 TEST_CASE("pty: SerialPort errors name the path", "[blob][push]") {
-  Result<std::unique_ptr<SerialPort>> p = SerialPort::Open("/nonexistent/ttyX");
+  Result<std::unique_ptr<serial::SerialPort>> p = serial::SerialPort::Open("/nonexistent/ttyX");
   REQUIRE_FALSE(p.ok());
   CHECK(p.error().ToString() == "/nonexistent/ttyX: cannot open: No such file or directory");
   const std::string plain = "metro_pty_plain.txt";
   REQUIRE(WriteFileAtomically(plain, "x").ok());
-  p = SerialPort::Open(plain);
+  p = serial::SerialPort::Open(plain);
   REQUIRE_FALSE(p.ok());
   CHECK(p.error().message.rfind("not a serial port (tcgetattr)", 0) == 0);
   std::remove(plain.c_str());
-  p = SerialPort::Open("/dev/null", 12345);
+  p = serial::SerialPort::Open("/dev/null", 12345);
   REQUIRE_FALSE(p.ok());
   CHECK(p.error().message == "unsupported baud rate 12345");
 }

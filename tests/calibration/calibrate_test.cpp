@@ -14,7 +14,7 @@
 #include <tuple>
 #include <vector>
 
-#include "metro/calibration/simulate.hpp"
+#include "metro/sim/calibration_session.hpp"
 
 namespace metro {
 namespace {

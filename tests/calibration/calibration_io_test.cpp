@@ -8,9 +8,9 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "metro/calibration/simulate.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/sim/calibration_session.hpp"
 #include "support/text_position.hpp"
 
 namespace metro {

@@ -10,9 +10,9 @@
 #include <string>
 
 #include "metro/calibration/calibrate.hpp"
-#include "metro/calibration/simulate.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/sim/calibration_session.hpp"
 #include "support/run_program.hpp"
 
 namespace metro {

@@ -9,7 +9,7 @@
 
 #include "metro/calibration/calibrate.hpp"
 #include "metro/calibration/calibration_io.hpp"
-#include "metro/calibration/simulate.hpp"
+#include "metro/sim/calibration_session.hpp"
 
 namespace metro {
 namespace {

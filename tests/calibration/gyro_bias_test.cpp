@@ -16,8 +16,8 @@
 #include <random>
 
 #include "metro/calibration/calibration_io.hpp"
-#include "metro/calibration/simulate.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/sim/calibration_session.hpp"
 #include "support/run_program.hpp"
 #include "support/temp_file.hpp"
 

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "metro/calibration/calibrate.hpp"
-#include "metro/calibration/simulate.hpp"
+#include "metro/sim/calibration_session.hpp"
 
 namespace metro {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "metro/calibration/segment_file.hpp"
-#include "metro/calibration/simulate.hpp"
+#include "metro/sim/calibration_session.hpp"
 
 namespace metro {
 namespace {

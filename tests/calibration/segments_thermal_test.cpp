@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "metro/calibration/segments.hpp"
-#include "metro/calibration/simulate.hpp"
+#include "metro/sim/calibration_session.hpp"
 
 namespace metro {
 namespace {

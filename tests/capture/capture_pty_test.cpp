@@ -24,8 +24,8 @@
 #include <thread>
 #include <vector>
 
-#include "metro/blob/serial_port.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/serial/serial_port.hpp"
 #include "support/run_program.hpp"
 
 extern char** environ;
@@ -371,7 +371,7 @@ TEST_CASE("pty capture: bad ports exit 2 naming the port", "[capture][pty]") {
   std::remove(plain.c_str());
   {
     Receiver rx({"--tags", "1", "--frame-period-s", "0.05"});
-    Result<std::unique_ptr<blob::SerialPort>> held = blob::SerialPort::Open(rx.link);
+    Result<std::unique_ptr<serial::SerialPort>> held = serial::SerialPort::Open(rx.link);
     REQUIRE(held.ok());
     r = testing::RunProgram(METRO_CHARACTERIZE_EXE,
                             "capture --port " + rx.link + " -o " + cap + " --duration-s 5");

@@ -12,9 +12,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "metro/calibration/simulate.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/sim/calibration_session.hpp"
 #include "registry/postgres_server.hpp"
 #include "registry/sql_backend.hpp"
 #include "support/run_program.hpp"

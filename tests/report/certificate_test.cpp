@@ -13,12 +13,12 @@
 #include <string>
 
 #include "metro/calibration/calibration_io.hpp"
-#include "metro/calibration/simulate.hpp"
 #include "metro/core/device_id.hpp"
 #include "metro/core/file.hpp"
 #include "metro/core/rounding.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/html_report.hpp"
+#include "metro/sim/calibration_session.hpp"
 #include "metro/uncertainty/gum.hpp"
 #include "support/temp_file.hpp"
 

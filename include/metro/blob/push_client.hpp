@@ -17,19 +17,9 @@
 
 #include "metro/blob/from_calibration.hpp"
 #include "metro/core/status.hpp"
+#include "metro/serial/byte_stream.hpp"
 
 namespace metro::blob {
-
-// A bidirectional byte link.
-class ByteStream {
- public:
-  virtual ~ByteStream() = default;
-  // Writes every byte (blocking). Error when the link is gone.
-  virtual Status Write(const uint8_t* data, size_t size) = 0;
-  // Reads at most `capacity` bytes, waiting up to timeout_ms for the first one; 0 bytes means
-  // the timeout passed. Error when the link hung up or failed.
-  virtual Result<size_t> Read(uint8_t* data, size_t capacity, int timeout_ms) = 0;
-};
 
 // SLIP (RFC 1055) decoder, one byte at a time. Frames longer than max_frame bytes, or with an
 // ESC not followed by ESC_END/ESC_ESC, are reported as bad (empty vector plus bad = true).
@@ -116,7 +106,7 @@ using PushProgress = std::function<void(const char* phase, size_t bytes_done, si
 class PushClient {
  public:
   // `stream` must outlive the client.
-  PushClient(ByteStream* stream, PushOptions options);
+  PushClient(serial::ByteStream* stream, PushOptions options);
 
   Result<TagInfo> GetInfo();
   // CAL_CREATE, CAL_WRITE (resuming at the tag's received_len on INVALID_OFFSET, at most
@@ -144,7 +134,7 @@ class PushClient {
   Result<Response> Transact(uint8_t op, const std::vector<uint8_t>& payload, int timeout_ms);
   Status SendFrame(const std::vector<uint8_t>& enc);  // SLIP-encoded, in NUS-sized writes
 
-  ByteStream* stream_;
+  serial::ByteStream* stream_;
   PushOptions options_;
   uint8_t txn_;
   PushStats stats_;
@@ -183,7 +173,7 @@ struct PushSummary {
 // whose active seq and CRC-32 already are the blob's (a push repeated with --seq N after an
 // unknown outcome) is only read back (already_held). An active seq of kSeqMax cannot be
 // exceeded: refused before anything is sent (the wired path restarts the seq space).
-PushSummary PushCalibration(ByteStream* stream, const Calibration& calibration,
+PushSummary PushCalibration(serial::ByteStream* stream, const Calibration& calibration,
                             BlobFromCalibrationOptions blob_options,
                             std::optional<uint64_t> expect_device_id, const PushOptions& options,
                             const PushProgress& progress = {});

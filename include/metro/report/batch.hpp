@@ -4,12 +4,12 @@
 // never costs the other results.
 #pragma once
 
-#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "metro/core/file_lock.hpp"
 #include "metro/core/status.hpp"
 #include "metro/report/batch_summary.hpp"
 #include "metro/report/session_analysis.hpp"
@@ -75,54 +75,18 @@ struct BatchSummary {
   Error error;  // Set when the run itself failed (bad options, output directory, summary).
 };
 
-// An exclusive lock (flock) held while the object lives; closing the descriptor releases it.
-class FileLock {
- public:
-  explicit FileLock(int fd) : fd_(fd) {}
-  FileLock(FileLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
-  FileLock& operator=(FileLock&&) = delete;
-  FileLock(const FileLock&) = delete;
-  ~FileLock();
-
- private:
-  int fd_ = -1;
-};
-
 // Takes the batch lock of `output_dir` (which exists): the file kBatchLockName in it, locked
 // with flock(LOCK_EX | LOCK_NB), and records who holds it. Never waits: when another run
 // holds it the error names that run ("pid N on HOST, since T") and says to wait or choose
 // another directory.
 Result<FileLock> LockBatchDirectory(const std::string& output_dir);
 
-// Circular statistics of angles in degrees (Mardia & Jupp, Directional Statistics, Wiley
-// 2000, 2.2.1-2.3.2): with C = (1/n) sum cos(a_k), S = (1/n) sum sin(a_k),
-//   mean = atan2(S, C)                        (circular mean, wrapped into (-180, 180])
-//   R = sqrt(C^2 + S^2)                       (mean resultant length, 0..1)
-//   std_deg = sqrt(-2 ln R)                   (circular standard deviation, in rad -> deg)
-// For a small spread std_deg is the linear standard deviation with divisor n; sample_std_deg
-// = sqrt(n / (n - 1)) std_deg is the one with n - 1 (JCGM 100:2008 4.2.2), NaN for n < 2.
-// The mean is NaN when R <= 1e-12 (no preferred direction, e.g. 0 and 180 deg). Tags at +179.95 and
-// -179.95 deg give mean 180, std 0.05, sample_std 0.0707 (a linear mean would say 0 and 180).
-struct CircularStatistics {
-  double mean_deg = std::nan("");
-  double resultant_length = 0.0;
-  double std_deg = std::nan("");
-  double sample_std_deg = std::nan("");
-};
-CircularStatistics CircularStatisticsDeg(const std::vector<double>& angles_deg);
-
-// The lines that must head a console table or a summary: one per tag of a receiver capture
-// with no fresh packet (frames > 0, fresh == 0), from a session report's sensors: its
-// counts and packet_loss_ratio 1.0. `prefix` goes before each line (e.g. the session).
-std::vector<std::string> NoFreshPacketWarnings(const SessionReport& report,
-                                               const std::string& prefix = "");
-
 // Analyses every input. Per tag (sensor number and name) and quantity, across the sessions
 // that evaluated it: the mean of the session means, the standard deviation of the session
 // means (n - 1), and the worst (smallest) n_eff/n with its session. Angle quantities (unit
-// deg or rad) are pooled with CircularStatisticsDeg: mean_of_means is the circular mean
-// and std_of_means the circular sample_std ("statistics": "circular"). Per tag: frames,
-// fresh, stale, never summed over the sessions and packet_loss_ratio = (stale + never) /
+// deg or rad) are pooled with CircularStatisticsDeg (stats/circular.hpp): mean_of_means is the
+// circular mean and std_of_means the circular sample_std ("statistics": "circular"). Per tag:
+// frames, fresh, stale, never summed over the sessions and packet_loss_ratio = (stale + never) /
 // frames ("tags"); a tag of a session with no fresh packet has a row there and in the
 // table even without quantities, and a warning heads summary.json ("warnings") and the
 // table.

@@ -258,4 +258,10 @@ std::string ToJson(const SessionReport& report);
 // file:line:column with its path; a "schema" other than "metro.report/1".
 Result<SessionReport> SessionReportFromJson(std::string_view text, const std::string& file);
 
+// The lines that must head a console table or a summary: one per tag of a receiver capture
+// with no fresh packet (frames > 0, fresh == 0), from a session report's sensors: its
+// counts and packet_loss_ratio 1.0. `prefix` goes before each line (e.g. the session).
+std::vector<std::string> NoFreshPacketWarnings(const SessionReport& report,
+                                               const std::string& prefix = "");
+
 }  // namespace metro

@@ -1,4 +1,4 @@
-#include "metro/blob/serial_port.hpp"
+#include "metro/serial/serial_port.hpp"
 
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -11,7 +11,7 @@
 #include <chrono>
 #include <cstring>
 
-namespace metro::blob {
+namespace metro::serial {
 namespace {
 
 bool BaudConstant(int baud, speed_t* out) {
@@ -122,4 +122,4 @@ Result<size_t> SerialPort::Read(uint8_t* data, size_t capacity, int timeout_ms) 
   }
 }
 
-}  // namespace metro::blob
+}  // namespace metro::serial

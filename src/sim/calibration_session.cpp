@@ -1,4 +1,4 @@
-#include "metro/calibration/simulate.hpp"
+#include "metro/sim/calibration_session.hpp"
 
 #include <fmt/format.h>
 

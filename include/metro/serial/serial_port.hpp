@@ -1,23 +1,26 @@
-// A serial port (or pseudo-terminal) as a ByteStream: termios raw 8N1 at the push protocol's
-// 230400 baud, no flow control, reads with poll() timeouts. POSIX only.
+// A serial port (or pseudo-terminal) as a ByteStream: termios raw 8N1 at the receiver's
+// 230400 baud (the push protocol and the capture), no flow control, reads with poll() timeouts.
+// POSIX only.
 #pragma once
 
 #include <memory>
 #include <string>
 
-#include "metro/blob/push_client.hpp"
 #include "metro/core/status.hpp"
+#include "metro/serial/byte_stream.hpp"
 
-namespace metro::blob {
+namespace metro::serial {
 
-inline constexpr int kPushBaud = 230400;
+// The nRF52840 receiver's serial link (thesis ch. 8): capture and push.
+inline constexpr int kReceiverBaud = 230400;
 
 class SerialPort : public ByteStream {
  public:
   // Opens `path` (O_NOCTTY), takes an exclusive flock (another program on the same port is an
   // error), sets raw 8N1 at `baud` (9600, 19200, 38400, 57600, 115200, 230400, 460800 or
   // 921600) and flushes stale input. Errors name the path and the system's reason.
-  static Result<std::unique_ptr<SerialPort>> Open(const std::string& path, int baud = kPushBaud);
+  static Result<std::unique_ptr<SerialPort>> Open(const std::string& path,
+                                                  int baud = kReceiverBaud);
   ~SerialPort() override;
   SerialPort(const SerialPort&) = delete;
   SerialPort& operator=(const SerialPort&) = delete;
@@ -32,4 +35,4 @@ class SerialPort : public ByteStream {
   std::string path_;
 };
 
-}  // namespace metro::blob
+}  // namespace metro::serial
