@@ -72,6 +72,14 @@ double PointSampledFlickerFactor(bool hadamard, int64_t m) {
   c.emplace_back(m, value);
   return value;
 }
+// The sampling's excess per unit coefficient of a term (B^2 or K^2) at a point; 0 for the
+// others.
+double ExcessFactor(const Point& p, NoiseTerm term) {
+  if (term == NoiseTerm::kBiasInstability) return p.excess_b;
+  if (term == NoiseTerm::kRateRandomWalk) return p.excess_k;
+  return 0.0;
+}
+
 // ---- Covariance of overlapping variance estimates ------------------------------------------
 //
 // For Gaussian noise an overlapping estimate is s_a^2 = sum_i d_a(i)^2 / norm_a with
@@ -362,8 +370,11 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
     y(i) = pts[static_cast<size_t>(i)].var;
     for (int j = 0; j < k; ++j) {
       double f = 0.0;
-      METRO_CHECK(NoiseBasis(estimator, static_cast<NoiseTerm>(terms[static_cast<size_t>(j)]),
-                             pts[static_cast<size_t>(i)].tau_s, &f));
+      const auto term = static_cast<NoiseTerm>(terms[static_cast<size_t>(j)]);
+      const Point& p = pts[static_cast<size_t>(i)];
+      METRO_CHECK(NoiseBasis(estimator, term, p.tau_s, &f));
+      // The model at the midpoint of the two discretizations (see the excess below).
+      if (options.discretization_error) f += 0.5 * ExcessFactor(p, term);
       a(i, j) = f;
     }
   }
@@ -375,9 +386,13 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
   Eigen::VectorXd c = Eigen::VectorXd::Zero(k);
   Eigen::MatrixXd c_cov;
   // Model error in cov: the relative floor on the diagonal, and the sampling's excess e as one
-  // systematic pattern e e' (the excess has the same sign at every tau and shrinks with tau:
-  // a nuisance amplitude a ~ N(0, 1) times e, which the data may absorb at a chi2 cost of a^2,
-  // so a point-sampled record biases no term).
+  // systematic pattern. The truth lies between the integrating sampler (the IEEE 952 factors)
+  // and the point sampler (+e), and a real sensor may sit at either end, so the model is taken
+  // at the midpoint (+e/2, in the design matrix above) with the pattern (e/2)(e/2)': a nuisance
+  // amplitude a ~ N(0, 1) times e/2 (the standard deviation of a two-point distribution of
+  // half-width e/2; JCGM 100 4.3.7's rectangular e/(2 sqrt 3) would put both ends, where real
+  // samplers are, at 1.7 standard deviations). The data may absorb a at a chi2 cost of a^2, so
+  // neither discretization biases a term.
   Eigen::VectorXd floor_diag = Eigen::VectorXd::Zero(n);
   Eigen::VectorXd excess = Eigen::VectorXd::Zero(n);
   double chi2 = 0.0;
@@ -439,8 +454,8 @@ SubsetFit FitSubset(const std::vector<Point>& pts, const std::vector<int>& terms
       // The sampling's excess (point-sampled minus integrating) and the floor.
       double e = 0.0;
       if (options.discretization_error) {
-        e = p.excess_b * cfull[static_cast<size_t>(NoiseTerm::kBiasInstability)] +
-            p.excess_k * cfull[static_cast<size_t>(NoiseTerm::kRateRandomWalk)];
+        e = 0.5 * (p.excess_b * cfull[static_cast<size_t>(NoiseTerm::kBiasInstability)] +
+                   p.excess_k * cfull[static_cast<size_t>(NoiseTerm::kRateRandomWalk)]);
       }
       excess(i) = e;
       floor_diag(i) = floor2 * m * m;

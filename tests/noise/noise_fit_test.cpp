@@ -95,7 +95,24 @@ TEST_CASE("Fit and read-offs recover an exact model curve", "[noise]") {
   // (Q rules below 0.01 s, N to 14 s, B to 59 s, K to 6667 s, R beyond).
   const double q = 3e-4, n = 5e-3, b = 2e-3, k = 3e-4, r = 3e-6;
   const AllanCurve c = ModelCurve(AllanEstimator::kOadev, q, n, b, k, r);
-  const Result<NoiseFit> fit = FitNoiseTerms(c);
+  // The curve is the integrating sampler's exactly: recovered to 1e-6 with the model error of
+  // the sampling off, and within the stated u with it on (the model is then the midpoint of
+  // the two discretizations, and the curve one end of the interval).
+  NoiseFitOptions exact;
+  exact.discretization_error = false;
+  {
+    const Result<NoiseFit> midpoint = FitNoiseTerms(c);
+    REQUIRE(midpoint.ok());
+    for (const auto& [term, truth] : {std::pair{NoiseTerm::kRandomWalk, n},
+                                      {NoiseTerm::kBiasInstability, b},
+                                      {NoiseTerm::kRateRandomWalk, k}}) {
+      const NoiseTermEstimate& e = midpoint.value().term(term);
+      REQUIRE(e.supported);
+      CHECK(e.value != truth);
+      CHECK(std::fabs(e.value - truth) <= e.u);
+    }
+  }
+  const Result<NoiseFit> fit = FitNoiseTerms(c, exact);
   REQUIRE(fit.ok());
   const NoiseFit& f = fit.value();
   CHECK(f.term(NoiseTerm::kQuantization).value == Approx(q).epsilon(1e-6));
@@ -110,7 +127,7 @@ TEST_CASE("Fit and read-offs recover an exact model curve", "[noise]") {
             .epsilon(1e-9));
   // Hadamard: the same coefficients through the Hadamard factors; no ramp term.
   const AllanCurve h = ModelCurve(AllanEstimator::kOhdev, q, n, b, k, 0.0);
-  const Result<NoiseFit> hfit = FitNoiseTerms(h);
+  const Result<NoiseFit> hfit = FitNoiseTerms(h, exact);
   REQUIRE(hfit.ok());
   CHECK(hfit.value().term(NoiseTerm::kBiasInstability).value == Approx(b).epsilon(1e-6));
   CHECK(hfit.value().term(NoiseTerm::kRateRandomWalk).value == Approx(k).epsilon(1e-6));

@@ -196,8 +196,9 @@ TEST_CASE("N + B + K on independent generators: coverage over 1 h records",
   // Issue #36 targets per generator: K found in >= 85 % of records, a spurious R or Q in at
   // most 2 of 40, each term within u in 62-74 % and within 2u in 92-98 %. The figures are
   // printed for docs/noise.md; the assertions are the targets widened by two binomial
-  // standard deviations at the record count (METRO_NOISE_GEN_RECORDS, default 40).
-  const int records = EnvInt("METRO_NOISE_GEN_RECORDS", 40);
+  // standard deviations at the record count (METRO_NOISE_GEN_RECORDS, default 100, the
+  // issue's minimum; docs/noise.md 4b has two blocks of 100).
+  const int records = EnvInt("METRO_NOISE_GEN_RECORDS", 100);
   const uint64_t seed = static_cast<uint64_t>(EnvInt("METRO_NOISE_GEN_SEED", 52000));
   const double sd68 = std::sqrt(0.683 * 0.317 / records);
   const double sd95 = std::sqrt(0.954 * 0.046 / records);

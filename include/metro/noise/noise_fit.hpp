@@ -59,9 +59,10 @@ struct NoiseFitOptions {
   int iterations = 8;  // IRLS passes; >= 1.
   // Model error of the sampling (issue #36): the IEEE 952 factors are those of an integrating
   // sampler; a point-sampled flicker (Kasdin 1992) or random walk reads higher at the shortest
-  // taus. The difference of the two discretizations at each fitted tau, from the subset's own
-  // B and K, is added on the diagonal as model error, so no term rests on the model holding
-  // better than that (and a Q or N is not invented to explain it).
+  // taus, by e (from the subset's own B and K). The model is taken at the midpoint of the two
+  // discretizations (+e/2) with a systematic pattern of standard deviation e/2 in the
+  // covariance, so no term rests on the model holding better than that (and a Q or N is not
+  // invented to explain it) and neither kind of sampler biases a term.
   bool discretization_error = true;
   // A term enters only when it lowers chi2 by more than its penalty (indexed by NoiseTerm):
   // the chosen subset minimizes chi2 + sum of its terms' penalties. Defaults: the chi-squared
