@@ -2,10 +2,12 @@
 
 #include <fmt/format.h>
 
-#include <map>
 #include <memory>
 #include <optional>
+#include <utility>
+#include <vector>
 
+#include "metro/core/file.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/stats/derived_quantity.hpp"
 
@@ -88,7 +90,9 @@ SessionQuantityResolver MakeSessionQuantityResolver(const Session& session,
                                                     const SessionTypeA& evaluated,
                                                     WindowOptions window) {
   return [&session, &evaluated, window](const SessionQuantityRef& ref) -> Result<TypeASummary> {
-    if (!ref.session.empty() && ref.session != session.path) {
+    // The same file under another spelling is the evaluated session (its load options and
+    // window), compared by the file's identity, not by the path's spelling (issue #39).
+    if (!ref.session.empty() && !IsSameFile(ref.session, session.path)) {
       LoadOptions load;
       auto other = LoadSession(ref.session, load);
       if (!other.ok()) return other.error();
@@ -106,7 +110,9 @@ SessionQuantityResolver MakeSessionQuantityResolver(const Session& session,
 
 SessionQuantityResolver MakeSessionQuantityResolver(std::string default_session, LoadOptions load,
                                                     WindowOptions window) {
-  auto cache = std::make_shared<std::map<std::string, Session>>();
+  // Loaded sessions, found again by the file's identity (IsSameFile), so another spelling of
+  // one file is not loaded twice.
+  auto cache = std::make_shared<std::vector<std::pair<std::string, Session>>>();
   return [default_session = std::move(default_session), load, window,
           cache](const SessionQuantityRef& ref) -> Result<TypeASummary> {
     const std::string path = ref.session.empty() ? default_session : ref.session;
@@ -116,13 +122,13 @@ SessionQuantityResolver MakeSessionQuantityResolver(std::string default_session,
                       "command line",
                       ref.quantity));
     }
-    auto it = cache->find(path);
-    if (it == cache->end()) {
-      auto loaded = LoadSession(path, load);
-      if (!loaded.ok()) return loaded.error();
-      it = cache->emplace(path, std::move(loaded).value()).first;
+    for (const auto& [cached_path, session] : *cache) {
+      if (IsSameFile(path, cached_path)) return EvaluateRef(session, ref, window);
     }
-    return EvaluateRef(it->second, ref, window);
+    auto loaded = LoadSession(path, load);
+    if (!loaded.ok()) return loaded.error();
+    cache->emplace_back(path, std::move(loaded).value());
+    return EvaluateRef(cache->back().second, ref, window);
   };
 }
 
