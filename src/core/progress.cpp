@@ -41,13 +41,25 @@ std::string FormatProgressLine(const std::string& label, int64_t done, int64_t t
                                : fmt::format("{:.1f}", static_cast<double>(n) / unit_divisor);
   };
   const std::string suffix = unit.empty() ? std::string() : " " + unit;
-  if (total <= 0) return fmt::format("{} {}{}  {:.1f} s", label, count(done), suffix, elapsed_s);
+  // The rate so far and, with a total, the time left at that rate.
+  std::string pace;
+  if (elapsed_s > 0.0 && done > 0) {
+    const double per_s = static_cast<double>(done) / elapsed_s;
+    pace = unit_divisor == 1.0 ? fmt::format("  {:.0f}{}/s", per_s, suffix)
+                               : fmt::format("  {:.1f}{}/s", per_s / unit_divisor, suffix);
+    if (total > done) {
+      pace += fmt::format("  {:.0f} s left", static_cast<double>(total - done) / per_s);
+    }
+  }
+  if (total <= 0) {
+    return fmt::format("{} {}{}  {:.1f} s{}", label, count(done), suffix, elapsed_s, pace);
+  }
   const int64_t clamped = std::clamp<int64_t>(done, 0, total);
   const double fraction = static_cast<double>(clamped) / static_cast<double>(total);
   const int filled = static_cast<int>(fraction * bar_width);
-  return fmt::format("{} [{}{}] {}/{}{} {:3d} %  {:.1f} s", label, std::string(filled, '#'),
+  return fmt::format("{} [{}{}] {}/{}{} {:3d} %  {:.1f} s{}", label, std::string(filled, '#'),
                      std::string(bar_width - filled, '.'), count(done), count(total), suffix,
-                     static_cast<int>(fraction * 100.0), elapsed_s);
+                     static_cast<int>(fraction * 100.0), elapsed_s, pace);
 }
 
 bool IsTerminal(std::FILE* stream) { return stream != nullptr && ::isatty(::fileno(stream)) == 1; }

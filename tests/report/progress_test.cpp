@@ -43,12 +43,13 @@ void OnThreads(int threads, const std::function<void()>& work) {
 }
 
 TEST_CASE("Progress line shows the bar the count and the percentage", "[report][progress]") {
-  CHECK(FormatProgressLine("batch", 2, 4, 1.25, 10) == "batch [#####.....] 2/4  50 %  1.2 s");
-  CHECK(FormatProgressLine("batch", 4, 4, 3.0, 4) == "batch [####] 4/4 100 %  3.0 s");
+  CHECK(FormatProgressLine("batch", 2, 4, 1.25, 10) ==
+        "batch [#####.....] 2/4  50 %  1.2 s  2/s  1 s left");
+  CHECK(FormatProgressLine("batch", 4, 4, 3.0, 4) == "batch [####] 4/4 100 %  3.0 s  1/s");
   CHECK(FormatProgressLine("batch", 0, 3, 0.0, 3) == "batch [...] 0/3   0 %  0.0 s");
   // More than the total is drawn as full; an unknown total has no bar.
   CHECK(FormatProgressLine("x", 9, 3, 0.0, 3) == "x [###] 9/3 100 %  0.0 s");
-  CHECK(FormatProgressLine("rows", 17, 0, 2.0, 10) == "rows 17  2.0 s");
+  CHECK(FormatProgressLine("rows", 17, 0, 2.0, 10) == "rows 17  2.0 s  8/s");
 }
 
 TEST_CASE("Progress bar is quiet when the stream is not a terminal", "[report][progress]") {
@@ -110,11 +111,11 @@ TEST_CASE("Elapsed ticker forced on redraws until finished", "[report][progress]
 
 TEST_CASE("Progress line shows counts in units", "[report][progress]") {
   CHECK(FormatProgressLine("load a.csv", 12345678, 388672119, 0.5, 4, "MB", 1e6) ==
-        "load a.csv [....] 12.3/388.7 MB   3 %  0.5 s");
+        "load a.csv [....] 12.3/388.7 MB   3 %  0.5 s  24.7 MB/s  15 s left");
   CHECK(FormatProgressLine("Monte Carlo", 500000, 1000000, 1.0, 2, "trials") ==
-        "Monte Carlo [#.] 500000/1000000 trials  50 %  1.0 s");
+        "Monte Carlo [#.] 500000/1000000 trials  50 %  1.0 s  500000 trials/s  1 s left");
   CHECK(FormatProgressLine("Monte Carlo", 70000, 0, 2.0, 2, "trials") ==
-        "Monte Carlo 70000 trials  2.0 s");
+        "Monte Carlo 70000 trials  2.0 s  35000 trials/s");
 }
 
 TEST_CASE("Quick work under the delay leaves no line", "[report][progress]") {

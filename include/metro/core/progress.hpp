@@ -34,8 +34,9 @@ struct ProgressOptions {
   bool IsValid(std::string* why) const;
 };
 
-// One progress line: "label [#####.....] done/total  40 %  12.3 s". `total` 0 gives no bar
-// and no percentage. Exposed for tests.
+// One progress line: "label [#####.....] done/total  40 %  12.3 s  31.6 MB/s  18 s left":
+// the count, the time so far, the rate so far (once something is done) and the time left at
+// that rate. `total` 0 gives no bar, no percentage and no time left. Exposed for tests.
 std::string FormatProgressLine(const std::string& label, int64_t done, int64_t total,
                                double elapsed_s, int bar_width, const std::string& unit = "",
                                double unit_divisor = 1.0);
