@@ -134,7 +134,7 @@ std::string MetaLines(NoiseExportFormat format, double rate_hz, const NoiseExpor
   std::string s;
   for (const ExportMetaKey& m : ExportMetaKeys(format)) {
     const std::string key = m.key.substr(strip.size());
-    if (m.kind == ExportMetaKind::kRate) s += fmt::format("{}{}: {}\n", indent, key, Num(rate_hz));
+    if (m.kind == ExportMetaKind::kRate) s += fmt::format("{}{}: {:.10g}\n", indent, key, rate_hz);
     if (m.kind == ExportMetaKind::kTopic) s += fmt::format("{}{}: {}\n", indent, key, o.rostopic);
   }
   return s;
@@ -185,7 +185,7 @@ std::string RosText(const NoiseExport& e, const std::string& source, const Noise
 std::string BasaltText(const NoiseExport& e, const std::string& source,
                        const NoiseExportOptions& o) {
   nlohmann::ordered_json value0;
-  value0["imu_update_rate"] = e.rate_hz;
+  value0["imu_update_rate"] = std::stod(fmt::format("{:.10g}", e.rate_hz));  // As the YAML.
   for (const ExportedNoiseValue& v : e.values) {
     const std::string name = v.key.substr(7, v.key.find('[') - 7);  // "value0." ... "[i]"
     if (!value0.contains(name)) value0[name] = nlohmann::ordered_json::array();
