@@ -232,6 +232,38 @@ bool NoiseExportOptions::IsValid(std::string* why) const {
   return true;
 }
 
+std::optional<StandardNoiseName> StandardNoiseNameOf(NoiseTerm term,
+                                                     const AllanNoiseTermReport& report) {
+  const bool white = term == NoiseTerm::kRandomWalk;
+  if (!white && term != NoiseTerm::kRateRandomWalk) return std::nullopt;
+  const std::string suffix = white ? "*sqrt(s)" : "/sqrt(s)";
+  const std::string& unit = report.unit;
+  if (unit.size() <= suffix.size() ||
+      unit.compare(unit.size() - suffix.size(), suffix.size(), suffix) != 0) {
+    return std::nullopt;
+  }
+  const Unit* q = UnitBySymbol(unit.substr(0, unit.size() - suffix.size()));
+  if (q == nullptr) return std::nullopt;
+  const bool gyro = q->dimension == Dimension::kAngularRate;
+  if (!gyro && q->dimension != Dimension::kAcceleration) return std::nullopt;
+  const std::optional<double> f = ConversionFactor(*q, *UnitBySymbol(gyro ? "rad/s" : "m/s^2"));
+  if (!f) return std::nullopt;
+  StandardNoiseName s;
+  s.name = white ? (gyro ? "angle_random_walk" : "velocity_random_walk")
+                 : (gyro ? "rate_random_walk" : "acceleration_random_walk");
+  s.kalibr_key = std::string(gyro ? "gyroscope" : "accelerometer") +
+                 (white ? "_noise_density" : "_random_walk");
+  s.unit = white ? (gyro ? "rad/s/sqrt(Hz)" : "m/s^2/sqrt(Hz)")
+                 : (gyro ? "rad/s^2/sqrt(Hz)" : "m/s^3/sqrt(Hz)");
+  s.value = report.value * *f;
+  s.u = report.u * *f;
+  if (white) {  // One-sided density d = sqrt(2) N (noise_units.hpp).
+    s.density_one_sided = std::sqrt(2.0) * s.value;
+    s.u_density_one_sided = std::sqrt(2.0) * s.u;
+  }
+  return s;
+}
+
 double DiscreteWhiteSigma(double density, double rate_hz) { return density * std::sqrt(rate_hz); }
 
 double DiscreteBiasWalkSigma(double walk, double rate_hz) { return walk / std::sqrt(rate_hz); }

@@ -255,6 +255,37 @@ TEST_CASE("Unresolved terms and unusable units are refused by name", "[export]")
   }
 }
 
+TEST_CASE("The report's N and K gain their standard names and SI form", "[export]") {
+  // A gyroscope N of 0.6 deg/sqrt(h) = 0.01 deg/s*sqrt(s): Kalibr's gyroscope_noise_density
+  // 0.01 pi/180 rad/s/sqrt(Hz), one-sided density sqrt(2) times that.
+  AllanNoiseTermReport n;
+  n.value = 0.01;
+  n.u = 0.001;
+  n.unit = "deg/s*sqrt(s)";
+  n.supported = true;
+  const std::optional<StandardNoiseName> arw = StandardNoiseNameOf(NoiseTerm::kRandomWalk, n);
+  REQUIRE(arw);
+  CHECK(arw->name == "angle_random_walk");
+  CHECK(arw->kalibr_key == "gyroscope_noise_density");
+  CHECK(arw->unit == "rad/s/sqrt(Hz)");
+  CHECK(arw->value == Approx(0.01 * kDegToRad));
+  CHECK(arw->u == Approx(0.001 * kDegToRad));
+  CHECK(arw->density_one_sided == Approx(std::sqrt(2.0) * 0.01 * kDegToRad));
+  AllanNoiseTermReport k;
+  k.value = 1e-5;
+  k.unit = "g/sqrt(s)";
+  const std::optional<StandardNoiseName> aw = StandardNoiseNameOf(NoiseTerm::kRateRandomWalk, k);
+  REQUIRE(aw);
+  CHECK(aw->name == "acceleration_random_walk");
+  CHECK(aw->kalibr_key == "accelerometer_random_walk");
+  CHECK(aw->unit == "m/s^3/sqrt(Hz)");
+  CHECK(aw->value == Approx(1e-5 * kG0));
+  CHECK(std::isnan(aw->density_one_sided));
+  k.unit = "LSB/sqrt(s)";
+  CHECK_FALSE(StandardNoiseNameOf(NoiseTerm::kRateRandomWalk, k));
+  CHECK_FALSE(StandardNoiseNameOf(NoiseTerm::kBiasInstability, n));
+}
+
 // --- Coverage on Kalibr's discrete model ---------------------------------------------------
 
 // allan_variance_ros's simulator (issue #40): 400 Hz, SI units.

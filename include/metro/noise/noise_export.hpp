@@ -24,6 +24,7 @@
 #pragma once
 
 #include <cmath>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -109,6 +110,26 @@ struct NoiseExport {
   std::vector<ExportedNoiseValue> values;
   std::string text;  // The file, with its convention comment block (basalt: a JSON member).
 };
+
+// The field's names and SI form of a report's N or K (issue #40 step 2), written beside the
+// term as "allan.noise.<key>.standard" (docs/noise.md "Names"): name "angle_random_walk" /
+// "velocity_random_walk" (N of a gyroscope / accelerometer), "rate_random_walk" /
+// "acceleration_random_walk" (K); kalibr_key the Kalibr imu.yaml key holding the same value;
+// value/u in rad/s, m/s^2 based units ("rad/s/sqrt(Hz)", "m/s^3/sqrt(Hz)"); for N also the
+// one-sided density sqrt(2) N in the same unit. NaN where the term is not supported.
+struct StandardNoiseName {
+  std::string name;
+  std::string kalibr_key;
+  double value = std::nan("");
+  double u = std::nan("");
+  std::string unit;
+  double density_one_sided = std::nan("");  // N only.
+  double u_density_one_sided = std::nan("");
+};
+// nullopt for the other terms and for a quantity unit that is not an angular rate or an
+// acceleration with an SI scale (read from the term's unit, e.g. "deg/s*sqrt(s)").
+std::optional<StandardNoiseName> StandardNoiseNameOf(NoiseTerm term,
+                                                     const AllanNoiseTermReport& report);
 
 // Kalibr's discretization of a continuous white sigma (density [q]/sqrt(Hz)) at rate_hz:
 // sigma_d = density * sqrt(rate_hz).
