@@ -52,7 +52,7 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
   if (o.accuracy.enabled) {
     for (const char* name :
          {"--allan", "--taus", "--estimator", "--gaps", "--allan-csv", "--budget", "--quantity",
-          "--settle-scope", "--export", "--export-file"}) {
+          "--settle-scope", "--export", "--export-file", "--axis-reduction"}) {
       if (given(name)) {
         return MakeError(fmt::format(
             "{} does nothing with --accuracy (the accuracy evaluation takes the table axis's "

@@ -109,7 +109,7 @@ Status ReadLine(const std::string& file, std::string_view raw, int64_t line,
     }
     const std::string_view value = Trim(rest.substr(sp));
     out->push_back(Entry(std::string(rest.substr(0, sp)), value, line, key_col + 10,
-                         static_cast<int64_t>(raw.find(value, indent + 10 + sp)) + 1));
+                         static_cast<int64_t>(value.data() - raw.data()) + 1));
     return {};
   }
   const size_t colon = s.find(':');
@@ -126,7 +126,7 @@ Status ReadLine(const std::string& file, std::string_view raw, int64_t line,
     parents->push_back({indent, prefix + key});
     return {};
   }
-  const int64_t value_col = static_cast<int64_t>(raw.find(value, indent + colon + 1)) + 1;
+  const int64_t value_col = static_cast<int64_t>(value.data() - raw.data()) + 1;
   if (value.front() == '[') {
     return FlowList(file, prefix + key, value, line, key_col, value_col, out);
   }

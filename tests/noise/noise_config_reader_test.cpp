@@ -2,7 +2,9 @@
 // file:line:column, counted independently of the reader (support/text_position.hpp).
 #include "metro/noise/noise_config_reader.hpp"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <random>
 #include <string>
 
 #include "support/text_position.hpp"
@@ -178,6 +180,58 @@ TEST_CASE("Bad noise files fail at file:line:column with what was expected", "[e
     CHECK(f.error().ToString().find("f.yaml:1:1: no key of a known noise file; expected the keys "
                                     "of one of: kalibr (accelerometer_noise_density)") == 0);
   }
+}
+
+TEST_CASE("Mutated noise files read, or fail at a line and column inside the file", "[export]") {
+  // Random edits of every exported format (characters the grammars care about): no crash, and
+  // every error points into the text (line 1..lines, column >= 1).
+  const NoiseExportInput in = Record();
+  std::mt19937_64 rng(4040);
+  const std::string alphabet = ":#[],-+.eE0123456789 \t\n\"'{}abc_x";
+  int failures_with_position = 0, accepted = 0;
+  for (NoiseExportFormat f : kAllNoiseExportFormats) {
+    NoiseExportOptions o;
+    o.format = f;
+    const Result<NoiseExport> e = ExportNoise(in, o);
+    REQUIRE(e.ok());
+    for (int trial = 0; trial < 300; ++trial) {
+      std::string text = e.value().text;
+      const int edits = 1 + static_cast<int>(rng() % 3);
+      for (int k = 0; k < edits; ++k) {
+        const size_t at = rng() % (text.size() + 1);
+        const char c = alphabet[rng() % alphabet.size()];
+        switch (rng() % 3) {
+          case 0:
+            text.insert(at, 1, c);
+            break;
+          case 1:
+            if (at < text.size()) text.erase(at, 1);
+            break;
+          default:
+            if (at < text.size()) text[at] = c;
+        }
+      }
+      const int64_t lines = 1 + std::count(text.begin(), text.end(), '\n');
+      Result<NoiseConfigFile> read = ReadNoiseConfig(text, "m");
+      Result<NoiseComparison> c = MakeError("not compared");
+      if (read.ok()) c = CompareNoiseConfig(read.value(), in, o);
+      if (c.ok()) {
+        ++accepted;
+        for (const NoiseComparisonRow& r : c.value().rows) CHECK(r.file_value >= 0.0);
+        continue;
+      }
+      const Error& err = read.ok() ? c.error() : read.error();
+      INFO(NoiseExportFormatName(f) << " trial " << trial << ": " << err.ToString());
+      CHECK(err.file == "m");
+      CHECK(err.line >= 1);
+      CHECK(err.line <= lines);
+      CHECK(err.column >= 1);
+      ++failures_with_position;
+    }
+  }
+  // Most single edits land in a comment and change nothing; the rest fail at a position.
+  CHECK(accepted > 0);
+  CHECK(failures_with_position > 0);
 }
 
 }  // namespace
