@@ -50,9 +50,12 @@ std::string FormatConvention(NoiseExportFormat format, double px4_rate_hz) {
              "discrete sigma). Merge these members into your calibration.json's value0.";
     case NoiseExportFormat::kVins:
       return "VINS-Mono / VINS-Fusion config: acc_n, gyr_n = metro N and acc_w, gyr_w = metro K, "
-             "written as the continuous (Kalibr) values. Its config calls them 'noise standard "
-             "deviation' and its authors 'discrete' (VINS-Mono issue #102); the discrete forms at "
-             "the record's rate are given under each value. Merge into your config.";
+             "written as the continuous (Kalibr) values that its users put there. Its config "
+             "calls them 'noise standard deviation', its authors 'discrete' (VINS-Mono issue "
+             "#102), and its integration_base.h propagates them per sample (midpoint: each of "
+             "two samples with V = dt/2 and noise acc_n^2; the bias with V = dt and acc_w^2), "
+             "which makes acc_n = N * sqrt(2 rate) and acc_w = K * sqrt(rate) for the same "
+             "covariance; both readings are given under each value. Merge into your config.";
     case NoiseExportFormat::kOrbSlam3:
       return "ORB-SLAM3 settings: IMU.Noise* = metro N, IMU.*Walk = metro K, continuous; "
              "ORB-SLAM3 discretizes with Kalibr's rule at IMU.Frequency (Noise * sqrt(f), "
@@ -117,6 +120,12 @@ std::vector<std::string> ConventionLines(const NoiseExport& e, const std::string
                                   e.rate_hz, white ? "value * sqrt(rate)" : "value / sqrt(rate)",
                                   white ? DiscreteWhiteSigma(v.value, e.rate_hz)
                                         : DiscreteBiasWalkSigma(v.value, e.rate_hz)));
+    }
+    if (e.format == NoiseExportFormat::kVins) {  // integration_base.h (see the convention).
+      lines.push_back(fmt::format(
+          "  VINS integration_base.h reading at {:.10g} Hz: {} = {:.6g}", e.rate_hz,
+          v.term == NoiseTerm::kRandomWalk ? "value * sqrt(2 rate)" : "value * sqrt(rate)",
+          v.value * std::sqrt((v.term == NoiseTerm::kRandomWalk ? 2.0 : 1.0) * e.rate_hz)));
     }
     lines.push_back("  from: " + v.from);
   }
