@@ -397,9 +397,9 @@ int EnvInt(const char* name, int fallback) {
 }
 
 TEST_CASE("Kalibr imu.yaml holds the simulator's truth: a quick look", "[export]") {
-  // 4 records of 2 h: each value within its 95 % interval in at least MinCount(4, 0.95)
+  // 16 records of 2 h: each value within its 95 % interval in at least MinCount(16, 0.95)
   // records (a false alarm at 2e-4 per bound, support/coverage_bounds.hpp).
-  const CoverageCounts c = RunKalibrCoverage(4, 2.0, 40000);
+  const CoverageCounts c = RunKalibrCoverage(16, 2.0, 40000);
   const int min = testing::MinCount(c.records, 0.95);
   for (size_t i = 0; i < 4; ++i) {
     INFO("value " << i << "; first refusal: " << c.first_refusal);
