@@ -14,6 +14,7 @@
 #include "metro/noise/allan.hpp"
 #include "metro/noise/noise_config_reader.hpp"
 #include "metro/noise/noise_fit.hpp"
+#include "noise/allan_report_json.hpp"
 #include "support/coverage_bounds.hpp"
 #include "support/noise_generators.hpp"
 
@@ -284,6 +285,37 @@ TEST_CASE("The report's N and K gain their standard names and SI form", "[export
   k.unit = "LSB/sqrt(s)";
   CHECK_FALSE(StandardNoiseNameOf(NoiseTerm::kRateRandomWalk, k));
   CHECK_FALSE(StandardNoiseNameOf(NoiseTerm::kBiasInstability, n));
+}
+
+TEST_CASE("The standard names are written beside N and K and the JSON still round-trips",
+          "[export]") {
+  // A gyroscope in deg/s with white noise and a random walk (Kalibr's model): the written
+  // "standard" is the term in rad/s per sqrt(Hz); reading the JSON back and writing it again
+  // gives the same text (the key is derived, never read).
+  const double dt = 0.01, n = 0.01, k = 0.001;
+  AllanOptions options;
+  options.threads = 1;
+  const Result<AllanCurve> curve =
+      ComputeAllan(testing::KalibrImuRate(size_t{1} << 18, dt, n, k, 77), dt, options);
+  REQUIRE(curve.ok());
+  const Result<NoiseFit> fit = FitNoiseTerms(curve.value());
+  REQUIRE(fit.ok());
+  const AllanReport report = MakeAllanReport(curve.value(), fit.value(), "deg/s");
+  const nlohmann::ordered_json j = ToJsonValue(report);
+  const auto& rw = j["noise"]["random_walk"];
+  REQUIRE(rw.contains("standard"));
+  CHECK(rw["standard"]["name"] == "angle_random_walk");
+  CHECK(rw["standard"]["kalibr_key"] == "gyroscope_noise_density");
+  CHECK(rw["standard"]["value"].get<double>() ==
+        Approx(rw["value"].get<double>() * kDegToRad).epsilon(1e-14));
+  CHECK(rw["standard"]["density_one_sided"].get<double>() ==
+        Approx(std::sqrt(2.0) * rw["value"].get<double>() * kDegToRad).epsilon(1e-14));
+  CHECK_FALSE(j["noise"]["bias_instability"].contains("standard"));
+  const std::string text = j.dump(2);
+  const Result<AllanReport> read =
+      ReadJsonText<AllanReport>(text, "a.json", &AllanReportFromJsonValue);
+  REQUIRE(read.ok());
+  CHECK(ToJsonValue(read.value()).dump(2) == text);
 }
 
 // --- Coverage on Kalibr's discrete model ---------------------------------------------------
