@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <optional>
 
@@ -12,10 +13,10 @@
 namespace metro {
 namespace {
 
-// The 95 % coverage factor of the normal approximation (JCGM 100:2008 G.3.4, Table G.1).
+// The 95 % coverage factor of the normal distribution (JCGM 100:2008 G.1.3, Table G.1).
 constexpr double kK95 = 1.959963984540054;
 
-// One term of one axis in SI (rad/s or m/s^2 based units), or the reason it is refused.
+// One term of one axis in SI (rad/s or m/s^2 based units) and as the report states it.
 struct AxisTerm {
   std::string quantity;
   char axis = 0;
@@ -225,8 +226,13 @@ bool NoiseExportOptions::IsValid(std::string* why) const {
     *why = "px4_predict_rate_hz must be a positive number of Hz";
     return false;
   }
-  if (rostopic.find_first_of("\n\r\"") != std::string::npos) {
-    *why = "rostopic must be one line without quotes";
+  // A ROS graph resource name (wiki.ros.org/Names): letters, digits, _, / and ~.
+  const bool ros_name =
+      !rostopic.empty() && std::all_of(rostopic.begin(), rostopic.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '/' || c == '~';
+      });
+  if (!ros_name) {
+    *why = "rostopic '" + rostopic + "' is not a ROS name (letters, digits, _, / and ~)";
     return false;
   }
   return true;

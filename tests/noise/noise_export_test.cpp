@@ -253,6 +253,11 @@ TEST_CASE("Unresolved terms and unusable units are refused by name", "[export]")
           "unknown noise export format 'kalibr2'; expected one of kalibr, openvins, basalt, vins, "
           "orbslam3, gtsam, px4-ekf2, ros");
     CHECK_FALSE(ParseAxisReduction("mean").ok());
+    o.rostopic = "/imu0 # x";
+    std::string why;
+    CHECK_FALSE(o.IsValid(&why));
+    CHECK(why == "rostopic '/imu0 # x' is not a ROS name (letters, digits, _, / and ~)");
+    CHECK(ExportNoise(SixAxes(), o).error().message == why);
   }
 }
 

@@ -79,7 +79,7 @@ struct NoiseExportInput {
 struct NoiseExportOptions {
   NoiseExportFormat format = NoiseExportFormat::kKalibr;
   AxisReduction reduction = AxisReduction::kMax;
-  std::string rostopic = "/imu0";  // kalibr, openvins: the topic the file names.
+  std::string rostopic = "/imu0";  // kalibr, openvins: the topic the file names (a ROS name).
   // px4-ekf2: the EKF2 prediction rate the parameters are discretized at (PX4 scales both its
   // white and bias parameters by its filter step dt: value = continuous / sqrt(dt)).
   double px4_predict_rate_hz = 100.0;
