@@ -13,7 +13,9 @@
 #include "metro/core/file.hpp"
 #include "metro/core/progress.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/noise/noise_export.hpp"
 #include "metro/report/html_report.hpp"
+#include "metro/report/noise_export_input.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
@@ -32,6 +34,11 @@ struct AnalyzeOptions {
   std::string budget;
   AccuracyCliOptions accuracy;  // --accuracy and its options (accuracy_command.hpp).
   std::string html;
+  // --export FORMAT --export-file FILE [--axis-reduction]: the noise terms as an estimator's
+  // file (docs/noise.md "Export to estimators"; noise-export has the formats' other options).
+  std::string export_format;
+  std::string export_file;
+  NoiseExportOptions export_options;
 };
 
 // Options that do nothing in the chosen mode are refused, never silently ignored: the
@@ -43,8 +50,9 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
     return app.get_option_no_throw(name) != nullptr && app.count(name) > 0;
   };
   if (o.accuracy.enabled) {
-    for (const char* name : {"--allan", "--taus", "--estimator", "--gaps", "--allan-csv",
-                             "--budget", "--quantity", "--settle-scope"}) {
+    for (const char* name :
+         {"--allan", "--taus", "--estimator", "--gaps", "--allan-csv", "--budget", "--quantity",
+          "--settle-scope", "--export", "--export-file", "--axis-reduction"}) {
       if (given(name)) {
         return MakeError(fmt::format(
             "{} does nothing with --accuracy (the accuracy evaluation takes the table axis's "
@@ -61,11 +69,34 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
     }
   }
   if (!o.analysis.allan) {
-    for (const char* name : {"--taus", "--estimator", "--gaps", "--allan-csv"}) {
+    for (const char* name : {"--taus", "--estimator", "--gaps", "--allan-csv", "--export"}) {
       if (given(name)) return MakeError(fmt::format("{} needs --allan", name));
     }
   }
+  if (given("--export") != given("--export-file")) {
+    return MakeError("--export FORMAT and --export-file FILE go together");
+  }
+  if (given("--axis-reduction") && !given("--export")) {
+    return MakeError("--axis-reduction needs --export");
+  }
   return {};
+}
+
+// The noise file of --export for the analysed session (the one tag with an Allan section, or
+// the one --sensor names).
+Result<std::string> ExportText(const SessionAnalysis& analysis, const AnalyzeOptions& o) {
+  Result<NoiseExportFormat> format = ParseNoiseExportFormat(o.export_format);
+  if (!format.ok()) return format.error();
+  NoiseExportOptions options = o.export_options;
+  options.format = format.value();
+  std::optional<int64_t> sensor;
+  if (o.analysis.sensors.size() == 1) sensor = o.analysis.sensors.front();
+  Result<NoiseExportInput> input = NoiseExportInputFromReport(
+      analysis.report, o.output.empty() || o.output == "-" ? "the report" : o.output, sensor);
+  if (!input.ok()) return input.error();
+  Result<NoiseExport> exported = ExportNoise(input.value(), options);
+  if (!exported.ok()) return exported.error();
+  return exported.value().text;
 }
 
 int RunAnalyze(const AnalyzeOptions& o) {
@@ -90,7 +121,10 @@ int RunAnalyze(const AnalyzeOptions& o) {
       inputs.push_back({"a session of --budget", std::move(session)});
     }
   }
-  if (Status s = CheckOutputs({{"-o", o.output}, {"--allan-csv", o.allan_csv}, {"--html", o.html}},
+  if (Status s = CheckOutputs({{"-o", o.output},
+                               {"--allan-csv", o.allan_csv},
+                               {"--html", o.html},
+                               {"--export-file", o.export_file}},
                               inputs);
       !s.ok()) {
     return PrintErrorExit(s.error());
@@ -133,11 +167,24 @@ int RunAnalyze(const AnalyzeOptions& o) {
     PrintErrorText(
         fmt::format("--allan-csv {}: not written, no Allan curve was computed", o.allan_csv));
   }
-  // The JSON (no -o: to stdout, with no table), the Allan CSV and the HTML are replaced
-  // together or not at all.
+  // --export: a term the record did not resolve is refused by name (exit 2); the report is
+  // still written, the noise file is not.
+  std::optional<Error> export_error;
+  std::string exported;
+  if (!o.export_format.empty()) {
+    Result<std::string> text = ExportText(analysis, o);
+    if (text.ok()) {
+      exported = std::move(text).value();
+    } else {
+      export_error = text.error();
+    }
+  }
+  // The JSON (no -o: to stdout, with no table), the Allan CSV, the HTML and the noise file are
+  // replaced together or not at all.
   if (Status s = WriteOutputs({{o.output.empty() ? "-" : o.output, json},
                                {allan_csv_path, analysis.allan_csv},
-                               {o.html, html}});
+                               {o.html, html},
+                               {export_error ? std::string() : o.export_file, exported}});
       !s.ok()) {
     return PrintErrorExit(s.error());
   }
@@ -150,6 +197,10 @@ int RunAnalyze(const AnalyzeOptions& o) {
   if (analysis.nothing_produced) {
     PrintErrorText("--allan produced no curve for any quantity (reasons above and in the report)");
     return kExitFailed;
+  }
+  if (export_error) {
+    return PrintErrorExit(
+        export_error->WithContext("--export " + o.export_format + ": not written"));
   }
   return kExitOk;
 }
@@ -176,6 +227,21 @@ void AddTypeAOptions(CLI::App& app, AnalyzeOptions* o, bool accuracy) {
       ->check(CLI::ExistingFile);
   app.add_option("--html", o->html,
                  "also write a self-contained HTML report with plots here (docs/reports.md)");
+  app.add_option("--export", o->export_format,
+                 "with --allan: also write the noise terms as this estimator's noise file: "
+                 "kalibr, openvins, basalt, vins, orbslam3, gtsam, px4-ekf2, ros "
+                 "(docs/noise.md; characterize noise-export has their options)")
+      ->check(CLI::IsMember(
+          {"kalibr", "openvins", "basalt", "vins", "orbslam3", "gtsam", "px4-ekf2", "ros"}));
+  app.add_option("--export-file", o->export_file, "the noise file of --export (atomically)");
+  app.add_option_function<std::string>(
+         "--axis-reduction",
+         [o](const std::string& value) {
+           o->export_options.reduction = value == "rms" ? AxisReduction::kRms : AxisReduction::kMax;
+         },
+         "with --export: one value over the three axes, max (the largest axis and its u) or rms")
+      ->check(CLI::IsMember({"max", "rms"}))
+      ->default_str("max");
   if (accuracy) AddAccuracyOptions(app, &o->accuracy);
   app.add_option("--threads", o->threads, "worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);

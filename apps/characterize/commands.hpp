@@ -21,5 +21,9 @@ void AddBatchCommand(CLI::App& app, int* exit_code);
 void AddReportCommand(CLI::App& app, int* exit_code);
 // `characterize capture --port DEV -o capture.txt` (docs/capture.md).
 void AddCaptureCommand(CLI::App& app, int* exit_code);
+// `characterize noise-export REPORT.json --to FORMAT` and `noise-compare FILE REPORT.json`
+// (docs/noise.md "Export to estimators").
+void AddNoiseExportCommand(CLI::App& app, int* exit_code);
+void AddNoiseCompareCommand(CLI::App& app, int* exit_code);
 
 }  // namespace metro::apps

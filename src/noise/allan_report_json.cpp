@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "metro/noise/noise_export.hpp"
+
 namespace metro {
 namespace {
 
@@ -187,7 +189,23 @@ Json ToJsonValue(const AllanReport& a) {
   j["alpha"] = a.alpha;
   j["alpha_source"] = a.alpha_source;
   Json noise = Json::object();
-  for (NoiseTerm t : kAllNoiseTerms) noise[NoiseTermKey(t)] = ToJsonValue(a.term(t));
+  for (NoiseTerm t : kAllNoiseTerms) {
+    Json term = ToJsonValue(a.term(t));
+    // Derived from value, u and unit (written, never read): the field's names (issue #40).
+    if (const std::optional<StandardNoiseName> n = StandardNoiseNameOf(t, a.term(t))) {
+      Json standard = {{"name", n->name},
+                       {"kalibr_key", n->kalibr_key},
+                       {"value", Number(n->value)},
+                       {"u", Number(n->u)},
+                       {"unit", n->unit}};
+      if (t == NoiseTerm::kRandomWalk) {
+        standard["density_one_sided"] = Number(n->density_one_sided);
+        standard["u_density_one_sided"] = Number(n->u_density_one_sided);
+      }
+      term["standard"] = standard;
+    }
+    noise[NoiseTermKey(t)] = term;
+  }
   j["noise"] = noise;
   const AllanSamplePeriodReport& p = a.sample_period;
   j["sample_period"] = {{"tau0_s", Number(p.tau0_s)},

@@ -247,6 +247,13 @@ std::string AllanSummaryTable(const SessionReport& report) {
                          term(allan.term(NoiseTerm::kRateRandomWalk)), minimum);
     }
   }
+  if (!out.empty()) {  // Which is which among the field's names (issue #40).
+    out +=
+        "  N = angle (gyroscope) or velocity (accelerometer) random walk = Kalibr's "
+        "*_noise_density (continuous, two-sided PSD N^2; a datasheet's one-sided density is "
+        "sqrt(2) N); K = Kalibr's *_random_walk; in SI with characterize noise-export "
+        "(docs/noise.md section 9)\n";
+  }
   return out;
 }
 

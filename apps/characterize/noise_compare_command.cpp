@@ -1,0 +1,65 @@
+// characterize noise-compare FILE REPORT.json: an estimator's noise file read back and each
+// value compared with the measurement (ratio, E_n; docs/noise.md "Compare a noise file").
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "metro/core/file.hpp"
+#include "metro/noise/noise_config_reader.hpp"
+#include "noise_export_options.hpp"
+#include "output.hpp"
+
+namespace metro::apps {
+namespace {
+
+struct NoiseCompareOptions {
+  std::string file;
+  std::string format;  // --format: empty, told by the keys.
+  NoiseExportCliOptions common;
+};
+
+int RunNoiseCompare(const NoiseCompareOptions& o) {
+  Result<std::string> text = ReadFile(o.file);
+  if (!text.ok()) return PrintErrorExit(text.error());
+  Result<NoiseConfigFile> config = ReadNoiseConfig(text.value(), o.file);
+  if (!config.ok()) return PrintErrorExit(config.error());
+  NoiseExportOptions options = o.common.library;
+  Result<NoiseExportFormat> format =
+      o.format.empty() ? DetectNoiseConfigFormat(config.value()) : ParseNoiseExportFormat(o.format);
+  if (!format.ok()) return PrintErrorExit(format.error());
+  options.format = format.value();
+  Result<NoiseExportInput> input = LoadNoiseExportInput(o.common);
+  if (!input.ok()) return PrintErrorExit(input.error());
+  Result<NoiseComparison> c = CompareNoiseConfig(config.value(), input.value(), options);
+  if (!c.ok()) return PrintErrorExit(c.error());
+  const std::string header = fmt::format(
+      "{} ({}) against {}\n", o.file, NoiseExportFormatName(options.format), input.value().source);
+  if (Status s = WriteOutput("-", header + NoiseComparisonTable(c.value())); !s.ok()) {
+    return PrintErrorExit(s.error());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddNoiseCompareCommand(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<NoiseCompareOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "noise-compare",
+      "read an estimator's noise file (any noise-export format) and compare each value with a "
+      "report's measurement: ratio and E_n");
+  sub->add_option("file", o->file, "imu.yaml, a VINS/ORB-SLAM3 config, PX4 params, ...")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("report", o->common.report, "REPORT.json made with --allan")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("--format", o->format, "the file's format (default: told by its keys)")
+      ->check(CLI::IsMember(
+          {"kalibr", "openvins", "basalt", "vins", "orbslam3", "gtsam", "px4-ekf2", "ros"}));
+  AddNoiseExportCliOptions(sub, &o->common);
+  sub->callback([o, exit_code] { *exit_code = RunNoiseCompare(*o); });
+}
+
+}  // namespace metro::apps

@@ -1,0 +1,27 @@
+// The options `characterize noise-export` and `noise-compare` share: which tag of the report,
+// the reduction over axes and the formats' own settings, and the report they read (issue #40).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "metro/core/status.hpp"
+#include "metro/noise/noise_export.hpp"
+
+namespace metro::apps {
+
+struct NoiseExportCliOptions {
+  std::string report;             // REPORT.json (metro.report/1 made with --allan).
+  std::optional<int64_t> sensor;  // --sensor N.
+  NoiseExportOptions library;     // --axis-reduction, --rostopic, --px4-predict-rate-hz.
+};
+
+// Registers --sensor, --axis-reduction, --rostopic and --px4-predict-rate-hz.
+void AddNoiseExportCliOptions(CLI::App* app, NoiseExportCliOptions* o);
+
+// The record of REPORT.json's tag (report/noise_export_input.hpp).
+Result<NoiseExportInput> LoadNoiseExportInput(const NoiseExportCliOptions& o);
+
+}  // namespace metro::apps
