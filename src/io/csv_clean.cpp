@@ -64,6 +64,33 @@ struct CleanBlock {
 // clean path and block size").
 constexpr size_t kCleanBlockBytes = size_t{512} << 10;
 
+// Pieces of a file block: its bytes in kCleanBlockBytes steps, the last piece taking the
+// remainder (kCleanBlockBytes to 2 kCleanBlockBytes).
+size_t PieceCount(const Block& block) {
+  return std::max<size_t>(1, (block.end - block.begin) / kCleanBlockBytes);
+}
+
+// Just after the end of the line holding byte `at` of `block`, or the block's end.
+size_t LineBoundaryAfter(const MappedFile& file, const Block& block, size_t at) {
+  const char* from = file.data() + at;
+  const char* nl = static_cast<const char*>(
+      std::memchr(from, '\n', static_cast<size_t>(file.data() + block.end - from)));
+  return nl != nullptr ? static_cast<size_t>(nl - file.data()) + 1 : block.end;
+}
+
+// Turns piece k of n of `block` (piece->begin = k, piece->end = n, as queued) into its byte
+// range: its ends are the line boundaries after the nominal offsets k and k + 1 times
+// kCleanBlockBytes, so neighbouring pieces, placed by different workers, meet exactly; a
+// line longer than a piece leaves a piece empty.
+void PlacePiece(const MappedFile& file, const Block& block, CleanBlock* piece) {
+  const size_t k = piece->begin, n = piece->end;
+  piece->begin =
+      k == 0 ? block.begin : LineBoundaryAfter(file, block, block.begin + k * kCleanBlockBytes);
+  piece->end = k + 1 == n
+                   ? block.end
+                   : LineBoundaryAfter(file, block, block.begin + (k + 1) * kCleanBlockBytes);
+}
+
 // End of a line's last field at `q`: "\n", "\r\n" or the end of the block. Returns the
 // start of the next line, or nullptr if `q` is not at the end of the line.
 inline const char* EndOfLine(const char* q, const char* end) {
@@ -474,23 +501,16 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
                                     ReleaseBehind* release) {
   if (!plan.CleanPathCan() || cut.empty()) return std::nullopt;
   // The file's blocks cut again into clean-path blocks; a file block counts as parsed
-  // (progress) once all of its pieces are.
+  // (progress) once all of its pieces are. A piece's ends are found by the worker that parses
+  // it (PlacePiece), not here: finding them all up front touched a page every 512 kB, and
+  // the kernel maps a page-cache folio around each touch, so most of the file was mapped
+  // before the first row was parsed (peak RSS, issue #38).
   std::vector<CleanBlock> blocks;
   std::vector<std::atomic<uint32_t>> pieces_left(cut.size());
   for (size_t c = 0; c < cut.size(); ++c) {
-    uint32_t pieces = 0;
-    for (size_t begin = cut[c].begin; begin < cut[c].end; ++pieces) {
-      size_t end = cut[c].end;
-      if (end - begin > 2 * kCleanBlockBytes) {
-        const char* from = file.data() + begin + kCleanBlockBytes;
-        const char* nl = static_cast<const char*>(
-            std::memchr(from, '\n', static_cast<size_t>(file.data() + end - from)));
-        if (nl != nullptr) end = static_cast<size_t>(nl - file.data()) + 1;
-      }
-      blocks.push_back(CleanBlock{begin, end, c});
-      begin = end;
-    }
-    pieces_left[c].store(pieces);
+    const size_t pieces = PieceCount(cut[c]);
+    for (size_t k = 0; k < pieces; ++k) blocks.push_back(CleanBlock{k, pieces, c});
+    pieces_left[c].store(static_cast<uint32_t>(pieces));
   }
   const size_t workers = std::min(static_cast<size_t>(ResolveThreads(threads)), blocks.size());
   std::vector<int> staged_fields{plan.time_field};
@@ -543,6 +563,7 @@ std::optional<Session> LoadCleanCsv(const std::string& path, const MappedFile& f
         pool.Give(std::move(stage));
         return;
       }
+      PlacePiece(file, cut[blocks[i].cut], &blocks[i]);
       if (!ParseCleanBlock(file, plan, blocks[i], stage.get())) {
         clean.store(false);
         pool.Fail();

@@ -5,9 +5,9 @@
 // path (csv_clean.cpp), and anything irregular, or any other dialect, the general path
 // (csv_general.cpp), which explains every error exactly.
 // The mapping's pages are released behind the parser and the SHA-256 hasher, whichever is
-// slower (ReleaseBehind), so the file's pages give way to the parsed numbers and peak
-// memory stays near the larger of the two (about 1.3 x the file for a clean session), not
-// file + numbers, however fast the hasher runs.
+// slower (ReleaseBehind), and a faster hasher waits within kHashLeadBytes of the parser, so
+// the file's pages give way to the parsed numbers and peak memory stays near the numbers
+// plus a few tens of MB, not file + numbers, however fast or slow the hasher runs.
 #include <algorithm>
 #include <optional>
 #include <thread>
@@ -22,10 +22,16 @@ namespace {
 
 // The hasher reports its progress (and so lets pages go) this many bytes at a time.
 constexpr size_t kHashChunkBytes = size_t{4} << 20;
-// The file's pages kept mapped ahead of a hasher slower than the parser (ReleaseBehind): a
-// quarter of the file, so the peak stays near 1.25 x the file for a session's columns
-// however slow the hasher; at least 32 MB, so small files are read once.
-constexpr size_t kMinReleaseGapBytes = size_t{32} << 20;
+// How far the hasher may run ahead of the parser (ReleaseBehind::AwaitParser): the pages it
+// maps there stay until the parser is past them.
+constexpr size_t kHashLeadBytes = size_t{12} << 20;
+// The file's pages kept mapped ahead of a hasher slower than the parser (a CPU without SHA
+// extensions, or one the hasher shares with other work) (ReleaseBehind): 16 MB, so the peak
+// stays within a few tens of MB of the session's columns however slow the hasher. Pages
+// released ahead of it are mapped again from the page cache when it gets there (a minor
+// fault per 64 kB). A quarter of the file (as before) put up to 97 MB of a 389 MB file on
+// the peak when the hasher lagged.
+constexpr size_t kReleaseGapBytes = size_t{16} << 20;
 
 Result<Session> LoadMappedCsv(const std::string& path, const MappedFile& file,
                               const LoadOptions& options, SessionFormat format,
@@ -71,19 +77,30 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   if (Status s = file.Open(path); !s.ok()) return s.error();
   // The SHA-256 of the bytes, on a second thread while the parser works, from the parser's
   // own mapping: the file's pages are mapped once for both and released once both are past
-  // them; a hasher slower than the parser (a CPU without SHA extensions) keeps at most a
-  // quarter of the file mapped behind the parser (ReleaseBehind).
+  // them; a hasher slower than the parser keeps at most kReleaseGapBytes mapped behind the
+  // parser (ReleaseBehind), a faster one waits within kHashLeadBytes ahead of it.
   ReleaseBehind release([&file](size_t begin, size_t end) { file.ReleaseBelow(begin, end); }, hash,
-                        std::max(file.size() / 4, kMinReleaseGapBytes));
+                        kReleaseGapBytes);
   std::string digest;
   std::optional<Result<Session>> session;
   RunBeside(
       [&] {
         if (!hash) return;
+        release.AwaitParser(kHashChunkBytes, kHashLeadBytes);
         digest = Sha256Hex(std::string_view(file.data(), file.size()), kHashChunkBytes,
-                           [&release](size_t hashed) { release.Hashed(hashed); });
+                           [&release](size_t hashed) {
+                             release.Hashed(hashed);
+                             release.AwaitParser(hashed + kHashChunkBytes, kHashLeadBytes);
+                           });
       },
-      [&] { session = LoadMappedCsv(path, file, options, format, allow_clean_path, &release); });
+      [&] {
+        // However the parse ends (a value, an error, an exception), the hasher is let go.
+        struct Finish {
+          ReleaseBehind* release;
+          ~Finish() { release->ParserFinished(); }
+        } finish{&release};
+        session = LoadMappedCsv(path, file, options, format, allow_clean_path, &release);
+      });
   // A file truncated or rewritten while it was read: whatever was parsed (or whatever error
   // its zeros caused) is discarded for the one error that says what happened.
   if (const std::string changed = file.ChangedSinceOpen(); !changed.empty()) {

@@ -312,6 +312,28 @@ std::vector<Session> CheckCleanEqualsGeneral(const std::string& path, size_t tag
   return sessions;
 }
 
+// A comment line longer than a clean-path piece (512 kB) in the middle of the rows: the
+// pieces' ends are placed by the workers that parse them (issue #38), so a piece inside the
+// line is empty and its neighbours meet at the line's end; the rows, their times and their
+// line numbers equal the general loader's.
+TEST_CASE("A line longer than a clean-path piece leaves the rows as the general loader reads them",
+          "[io][csv]") {
+  std::string text = "t_s,sensor,ax_g,ay_g\n";
+  for (int i = 0; i < 120000; ++i) {
+    text += std::to_string(i) + "," + std::to_string(1 + i % 3) + ",0." + std::to_string(i % 97) +
+            ",-1." + std::to_string(i % 13) + "\n";
+    if (i == 60000) text += "# " + std::string(size_t{1300} << 10, 'x') + "\n";
+  }
+  testing::TempFile file(text);
+  const std::vector<Session> sessions = CheckCleanEqualsGeneral(file.path(), 3);
+  // Row 60001 (tag 60001 % 3 + 1 = 2) is the first after the comment: header + 60001 rows
+  // + the comment line before it, so file line 60003 + 1.
+  const Tag& tag = *sessions.front().FindTag(2);
+  const auto at = std::find(tag.t_s.begin(), tag.t_s.end(), 60001.0);
+  REQUIRE(at != tag.t_s.end());
+  CHECK(tag.line[static_cast<size_t>(at - tag.t_s.begin())] == 60004);
+}
+
 // A logger's file (LF, fixed decimals per column, signs), as the vectorized reader takes
 // it, with one comment line that sends its run to the scalar parser: the clean path and
 // the general loader (fast_float on every field) must agree bit for bit.
