@@ -136,7 +136,7 @@ TEST_CASE("A hasher ahead of the parser waits within its lead until the parser m
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
   CHECK(stage == 0);
   t.release.BlockDone(0);  // now at 20
-  for (int i = 0; i < 500 && stage < 1; ++i)
+  for (int i = 0; i < 10000 && stage < 1; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   CHECK(stage == 1);
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
