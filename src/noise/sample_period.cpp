@@ -45,15 +45,15 @@ bool SamplePeriodOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// The estimate from the intervals dt[i] = t[i + 1] - t[i] [s] and the whole span
-// t[n - 1] - t[0] [s]; `line` has one entry per timestamp.
-Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
-                                   const std::vector<uint32_t>& line,
-                                   const SamplePeriodOptions& options) {
-  const size_t n = dt.size() + 1;
+// The estimate from the n - 1 intervals dt(i) = t[i + 1] - t[i] [s] (computed when asked,
+// so no array of them is kept beside the times) and the whole span t[n - 1] - t[0] [s];
+// `line` has one entry per timestamp.
+template <typename Interval>
+Result<SamplePeriod> FromIntervals(const Interval& dt, size_t n, double span_s,
+                                   const uint32_t* line, const SamplePeriodOptions& options) {
   std::vector<uint32_t> reset_lines;
   for (size_t i = 0; i + 1 < n; ++i) {
-    if (!(dt[i] > 0.0)) reset_lines.push_back(line[i + 1]);
+    if (!(dt(i) > 0.0)) reset_lines.push_back(line[i + 1]);
   }
   if (!reset_lines.empty()) {
     return MakeError("", reset_lines.front(),
@@ -61,14 +61,19 @@ Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
                                  "estimators need one uniformly sampled run; split the log there",
                                  LineList(reset_lines), reset_lines.size()));
   }
-  std::vector<double> sorted = dt;
-  const size_t mid = sorted.size() / 2;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid), sorted.end());
-  double median = sorted[mid];
-  if (sorted.size() % 2 == 0) {
-    const double below =
-        *std::max_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid));
-    median = 0.5 * (median + below);
+  double median = 0.0;
+  {
+    std::vector<double> sorted(n - 1);
+    for (size_t i = 0; i + 1 < n; ++i) sorted[i] = dt(i);
+    const size_t mid = sorted.size() / 2;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid),
+                     sorted.end());
+    median = sorted[mid];
+    if (sorted.size() % 2 == 0) {
+      const double below =
+          *std::max_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid));
+      median = 0.5 * (median + below);
+    }
   }
 
   SamplePeriod period;
@@ -80,14 +85,14 @@ Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
   double sum_sq = 0.0;
   int64_t regular = 0;
   for (size_t i = 0; i + 1 < n; ++i) {
-    if (dt[i] > options.gap_factor * median) {
+    if (dt(i) > options.gap_factor * median) {
       TimingGap gap;
       gap.line = line[i + 1];
-      gap.dt_s = dt[i];
+      gap.dt_s = dt(i);
       // Counted in double and saturated: a gap of 1e300 s (a corrupt timestamp) must not
       // overflow the int64 count (UBSan: signed overflow, issue #20).
       constexpr double kMaxCount = 1e18;
-      const double missing = std::min(kMaxCount, std::max(1.0, std::round(dt[i] / median) - 1.0));
+      const double missing = std::min(kMaxCount, std::max(1.0, std::round(dt(i) / median) - 1.0));
       gap.missing_samples = static_cast<int64_t>(missing);
       period.missing_samples = static_cast<int64_t>(
           std::min(kMaxCount, static_cast<double>(period.missing_samples) + missing));
@@ -95,7 +100,7 @@ Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
       gap_lines.push_back(gap.line);
       continue;
     }
-    const double e = dt[i] - median;
+    const double e = dt(i) - median;
     sum_sq += e * e;
     period.max_abs_jitter_s = std::max(period.max_abs_jitter_s, std::fabs(e));
     ++regular;
@@ -112,7 +117,7 @@ Result<SamplePeriod> FromIntervals(const std::vector<double>& dt, double span_s,
       std::vector<double> piece;
       const size_t end = part + 1 == kParts ? n - 1 : (part + 1) * per;
       for (size_t i = part * per; i < end; ++i) {
-        if (dt[i] <= options.gap_factor * median) piece.push_back(dt[i]);
+        if (dt(i) <= options.gap_factor * median) piece.push_back(dt(i));
       }
       if (piece.empty()) continue;
       std::nth_element(piece.begin(), piece.begin() + static_cast<std::ptrdiff_t>(piece.size() / 2),
@@ -174,14 +179,21 @@ Result<SamplePeriod> EstimateSamplePeriod(const std::vector<double>& t_s,
   std::string why;
   if (!options.IsValid(&why)) return MakeError("sample period options: " + why);
   if (Status s = CheckSizes(t_s.size(), line.size()); !s.ok()) return s.error();
-  for (size_t i = 0; i < t_s.size(); ++i) {
+  return EstimateSamplePeriod(t_s.data(), line.data(), t_s.size(), options);
+}
+
+Result<SamplePeriod> EstimateSamplePeriod(const double* t_s, const uint32_t* line, size_t n,
+                                          const SamplePeriodOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("sample period options: " + why);
+  if (Status s = CheckSizes(n, n); !s.ok()) return s.error();
+  for (size_t i = 0; i < n; ++i) {
     if (!std::isfinite(t_s[i])) {
       return MakeError("", line[i], fmt::format("timestamp {} is not finite", t_s[i]));
     }
   }
-  std::vector<double> dt(t_s.size() - 1);
-  for (size_t i = 0; i + 1 < t_s.size(); ++i) dt[i] = t_s[i + 1] - t_s[i];
-  return FromIntervals(dt, t_s.back() - t_s.front(), line, options);
+  return FromIntervals([t_s](size_t i) { return t_s[i + 1] - t_s[i]; }, n, t_s[n - 1] - t_s[0],
+                       line, options);
 }
 
 Result<SamplePeriod> EstimateSamplePeriodNs(const std::vector<int64_t>& t_ns,
@@ -190,19 +202,26 @@ Result<SamplePeriod> EstimateSamplePeriodNs(const std::vector<int64_t>& t_ns,
   std::string why;
   if (!options.IsValid(&why)) return MakeError("sample period options: " + why);
   if (Status s = CheckSizes(t_ns.size(), line.size()); !s.ok()) return s.error();
+  return EstimateSamplePeriodNs(t_ns.data(), line.data(), t_ns.size(), options);
+}
+
+Result<SamplePeriod> EstimateSamplePeriodNs(const int64_t* t_ns, const uint32_t* line, size_t n,
+                                            const SamplePeriodOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("sample period options: " + why);
+  if (Status s = CheckSizes(n, n); !s.ok()) return s.error();
   // Differences of integers, exact (saturated where they would overflow: a time reset that
   // large is refused as a reset either way); each converted once, correctly rounded.
-  std::vector<double> dt(t_ns.size() - 1);
-  for (size_t i = 0; i + 1 < t_ns.size(); ++i) {
+  const auto dt = [t_ns](size_t i) {
     int64_t d = 0;
     if (__builtin_sub_overflow(t_ns[i + 1], t_ns[i], &d)) {
       d = t_ns[i + 1] > t_ns[i] ? INT64_MAX : INT64_MIN;
     }
-    dt[i] = static_cast<double>(d) / 1e9;
-  }
+    return static_cast<double>(d) / 1e9;
+  };
   int64_t span = 0;
-  if (__builtin_sub_overflow(t_ns.back(), t_ns.front(), &span)) span = INT64_MAX;
-  return FromIntervals(dt, static_cast<double>(span) / 1e9, line, options);
+  if (__builtin_sub_overflow(t_ns[n - 1], t_ns[0], &span)) span = INT64_MAX;
+  return FromIntervals(dt, n, static_cast<double>(span) / 1e9, line, options);
 }
 
 }  // namespace metro

@@ -136,18 +136,20 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
       const Quantity* values = tag->Find(q.name);
       const auto b = static_cast<ptrdiff_t>(t.window.begin);
       const auto e = static_cast<ptrdiff_t>(t.window.end);
-      const std::vector<uint32_t> line(tag->line.begin() + b, tag->line.begin() + e);
-      const std::vector<double> rate(values->values.begin() + b, values->values.begin() + e);
+      // The window's rates: the column itself when the window is all of it (no copy).
+      std::vector<double> window_copy;
+      const bool whole = b == 0 && static_cast<size_t>(e) == values->values.size();
+      if (!whole) window_copy.assign(values->values.begin() + b, values->values.begin() + e);
+      const std::vector<double>& rate = whole ? values->values : window_copy;
       // tau0 from exact integer differences when the file's time was integer (t_ns).
       SamplePeriodOptions period_options = options.period;
       period_options.allow_gaps = options.gaps != AllanGapPolicy::kRefuse;
+      // The window's times and lines read in place (no copies of 10^7-sample columns).
+      const size_t count = t.window.end - t.window.begin;
+      const uint32_t* line = tag->line.data() + b;
       auto period = tag->t_ns.size() == tag->t_s.size()
-                        ? EstimateSamplePeriodNs(
-                              std::vector<int64_t>(tag->t_ns.begin() + b, tag->t_ns.begin() + e),
-                              line, period_options)
-                        : EstimateSamplePeriod(
-                              std::vector<double>(tag->t_s.begin() + b, tag->t_s.begin() + e), line,
-                              period_options);
+                        ? EstimateSamplePeriodNs(tag->t_ns.data() + b, line, count, period_options)
+                        : EstimateSamplePeriod(tag->t_s.data() + b, line, count, period_options);
       if (!period.ok()) {
         Error err = period.error();
         err.file = session.path;
