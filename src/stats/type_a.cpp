@@ -241,8 +241,13 @@ const double* BlockLagSums(const double* x, double mean, size_t n, FftWorkspace*
   return real;
 }
 
-// First block length tried for lags beyond the direct ones; each retry is 16 x longer.
+// First block length tried for lags beyond the direct ones; each retry is 16 x longer, and 4 x
+// from kLargeLagBlock on: a block's buffers take 64 bytes per lag, so a 16 x step past a
+// cut-off at 0.75 M lags of a 10^7-sample record took a 4 M-lag block (256 MB) where 2 M
+// does, for about the same time (a pass costs O(n log block)); retries cost a pass each, so
+// small blocks still grow 16 x.
 constexpr size_t kFirstLagBlock = 2048;
+constexpr size_t kLargeLagBlock = size_t{1} << 19;
 
 // rho at lag kDirectLags above which the first block is skipped: an AR(1) decay through it,
 // rho_k = rho_8^(k/8), would still be above 0.5 at lag kFirstLagBlock (0.5^(8/2048)),
@@ -518,7 +523,7 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
         size_t block = lags_known == 0
                            ? (direct[kDirectLags] / c0 > kLongCorrelationRho ? 16 * kFirstLagBlock
                                                                              : kFirstLagBlock)
-                           : 16 * lags_known;
+                           : (lags_known >= kLargeLagBlock ? 4 : 16) * lags_known;
         size_t max_block = 1;
         while (max_block < max_lag) max_block *= 2;
         block = std::min(block, max_block);
