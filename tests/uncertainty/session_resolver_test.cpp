@@ -22,14 +22,29 @@ std::string Readings(double offset) {
   return text;
 }
 
-TEST_CASE("Session resolver: another spelling of the evaluated file is that evaluation",
-          "[uncertainty][budget]") {
+// A folder with log.csv (Readings(0)) and a sub-folder for another spelling of its path.
+struct Folder {
+  Folder() {
+    std::filesystem::create_directories(dir / "sub");
+    testing::Put(path, Readings(0.0));
+  }
   testing::WorkDir dir;
-  std::filesystem::create_directories(dir / "sub");
-  const std::string path = dir / "log.csv";
-  testing::Put(path, Readings(0.0));
+  std::string path = dir / "log.csv";
+};
+
+// The load options that make the logger's gyro_x column gx_dps.
+LoadOptions GyroXLoad() {
   LoadOptions load;
   load.column_map.push_back({"gyro_x", "gx_dps"});
+  return load;
+}
+
+TEST_CASE("Session resolver: another spelling of the evaluated file is that evaluation",
+          "[uncertainty][budget]") {
+  const Folder folder;
+  const std::string& path = folder.path;
+  const testing::WorkDir& dir = folder.dir;
+  const LoadOptions load = GyroXLoad();
   Result<Session> session = LoadSession(path, load);
   REQUIRE(session.ok());
   Result<SessionTypeA> evaluated = EvaluateSessionTypeA(session.value(), {});
@@ -47,12 +62,10 @@ TEST_CASE("Session resolver: another spelling of the evaluated file is that eval
 }
 
 TEST_CASE("Session resolver: one load per file whatever its spelling", "[uncertainty][budget]") {
-  testing::WorkDir dir;
-  std::filesystem::create_directories(dir / "sub");
-  const std::string path = dir / "log.csv";
-  testing::Put(path, Readings(0.0));
-  LoadOptions load;
-  load.column_map.push_back({"gyro_x", "gx_dps"});
+  const Folder folder;
+  const std::string& path = folder.path;
+  const testing::WorkDir& dir = folder.dir;
+  const LoadOptions load = GyroXLoad();
   const SessionQuantityResolver resolve = MakeSessionQuantityResolver(path, load, {});
   const Result<TypeASummary> first = resolve({"", 1, "gx_dps"});
   REQUIRE(first.ok());
