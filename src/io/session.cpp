@@ -26,6 +26,7 @@
 #include "metro/io/columns.hpp"
 #include "metro/io/receiver.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/io/ulog.hpp"
 
 namespace metro {
 
@@ -40,6 +41,7 @@ constexpr FormatName kFormatNames[] = {
     {SessionFormat::kReceiver, "receiver"}, {SessionFormat::kImuTk, "imutk"},
     {SessionFormat::kEuroc, "euroc"},       {SessionFormat::kRaw, "raw"},
     {SessionFormat::kPhyphox, "phyphox"},   {SessionFormat::kSensorLogger, "sensorlogger"},
+    {SessionFormat::kULog, "ulog"},
 };
 
 }  // namespace
@@ -312,6 +314,7 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
   ::close(fd);
   if (got < 0) return MakeError(path, 0, std::string("cannot read: ") + std::strerror(errno));
   head.resize(static_cast<size_t>(got));
+  if (IsULogMagic(head)) return SessionFormat::kULog;
   if (head.compare(0, 3, "\xEF\xBB\xBF") == 0) head.erase(0, 3);  // UTF-8 byte-order mark.
   if (head.empty()) {
     return MakeError(path, 0, "empty file: expected a session.csv or a receiver capture");
@@ -376,8 +379,15 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
   if (format == SessionFormat::kImuTk) {
     return MakeError(path, 0, "imu_tk input is two files: use LoadImuTk(acc, gyro)");
   }
+  if (!options.topics.empty() && format != SessionFormat::kULog) {
+    return MakeError(path, 0,
+                     fmt::format("--topic {}: topics are chosen in ULog input; this is {} input",
+                                 options.topics.front(), SessionFormatName(format)));
+  }
   Result<Session> session = MakeError(path, 0, "not loaded");
-  if (format != SessionFormat::kReceiver) {
+  if (format == SessionFormat::kULog) {
+    session = internal::LoadULogSession(path, options);
+  } else if (format != SessionFormat::kReceiver) {
     session =
         internal::LoadSessionCsv(path, options, /*allow_clean_path=*/true, /*hash=*/true, format);
   } else {
