@@ -1,0 +1,407 @@
+// PX4 ULog reader and loader against PX4's sample logs (datasets/external/px4_pyulog_samples):
+// message counts and dropouts against pyulog's `ulog_info` output written beside them (an
+// independent reader), sample values against a hand decode of the message bytes done here
+// (a walk over the 3-byte message headers and memcpy of the floats, not the reader's code).
+#include "metro/io/ulog.hpp"
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "metro/io/session_io.hpp"
+#include "support/temp_file.hpp"
+
+namespace metro {
+namespace {
+
+using testing::TempFile;
+
+const std::string kDir = std::string(METRO_EXTERNAL_DATA_DIR) + "/px4_pyulog_samples/";
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// pyulog's ulog_info table: " name (multi id, message size in bytes)   count   total bytes".
+struct InfoRow {
+  std::string topic;
+  int multi_id = 0;
+  size_t size_bytes = 0;
+  int64_t count = 0;
+};
+struct InfoFile {
+  std::vector<InfoRow> rows;
+  std::string dropouts;  // The "Dropouts: ..." or "No Dropouts" line.
+};
+
+InfoFile ParseInfo(const std::string& path) {
+  InfoFile out;
+  std::istringstream in(Slurp(path));
+  std::string line;
+  bool table = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("Dropouts:", 0) == 0 || line.rfind("No Dropouts", 0) == 0) out.dropouts = line;
+    if (line.rfind("Name (multi id", 0) == 0) {
+      table = true;
+      continue;
+    }
+    if (!table || line.empty()) continue;
+    InfoRow r;
+    char open = 0, comma = 0, close = 0;
+    int64_t total = 0;
+    std::istringstream fields(line);
+    fields >> r.topic >> open >> r.multi_id >> comma >> r.size_bytes >> close >> r.count >> total;
+    REQUIRE(open == '(');
+    REQUIRE(close == ')');
+    REQUIRE(total == r.count * static_cast<int64_t>(r.size_bytes));
+    out.rows.push_back(r);
+  }
+  return out;
+}
+
+// The test's own walk over the messages: offset and type of each (no appended-data rules:
+// the sample files' sections follow each other exactly).
+struct RawMessage {
+  size_t offset;
+  char type;
+  uint16_t size;
+};
+std::vector<RawMessage> Walk(const std::string& b) {
+  std::vector<RawMessage> out;
+  size_t p = 16;
+  while (p + 3 <= b.size()) {
+    const uint16_t size = static_cast<uint16_t>(static_cast<unsigned char>(b[p]) |
+                                                (static_cast<unsigned char>(b[p + 1]) << 8));
+    if (p + 3 + size > b.size()) break;
+    out.push_back({p, b[p + 2], size});
+    p += 3 + size;
+  }
+  return out;
+}
+uint16_t U16(const std::string& b, size_t at) {
+  uint16_t v;
+  std::memcpy(&v, b.data() + at, 2);
+  return v;
+}
+// The msg_id the test's walk finds subscribed for topic[multi_id].
+int MsgId(const std::string& b, const std::vector<RawMessage>& ms, const std::string& topic,
+          int multi_id) {
+  for (const RawMessage& m : ms) {
+    if (m.type == 'A' && std::string(b.data() + m.offset + 6, m.size - 3) == topic &&
+        static_cast<unsigned char>(b[m.offset + 3]) == multi_id) {
+      return U16(b, m.offset + 4);
+    }
+  }
+  return -1;
+}
+std::vector<size_t> DataOffsets(const std::string& b, const std::vector<RawMessage>& ms,
+                                int msg_id) {
+  std::vector<size_t> out;
+  for (const RawMessage& m : ms) {
+    if (m.type == 'D' && U16(b, m.offset + 3) == msg_id) out.push_back(m.offset + 5);
+  }
+  return out;
+}
+float F32(const std::string& b, size_t at) {
+  float v;
+  std::memcpy(&v, b.data() + at, 4);
+  return v;
+}
+uint64_t U64(const std::string& b, size_t at) {
+  uint64_t v;
+  std::memcpy(&v, b.data() + at, 8);
+  return v;
+}
+
+void CheckAgainstInfo(const std::string& ulg, const std::string& info_txt) {
+  const InfoFile info = ParseInfo(kDir + info_txt);
+  REQUIRE(info.rows.size() >= 15);
+  auto log = ReadULog(kDir + ulg);
+  REQUIRE(log.ok());
+  size_t with_data = 0;
+  for (const ULogSubscription& s : log.value().subscriptions) with_data += s.message_count > 0;
+  CHECK(with_data == info.rows.size());  // ulog_info lists the topics with data.
+  for (const InfoRow& r : info.rows) {
+    INFO(ulg << ": " << r.topic << "[" << r.multi_id << "]");
+    const ULogSubscription* found = nullptr;
+    for (const ULogSubscription* s : log.value().Find(r.topic)) {
+      if (s->multi_id == r.multi_id) found = s;
+    }
+    REQUIRE(found != nullptr);
+    CHECK(found->message_count == r.count);
+    CHECK(log.value().FormatOf(*found).logged_size_bytes == r.size_bytes);
+  }
+}
+
+TEST_CASE("ULog: every topic's message count and size equal pyulog's ulog_info", "[io][ulog]") {
+  CheckAgainstInfo("sample.ulg", "sample_info.txt");
+  CheckAgainstInfo("sample_appended_multiple.ulg", "sample_appended_multiple_info.txt");
+}
+
+TEST_CASE("ULog: dropouts as ulog_info counts them", "[io][ulog]") {
+  // "Dropouts: count: 4, total duration: 0.1 s, max: 62 ms, mean: 29 ms"
+  const InfoFile info = ParseInfo(kDir + "sample_info.txt");
+  int count = 0, max_ms = 0, mean_ms = 0;
+  double total_s = 0;
+  REQUIRE(std::sscanf(info.dropouts.c_str(),
+                      "Dropouts: count: %d, total duration: %lf s, max: %d ms, mean: %d ms", &count,
+                      &total_s, &max_ms, &mean_ms) == 4);
+  auto log = ReadULog(kDir + "sample.ulg");
+  REQUIRE(log.ok());
+  const ULog& l = log.value();
+  CHECK(l.dropout_count == count);
+  CHECK(l.dropout_max_ms == max_ms);
+  // ulog_info prints the mean truncated to whole ms (119 / 4 = 29.75 -> 29).
+  CHECK(l.dropout_total_ms / l.dropout_count == mean_ms);
+  CHECK(std::round(l.dropout_total_ms / 100.0) / 10.0 == total_s);  // ulog_info's 0.1 s.
+  CHECK(l.version == 0);  // A version 0 file: no 'B' message.
+  // pyulog's ulog_messages output: one line per logged text message.
+  const std::string messages = Slurp(kDir + "sample_messages.txt");
+  CHECK(l.log_message_count == std::count(messages.begin(), messages.end(), '\n'));
+  CHECK(l.log_message_count == 4);
+  const InfoFile appended = ParseInfo(kDir + "sample_appended_multiple_info.txt");
+  CHECK(appended.dropouts == "No Dropouts");
+  auto a = ReadULog(kDir + "sample_appended_multiple.ulg");
+  REQUIRE(a.ok());
+  CHECK(a.value().dropout_count == 0);
+  // Three appended sections (the flag bits' offsets); nothing cut between them.
+  CHECK(a.value().appended_offsets.size() == 3);
+  CHECK(a.value().cut_bytes == 0);
+  CHECK(a.value().incompat_flags[0] == 1);
+}
+
+TEST_CASE("ULog: sensor_combined loads bit for bit as a session", "[io][ulog]") {
+  const std::string path = kDir + "sample.ulg";
+  CHECK(DetectSessionFormat(path).value() == SessionFormat::kULog);
+  auto r = LoadSession(path);
+  REQUIRE(r.ok());
+  const Session& s = r.value();
+  CHECK(s.format == SessionFormat::kULog);
+  REQUIRE(s.tags.size() == 1);
+  const Tag& t = s.tags[0];
+  REQUIRE(t.size() == 17070);
+  // The hand decode: 'F' sensor_combined is "uint64_t timestamp;float[3] gyro_rad;float
+  // gyro_integral_dt;int32_t accelerometer_timestamp_relative;float[3] accelerometer_m_s2;..."
+  // so timestamp at byte 0, gyro_rad at 8, accelerometer_m_s2 at 28 of the fields.
+  const std::string b = Slurp(path);
+  const auto ms = Walk(b);
+  const int id = MsgId(b, ms, "sensor_combined", 0);
+  REQUIRE(id >= 0);
+  const auto offsets = DataOffsets(b, ms, id);
+  REQUIRE(offsets.size() == 17070);
+  const uint64_t t0 = U64(b, offsets[0]);
+  for (size_t i : {size_t{0}, size_t{1}, size_t{8535}, size_t{17069}}) {
+    INFO("sample " << i);
+    const size_t at = offsets[i];
+    CHECK(t.t_ns[i] == static_cast<int64_t>(U64(b, at)) * 1000);
+    CHECK(t.t_s[i] == static_cast<double>(U64(b, at) - t0) * 1e-6);
+    const char* gyro[3] = {"gx_rads", "gy_rads", "gz_rads"};
+    const char* acc[3] = {"ax_mps2", "ay_mps2", "az_mps2"};
+    for (int k = 0; k < 3; ++k) {
+      CHECK(t.Find(gyro[k])->values[i] == static_cast<double>(F32(b, at + 8 + 4 * k)));
+      CHECK(t.Find(acc[k])->values[i] == static_cast<double>(F32(b, at + 28 + 4 * k)));
+    }
+  }
+  CHECK(t.Find("gx_rads")->unit == "rad/s");
+  CHECK(t.Find("az_mps2")->unit == "m/s^2");
+  CHECK(t.t_s[0] == 0.0);
+  CHECK(s.input.time_unit == "us");
+  CHECK(s.input.time_origin_ns == static_cast<int64_t>(t0) * 1000);
+  // First sample's az: the value the hand decode printed, -9.63039493560791 m/s^2 (gravity).
+  CHECK(t.Find("az_mps2")->values[0] == Approx(-9.63039493560791).epsilon(1e-7));
+}
+
+TEST_CASE("ULog: multi-instance sensor_accel, sensor_gyro and vehicle_imu", "[io][ulog]") {
+  const std::string path = kDir + "sample_log_small.ulg";
+  const std::string b = Slurp(path);
+  const auto ms = Walk(b);
+  // Default: sensor_combined, whose trailing padding (uint8_t[3] _padding0) is not logged.
+  auto def = LoadSession(path);
+  REQUIRE(def.ok());
+  REQUIRE(def.value().tags.size() == 1);
+  CHECK(def.value().tags[0].size() ==
+        DataOffsets(b, ms, MsgId(b, ms, "sensor_combined", 0)).size());
+  LoadOptions o;
+  o.topics = {"sensor_accel", "sensor_gyro"};
+  auto r = LoadSession(path, o);
+  REQUIRE(r.ok());
+  const Session& s = r.value();
+  REQUIRE(s.tags.size() == 6);  // Three instances of each.
+  for (int k = 0; k < 6; ++k) {
+    const std::string topic = k < 3 ? "sensor_accel" : "sensor_gyro";
+    const auto offsets = DataOffsets(b, ms, MsgId(b, ms, topic, k % 3));
+    INFO(topic << "[" << k % 3 << "]");
+    const Tag& t = s.tags[k];
+    CHECK(t.sensor == k + 1);
+    REQUIRE(t.size() == offsets.size());
+    REQUIRE(!offsets.empty());
+    // Layout: uint64_t timestamp; uint64_t timestamp_sample; uint32_t device_id; float x;
+    // float y; float z; float temperature; ... : time from timestamp_sample (byte 8).
+    const size_t at = offsets.back();
+    CHECK(t.t_ns.back() == static_cast<int64_t>(U64(b, at + 8)) * 1000);
+    CHECK(t.Find(k < 3 ? "ax_mps2" : "gx_rads")->values.back() == F32(b, at + 20));
+    CHECK(t.Find(k < 3 ? "az_mps2" : "gz_rads")->values.back() == F32(b, at + 28));
+    CHECK(t.Find("temp_c")->values.back() == F32(b, at + 32));
+  }
+  // vehicle_imu: uint64_t timestamp; uint64_t timestamp_sample; uint32_t accel_device_id;
+  // uint32_t gyro_device_id; float[3] delta_angle (24); float[3] delta_velocity (36);
+  // uint16_t delta_angle_dt (48); uint16_t delta_velocity_dt (50). Rate = delta / dt.
+  o.topics = {"vehicle_imu"};
+  auto v = LoadSession(path, o);
+  REQUIRE(v.ok());
+  REQUIRE(v.value().tags.size() == 3);
+  const auto offsets = DataOffsets(b, ms, MsgId(b, ms, "vehicle_imu", 0));
+  const Tag& t = v.value().tags[0];
+  REQUIRE(t.size() == offsets.size());
+  const size_t at = offsets[0];
+  CHECK(t.Find("gy_rads")->values[0] ==
+        static_cast<double>(F32(b, at + 28)) / (U16(b, at + 48) * 1e-6));
+  CHECK(t.Find("ax_mps2")->values[0] ==
+        static_cast<double>(F32(b, at + 36)) / (U16(b, at + 50) * 1e-6));
+  // A topic the log lacks, a topic that is not an IMU's: errors that list the IMU topics.
+  o.topics = {"vehicle_attitude"};
+  auto bad = LoadSession(path, o);
+  REQUIRE_FALSE(bad.ok());
+  CHECK_THAT(bad.error().message, Catch::Contains("--topic vehicle_attitude: not an IMU topic"));
+  CHECK_THAT(bad.error().message, Catch::Contains("sensor_gyro[2] (6 messages)"));
+  o.topics = {"sensor_accel"};
+  auto none = LoadSession(kDir + "sample.ulg", o);
+  REQUIRE_FALSE(none.ok());
+  CHECK_THAT(none.error().message, Catch::Contains("the log has no sensor_accel messages"));
+}
+
+// The offset of the message that runs past byte `n`.
+size_t CutMessage(const std::vector<RawMessage>& ms, size_t n) {
+  for (const RawMessage& m : ms) {
+    if (m.offset + 3 + m.size > n) return m.offset;
+  }
+  return 0;
+}
+
+TEST_CASE("ULog: a truncated file is an error, or its complete messages with --lenient",
+          "[io][ulog]") {
+  const std::string b = Slurp(kDir + "sample_log_small.ulg");
+  const auto ms = Walk(b);
+  const size_t n = b.size() / 2 + 7;  // Somewhere inside a message.
+  const size_t cut = CutMessage(ms, n);
+  REQUIRE(cut > 0);
+  REQUIRE(cut < n);
+  TempFile file(b.substr(0, n), ".ulg");
+  auto strict = LoadSession(file.path());
+  REQUIRE_FALSE(strict.ok());
+  CHECK(strict.error().file == file.path());
+  CHECK_THAT(strict.error().message,
+             Catch::StartsWith("byte offset " + std::to_string(cut) + ": truncated file: "));
+  CHECK_THAT(strict.error().message,
+             Catch::Contains("bytes, " + std::to_string(n - cut - 3) + " left after its header"));
+  LoadOptions lenient;
+  lenient.lenient = true;
+  auto r = LoadSession(file.path(), lenient);
+  REQUIRE(r.ok());
+  CHECK(r.value().rejected_rows == 1);
+  std::vector<RawMessage> complete;
+  for (const RawMessage& m : ms) {
+    if (m.offset < cut) complete.push_back(m);
+  }
+  CHECK(r.value().tags[0].size() ==
+        DataOffsets(b, complete, MsgId(b, ms, "sensor_combined", 0)).size());
+  auto log = ReadULog(file.path(), {true, {}});
+  REQUIRE(log.ok());
+  CHECK(log.value().truncated_bytes == static_cast<int64_t>(n - cut));
+  CHECK(log.value().message_count == static_cast<int64_t>(complete.size()));
+}
+
+TEST_CASE("ULog: bad input names the file and the byte offset", "[io][ulog]") {
+  const std::string good = Slurp(kDir + "sample_log_small.ulg");
+  const auto ms = Walk(good);
+  LoadOptions ulog;
+  ulog.format = SessionFormat::kULog;
+  SECTION("bad magic") {
+    std::string b = good;
+    b[3] = 'X';
+    TempFile file(b, ".ulg");
+    CHECK(DetectSessionFormat(file.path()).ok() == false);  // Binary, not ULog: refused.
+    auto r = LoadSession(file.path(), ulog);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().ToString() == file.path() +
+                                      ": byte offset 0: expected the ULog magic 55 4c 6f 67 01 "
+                                      "12 35 (\"ULog\" 01 12 35), found 55 4c 6f 58 01 12 35");
+  }
+  SECTION("unknown field type") {
+    std::string b = good;
+    const size_t f = b.find("vehicle_imu:uint64_t timestamp;");
+    REQUIRE(f != std::string::npos);
+    b.replace(b.find("float[3] delta_angle", f), 5, "flaot");
+    size_t a_offset = 0;
+    for (const RawMessage& m : ms) {
+      if (m.type == 'A' && std::string(b.data() + m.offset + 6, m.size - 3) == "vehicle_imu") {
+        a_offset = m.offset;
+        break;
+      }
+    }
+    TempFile file(b, ".ulg");
+    auto r = ReadULog(file.path());
+    REQUIRE_FALSE(r.ok());
+    CHECK_THAT(r.error().ToString(),
+               Catch::StartsWith(file.path() + ": byte offset " + std::to_string(a_offset) +
+                                 ": format 'vehicle_imu', field 'flaot delta_angle': unknown "
+                                 "type 'flaot'; expected int8_t"));
+  }
+  SECTION("a data message of an id never added") {
+    std::string b = good;
+    const auto offsets = DataOffsets(b, ms, MsgId(b, ms, "sensor_combined", 0));
+    const size_t d = offsets[10] - 5;    // The message's header.
+    b[d + 3] = static_cast<char>(0xe7);  // msg_id 999 (0x03e7): never subscribed.
+    b[d + 4] = 0x03;
+    TempFile file(b, ".ulg");
+    auto r = LoadSession(file.path());
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().ToString() == file.path() + ": byte offset " + std::to_string(d) +
+                                      ": 'D' message of msg_id 999, which no 'A' message added "
+                                      "(or an 'R' message removed): expected the msg_id of a "
+                                      "subscribed topic");
+    LoadOptions lenient;
+    lenient.lenient = true;
+    auto skipped = LoadSession(file.path(), lenient);
+    REQUIRE(skipped.ok());
+    CHECK(skipped.value().tags[0].size() == offsets.size() - 1);
+    CHECK(skipped.value().rejected_rows == 1);
+  }
+  SECTION("an incompatible flag this reader does not know") {
+    std::string b = good;
+    REQUIRE(b[18] == 'B');
+    b[16 + 3 + 8 + 1] = 0x04;  // incompat_flags[1]
+    TempFile file(b, ".ulg");
+    auto r = ReadULog(file.path());
+    REQUIRE_FALSE(r.ok());
+    CHECK_THAT(r.error().message,
+               Catch::StartsWith("byte offset 28: incompat_flags[1] = 0x04: an incompatible flag"));
+  }
+  SECTION("a file shorter than the header") {
+    TempFile file(good.substr(0, 10), ".ulg");
+    auto r = LoadSession(file.path());
+    REQUIRE_FALSE(r.ok());
+    CHECK_THAT(r.error().message, Catch::Contains("a 10-byte file: expected the 16-byte ULog"));
+  }
+  SECTION("--topic on a CSV session") {
+    TempFile file("t_s,gx_dps\n0,1\n0.1,2\n");
+    LoadOptions o;
+    o.topics = {"sensor_combined"};
+    auto r = LoadSession(file.path(), o);
+    REQUIRE_FALSE(r.ok());
+    CHECK_THAT(r.error().message, Catch::Contains("topics are chosen in ULog input"));
+  }
+}
+
+}  // namespace
+}  // namespace metro
