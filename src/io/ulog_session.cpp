@@ -127,7 +127,52 @@ struct TagBuild {
   Tag tag;
   std::vector<int64_t> t_us;
   std::string time_field;
+  std::string topic;
+  int multi_id = 0;
+  std::string label;    // "sensor_accel[1]: 6 messages", extended when paired.
+  bool merged = false;  // Merged into another build (PairAccelGyro).
 };
+
+// sensor_accel[k] and sensor_gyro[k] sampled at the same instants (equal time sequences)
+// are one IMU: their columns become one tag, the accelerometer's temperature kept (the
+// gyroscope's beside it compared in a note). Instances with other times stay apart.
+void PairAccelGyro(std::vector<TagBuild>* builds, std::vector<std::string>* notes) {
+  for (TagBuild& a : *builds) {
+    if (a.topic != "sensor_accel") continue;
+    for (TagBuild& g : *builds) {
+      if (g.topic != "sensor_gyro" || g.multi_id != a.multi_id || g.merged) continue;
+      if (g.t_us != a.t_us) {
+        notes->push_back(
+            fmt::format("sensor_accel[{0}] and sensor_gyro[{0}] have different "
+                        "sample times: two tags",
+                        a.multi_id));
+        continue;
+      }
+      const Quantity* a_temp = a.tag.Find("temp_c");
+      for (Quantity& q : g.tag.quantities) {
+        if (q.name != "temp_c" || a_temp == nullptr) {
+          a.tag.quantities.push_back(std::move(q));
+          a_temp = a.tag.Find("temp_c");
+          continue;
+        }
+        double most = 0.0;
+        for (size_t i = 0; i < q.values.size(); ++i) {
+          most = std::max(most, std::fabs(q.values[i] - a_temp->values[i]));
+        }
+        notes->push_back(
+            fmt::format("sensor_accel[{0}] and sensor_gyro[{0}] share their sample "
+                        "times: one tag; temp_c is the accelerometer's (the "
+                        "gyroscope's differs by at most {1} degC)",
+                        a.multi_id, most));
+      }
+      a.label += " + " + g.label;
+      g.merged = true;
+    }
+  }
+  builds->erase(
+      std::remove_if(builds->begin(), builds->end(), [](const TagBuild& b) { return b.merged; }),
+      builds->end());
+}
 
 Result<std::vector<BoundChannel>> Bind(const ULog& log, const ULogSubscription& sub,
                                        const TopicSpec& spec) {
@@ -303,13 +348,21 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
       if (sub->message_count == 0) continue;
       auto build = ReadTag(log, *sub, *FindTopicSpec(topic), options, &session);
       if (!build.ok()) return build.error();
-      build.value().tag.sensor = static_cast<int>(builds.size()) + 1;
-      session.input.notes.push_back(fmt::format("sensor {} = {}[{}]: {} messages",
-                                                build.value().tag.sensor, topic, sub->multi_id,
-                                                sub->message_count));
+      build.value().topic = topic;
+      build.value().multi_id = sub->multi_id;
+      build.value().label =
+          fmt::format("{}[{}] ({} messages)", topic, sub->multi_id, sub->message_count);
       builds.push_back(std::move(build).value());
     }
   }
+  for (const TagBuild& b : builds) session.rows += static_cast<int64_t>(b.t_us.size());
+  std::vector<std::string> pair_notes;
+  PairAccelGyro(&builds, &pair_notes);
+  for (size_t k = 0; k < builds.size(); ++k) {
+    builds[k].tag.sensor = static_cast<int>(k) + 1;
+    session.input.notes.push_back(fmt::format("sensor {} = {}", k + 1, builds[k].label));
+  }
+  session.input.notes.insert(session.input.notes.end(), pair_notes.begin(), pair_notes.end());
   int64_t t0_us = std::numeric_limits<int64_t>::max();
   for (const TagBuild& b : builds) {
     if (!b.t_us.empty()) t0_us = std::min(t0_us, b.t_us.front());
@@ -329,7 +382,6 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
       b.tag.t_s.push_back(static_cast<double>(t - t0_us) * 1e-6);
     }
     b.tag.counts.frames = b.tag.counts.fresh = static_cast<int64_t>(b.t_us.size());
-    session.rows += static_cast<int64_t>(b.t_us.size());
     for (const Quantity& q : b.tag.quantities) {
       if (std::find(session.columns.begin(), session.columns.end(), q.name) ==
           session.columns.end()) {

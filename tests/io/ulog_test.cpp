@@ -236,22 +236,47 @@ TEST_CASE("ULog: multi-instance sensor_accel, sensor_gyro and vehicle_imu", "[io
   auto r = LoadSession(path, o);
   REQUIRE(r.ok());
   const Session& s = r.value();
-  REQUIRE(s.tags.size() == 6);  // Three instances of each.
-  for (int k = 0; k < 6; ++k) {
-    const std::string topic = k < 3 ? "sensor_accel" : "sensor_gyro";
-    const auto offsets = DataOffsets(b, ms, MsgId(b, ms, topic, k % 3));
-    INFO(topic << "[" << k % 3 << "]");
+  // Three instances of each; instance k of both sampled at the same instants (checked here
+  // on the raw bytes), so each pair is one tag.
+  REQUIRE(s.tags.size() == 3);
+  int64_t messages = 0;
+  for (int k = 0; k < 3; ++k) {
+    const auto acc = DataOffsets(b, ms, MsgId(b, ms, "sensor_accel", k));
+    const auto gyro = DataOffsets(b, ms, MsgId(b, ms, "sensor_gyro", k));
+    messages += static_cast<int64_t>(acc.size() + gyro.size());
+    INFO("instance " << k);
     const Tag& t = s.tags[k];
     CHECK(t.sensor == k + 1);
-    REQUIRE(t.size() == offsets.size());
-    REQUIRE(!offsets.empty());
-    // Layout: uint64_t timestamp; uint64_t timestamp_sample; uint32_t device_id; float x;
-    // float y; float z; float temperature; ... : time from timestamp_sample (byte 8).
-    const size_t at = offsets.back();
-    CHECK(t.t_ns.back() == static_cast<int64_t>(U64(b, at + 8)) * 1000);
-    CHECK(t.Find(k < 3 ? "ax_mps2" : "gx_rads")->values.back() == F32(b, at + 20));
-    CHECK(t.Find(k < 3 ? "az_mps2" : "gz_rads")->values.back() == F32(b, at + 28));
-    CHECK(t.Find("temp_c")->values.back() == F32(b, at + 32));
+    REQUIRE(!acc.empty());
+    REQUIRE(t.size() == acc.size());
+    REQUIRE(t.size() == gyro.size());
+    // Layout of both: uint64_t timestamp; uint64_t timestamp_sample; uint32_t device_id;
+    // float x; float y; float z; float temperature; ...: time from timestamp_sample (byte 8).
+    for (size_t i = 0; i < acc.size(); ++i) {
+      REQUIRE(U64(b, acc[i] + 8) == U64(b, gyro[i] + 8));
+      CHECK(t.t_ns[i] == static_cast<int64_t>(U64(b, acc[i] + 8)) * 1000);
+      CHECK(t.Find("ax_mps2")->values[i] == F32(b, acc[i] + 20));
+      CHECK(t.Find("az_mps2")->values[i] == F32(b, acc[i] + 28));
+      CHECK(t.Find("gx_rads")->values[i] == F32(b, gyro[i] + 20));
+      CHECK(t.Find("gz_rads")->values[i] == F32(b, gyro[i] + 28));
+      CHECK(t.Find("temp_c")->values[i] == F32(b, acc[i] + 32));
+    }
+  }
+  CHECK(s.rows == messages);
+  {
+    // One gyroscope sample 1 us later: that instance's two sensors stay two tags.
+    std::string shifted = b;
+    const size_t at = DataOffsets(b, ms, MsgId(b, ms, "sensor_gyro", 0))[2] + 8;
+    shifted[at] = static_cast<char>(shifted[at] + 1);
+    TempFile file(shifted, ".ulg");
+    auto apart = LoadSession(file.path(), o);
+    REQUIRE(apart.ok());
+    CHECK(apart.value().tags.size() == 4);
+    CHECK(apart.value().tags[0].Find("gx_rads") == nullptr);
+    CHECK(apart.value().tags[3].Find("ax_mps2") == nullptr);
+    CHECK(std::count(apart.value().input.notes.begin(), apart.value().input.notes.end(),
+                     "sensor_accel[0] and sensor_gyro[0] have different sample times: two "
+                     "tags") == 1);
   }
   // vehicle_imu: uint64_t timestamp; uint64_t timestamp_sample; uint32_t accel_device_id;
   // uint32_t gyro_device_id; float[3] delta_angle (24); float[3] delta_velocity (36);
