@@ -323,15 +323,15 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
   for (unsigned char c : head) {
     if (c == 0) {
       return MakeError(path, 0,
-                       "binary data (NUL bytes): expected a text session.csv or a "
-                       "receiver capture");
+                       "binary data (NUL bytes): expected a text session.csv, a "
+                       "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35)");
     }
     if (c < 0x20 && c != '\n' && c != '\r' && c != '\t') ++control;
   }
   if (control * 20 > head.size()) {
     return MakeError(path, 0,
-                     "binary data (control bytes): expected a text session.csv or "
-                     "a receiver capture");
+                     "binary data (control bytes): expected a text session.csv, a "
+                     "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35)");
   }
   // The first meaningful lines: a receiver capture when most of them are receiver lines
   // (a cut first line or a terminal program's banner does not defeat it).

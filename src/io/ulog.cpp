@@ -76,7 +76,8 @@ class Reader {
  private:
   Status Handle(const Message& m);
   Status Short(const Message& m, size_t needed, const char* layout) const;
-  Status Reject(uint64_t offset, const std::string& what);
+  // An error, or with `lenient` a problem kept (of the message with that 1-based index).
+  Status Reject(uint64_t offset, const std::string& what, int64_t message_index);
   Status AddFormat(const Message& m);
   Status ResolveFormat(size_t index, int depth, const Message& m);
   Status AddInfo(const Message& m);
@@ -167,10 +168,11 @@ Status Reader::ReadFlagBits() {
   return Status::Ok();
 }
 
-Status Reader::Reject(uint64_t offset, const std::string& what) {
+Status Reader::Reject(uint64_t offset, const std::string& what, int64_t message_index) {
   Error e = At(log_.path, offset, what);
   if (!options_.lenient) return e;
   log_.problems.push_back(e.ToString());
+  log_.problem_messages.push_back(message_index);
   return Status::Ok();
 }
 
@@ -200,7 +202,7 @@ Status Reader::ReadSection(uint64_t begin, uint64_t end, bool last) {
                     left)
               : fmt::format("truncated file: {} message of {} bytes, {} left after its header",
                             TypeName(m.type), m.size, left - kMessageHeaderBytes);
-      if (Status s = Reject(pos, what); !s.ok()) return s;
+      if (Status s = Reject(pos, what, log_.message_count + 1); !s.ok()) return s;
       log_.truncated_bytes += static_cast<int64_t>(left);
       return Status::Ok();
     }
@@ -462,10 +464,11 @@ Status Reader::AddData(const Message& m) {
   auto it = active_.find(msg_id);
   if (it == active_.end()) {
     ++log_.unsubscribed_data_count;
-    return Reject(m.offset, fmt::format("'D' message of msg_id {}, which no 'A' message added "
-                                        "(or an 'R' message removed): expected the msg_id of "
-                                        "a subscribed topic",
-                                        msg_id));
+    return Reject(m.offset,
+                  fmt::format("'D' message of msg_id {}, which no 'A' message added (or an 'R' "
+                              "message removed): expected the msg_id of a subscribed topic",
+                              msg_id),
+                  log_.message_count);
   }
   ULogSubscription& sub = log_.subscriptions[it->second];
   const ULogFormat& format = log_.formats[sub.format_index];
@@ -479,7 +482,8 @@ Status Reader::AddData(const Message& m) {
                               sub.topic, msg_id, size, format.size_bytes,
                               least < format.size_bytes
                                   ? fmt::format(", or {} without the trailing padding", least)
-                                  : ""));
+                                  : ""),
+                  log_.message_count);
   }
   ++sub.message_count;
   const uint64_t data_offset = m.offset + kMessageHeaderBytes + 2;

@@ -335,11 +335,11 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
   session.path = log.path;
   session.format = SessionFormat::kULog;
   session.columns = {"t_s", "sensor"};
-  for (const std::string& p : log.problems) {
+  for (size_t i = 0; i < log.problems.size(); ++i) {
     ++session.rejected_rows;
     if (session.rejected_reasons.size() < options.max_rejected_kept) {
-      session.rejected_lines.push_back(0);
-      session.rejected_reasons.push_back(p);
+      session.rejected_lines.push_back(log.problem_messages[i]);
+      session.rejected_reasons.push_back(log.problems[i]);
     }
   }
   std::vector<TagBuild> builds;

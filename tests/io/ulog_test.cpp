@@ -334,6 +334,7 @@ TEST_CASE("ULog: a truncated file is an error, or its complete messages with --l
   auto r = LoadSession(file.path(), lenient);
   REQUIRE(r.ok());
   CHECK(r.value().rejected_rows == 1);
+  REQUIRE(r.value().rejected_lines.size() == 1);
   std::vector<RawMessage> complete;
   for (const RawMessage& m : ms) {
     if (m.offset < cut) complete.push_back(m);
@@ -344,6 +345,8 @@ TEST_CASE("ULog: a truncated file is an error, or its complete messages with --l
   REQUIRE(log.ok());
   CHECK(log.value().truncated_bytes == static_cast<int64_t>(n - cut));
   CHECK(log.value().message_count == static_cast<int64_t>(complete.size()));
+  // The lost message's index: the one after the complete ones.
+  CHECK(r.value().rejected_lines[0] == static_cast<int64_t>(complete.size()) + 1);
 }
 
 TEST_CASE("ULog: bad input names the file and the byte offset", "[io][ulog]") {

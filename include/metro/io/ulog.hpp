@@ -124,6 +124,7 @@ struct ULog {
   int64_t truncated_bytes = 0;
   int64_t unsubscribed_data_count = 0;
   std::vector<std::string> problems;
+  std::vector<int64_t> problem_messages;  // 1-based message index of each problem.
   // Bytes of a message cut by the start of appended data (see the file comment).
   int64_t cut_bytes = 0;
 
