@@ -29,6 +29,14 @@ TEST_CASE("characterize FILE.ulg --type-a reads sensor_combined", "[apps][ulog]"
   const auto& q = report["sensors"][0]["quantities"];
   CHECK(q["gx_rads"]["type_a"]["n"] == 17070);
   CHECK(q["az_mps2"]["type_a"]["n"] == 17070);
+  // The same through a pipe: a ULog is binary by design, not refused as binary data.
+  std::ifstream in(kDir + "sample.ulg", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto piped = testing::RunProgramWithStdin(METRO_CHARACTERIZE_EXE, "- --type-a", bytes);
+  INFO(piped.err);
+  REQUIRE(piped.exit_code == 0);
+  CHECK(nlohmann::json::parse(piped.out)["sensors"][0]["quantities"]["gz_rads"]["type_a"]["n"] ==
+        17070);
   // --topic chooses; --format ulog forces; a topic that is not an IMU's is exit 2.
   auto bad = Characterize(kDir + "sample.ulg --type-a --format ulog --topic vehicle_attitude");
   CHECK(bad.exit_code == 2);
