@@ -305,6 +305,118 @@ TEST_CASE("ULog: multi-instance sensor_accel, sensor_gyro and vehicle_imu", "[io
   CHECK_THAT(none.error().message, Catch::Contains("the log has no sensor_accel messages"));
 }
 
+// A ULog written here, message by message, with what the sample logs lack: nested formats, a
+// trailing padding left out, 'C', 'S', 'R', 'I' and a message cut where appended data starts.
+class ULogWriter {
+ public:
+  ULogWriter() {
+    bytes_ = std::string("ULog\x01\x12\x35\x01", 8);
+    Put(uint64_t{1000}, 8);
+  }
+  template <typename T>
+  void Put(T v, int n) {
+    for (int i = 0; i < n; ++i)
+      bytes_ += static_cast<char>((static_cast<uint64_t>(v) >> (8 * i)) & 0xff);
+  }
+  static std::string Le(uint64_t v, int n) {
+    std::string s;
+    for (int i = 0; i < n; ++i) s += static_cast<char>((v >> (8 * i)) & 0xff);
+    return s;
+  }
+  static std::string F32Bytes(float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return Le(u, 4);
+  }
+  void Message(char type, const std::string& body) {
+    Put(body.size(), 2);
+    bytes_ += type;
+    bytes_ += body;
+  }
+  std::string& bytes() { return bytes_; }
+
+ private:
+  std::string bytes_;
+};
+
+TEST_CASE("ULog: nested formats, padding, tagged text, sync, remove and a cut before appended data",
+          "[io][ulog]") {
+  ULogWriter w;
+  // 'B': incompat_flags[0] bit 0, appended_offsets[0] patched below.
+  w.Message('B', std::string(8, '\0') + std::string("\x01", 1) + std::string(7, '\0') +
+                     std::string(24, '\0'));
+  w.Message('F', "vec3:float x;float y;float z;");
+  w.Message('F', "imu_sample:uint64_t timestamp;vec3[2] v;uint16_t dt;uint8_t[2] _padding0;");
+  w.Message('F', "sensor_gyro:uint64_t timestamp;float x;float y;float z;float temperature;");
+  w.Message('I', std::string("\x0b", 1) + "char[3] foo" + "bar");
+  w.Message('A', std::string("\x00", 1) + ULogWriter::Le(5, 2) + "imu_sample");
+  w.Message('A', std::string("\x00", 1) + ULogWriter::Le(6, 2) + "sensor_gyro");
+  // imu_sample: 8 + 2 * 12 + 2 = 34 bytes logged of its 36 (the padding left out).
+  w.Message('D', ULogWriter::Le(5, 2) + ULogWriter::Le(2000, 8) + std::string(24, '\x01') +
+                     ULogWriter::Le(4000, 2));
+  const float gyro[5][3] = {{0.5f, -0.25f, 1e-3f},
+                            {0.75f, 0.f, -2.f},
+                            {1.f, 2.f, 3.f},
+                            {-0.5f, 0.125f, 7.f},
+                            {3.f, 2.f, 1.f}};
+  auto gyro_message = [&](int i) {
+    std::string body = ULogWriter::Le(6, 2) + ULogWriter::Le(10000 + 2500 * i, 8);
+    for (float v : gyro[i]) body += ULogWriter::F32Bytes(v);
+    return body + ULogWriter::F32Bytes(25.0f + i);
+  };
+  for (int i = 0; i < 3; ++i) w.Message('D', gyro_message(i));
+  w.Message('S', std::string("\x2f\x73\x13\x20\x25\x0c\xbb\x12", 8));
+  w.Message('O', ULogWriter::Le(25, 2));
+  w.Message('C', std::string("\x06", 1) + ULogWriter::Le(7, 2) + ULogWriter::Le(3000, 8) + "hi");
+  w.Message('L', std::string("\x06", 1) + ULogWriter::Le(3100, 8) + "hello");
+  w.Message('R', ULogWriter::Le(5, 2));
+  // The logger stopped mid-message: 10 bytes of a 29-byte 'D' message, then appended data.
+  const std::string cut = gyro_message(3);
+  w.bytes() += ULogWriter::Le(cut.size(), 2) + "D" + cut.substr(0, 7);
+  const uint64_t appended = w.bytes().size();
+  for (int i = 3; i < 5; ++i) w.Message('D', gyro_message(i));
+  w.bytes().replace(16 + 3 + 16, 8, ULogWriter::Le(appended, 8));
+  TempFile file(w.bytes(), ".ulg");
+
+  auto log = ReadULog(file.path());
+  REQUIRE(log.ok());
+  const ULog& l = log.value();
+  REQUIRE(l.appended_offsets == std::vector<uint64_t>{appended});
+  CHECK(l.cut_bytes == 10);
+  CHECK(l.dropout_count == 1);
+  CHECK(l.dropout_total_ms == 25);
+  CHECK(l.sync_count == 1);
+  CHECK(l.tagged_log_message_count == 1);
+  CHECK(l.log_message_count == 1);
+  CHECK(l.remove_count == 1);
+  REQUIRE(l.info.size() == 1);
+  CHECK(l.info[0].key == "foo");
+  CHECK(l.info[0].value == "bar");
+  const ULogSubscription& imu = *l.Find("imu_sample").at(0);
+  CHECK(imu.message_count == 1);
+  const ULogFormat& f = l.FormatOf(imu);
+  CHECK(f.size_bytes == 36);
+  CHECK(f.logged_size_bytes == 34);
+  CHECK(f.Find("v")->element_size_bytes == 12);
+  CHECK(f.Find("v")->size_bytes == 24);
+  CHECK(f.Find("dt")->offset_bytes == 32);
+  CHECK(l.Find("sensor_gyro").at(0)->message_count == 5);
+
+  LoadOptions o;
+  o.topics = {"sensor_gyro"};
+  auto r = LoadSession(file.path(), o);
+  REQUIRE(r.ok());
+  const Tag& t = r.value().tags.at(0);
+  REQUIRE(t.size() == 5);
+  for (int i = 0; i < 5; ++i) {
+    CHECK(t.t_s[i] == 2500e-6 * i);
+    CHECK(t.Find("gx_rads")->values[i] == gyro[i][0]);
+    CHECK(t.Find("gz_rads")->values[i] == gyro[i][2]);
+    CHECK(t.Find("temp_c")->values[i] == 25.0 + i);
+  }
+  CHECK(r.value().input.time_source == "timestamp");  // No timestamp_sample in this format.
+}
+
 // The offset of the message that runs past byte `n`.
 size_t CutMessage(const std::vector<RawMessage>& ms, size_t n) {
   for (const RawMessage& m : ms) {
