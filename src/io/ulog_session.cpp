@@ -284,6 +284,43 @@ Result<TagBuild> ReadTag(const ULog& log, const ULogSubscription& sub, const Top
   return out;
 }
 
+// sensor_combined's accelerometer was sampled at timestamp + accelerometer_timestamp_relative;
+// the tag keeps the gyroscope's time for both. What the offsets were, for the notes; a
+// warning when PX4 marked messages as without a new accelerometer sample (INT32_MAX).
+void AccelRelativeNotes(const ULog& log, InputDialect* in) {
+  constexpr double kInvalid = 2147483647.0;  // PX4's RELATIVE_TIMESTAMP_INVALID.
+  for (const ULogSubscription* sub : log.Find("sensor_combined")) {
+    const ULogField* f = log.FormatOf(*sub).Find("accelerometer_timestamp_relative");
+    if (f == nullptr || sub->data_offsets.empty()) continue;
+    double lo = kInvalid, hi = -kInvalid;
+    int64_t invalid = 0;
+    for (size_t i = 0; i < sub->data_offsets.size(); ++i) {
+      double v = 0.0;
+      if (!ReadULogValue(log, sub->data_offsets[i], sub->data_sizes[i], *f, 0, &v)) continue;
+      if (v == kInvalid) {
+        ++invalid;
+        continue;
+      }
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+    if (lo <= hi) {
+      in->notes.push_back(fmt::format(
+          "sensor_combined[{}]: accelerometer_timestamp_relative {} us; the accelerometer "
+          "columns carry the gyroscope's time",
+          sub->multi_id,
+          lo == hi ? fmt::format("{:.0f}", lo) : fmt::format("from {:.0f} to {:.0f}", lo, hi)));
+    }
+    if (invalid > 0) {
+      in->warnings.push_back(fmt::format(
+          "sensor_combined[{}]: {} messages without a new accelerometer sample "
+          "(accelerometer_timestamp_relative = 2147483647): their ax_mps2..az_mps2 are what "
+          "the message holds, not a new measurement",
+          sub->multi_id, invalid));
+    }
+  }
+}
+
 void AddNotes(const ULog& log, const std::vector<std::string>& topics, Session* session) {
   InputDialect& in = session->input;
   in.notes.push_back(fmt::format(
@@ -297,6 +334,7 @@ void AddNotes(const ULog& log, const std::vector<std::string>& topics, Session* 
           "sensor_combined: gyro_rad -> gx_rads..gz_rads, accelerometer_m_s2 -> ax_mps2..az_mps2, "
           "both at the gyroscope's timestamp (the accelerometer's own time is timestamp + "
           "accelerometer_timestamp_relative, not applied)");
+      AccelRelativeNotes(log, &in);
     } else if (t == "vehicle_imu") {
       in.notes.push_back(
           "vehicle_imu: gx_rads.. = delta_angle / (delta_angle_dt * 1e-6 s), ax_mps2.. = "

@@ -212,6 +212,14 @@ TEST_CASE("ULog: sensor_combined loads bit for bit as a session", "[io][ulog]") 
       CHECK(t.Find(acc[k])->values[i] == static_cast<double>(F32(b, at + 28 + 4 * k)));
     }
   }
+  // accelerometer_timestamp_relative (int32 at byte 24): 0 in every message of this log, so
+  // the note says the accelerometer columns carry the gyroscope's time with no offset.
+  bool all_zero = true;
+  for (size_t at : offsets) all_zero = all_zero && U64(b, at + 24) % (uint64_t{1} << 32) == 0;
+  CHECK(all_zero);
+  CHECK(std::count(s.input.notes.begin(), s.input.notes.end(),
+                   "sensor_combined[0]: accelerometer_timestamp_relative 0 us; the accelerometer "
+                   "columns carry the gyroscope's time") == 1);
   CHECK(t.Find("gx_rads")->unit == "rad/s");
   CHECK(t.Find("az_mps2")->unit == "m/s^2");
   CHECK(t.t_s[0] == 0.0);
