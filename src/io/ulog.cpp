@@ -21,6 +21,7 @@ constexpr uint64_t kHeaderBytes = 16;
 constexpr uint64_t kMessageHeaderBytes = 3;  // msg_size (uint16), msg_type (uint8).
 constexpr uint64_t kFlagBitsBytes = 40;      // 'B': 8 + 8 flag bytes, 3 uint64 offsets.
 constexpr int kMaxNesting = 32;
+constexpr size_t kMaxMessageBytes = 65535;
 
 // Explicit little-endian loads (the file's byte order, whatever the host's).
 uint64_t LoadLe(const char* p, int bytes) {
@@ -369,6 +370,13 @@ Status Reader::ResolveFormat(size_t index, int depth, const Message& m) {
     f.offset_bytes = offset;
     f.size_bytes = f.element_size_bytes * static_cast<size_t>(std::max(1, f.array_size));
     offset += f.size_bytes;
+    // Every size is bounded by what a message can hold, so nothing below can overflow.
+    if (offset > kMaxMessageBytes) {
+      return At(log_.path, m.offset,
+                fmt::format("format '{}' is more than {} bytes at field '{}': more than a "
+                            "message can hold (msg_size is a uint16)",
+                            log_.formats[index].name, kMaxMessageBytes, f.name));
+    }
   }
   ULogFormat& format = log_.formats[index];
   format.size_bytes = offset;

@@ -425,6 +425,51 @@ TEST_CASE("ULog: nested formats, padding, tagged text, sync, remove and a cut be
   CHECK(r.value().input.time_source == "timestamp");  // No timestamp_sample in this format.
 }
 
+TEST_CASE("ULog: damaged copies give a session or an error at a byte offset, never a crash",
+          "[io][ulog]") {
+  const std::string good = Slurp(kDir + "sample_log_small.ulg");
+  uint64_t state = 0x9e3779b97f4a7c15u;  // xorshift64: the same damage on every run.
+  auto next = [&state] {
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    return state;
+  };
+  int ok = 0, errors = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    std::string b = good;
+    // Damage the definitions more often than the data: that is where a byte changes most.
+    const size_t span = trial % 2 == 0 ? 60000 : b.size();
+    for (int k = 0; k < 4; ++k) b[next() % span] = static_cast<char>(next() & 0xff);
+    if (trial % 5 == 0) b.resize(next() % b.size());
+    TempFile file(b, ".ulg");
+    for (bool lenient : {false, true}) {
+      LoadOptions o;
+      o.format = SessionFormat::kULog;
+      o.lenient = lenient;
+      auto r = LoadSession(file.path(), o);
+      if (r.ok()) {
+        ++ok;
+        bool consistent = true;
+        for (const Tag& t : r.value().tags) {
+          for (const Quantity& q : t.quantities) consistent &= q.values.size() == t.size();
+          for (size_t i = 1; i < t.size(); ++i) consistent &= t.t_s[i] > t.t_s[i - 1];
+        }
+        CHECK(consistent);
+      } else {
+        ++errors;
+        INFO(r.error().ToString());
+        CHECK(r.error().file == file.path());
+        const std::string& m = r.error().message;
+        CHECK((m.rfind("byte offset ", 0) == 0 || m.find("--topic") != std::string::npos ||
+               m.find("no sensor_combined") != std::string::npos || m.find("format '") == 0));
+      }
+    }
+  }
+  CHECK(ok > 0);
+  CHECK(errors > 0);
+}
+
 // The offset of the message that runs past byte `n`.
 size_t CutMessage(const std::vector<RawMessage>& ms, size_t n) {
   for (const RawMessage& m : ms) {
@@ -534,6 +579,19 @@ TEST_CASE("ULog: bad input names the file and the byte offset", "[io][ulog]") {
     REQUIRE_FALSE(r.ok());
     CHECK_THAT(r.error().message,
                Catch::StartsWith("byte offset 28: incompat_flags[1] = 0x04: an incompatible flag"));
+  }
+  SECTION("a format larger than a message can hold") {
+    ULogWriter w;
+    w.Message('F', "part:float[20000] x;");  // 80,000 bytes: no uint16 msg_size holds it.
+    w.Message('F', "big:uint64_t timestamp;part p;");
+    const size_t a_offset = w.bytes().size();
+    w.Message('A', std::string("\x00", 1) + ULogWriter::Le(1, 2) + "big");
+    TempFile file(w.bytes(), ".ulg");
+    auto r = ReadULog(file.path());
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().message == "byte offset " + std::to_string(a_offset) +
+                                   ": format 'part' is more than 65535 bytes at field 'x': more "
+                                   "than a message can hold (msg_size is a uint16)");
   }
   SECTION("a file shorter than the header") {
     TempFile file(good.substr(0, 10), ".ulg");
