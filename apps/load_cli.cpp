@@ -10,8 +10,8 @@ void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags) 
       ->capture_default_str();
   app->add_option("--topic", o->library.topics,
                   "ULog input: an IMU topic to read (sensor_combined, sensor_accel, sensor_gyro, "
-                  "vehicle_imu), each instance one tag; repeatable (default: sensor_combined, "
-                  "else sensor_accel and sensor_gyro)");
+                  "vehicle_imu), each instance one tag, NAME[K] instance K only; repeatable "
+                  "(default: sensor_combined, else sensor_accel and sensor_gyro)");
   app->add_option("--frame-period-s", o->library.frame_period_s,
                   "receiver frame period in seconds (default 3281/32768 = 0.10013)")
       ->check(CLI::PositiveNumber);

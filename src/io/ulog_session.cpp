@@ -78,35 +78,74 @@ std::string TopicList(const ULog& log, bool imu_only) {
   return out.empty() ? "none" : out;
 }
 
-bool HasMessages(const ULog& log, std::string_view topic) {
-  for (const ULogSubscription* s : log.Find(topic)) {
-    if (s->message_count > 0) return true;
+// A --topic: NAME (every instance), NAME[K] or NAME:K (instance K only).
+struct TopicChoice {
+  std::string topic;
+  int multi_id = -1;  // -1: every instance.
+};
+
+bool HasMessages(const ULog& log, const TopicChoice& c) {
+  for (const ULogSubscription* s : log.Find(c.topic)) {
+    if (s->message_count > 0 && (c.multi_id < 0 || s->multi_id == c.multi_id)) return true;
   }
   return false;
 }
 
+// NAME, NAME[K] or NAME:K; false when K is not a number 0..255.
+bool ParseTopicChoice(const std::string& text, TopicChoice* c) {
+  c->topic = text;
+  c->multi_id = -1;
+  size_t cut = text.find_first_of("[:");
+  if (cut == std::string::npos) return true;
+  std::string k = text.substr(cut + 1);
+  if (text[cut] == '[') {
+    if (k.empty() || k.back() != ']') return false;
+    k.pop_back();
+  }
+  if (k.empty() || k.size() > 3 || k.find_first_not_of("0123456789") != std::string::npos ||
+      std::stoi(k) > 255) {
+    return false;
+  }
+  c->topic = text.substr(0, cut);
+  c->multi_id = std::stoi(k);
+  return true;
+}
+
 // --topic as given, or the default: sensor_combined, else sensor_accel + sensor_gyro.
-Result<std::vector<std::string>> ChooseTopics(const ULog& log, const LoadOptions& options) {
-  std::vector<std::string> topics = options.topics;
-  for (const std::string& t : topics) {
-    if (FindTopicSpec(t) == nullptr) {
+Result<std::vector<TopicChoice>> ChooseTopics(const ULog& log, const LoadOptions& options) {
+  std::vector<TopicChoice> topics;
+  for (const std::string& t : options.topics) {
+    TopicChoice c;
+    if (!ParseTopicChoice(t, &c) || FindTopicSpec(c.topic) == nullptr) {
       return MakeError(log.path, 0,
                        fmt::format("--topic {}: not an IMU topic metro reads; expected "
-                                   "sensor_combined, sensor_accel, sensor_gyro or vehicle_imu "
-                                   "(this log's: {})",
+                                   "sensor_combined, sensor_accel, sensor_gyro or vehicle_imu, "
+                                   "optionally one instance as NAME[K] (this log's: {})",
                                    t, TopicList(log, true)));
     }
-    if (!HasMessages(log, t)) {
+    if (!HasMessages(log, c)) {
       return MakeError(log.path, 0,
                        fmt::format("--topic {}: the log has no {} messages; its IMU topics: {} "
                                    "(`characterize topics {}` lists all)",
                                    t, t, TopicList(log, true), log.path));
     }
+    for (const TopicChoice& earlier : topics) {
+      if (earlier.topic == c.topic &&
+          (earlier.multi_id < 0 || c.multi_id < 0 || earlier.multi_id == c.multi_id)) {
+        return MakeError(log.path, 0,
+                         fmt::format("--topic {}: that instance is chosen twice; each instance "
+                                     "is one tag",
+                                     t));
+      }
+    }
+    topics.push_back(c);
   }
   if (!topics.empty()) return topics;
-  if (HasMessages(log, "sensor_combined")) return std::vector<std::string>{"sensor_combined"};
+  if (HasMessages(log, TopicChoice{"sensor_combined"})) {
+    return std::vector<TopicChoice>{TopicChoice{"sensor_combined"}};
+  }
   for (const char* t : {"sensor_accel", "sensor_gyro"}) {
-    if (HasMessages(log, t)) topics.push_back(t);
+    if (HasMessages(log, TopicChoice{t})) topics.push_back(TopicChoice{t});
   }
   if (!topics.empty()) return topics;
   return MakeError(log.path, 0,
@@ -321,14 +360,15 @@ void AccelRelativeNotes(const ULog& log, InputDialect* in) {
   }
 }
 
-void AddNotes(const ULog& log, const std::vector<std::string>& topics, Session* session) {
+void AddNotes(const ULog& log, const std::vector<TopicChoice>& topics, Session* session) {
   InputDialect& in = session->input;
   in.notes.push_back(fmt::format(
       "PX4 ULog version {}: t_s = (t - t0) * 1e-6 s from each message's {} [us, the "
       "autopilot's boot clock], t0 = {} us (the first sample read; logging started at {} us); "
       "line numbers are 1-based message indexes in the file",
       log.version, in.time_source, in.time_origin_ns / 1000, log.start_time_us));
-  for (const std::string& t : topics) {
+  for (const TopicChoice& choice : topics) {
+    const std::string& t = choice.topic;
     if (t == "sensor_combined") {
       in.notes.push_back(
           "sensor_combined: gyro_rad -> gx_rads..gz_rads, accelerometer_m_s2 -> ax_mps2..az_mps2, "
@@ -381,9 +421,11 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
     }
   }
   std::vector<TagBuild> builds;
-  for (const std::string& topic : topics.value()) {
+  for (const TopicChoice& choice : topics.value()) {
+    const std::string& topic = choice.topic;
     for (const ULogSubscription* sub : log.Find(topic)) {
       if (sub->message_count == 0) continue;
+      if (choice.multi_id >= 0 && sub->multi_id != choice.multi_id) continue;
       auto build = ReadTag(log, *sub, *FindTopicSpec(topic), options, &session);
       if (!build.ok()) return build.error();
       build.value().topic = topic;

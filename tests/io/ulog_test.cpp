@@ -301,6 +301,24 @@ TEST_CASE("ULog: multi-instance sensor_accel, sensor_gyro and vehicle_imu", "[io
         static_cast<double>(F32(b, at + 28)) / (U16(b, at + 48) * 1e-6));
   CHECK(t.Find("ax_mps2")->values[0] ==
         static_cast<double>(F32(b, at + 36)) / (U16(b, at + 50) * 1e-6));
+  // One instance: NAME[K] or NAME:K.
+  o.topics = {"sensor_gyro[2]", "sensor_accel:0"};
+  auto one = LoadSession(path, o);
+  REQUIRE(one.ok());
+  REQUIRE(one.value().tags.size() == 2);
+  CHECK(one.value().tags[0].size() == DataOffsets(b, ms, MsgId(b, ms, "sensor_gyro", 2)).size());
+  CHECK(one.value().tags[0].Find("ax_mps2") == nullptr);  // Instances 2 and 0: not paired.
+  CHECK(one.value().input.notes[0] == "sensor 1 = sensor_gyro[2] (6 messages)");
+  CHECK(one.value().input.notes[1] == "sensor 2 = sensor_accel[0] (6 messages)");
+  o.topics = {"sensor_gyro", "sensor_gyro[1]"};
+  auto twice = LoadSession(path, o);
+  REQUIRE_FALSE(twice.ok());
+  CHECK_THAT(twice.error().message, Catch::Contains("--topic sensor_gyro[1]: that instance is "
+                                                    "chosen twice"));
+  o.topics = {"sensor_gyro[7]"};
+  auto absent = LoadSession(path, o);
+  REQUIRE_FALSE(absent.ok());
+  CHECK_THAT(absent.error().message, Catch::Contains("--topic sensor_gyro[7]: the log has no"));
   // A topic the log lacks, a topic that is not an IMU's: errors that list the IMU topics.
   o.topics = {"vehicle_attitude"};
   auto bad = LoadSession(path, o);

@@ -36,8 +36,8 @@ struct LoadOptions {
   double accel_fs_g = 0.0;
   double gyro_fs_dps = 0.0;
   // ULog input: the topics to read (--topic, repeatable), each instance (multi_id) one tag;
-  // empty: sensor_combined if the log has it, else sensor_accel and sensor_gyro. Any other
-  // format refuses topics.
+  // "NAME[K]" or "NAME:K" reads instance K only; empty: sensor_combined if the log has it,
+  // else sensor_accel and sensor_gyro. Any other format refuses topics.
   std::vector<std::string> topics;
   int threads = 0;                // Parser threads; 0 = all cores.
   size_t max_rejected_kept = 10;  // How many rejected line numbers to keep.
