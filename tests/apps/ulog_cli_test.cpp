@@ -25,6 +25,9 @@ TEST_CASE("characterize FILE.ulg --type-a reads sensor_combined", "[apps][ulog]"
   REQUIRE(r.exit_code == 0);
   const auto report = nlohmann::json::parse(r.out);
   CHECK(report["input"]["format"] == "ulog");
+  CHECK(report["input"].count("dialect") == 0);  // Binary: no text dialect to report.
+  CHECK(report["input"]["time"]["unit"] == "us");
+  CHECK(report["input"]["time"]["integer"] == true);
   REQUIRE(report["sensors"].size() == 1);
   const auto& q = report["sensors"][0]["quantities"];
   CHECK(q["gx_rads"]["type_a"]["n"] == 17070);
