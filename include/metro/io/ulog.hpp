@@ -23,7 +23,8 @@
 //
 // Errors name the file and the byte offset of the message (0-based, from the start of the
 // file) and what was expected. With `lenient`, a truncated last message and data messages of
-// ids never subscribed are skipped and counted instead.
+// ids never subscribed or of a size their format does not allow are skipped and kept in
+// `problems` instead.
 #pragma once
 
 #include <cstdint>
