@@ -2,6 +2,7 @@
 // `characterize topics`, with the counts pyulog's ulog_info gives for the same file
 // (datasets/external/px4_pyulog_samples/sample_info.txt: sensor_combined (0, 72) 17070).
 #include <catch2/catch.hpp>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -83,6 +84,27 @@ TEST_CASE("characterize topics lists a ULog's topics", "[apps][ulog]") {
   auto analyze = Characterize(cut.path() + " --type-a");
   CHECK(analyze.exit_code == 2);
   CHECK_THAT(analyze.err, Catch::Contains("truncated file"));
+}
+
+TEST_CASE("characterize convert FILE.ulg writes a session.csv that reads back the same",
+          "[apps][ulog]") {
+  const std::string csv = "metro_ulog_convert_test.csv";
+  auto conv = Characterize("convert " + kDir + "sample.ulg -o " + csv);
+  INFO(conv.err);
+  REQUIRE(conv.exit_code == 0);
+  auto direct = Characterize(kDir + "sample.ulg --type-a");
+  auto back = Characterize(csv + " --type-a");
+  std::remove(csv.c_str());
+  REQUIRE(direct.exit_code == 0);
+  REQUIRE(back.exit_code == 0);
+  const auto a = nlohmann::json::parse(direct.out)["sensors"][0]["quantities"];
+  const auto b = nlohmann::json::parse(back.out)["sensors"][0]["quantities"];
+  for (const char* q : {"gx_rads", "gy_rads", "gz_rads", "ax_mps2", "ay_mps2", "az_mps2"}) {
+    INFO(q);
+    CHECK(a[q]["type_a"]["n"] == b[q]["type_a"]["n"]);
+    CHECK(a[q]["type_a"]["mean"].get<double>() == b[q]["type_a"]["mean"].get<double>());
+    CHECK(a[q]["type_a"]["u_mean"].get<double>() == b[q]["type_a"]["u_mean"].get<double>());
+  }
 }
 
 }  // namespace
