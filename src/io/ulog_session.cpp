@@ -363,10 +363,10 @@ void AccelRelativeNotes(const ULog& log, InputDialect* in) {
 void AddNotes(const ULog& log, const std::vector<TopicChoice>& topics, Session* session) {
   InputDialect& in = session->input;
   in.notes.push_back(fmt::format(
-      "PX4 ULog version {}: t_s = (t - t0) * 1e-6 s from each message's {} [us, the "
-      "autopilot's boot clock], t0 = {} us (the first sample read; logging started at {} us); "
-      "line numbers are 1-based message indexes in the file",
-      log.version, in.time_source, in.time_origin_ns / 1000, log.start_time_us));
+      "PX4 ULog version {}: t_s = (t - t0) * 1e-6 s, t the time field each sensor above names "
+      "[us, the autopilot's boot clock], t0 = {} us (the first sample read; logging started at "
+      "{} us); line numbers are 1-based message indexes in the file",
+      log.version, in.time_origin_ns / 1000, log.start_time_us));
   for (const TopicChoice& choice : topics) {
     const std::string& t = choice.topic;
     if (t == "sensor_combined") {
@@ -430,8 +430,8 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
       if (!build.ok()) return build.error();
       build.value().topic = topic;
       build.value().multi_id = sub->multi_id;
-      build.value().label =
-          fmt::format("{}[{}] ({} messages)", topic, sub->multi_id, sub->message_count);
+      build.value().label = fmt::format("{}[{}] ({} messages, time from {})", topic, sub->multi_id,
+                                        sub->message_count, build.value().time_field);
       builds.push_back(std::move(build).value());
     }
   }

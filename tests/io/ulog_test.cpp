@@ -308,8 +308,10 @@ TEST_CASE("ULog: multi-instance sensor_accel, sensor_gyro and vehicle_imu", "[io
   REQUIRE(one.value().tags.size() == 2);
   CHECK(one.value().tags[0].size() == DataOffsets(b, ms, MsgId(b, ms, "sensor_gyro", 2)).size());
   CHECK(one.value().tags[0].Find("ax_mps2") == nullptr);  // Instances 2 and 0: not paired.
-  CHECK(one.value().input.notes[0] == "sensor 1 = sensor_gyro[2] (6 messages)");
-  CHECK(one.value().input.notes[1] == "sensor 2 = sensor_accel[0] (6 messages)");
+  CHECK(one.value().input.notes[0] ==
+        "sensor 1 = sensor_gyro[2] (6 messages, time from timestamp_sample)");
+  CHECK(one.value().input.notes[1] ==
+        "sensor 2 = sensor_accel[0] (6 messages, time from timestamp_sample)");
   o.topics = {"sensor_gyro", "sensor_gyro[1]"};
   auto twice = LoadSession(path, o);
   REQUIRE_FALSE(twice.ok());
