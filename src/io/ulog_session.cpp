@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/parallel.hpp"
 #include "io/session_internal.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/ulog.hpp"
@@ -481,11 +482,16 @@ Result<Session> LoadULogSession(const std::string& path, const LoadOptions& opti
   ULogReadOptions read;
   read.lenient = options.lenient;
   for (const TopicSpec& s : TopicSpecs()) read.keep_topics.push_back(s.topic);
-  auto log = ReadULog(path, read);
-  if (!log.ok()) return log.error();
-  auto session = LoadULogSessionFrom(std::move(log).value(), options);
+  // The file is hashed on a second thread while it is read and decoded.
+  Result<std::string> digest = std::string();
+  Result<Session> session = MakeError(path, 0, "not loaded");
+  RunBeside([&] { digest = Sha256File(path); },
+            [&] {
+              auto log = ReadULog(path, read);
+              session = log.ok() ? LoadULogSessionFrom(std::move(log).value(), options)
+                                 : Result<Session>(log.error());
+            });
   if (!session.ok()) return session;
-  auto digest = Sha256File(path);
   if (!digest.ok()) return digest.error();
   session.value().sha256 = digest.value();
   return session;
