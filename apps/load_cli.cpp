@@ -5,8 +5,13 @@ namespace metro::apps {
 void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags) {
   app->add_option("--format", o->format,
                   "input format (auto: detected; csv is session.csv in any dialect)")
-      ->check(CLI::IsMember({"auto", "csv", "receiver", "euroc", "raw", "phyphox", "sensorlogger"}))
+      ->check(CLI::IsMember(
+          {"auto", "csv", "receiver", "euroc", "raw", "phyphox", "sensorlogger", "ulog"}))
       ->capture_default_str();
+  app->add_option("--topic", o->library.topics,
+                  "ULog input: an IMU topic to read (sensor_combined, sensor_accel, sensor_gyro, "
+                  "vehicle_imu), each instance one tag, NAME[K] instance K only; repeatable "
+                  "(default: sensor_combined, else sensor_accel and sensor_gyro)");
   app->add_option("--frame-period-s", o->library.frame_period_s,
                   "receiver frame period in seconds (default 3281/32768 = 0.10013)")
       ->check(CLI::PositiveNumber);
@@ -39,6 +44,7 @@ Status MakeLoadOptions(const LoadCliOptions& o, LoadOptions* load) {
   load->rate_hz = o.library.rate_hz;
   load->accel_fs_g = o.library.accel_fs_g;
   load->gyro_fs_dps = o.library.gyro_fs_dps;
+  load->topics = o.library.topics;
   load->column_map.clear();
   if (!o.columns_file.empty()) {
     auto file = LoadColumnMappings(o.columns_file);

@@ -25,5 +25,7 @@ void AddCaptureCommand(CLI::App& app, int* exit_code);
 // (docs/noise.md "Export to estimators").
 void AddNoiseExportCommand(CLI::App& app, int* exit_code);
 void AddNoiseCompareCommand(CLI::App& app, int* exit_code);
+// `characterize topics FILE.ulg`: a PX4 ULog's topics (docs/cli.md "topics").
+void AddTopicsCommand(CLI::App& app, int* exit_code);
 
 }  // namespace metro::apps

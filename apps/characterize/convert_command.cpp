@@ -1,5 +1,5 @@
 // characterize convert INPUT... -o session.csv [--format auto|csv|receiver|euroc|raw|phyphox|
-//   sensorlogger] [--imutk]: one session to canonical session.csv, several files of one
+//   sensorlogger|ulog] [--imutk]: one session to canonical session.csv, several files of one
 //   recording joined on time, or imu_tk's two files. --format is the flag every command that
 //   loads a session has (load_cli.hpp); --from FORMAT is its older spelling here (--from imutk:
 //   --imutk).
@@ -104,7 +104,8 @@ void AddConvertCommand(CLI::App& app, int* exit_code) {
   auto o = std::make_shared<ConvertOptions>();
   CLI::App* sub = app.add_subcommand(
       "convert",
-      "turn any readable session (receiver capture, EuRoC, raw prints, phyphox, Sensor Logger, "
+      "turn any readable session (receiver capture, EuRoC, raw prints, phyphox, Sensor Logger, PX4 "
+      "ULog, "
       "imu_tk's two files) into canonical session.csv; several files are joined on time");
   sub->add_option("inputs", o->inputs,
                   "INPUT, several files of one recording (joined on time), or ACC GYRO with "
@@ -120,7 +121,7 @@ void AddConvertCommand(CLI::App& app, int* exit_code) {
           ->excludes(format);
   sub->add_option("--from", o->from, "the older spelling of --format (--from imutk: --imutk)")
       ->check(CLI::IsMember(
-          {"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox", "sensorlogger"}))
+          {"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox", "sensorlogger", "ulog"}))
       ->excludes(format)
       ->excludes(imutk);
   sub->callback([o, exit_code] { *exit_code = RunConvert(*o); });

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   metro::apps::AddCaptureCommand(app, &exit_code);
   metro::apps::AddNoiseExportCommand(app, &exit_code);
   metro::apps::AddNoiseCompareCommand(app, &exit_code);
+  metro::apps::AddTopicsCommand(app, &exit_code);
   metro::apps::AddVersionFlag(app, "characterize");
   metro::apps::AddQuietFlag(app);  // On the app and every subcommand (docs/unix.md).
   try {

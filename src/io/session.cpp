@@ -26,6 +26,7 @@
 #include "metro/io/columns.hpp"
 #include "metro/io/receiver.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/io/ulog.hpp"
 
 namespace metro {
 
@@ -40,6 +41,7 @@ constexpr FormatName kFormatNames[] = {
     {SessionFormat::kReceiver, "receiver"}, {SessionFormat::kImuTk, "imutk"},
     {SessionFormat::kEuroc, "euroc"},       {SessionFormat::kRaw, "raw"},
     {SessionFormat::kPhyphox, "phyphox"},   {SessionFormat::kSensorLogger, "sensorlogger"},
+    {SessionFormat::kULog, "ulog"},
 };
 
 }  // namespace
@@ -312,6 +314,7 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
   ::close(fd);
   if (got < 0) return MakeError(path, 0, std::string("cannot read: ") + std::strerror(errno));
   head.resize(static_cast<size_t>(got));
+  if (IsULogMagic(head)) return SessionFormat::kULog;
   if (head.compare(0, 3, "\xEF\xBB\xBF") == 0) head.erase(0, 3);  // UTF-8 byte-order mark.
   if (head.empty()) {
     return MakeError(path, 0, "empty file: expected a session.csv or a receiver capture");
@@ -320,15 +323,15 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
   for (unsigned char c : head) {
     if (c == 0) {
       return MakeError(path, 0,
-                       "binary data (NUL bytes): expected a text session.csv or a "
-                       "receiver capture");
+                       "binary data (NUL bytes): expected a text session.csv, a "
+                       "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35)");
     }
     if (c < 0x20 && c != '\n' && c != '\r' && c != '\t') ++control;
   }
   if (control * 20 > head.size()) {
     return MakeError(path, 0,
-                     "binary data (control bytes): expected a text session.csv or "
-                     "a receiver capture");
+                     "binary data (control bytes): expected a text session.csv, a "
+                     "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35)");
   }
   // The first meaningful lines: a receiver capture when most of them are receiver lines
   // (a cut first line or a terminal program's banner does not defeat it).
@@ -376,8 +379,15 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
   if (format == SessionFormat::kImuTk) {
     return MakeError(path, 0, "imu_tk input is two files: use LoadImuTk(acc, gyro)");
   }
+  if (!options.topics.empty() && format != SessionFormat::kULog) {
+    return MakeError(path, 0,
+                     fmt::format("--topic {}: topics are chosen in ULog input; this is {} input",
+                                 options.topics.front(), SessionFormatName(format)));
+  }
   Result<Session> session = MakeError(path, 0, "not loaded");
-  if (format != SessionFormat::kReceiver) {
+  if (format == SessionFormat::kULog) {
+    session = internal::LoadULogSession(path, options);
+  } else if (format != SessionFormat::kReceiver) {
     session =
         internal::LoadSessionCsv(path, options, /*allow_clean_path=*/true, /*hash=*/true, format);
   } else {

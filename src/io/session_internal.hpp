@@ -26,6 +26,9 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
 // How many loads the clean-file path has completed in this process (for tests).
 int64_t CleanPathLoads();
 Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& options);
+// A PX4 ULog's IMU topics (options.topics), one tag per topic instance (ulog_session.cpp);
+// sets the session's sha256.
+Result<Session> LoadULogSession(const std::string& path, const LoadOptions& options);
 
 // Adds a text column to the tag, or, for an unknown column whose every value is a finite
 // number, a numeric Quantity with origin kUnknown.

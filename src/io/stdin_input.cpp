@@ -11,8 +11,11 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <utility>
 #include <vector>
+
+#include "metro/io/ulog.hpp"
 
 namespace metro::internal {
 namespace {
@@ -186,6 +189,7 @@ Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
 
   std::vector<char> chunk(size_t{1} << 20);
   int64_t total = 0;
+  std::string head;  // The first 7 bytes: a PX4 ULog (binary by design) starts with its magic.
   for (;;) {
     const ssize_t n = ::read(source, chunk.data(), chunk.size());
     if (n == 0) break;
@@ -194,14 +198,16 @@ Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
       if ((errno == EAGAIN || errno == EWOULDBLOCK) && WaitReadable(source)) continue;
       return StreamError(name, "cannot read " + said, errno);
     }
+    if (head.size() < 7) head.append(chunk.data(), std::min<size_t>(n, 7 - head.size()));
     // Binary data is refused on its first bytes, not after the cap (/dev/zero never ends).
-    if (total < kBinaryCheckBytes &&
+    // The ULog magic has no NUL byte, so a ULog is known before its first NUL is read.
+    if (total < kBinaryCheckBytes && !IsULogMagic(head) &&
         std::memchr(chunk.data(), '\0',
                     std::min(static_cast<size_t>(n),
                              static_cast<size_t>(kBinaryCheckBytes - total))) != nullptr) {
       return MakeError(name, 0,
                        "binary data (NUL bytes) in the first 64 KiB: expected a text "
-                       "session.csv or a receiver capture");
+                       "session.csv, a receiver capture or a PX4 ULog");
     }
     if (n > max_bytes - total) {
       return MakeError(

@@ -147,6 +147,7 @@ bool IsThesisTagFormat(SessionFormat format) {
     case SessionFormat::kRaw:
     case SessionFormat::kPhyphox:
     case SessionFormat::kSensorLogger:
+    case SessionFormat::kULog:
       return false;
   }
   return true;

@@ -68,6 +68,11 @@ ReportInput MakeInput(const Session& session) {
   } else {
     AddInputDialect(session.input, &input);
   }
+  if (session.format == SessionFormat::kULog) {
+    // A binary log: no delimiter, line ends or header to report, only its time.
+    input.dialect.reset();
+    input.mapping.reset();
+  }
   input.notes = session.input.notes;
   input.warnings = session.input.warnings;
   return input;

@@ -186,8 +186,8 @@ TEST_CASE("session.csv bad input: each class names file, line and what was expec
   CHECK(ErrorOf(std::string("\x7f"
                             "ELF\x02\x01\x01\0\0\0",
                             10)) ==
-        "session.csv: binary data (NUL bytes): expected a text session.csv or a receiver "
-        "capture");
+        "session.csv: binary data (NUL bytes): expected a text session.csv, a receiver "
+        "capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35)");
 }
 
 TEST_CASE("Lenient mode skips and counts malformed rows", "[io][csv]") {

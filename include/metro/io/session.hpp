@@ -34,9 +34,11 @@ enum class SessionFormat {
   kRaw,           // Arduino-style raw-count prints: ax,ay,az,gx,gy,gz (+ metadata lines).
   kPhyphox,       // phyphox CSV exports ("Time (s)", "Gyroscope x (rad/s)", ...).
   kSensorLogger,  // Sensor Logger per-sensor files: time (epoch ns), seconds_elapsed, z, y, x.
+  kULog,          // PX4 ULog flight logs (binary; metro/io/ulog.hpp): IMU topics, one tag each.
 };
 
-// "csv", "receiver", "imutk", "euroc", "raw", "phyphox", "sensorlogger" ("auto" for kAuto).
+// "csv", "receiver", "imutk", "euroc", "raw", "phyphox", "sensorlogger", "ulog" ("auto" for
+// kAuto).
 const char* SessionFormatName(SessionFormat format);
 // The format with that name; false if none.
 bool ParseSessionFormat(std::string_view name, SessionFormat* format);

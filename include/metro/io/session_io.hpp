@@ -35,6 +35,10 @@ struct LoadOptions {
   // the _lsb columns, at fs / 32768 per count. 0: counts only.
   double accel_fs_g = 0.0;
   double gyro_fs_dps = 0.0;
+  // ULog input: the topics to read (--topic, repeatable), each instance (multi_id) one tag;
+  // "NAME[K]" or "NAME:K" reads instance K only; empty: sensor_combined if the log has it,
+  // else sensor_accel and sensor_gyro. Any other format refuses topics.
+  std::vector<std::string> topics;
   int threads = 0;                // Parser threads; 0 = all cores.
   size_t max_rejected_kept = 10;  // How many rejected line numbers to keep.
   // Progress of a load: called with the byte count of each stretch of the file once it is
@@ -46,7 +50,8 @@ struct LoadOptions {
   bool IsValid(std::string* why) const;
 };
 
-// Detects the format of a file from its first lines: a receiver capture when most of the
+// Detects the format of a file from its first lines: a PX4 ULog by its magic bytes, a
+// receiver capture when most of the
 // first meaningful lines are receiver lines (a cut first line or a terminal program's banner
 // does not defeat it), a named format from its header, session.csv otherwise.
 Result<SessionFormat> DetectSessionFormat(const std::string& path);
