@@ -149,6 +149,36 @@ const char* FieldEnd(const char* p, const char* e, char delimiter) {
   return d != nullptr ? static_cast<const char*>(d) : e;
 }
 
+// The time field [fb, fe) on the careful path, into *t (t_s) or *t_ns (an integer time
+// column). Returns false if it is bad (recorded in block->bad).
+bool CarefulTime(const ColumnPlan& plan, const NumberSyntax& syntax, const char* fb, const char* fe,
+                 uint32_t local_line, Block* block, double* t, int64_t* t_ns) {
+  const int f = plan.time_field;
+  const std::string& name = plan.names[static_cast<size_t>(f)];
+  const char* why = nullptr;
+  if (plan.time_ns_per_unit != 0) {
+    int64_t resolution_ns = 0;
+    if (!syntax.TimeNs(fb, fe, plan.time_ns_per_unit, t_ns, &resolution_ns, &why)) {
+      block->bad.push_back(
+          {local_line, f + 1,
+           fmt::format("{}: expected a time in whole {} (integer, or a decimal down to 1 "
+                       "ns), found '{}' ({})",
+                       name, name.substr(2), Printable(fb, fe), why)});
+      return false;
+    }
+    // Only a resolution coarser than the column's unit is a loss worth a warning.
+    if (resolution_ns > plan.time_ns_per_unit) {
+      block->time_resolution_ns = std::max(block->time_resolution_ns, resolution_ns);
+    }
+  } else if (!syntax.Field(fb, fe, t, &why)) {
+    block->bad.push_back({local_line, f + 1,
+                          fmt::format("t_s: expected a finite time in seconds, found '{}' ({})",
+                                      Printable(fb, fe), why)});
+    return false;
+  }
+  return true;
+}
+
 // Parses one data line into the block. Returns false if the row is bad (recorded).
 bool ParseRow(const ColumnPlan& plan, const NumberSyntax& syntax, const char* b, const char* e,
               uint32_t local_line, Block* block, std::vector<double>* numeric_row,
@@ -215,27 +245,7 @@ bool ParseRow(const ColumnPlan& plan, const NumberSyntax& syntax, const char* b,
     Unquote(fb, fe);
     const char* why = nullptr;
     if (f == plan.time_field) {
-      const std::string& name = plan.names[uf];
-      if (integer_time) {
-        int64_t resolution_ns = 0;
-        if (!syntax.TimeNs(fb, fe, plan.time_ns_per_unit, &t_ns, &resolution_ns, &why)) {
-          block->bad.push_back(
-              {local_line, f + 1,
-               fmt::format("{}: expected a time in whole {} (integer, or a decimal down to 1 "
-                           "ns), found '{}' ({})",
-                           name, name.substr(2), Printable(fb, fe), why)});
-          return false;
-        }
-        // Only a resolution coarser than the column's unit is a loss worth a warning.
-        if (resolution_ns > plan.time_ns_per_unit) {
-          block->time_resolution_ns = std::max(block->time_resolution_ns, resolution_ns);
-        }
-      } else if (!syntax.Field(fb, fe, &t, &why)) {
-        block->bad.push_back({local_line, f + 1,
-                              fmt::format("t_s: expected a finite time in seconds, found '{}' ({})",
-                                          Printable(fb, fe), why)});
-        return false;
-      }
+      if (!CarefulTime(plan, syntax, fb, fe, local_line, block, &t, &t_ns)) return false;
     } else if (f == plan.sensor_field) {
       double v = 0.0;
       if (!syntax.Field(fb, fe, &v, &why) || v != std::floor(v) || v < 1.0 || v > 255.0) {
