@@ -23,6 +23,10 @@
 // as on a real serial port): the simulator waits for the open's flush (pty packet mode).
 // Prints "pty: /dev/pts/N" on stdout when PATH is ready, "done" after the last frame.
 // Exit status: 0 after SIGTERM/SIGINT, 2 for bad arguments, 1 for a system error.
+//
+// main runs these stages, in this order: ParseArgs (the command line), SimOptionsOf (the
+// simulator's options), InstallSignals, the Streamer's pty and record file, StreamFrames
+// (the simulator's text, frame by frame, to the pty), then idles until stopped.
 #include <fcntl.h>
 #include <poll.h>
 #include <pty.h>
@@ -279,10 +283,11 @@ struct Streamer {
   }
 };
 
-}  // namespace
+// ---- main's stages ------------------------------------------------------------------------
 
-int main(int argc, char** argv) {
-  Options o;
+// The command line into *o; 0, or the usage error's exit code.
+int ParseArgs(int argc, char** argv, Options* options) {
+  Options& o = *options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (i + 1 >= argc) return Usage("missing value after " + a);
@@ -335,8 +340,13 @@ int main(int argc, char** argv) {
     }
   }
   if (o.link.empty()) return Usage("--port-link PATH is required");
+  return 0;
+}
 
-  metro::StaticSimulationOptions sim;
+// The static simulator's options for the tags, late joiners and timing asked for; 0, or
+// the usage error's exit code.
+int SimOptionsOf(const Options& o, metro::StaticSimulationOptions* out) {
+  metro::StaticSimulationOptions& sim = *out;
   sim.seed = o.seed;
   sim.sensors.clear();
   for (int s = 1; s <= o.tags; ++s) {
@@ -356,10 +366,13 @@ int main(int argc, char** argv) {
                                     : std::min(metro::kSimMaxDurationS,
                                                0.5 * metro::kSimMaxObservations / lines_per_s);
   if (std::string why; !sim.IsValid(&why)) return Usage(why);
+  return 0;
+}
 
-  // Without SA_RESTART (std::signal sets it): a write blocked on a full pseudo-terminal,
-  // whose reader has gone, returns EINTR on SIGTERM and the loop sees g_stop; with it the
-  // write restarted and the program never ended (a README example hung its ctest for 600 s).
+// Without SA_RESTART (std::signal sets it): a write blocked on a full pseudo-terminal,
+// whose reader has gone, returns EINTR on SIGTERM and the loop sees g_stop; with it the
+// write restarted and the program never ended (a README example hung its ctest for 600 s).
+void InstallSignals() {
   struct sigaction stop {};
   stop.sa_handler = OnSignal;
   sigemptyset(&stop.sa_mask);
@@ -367,23 +380,13 @@ int main(int argc, char** argv) {
   sigaction(SIGTERM, &stop, nullptr);
   sigaction(SIGINT, &stop, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
+}
 
-  Streamer st;
-  st.opt = o;
-  if (!o.record.empty()) {
-    st.record = std::fopen(o.record.c_str(), "wb");
-    if (st.record == nullptr) {
-      std::fprintf(stderr, "metro_sim_receiver: cannot create %s: %s\n", o.record.c_str(),
-                   std::strerror(errno));
-      return 1;
-    }
-  }
-  if (!st.pty.Open(o.link)) return 1;
-  std::printf("pty: %s\n", st.pty.SlaveName().c_str());
-  std::fflush(stdout);
-
+// The simulator's text, frame by frame, to the pty at the frame period (connecting on the
+// first chunk).
+metro::Status StreamFrames(const metro::StaticSimulationOptions& sim, Streamer* streamer) {
+  Streamer& st = *streamer;
   bool connected = false;
-  bool failed = false;
   const metro::TextSink pace = [&](std::string_view chunk) -> metro::Status {
     if (!connected) {
       st.first_line_tail = std::string(chunk.substr(0, chunk.find('\n')));
@@ -409,7 +412,33 @@ int main(int argc, char** argv) {
     if (!frame.empty() && !st.SendFrame(frame)) return metro::MakeError("stopped");
     return metro::Status::Ok();
   };
-  const metro::Status s = metro::SimulateStaticSession(sim, metro::SessionFormat::kReceiver, pace);
+  return metro::SimulateStaticSession(sim, metro::SessionFormat::kReceiver, pace);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  if (int code = ParseArgs(argc, argv, &o); code != 0) return code;
+  metro::StaticSimulationOptions sim;
+  if (int code = SimOptionsOf(o, &sim); code != 0) return code;
+  InstallSignals();
+  Streamer st;
+  st.opt = o;
+  if (!o.record.empty()) {
+    st.record = std::fopen(o.record.c_str(), "wb");
+    if (st.record == nullptr) {
+      std::fprintf(stderr, "metro_sim_receiver: cannot create %s: %s\n", o.record.c_str(),
+                   std::strerror(errno));
+      return 1;
+    }
+  }
+  if (!st.pty.Open(o.link)) return 1;
+  std::printf("pty: %s\n", st.pty.SlaveName().c_str());
+  std::fflush(stdout);
+
+  bool failed = false;
+  const metro::Status s = StreamFrames(sim, &st);
   if (st.record != nullptr) {
     if (std::fclose(st.record) != 0) failed = true;
     st.record = nullptr;

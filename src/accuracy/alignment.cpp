@@ -1,3 +1,9 @@
+// AlignReference runs these stages, in this order:
+//
+//   logs     CheckLogs         lengths, sizes, overlap within the searched offsets
+//   offset   GridOffset        grid search of the clock offset, parabolic refinement
+//   lag      FitOffsetAndLag   with model_lag: offset and first-order response time together
+//   result   (driver)          the reference at the tag's times, its residual and overlap
 #include "metro/accuracy/alignment.hpp"
 
 #include <fmt/format.h>
@@ -144,24 +150,32 @@ bool AlignmentOptions::IsValid(std::string* why) const {
   return true;
 }
 
-Result<Alignment> AlignReference(const std::vector<double>& tag_t_s,
-                                 const std::vector<double>& tag_angle_deg,
-                                 const std::vector<double>& reference_t_s,
-                                 const std::vector<double>& reference_angle_deg,
-                                 const AlignmentOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) return MakeError(why);
-  if (tag_t_s.size() != tag_angle_deg.size() ||
-      reference_t_s.size() != reference_angle_deg.size()) {
+namespace {
+
+// ---- AlignReference's stages --------------------------------------------------------------
+
+// The two logs.
+struct AlignmentInput {
+  const std::vector<double>& tag_t_s;
+  const std::vector<double>& tag_angle_deg;
+  const std::vector<double>& reference_t_s;
+  const std::vector<double>& reference_angle_deg;
+};
+
+// The logs checked (lengths, at least 2 samples, overlap within the searched offsets): the
+// alignment with their spans.
+Result<Alignment> CheckLogs(const AlignmentInput& in, const AlignmentOptions& options) {
+  if (in.tag_t_s.size() != in.tag_angle_deg.size() ||
+      in.reference_t_s.size() != in.reference_angle_deg.size()) {
     return MakeError("alignment: time and angle series differ in length");
   }
-  if (tag_t_s.size() < 2) return MakeError("the tag log has fewer than 2 observations");
-  if (reference_t_s.size() < 2) return MakeError("the reference log has fewer than 2 samples");
+  if (in.tag_t_s.size() < 2) return MakeError("the tag log has fewer than 2 observations");
+  if (in.reference_t_s.size() < 2) return MakeError("the reference log has fewer than 2 samples");
   Alignment a;
-  a.tag_t_first_s = tag_t_s.front();
-  a.tag_t_last_s = tag_t_s.back();
-  a.reference_t_first_s = reference_t_s.front();
-  a.reference_t_last_s = reference_t_s.back();
+  a.tag_t_first_s = in.tag_t_s.front();
+  a.tag_t_last_s = in.tag_t_s.back();
+  a.reference_t_first_s = in.reference_t_s.front();
+  a.reference_t_last_s = in.reference_t_s.back();
   const double centre = options.offset_s.value_or(0.0);
   const double reach = options.offset_s ? 0.0 : options.max_offset_s;
   // Overlap over the whole search range: tag [t0, t1] against reference [r0 - o, r1 - o].
@@ -175,6 +189,108 @@ Result<Alignment> AlignReference(const std::vector<double>& tag_t_s,
         options.offset_s ? fmt::format(" at offset {} s", *options.offset_s)
                          : fmt::format(" within +-{} s", options.max_offset_s)));
   }
+  return a;
+}
+
+// The clock offset minimising the standard deviation of tag - reference over a grid of
+// step_s within +-max_offset_s, refined by a parabola through the best three (a->offset_s,
+// a->delay_s). r: scratch for the interpolated reference.
+Status GridOffset(const AlignmentInput& in, const AlignmentOptions& options, Alignment* a,
+                  std::vector<double>* r) {
+  size_t count = 0;
+  const int half = static_cast<int>(std::lround(options.max_offset_s / options.step_s));
+  std::vector<double> cost(static_cast<size_t>(2 * half + 1), kNaN);
+  int best = -1;
+  for (int g = -half; g <= half; ++g) {
+    Interpolate(in.tag_t_s, in.reference_t_s, in.reference_angle_deg, g * options.step_s, r);
+    const double c = ResidualStd(in.tag_angle_deg, *r, &count);
+    // Offsets that leave fewer than half the tag observations matched are not candidates.
+    if (count * 2 < in.tag_t_s.size()) continue;
+    cost[static_cast<size_t>(g + half)] = c;
+    if (best < 0 || c < cost[static_cast<size_t>(best)]) best = g + half;
+  }
+  if (best < 0) {
+    return MakeError(fmt::format(
+        "the reference log (t_s {:.6g} .. {:.6g} s) covers less than half of the tag log "
+        "(t_s {:.6g} .. {:.6g} s) at every offset within +-{} s: record the reference during "
+        "the whole sweep",
+        a->reference_t_first_s, a->reference_t_last_s, a->tag_t_first_s, a->tag_t_last_s,
+        options.max_offset_s));
+  }
+  if (best == 0 || best == 2 * half || std::isnan(cost[static_cast<size_t>(best - 1)]) ||
+      std::isnan(cost[static_cast<size_t>(best + 1)])) {
+    return MakeError(fmt::format(
+        "the reference log could not be aligned: the best clock offset lies at the edge of "
+        "the searched range ({:.6g} s of +-{} s); give it with --reference-offset-s",
+        (best - half) * options.step_s, options.max_offset_s));
+  }
+  const double c0 = cost[static_cast<size_t>(best - 1)];
+  const double c1 = cost[static_cast<size_t>(best)];
+  const double c2 = cost[static_cast<size_t>(best + 1)];
+  const double curvature = c0 - 2.0 * c1 + c2;
+  const double shift = curvature > 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
+  a->offset_s = (best - half + shift) * options.step_s;
+  a->delay_s = a->offset_s;
+  return Status::Ok();
+}
+
+// The pure delay d0 is the clock offset less the tag's response delay (a first-order
+// lag of tau delays a ramp by tau). Fit both: tag(t) = L_tau[r(. + offset)](t) + e,
+// minimising the standard deviation of the residual over (offset, tau), coarse grid
+// around offset = d0 + tau, then a fine one around the coarse minimum.
+void FitOffsetAndLag(const AlignmentInput& in, const AlignmentOptions& options, Alignment* a,
+                     std::vector<double>* r_out) {
+  std::vector<double>& r = *r_out;
+  std::vector<double> gain;
+  auto cost_at = [&](double offset, double tau) {
+    LagGains(in.tag_t_s, tau, &gain);
+    Interpolate(in.tag_t_s, in.reference_t_s, in.reference_angle_deg, offset, &r);
+    size_t n = 0;
+    const double c = LaggedResidualStd(in.tag_angle_deg, r, gain, &n);
+    return n * 2 < in.tag_t_s.size() ? kNaN : c;
+  };
+  double best_offset = a->offset_s, best_tau = 0.0;
+  double best_cost = cost_at(best_offset, 0.0);
+  auto search = [&](double tau_lo, double tau_hi, double tau_step, double off_half, double off_step,
+                    bool relative) {
+    const double centre_offset = best_offset;
+    for (double tau = tau_lo; tau <= tau_hi + 1e-12; tau += tau_step) {
+      if (tau < 0.0) continue;
+      const double mid = relative ? a->delay_s + tau : centre_offset;
+      for (double off = mid - off_half; off <= mid + off_half + 1e-12; off += off_step) {
+        const double c = cost_at(off, tau);
+        if (c < best_cost) {
+          best_cost = c;
+          best_offset = off;
+          best_tau = tau;
+        }
+      }
+    }
+  };
+  search(0.0, options.max_lag_s, 0.1, 0.3, 0.02, true);
+  search(best_tau - 0.1, best_tau + 0.1, 0.01, 0.04, 0.005, false);
+  a->offset_s = best_offset;
+  a->lag_tau_s = best_tau;
+  a->lag_modelled = true;
+  a->method =
+      "linear interpolation of the reference at the tag's t_s + offset; offset and the tag's "
+      "first-order response time tau estimated together by minimising the standard "
+      "deviation of tag - L_tau[reference] (coarse then fine grid)";
+}
+
+}  // namespace
+
+Result<Alignment> AlignReference(const std::vector<double>& tag_t_s,
+                                 const std::vector<double>& tag_angle_deg,
+                                 const std::vector<double>& reference_t_s,
+                                 const std::vector<double>& reference_angle_deg,
+                                 const AlignmentOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(why);
+  const AlignmentInput in{tag_t_s, tag_angle_deg, reference_t_s, reference_angle_deg};
+  Result<Alignment> checked = CheckLogs(in, options);
+  if (!checked.ok()) return checked.error();
+  Alignment a = std::move(checked).value();
   std::vector<double> r;
   size_t count = 0;
   Interpolate(tag_t_s, reference_t_s, reference_angle_deg, 0.0, &r);
@@ -187,80 +303,8 @@ Result<Alignment> AlignReference(const std::vector<double>& tag_t_s,
         "linear interpolation of the reference at the tag's t_s + offset; offset estimated by "
         "minimising the standard deviation of tag - reference over a grid, parabolic refinement";
     a.estimated = true;
-    const int half = static_cast<int>(std::lround(options.max_offset_s / options.step_s));
-    std::vector<double> cost(static_cast<size_t>(2 * half + 1), kNaN);
-    int best = -1;
-    for (int g = -half; g <= half; ++g) {
-      Interpolate(tag_t_s, reference_t_s, reference_angle_deg, g * options.step_s, &r);
-      const double c = ResidualStd(tag_angle_deg, r, &count);
-      // Offsets that leave fewer than half the tag observations matched are not candidates.
-      if (count * 2 < tag_t_s.size()) continue;
-      cost[static_cast<size_t>(g + half)] = c;
-      if (best < 0 || c < cost[static_cast<size_t>(best)]) best = g + half;
-    }
-    if (best < 0) {
-      return MakeError(fmt::format(
-          "the reference log (t_s {:.6g} .. {:.6g} s) covers less than half of the tag log "
-          "(t_s {:.6g} .. {:.6g} s) at every offset within +-{} s: record the reference during "
-          "the whole sweep",
-          a.reference_t_first_s, a.reference_t_last_s, a.tag_t_first_s, a.tag_t_last_s,
-          options.max_offset_s));
-    }
-    if (best == 0 || best == 2 * half || std::isnan(cost[static_cast<size_t>(best - 1)]) ||
-        std::isnan(cost[static_cast<size_t>(best + 1)])) {
-      return MakeError(fmt::format(
-          "the reference log could not be aligned: the best clock offset lies at the edge of "
-          "the searched range ({:.6g} s of +-{} s); give it with --reference-offset-s",
-          (best - half) * options.step_s, options.max_offset_s));
-    }
-    const double c0 = cost[static_cast<size_t>(best - 1)];
-    const double c1 = cost[static_cast<size_t>(best)];
-    const double c2 = cost[static_cast<size_t>(best + 1)];
-    const double curvature = c0 - 2.0 * c1 + c2;
-    const double shift = curvature > 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
-    a.offset_s = (best - half + shift) * options.step_s;
-    a.delay_s = a.offset_s;
-    if (options.model_lag) {
-      // The pure delay d0 is the clock offset less the tag's response delay (a first-order
-      // lag of tau delays a ramp by tau). Fit both: tag(t) = L_tau[r(. + offset)](t) + e,
-      // minimising the standard deviation of the residual over (offset, tau), coarse grid
-      // around offset = d0 + tau, then a fine one around the coarse minimum.
-      std::vector<double> gain;
-      auto cost_at = [&](double offset, double tau) {
-        LagGains(tag_t_s, tau, &gain);
-        Interpolate(tag_t_s, reference_t_s, reference_angle_deg, offset, &r);
-        size_t n = 0;
-        const double c = LaggedResidualStd(tag_angle_deg, r, gain, &n);
-        return n * 2 < tag_t_s.size() ? kNaN : c;
-      };
-      double best_offset = a.offset_s, best_tau = 0.0;
-      double best_cost = cost_at(best_offset, 0.0);
-      auto search = [&](double tau_lo, double tau_hi, double tau_step, double off_half,
-                        double off_step, bool relative) {
-        const double centre_offset = best_offset;
-        for (double tau = tau_lo; tau <= tau_hi + 1e-12; tau += tau_step) {
-          if (tau < 0.0) continue;
-          const double mid = relative ? a.delay_s + tau : centre_offset;
-          for (double off = mid - off_half; off <= mid + off_half + 1e-12; off += off_step) {
-            const double c = cost_at(off, tau);
-            if (c < best_cost) {
-              best_cost = c;
-              best_offset = off;
-              best_tau = tau;
-            }
-          }
-        }
-      };
-      search(0.0, options.max_lag_s, 0.1, 0.3, 0.02, true);
-      search(best_tau - 0.1, best_tau + 0.1, 0.01, 0.04, 0.005, false);
-      a.offset_s = best_offset;
-      a.lag_tau_s = best_tau;
-      a.lag_modelled = true;
-      a.method =
-          "linear interpolation of the reference at the tag's t_s + offset; offset and the tag's "
-          "first-order response time tau estimated together by minimising the standard "
-          "deviation of tag - L_tau[reference] (coarse then fine grid)";
-    }
+    if (Status s = GridOffset(in, options, &a, &r); !s.ok()) return s.error();
+    if (options.model_lag) FitOffsetAndLag(in, options, &a, &r);
   }
   Interpolate(tag_t_s, reference_t_s, reference_angle_deg, a.offset_s, &r);
   a.residual_std_deg = ResidualStd(tag_angle_deg, r, &count);

@@ -1,3 +1,10 @@
+// SensorConstantsAt (behind SensorConstantsFromCalibration) runs these stages, in order:
+//
+//   inputs     CheckBlobInputs   raw-count input, a nominal full scale (unless generic), u(M)
+//   tempco     CheckTempco       |b1| within the plausibility limit (docs/calibration-blob.md 3.1)
+//   constants  FillConstants     M, u(M), b0, b1 and their u, the fit residual, in SI
+//   validity   ApplyValidity     the temperature validity range
+//   generic    GenericSection    --profile generic: section v1.0 or v2.0 and its encoding
 #include "metro/blob/from_calibration.hpp"
 
 #include <fmt/format.h>
@@ -265,14 +272,13 @@ Result<uint8_t> InferFsSel(ImuSensor sensor, const Eigen::Matrix3d& m) {
 
 namespace {
 
-// SensorConstantsFromCalibration; on an error *where receives the path, in the sensor's object
-// of calibration.json, of the value it is about (empty: the object itself).
-Result<SensorConstants> SensorConstantsAt(const SensorCalibration& c,
-                                          const BlobFromCalibrationOptions& options,
-                                          std::vector<std::string>* warnings,
-                                          CalibrationPath* where) {
+// ---- SensorConstantsAt's stages -----------------------------------------------------------
+
+// What the tag needs of the calibration: raw-count input, a nominal full scale (unless
+// generic) and the uncertainty of M. fs: NominalFsSel's answer.
+Status CheckBlobInputs(const SensorCalibration& c, bool generic, const Result<uint8_t>& fs,
+                       CalibrationPath* where) {
   const SensorModel& model = c.model;
-  where->clear();
   const auto at = [where](CalibrationPath path) { *where = std::move(path); };
   const char* name = ImuSensorName(model.sensor);
   if (model.input_unit != "LSB") {
@@ -282,12 +288,6 @@ Result<SensorConstants> SensorConstantsAt(const SensorCalibration& c,
                     "calibration must be fitted on LSB data",
                     name, model.input_unit));
   }
-  // docs/calibration-blob.md section 10: M is calibration.json's `matrix` (the reader checked it
-  // against `scale` and `misalignment`); a calibration straight from a fit has model.Matrix().
-  const Eigen::Matrix3d m_c = c.M();
-  const bool generic = options.profile == SensorProfile::kGeneric;
-  Result<uint8_t> fs = NominalFsSel(model.sensor, m_c, options);
-  // generic: a section v2.0 declares the nominal itself when no FS_SEL of v1.0 fits (below)
   if (!fs.ok() && !generic) {
     at({std::string("matrix")});
     return MakeError(fmt::format(
@@ -301,22 +301,21 @@ Result<SensorConstants> SensorConstantsAt(const SensorCalibration& c,
         "{}: 'matrix_u' is missing or zero; the blob stores the uncertainty of every element of M",
         name));
   }
-  const double si = SiPerOutputUnit(model.sensor);
-  SensorConstants s;
-  s.fs_sel = fs.ok() ? fs.value() : 0;
-  s.dlpf_cfg = options.dlpf_cfg;
-  s.model_bits = kModelBias;
-  if (model.kind == ModelKind::kFull) s.model_bits |= kModelFullMatrix;
-  if (model.has_temperature) s.model_bits |= kModelLinearT;
-  // Plausibility (docs/calibration-blob.md 3.1): the calibrator fits no b2, so the temperature
-  // coefficient is |b1| on each axis.
+  return Status::Ok();
+}
+
+// Plausibility (docs/calibration-blob.md 3.1): the calibrator fits no b2, so the temperature
+// coefficient is |b1| on each axis.
+Status CheckTempco(const SensorModel& model, uint8_t fs_sel, CalibrationPath* where) {
+  const auto at = [where](CalibrationPath path) { *where = std::move(path); };
+  const char* name = ImuSensorName(model.sensor);
   const bool accel = model.sensor == ImuSensor::kAccel;
-  const double tempco_limit = TempcoLimitLsbPerC(accel, s.fs_sel);
-  for (int i = 0; i < 3 && model.has_temperature && !generic; ++i) {
+  const double tempco_limit = TempcoLimitLsbPerC(accel, fs_sel);
+  for (int i = 0; i < 3 && model.has_temperature; ++i) {
     const double b1 = model.bias_per_c[i];
     if (std::fabs(b1) <= tempco_limit) continue;
-    const double per_unit = accel ? 1000.0 * NominalOutPerLsb(model.sensor, s.fs_sel)
-                                  : NominalOutPerLsb(model.sensor, s.fs_sel);
+    const double per_unit = accel ? 1000.0 * NominalOutPerLsb(model.sensor, fs_sel)
+                                  : NominalOutPerLsb(model.sensor, fs_sel);
     const char* unit = accel ? "mg/degC" : "deg/s/degC";
     at({std::string("temperature"), std::string("bias_per_c"), static_cast<size_t>(i)});
     return MakeError(fmt::format(
@@ -324,8 +323,17 @@ Result<SensorConstants> SensorConstantsAt(const SensorCalibration& c,
         "plausibility limit {} LSB/degC ({:.3g} {} at fs_sel {}; docs/calibration-blob.md "
         "3.1); expected |b1| <= {} LSB/degC: no MPU6050 drifts that fast, check the fit",
         name, "xyz"[i], b1, b1 * per_unit, unit, tempco_limit, tempco_limit * per_unit, unit,
-        s.fs_sel, tempco_limit));
+        fs_sel, tempco_limit));
   }
+  return Status::Ok();
+}
+
+// The constants in SI output units (si per output unit): M, u(M), b0, b1 and their u, the
+// fit residual.
+void FillConstants(const SensorCalibration& c, const Eigen::Matrix3d& m_c, double si,
+                   SensorConstants* constants) {
+  const SensorModel& model = c.model;
+  SensorConstants& s = *constants;
   s.t_ref_c = model.has_temperature ? model.t_ref_c : 25.0;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
@@ -349,27 +357,38 @@ Result<SensorConstants> SensorConstantsAt(const SensorCalibration& c,
     if (g.kind == group && g.unit == unit) s.resid_rms_si = si * g.rms;
   }
   if (s.resid_rms_si == 0.0 && c.residual_unit == unit) s.resid_rms_si = si * c.residual_rms;
+}
+
+// The temperature validity range (and its warnings).
+Status ApplyValidity(const SensorCalibration& c, const BlobFromCalibrationOptions& options,
+                     SensorConstants* s, std::vector<std::string>* warnings,
+                     CalibrationPath* where) {
   Result<TemperatureValidity> validity =
       TemperatureValidityRange(c, ValidityOptions{options.t_valid_min_c, options.t_valid_max_c});
   if (!validity.ok()) {  // names the sensor
-    at({std::string("static_pose_temperature")});
+    *where = CalibrationPath{std::string("static_pose_temperature")};
     return validity.error();
   }
-  s.t_valid_min_c = validity.value().min_c;
-  s.t_valid_max_c = validity.value().max_c;
+  s->t_valid_min_c = validity.value().min_c;
+  s->t_valid_max_c = validity.value().max_c;
   if (warnings != nullptr) {
     warnings->insert(warnings->end(), validity.value().warnings.begin(),
                      validity.value().warnings.end());
   }
-  std::string why;
-  if (!s.IsValid(&why)) return MakeError(fmt::format("{}: {}", name, why));
-  if (!generic) return s;
-  // generic (docs/calibration-blob.md 10, "Nominal sensitivity"): a section v1.0 when the tag
-  // firmware uses one (tags with a firmware older than issue #25 accept it too), else a section
-  // v2.0 declaring the nominal, with signed input or, when only that holds the biases, unsigned
-  // counts about the mid-scale 32768 (b0 stored relative to it, exactly: both are integers or
-  // binary64 values far below 2^52).
-  if (fs.ok() && FirmwareUses(s, model.sensor)) return s;
+  return Status::Ok();
+}
+
+// generic (docs/calibration-blob.md 10, "Nominal sensitivity"): a section v2.0 declaring the
+// nominal, with signed input or, when only that holds the biases, unsigned counts about the
+// mid-scale 32768 (b0 stored relative to it, exactly: both are integers or binary64 values far
+// below 2^52); refused when neither encoding can be written.
+Result<SensorConstants> GenericSection(const SensorCalibration& c,
+                                       const BlobFromCalibrationOptions& options,
+                                       const Eigen::Matrix3d& m_c, double si, SensorConstants s,
+                                       CalibrationPath* where) {
+  const SensorModel& model = c.model;
+  const char* name = ImuSensorName(model.sensor);
+  const bool accel = model.sensor == ImuSensor::kAccel;
   const std::optional<double> declared = accel ? options.accel_fs_g : options.gyro_fs_dps;
   const double nominal_out = declared ? *declared / 32768.0 : m_c.rowwise().norm().mean();
   const std::string source =
@@ -409,6 +428,43 @@ Result<SensorConstants> SensorConstantsAt(const SensorCalibration& c,
   return MakeError(fmt::format(
       "{}: {}", name,
       GenericRefusal(tried, model.sensor, m_c, nominal_out, source, write_error, where)));
+}
+
+Result<SensorConstants> SensorConstantsAt(const SensorCalibration& c,
+                                          const BlobFromCalibrationOptions& options,
+                                          std::vector<std::string>* warnings,
+                                          CalibrationPath* where) {
+  const SensorModel& model = c.model;
+  where->clear();
+  const char* name = ImuSensorName(model.sensor);
+  // docs/calibration-blob.md section 10: M is calibration.json's `matrix` (the reader checked it
+  // against `scale` and `misalignment`); a calibration straight from a fit has model.Matrix().
+  const Eigen::Matrix3d m_c = c.M();
+  const bool generic = options.profile == SensorProfile::kGeneric;
+  Result<uint8_t> fs = NominalFsSel(model.sensor, m_c, options);
+  if (Status st = CheckBlobInputs(c, generic, fs, where); !st.ok()) return st.error();
+  const double si = SiPerOutputUnit(model.sensor);
+  SensorConstants s;
+  s.fs_sel = fs.ok() ? fs.value() : 0;
+  s.dlpf_cfg = options.dlpf_cfg;
+  s.model_bits = kModelBias;
+  if (model.kind == ModelKind::kFull) s.model_bits |= kModelFullMatrix;
+  if (model.has_temperature) s.model_bits |= kModelLinearT;
+  if (!generic) {
+    if (Status st = CheckTempco(model, s.fs_sel, where); !st.ok()) return st.error();
+  }
+  FillConstants(c, m_c, si, &s);
+  if (Status st = ApplyValidity(c, options, &s, warnings, where); !st.ok()) return st.error();
+  std::string why;
+  if (!s.IsValid(&why)) return MakeError(fmt::format("{}: {}", name, why));
+  if (!generic) return s;
+  // generic (docs/calibration-blob.md 10, "Nominal sensitivity"): a section v1.0 when the tag
+  // firmware uses one (tags with a firmware older than issue #25 accept it too), else a section
+  // v2.0 declaring the nominal, with signed input or, when only that holds the biases, unsigned
+  // counts about the mid-scale 32768 (b0 stored relative to it, exactly: both are integers or
+  // binary64 values far below 2^52).
+  if (fs.ok() && FirmwareUses(s, model.sensor)) return s;
+  return GenericSection(c, options, m_c, si, s, where);
 }
 
 }  // namespace

@@ -272,21 +272,38 @@ void AddCrossAxisTypeB(const Eigen::MatrixXd& sensitivity, const std::vector<int
   }
 }
 
-// The stages of calibrate_stages.hpp, in order.
-Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
-                                        const CalibrationOptions& o) {
-  std::string why;
-  if (!o.IsValid(&why)) return MakeError("invalid calibration options: " + why);
-  if (tags.empty()) return MakeError("no records to calibrate");
-  TagCalibration out;
-  out.sensor = tags.front()->sensor;
+// ---- CalibrateTagImpl's stages (calibrate_stages.hpp has the library stages they call) ------
 
+// What the stages of one tag's calibration share, in the order they fill it. It stays where
+// the driver made it: d.rotation_segments point into out.segments, the solutions' free blocks
+// into x.
+struct TagRun {
+  explicit TagRun(const CalibrationOptions& options) : o(options), oc(options) {}
+  const CalibrationOptions& o;
+  TagCalibration out;
+  ci::RecordSet records;  // Units and has_gyro; the records themselves move into d.
+  ci::TagProblemData d;
+  ci::TemperatureDecision temperature;
+  // Which models are fitted (issue #36): the whole ladder when comparing or choosing.
+  bool robust = false, accel_auto = false, gyro_auto = false, compare = false;
+  CalibrationOptions oc;  // o with the chosen models.
+  ci::ParameterBlocks x;
+  ci::Fit fit;
+  ci::SensorSolution accel, gyro;
+  ModelCheck accel_check, gyro_check;
+};
+
+// Records and poses, and the temperature term.
+Status ReadPoses(const std::vector<const Tag*>& tags, TagRun* run) {
+  const CalibrationOptions& o = run->o;
+  TagCalibration& out = run->out;
+  ci::TagProblemData& d = run->d;
   // Records and poses.
   Result<ci::RecordSet> read = ci::ReadRecords(tags, o, out.sensor);
   if (!read.ok()) return read.error();
-  ci::RecordSet records = std::move(read).value();
+  run->records = std::move(read).value();
+  ci::RecordSet& records = run->records;
   ci::SummarizeRecords(records, o, &out);
-  ci::TagProblemData d;
   d.target_norm = o.gravity_mps2 / kStandardGravityMps2;
   d.has_gyro = records.has_gyro;
   d.records = std::move(records.records);
@@ -298,25 +315,45 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
   Result<ci::TemperatureDecision> decided =
       ci::DecideTemperature(ci::EveryRecordHasTemperature(d.records), d.statics, o, out.sensor);
   if (!decided.ok()) return decided.error();
-  const ci::TemperatureDecision temperature = decided.value();
+  run->temperature = decided.value();
+  const ci::TemperatureDecision& temperature = run->temperature;
   d.temperature = temperature.fit;
   d.t_ref_c = temperature.t_ref_c;
+  return Status::Ok();
+}
 
-  // Which models are fitted (issue #36): the whole ladder when comparing or choosing.
+// Which models are fitted (issue #36): the whole ladder when comparing or choosing; a
+// robust loss fits the models as given.
+void ChooseLadder(TagRun* run) {
+  const CalibrationOptions& o = run->o;
   const bool robust = o.loss != LossKind::kTrivial;
-  const bool accel_auto = o.accel_auto && !robust;
-  const bool gyro_auto = o.gyro_auto && !robust;
-  const bool compare = (o.compare_models || o.accel_auto || o.gyro_auto) && !robust;
+  run->robust = robust;
+  run->accel_auto = o.accel_auto && !robust;
+  run->gyro_auto = o.gyro_auto && !robust;
+  run->compare = (o.compare_models || o.accel_auto || o.gyro_auto) && !robust;
   if (robust && (o.accel_auto || o.gyro_auto)) {
-    out.warnings.push_back(fmt::format(
+    run->out.warnings.push_back(fmt::format(
         "sensor {}: --model auto compares the models on their chi-square against the noise, "
         "which a robust loss does not give: the '{}' accelerometer and '{}' gyroscope models "
         "are fitted as given",
-        out.sensor, ModelKindName(o.accel_model), ModelKindName(o.gyro_model)));
+        run->out.sensor, ModelKindName(o.accel_model), ModelKindName(o.gyro_model)));
   }
-  CalibrationOptions oc = o;
+}
 
-  // Accelerometer: start and fit of each model, then the chosen one.
+// Accelerometer: start and fit of each model, then the chosen one.
+Status FitAccel(TagRun* run) {
+  const CalibrationOptions& o = run->o;
+  TagCalibration& out = run->out;
+  const ci::RecordSet& records = run->records;
+  ci::TagProblemData& d = run->d;
+  CalibrationOptions& oc = run->oc;
+  ci::ParameterBlocks& x = run->x;
+  ci::Fit& fit = run->fit;
+  ci::SensorSolution& accel = run->accel;
+  ModelCheck& accel_check = run->accel_check;
+  const bool compare = run->compare;
+  const bool robust = run->robust;
+  const bool accel_auto = run->accel_auto;
   const std::string hint = ci::PoseShortfallHint(d.records);
   std::array<Trial, 3> accel_trials;
   for (ModelKind k : kLadder) {
@@ -324,7 +361,6 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
     Trial& t = accel_trials[static_cast<size_t>(k)];
     t.status = RunAccelTrial(k, o, records.accel_unit, hint, out.sensor, &d, &t);
   }
-  ModelCheck accel_check;
   Result<ModelKind> accel_kind = SelectModel(ImuSensor::kAccel, accel_trials, accel_auto, compare,
                                              o.accel_model, d.temperature, robust, &accel_check);
   if (!accel_kind.ok()) return accel_kind.error();
@@ -332,68 +368,92 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
   Trial& at = accel_trials[static_cast<size_t>(oc.accel_model)];
   // What only the chosen model's report needs (its cross-axis sensitivity), on its own blocks.
   ci::CompleteAccelUncertainty(oc.accel_model, &at.x, &at.solution);
-  ci::ParameterBlocks x = at.x;
-  ci::Fit fit = at.fit;
-  ci::SensorSolution accel = at.solution;
+  x = at.x;
+  fit = at.fit;
+  accel = at.solution;
   accel.free_blocks = Rebase(at.solution.free_blocks, at.x, &x);
   d.accel_ref = at.ref;
   for (const std::string& w : at.warnings) out.warnings.push_back(w);
   for (const std::string& w : accel.warnings) out.warnings.push_back(w);
+  return Status::Ok();
+}
 
-  // Gyroscope: rotations, then start and fit of each model with the accelerometer held.
-  ci::SensorSolution gyro;
-  ModelCheck gyro_check;
-  if (d.has_gyro) {
-    ci::RotationSet rotations = ci::BuildRotations(d.records, d.statics, temperature, d.accel_ref,
-                                                   o.max_rotation_s, &out.segments);
-    const double gyro_nominal =
-        NominalScale(ImuSensor::kGyro, records.gyro_unit, o.gyro_fs_dps).value();
-    std::array<Trial, 3> gyro_trials;
-    std::optional<Result<ci::GyroStart>> scaled_start;
-    for (ModelKind k : kLadder) {
-      if (!compare && k != o.gyro_model) continue;
-      Trial& t = gyro_trials[static_cast<size_t>(k)];
-      d.rotations = rotations.data;
-      d.rotation_segments = rotations.segments;
-      t.x = x;
-      t.fit = fit;
-      t.segments = out.segments;
-      ci::SensorSolution held = accel;
-      held.free_blocks = Rebase(accel.free_blocks, x, &t.x);
-      t.status = RunGyroTrial(k, oc, held, gyro_nominal, records.gyro_unit, out.sensor, &d,
-                              &scaled_start, &t);
-      t.rotations = d.rotations;
-      t.rotation_segments = d.rotation_segments;
-    }
-    Result<ModelKind> gyro_kind = SelectModel(ImuSensor::kGyro, gyro_trials, gyro_auto, compare,
-                                              o.gyro_model, d.temperature, robust, &gyro_check);
-    if (!gyro_kind.ok()) return gyro_kind.error();
-    oc.gyro_model = gyro_kind.value();
-    Trial& gt = gyro_trials[static_cast<size_t>(oc.gyro_model)];
-    {
-      // The chosen model's stated covariance and cross-axis sensitivity, on its own blocks (the
-      // ladder's fits carry only what the comparison and CheckDetermined need).
-      ci::SensorSolution held = accel;
-      held.free_blocks = Rebase(accel.free_blocks, x, &gt.x);
-      Status done = ci::CompleteGyroUncertainty(oc, out.sensor, held, &gt.x, &gt.solution);
-      if (!done.ok()) return done.error();
-    }
-    x = gt.x;
-    fit = gt.fit;
-    gyro = gt.solution;
-    d.rotations = gt.rotations;
-    d.rotation_segments = gt.rotation_segments;
-    d.gyro_ref = gt.ref;
-    // Element by element: d.rotation_segments point into out.segments.
-    for (size_t i = 0; i < out.segments.size() && i < gt.segments.size(); ++i) {
-      out.segments[i] = gt.segments[i];
-    }
-    for (const std::string& w : gt.warnings) out.warnings.push_back(w);
-    for (const std::string& w : gyro.warnings) out.warnings.push_back(w);
+// Gyroscope: rotations, then start and fit of each model with the accelerometer held.
+Status FitGyro(TagRun* run) {
+  const CalibrationOptions& o = run->o;
+  TagCalibration& out = run->out;
+  const ci::RecordSet& records = run->records;
+  ci::TagProblemData& d = run->d;
+  const ci::TemperatureDecision& temperature = run->temperature;
+  CalibrationOptions& oc = run->oc;
+  ci::ParameterBlocks& x = run->x;
+  ci::Fit& fit = run->fit;
+  ci::SensorSolution& accel = run->accel;
+  ci::SensorSolution& gyro = run->gyro;
+  ModelCheck& gyro_check = run->gyro_check;
+  const bool compare = run->compare;
+  const bool robust = run->robust;
+  const bool gyro_auto = run->gyro_auto;
+  ci::RotationSet rotations = ci::BuildRotations(d.records, d.statics, temperature, d.accel_ref,
+                                                 o.max_rotation_s, &out.segments);
+  const double gyro_nominal =
+      NominalScale(ImuSensor::kGyro, records.gyro_unit, o.gyro_fs_dps).value();
+  std::array<Trial, 3> gyro_trials;
+  std::optional<Result<ci::GyroStart>> scaled_start;
+  for (ModelKind k : kLadder) {
+    if (!compare && k != o.gyro_model) continue;
+    Trial& t = gyro_trials[static_cast<size_t>(k)];
+    d.rotations = rotations.data;
+    d.rotation_segments = rotations.segments;
+    t.x = x;
+    t.fit = fit;
+    t.segments = out.segments;
+    ci::SensorSolution held = accel;
+    held.free_blocks = Rebase(accel.free_blocks, x, &t.x);
+    t.status = RunGyroTrial(k, oc, held, gyro_nominal, records.gyro_unit, out.sensor, &d,
+                            &scaled_start, &t);
+    t.rotations = d.rotations;
+    t.rotation_segments = d.rotation_segments;
   }
+  Result<ModelKind> gyro_kind = SelectModel(ImuSensor::kGyro, gyro_trials, gyro_auto, compare,
+                                            o.gyro_model, d.temperature, robust, &gyro_check);
+  if (!gyro_kind.ok()) return gyro_kind.error();
+  oc.gyro_model = gyro_kind.value();
+  Trial& gt = gyro_trials[static_cast<size_t>(oc.gyro_model)];
+  {
+    // The chosen model's stated covariance and cross-axis sensitivity, on its own blocks (the
+    // ladder's fits carry only what the comparison and CheckDetermined need).
+    ci::SensorSolution held = accel;
+    held.free_blocks = Rebase(accel.free_blocks, x, &gt.x);
+    Status done = ci::CompleteGyroUncertainty(oc, out.sensor, held, &gt.x, &gt.solution);
+    if (!done.ok()) return done.error();
+  }
+  x = gt.x;
+  fit = gt.fit;
+  gyro = gt.solution;
+  d.rotations = gt.rotations;
+  d.rotation_segments = gt.rotation_segments;
+  d.gyro_ref = gt.ref;
+  // Element by element: d.rotation_segments point into out.segments.
+  for (size_t i = 0; i < out.segments.size() && i < gt.segments.size(); ++i) {
+    out.segments[i] = gt.segments[i];
+  }
+  for (const std::string& w : gt.warnings) out.warnings.push_back(w);
+  for (const std::string& w : gyro.warnings) out.warnings.push_back(w);
+  return Status::Ok();
+}
 
-  // The Type B for the cross-axis terms a rejected or exact scale model leaves out (issue #36),
-  // added to the covariances after the gyroscope took the accelerometer's (noise) covariance.
+// The Type B for the cross-axis terms a rejected or exact scale model leaves out (issue #36),
+// added to the covariances after the gyroscope took the accelerometer's (noise) covariance;
+// the models' standing said.
+void AddLeftOutCrossAxisTypeB(TagRun* run) {
+  TagCalibration& out = run->out;
+  ci::TagProblemData& d = run->d;
+  CalibrationOptions& oc = run->oc;
+  ci::SensorSolution& accel = run->accel;
+  ci::SensorSolution& gyro = run->gyro;
+  ModelCheck& accel_check = run->accel_check;
+  ModelCheck& gyro_check = run->gyro_check;
   const bool accel_type_b = accel_check.type_b.has_value();
   if (accel_type_b) {
     accel_check.type_b->terms = CrossAxisTerms(ImuSensor::kAccel, true, false);
@@ -425,8 +485,23 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
       out.warnings.push_back(fmt::format("sensor {}: {}", out.sensor, c->reason));
     }
   }
+}
 
-  // Back to input units, and the results.
+// Back to input units, and the results.
+Status AssembleResults(TagRun* run) {
+  const CalibrationOptions& o = run->o;
+  TagCalibration& out = run->out;
+  const ci::RecordSet& records = run->records;
+  ci::TagProblemData& d = run->d;
+  const ci::TemperatureDecision& temperature = run->temperature;
+  CalibrationOptions& oc = run->oc;
+  ci::ParameterBlocks& x = run->x;
+  ci::Fit& fit = run->fit;
+  ci::SensorSolution& accel = run->accel;
+  ci::SensorSolution& gyro = run->gyro;
+  ModelCheck& accel_check = run->accel_check;
+  ModelCheck& gyro_check = run->gyro_check;
+  const bool compare = run->compare;
   out.iterations = fit.iterations;
   if (d.has_gyro) {
     ci::Unscale(d.gyro_ref, ImuSensor::kGyro, oc.gyro_model, d.temperature, &x, &gyro.covariance);
@@ -449,7 +524,26 @@ Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
         "sensor {}: the solver stopped before convergence (no-convergence after {} iterations)",
         out.sensor, o.max_iterations));
   }
-  return out;
+  return Status::Ok();
+}
+
+// The stages of calibrate_stages.hpp, in order.
+Result<TagCalibration> CalibrateTagImpl(const std::vector<const Tag*>& tags,
+                                        const CalibrationOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) return MakeError("invalid calibration options: " + why);
+  if (tags.empty()) return MakeError("no records to calibrate");
+  TagRun run(o);
+  run.out.sensor = tags.front()->sensor;
+  if (Status s = ReadPoses(tags, &run); !s.ok()) return s.error();
+  ChooseLadder(&run);
+  if (Status s = FitAccel(&run); !s.ok()) return s.error();
+  if (run.d.has_gyro) {
+    if (Status s = FitGyro(&run); !s.ok()) return s.error();
+  }
+  AddLeftOutCrossAxisTypeB(&run);
+  if (Status s = AssembleResults(&run); !s.ok()) return s.error();
+  return std::move(run.out);
 }
 
 }  // namespace

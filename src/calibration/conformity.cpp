@@ -1,3 +1,9 @@
+// ParseConformitySpec reads a spec in these stages, in this order (docs/conformity.md):
+//
+//   rule        ParseRule        known keys; decision_rule with its coverage factor or risk
+//   tolerances  ParseTolerance   each entry: constant (once), unit, lower and/or upper
+//
+// Every error at the value it is about (SpecErrorAt), with what was expected.
 #include "metro/calibration/conformity.hpp"
 
 #include <fmt/format.h>
@@ -136,18 +142,24 @@ bool ConformitySpec::IsValid(std::string* why) const {
   return true;
 }
 
-Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::string& path) {
-  Result<json> parsed = ParseJsonText(text, path);
-  if (!parsed.ok()) return parsed.error();
-  const json& j = parsed.value();
-  // Every error at the value it is about (or the object that lacks it), with what was expected
-  // and the shape of a spec (docs/conformity.md).
+namespace {
+
+// ---- ParseConformitySpec's stages ---------------------------------------------------------
+
+// An error at the value `where` is about (or the object that lacks it) in the spec's text.
+Error SpecErrorAt(const std::string& text, const std::string& path,
+                  const std::vector<JsonPathStep>& where, const std::string& message) {
+  const auto [line, column] = TextLineColumn(text, JsonValueOffset(text, where));
+  return SpecError(path, line, column, message);
+}
+
+// The top level: known keys, the decision rule, its coverage factor or consumer risk.
+Status ParseRule(const json& j, const std::string& text, const std::string& path,
+                 ConformitySpec* spec) {
   const auto at = [&](const std::vector<JsonPathStep>& where, const std::string& message) {
-    const auto [line, column] = TextLineColumn(text, JsonValueOffset(text, where));
-    return SpecError(path, line, column, message);
+    return SpecErrorAt(text, path, where, message);
   };
   const auto shape = [](const std::string& message) { return message + "; " + kSpecShape; };
-  if (!j.is_object()) return at({}, shape("a spec is a JSON object"));
   static const std::set<std::string> kTop = {"tolerances", "decision_rule", "coverage_factor",
                                              "max_consumer_risk", "description"};
   for (auto it = j.begin(); it != j.end(); ++it) {
@@ -157,8 +169,6 @@ Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::s
                                         it.key(), NearestName(it.key(), kTop)));
     }
   }
-  ConformitySpec spec;
-  spec.path = path;
   if (!j.contains("decision_rule")) return at({}, shape("missing 'decision_rule'"));
   const std::optional<DecisionRule> rule =
       j["decision_rule"].is_string() ? ParseDecisionRule(j["decision_rule"].get<std::string>())
@@ -170,7 +180,7 @@ Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::s
                           "2, or \"risk\" with \"max_consumer_risk\": 0.023)",
                           Shown(j["decision_rule"])));
   }
-  spec.rule = *rule;
+  spec->rule = *rule;
   if (j.contains("coverage_factor")) {
     const json& k = j["coverage_factor"];
     if (!k.is_number() || !std::isfinite(k.get<double>()) || !(k.get<double>() > 0.0)) {
@@ -180,7 +190,7 @@ Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::s
                       "(w = k u, JCGM 106 8.3.2)",
                       Shown(k)));
     }
-    spec.coverage_factor = k.get<double>();
+    spec->coverage_factor = k.get<double>();
   }
   if (j.contains("max_consumer_risk")) {
     const json& r = j["max_consumer_risk"];
@@ -190,93 +200,121 @@ Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::s
                             "\"max_consumer_risk\": 0.023",
                             Shown(r)));
     }
-    spec.max_consumer_risk = r.get<double>();
+    spec->max_consumer_risk = r.get<double>();
   }
-  if (spec.rule == DecisionRule::kRisk &&
-      !(spec.max_consumer_risk > 0.0 && spec.max_consumer_risk < 0.5)) {
+  if (spec->rule == DecisionRule::kRisk &&
+      !(spec->max_consumer_risk > 0.0 && spec->max_consumer_risk < 0.5)) {
     return at(j.contains("max_consumer_risk") ? std::vector<JsonPathStep>{"max_consumer_risk"}
                                               : std::vector<JsonPathStep>{"decision_rule"},
               "the risk rule needs max_consumer_risk in (0, 0.5); expected \"decision_rule\": "
               "\"risk\", \"max_consumer_risk\": 0.023");
   }
+  return Status::Ok();
+}
+
+constexpr const char* kEntryShape =
+    "expected {\"constant\": \"accel.b_x\", \"lower\": -300, \"upper\": 300, \"unit\": "
+    "\"LSB\"} (one limit may be absent)";
+
+// tolerances[i]: its constant (not in *names yet), unit and limits.
+Result<Tolerance> ParseTolerance(const json& e, size_t i, const std::string& text,
+                                 const std::string& path, std::set<std::string>* names) {
+  const auto at = [&](const std::vector<JsonPathStep>& where, const std::string& message) {
+    return SpecErrorAt(text, path, where, message);
+  };
+  static const std::set<std::string> kEntry = {"constant", "lower", "upper", "unit"};
+  // A pair, not a structured binding: C++17 lambdas cannot capture those (clang refuses).
+  const std::pair<int64_t, int64_t> entry = TopLevelArrayElementLineColumn(text, "tolerances", i);
+  auto fail = [&](const std::string& what) {
+    return SpecError(path, entry.first, entry.second, fmt::format("tolerances[{}]: {}", i, what));
+  };
+  auto fail_at = [&](const std::string& key, const std::string& what) {
+    return at({"tolerances", i, key}, fmt::format("tolerances[{}]: {}", i, what));
+  };
+  if (!e.is_object()) {
+    return at({"tolerances", i}, fmt::format("tolerances[{}] is {}: {}", i, Shown(e), kEntryShape));
+  }
+  for (auto it = e.begin(); it != e.end(); ++it) {
+    if (!kEntry.count(it.key())) {
+      return fail_at(it.key(), fmt::format("unknown key '{}'; an entry has constant, lower, "
+                                           "upper, unit{}: {}",
+                                           it.key(), NearestName(it.key(), kEntry), kEntryShape));
+    }
+  }
+  Tolerance t;
+  t.line = entry.first;
+  t.column = entry.second;
+  if (!e.contains("constant")) {
+    return fail(fmt::format("missing 'constant' (a name such as \"accel.b_x\"): {}", kEntryShape));
+  }
+  if (!e["constant"].is_string()) {
+    return fail_at("constant", fmt::format("'constant' is {}: expected a name such as "
+                                           "\"accel.b_x\" (docs/conformity.md)",
+                                           Shown(e["constant"])));
+  }
+  t.constant = e["constant"].get<std::string>();
+  if (!names->insert(t.constant).second) {
+    return fail_at("constant", fmt::format("'{}' is given twice; expected one entry per "
+                                           "constant, with both limits",
+                                           t.constant));
+  }
+  if (!e.contains("unit")) {
+    return fail(fmt::format("'{}': missing 'unit' (e.g. \"LSB\", \"g_n/LSB\", \"rad\"): {}",
+                            t.constant, kEntryShape));
+  }
+  if (!e["unit"].is_string()) {
+    return fail_at("unit", fmt::format("'{}': 'unit' is {}: expected a unit such as \"LSB\", "
+                                       "\"g_n/LSB\" or \"rad\"",
+                                       t.constant, Shown(e["unit"])));
+  }
+  t.unit = e["unit"].get<std::string>();
+  for (const char* key : {"lower", "upper"}) {
+    if (!e.contains(key) || e[key].is_null()) continue;
+    if (!e[key].is_number() || !std::isfinite(e[key].get<double>())) {
+      return fail_at(key, fmt::format("'{}': '{}' is {}: expected a finite number (or null "
+                                      "for no limit), e.g. \"{}\": {}",
+                                      t.constant, key, Shown(e[key]), key,
+                                      std::string(key) == "lower" ? "-300" : "300"));
+    }
+    (std::string(key) == "lower" ? t.lower : t.upper) = e[key].get<double>();
+  }
+  if (!t.lower && !t.upper) {
+    return fail(fmt::format("'{}' has neither 'lower' nor 'upper': {}", t.constant, kEntryShape));
+  }
+  if (t.lower && t.upper && *t.lower > *t.upper) {
+    return fail(fmt::format("'{}': lower {} > upper {}; expected lower <= upper", t.constant,
+                            *t.lower, *t.upper));
+  }
+  return t;
+}
+
+}  // namespace
+
+Result<ConformitySpec> ParseConformitySpec(const std::string& text, const std::string& path) {
+  Result<json> parsed = ParseJsonText(text, path);
+  if (!parsed.ok()) return parsed.error();
+  const json& j = parsed.value();
+  // Every error at the value it is about (or the object that lacks it), with what was expected
+  // and the shape of a spec (docs/conformity.md).
+  const auto at = [&](const std::vector<JsonPathStep>& where, const std::string& message) {
+    return SpecErrorAt(text, path, where, message);
+  };
+  const auto shape = [](const std::string& message) { return message + "; " + kSpecShape; };
+  if (!j.is_object()) return at({}, shape("a spec is a JSON object"));
+  ConformitySpec spec;
+  spec.path = path;
+  if (Status s = ParseRule(j, text, path, &spec); !s.ok()) return s.error();
   if (!j.contains("tolerances")) return at({}, shape("missing 'tolerances'"));
   if (!j["tolerances"].is_array() || j["tolerances"].empty()) {
     return at({"tolerances"},
               shape(fmt::format("'tolerances' is {}: expected a non-empty array of entries",
                                 Shown(j["tolerances"]))));
   }
-  static const std::set<std::string> kEntry = {"constant", "lower", "upper", "unit"};
-  constexpr const char* kEntryShape =
-      "expected {\"constant\": \"accel.b_x\", \"lower\": -300, \"upper\": 300, \"unit\": "
-      "\"LSB\"} (one limit may be absent)";
   std::set<std::string> names;
   for (size_t i = 0; i < j["tolerances"].size(); ++i) {
-    const json& e = j["tolerances"][i];
-    // A pair, not a structured binding: C++17 lambdas cannot capture those (clang refuses).
-    const std::pair<int64_t, int64_t> entry = TopLevelArrayElementLineColumn(text, "tolerances", i);
-    auto fail = [&](const std::string& what) {
-      return SpecError(path, entry.first, entry.second, fmt::format("tolerances[{}]: {}", i, what));
-    };
-    auto fail_at = [&](const std::string& key, const std::string& what) {
-      return at({"tolerances", i, key}, fmt::format("tolerances[{}]: {}", i, what));
-    };
-    if (!e.is_object()) {
-      return at({"tolerances", i},
-                fmt::format("tolerances[{}] is {}: {}", i, Shown(e), kEntryShape));
-    }
-    for (auto it = e.begin(); it != e.end(); ++it) {
-      if (!kEntry.count(it.key())) {
-        return fail_at(it.key(), fmt::format("unknown key '{}'; an entry has constant, lower, "
-                                             "upper, unit{}: {}",
-                                             it.key(), NearestName(it.key(), kEntry), kEntryShape));
-      }
-    }
-    Tolerance t;
-    t.line = entry.first;
-    t.column = entry.second;
-    if (!e.contains("constant")) {
-      return fail(
-          fmt::format("missing 'constant' (a name such as \"accel.b_x\"): {}", kEntryShape));
-    }
-    if (!e["constant"].is_string()) {
-      return fail_at("constant", fmt::format("'constant' is {}: expected a name such as "
-                                             "\"accel.b_x\" (docs/conformity.md)",
-                                             Shown(e["constant"])));
-    }
-    t.constant = e["constant"].get<std::string>();
-    if (!names.insert(t.constant).second) {
-      return fail_at("constant", fmt::format("'{}' is given twice; expected one entry per "
-                                             "constant, with both limits",
-                                             t.constant));
-    }
-    if (!e.contains("unit")) {
-      return fail(fmt::format("'{}': missing 'unit' (e.g. \"LSB\", \"g_n/LSB\", \"rad\"): {}",
-                              t.constant, kEntryShape));
-    }
-    if (!e["unit"].is_string()) {
-      return fail_at("unit", fmt::format("'{}': 'unit' is {}: expected a unit such as \"LSB\", "
-                                         "\"g_n/LSB\" or \"rad\"",
-                                         t.constant, Shown(e["unit"])));
-    }
-    t.unit = e["unit"].get<std::string>();
-    for (const char* key : {"lower", "upper"}) {
-      if (!e.contains(key) || e[key].is_null()) continue;
-      if (!e[key].is_number() || !std::isfinite(e[key].get<double>())) {
-        return fail_at(key, fmt::format("'{}': '{}' is {}: expected a finite number (or null "
-                                        "for no limit), e.g. \"{}\": {}",
-                                        t.constant, key, Shown(e[key]), key,
-                                        std::string(key) == "lower" ? "-300" : "300"));
-      }
-      (std::string(key) == "lower" ? t.lower : t.upper) = e[key].get<double>();
-    }
-    if (!t.lower && !t.upper) {
-      return fail(fmt::format("'{}' has neither 'lower' nor 'upper': {}", t.constant, kEntryShape));
-    }
-    if (t.lower && t.upper && *t.lower > *t.upper) {
-      return fail(fmt::format("'{}': lower {} > upper {}; expected lower <= upper", t.constant,
-                              *t.lower, *t.upper));
-    }
-    spec.tolerances.push_back(std::move(t));
+    Result<Tolerance> t = ParseTolerance(j["tolerances"][i], i, text, path, &names);
+    if (!t.ok()) return t.error();
+    spec.tolerances.push_back(std::move(t).value());
   }
   std::string why;
   if (!spec.IsValid(&why)) return at({}, why);  // Checked above, field by field.

@@ -1,3 +1,10 @@
+// RunCapture opens the port and the output, then runs a CaptureRun through these stages:
+//
+//   loop     Loop: ReadOnce, Reconnect,   read until the duration ends or a stop; lines
+//            Sort                         sorted, written and counted; a lost port reopened
+//                                         every reconnect_interval_s; flushes and ticks
+//   finish   Finish                       the drain of what already arrived, the trailer
+//                                         with the counts, the summary's verdict
 #include "metro/capture/capture.hpp"
 
 #include <fcntl.h>
@@ -353,6 +360,196 @@ bool CaptureOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace {
+
+// ---- RunCapture's stages ------------------------------------------------------------------
+
+// One capture from an opened port into an opened output: the read loop, its reconnects,
+// flushes and ticks, the drain at the end and the trailer. The summary collects the counts.
+class CaptureRun {
+ public:
+  CaptureRun(const CaptureOptions& options, const CaptureObserver& observer, CaptureTally* tally,
+             std::unique_ptr<serial::SerialPort> port, CaptureSummary* sum)
+      : options_(options), observer_(observer), tally_(tally), port_(std::move(port)), sum_(*sum) {
+    sink_ = [this](LineSorter::Kind kind, std::string_view line, const ReceiverLine& decoded,
+                   const std::string& what) { Sort(kind, line, decoded, what); };
+  }
+
+  Output& out() { return out_; }
+
+  // The header comment, then lines until the duration ends, a stop or the port is lost for
+  // good (or a write fails).
+  void Loop() {
+    t0_ = Clock::now();
+    out_.Append(fmt::format(
+        "# metro capture of the central receiver (docs/capture.md)\n# port: {}\n# baud: {}\n"
+        "# start_utc: {}\n# version: {}\n",
+        EscapeControlChars(options_.port), options_.baud, UtcIso8601Now(), options_.version));
+    last_flush_ = last_tick_ = last_attempt_ = t0_;
+    const auto flush_every = std::chrono::duration<double>(options_.flush_interval_s);
+    for (;;) {
+      const double elapsed = SecondsSince(t0_);
+      if (options_.stop != nullptr && *options_.stop != 0) {
+        sum_.stopped = true;
+        break;
+      }
+      if (options_.duration_s > 0.0 && elapsed >= options_.duration_s) break;
+      int wait_ms = 100;
+      if (options_.duration_s > 0.0) {
+        wait_ms = std::clamp(static_cast<int>(std::ceil((options_.duration_s - elapsed) * 1000.0)),
+                             1, 100);
+      }
+      if (port_) {
+        if (!ReadOnce(wait_ms)) break;
+      } else {
+        Reconnect(wait_ms);
+      }
+      const Clock::time_point now = Clock::now();
+      if (now - last_flush_ >= flush_every || out_.buffered() >= (size_t{1} << 20)) {
+        Flush();
+        last_flush_ = now;
+        if (!write_status_.ok()) break;
+      }
+      if (now - last_tick_ >= std::chrono::milliseconds(100)) {
+        last_tick_ = now;
+        if (observer_.on_tick && tally_ != nullptr) observer_.on_tick(*tally_, SecondsSince(t0_));
+      }
+    }
+  }
+
+  // Whatever already arrived is kept: read until the port is quiet (bounded); then the
+  // trailer with the counts, and the summary's verdict.
+  void Finish() {
+    if (port_ && write_status_.ok()) {
+      for (int i = 0; i < 50; ++i) {
+        Result<size_t> got = port_->Read(buf_.data(), buf_.size(), 20);
+        if (!got.ok() || got.value() == 0) break;
+        sum_.bytes_read += static_cast<int64_t>(got.value());
+        sorter_.Feed(buf_.data(), got.value(), sink_);
+      }
+    }
+    sum_.elapsed_s = SecondsSince(t0_);
+    out_.Append(
+        fmt::format("# end_utc: {}\n# receiver_lines: {}, cut_first_lines: {}, other_lines: {}, "
+                    "unfinished_line_bytes: {}, port_lost: {}, reopened: {}\n",
+                    UtcIso8601Now(), sum_.receiver_lines, sum_.cut_lines, sum_.other_lines,
+                    sorter_.pending_bytes(), sum_.port_lost, sum_.reopened));
+    for (const auto& [sensor, c] : sum_.counts) {
+      out_.Append(fmt::format("# sensor {}: frames {}, fresh {}, stale {}, never {}\n", sensor,
+                              c.frames, c.fresh, c.stale, c.never));
+    }
+    Flush();
+    if (observer_.on_tick && tally_ != nullptr) observer_.on_tick(*tally_, sum_.elapsed_s);
+    if (!write_status_.ok()) {
+      sum_.message = write_status_.error().ToString();
+      return;
+    }
+    if (lost_for_good_) {
+      sum_.message = fmt::format(
+          "{}: the port disappeared after {:.1f} s and --no-reconnect was given; {} kept {} lines",
+          options_.port, sum_.elapsed_s, options_.output, sum_.receiver_lines);
+      return;
+    }
+    sum_.ok = true;
+    sum_.message = fmt::format("{}: {} receiver lines in {:.1f} s", options_.output,
+                               sum_.receiver_lines, sum_.elapsed_s);
+  }
+
+ private:
+  void Event(const std::string& text) {
+    if (observer_.on_event) observer_.on_event(text);
+  }
+  void Flush() {
+    if (write_status_.ok()) write_status_ = out_.Flush();
+  }
+
+  // A sorted line: a receiver line written and counted, a cut first line counted, anything
+  // else written as a comment.
+  void Sort(LineSorter::Kind kind, std::string_view line, const ReceiverLine& decoded,
+            const std::string& what) {
+    switch (kind) {
+      case LineSorter::Kind::kReceiver:
+        out_.Append(line);
+        ++sum_.receiver_lines;
+        ++sum_.counts[decoded.sensor].frames;
+        if (decoded.flag == NewDataFlag::kFresh) ++sum_.counts[decoded.sensor].fresh;
+        if (decoded.flag == NewDataFlag::kStale) ++sum_.counts[decoded.sensor].stale;
+        if (decoded.flag == NewDataFlag::kNever) ++sum_.counts[decoded.sensor].never;
+        if (tally_ != nullptr) tally_->Add(decoded);
+        break;
+      case LineSorter::Kind::kCut:
+        ++sum_.cut_lines;
+        break;
+      case LineSorter::Kind::kOther:
+        ++sum_.other_lines;
+        out_.Append(fmt::format("# not a receiver line ({}): {}\n", what, Printable(line)));
+        break;
+    }
+  }
+
+  // One read of at most wait_ms; false when the port was lost and reconnecting is off.
+  bool ReadOnce(int wait_ms) {
+    Result<size_t> got = port_->Read(buf_.data(), buf_.size(), wait_ms);
+    if (got.ok()) {
+      sum_.bytes_read += static_cast<int64_t>(got.value());
+      sorter_.Feed(buf_.data(), got.value(), sink_);
+      return true;
+    }
+    ++sum_.port_lost;
+    port_.reset();
+    const size_t partial = sorter_.pending_bytes();
+    sorter_.Restart();
+    out_.Append(fmt::format("# port lost at {}: {}{}\n", UtcIso8601Now(),
+                            EscapeControlChars(got.error().message),
+                            partial > 0 ? fmt::format(" ({} bytes of an unfinished line "
+                                                      "dropped)",
+                                                      partial)
+                                        : ""));
+    Flush();
+    last_flush_ = Clock::now();
+    Event(fmt::format("{}: the port disappeared ({}); kept the {} lines captured{}", options_.port,
+                      got.error().message, sum_.receiver_lines,
+                      options_.reconnect ? "; waiting for it to return" : ""));
+    if (!options_.reconnect) {
+      lost_for_good_ = true;
+      return false;
+    }
+    last_attempt_ = Clock::now();
+    return true;
+  }
+
+  // Without a port: wait, and every reconnect_interval_s try to open it again.
+  void Reconnect(int wait_ms) {
+    SleepUnlessStopped(std::min(wait_ms, 50), options_.stop);
+    if (SecondsSince(last_attempt_) >= options_.reconnect_interval_s) {
+      last_attempt_ = Clock::now();
+      Result<std::unique_ptr<serial::SerialPort>> again =
+          serial::SerialPort::Open(options_.port, options_.baud);
+      if (again.ok()) {
+        port_ = std::move(again).value();
+        ++sum_.reopened;
+        out_.Append(fmt::format("# port reopened at {}\n", UtcIso8601Now()));
+        Event(fmt::format("{}: the port is back; capturing again", options_.port));
+      }
+    }
+  }
+
+  const CaptureOptions& options_;
+  const CaptureObserver& observer_;
+  CaptureTally* tally_;
+  std::unique_ptr<serial::SerialPort> port_;
+  CaptureSummary& sum_;
+  Output out_;
+  LineSorter sorter_;
+  LineSorter::Sink sink_;
+  Status write_status_ = Status::Ok();
+  std::vector<uint8_t> buf_ = std::vector<uint8_t>(8192);
+  Clock::time_point t0_, last_flush_, last_tick_, last_attempt_;
+  bool lost_for_good_ = false;
+};
+
+}  // namespace
+
 CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& observer,
                           CaptureTally* tally) {
   CaptureSummary sum;
@@ -361,159 +558,20 @@ CaptureSummary RunCapture(const CaptureOptions& options, const CaptureObserver& 
     sum.message = why;
     return sum;
   }
-  auto event = [&](const std::string& text) {
-    if (observer.on_event) observer.on_event(text);
-  };
-  auto stopped = [&] { return options.stop != nullptr && *options.stop != 0; };
-
   Result<std::unique_ptr<serial::SerialPort>> opened =
       serial::SerialPort::Open(options.port, options.baud);
   if (!opened.ok()) {
     sum.message = opened.error().ToString();
     return sum;
   }
-  std::unique_ptr<serial::SerialPort> port = std::move(opened).value();
-  Output out;
-  if (Status s = out.Open(options.output, options.force); !s.ok()) {
+  CaptureRun run(options, observer, tally, std::move(opened).value(), &sum);
+  if (Status s = run.out().Open(options.output, options.force); !s.ok()) {
     sum.message = s.error().ToString();
     return sum;
   }
   sum.input_error = false;
-  const Clock::time_point t0 = Clock::now();
-  out.Append(fmt::format(
-      "# metro capture of the central receiver (docs/capture.md)\n# port: {}\n# baud: {}\n"
-      "# start_utc: {}\n# version: {}\n",
-      EscapeControlChars(options.port), options.baud, UtcIso8601Now(), options.version));
-
-  LineSorter sorter;
-  Status write_status = Status::Ok();
-  auto flush = [&] {
-    if (write_status.ok()) write_status = out.Flush();
-  };
-  const LineSorter::Sink sink = [&](LineSorter::Kind kind, std::string_view line,
-                                    const ReceiverLine& decoded, const std::string& what) {
-    switch (kind) {
-      case LineSorter::Kind::kReceiver:
-        out.Append(line);
-        ++sum.receiver_lines;
-        ++sum.counts[decoded.sensor].frames;
-        if (decoded.flag == NewDataFlag::kFresh) ++sum.counts[decoded.sensor].fresh;
-        if (decoded.flag == NewDataFlag::kStale) ++sum.counts[decoded.sensor].stale;
-        if (decoded.flag == NewDataFlag::kNever) ++sum.counts[decoded.sensor].never;
-        if (tally != nullptr) tally->Add(decoded);
-        break;
-      case LineSorter::Kind::kCut:
-        ++sum.cut_lines;
-        break;
-      case LineSorter::Kind::kOther:
-        ++sum.other_lines;
-        out.Append(fmt::format("# not a receiver line ({}): {}\n", what, Printable(line)));
-        break;
-    }
-  };
-
-  std::vector<uint8_t> buf(8192);
-  Clock::time_point last_flush = t0, last_tick = t0, last_attempt = t0;
-  const auto flush_every = std::chrono::duration<double>(options.flush_interval_s);
-  bool lost_for_good = false;
-  for (;;) {
-    const double elapsed = SecondsSince(t0);
-    if (stopped()) {
-      sum.stopped = true;
-      break;
-    }
-    if (options.duration_s > 0.0 && elapsed >= options.duration_s) break;
-    int wait_ms = 100;
-    if (options.duration_s > 0.0) {
-      wait_ms =
-          std::clamp(static_cast<int>(std::ceil((options.duration_s - elapsed) * 1000.0)), 1, 100);
-    }
-    if (port) {
-      Result<size_t> got = port->Read(buf.data(), buf.size(), wait_ms);
-      if (got.ok()) {
-        sum.bytes_read += static_cast<int64_t>(got.value());
-        sorter.Feed(buf.data(), got.value(), sink);
-      } else {
-        ++sum.port_lost;
-        port.reset();
-        const size_t partial = sorter.pending_bytes();
-        sorter.Restart();
-        out.Append(fmt::format("# port lost at {}: {}{}\n", UtcIso8601Now(),
-                               EscapeControlChars(got.error().message),
-                               partial > 0 ? fmt::format(" ({} bytes of an unfinished line "
-                                                         "dropped)",
-                                                         partial)
-                                           : ""));
-        flush();
-        last_flush = Clock::now();
-        event(fmt::format("{}: the port disappeared ({}); kept the {} lines captured{}",
-                          options.port, got.error().message, sum.receiver_lines,
-                          options.reconnect ? "; waiting for it to return" : ""));
-        if (!options.reconnect) {
-          lost_for_good = true;
-          break;
-        }
-        last_attempt = Clock::now();
-      }
-    } else {
-      SleepUnlessStopped(std::min(wait_ms, 50), options.stop);
-      if (SecondsSince(last_attempt) >= options.reconnect_interval_s) {
-        last_attempt = Clock::now();
-        Result<std::unique_ptr<serial::SerialPort>> again =
-            serial::SerialPort::Open(options.port, options.baud);
-        if (again.ok()) {
-          port = std::move(again).value();
-          ++sum.reopened;
-          out.Append(fmt::format("# port reopened at {}\n", UtcIso8601Now()));
-          event(fmt::format("{}: the port is back; capturing again", options.port));
-        }
-      }
-    }
-    const Clock::time_point now = Clock::now();
-    if (now - last_flush >= flush_every || out.buffered() >= (size_t{1} << 20)) {
-      flush();
-      last_flush = now;
-      if (!write_status.ok()) break;
-    }
-    if (now - last_tick >= std::chrono::milliseconds(100)) {
-      last_tick = now;
-      if (observer.on_tick && tally != nullptr) observer.on_tick(*tally, SecondsSince(t0));
-    }
-  }
-  // Whatever already arrived is kept: read until the port is quiet (bounded).
-  if (port && write_status.ok()) {
-    for (int i = 0; i < 50; ++i) {
-      Result<size_t> got = port->Read(buf.data(), buf.size(), 20);
-      if (!got.ok() || got.value() == 0) break;
-      sum.bytes_read += static_cast<int64_t>(got.value());
-      sorter.Feed(buf.data(), got.value(), sink);
-    }
-  }
-  sum.elapsed_s = SecondsSince(t0);
-  out.Append(
-      fmt::format("# end_utc: {}\n# receiver_lines: {}, cut_first_lines: {}, other_lines: {}, "
-                  "unfinished_line_bytes: {}, port_lost: {}, reopened: {}\n",
-                  UtcIso8601Now(), sum.receiver_lines, sum.cut_lines, sum.other_lines,
-                  sorter.pending_bytes(), sum.port_lost, sum.reopened));
-  for (const auto& [sensor, c] : sum.counts) {
-    out.Append(fmt::format("# sensor {}: frames {}, fresh {}, stale {}, never {}\n", sensor,
-                           c.frames, c.fresh, c.stale, c.never));
-  }
-  flush();
-  if (observer.on_tick && tally != nullptr) observer.on_tick(*tally, sum.elapsed_s);
-  if (!write_status.ok()) {
-    sum.message = write_status.error().ToString();
-    return sum;
-  }
-  if (lost_for_good) {
-    sum.message = fmt::format(
-        "{}: the port disappeared after {:.1f} s and --no-reconnect was given; {} kept {} lines",
-        options.port, sum.elapsed_s, options.output, sum.receiver_lines);
-    return sum;
-  }
-  sum.ok = true;
-  sum.message = fmt::format("{}: {} receiver lines in {:.1f} s", options.output, sum.receiver_lines,
-                            sum.elapsed_s);
+  run.Loop();
+  run.Finish();
   return sum;
 }
 

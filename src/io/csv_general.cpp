@@ -4,6 +4,16 @@
 // rows, in file order, into the per-tag columns, checking time order per tag, so strict and
 // lenient loads behave exactly as a one-thread reader would, whatever the thread count, and
 // every error names its line and field.
+//
+// LoadGeneralCsv runs these stages, in this order:
+//
+//   parse    ParseBlocks                     blocks on all cores (ParseBlock, ParseRow)
+//   columns  TimingOf, MakeBuilders,         how rows are timed; per-tag columns sized
+//            NewSession                      exactly; the session's columns
+//   rows     RowMover::MoveBlock, RowTime,   the sequential pass, block by block
+//            Reject
+//   tags     FinishTags, SecondsFromOrigin   times in seconds, scaled and text columns
+//   warnings AddTimingWarnings               E-notation resolution, untimed rejections
 #include <fast_float/fast_float.h>
 #include <fmt/format.h>
 
@@ -13,6 +23,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <string>
 
 #include "core/parallel.hpp"
 #include "core/plain_decimal.hpp"
@@ -138,6 +149,36 @@ const char* FieldEnd(const char* p, const char* e, char delimiter) {
   return d != nullptr ? static_cast<const char*>(d) : e;
 }
 
+// The time field [fb, fe) on the careful path, into *t (t_s) or *t_ns (an integer time
+// column). Returns false if it is bad (recorded in block->bad).
+bool CarefulTime(const ColumnPlan& plan, const NumberSyntax& syntax, const char* fb, const char* fe,
+                 uint32_t local_line, Block* block, double* t, int64_t* t_ns) {
+  const int f = plan.time_field;
+  const std::string& name = plan.names[static_cast<size_t>(f)];
+  const char* why = nullptr;
+  if (plan.time_ns_per_unit != 0) {
+    int64_t resolution_ns = 0;
+    if (!syntax.TimeNs(fb, fe, plan.time_ns_per_unit, t_ns, &resolution_ns, &why)) {
+      block->bad.push_back(
+          {local_line, f + 1,
+           fmt::format("{}: expected a time in whole {} (integer, or a decimal down to 1 "
+                       "ns), found '{}' ({})",
+                       name, name.substr(2), Printable(fb, fe), why)});
+      return false;
+    }
+    // Only a resolution coarser than the column's unit is a loss worth a warning.
+    if (resolution_ns > plan.time_ns_per_unit) {
+      block->time_resolution_ns = std::max(block->time_resolution_ns, resolution_ns);
+    }
+  } else if (!syntax.Field(fb, fe, t, &why)) {
+    block->bad.push_back({local_line, f + 1,
+                          fmt::format("t_s: expected a finite time in seconds, found '{}' ({})",
+                                      Printable(fb, fe), why)});
+    return false;
+  }
+  return true;
+}
+
 // Parses one data line into the block. Returns false if the row is bad (recorded).
 bool ParseRow(const ColumnPlan& plan, const NumberSyntax& syntax, const char* b, const char* e,
               uint32_t local_line, Block* block, std::vector<double>* numeric_row,
@@ -204,27 +245,7 @@ bool ParseRow(const ColumnPlan& plan, const NumberSyntax& syntax, const char* b,
     Unquote(fb, fe);
     const char* why = nullptr;
     if (f == plan.time_field) {
-      const std::string& name = plan.names[uf];
-      if (integer_time) {
-        int64_t resolution_ns = 0;
-        if (!syntax.TimeNs(fb, fe, plan.time_ns_per_unit, &t_ns, &resolution_ns, &why)) {
-          block->bad.push_back(
-              {local_line, f + 1,
-               fmt::format("{}: expected a time in whole {} (integer, or a decimal down to 1 "
-                           "ns), found '{}' ({})",
-                           name, name.substr(2), Printable(fb, fe), why)});
-          return false;
-        }
-        // Only a resolution coarser than the column's unit is a loss worth a warning.
-        if (resolution_ns > plan.time_ns_per_unit) {
-          block->time_resolution_ns = std::max(block->time_resolution_ns, resolution_ns);
-        }
-      } else if (!syntax.Field(fb, fe, &t, &why)) {
-        block->bad.push_back({local_line, f + 1,
-                              fmt::format("t_s: expected a finite time in seconds, found '{}' ({})",
-                                          Printable(fb, fe), why)});
-        return false;
-      }
+      if (!CarefulTime(plan, syntax, fb, fe, local_line, block, &t, &t_ns)) return false;
     } else if (f == plan.sensor_field) {
       double v = 0.0;
       if (!syntax.Field(fb, fe, &v, &why) || v != std::floor(v) || v < 1.0 || v > 255.0) {
@@ -338,6 +359,316 @@ void AddScaledRawColumns(const ColumnPlan& plan, Tag* tag) {
   }
 }
 
+// ---- parse --------------------------------------------------------------------------------
+
+// Parse blocks in parallel. In strict mode, blocks after the first one with an error
+// are never reached by the sequential pass, so they need not be parsed.
+void ParseBlocks(const MappedFile& file, const ColumnPlan& plan, const LoadOptions& options,
+                 int threads, std::vector<Block>* cut, BlockProgress* progress,
+                 ReleaseBehind* release) {
+  std::vector<Block>& blocks = *cut;
+  std::atomic<size_t> first_bad_block{blocks.size()};
+  release->StartPass(BlockBegins(blocks), BlockEnds(blocks));
+  ParallelFor(blocks.size(), threads, [&](size_t i) {
+    if (!options.lenient && i > first_bad_block.load()) {
+      release->BlockDone(i);  // Never read: the sequential pass stops before it.
+      return;
+    }
+    ParseBlock(file, plan, options.lenient, &blocks[i]);
+    release->BlockDone(i);
+    progress->Parsed(i, blocks[i].begin, blocks[i].end);
+    if (!options.lenient && !blocks[i].bad.empty()) {
+      size_t cur = first_bad_block.load();
+      while (i < cur && !first_bad_block.compare_exchange_weak(cur, i)) {
+      }
+    }
+  });
+}
+
+// ---- columns ------------------------------------------------------------------------------
+
+// How the rows are timed.
+struct Timing {
+  bool rate_time = false;  // No time column: sample k of a tag is at k / rate.
+  // Rate-timed: integer time too when the period is a whole number of nanoseconds (100 Hz:
+  // 10,000,000 ns), so tau0 is exactly 1 / rate, not a difference of doubles k / rate.
+  double rate_period_ns = 0.0;
+  bool rate_integer = false;
+  bool integer_time = false;  // Times held in t_ns (integer time column or rate_integer).
+  std::string time_name;      // The time column's name; empty when rate-timed.
+};
+
+Timing TimingOf(const ColumnPlan& plan) {
+  Timing timing;
+  timing.rate_time = plan.time_field < 0;
+  timing.rate_period_ns = timing.rate_time ? 1e9 / plan.rate_hz : 0.0;
+  timing.rate_integer = timing.rate_time &&
+                        timing.rate_period_ns == std::round(timing.rate_period_ns) &&
+                        timing.rate_period_ns < 9e15;
+  timing.integer_time = plan.time_ns_per_unit != 0 || timing.rate_integer;
+  timing.time_name =
+      timing.rate_time ? std::string() : plan.names[static_cast<size_t>(plan.time_field)];
+  return timing;
+}
+
+// One builder per sensor 1..255 that has rows (nullptr for the others).
+using Builders = std::vector<std::unique_ptr<TagBuilder>>;
+
+// The builders, their columns sized exactly from the rows counted per sensor.
+Builders MakeBuilders(const std::vector<Block>& blocks, const ColumnPlan& plan,
+                      const Timing& timing) {
+  std::vector<int64_t> per_sensor(256, 0);
+  for (const Block& b : blocks) {
+    if (!b.parsed) break;
+    for (uint8_t s : b.sensor) ++per_sensor[s];
+  }
+  Builders builders(256);
+  const size_t nq = plan.numeric_fields.size();
+  const size_t nt = plan.text_fields.size();
+  for (int s = 1; s < 256; ++s) {
+    if (per_sensor[s] == 0) continue;
+    auto tb = std::make_unique<TagBuilder>();
+    tb->tag.sensor = s;
+    const size_t rows = static_cast<size_t>(per_sensor[s]);
+    tb->tag.t_s.reserve(rows);
+    if (timing.integer_time) tb->tag.t_ns.reserve(rows);
+    tb->tag.line.reserve(rows);
+    for (size_t q = 0; q < nq; ++q) {
+      Quantity quantity;
+      const size_t f = static_cast<size_t>(plan.numeric_fields[q]);
+      quantity.name = plan.names[f];
+      quantity.unit = plan.info[f].UnitSymbol();
+      quantity.origin = QuantityOrigin::kFile;
+      quantity.values.reserve(rows);
+      tb->tag.quantities.push_back(std::move(quantity));
+    }
+    tb->text.resize(nt);
+    builders[static_cast<size_t>(s)] = std::move(tb);
+  }
+  return builders;
+}
+
+// The session before its rows: path, format, dialect, columns.
+Session NewSession(const std::string& path, const ColumnPlan& plan) {
+  Session session;
+  session.path = path;
+  session.format = plan.format;
+  session.input = plan.dialect;
+  for (size_t f = 0; f < plan.names.size(); ++f) {
+    if (plan.names[f].empty()) continue;
+    session.columns.push_back(plan.names[f]);
+    if (plan.info[f].role == ColumnRole::kUnknown) session.unknown_columns.push_back(plan.names[f]);
+  }
+  return session;
+}
+
+// ---- rows ---------------------------------------------------------------------------------
+
+// The sequential pass: each block's rows, in file order, into the tags' columns, checking
+// time order per tag; a bad row is an error (strict) or counted and kept aside (lenient).
+class RowMover {
+ public:
+  RowMover(const std::string& path, const ColumnPlan& plan, const LoadOptions& options,
+           const Timing& timing, Builders* builders, Session* session)
+      : path_(path),
+        plan_(plan),
+        options_(options),
+        timing_(timing),
+        builders_(*builders),
+        session_(*session) {}
+
+  // The rows of block b, whose first line is first_line.
+  Status MoveBlock(int64_t first_line, Block* block) {
+    Block& b = *block;
+    const size_t nq = plan_.numeric_fields.size();
+    const size_t nt = plan_.text_fields.size();
+    size_t bad_i = 0;
+    const size_t rows = b.sensor.size();
+    for (size_t r = 0; r <= rows; ++r) {
+      const uint32_t row_line = r < rows ? b.local_line[r] : UINT32_MAX;
+      while (bad_i < b.bad.size() && b.bad[bad_i].local_line < row_line) {
+        const BadRow& bad = b.bad[bad_i++];
+        if (Status s = Reject(first_line + bad.local_line, bad.field, bad.message); !s.ok()) {
+          return s;
+        }
+        if (timing_.rate_time && plan_.sensor_field < 0) ++slots_[1];
+      }
+      if (r == rows) break;
+      TagBuilder& tb = *builders_[b.sensor[r]];
+      const int64_t line = first_line + b.local_line[r];
+      double t = 0.0;
+      int64_t t_ns = 0;
+      Result<bool> timed = RowTime(b, r, line, &tb, &t, &t_ns);
+      if (!timed.ok()) return timed.error();
+      if (!timed.value()) continue;
+      if (line > kMaxLineNumber) return TooManyLinesError(path_, line);
+      ++session_.rows;
+      tb.last_line = static_cast<uint32_t>(line);
+      if (timing_.integer_time) {
+        tb.tag.t_ns.push_back(t_ns);
+      } else {
+        tb.tag.t_s.push_back(t);
+      }
+      tb.tag.line.push_back(static_cast<uint32_t>(line));
+      const double* row = b.numeric.data() + r * nq;
+      for (size_t q = 0; q < nq; ++q) tb.tag.quantities[q].values.push_back(row[q]);
+      for (size_t k = 0; k < nt; ++k) tb.text[k].push_back(std::move(b.text[r * nt + k]));
+    }
+    return Status::Ok();
+  }
+
+  // Rejected rows of a rate-timed file with a sensor column (their tags' clocks stood still).
+  int64_t rejected_untimed() const { return rejected_untimed_; }
+
+ private:
+  // Rate-timed files: a rejected row of a file without a sensor column was still a sample
+  // of tag 1, so its clock advances; with a sensor column the tag of a bad row is unknown.
+  Status Reject(int64_t line, int field, const std::string& message) {
+    if (!options_.lenient) return MakeError(path_, line, field, message);
+    ++session_.rejected_rows;
+    ++session_.rows;
+    if (timing_.rate_time) ++rejected_untimed_;
+    if (session_.rejected_lines.size() < options_.max_rejected_kept) {
+      session_.rejected_lines.push_back(line);
+      session_.rejected_reasons.push_back(message);
+    }
+    return Status::Ok();
+  }
+
+  // The time of row r of b (on `line`, of tag tb) in *t or *t_ns: true, or false when the
+  // row was rejected as out of time order.
+  Result<bool> RowTime(const Block& b, size_t r, int64_t line, TagBuilder* tb, double* t,
+                       int64_t* t_ns) {
+    const std::string& time_name = timing_.time_name;
+    if (timing_.rate_integer) {
+      if (__builtin_mul_overflow(slots_[b.sensor[r]]++,
+                                 static_cast<int64_t>(timing_.rate_period_ns), t_ns)) {
+        return MakeError(path_, line,
+                         fmt::format("sample {} at {} Hz is beyond 2^63 ns (292 years) of "
+                                     "time: check the rate",
+                                     slots_[b.sensor[r]] - 1, plan_.rate_hz));
+      }
+    } else if (timing_.rate_time) {
+      *t = static_cast<double>(slots_[b.sensor[r]]++) / plan_.rate_hz;
+    } else if (timing_.integer_time) {
+      const int64_t ns = b.t_ns[r];
+      if (!(ns > tb->last_ns)) {
+        const std::string message = fmt::format(
+            "{} = {} is not after {} = {} of sensor {} on line {}: rows must be sorted by "
+            "strictly increasing time per tag",
+            time_name, ns / plan_.time_ns_per_unit, time_name, tb->last_ns / plan_.time_ns_per_unit,
+            b.sensor[r], tb->last_line);
+        if (Status s = Reject(line, plan_.time_field + 1, message); !s.ok()) return s.error();
+        return false;
+      }
+      tb->last_ns = ns;
+      *t_ns = ns;
+    } else {
+      *t = b.t_s[r];
+      if (!(*t > tb->last_t)) {
+        const std::string message = fmt::format(
+            "t_s = {} is not after t_s = {} of sensor {} on line {}: rows must be sorted by "
+            "strictly increasing time per tag",
+            *t, tb->last_t, b.sensor[r], tb->last_line);
+        if (Status s = Reject(line, plan_.time_field + 1, message); !s.ok()) return s.error();
+        return false;
+      }
+      tb->last_t = *t;
+    }
+    return true;
+  }
+
+  const std::string& path_;
+  const ColumnPlan& plan_;
+  const LoadOptions& options_;
+  const Timing& timing_;
+  Builders& builders_;
+  Session& session_;
+  std::vector<int64_t> slots_ = std::vector<int64_t>(256, 0);  // Rate-timed: next sample.
+  int64_t rejected_untimed_ = 0;
+};
+
+// ---- tags ---------------------------------------------------------------------------------
+
+// Integer time: seconds of tag `sensor` from the session's first time, from exact differences.
+Status SecondsFromOrigin(const std::string& path, const std::string& time_name, int sensor,
+                         int64_t origin_ns, Tag* tag) {
+  tag->t_s.resize(tag->t_ns.size());
+  for (size_t i = 0; i < tag->t_ns.size(); ++i) {
+    int64_t since_origin_ns = 0;
+    if (__builtin_sub_overflow(tag->t_ns[i], origin_ns, &since_origin_ns)) {
+      return MakeError(path, tag->line[i],
+                       "the session's times span more than 2^63 ns (292 years): expected "
+                       "one clock");
+    }
+    // Correctly rounded: one division of two exactly representable integers.
+    tag->t_s[i] = static_cast<double>(since_origin_ns) / 1e9;
+    // Far from the origin, times a few ns apart are one double of seconds: Tag::t_s
+    // must still increase strictly.
+    if (i > 0 && !(tag->t_s[i] > tag->t_s[i - 1])) {
+      return MakeError(
+          path, tag->line[i],
+          fmt::format("{} = {} is {} ns after the previous time of sensor {} but {:g} s "
+                      "from the session's first time: closer than seconds in a double "
+                      "resolve there; expected one clock for the whole session",
+                      time_name.empty() ? std::string("time") : time_name, tag->t_ns[i],
+                      tag->t_ns[i] - tag->t_ns[i - 1], sensor, tag->t_s[i]));
+    }
+  }
+  return Status::Ok();
+}
+
+// The built tags, in sensor order, into the session: times in seconds, scaled raw columns,
+// text and unknown columns, counts.
+Status FinishTags(const std::string& path, const ColumnPlan& plan, const Timing& timing,
+                  Builders* builders, Session* session) {
+  int64_t origin_ns = std::numeric_limits<int64_t>::max();
+  if (timing.integer_time) {
+    for (const auto& tb : *builders) {
+      if (tb != nullptr && !tb->tag.t_ns.empty()) origin_ns = std::min(origin_ns, tb->tag.t_ns[0]);
+    }
+    session->input.time_origin_ns = origin_ns;
+    session->input.time_integer = true;
+  }
+  for (int s = 1; s < 256; ++s) {
+    TagBuilder* tb = (*builders)[static_cast<size_t>(s)].get();
+    if (tb == nullptr || tb->tag.line.empty()) continue;
+    if (timing.integer_time) {
+      Status seconds = SecondsFromOrigin(path, timing.time_name, s, origin_ns, &tb->tag);
+      if (!seconds.ok()) return seconds;
+    }
+    AddScaledRawColumns(plan, &tb->tag);
+    for (size_t k = 0; k < plan.text_fields.size(); ++k) {
+      const size_t f = static_cast<size_t>(plan.text_fields[k]);
+      AddTextOrUnknownColumn(plan.names[f], plan.info[f].role == ColumnRole::kUnknown,
+                             plan.info[f].UnitSymbol(), std::move(tb->text[k]), &tb->tag);
+    }
+    tb->tag.counts.frames = tb->tag.counts.fresh = static_cast<int64_t>(tb->tag.t_s.size());
+    session->tags.push_back(std::move(tb->tag));
+  }
+  return Status::Ok();
+}
+
+// The warnings on the times: E-notation's resolution, rejected rows of a rate-timed file.
+void AddTimingWarnings(const ColumnPlan& plan, const Timing& timing, int64_t resolution_ns,
+                       int64_t rejected_untimed, Session* session) {
+  if (resolution_ns > 0) {
+    session->input.time_resolution_s = static_cast<double>(resolution_ns) / 1e9;
+    session->input.warnings.push_back(fmt::format(
+        "{} is written in E-notation (a spreadsheet round trip?): its last digits are gone, "
+        "so times are resolved to {} ns ({:g} s) only; sample periods, gaps and Allan tau0 "
+        "are good to that resolution",
+        timing.time_name, resolution_ns, session->input.time_resolution_s));
+  }
+  if (timing.rate_time && rejected_untimed > 0 && plan.sensor_field >= 0) {
+    session->input.warnings.push_back(fmt::format(
+        "{} rows were rejected in a file timed by --rate-hz with a sensor column: the tag of a "
+        "rejected row is unknown, so its clock did not advance and later times of that tag "
+        "are early by one period per rejected row",
+        rejected_untimed));
+  }
+}
+
 }  // namespace
 
 std::vector<Block> CutBlocks(const MappedFile& file, size_t data_begin, size_t data_end,
@@ -370,225 +701,26 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
                                const LoadOptions& options, int threads, std::vector<Block>* cut,
                                BlockProgress* progress, ReleaseBehind* release) {
   std::vector<Block>& blocks = *cut;
-  // Parse blocks in parallel. In strict mode, blocks after the first one with an error
-  // are never reached by the sequential pass, so they need not be parsed.
-  std::atomic<size_t> first_bad_block{blocks.size()};
-  release->StartPass(BlockBegins(blocks), BlockEnds(blocks));
-  ParallelFor(blocks.size(), threads, [&](size_t i) {
-    if (!options.lenient && i > first_bad_block.load()) {
-      release->BlockDone(i);  // Never read: the sequential pass stops before it.
-      return;
-    }
-    ParseBlock(file, plan, options.lenient, &blocks[i]);
-    release->BlockDone(i);
-    progress->Parsed(i, blocks[i].begin, blocks[i].end);
-    if (!options.lenient && !blocks[i].bad.empty()) {
-      size_t cur = first_bad_block.load();
-      while (i < cur && !first_bad_block.compare_exchange_weak(cur, i)) {
-      }
-    }
-  });
-
-  // Count rows per sensor to size the tag columns exactly.
-  std::vector<int64_t> per_sensor(256, 0);
-  for (const Block& b : blocks) {
-    if (!b.parsed) break;
-    for (uint8_t s : b.sensor) ++per_sensor[s];
-  }
-  const bool rate_time = plan.time_field < 0;
-  // Rate-timed: integer time too when the period is a whole number of nanoseconds (100 Hz:
-  // 10,000,000 ns), so tau0 is exactly 1 / rate, not a difference of doubles k / rate.
-  const double rate_period_ns = rate_time ? 1e9 / plan.rate_hz : 0.0;
-  const bool rate_integer =
-      rate_time && rate_period_ns == std::round(rate_period_ns) && rate_period_ns < 9e15;
-  const bool integer_time = plan.time_ns_per_unit != 0 || rate_integer;
-  std::vector<std::unique_ptr<TagBuilder>> builders(256);
-  const size_t nq = plan.numeric_fields.size();
-  const size_t nt = plan.text_fields.size();
-  for (int s = 1; s < 256; ++s) {
-    if (per_sensor[s] == 0) continue;
-    auto tb = std::make_unique<TagBuilder>();
-    tb->tag.sensor = s;
-    const size_t rows = static_cast<size_t>(per_sensor[s]);
-    tb->tag.t_s.reserve(rows);
-    if (integer_time) tb->tag.t_ns.reserve(rows);
-    tb->tag.line.reserve(rows);
-    for (size_t q = 0; q < nq; ++q) {
-      Quantity quantity;
-      const size_t f = static_cast<size_t>(plan.numeric_fields[q]);
-      quantity.name = plan.names[f];
-      quantity.unit = plan.info[f].UnitSymbol();
-      quantity.origin = QuantityOrigin::kFile;
-      quantity.values.reserve(rows);
-      tb->tag.quantities.push_back(std::move(quantity));
-    }
-    tb->text.resize(nt);
-    builders[static_cast<size_t>(s)] = std::move(tb);
-  }
-
-  Session session;
-  session.path = path;
-  session.format = plan.format;
-  session.input = plan.dialect;
-  for (size_t f = 0; f < plan.names.size(); ++f) {
-    if (plan.names[f].empty()) continue;
-    session.columns.push_back(plan.names[f]);
-    if (plan.info[f].role == ColumnRole::kUnknown) session.unknown_columns.push_back(plan.names[f]);
-  }
-
-  // Rate-timed files: a rejected row of a file without a sensor column was still a sample
-  // of tag 1, so its clock advances; with a sensor column the tag of a bad row is unknown.
-  int64_t rejected_untimed = 0;
-  auto reject = [&](int64_t line, int field, const std::string& message) -> Status {
-    if (!options.lenient) return MakeError(path, line, field, message);
-    ++session.rejected_rows;
-    ++session.rows;
-    if (rate_time) ++rejected_untimed;
-    if (session.rejected_lines.size() < options.max_rejected_kept) {
-      session.rejected_lines.push_back(line);
-      session.rejected_reasons.push_back(message);
-    }
-    return Status::Ok();
-  };
-  std::vector<int64_t> slots(256, 0);  // Rate-timed: the next sample index of each tag.
+  ParseBlocks(file, plan, options, threads, &blocks, progress, release);
+  const Timing timing = TimingOf(plan);
+  Builders builders = MakeBuilders(blocks, plan, timing);
+  Session session = NewSession(path, plan);
 
   // Sequential pass in file order.
+  RowMover mover(path, plan, options, timing, &builders, &session);
   int64_t first_line = header.line_number + 1;
   int64_t resolution_ns = 0;
-  const std::string& time_name =
-      rate_time ? std::string() : plan.names[static_cast<size_t>(plan.time_field)];
   for (Block& b : blocks) {
     if (!b.parsed) break;
     resolution_ns = std::max(resolution_ns, b.time_resolution_ns);
-    size_t bad_i = 0;
-    const size_t rows = b.sensor.size();
-    for (size_t r = 0; r <= rows; ++r) {
-      const uint32_t row_line = r < rows ? b.local_line[r] : UINT32_MAX;
-      while (bad_i < b.bad.size() && b.bad[bad_i].local_line < row_line) {
-        const BadRow& bad = b.bad[bad_i++];
-        if (Status s = reject(first_line + bad.local_line, bad.field, bad.message); !s.ok()) {
-          return s.error();
-        }
-        if (rate_time && plan.sensor_field < 0) ++slots[1];
-      }
-      if (r == rows) break;
-      TagBuilder& tb = *builders[b.sensor[r]];
-      const int64_t line = first_line + b.local_line[r];
-      double t = 0.0;
-      int64_t t_ns = 0;
-      if (rate_integer) {
-        if (__builtin_mul_overflow(slots[b.sensor[r]]++, static_cast<int64_t>(rate_period_ns),
-                                   &t_ns)) {
-          return MakeError(path, line,
-                           fmt::format("sample {} at {} Hz is beyond 2^63 ns (292 years) of "
-                                       "time: check the rate",
-                                       slots[b.sensor[r]] - 1, plan.rate_hz));
-        }
-      } else if (rate_time) {
-        t = static_cast<double>(slots[b.sensor[r]]++) / plan.rate_hz;
-      } else if (integer_time) {
-        const int64_t ns = b.t_ns[r];
-        if (!(ns > tb.last_ns)) {
-          const std::string message = fmt::format(
-              "{} = {} is not after {} = {} of sensor {} on line {}: rows must be sorted by "
-              "strictly increasing time per tag",
-              time_name, ns / plan.time_ns_per_unit, time_name, tb.last_ns / plan.time_ns_per_unit,
-              b.sensor[r], tb.last_line);
-          if (Status s = reject(line, plan.time_field + 1, message); !s.ok()) return s.error();
-          continue;
-        }
-        tb.last_ns = ns;
-        t_ns = ns;
-      } else {
-        t = b.t_s[r];
-        if (!(t > tb.last_t)) {
-          const std::string message = fmt::format(
-              "t_s = {} is not after t_s = {} of sensor {} on line {}: rows must be sorted by "
-              "strictly increasing time per tag",
-              t, tb.last_t, b.sensor[r], tb.last_line);
-          if (Status s = reject(line, plan.time_field + 1, message); !s.ok()) return s.error();
-          continue;
-        }
-        tb.last_t = t;
-      }
-      if (line > kMaxLineNumber) return TooManyLinesError(path, line);
-      ++session.rows;
-      tb.last_line = static_cast<uint32_t>(line);
-      if (integer_time) {
-        tb.tag.t_ns.push_back(t_ns);
-      } else {
-        tb.tag.t_s.push_back(t);
-      }
-      tb.tag.line.push_back(static_cast<uint32_t>(line));
-      const double* row = b.numeric.data() + r * nq;
-      for (size_t q = 0; q < nq; ++q) tb.tag.quantities[q].values.push_back(row[q]);
-      for (size_t k = 0; k < nt; ++k) tb.text[k].push_back(std::move(b.text[r * nt + k]));
-    }
+    if (Status s = mover.MoveBlock(first_line, &b); !s.ok()) return s.error();
     first_line += b.lines;
     // Free the block's buffers as soon as they are moved.
     b = Block();
   }
 
-  // Integer time: seconds from the session's first time, from exact differences.
-  int64_t origin_ns = std::numeric_limits<int64_t>::max();
-  if (integer_time) {
-    for (const auto& tb : builders) {
-      if (tb != nullptr && !tb->tag.t_ns.empty()) origin_ns = std::min(origin_ns, tb->tag.t_ns[0]);
-    }
-    session.input.time_origin_ns = origin_ns;
-    session.input.time_integer = true;
-  }
-  for (int s = 1; s < 256; ++s) {
-    TagBuilder* tb = builders[static_cast<size_t>(s)].get();
-    if (tb == nullptr || tb->tag.line.empty()) continue;
-    if (integer_time) {
-      tb->tag.t_s.resize(tb->tag.t_ns.size());
-      for (size_t i = 0; i < tb->tag.t_ns.size(); ++i) {
-        int64_t since_origin_ns = 0;
-        if (__builtin_sub_overflow(tb->tag.t_ns[i], origin_ns, &since_origin_ns)) {
-          return MakeError(path, tb->tag.line[i],
-                           "the session's times span more than 2^63 ns (292 years): expected "
-                           "one clock");
-        }
-        // Correctly rounded: one division of two exactly representable integers.
-        tb->tag.t_s[i] = static_cast<double>(since_origin_ns) / 1e9;
-        // Far from the origin, times a few ns apart are one double of seconds: Tag::t_s
-        // must still increase strictly.
-        if (i > 0 && !(tb->tag.t_s[i] > tb->tag.t_s[i - 1])) {
-          return MakeError(
-              path, tb->tag.line[i],
-              fmt::format("{} = {} is {} ns after the previous time of sensor {} but {:g} s "
-                          "from the session's first time: closer than seconds in a double "
-                          "resolve there; expected one clock for the whole session",
-                          time_name.empty() ? std::string("time") : time_name, tb->tag.t_ns[i],
-                          tb->tag.t_ns[i] - tb->tag.t_ns[i - 1], s, tb->tag.t_s[i]));
-        }
-      }
-    }
-    AddScaledRawColumns(plan, &tb->tag);
-    for (size_t k = 0; k < nt; ++k) {
-      const size_t f = static_cast<size_t>(plan.text_fields[k]);
-      AddTextOrUnknownColumn(plan.names[f], plan.info[f].role == ColumnRole::kUnknown,
-                             plan.info[f].UnitSymbol(), std::move(tb->text[k]), &tb->tag);
-    }
-    tb->tag.counts.frames = tb->tag.counts.fresh = static_cast<int64_t>(tb->tag.t_s.size());
-    session.tags.push_back(std::move(tb->tag));
-  }
-  if (resolution_ns > 0) {
-    session.input.time_resolution_s = static_cast<double>(resolution_ns) / 1e9;
-    session.input.warnings.push_back(fmt::format(
-        "{} is written in E-notation (a spreadsheet round trip?): its last digits are gone, "
-        "so times are resolved to {} ns ({:g} s) only; sample periods, gaps and Allan tau0 "
-        "are good to that resolution",
-        time_name, resolution_ns, session.input.time_resolution_s));
-  }
-  if (rate_time && rejected_untimed > 0 && plan.sensor_field >= 0) {
-    session.input.warnings.push_back(fmt::format(
-        "{} rows were rejected in a file timed by --rate-hz with a sensor column: the tag of a "
-        "rejected row is unknown, so its clock did not advance and later times of that tag "
-        "are early by one period per rejected row",
-        rejected_untimed));
-  }
+  if (Status s = FinishTags(path, plan, timing, &builders, &session); !s.ok()) return s.error();
+  AddTimingWarnings(plan, timing, resolution_ns, mover.rejected_untimed(), &session);
   if (session.tags.empty()) {
     if (session.rejected_rows > 0) {
       return MakeError(path, 0,

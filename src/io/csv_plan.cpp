@@ -1,3 +1,12 @@
+// PlanCsv runs these stages, in this order (the dialects: docs/formats.md):
+//
+//   1 framing   DetectFraming                   byte-order mark, line ends, delimiter
+//   2 header    ReadHeader, ApplyRateMetadata   header line, named format, metadata rate
+//   3 columns   NameColumns, ColumnName,        canonical names, roles and slots, how rows
+//               AssignRoles, CheckTiming,       are timed, raw-count scales, the time
+//               PlanRawScales,                  column's written resolution
+//               CheckTimeResolution
+//   4 footer    FindDataEnd                     a spreadsheet footer
 #include "io/csv_plan.hpp"
 
 #include <fast_float/fast_float.h>
@@ -675,38 +684,45 @@ bool ColumnPlan::CleanPathCan() const {
   return std::none_of(names.begin(), names.end(), [](const std::string& n) { return n.empty(); });
 }
 
-Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
-                           const LoadOptions& options, SessionFormat format, HeaderLine* header) {
-  ColumnPlan plan;
-  InputDialect& dialect = plan.dialect;
-  // Stage 1: byte-order mark, line ends, delimiter.
+namespace {
+
+// ---- stage 1: framing ---------------------------------------------------------------------
+
+// Where the text starts, its head, line end and first lines.
+struct Framing {
+  std::string_view head;  // The first kHeadBytes after the byte-order mark.
+  char line_end = '\n';
+  std::vector<HeadLine> lines;
+};
+
+// Byte-order mark, line ends, delimiter (into *dialect).
+Framing DetectFraming(const MappedFile& file, InputDialect* dialect) {
   size_t start = 0;
   if (file.size() >= 3 && std::memcmp(file.data(), "\xEF\xBB\xBF", 3) == 0) {
-    dialect.bom = true;
+    dialect->bom = true;
     start = 3;
   }
-  const std::string_view head(file.data() + start, std::min(file.size() - start, kHeadBytes));
+  Framing framing;
+  framing.head = std::string_view(file.data() + start, std::min(file.size() - start, kHeadBytes));
+  const std::string_view head = framing.head;
   const size_t lf = static_cast<size_t>(std::count(head.begin(), head.end(), '\n'));
   const size_t cr = static_cast<size_t>(std::count(head.begin(), head.end(), '\r'));
   const char line_end = lf == 0 && cr > 0 ? '\r' : '\n';
-  dialect.line_ends = line_end == '\r' ? "CR" : (cr > 0 ? "CRLF" : "LF");
-  const std::vector<HeadLine> lines = HeadLines(file, start, line_end, kHeadLines);
-  DetectDelimiter(lines, &dialect);
+  framing.line_end = line_end;
+  dialect->line_ends = line_end == '\r' ? "CR" : (cr > 0 ? "CRLF" : "LF");
+  framing.lines = HeadLines(file, start, line_end, kHeadLines);
+  DetectDelimiter(framing.lines, dialect);
+  return framing;
+}
 
-  // Stage 2: the header.
-  auto found_or = FindHeaderLine(path, lines, dialect);
-  if (!found_or.ok()) return found_or.error();
-  const Found& found = found_or.value();
-  *header = found.header;
-  dialect.header_in_comment = IsComment(std::string_view(
-      file.data() + header->line_begin, std::min<size_t>(file.size() - header->line_begin, 256)));
-  if (format == SessionFormat::kAuto || format == SessionFormat::kCsv) {
-    const SessionFormat named = DetectNamedFormat(path, head);
-    if (format == SessionFormat::kAuto) format = named;
-  }
-  plan.format = format;
-  plan.rate_hz = options.rate_hz;
-  for (const MetadataLine& m : found.metadata) {
+// ---- stage 2: the header ------------------------------------------------------------------
+
+// A sample rate given in the metadata lines before the header (plan->rate_hz unless
+// --rate-hz is given); a rate line that says no rate is refused.
+Status ApplyRateMetadata(const std::string& path, const std::vector<MetadataLine>& metadata,
+                         const LoadOptions& options, ColumnPlan* plan) {
+  InputDialect& dialect = plan->dialect;
+  for (const MetadataLine& m : metadata) {
     const std::string k = Lower(std::string(TrimView(m.key)));
     if (k != "fs" && k != "rate_hz" && k != "sample rate" && k != "sampling rate") continue;
     const std::string_view value = TrimView(m.value);
@@ -724,153 +740,213 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
                                    Printable(m.key), Printable(m.value), Printable(m.key)));
     }
     if (options.rate_hz == 0.0) {
-      plan.rate_hz = rate_hz;
+      plan->rate_hz = rate_hz;
       dialect.notes.push_back(fmt::format("metadata '{},{}' sets the sample rate to {} Hz", m.key,
-                                          m.value, plan.rate_hz));
+                                          m.value, plan->rate_hz));
     } else if (rate_hz != options.rate_hz) {
       dialect.notes.push_back(fmt::format("--rate-hz {} overrides the metadata '{},{}' (line {})",
                                           options.rate_hz, m.key, m.value, m.line));
     }
   }
+  return Status::Ok();
+}
+
+// The header line (*header), the format (plan->format) and the metadata before the header.
+Status ReadHeader(const std::string& path, const MappedFile& file, const Framing& framing,
+                  const LoadOptions& options, SessionFormat format, ColumnPlan* plan,
+                  HeaderLine* header) {
+  InputDialect& dialect = plan->dialect;
+  auto found_or = FindHeaderLine(path, framing.lines, dialect);
+  if (!found_or.ok()) return found_or.error();
+  const Found& found = found_or.value();
+  *header = found.header;
+  dialect.header_in_comment = IsComment(std::string_view(
+      file.data() + header->line_begin, std::min<size_t>(file.size() - header->line_begin, 256)));
+  if (format == SessionFormat::kAuto || format == SessionFormat::kCsv) {
+    const SessionFormat named = DetectNamedFormat(path, framing.head);
+    if (format == SessionFormat::kAuto) format = named;
+  }
+  plan->format = format;
+  plan->rate_hz = options.rate_hz;
+  if (Status s = ApplyRateMetadata(path, found.metadata, options, plan); !s.ok()) return s;
   if (header->metadata_lines > 0) {
     dialect.notes.push_back(fmt::format("{} metadata line(s) before the header on line {}",
                                         header->metadata_lines, header->line_number));
   }
+  return Status::Ok();
+}
 
-  // Stage 3: the columns.
-  const std::vector<std::string> sources = SplitFields(header->text, dialect.delimiter);
+// ---- stage 3: the columns -----------------------------------------------------------------
+
+// The canonical name of header field `source` (column 1-based): --column, the named
+// format's, or the header's own if canonical; empty: left out.
+Result<std::string> ColumnName(const std::string& path, std::string_view head,
+                               const HeaderLine& header, const LoadOptions& options,
+                               SessionFormat format, const std::string& source, int column) {
+  std::string name;
+  bool mapped = false;
+  for (const ColumnMapping& m : options.column_map) {
+    if (Lower(m.source) == Lower(source)) {
+      name = m.canonical;
+      mapped = true;
+    }
+  }
+  if (!mapped) name = NamedFormatColumn(format, path, source, &mapped);
+  if (!mapped && format == SessionFormat::kSensorLogger) {
+    const std::string lower = Lower(source);
+    if (lower == "x" || lower == "y" || lower == "z") {
+      return MakeError(
+          path, header.line_number, column,
+          fmt::format("Sensor Logger names the sensor of its x, y, z columns only in the file "
+                      "name (Gyroscope.csv, Accelerometer.csv), and '{}' does not say it: map "
+                      "the axes, e.g. --column x=gx_rads --column y=gy_rads --column z=gz_rads "
+                      "(gyroscope, rad/s) or ax_mps2.. (accelerometer, m/s^2)",
+                      path));
+    }
+  }
+  if (!mapped) {
+    const std::string lower = Lower(source);
+    if (!IsValidColumnName(lower)) {
+      const SessionFormat detected = DetectNamedFormat(path, head);
+      const std::string hint = format == SessionFormat::kCsv ? FormatHint(detected) : "";
+      return MakeError(path, header.line_number, column,
+                       fmt::format("header: column {} is '{}', not a canonical column name "
+                                   "([a-z][a-z0-9_]* with its unit, e.g. gx_dps); {}{}",
+                                   column, Printable(source), ProposeMapping(source), hint));
+    }
+    name = lower;
+  }
+  if (!name.empty() && !IsValidColumnName(name)) {
+    return MakeError(path, header.line_number, column,
+                     fmt::format("--column maps '{}' to '{}', which is not a canonical column "
+                                 "name ([a-z][a-z0-9_]*, e.g. gx_dps; docs/formats.md)",
+                                 Printable(source), Printable(name)));
+  }
+  return name;
+}
+
+// The header's fields (sources) named and classified: plan->source_names, names, info.
+Status NameColumns(const std::string& path, std::string_view head, const HeaderLine& header,
+                   const LoadOptions& options, const std::vector<std::string>& sources,
+                   ColumnPlan* plan) {
+  InputDialect& dialect = plan->dialect;
   if (sources.size() > kMaxSessionColumns) {
-    return MakeError(path, header->line_number,
+    return MakeError(path, header.line_number,
                      fmt::format("{} columns; metro reads at most {} (docs/formats.md, "
                                  "\"Limits\"): write the columns you need to a new file, or "
                                  "split it",
                                  sources.size(), kMaxSessionColumns));
   }
-  dialect.quoted = header->text.find('"') != std::string::npos;
+  dialect.quoted = header.text.find('"') != std::string::npos;
   std::map<std::string, int> seen;
   for (size_t f = 0; f < sources.size(); ++f) {
     const std::string& source = sources[f];
     const int column = static_cast<int>(f) + 1;
-    std::string name;
-    bool mapped = false;
-    for (const ColumnMapping& m : options.column_map) {
-      if (Lower(m.source) == Lower(source)) {
-        name = m.canonical;
-        mapped = true;
-      }
-    }
-    if (!mapped) name = NamedFormatColumn(format, path, source, &mapped);
-    if (!mapped && format == SessionFormat::kSensorLogger) {
-      const std::string lower = Lower(source);
-      if (lower == "x" || lower == "y" || lower == "z") {
-        return MakeError(
-            path, header->line_number, column,
-            fmt::format("Sensor Logger names the sensor of its x, y, z columns only in the file "
-                        "name (Gyroscope.csv, Accelerometer.csv), and '{}' does not say it: map "
-                        "the axes, e.g. --column x=gx_rads --column y=gy_rads --column z=gz_rads "
-                        "(gyroscope, rad/s) or ax_mps2.. (accelerometer, m/s^2)",
-                        path));
-      }
-    }
-    if (!mapped) {
-      const std::string lower = Lower(source);
-      if (!IsValidColumnName(lower)) {
-        const SessionFormat detected = DetectNamedFormat(path, head);
-        const std::string hint = format == SessionFormat::kCsv ? FormatHint(detected) : "";
-        return MakeError(path, header->line_number, column,
-                         fmt::format("header: column {} is '{}', not a canonical column name "
-                                     "([a-z][a-z0-9_]* with its unit, e.g. gx_dps); {}{}",
-                                     column, Printable(source), ProposeMapping(source), hint));
-      }
-      name = lower;
-    }
-    if (!name.empty() && !IsValidColumnName(name)) {
-      return MakeError(path, header->line_number, column,
-                       fmt::format("--column maps '{}' to '{}', which is not a canonical column "
-                                   "name ([a-z][a-z0-9_]*, e.g. gx_dps; docs/formats.md)",
-                                   Printable(source), Printable(name)));
-    }
+    Result<std::string> named =
+        ColumnName(path, head, header, options, plan->format, source, column);
+    if (!named.ok()) return named.error();
+    const std::string& name = named.value();
     if (name != source) dialect.mapping.push_back(ColumnMapping{source, name});
     if (!name.empty() && !seen.emplace(name, column).second) {
-      return MakeError(path, header->line_number, column,
+      return MakeError(path, header.line_number, column,
                        fmt::format("header: column '{}' appears twice (columns {} and {})", name,
                                    seen[name], column));
     }
-    plan.source_names.push_back(source);
-    plan.names.push_back(name);
-    plan.info.push_back(name.empty() ? ColumnInfo{} : ClassifyColumn(name));
+    plan->source_names.push_back(source);
+    plan->names.push_back(name);
+    plan->info.push_back(name.empty() ? ColumnInfo{} : ClassifyColumn(name));
   }
-  dialect.header_line = header->line_number;
-  dialect.header_names = plan.names;
-  const size_t nf = plan.names.size();
-  plan.numeric_slot.assign(nf, -1);
-  plan.text_slot.assign(nf, -1);
+  dialect.header_line = header.line_number;
+  dialect.header_names = plan->names;
+  return Status::Ok();
+}
+
+// Each named column's role: the time, the sensor, numeric and text slots.
+Status AssignRoles(const std::string& path, const HeaderLine& header, ColumnPlan* plan) {
+  ColumnPlan& p = *plan;
+  const size_t nf = p.names.size();
+  p.numeric_slot.assign(nf, -1);
+  p.text_slot.assign(nf, -1);
   for (size_t f = 0; f < nf; ++f) {
-    if (plan.names[f].empty()) continue;  // Left out.
-    switch (plan.info[f].role) {
+    if (p.names[f].empty()) continue;  // Left out.
+    switch (p.info[f].role) {
       case ColumnRole::kTime:
-        if (plan.time_field >= 0) {
-          return MakeError(path, header->line_number, static_cast<int>(f) + 1,
+        if (p.time_field >= 0) {
+          return MakeError(path, header.line_number, static_cast<int>(f) + 1,
                            fmt::format("header: two time columns, '{}' and '{}'; leave one "
                                        "out with --column '{}='",
-                                       plan.names[static_cast<size_t>(plan.time_field)],
-                                       plan.names[f], plan.source_names[f]));
+                                       p.names[static_cast<size_t>(p.time_field)], p.names[f],
+                                       p.source_names[f]));
         }
-        plan.time_field = static_cast<int>(f);
-        plan.time_ns_per_unit = plan.names[f] == "t_s"    ? 0
-                                : plan.names[f] == "t_ms" ? 1000000
-                                : plan.names[f] == "t_us" ? 1000
-                                                          : 1;
+        p.time_field = static_cast<int>(f);
+        p.time_ns_per_unit = p.names[f] == "t_s"    ? 0
+                             : p.names[f] == "t_ms" ? 1000000
+                             : p.names[f] == "t_us" ? 1000
+                                                    : 1;
         break;
       case ColumnRole::kSensor:
-        plan.sensor_field = static_cast<int>(f);
+        p.sensor_field = static_cast<int>(f);
         break;
       case ColumnRole::kQuantity:
-        plan.numeric_slot[f] = static_cast<int>(plan.numeric_fields.size());
-        plan.numeric_fields.push_back(static_cast<int>(f));
+        p.numeric_slot[f] = static_cast<int>(p.numeric_fields.size());
+        p.numeric_fields.push_back(static_cast<int>(f));
         break;
       case ColumnRole::kText:
       case ColumnRole::kUnknown:
-        plan.text_slot[f] = static_cast<int>(plan.text_fields.size());
-        plan.text_fields.push_back(static_cast<int>(f));
+        p.text_slot[f] = static_cast<int>(p.text_fields.size());
+        p.text_fields.push_back(static_cast<int>(f));
         break;
     }
   }
-  if (plan.time_field >= 0) {
-    const std::string& name = plan.names[static_cast<size_t>(plan.time_field)];
-    dialect.time_source = plan.source_names[static_cast<size_t>(plan.time_field)];
+  return Status::Ok();
+}
+
+// How the rows are timed: the time column, or --rate-hz / the metadata's rate; neither is
+// an error that proposes a mapping.
+Status CheckTiming(const std::string& path, std::string_view head, const HeaderLine& header,
+                   const LoadOptions& options, const std::vector<std::string>& sources,
+                   ColumnPlan* plan) {
+  InputDialect& dialect = plan->dialect;
+  if (plan->time_field >= 0) {
+    const std::string& name = plan->names[static_cast<size_t>(plan->time_field)];
+    dialect.time_source = plan->source_names[static_cast<size_t>(plan->time_field)];
     dialect.time_unit = name.substr(2);
-    dialect.time_integer = plan.time_ns_per_unit != 0;
+    dialect.time_integer = plan->time_ns_per_unit != 0;
     if (options.rate_hz > 0.0) {
-      return MakeError(path, header->line_number, plan.time_field + 1,
+      return MakeError(path, header.line_number, plan->time_field + 1,
                        fmt::format("--rate-hz is for a file without a time column, but this "
                                    "one has '{}'; leave it out with --column '{}=' to time the "
                                    "rows by --rate-hz instead",
                                    dialect.time_source, dialect.time_source));
     }
-  } else if (plan.rate_hz > 0.0) {
-    dialect.time_unit = "rate";
-    dialect.rate_hz = plan.rate_hz;
-  } else {
-    std::string proposal;
-    for (const std::string& s : sources) {
-      const std::string inferred = InferCanonicalName(s);
-      if (inferred.rfind("t_", 0) == 0 && ClassifyColumn(inferred).role == ColumnRole::kTime) {
-        proposal = fmt::format("; map yours: --column '{}={}'", s, inferred);
-        break;
-      }
-    }
-    return MakeError(
-        path, header->line_number,
-        fmt::format(
-            "header: no time column; expected t_s, t_ms, t_us or t_ns (or --rate-hz R "
-            "for a file without one){}; found '{}'{}",
-            proposal, Printable(header->text),
-            format == SessionFormat::kCsv ? FormatHint(DetectNamedFormat(path, head)) : ""));
+    return Status::Ok();
   }
-  // Raw counts with full-scale settings: the physical columns beside the counts.
-  for (size_t q = 0; q < plan.numeric_fields.size(); ++q) {
-    const ColumnInfo& info = plan.info[static_cast<size_t>(plan.numeric_fields[q])];
+  if (plan->rate_hz > 0.0) {
+    dialect.time_unit = "rate";
+    dialect.rate_hz = plan->rate_hz;
+    return Status::Ok();
+  }
+  std::string proposal;
+  for (const std::string& s : sources) {
+    const std::string inferred = InferCanonicalName(s);
+    if (inferred.rfind("t_", 0) == 0 && ClassifyColumn(inferred).role == ColumnRole::kTime) {
+      proposal = fmt::format("; map yours: --column '{}={}'", s, inferred);
+      break;
+    }
+  }
+  return MakeError(
+      path, header.line_number,
+      fmt::format(
+          "header: no time column; expected t_s, t_ms, t_us or t_ns (or --rate-hz R "
+          "for a file without one){}; found '{}'{}",
+          proposal, Printable(header.text),
+          plan->format == SessionFormat::kCsv ? FormatHint(DetectNamedFormat(path, head)) : ""));
+}
+
+// Raw counts with full-scale settings: the physical columns beside the counts.
+void PlanRawScales(const LoadOptions& options, ColumnPlan* plan) {
+  for (size_t q = 0; q < plan->numeric_fields.size(); ++q) {
+    const ColumnInfo& info = plan->info[static_cast<size_t>(plan->numeric_fields[q])];
     double scale = 0.0;
     std::string scaled;
     if (info.unit != nullptr && info.unit->symbol == "LSB") {
@@ -882,27 +958,32 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
         scaled = AxisColumn(info.sensor, info.axis, *UnitBySymbol("deg/s"));
       }
     }
-    plan.raw_scale.push_back(scale);
-    plan.raw_scaled_name.push_back(scaled);
+    plan->raw_scale.push_back(scale);
+    plan->raw_scaled_name.push_back(scaled);
   }
-  if (std::all_of(plan.raw_scale.begin(), plan.raw_scale.end(),
+  if (std::all_of(plan->raw_scale.begin(), plan->raw_scale.end(),
                   [](double s) { return s == 0.0; })) {
-    plan.raw_scale.clear();
-    plan.raw_scaled_name.clear();
+    plan->raw_scale.clear();
+    plan->raw_scaled_name.clear();
   } else {
-    dialect.accel_fs_g = options.accel_fs_g;
-    dialect.gyro_fs_dps = options.gyro_fs_dps;
+    plan->dialect.accel_fs_g = options.accel_fs_g;
+    plan->dialect.gyro_fs_dps = options.gyro_fs_dps;
   }
-  // Time in seconds written in E-notation (a spreadsheet round trip: 1.40363657975856E+09)
-  // keeps only the digits written: say which resolution is left, from the first data row
-  // (the clean path parses such a column as any number; integer time units are checked row
-  // by row in the general path).
-  if (plan.time_field >= 0 && plan.time_ns_per_unit == 0) {
+}
+
+// Time in seconds written in E-notation (a spreadsheet round trip: 1.40363657975856E+09)
+// keeps only the digits written: say which resolution is left, from the first data row
+// (the clean path parses such a column as any number; integer time units are checked row
+// by row in the general path).
+void CheckTimeResolution(const std::vector<HeadLine>& lines, const HeaderLine& header,
+                         ColumnPlan* plan) {
+  InputDialect& dialect = plan->dialect;
+  if (plan->time_field >= 0 && plan->time_ns_per_unit == 0) {
     for (const HeadLine& l : lines) {
-      if (l.begin < header->data_begin || IsBlank(l.text) || IsComment(l.text)) continue;
+      if (l.begin < header.data_begin || IsBlank(l.text) || IsComment(l.text)) continue;
       const std::vector<std::string> fields = SplitFields(l.text, dialect.delimiter);
-      if (static_cast<size_t>(plan.time_field) >= fields.size()) break;
-      std::string t = fields[static_cast<size_t>(plan.time_field)];
+      if (static_cast<size_t>(plan->time_field) >= fields.size()) break;
+      std::string t = fields[static_cast<size_t>(plan->time_field)];
       std::replace(t.begin(), t.end(), dialect.decimal_point, '.');
       int64_t ns = 0;
       int64_t resolution_ns = 0;
@@ -920,10 +1001,34 @@ Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
       break;
     }
   }
+}
+
+}  // namespace
+
+Result<ColumnPlan> PlanCsv(const std::string& path, const MappedFile& file,
+                           const LoadOptions& options, SessionFormat format, HeaderLine* header) {
+  ColumnPlan plan;
+  // Stage 1: byte-order mark, line ends, delimiter.
+  const Framing framing = DetectFraming(file, &plan.dialect);
+  // Stage 2: the header.
+  if (Status s = ReadHeader(path, file, framing, options, format, &plan, header); !s.ok()) {
+    return s.error();
+  }
+  // Stage 3: the columns.
+  const std::vector<std::string> sources = SplitFields(header->text, plan.dialect.delimiter);
+  if (Status s = NameColumns(path, framing.head, *header, options, sources, &plan); !s.ok()) {
+    return s.error();
+  }
+  if (Status s = AssignRoles(path, *header, &plan); !s.ok()) return s.error();
+  if (Status s = CheckTiming(path, framing.head, *header, options, sources, &plan); !s.ok()) {
+    return s.error();
+  }
+  PlanRawScales(options, &plan);
+  CheckTimeResolution(framing.lines, *header, &plan);
   // Stage 4: a spreadsheet footer.
   int64_t footer = 0;
-  plan.data_end =
-      FindDataEnd(file, header->data_begin, line_end, dialect.delimiter, &dialect.notes, &footer);
+  plan.data_end = FindDataEnd(file, header->data_begin, framing.line_end, plan.dialect.delimiter,
+                              &plan.dialect.notes, &footer);
   return plan;
 }
 

@@ -1,3 +1,9 @@
+// LoadReceiverCapture runs these stages, in this order:
+//
+//   session  NewReceiverSession            the session's format, frame period and columns
+//   lines    ReadCaptureLines, RejectLine  line by line: a torn first line skipped, each
+//            AddDecodedLine                decoded, framed, counted and kept per tag
+//   finish   FinishReceiverSession         the tags, or no valid line as an error
 #include "metro/io/receiver.hpp"
 
 #include <fmt/format.h>
@@ -6,6 +12,8 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <string>
+#include <string_view>
 
 #include "io/session_internal.hpp"
 #include "metro/core/file.hpp"
@@ -107,43 +115,100 @@ std::string FormatReceiverLine(int sensor, NewDataFlag flag, const ReceiverPaylo
   return line;
 }
 
-namespace internal {
+namespace {
 
-Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& options) {
-  auto text_or = ReadFile(path, kMaxRecordingBytes);
-  if (!text_or.ok()) return text_or.error();
-  const std::string& text = text_or.value();
-  if (text.empty()) return MakeError(path, 0, "empty file: expected receiver capture lines");
+// ---- LoadReceiverCapture's stages ---------------------------------------------------------
 
-  struct Builder {
-    Tag tag;
-    std::vector<std::string> payload_hex;
-  };
-  std::map<int, Builder> tags;
+// One tag's observations and the rest of each of its lines (payload_hex).
+struct ReceiverTagBuilder {
+  Tag tag;
+  std::vector<std::string> payload_hex;
+};
+
+// The state of the pass over the capture's lines.
+struct CaptureState {
+  const std::string& path;
+  const LoadOptions& options;
+  Session session;
+  std::map<int, ReceiverTagBuilder> tags;
+  int64_t frame = -1;
+  int previous_sensor = 256;
+  int64_t line_number = 0;
+};
+
+Session NewReceiverSession(const std::string& path, const LoadOptions& options) {
   Session session;
   session.path = path;
   session.format = SessionFormat::kReceiver;
   session.frame_period_s = options.frame_period_s;
   session.columns = {"sensor", "new_data", "qw", "qx", "qy", "qz", "payload_hex"};
+  return session;
+}
 
-  int64_t frame = -1;
-  int previous_sensor = 256;
-  int64_t line_number = 0;
+// A bad line: an error (strict) or counted and kept aside (lenient).
+Status RejectLine(int64_t column, const std::string& message, CaptureState* st) {
+  if (!st->options.lenient) return MakeError(st->path, st->line_number, column, message);
+  Session& session = st->session;
+  ++session.rejected_rows;
+  ++session.rows;
+  if (session.rejected_lines.size() < st->options.max_rejected_kept) {
+    session.rejected_lines.push_back(st->line_number);
+    session.rejected_reasons.push_back(message);
+  }
+  return Status::Ok();
+}
+
+// A decoded line into its tag: a new frame when the sensor number does not increase; stale
+// and never-sent counted; a fresh one's quaternion and payload kept.
+Status AddDecodedLine(const ReceiverLine& decoded, std::string_view line, CaptureState* st) {
+  Session& session = st->session;
+  const int64_t line_number = st->line_number;
+  const int sensor = decoded.sensor;
+  const int flag = static_cast<int>(decoded.flag);
+  const Quaternion& q = decoded.q;
+  // A new frame starts when the sensor number does not increase.
+  if (sensor <= st->previous_sensor) ++st->frame;
+  st->previous_sensor = sensor;
+  ++session.rows;
+
+  ReceiverTagBuilder& b = st->tags[sensor];
+  b.tag.sensor = sensor;
+  ++b.tag.counts.frames;
+  if (flag == 0x00) {
+    ++b.tag.counts.stale;
+    return Status::Ok();
+  }
+  if (flag == 0xFF) {
+    ++b.tag.counts.never;
+    return Status::Ok();
+  }
+  ++b.tag.counts.fresh;
+  if (b.tag.quantities.empty()) {
+    for (const char* name : {"qw", "qx", "qy", "qz"}) {
+      b.tag.quantities.push_back(Quantity{name, "1", QuantityOrigin::kFile, {}});
+    }
+  }
+  b.tag.t_s.push_back(static_cast<double>(st->frame) * st->options.frame_period_s);
+  if (line_number > internal::kMaxLineNumber) {
+    return internal::TooManyLinesError(st->path, line_number);
+  }
+  b.tag.line.push_back(static_cast<uint32_t>(line_number));
+  b.tag.quantities[0].values.push_back(q.w);
+  b.tag.quantities[1].values.push_back(q.x);
+  b.tag.quantities[2].values.push_back(q.y);
+  b.tag.quantities[3].values.push_back(q.z);
+  std::string extra(line.substr(4 + 2 * 16));
+  for (char& c : extra) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  b.payload_hex.push_back(std::move(extra));
+  return Status::Ok();
+}
+
+// Every line of the capture, in order.
+Status ReadCaptureLines(const std::string& text, CaptureState* st) {
+  const LoadOptions& options = st->options;
   size_t pos = 0;
   bool seen_line = false;  // A line that is neither blank nor a comment.
-
-  auto reject = [&](int64_t column, const std::string& message) -> Status {
-    if (!options.lenient) return MakeError(path, line_number, column, message);
-    ++session.rejected_rows;
-    ++session.rows;
-    if (session.rejected_lines.size() < options.max_rejected_kept) {
-      session.rejected_lines.push_back(line_number);
-      session.rejected_reasons.push_back(message);
-    }
-    return Status::Ok();
-  };
-
-  size_t reported = 0;  // Bytes told to options.on_bytes_parsed.
+  size_t reported = 0;     // Bytes told to options.on_bytes_parsed.
   constexpr size_t kReportBytes = size_t{1} << 20;
   while (pos < text.size()) {
     size_t nl = text.find('\n', pos);
@@ -155,7 +220,7 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
       options.on_bytes_parsed(static_cast<int64_t>(upto - reported));
       reported = upto;
     }
-    ++line_number;
+    ++st->line_number;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.empty() || line.front() == '#') continue;
     const bool first_line = !seen_line;
@@ -164,10 +229,10 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
     // that is the tail of a receiver line is skipped (even in strict mode), with a note.
     if (first_line && line.size() < static_cast<size_t>(kReceiverLineHexChars) &&
         std::all_of(line.begin(), line.end(), [](char c) { return HexValue(c) >= 0; })) {
-      session.input.notes.push_back(fmt::format(
+      st->session.input.notes.push_back(fmt::format(
           "line {}: {} hex characters, the tail of a receiver line (the port was opened "
           "mid-line): skipped",
-          line_number, line.size()));
+          st->line_number, line.size()));
       continue;
     }
 
@@ -179,50 +244,21 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
             "; the first line of a capture may be a terminal program's banner: remove it, or "
             "pass --lenient to skip it";
       }
-      if (Status s = reject(problem.column, problem.message); !s.ok()) return s.error();
+      if (Status s = RejectLine(problem.column, problem.message, st); !s.ok()) return s;
       continue;
     }
-    const int sensor = decoded.sensor;
-    const int flag = static_cast<int>(decoded.flag);
-    const Quaternion& q = decoded.q;
-    // A new frame starts when the sensor number does not increase.
-    if (sensor <= previous_sensor) ++frame;
-    previous_sensor = sensor;
-    ++session.rows;
-
-    Builder& b = tags[sensor];
-    b.tag.sensor = sensor;
-    ++b.tag.counts.frames;
-    if (flag == 0x00) {
-      ++b.tag.counts.stale;
-      continue;
-    }
-    if (flag == 0xFF) {
-      ++b.tag.counts.never;
-      continue;
-    }
-    ++b.tag.counts.fresh;
-    if (b.tag.quantities.empty()) {
-      for (const char* name : {"qw", "qx", "qy", "qz"}) {
-        b.tag.quantities.push_back(Quantity{name, "1", QuantityOrigin::kFile, {}});
-      }
-    }
-    b.tag.t_s.push_back(static_cast<double>(frame) * options.frame_period_s);
-    if (line_number > internal::kMaxLineNumber) {
-      return internal::TooManyLinesError(path, line_number);
-    }
-    b.tag.line.push_back(static_cast<uint32_t>(line_number));
-    b.tag.quantities[0].values.push_back(q.w);
-    b.tag.quantities[1].values.push_back(q.x);
-    b.tag.quantities[2].values.push_back(q.y);
-    b.tag.quantities[3].values.push_back(q.z);
-    std::string extra(line.substr(4 + 2 * 16));
-    for (char& c : extra) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    b.payload_hex.push_back(std::move(extra));
+    if (Status s = AddDecodedLine(decoded, line, st); !s.ok()) return s;
   }
   if (options.on_bytes_parsed && reported < text.size()) {
     options.on_bytes_parsed(static_cast<int64_t>(text.size() - reported));
   }
+  return Status::Ok();
+}
+
+// The tags into the session, or the error of a capture without a valid line.
+Status FinishReceiverSession(CaptureState* st) {
+  Session& session = st->session;
+  const std::string& path = st->path;
   if (session.rows == session.rejected_rows) {
     if (session.rejected_rows > 0) {
       return MakeError(path, 0,
@@ -233,13 +269,28 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
     }
     return MakeError(path, 0, "no receiver lines: only blank or comment lines");
   }
-  for (auto& [sensor, b] : tags) {
+  for (auto& [sensor, b] : st->tags) {
     if (!b.tag.t_s.empty()) {
       b.tag.text_columns.push_back(TextColumn{"payload_hex", std::move(b.payload_hex)});
     }
     session.tags.push_back(std::move(b.tag));
   }
-  return session;
+  return Status::Ok();
+}
+
+}  // namespace
+
+namespace internal {
+
+Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& options) {
+  auto text_or = ReadFile(path, kMaxRecordingBytes);
+  if (!text_or.ok()) return text_or.error();
+  const std::string& text = text_or.value();
+  if (text.empty()) return MakeError(path, 0, "empty file: expected receiver capture lines");
+  CaptureState st{path, options, NewReceiverSession(path, options), {}};
+  if (Status s = ReadCaptureLines(text, &st); !s.ok()) return s.error();
+  if (Status s = FinishReceiverSession(&st); !s.ok()) return s.error();
+  return std::move(st.session);
 }
 
 }  // namespace internal

@@ -1,3 +1,10 @@
+// JoinSessionsOnTime runs these stages, in this order:
+//
+//   check   CheckDisjoint                no quantity in two sessions
+//   tags    JoinTag: NearestSamples,     per tag of the first session: the nearest sample of
+//           ZipMatched                   every other within half its period; the samples
+//                                        all of them matched, zipped
+//   finish  (driver)                     unmatched counts, columns, an empty join refused
 #include "metro/io/session_join.hpp"
 
 #include <fmt/format.h>
@@ -26,16 +33,12 @@ double MedianInterval(const Tag& tag, bool exact) {
   return dt[dt.size() / 2];
 }
 
-}  // namespace
+// ---- JoinSessionsOnTime's stages ----------------------------------------------------------
 
-Result<Session> JoinSessionsOnTime(const std::vector<Session>& parts, JoinSummary* summary) {
-  if (parts.size() < 2) return MakeError("joining on time needs two sessions or more");
-  *summary = JoinSummary{};
-  bool exact = true;
-  for (const Session& s : parts) {
-    for (const Tag& t : s.tags) exact = exact && t.t_ns.size() == t.t_s.size();
-  }
-  // No quantity in two sessions.
+constexpr size_t kNone = std::numeric_limits<size_t>::max();
+
+// No quantity in two sessions.
+Status CheckDisjoint(const std::vector<Session>& parts) {
   for (size_t a = 0; a < parts.size(); ++a) {
     for (size_t b = a + 1; b < parts.size(); ++b) {
       for (const Tag& ta : parts[a].tags) {
@@ -52,6 +55,106 @@ Result<Session> JoinSessionsOnTime(const std::vector<Session>& parts, JoinSummar
       }
     }
   }
+  return Status::Ok();
+}
+
+// Per sample of `base`, the index of the nearest sample of `other` within half its median
+// period (or kNone). Ties go to the earlier.
+std::vector<size_t> NearestSamples(const Tag& base, const Tag& other, bool exact) {
+  std::vector<size_t> match(base.size(), kNone);
+  const double half = MedianInterval(other, exact) / 2.0;
+  size_t j = 0;
+  for (size_t i = 0; i < base.size(); ++i) {
+    const double t = TimeAt(base, i, exact);
+    while (j + 1 < other.size() && TimeAt(other, j + 1, exact) <= t) ++j;
+    // Candidates j (at or before t) and j + 1 (after t); ties go to the earlier.
+    size_t best = j;
+    double gap = std::fabs(TimeAt(other, j, exact) - t);
+    if (j + 1 < other.size()) {
+      const double after = std::fabs(TimeAt(other, j + 1, exact) - t);
+      if (after < gap) {
+        best = j + 1;
+        gap = after;
+      }
+    }
+    if (gap <= half) match[i] = best;
+  }
+  return match;
+}
+
+// The base tag's samples that every other session's tag matched, with all their quantities;
+// the samples each session left unmatched counted in summary->unmatched.
+Tag ZipMatched(const std::vector<Session>& parts, const Tag& base,
+               const std::vector<const Tag*>& tags, const std::vector<std::vector<size_t>>& match,
+               bool exact, JoinSummary* summary) {
+  Tag tag;
+  tag.sensor = base.sensor;
+  std::vector<std::vector<bool>> used(parts.size());
+  for (size_t p = 0; p < parts.size(); ++p) {
+    if (tags[p] == nullptr) continue;
+    used[p].assign(tags[p]->size(), false);
+    for (const Quantity& q : tags[p]->quantities) {
+      tag.quantities.push_back(Quantity{q.name, q.unit, q.origin, {}});
+    }
+  }
+  for (size_t i = 0; i < base.size(); ++i) {
+    bool all = true;
+    for (size_t p = 1; p < parts.size(); ++p) {
+      all = all && (tags[p] == nullptr || match[p][i] != kNone);
+    }
+    if (!all) continue;
+    tag.t_s.push_back(base.t_s[i]);
+    if (exact) tag.t_ns.push_back(base.t_ns[i]);
+    tag.line.push_back(base.line[i]);
+    size_t k = 0;
+    for (size_t p = 0; p < parts.size(); ++p) {
+      if (tags[p] == nullptr) continue;
+      const size_t j = match[p][i];
+      used[p][j] = true;
+      for (const Quantity& q : tags[p]->quantities)
+        tag.quantities[k++].values.push_back(q.values[j]);
+    }
+  }
+  for (size_t p = 0; p < parts.size(); ++p) {
+    if (tags[p] == nullptr) continue;
+    summary->unmatched[p] += std::count(used[p].begin(), used[p].end(), false);
+  }
+  return tag;
+}
+
+// The joined tag of base's sensor.
+Result<Tag> JoinTag(const std::vector<Session>& parts, const Tag& base, bool exact,
+                    JoinSummary* summary) {
+  // For every other session: its tag and per base sample the index of the matched sample
+  // (or kNone).
+  std::vector<std::vector<size_t>> match(parts.size(), std::vector<size_t>(base.size(), kNone));
+  std::vector<const Tag*> tags(parts.size(), nullptr);
+  tags[0] = &base;
+  for (size_t i = 0; i < base.size(); ++i) match[0][i] = i;
+  for (size_t p = 1; p < parts.size(); ++p) {
+    const Tag* other = parts[p].FindTag(base.sensor);
+    tags[p] = other;
+    if (other == nullptr) continue;
+    if (other->size() < 2) {
+      return MakeError(parts[p].path, 0,
+                       fmt::format("sensor {} has {} sample(s): a join needs a sample period",
+                                   base.sensor, other->size()));
+    }
+    match[p] = NearestSamples(base, *other, exact);
+  }
+  return ZipMatched(parts, base, tags, match, exact, summary);
+}
+
+}  // namespace
+
+Result<Session> JoinSessionsOnTime(const std::vector<Session>& parts, JoinSummary* summary) {
+  if (parts.size() < 2) return MakeError("joining on time needs two sessions or more");
+  *summary = JoinSummary{};
+  bool exact = true;
+  for (const Session& s : parts) {
+    for (const Tag& t : s.tags) exact = exact && t.t_ns.size() == t.t_s.size();
+  }
+  if (Status s = CheckDisjoint(parts); !s.ok()) return s.error();
   Session out;
   out.path = parts[0].path;
   out.format = parts[0].format;
@@ -64,72 +167,9 @@ Result<Session> JoinSessionsOnTime(const std::vector<Session>& parts, JoinSummar
     out.sha256 += (out.sha256.empty() ? "" : "+") + s.sha256;
   }
   for (const Tag& base : parts[0].tags) {
-    // For every other session: its tag, its half period, and per base sample the index of
-    // the matched sample (or npos).
-    constexpr size_t kNone = std::numeric_limits<size_t>::max();
-    std::vector<std::vector<size_t>> match(parts.size(), std::vector<size_t>(base.size(), kNone));
-    std::vector<const Tag*> tags(parts.size(), nullptr);
-    tags[0] = &base;
-    for (size_t i = 0; i < base.size(); ++i) match[0][i] = i;
-    for (size_t p = 1; p < parts.size(); ++p) {
-      const Tag* other = parts[p].FindTag(base.sensor);
-      tags[p] = other;
-      if (other == nullptr) continue;
-      if (other->size() < 2) {
-        return MakeError(parts[p].path, 0,
-                         fmt::format("sensor {} has {} sample(s): a join needs a sample period",
-                                     base.sensor, other->size()));
-      }
-      const double half = MedianInterval(*other, exact) / 2.0;
-      size_t j = 0;
-      for (size_t i = 0; i < base.size(); ++i) {
-        const double t = TimeAt(base, i, exact);
-        while (j + 1 < other->size() && TimeAt(*other, j + 1, exact) <= t) ++j;
-        // Candidates j (at or before t) and j + 1 (after t); ties go to the earlier.
-        size_t best = j;
-        double gap = std::fabs(TimeAt(*other, j, exact) - t);
-        if (j + 1 < other->size()) {
-          const double after = std::fabs(TimeAt(*other, j + 1, exact) - t);
-          if (after < gap) {
-            best = j + 1;
-            gap = after;
-          }
-        }
-        if (gap <= half) match[p][i] = best;
-      }
-    }
-    Tag tag;
-    tag.sensor = base.sensor;
-    std::vector<std::vector<bool>> used(parts.size());
-    for (size_t p = 0; p < parts.size(); ++p) {
-      if (tags[p] == nullptr) continue;
-      used[p].assign(tags[p]->size(), false);
-      for (const Quantity& q : tags[p]->quantities) {
-        tag.quantities.push_back(Quantity{q.name, q.unit, q.origin, {}});
-      }
-    }
-    for (size_t i = 0; i < base.size(); ++i) {
-      bool all = true;
-      for (size_t p = 1; p < parts.size(); ++p) {
-        all = all && (tags[p] == nullptr || match[p][i] != kNone);
-      }
-      if (!all) continue;
-      tag.t_s.push_back(base.t_s[i]);
-      if (exact) tag.t_ns.push_back(base.t_ns[i]);
-      tag.line.push_back(base.line[i]);
-      size_t k = 0;
-      for (size_t p = 0; p < parts.size(); ++p) {
-        if (tags[p] == nullptr) continue;
-        const size_t j = match[p][i];
-        used[p][j] = true;
-        for (const Quantity& q : tags[p]->quantities)
-          tag.quantities[k++].values.push_back(q.values[j]);
-      }
-    }
-    for (size_t p = 0; p < parts.size(); ++p) {
-      if (tags[p] == nullptr) continue;
-      summary->unmatched[p] += std::count(used[p].begin(), used[p].end(), false);
-    }
+    Result<Tag> joined = JoinTag(parts, base, exact, summary);
+    if (!joined.ok()) return joined.error();
+    Tag& tag = joined.value();
     tag.counts.frames = tag.counts.fresh = static_cast<int64_t>(tag.size());
     summary->rows += static_cast<int64_t>(tag.size());
     out.rows += static_cast<int64_t>(tag.size());

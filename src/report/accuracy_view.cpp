@@ -1,3 +1,14 @@
+// RenderAccuracyHtml fills the "accuracy" template section by section, in the page's order:
+//
+//   headline      PageCoverage, SetHeadline        input, options, statements, U
+//   fit           SetFit                           error plot, fitted parameters
+//   points        SetPoints                        one row per plateau
+//   analyses      SetSystematicAndLinearity,       systematic error, linearity, hysteresis
+//                 SetHysteresis, SetRepeatability  (rows and plot), repeatability
+//   cross-axis    SetCrossAxes                     the two other angles' rows and plots
+//   the rest      SetBudgetsAndSegmentation        budgets, segmentation, warnings
+//
+// Each Set* reads the report alone and sets its own template keys.
 #include "accuracy_view.hpp"
 
 #include <fmt/format.h>
@@ -280,39 +291,44 @@ mustache::data InputData(const AccuracyReport& report) {
   return rows;
 }
 
-}  // namespace
+// ---- headline -----------------------------------------------------------------------------
 
-Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::string& json_path) {
+// The coverage the page states: the corrected budget's, else the options', else 95 %.
+double PageCoverage(const AccuracyReport& report) {
   double coverage = report.corrected.gum.coverage;
   if (!(coverage > 0.0 && coverage < 1.0)) coverage = report.options.coverage;
   if (!(coverage > 0.0 && coverage < 1.0)) coverage = 0.95;
-  Result<std::vector<Point>> parsed = PointsOf(report, coverage);
-  if (!parsed.ok()) return parsed.error();
-  const std::vector<Point>& points = parsed.value();
-  const AccuracyReportInput& input = report.input;
-  const std::string& quantity = input.quantity;
-  const AccuracyReportResult& result = report.result;
+  return coverage;
+}
 
-  mustache::data data;
-  data.set("input_rows", InputData(report));
+// The input, the options and the two statements with their U.
+void SetHeadline(const AccuracyReport& report, double coverage, mustache::data* data) {
+  const AccuracyReportResult& result = report.result;
+  data->set("input_rows", InputData(report));
   // The options as a table, one row per option (as the session page), not a JSON string.
   const mustache::data option_rows = OptionRows(AccuracyOptionsToJsonValue(report.options));
-  data.set("option_rows", option_rows);
-  data.set("has_options", !option_rows.is_empty_list());
-  data.set("statement_corrected", result.statement_corrected);
-  data.set("statement_uncorrected", result.statement_uncorrected);
-  data.set("result_ok", true);
-  data.set("U_corrected", UncertaintyText(report.corrected.gum.expanded));
-  data.set("k_corrected", ShortNumber(report.corrected.gum.k, 3));
-  data.set("U_uncorrected", UncertaintyText(report.uncorrected.gum.expanded));
-  data.set("k_uncorrected", ShortNumber(report.uncorrected.gum.k, 3));
-  data.set("U_random", UncertaintyText(result.U_random_deg));
-  data.set("U_max_abs", UncertaintyText(result.U_uncorrected_max_abs_deg));
-  data.set("coverage", ShortNumber(100.0 * coverage, 3));
-  data.set("has_which_u", !result.which_u.empty());
-  data.set("which_u", result.which_u);
+  data->set("option_rows", option_rows);
+  data->set("has_options", !option_rows.is_empty_list());
+  data->set("statement_corrected", result.statement_corrected);
+  data->set("statement_uncorrected", result.statement_uncorrected);
+  data->set("result_ok", true);
+  data->set("U_corrected", UncertaintyText(report.corrected.gum.expanded));
+  data->set("k_corrected", ShortNumber(report.corrected.gum.k, 3));
+  data->set("U_uncorrected", UncertaintyText(report.uncorrected.gum.expanded));
+  data->set("k_uncorrected", ShortNumber(report.uncorrected.gum.k, 3));
+  data->set("U_random", UncertaintyText(result.U_random_deg));
+  data->set("U_max_abs", UncertaintyText(result.U_uncorrected_max_abs_deg));
+  data->set("coverage", ShortNumber(100.0 * coverage, 3));
+  data->set("has_which_u", !result.which_u.empty());
+  data->set("which_u", result.which_u);
+}
 
-  // The error plot and the fit.
+// ---- fit ----------------------------------------------------------------------------------
+
+// The error plot and the fit.
+void SetFit(const AccuracyReport& report, const std::vector<Point>& points, double coverage,
+            mustache::data* data) {
+  const std::string& quantity = report.input.quantity;
   const HarmonicFit& fit = report.fit.fit;
   const std::string fit_model = ErrorModelName(report.fit.model);
   const Curve curve = CurveOf(fit);
@@ -328,9 +344,9 @@ Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::
                   "u_fit = sqrt(g^T C g), k = t(nu = {}) = {}.",
                   ShortNumber(100.0 * coverage, 3), fit_model, ShortNumber(fit_dof, 4),
                   ShortNumber(k_fit, 3))));
-  data.set("error_figures", figures);
-  data.set("has_fit_note", !curve.ok);
-  data.set("fit_note", "The report has no usable fitted parameters: the curve is not drawn.");
+  data->set("error_figures", figures);
+  data->set("has_fit_note", !curve.ok);
+  data->set("fit_note", "The report has no usable fitted parameters: the curve is not drawn.");
   mustache::data params{mustache::data::type::list};
   for (size_t i = 0; i < fit.terms.size() && i < fit.params.size() && i < fit.u.size(); ++i) {
     const RoundedResult r = RoundForStatement(fit.params[i], fit.u[i]);
@@ -341,18 +357,23 @@ Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::
     row.set("unit", fit.terms[i] == ErrorTerm::kScale ? "deg/deg" : "deg");
     params.push_back(row);
   }
-  data.set("fit_params", params);
-  data.set("fit_model", fit_model);
-  data.set("fit_equation", report.fit.equation);
-  data.set("fit_order_rule", report.fit.order_rule);
-  data.set("fit_chi2", ShortNumber(fit.chi2, 4));
-  data.set("fit_dof", ShortNumber(fit_dof, 4));
-  data.set("fit_reduced_chi2", ShortNumber(fit.reduced_chi2, 3));
-  data.set("fit_scaled", fit.covariance_scaled ? "yes" : "no");
-  data.set("fit_residual_rms", UncertaintyText(fit.residual_rms_deg));
-  data.set("fit_max_prediction_u", UncertaintyText(report.fit.max_prediction_u_deg));
+  data->set("fit_params", params);
+  data->set("fit_model", fit_model);
+  data->set("fit_equation", report.fit.equation);
+  data->set("fit_order_rule", report.fit.order_rule);
+  data->set("fit_chi2", ShortNumber(fit.chi2, 4));
+  data->set("fit_dof", ShortNumber(fit_dof, 4));
+  data->set("fit_reduced_chi2", ShortNumber(fit.reduced_chi2, 3));
+  data->set("fit_scaled", fit.covariance_scaled ? "yes" : "no");
+  data->set("fit_residual_rms", UncertaintyText(fit.residual_rms_deg));
+  data->set("fit_max_prediction_u", UncertaintyText(report.fit.max_prediction_u_deg));
+}
 
-  // Per plateau, rounded per JCGM 100:2008 7.2.6 (the u of each point).
+// ---- points -------------------------------------------------------------------------------
+
+// Per plateau, rounded per JCGM 100:2008 7.2.6 (the u of each point).
+void SetPoints(const AccuracyReport& report, const std::vector<Point>& points,
+               mustache::data* data) {
   mustache::data rows{mustache::data::type::list};
   for (size_t i = 0; i < points.size(); ++i) {
     const Point& p = points[i];
@@ -374,35 +395,39 @@ Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::
     row.set("t", fmt::format("{} .. {}", ShortNumber(a.t_start_s, 6), ShortNumber(a.t_end_s, 6)));
     rows.push_back(row);
   }
-  data.set("points", rows);
+  data->set("points", rows);
+}
 
-  // Systematic error and linearity.
+// ---- systematic error, linearity, hysteresis, repeatability --------------------------------
+
+void SetSystematicAndLinearity(const AccuracyReport& report, mustache::data* data) {
   const SystematicError& se = report.systematic;
   const Linearity& lin = report.linearity;
-  data.set("sys_mean", ShortNumber(se.mean_deg, 3));
-  data.set("sys_std", UncertaintyText(se.std_deg));
-  data.set("sys_rms", UncertaintyText(se.rms_deg));
-  data.set("sys_max", ShortNumber(se.max_abs_deg, 3));
-  data.set("sys_at", ShortNumber(se.at_reference_deg, 6));
-  data.set("lin_max", ShortNumber(lin.max_abs_deviation_deg, 3));
-  data.set("lin_at", ShortNumber(lin.at_reference_deg, 6));
-  data.set("lin_rms", UncertaintyText(lin.rms_deviation_deg));
-  data.set("lin_percent", ShortNumber(lin.percent_of_span, 3));
+  data->set("sys_mean", ShortNumber(se.mean_deg, 3));
+  data->set("sys_std", UncertaintyText(se.std_deg));
+  data->set("sys_rms", UncertaintyText(se.rms_deg));
+  data->set("sys_max", ShortNumber(se.max_abs_deg, 3));
+  data->set("sys_at", ShortNumber(se.at_reference_deg, 6));
+  data->set("lin_max", ShortNumber(lin.max_abs_deviation_deg, 3));
+  data->set("lin_at", ShortNumber(lin.at_reference_deg, 6));
+  data->set("lin_rms", UncertaintyText(lin.rms_deviation_deg));
+  data->set("lin_percent", ShortNumber(lin.percent_of_span, 3));
+}
 
-  // Hysteresis.
+void SetHysteresis(const AccuracyReport& report, double coverage, mustache::data* data) {
   const Hysteresis& h = report.hysteresis;
-  data.set("hysteresis_available", h.available);
-  data.set("hysteresis_note", h.note);
+  data->set("hysteresis_available", h.available);
+  data->set("hysteresis_note", h.note);
   mustache::data h_rows{mustache::data::type::list};
   mustache::data h_figures{mustache::data::type::list};
   if (h.available) {
     const RoundedResult mean = RoundForStatement(h.mean_deg, h.u_mean_deg);
     const RoundedResult max = RoundForStatement(h.max_abs_deg, h.u_max_abs_deg);
-    data.set("h_mean", mean.value);
-    data.set("h_u_mean", mean.uncertainty);
-    data.set("h_max", max.value);
-    data.set("h_u_max", max.uncertainty);
-    data.set("h_at", ShortNumber(h.at_reference_deg, 6));
+    data->set("h_mean", mean.value);
+    data->set("h_u_mean", mean.uncertainty);
+    data->set("h_max", max.value);
+    data->set("h_u_max", max.uncertainty);
+    data->set("h_at", ShortNumber(h.at_reference_deg, 6));
     PlotSeries bars;
     bars.style = SeriesStyle::kErrorBars;
     bars.color = PlotColor::kPurple;
@@ -441,19 +466,25 @@ Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::
                       "G.4.1); red dashed: the inverse-variance weighted mean.")));
     }
   }
-  data.set("hysteresis_pairs", h_rows);
-  data.set("hysteresis_figures", h_figures);
+  data->set("hysteresis_pairs", h_rows);
+  data->set("hysteresis_figures", h_figures);
+}
 
-  // Repeatability.
+void SetRepeatability(const AccuracyReport& report, mustache::data* data) {
   const Repeatability& rp = report.repeatability;
-  data.set("repeatability_available", rp.available);
-  data.set("s_r", UncertaintyText(rp.available ? rp.s_r_deg : kNaN));
-  data.set("s_r_dof", ShortNumber(rp.dof, 4));
-  data.set("s_r_groups", std::to_string(rp.groups));
-  data.set("s_r_sweeps", std::to_string(rp.sweeps));
-  data.set("repeatability_note", rp.note);
+  data->set("repeatability_available", rp.available);
+  data->set("s_r", UncertaintyText(rp.available ? rp.s_r_deg : kNaN));
+  data->set("s_r_dof", ShortNumber(rp.dof, 4));
+  data->set("s_r_groups", std::to_string(rp.groups));
+  data->set("s_r_sweeps", std::to_string(rp.sweeps));
+  data->set("repeatability_note", rp.note);
+}
 
-  // Cross-axis: the means of the two axes not turned, per plateau, with the fitted harmonic.
+// ---- cross-axis ---------------------------------------------------------------------------
+
+// Cross-axis: the means of the two axes not turned, per plateau, with the fitted harmonic.
+void SetCrossAxes(const AccuracyReport& report, mustache::data* data) {
+  const AccuracyReportInput& input = report.input;
   mustache::data cross_rows{mustache::data::type::list};
   mustache::data cross_figures{mustache::data::type::list};
   for (size_t k = 0; k < 2; ++k) {
@@ -511,21 +542,24 @@ Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::
                                          "axis makes it vary once per turn)"
                                        : "")));
   }
-  data.set("cross_rows", cross_rows);
-  data.set("cross_figures", cross_figures);
+  data->set("cross_rows", cross_rows);
+  data->set("cross_figures", cross_figures);
+}
 
-  // Budgets.
+// ---- budgets, segmentation, warnings --------------------------------------------------------
+
+void SetBudgetsAndSegmentation(const AccuracyReport& report, mustache::data* data) {
   mustache::data budgets{mustache::data::type::list};
   budgets.push_back(BudgetData("Reading corrected by the fitted curve", report.corrected));
   budgets.push_back(BudgetData("Uncorrected reading", report.uncorrected));
-  data.set("budgets", budgets);
+  data->set("budgets", budgets);
 
   // Segmentation.
   const AccuracyReportSegmentation& seg = report.segmentation;
-  data.set("seg_plateaus", std::to_string(seg.plateaus));
-  data.set("seg_excluded_samples", std::to_string(seg.excluded_samples));
-  data.set("seg_excluded_s", ShortNumber(seg.excluded_s, 4));
-  data.set("seg_settle_samples", std::to_string(seg.settle_samples));
+  data->set("seg_plateaus", std::to_string(seg.plateaus));
+  data->set("seg_excluded_samples", std::to_string(seg.excluded_samples));
+  data->set("seg_excluded_s", ShortNumber(seg.excluded_s, 4));
+  data->set("seg_settle_samples", std::to_string(seg.settle_samples));
   mustache::data excluded{mustache::data::type::list};
   size_t shown = 0;
   for (const AccuracyExcludedSpan& e : seg.excluded) {
@@ -536,16 +570,37 @@ Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::
     row.set("reason", e.reason);
     excluded.push_back(row);
   }
-  data.set("excluded", excluded);
+  data->set("excluded", excluded);
   const bool more_excluded = seg.excluded.size() > kMaxExcludedRows;
-  data.set("has_more_excluded", more_excluded);
-  data.set("more_excluded", more_excluded ? fmt::format("... {} more excluded spans in the JSON.",
-                                                        seg.excluded.size() - kMaxExcludedRows)
-                                          : "");
+  data->set("has_more_excluded", more_excluded);
+  data->set("more_excluded", more_excluded ? fmt::format("... {} more excluded spans in the JSON.",
+                                                         seg.excluded.size() - kMaxExcludedRows)
+                                           : "");
 
   mustache::data warnings{mustache::data::type::list};
   for (const std::string& w : report.warnings) warnings.push_back(mustache::data(w));
-  data.set("warnings", warnings);
+  data->set("warnings", warnings);
+}
+
+}  // namespace
+
+Result<std::string> RenderAccuracyHtml(const AccuracyReport& report, const std::string& json_path) {
+  const double coverage = PageCoverage(report);
+  Result<std::vector<Point>> parsed = PointsOf(report, coverage);
+  if (!parsed.ok()) return parsed.error();
+  const std::vector<Point>& points = parsed.value();
+  const AccuracyReportInput& input = report.input;
+  const std::string& quantity = input.quantity;
+
+  mustache::data data;
+  SetHeadline(report, coverage, &data);
+  SetFit(report, points, coverage, &data);
+  SetPoints(report, points, &data);
+  SetSystematicAndLinearity(report, &data);
+  SetHysteresis(report, coverage, &data);
+  SetRepeatability(report, &data);
+  SetCrossAxes(report, &data);
+  SetBudgetsAndSegmentation(report, &data);
 
   Result<std::string> body = RenderTemplate("accuracy", std::move(data));
   if (!body.ok()) return body;

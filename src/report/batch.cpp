@@ -1,3 +1,12 @@
+// RunBatch runs these stages, in this order:
+//
+//   output dir  PrepareOutputDir                options, the directory created and locked
+//   inputs      WithoutOwnOutputs,              the sessions and their report names
+//               BatchReportNames
+//   sessions    MakeSessionJobs, RunSession     each session analysed and written, in parallel
+//   summary     Accumulate, AddSessionEntries,  per (sensor, quantity) and per tag across the
+//               QuantityRows, TagRows           sessions; the summary's table
+//   write       WriteSummary                    summary.json and summary.txt, both or neither
 #include "metro/report/batch.hpp"
 
 #include <fmt/format.h>
@@ -13,6 +22,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 
 #include "core/parallel.hpp"
@@ -241,123 +251,148 @@ std::vector<std::string> BatchReportNames(const std::vector<std::string>& inputs
   return names;
 }
 
-BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOptions& options) {
-  BatchSummary out;
+namespace {
+
+// ---- output directory ---------------------------------------------------------------------
+
+// The options checked, the output directory created and locked for this run (the lock goes
+// with the descriptor); else out->error.
+std::optional<FileLock> PrepareOutputDir(const BatchOptions& options, BatchSummary* out) {
   std::string why;
   if (!options.IsValid(&why)) {
-    out.error = MakeError(why);
-    return out;
+    out->error = MakeError(why);
+    return std::nullopt;
   }
   std::error_code ec;
   fs::create_directories(options.output_dir, ec);
   if (ec || !fs::is_directory(options.output_dir, ec)) {
-    out.error = MakeError(options.output_dir, 0,
-                          fmt::format("cannot create the output directory: {}", ec.message()));
-    return out;
+    out->error = MakeError(options.output_dir, 0,
+                           fmt::format("cannot create the output directory: {}", ec.message()));
+    return std::nullopt;
   }
-  // The folder is this run's until it returns (the lock goes with the descriptor).
   Result<FileLock> lock = LockBatchDirectory(options.output_dir);
   if (!lock.ok()) {
-    out.error = lock.error();
-    return out;
+    out->error = lock.error();
+    return std::nullopt;
   }
-  const std::vector<std::string> inputs = WithoutOwnOutputs(all_inputs, options.output_dir, &out);
-  SessionAnalysisOptions analysis = options.analysis;
-  analysis.load.threads = 1;
-  analysis.type_a.threads = 1;
-  analysis.allan_options.allan.threads = 1;
-  analysis.allan_csv = false;
+  return std::move(lock).value();
+}
 
-  const std::vector<std::string> names = BatchReportNames(inputs);
-  out.items.resize(inputs.size());
-  std::vector<SessionResults> results(inputs.size());
-  std::vector<std::string> hashes(inputs.size());
+// ---- sessions -----------------------------------------------------------------------------
+
+// What one session's job needs besides its index.
+struct SessionJobs {
+  const std::vector<std::string>& inputs;
+  const std::vector<std::string>& names;  // Report file names (BatchReportNames).
+  const BatchOptions& options;
+  SessionAnalysisOptions analysis;  // One thread per session.
   // Every input's identity: no report is written over one (through links).
   std::set<std::pair<dev_t, ino_t>> input_ids;
+};
+
+SessionJobs MakeSessionJobs(const std::vector<std::string>& inputs,
+                            const std::vector<std::string>& names, const BatchOptions& options) {
+  SessionJobs jobs{inputs, names, options, options.analysis, {}};
+  jobs.analysis.load.threads = 1;
+  jobs.analysis.type_a.threads = 1;
+  jobs.analysis.allan_options.allan.threads = 1;
+  jobs.analysis.allan_csv = false;
   for (const std::string& in : inputs) {
     struct stat st {};
-    if (::stat(in.c_str(), &st) == 0) input_ids.insert({st.st_dev, st.st_ino});
+    if (::stat(in.c_str(), &st) == 0) jobs.input_ids.insert({st.st_dev, st.st_ino});
   }
-  std::mutex progress_mutex;
-  size_t done = 0;
-  internal::ParallelFor(inputs.size(), options.jobs, [&](size_t i) {
-    BatchItem& item = out.items[i];
-    item.input = inputs[i];
-    const std::string report_path = (fs::path(options.output_dir) / names[i]).string();
-    std::string refused = NotASessionFile(inputs[i]);
-    struct stat report_st {};
-    if (refused.empty() && ::stat(report_path.c_str(), &report_st) == 0 &&
-        input_ids.count({report_st.st_dev, report_st.st_ino}) > 0) {
-      refused = fmt::format(
-          "its report {} is one of the inputs: refusing to overwrite an input; "
-          "move that file or choose another -o",
-          report_path);
-    }
-    const SessionAnalysis a =
-        refused.empty() ? AnalyzeSession(inputs[i], analysis) : SessionAnalysis{};
-    if (!refused.empty()) {
-      item.error = MakeError(inputs[i], 0, refused);
-    } else if (!a.ok) {
-      item.error = a.error;
-      item.input_error = a.input_error;
-    } else {
-      item.report_path = report_path;
-      std::string page;
-      if (options.session_pages) {
-        item.page_path = BatchPagePath(report_path);
-        Result<std::string> html = RenderSessionAnalysisHtml(a);
-        if (html.ok()) {
-          page = std::move(html).value();
-        } else {
-          item.error = html.error();
-          item.input_error = false;
-        }
-      }
-      const std::string json = ToJson(a.report) + "\n";
-      Status s = !item.error.message.empty() ? Status(item.error)
-                 : options.session_pages
-                     ? WriteFilesAtomically({{item.report_path, json}, {item.page_path, page}})
-                     : WriteFileAtomically(item.report_path, json);
-      if (!s.ok()) {
-        item.error = s.error();
-        item.input_error = false;
-        item.report_path.clear();
-        item.page_path.clear();
-      } else {
-        item.ok = true;
-        hashes[i] = a.session.sha256;
-        results[i] = ExtractResults(a.report, inputs[i]);
-        // An analysis asked for that produced nothing for a quantity (issue #21).
-        for (const std::string& f : a.failures) results[i].warnings.push_back(inputs[i] + ": " + f);
-      }
-    }
-    if (options.on_progress) {
-      std::lock_guard<std::mutex> guard(progress_mutex);
-      options.on_progress(++done, inputs.size());
-    }
-  });
+  return jobs;
+}
 
-  // Summary per tag and quantity across sessions, in (sensor, quantity) order.
-  struct Accumulated {
-    std::string tag_name, unit;
-    std::vector<double> means;
-    double worst_ratio = std::numeric_limits<double>::infinity();
-    std::string worst_session;
-    std::set<std::string> units;
-  };
+// Session i: analysed, its report (and page) written; *item says how it went, *results and
+// *hash hold what the summary needs when it went well.
+void RunSession(const SessionJobs& jobs, size_t i, BatchItem* item, SessionResults* results,
+                std::string* hash) {
+  const std::vector<std::string>& inputs = jobs.inputs;
+  const BatchOptions& options = jobs.options;
+  item->input = inputs[i];
+  const std::string report_path = (fs::path(options.output_dir) / jobs.names[i]).string();
+  std::string refused = NotASessionFile(inputs[i]);
+  struct stat report_st {};
+  if (refused.empty() && ::stat(report_path.c_str(), &report_st) == 0 &&
+      jobs.input_ids.count({report_st.st_dev, report_st.st_ino}) > 0) {
+    refused = fmt::format(
+        "its report {} is one of the inputs: refusing to overwrite an input; "
+        "move that file or choose another -o",
+        report_path);
+  }
+  const SessionAnalysis a =
+      refused.empty() ? AnalyzeSession(inputs[i], jobs.analysis) : SessionAnalysis{};
+  if (!refused.empty()) {
+    item->error = MakeError(inputs[i], 0, refused);
+    return;
+  }
+  if (!a.ok) {
+    item->error = a.error;
+    item->input_error = a.input_error;
+    return;
+  }
+  item->report_path = report_path;
+  std::string page;
+  if (options.session_pages) {
+    item->page_path = BatchPagePath(report_path);
+    Result<std::string> html = RenderSessionAnalysisHtml(a);
+    if (html.ok()) {
+      page = std::move(html).value();
+    } else {
+      item->error = html.error();
+      item->input_error = false;
+    }
+  }
+  const std::string json = ToJson(a.report) + "\n";
+  Status s = !item->error.message.empty() ? Status(item->error)
+             : options.session_pages
+                 ? WriteFilesAtomically({{item->report_path, json}, {item->page_path, page}})
+                 : WriteFileAtomically(item->report_path, json);
+  if (!s.ok()) {
+    item->error = s.error();
+    item->input_error = false;
+    item->report_path.clear();
+    item->page_path.clear();
+    return;
+  }
+  item->ok = true;
+  *hash = a.session.sha256;
+  *results = ExtractResults(a.report, inputs[i]);
+  // An analysis asked for that produced nothing for a quantity (issue #21).
+  for (const std::string& f : a.failures) results->warnings.push_back(inputs[i] + ": " + f);
+}
+
+// ---- accumulation -------------------------------------------------------------------------
+
+// One (sensor, quantity) across sessions.
+struct Accumulated {
+  std::string tag_name, unit;
+  std::vector<double> means;
+  double worst_ratio = std::numeric_limits<double>::infinity();
+  std::string worst_session;
+  std::set<std::string> units;
+};
+// Receiver counts of one tag across sessions.
+struct TagAccumulated {
+  std::string tag_name;
+  size_t sessions = 0, sessions_without_fresh = 0;
+  int64_t frames = 0, fresh = 0, stale = 0, never = 0;
+};
+// The sessions' results gathered, in (sensor, quantity) and sensor order.
+struct Totals {
   std::map<std::pair<int, std::string>, Accumulated> by_quantity;
-  // Receiver counts per tag across sessions.
-  struct TagAccumulated {
-    std::string tag_name;
-    size_t sessions = 0, sessions_without_fresh = 0;
-    int64_t frames = 0, fresh = 0, stale = 0, never = 0;
-  };
   std::map<int, TagAccumulated> by_tag;
   std::vector<std::string> warnings;
+};
+
+Totals Accumulate(const std::vector<std::string>& inputs,
+                  const std::vector<SessionResults>& results) {
+  Totals totals;
   for (size_t i = 0; i < inputs.size(); ++i) {
-    for (const std::string& w : results[i].warnings) warnings.push_back(w);
+    for (const std::string& w : results[i].warnings) totals.warnings.push_back(w);
     for (const TagResult& t : results[i].tags) {
-      TagAccumulated& acc = by_tag[t.sensor];
+      TagAccumulated& acc = totals.by_tag[t.sensor];
       if (acc.tag_name.empty()) acc.tag_name = t.tag_name;
       ++acc.sessions;
       acc.frames += t.frames;
@@ -369,7 +404,7 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
   }
   for (size_t i = 0; i < inputs.size(); ++i) {
     for (const QuantityResult& r : results[i].quantities) {
-      Accumulated& acc = by_quantity[{r.sensor, r.quantity}];
+      Accumulated& acc = totals.by_quantity[{r.sensor, r.quantity}];
       if (acc.tag_name.empty()) acc.tag_name = r.tag_name;
       acc.unit = r.unit;
       acc.units.insert(r.unit);
@@ -381,13 +416,15 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
       }
     }
   }
-  BatchSummaryReport& summary = out.summary;
-  summary.tool = {kToolName, kVersion};
-  summary.warnings = warnings;
-  summary.output_dir = options.output_dir;
-  summary.sessions_total = static_cast<int64_t>(inputs.size());
-  for (size_t i = 0; i < inputs.size(); ++i) {
-    const BatchItem& item = out.items[i];
+  return totals;
+}
+
+// One entry per session in the summary (out->summary.sessions); counts out->failed.
+void AddSessionEntries(const std::vector<std::string>& names,
+                       const std::vector<std::string>& hashes,
+                       const std::vector<SessionResults>& results, BatchSummary* out) {
+  for (size_t i = 0; i < out->items.size(); ++i) {
+    const BatchItem& item = out->items[i];
     BatchSessionEntry s;
     s.input = item.input;
     s.ok = item.ok;
@@ -405,22 +442,24 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
         s.quantities->push_back({r.sensor, r.tag_name, r.quantity, r.unit, r.mean, r.u_mean, r.n});
       }
     } else {
-      ++out.failed;
+      ++out->failed;
       s.error = item.error.ToString();
       s.input_error = item.input_error;
     }
-    summary.sessions.push_back(std::move(s));
+    out->summary.sessions.push_back(std::move(s));
   }
-  summary.sessions_failed = static_cast<int64_t>(out.failed);
+}
+
+// ---- tables -------------------------------------------------------------------------------
+
+// One record per line: tag names, quantities, units and file names are data (a session
+// file named "s\nFAILED x.csv" must not print a line of its own), escaped field by field.
+std::string Text(const std::string& data) { return EscapeControlChars(data); }
+
+// Per (sensor, quantity): the session means pooled (summary->quantities) and the table rows.
+std::string QuantityRows(const Totals& totals, BatchSummaryReport* summary) {
   std::string table;
-  // One record per line: tag names, quantities, units and file names are data (a session
-  // file named "s\nFAILED x.csv" must not print a line of its own), escaped field by field.
-  const auto text = [](const std::string& data) { return EscapeControlChars(data); };
-  for (const std::string& w : warnings) table += text(w) + "\n";
-  table += fmt::format("{} sessions, {} failed\n", inputs.size(), out.failed);
-  table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10}\n", "sensor", "tag",
-                       "quantity", "unit", "n", "mean of means", "std of means", "worst n_eff/n");
-  for (const auto& [key, acc] : by_quantity) {
+  for (const auto& [key, acc] : totals.by_quantity) {
     const size_t n = acc.means.size();
     const bool circular = acc.units.size() == 1 && IsAngleUnit(acc.unit);
     double mean = 0.0, std_of_means = std::nan("");
@@ -458,34 +497,93 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
     if (circular && !std::isfinite(mean)) {
       q.warning = "the session means cancel on the circle (R = 0): no mean direction";
     }
-    summary.quantities.push_back(std::move(q));
+    summary->quantities.push_back(std::move(q));
     const bool has_std = n >= 2 && std::isfinite(std_of_means);
     const RoundedResult r = std::isfinite(mean)
                                 ? RoundForStatement(mean, has_std ? std_of_means : 0.0)
                                 : RoundedResult{"-", "-"};
     table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10.3f}\n", key.first,
-                         text(acc.tag_name), text(key.second), text(acc.unit), n, r.value,
+                         Text(acc.tag_name), Text(key.second), Text(acc.unit), n, r.value,
                          has_std ? r.uncertainty : "-", acc.worst_ratio);
   }
-  // Per tag: receiver counts; packet_loss_ratio = (stale + never) / frames (docs/formats.md).
-  summary.tags.emplace();
+  return table;
+}
+
+// Per tag: receiver counts; packet_loss_ratio = (stale + never) / frames (docs/formats.md).
+std::string TagRows(const Totals& totals, BatchSummaryReport* summary) {
+  summary->tags.emplace();
   std::string tag_table;
-  for (const auto& [sensor, acc] : by_tag) {
+  for (const auto& [sensor, acc] : totals.by_tag) {
     const bool receiver = acc.frames > 0;
     const double loss =
         receiver ? static_cast<double>(acc.stale + acc.never) / static_cast<double>(acc.frames)
                  : 0.0;
-    summary.tags->push_back({sensor, acc.tag_name, static_cast<int64_t>(acc.sessions), acc.frames,
-                             acc.fresh, acc.stale, acc.never, loss,
-                             static_cast<int64_t>(acc.sessions_without_fresh)});
+    summary->tags->push_back({sensor, acc.tag_name, static_cast<int64_t>(acc.sessions), acc.frames,
+                              acc.fresh, acc.stale, acc.never, loss,
+                              static_cast<int64_t>(acc.sessions_without_fresh)});
     if (!receiver) continue;
     tag_table += fmt::format(
-        "{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>8.2f} %{}\n", sensor, text(acc.tag_name),
+        "{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>8.2f} %{}\n", sensor, Text(acc.tag_name),
         acc.sessions, acc.frames, acc.fresh, acc.stale, acc.never, 100.0 * loss,
         acc.sessions_without_fresh > 0
             ? fmt::format("  no fresh packet in {} session(s)", acc.sessions_without_fresh)
             : "");
   }
+  return tag_table;
+}
+
+// summary.json and summary.txt, both or neither.
+void WriteSummary(const BatchOptions& options, BatchSummary* out) {
+  const fs::path dir(options.output_dir);
+  const std::string summary_json = ToJson(out->summary) + "\n";
+  if (Status s = WriteFilesAtomically({{(dir / "summary.json").string(), summary_json},
+                                       {(dir / "summary.txt").string(), out->table}});
+      !s.ok()) {
+    out->error = s.error();
+    return;
+  }
+  out->ok = out->failed == 0;
+}
+
+}  // namespace
+
+BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOptions& options) {
+  BatchSummary out;
+  // The folder is this run's until it returns.
+  const std::optional<FileLock> lock = PrepareOutputDir(options, &out);
+  if (!lock) return out;
+  const std::vector<std::string> inputs = WithoutOwnOutputs(all_inputs, options.output_dir, &out);
+  const std::vector<std::string> names = BatchReportNames(inputs);
+  out.items.resize(inputs.size());
+  std::vector<SessionResults> results(inputs.size());
+  std::vector<std::string> hashes(inputs.size());
+  const SessionJobs jobs = MakeSessionJobs(inputs, names, options);
+  std::mutex progress_mutex;
+  size_t done = 0;
+  internal::ParallelFor(inputs.size(), options.jobs, [&](size_t i) {
+    RunSession(jobs, i, &out.items[i], &results[i], &hashes[i]);
+    if (options.on_progress) {
+      std::lock_guard<std::mutex> guard(progress_mutex);
+      options.on_progress(++done, inputs.size());
+    }
+  });
+
+  // Summary per tag and quantity across sessions, in (sensor, quantity) order.
+  const Totals totals = Accumulate(inputs, results);
+  BatchSummaryReport& summary = out.summary;
+  summary.tool = {kToolName, kVersion};
+  summary.warnings = totals.warnings;
+  summary.output_dir = options.output_dir;
+  summary.sessions_total = static_cast<int64_t>(inputs.size());
+  AddSessionEntries(names, hashes, results, &out);
+  summary.sessions_failed = static_cast<int64_t>(out.failed);
+  std::string table;
+  for (const std::string& w : totals.warnings) table += Text(w) + "\n";
+  table += fmt::format("{} sessions, {} failed\n", inputs.size(), out.failed);
+  table += fmt::format("{:>6} {:<16} {:<18} {:>8} {:>4} {:>16} {:>12} {:>10}\n", "sensor", "tag",
+                       "quantity", "unit", "n", "mean of means", "std of means", "worst n_eff/n");
+  table += QuantityRows(totals, &summary);
+  const std::string tag_table = TagRows(totals, &summary);
   if (!tag_table.empty()) {
     table += fmt::format("\n{:>6} {:<16} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10}\n", "sensor",
                          "tag", "sessions", "frames", "fresh", "stale", "never", "loss");
@@ -493,21 +591,13 @@ BatchSummary RunBatch(const std::vector<std::string>& all_inputs, const BatchOpt
   }
   for (const BatchItem& item : out.items) {
     if (!item.ok) {
-      table += fmt::format("FAILED {}: {}\n", text(item.input), text(item.error.ToString()));
+      table += fmt::format("FAILED {}: {}\n", Text(item.input), Text(item.error.ToString()));
     }
   }
-  const fs::path dir(options.output_dir);
-  // Both or neither. Tag names and file names in the table are data: escaped, so that
-  // `cat summary.txt` cannot drive a terminal.
+  // Tag names and file names in the table are data: escaped, so that `cat summary.txt` cannot
+  // drive a terminal.
   out.table = EscapeControlCharsKeepLines(table);
-  const std::string summary_json = ToJson(summary) + "\n";
-  if (Status s = WriteFilesAtomically({{(dir / "summary.json").string(), summary_json},
-                                       {(dir / "summary.txt").string(), out.table}});
-      !s.ok()) {
-    out.error = s.error();
-    return out;
-  }
-  out.ok = out.failed == 0;
+  WriteSummary(options, &out);
   return out;
 }
 

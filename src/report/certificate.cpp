@@ -1,3 +1,12 @@
+// RenderCalibrationCertificate fills the "certificate" template in these stages, in order:
+//
+//   check       CheckCertifiable                model_rejected constants need a view or
+//                                               --accept-rejected-model
+//   identity    SetIdentity, InputRows,         certificate id, items, dates, inputs, the
+//               SetSessionsNote, Traceability   records' note, traceability
+//   tags        SetTags, AddConditions,         per tag: results (SensorData), conditions,
+//               SensorData                      notes, warnings, coverage factors
+//   validity    Validity, SetConformity         where the results apply; conformity
 #include "metro/report/certificate.hpp"
 
 #include <fmt/format.h>
@@ -544,23 +553,12 @@ std::vector<std::string> Traceability(const Calibration& cal) {
   return out;
 }
 
-}  // namespace
+// ---- RenderCalibrationCertificate's stages --------------------------------------------------
 
-bool CertificateOptions::IsValid(std::string* why) const {
-  if (!(coverage_probability > 0.0 && coverage_probability < 1.0)) {
-    *why = fmt::format("certificate: coverage probability p = {} is outside (0, 1)",
-                       coverage_probability);
-    return false;
-  }
-  return true;
-}
-
-Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
-                                                 const CertificateOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) return MakeError(why);
-  const std::vector<std::string> rejected = ModelRejectedConstants(cal);
-  const bool not_certificate = !rejected.empty() && !options.accept_rejected_model;
+// Constants marked model_rejected are certified only with --accept-rejected-model (a view
+// states them as not a certificate).
+Status CheckCertifiable(const std::vector<std::string>& rejected, bool not_certificate,
+                        const CertificateOptions& options) {
   if (not_certificate && !options.view) {
     std::string list;
     for (const std::string& r : rejected) list += (list.empty() ? "" : "; ") + r;
@@ -569,28 +567,30 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
         "--accept-rejected-model to state them with that notice",
         list));
   }
-  const GravityUncertainty gravity = GravityUncertaintyOf(cal);
-  const std::string certificate_id =
-      options.certificate_id.empty() ? CalibrationCertificateId(cal) : options.certificate_id;
-  mustache::data data;
-  data.set("certificate_id",
-           fmt::format("{} (first 16 hex digits of the SHA-256 of the calibration JSON)",
-                       certificate_id));
-  std::string items;  // For the page's subtitle.
-  for (const TagCalibration& t : cal.tags) {
-    items += fmt::format("{}sensor {}", items.empty() ? "" : ", ", t.sensor);
-  }
-  data.set("print_id", certificate_id);
-  data.set("print_label",
-           not_certificate ? "Calibration report (not a certificate)" : "Calibration certificate");
-  data.set("id_label", not_certificate ? "calibration.json (not a certificate)" : "certificate");
-  if (not_certificate) data.set("rejected_banner", RejectedBanner(cal));
-  data.set("item_rows", ItemRows(cal));
-  data.set("date_issue_utc", UtcIso8601Now());
-  data.set("date_utc", cal.date_utc);
-  data.set("measurement_dates", MeasurementDates(cal));
-  data.set("tool_version", cal.tool_version);
-  data.set("gravity", GravityStatement(cal));
+  return Status::Ok();
+}
+
+// Section 1: the certificate's identity, the items, the dates, the gravity value.
+void SetIdentity(const Calibration& cal, const std::string& certificate_id, bool not_certificate,
+                 mustache::data* data) {
+  data->set("certificate_id",
+            fmt::format("{} (first 16 hex digits of the SHA-256 of the calibration JSON)",
+                        certificate_id));
+  data->set("print_id", certificate_id);
+  data->set("print_label",
+            not_certificate ? "Calibration report (not a certificate)" : "Calibration certificate");
+  data->set("id_label", not_certificate ? "calibration.json (not a certificate)" : "certificate");
+  if (not_certificate) data->set("rejected_banner", RejectedBanner(cal));
+  data->set("item_rows", ItemRows(cal));
+  data->set("date_issue_utc", UtcIso8601Now());
+  data->set("date_utc", cal.date_utc);
+  data->set("measurement_dates", MeasurementDates(cal));
+  data->set("tool_version", cal.tool_version);
+  data->set("gravity", GravityStatement(cal));
+}
+
+// The input files, one row each.
+mustache::data InputRows(const Calibration& cal) {
   mustache::data inputs{mustache::data::type::list};
   for (size_t i = 0; i < cal.inputs.size(); ++i) {
     const InputFile& in = cal.inputs[i];
@@ -606,8 +606,12 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
                                               : std::string("not recorded"));
     inputs.push_back(row);
   }
-  data.set("inputs", inputs);
-  // What the fit recorded from the records: every tag's conditions and every sensor's residuals.
+  return inputs;
+}
+
+// What the fit recorded from the records: every tag's conditions and every sensor's
+// residuals (true), or a calibration.json from before that.
+bool SetSessionsNote(const Calibration& cal, mustache::data* data) {
   bool recorded = true;
   for (const TagCalibration& t : cal.tags) {
     recorded = recorded && t.record_conditions.has_value();
@@ -615,21 +619,59 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
       recorded = recorded && (!c->has_value() || (*c)->static_residuals.has_value());
     }
   }
-  data.set("sessions_ok", recorded);
-  data.set("sessions_note",
-           recorded ? std::string("Conditions and residual plots as computed from the input "
-                                  "records by the fit (calibration.json's record_conditions and "
-                                  "static_residuals).")
-                    : fmt::format("This calibration.json was written before metro recorded the "
-                                  "records' conditions and the static residuals at fit time: "
-                                  "the temperature range of the records and the residual plots "
-                                  "are not in it; {}.",
-                                  kRefit));
-  data.set("p", Short(100.0 * options.coverage_probability, 4));
-  mustache::data traceability{mustache::data::type::list};
-  for (const std::string& line : Traceability(cal)) traceability.push_back(mustache::data(line));
-  data.set("traceability", traceability);
+  data->set("sessions_ok", recorded);
+  data->set("sessions_note",
+            recorded ? std::string("Conditions and residual plots as computed from the input "
+                                   "records by the fit (calibration.json's record_conditions and "
+                                   "static_residuals).")
+                     : fmt::format("This calibration.json was written before metro recorded the "
+                                   "records' conditions and the static residuals at fit time: "
+                                   "the temperature range of the records and the residual plots "
+                                   "are not in it; {}.",
+                                   kRefit));
+  return recorded;
+}
 
+// The conditions of each record of tag t, as the fit recorded them, and the notes on its
+// poses' temperatures and temperature terms.
+void AddConditions(const Calibration& cal, const TagCalibration& t, mustache::data* conditions,
+                   mustache::data* condition_notes) {
+  for (const RecordConditions& r :
+       t.record_conditions ? *t.record_conditions : std::vector<RecordConditions>{}) {
+    mustache::data row;
+    row.set("sensor", std::to_string(t.sensor));
+    row.set("record", r.input >= 0 && static_cast<size_t>(r.input) < cal.inputs.size()
+                          ? cal.inputs[static_cast<size_t>(r.input)].path
+                          : fmt::format("input {}", r.input));
+    row.set("samples", std::to_string(r.samples));
+    row.set("duration", fmt::format("{:.1f} s", r.duration_s));
+    row.set("temperature", r.temp_min_c && r.temp_max_c
+                               ? fmt::format("{:.2f} .. {:.2f} degC", *r.temp_min_c, *r.temp_max_c)
+                               : std::string("not recorded (no temp_c column)"));
+    conditions->push_back(row);
+  }
+  // The static poses' temperatures, from calibration.json (also without the records).
+  const std::optional<SensorCalibration>& first = t.accel ? t.accel : t.gyro;
+  if (first && first->static_pose_temperature) {
+    const PoseTemperatureRange& r = *first->static_pose_temperature;
+    condition_notes->push_back(mustache::data(fmt::format(
+        "sensor {}: the {} static poses were at {:.2f} .. {:.2f} degC (mean {:.2f} degC)", t.sensor,
+        r.poses, r.min_c, r.max_c, r.mean_c)));
+  }
+  for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
+    if (c->has_value() && (*c)->model.has_temperature) {
+      condition_notes->push_back(mustache::data(
+          fmt::format("sensor {} {}: linear temperature term fitted about t_ref = {:.2f} degC",
+                      t.sensor, ImuSensorName((*c)->model.sensor), (*c)->model.t_ref_c)));
+    }
+  }
+}
+
+// Sections 3 and 4 for every tag: its sensors' results, conditions and warnings; returns the
+// coverage factor of each sensor, in words, for the validity section.
+std::vector<std::string> SetTags(const Calibration& cal, const GravityUncertainty& gravity,
+                                 const CertificateOptions& options, bool recorded,
+                                 mustache::data* data) {
   mustache::data tags{mustache::data::type::list};
   mustache::data conditions{mustache::data::type::list};
   mustache::data condition_notes{mustache::data::type::list};
@@ -656,37 +698,7 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
     for (const std::string& w : t.warnings) {
       warnings.push_back(mustache::data(fmt::format("sensor {}: {}", t.sensor, w)));
     }
-    // Conditions of each record of this tag, as the fit recorded them.
-    for (const RecordConditions& r :
-         t.record_conditions ? *t.record_conditions : std::vector<RecordConditions>{}) {
-      mustache::data row;
-      row.set("sensor", std::to_string(t.sensor));
-      row.set("record", r.input >= 0 && static_cast<size_t>(r.input) < cal.inputs.size()
-                            ? cal.inputs[static_cast<size_t>(r.input)].path
-                            : fmt::format("input {}", r.input));
-      row.set("samples", std::to_string(r.samples));
-      row.set("duration", fmt::format("{:.1f} s", r.duration_s));
-      row.set("temperature",
-              r.temp_min_c && r.temp_max_c
-                  ? fmt::format("{:.2f} .. {:.2f} degC", *r.temp_min_c, *r.temp_max_c)
-                  : std::string("not recorded (no temp_c column)"));
-      conditions.push_back(row);
-    }
-    // The static poses' temperatures, from calibration.json (also without the records).
-    const std::optional<SensorCalibration>& first = t.accel ? t.accel : t.gyro;
-    if (first && first->static_pose_temperature) {
-      const PoseTemperatureRange& r = *first->static_pose_temperature;
-      condition_notes.push_back(mustache::data(fmt::format(
-          "sensor {}: the {} static poses were at {:.2f} .. {:.2f} degC (mean {:.2f} degC)",
-          t.sensor, r.poses, r.min_c, r.max_c, r.mean_c)));
-    }
-    for (const std::optional<SensorCalibration>* c : {&t.accel, &t.gyro}) {
-      if (c->has_value() && (*c)->model.has_temperature) {
-        condition_notes.push_back(mustache::data(
-            fmt::format("sensor {} {}: linear temperature term fitted about t_ref = {:.2f} degC",
-                        t.sensor, ImuSensorName((*c)->model.sensor), (*c)->model.t_ref_c)));
-      }
-    }
+    AddConditions(cal, t, &conditions, &condition_notes);
   }
   if (!recorded) {
     condition_notes.push_back(mustache::data(
@@ -695,11 +707,17 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
                     "at fit time); {}.",
                     kRefit)));
   }
-  data.set("tags", tags);
-  data.set("conditions", conditions);
-  data.set("condition_notes", condition_notes);
-  data.set("warnings", warnings);
+  data->set("tags", tags);
+  data->set("conditions", conditions);
+  data->set("condition_notes", condition_notes);
+  data->set("warnings", warnings);
+  return coverage_lines;
+}
 
+// Section 5: where the results apply.
+mustache::data Validity(const GravityUncertainty& gravity, const CertificateOptions& options,
+                        const std::vector<std::string>& coverage_lines,
+                        const std::vector<std::string>& rejected, bool not_certificate) {
   mustache::data validity{mustache::data::type::list};
   validity.push_back(mustache::data(
       "The results relate only to the tag(s) identified above, with the input units and "
@@ -731,7 +749,44 @@ Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
                   r
             : "Stated with --accept-rejected-model although marked model_rejected: " + r));
   }
-  data.set("validity", validity);
+  return validity;
+}
+
+}  // namespace
+
+bool CertificateOptions::IsValid(std::string* why) const {
+  if (!(coverage_probability > 0.0 && coverage_probability < 1.0)) {
+    *why = fmt::format("certificate: coverage probability p = {} is outside (0, 1)",
+                       coverage_probability);
+    return false;
+  }
+  return true;
+}
+
+Result<std::string> RenderCalibrationCertificate(const Calibration& cal,
+                                                 const CertificateOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(why);
+  const std::vector<std::string> rejected = ModelRejectedConstants(cal);
+  const bool not_certificate = !rejected.empty() && !options.accept_rejected_model;
+  if (Status s = CheckCertifiable(rejected, not_certificate, options); !s.ok()) return s.error();
+  const GravityUncertainty gravity = GravityUncertaintyOf(cal);
+  const std::string certificate_id =
+      options.certificate_id.empty() ? CalibrationCertificateId(cal) : options.certificate_id;
+  std::string items;  // For the page's subtitle.
+  for (const TagCalibration& t : cal.tags) {
+    items += fmt::format("{}sensor {}", items.empty() ? "" : ", ", t.sensor);
+  }
+  mustache::data data;
+  SetIdentity(cal, certificate_id, not_certificate, &data);
+  data.set("inputs", InputRows(cal));
+  const bool recorded = SetSessionsNote(cal, &data);
+  data.set("p", Short(100.0 * options.coverage_probability, 4));
+  mustache::data traceability{mustache::data::type::list};
+  for (const std::string& line : Traceability(cal)) traceability.push_back(mustache::data(line));
+  data.set("traceability", traceability);
+  const std::vector<std::string> coverage_lines = SetTags(cal, gravity, options, recorded, &data);
+  data.set("validity", Validity(gravity, options, coverage_lines, rejected, not_certificate));
   SetConformity(cal, &data);
 
   Result<std::string> body = report_internal::RenderTemplate("certificate", std::move(data));

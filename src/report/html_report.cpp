@@ -1,9 +1,18 @@
+// RenderSessionReportHtml fills the "session" template in these stages, in the page's order:
+//
+//   result, input  AnyPlotData, SetResultAndInput  result and Type A tables, noise, input,
+//                                                  dialect, options, the plot-data note
+//   tags           TagSection, QuantityData        per tag: counts, window, Allan groups;
+//                                                  per quantity: figures (at most
+//                                                  max_plotted_quantities on the page)
+//   budget         BudgetViewData                  the session's budget, if any
 #include "metro/report/html_report.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <filesystem>
+#include <optional>
 #include <utility>
 
 #include "accuracy_view.hpp"
@@ -112,6 +121,131 @@ bool AnyAllan(const SessionReport& report) {
   return false;
 }
 
+// ---- RenderSessionReportHtml's stages -------------------------------------------------------
+
+// True when some quantity kept its plot data (a report from before metro kept it has the
+// tables and Allan curves only).
+bool AnyPlotData(const SessionReport& report) {
+  bool any_plot_data = false;
+  for (const SensorReport& s : report.sensors) {
+    for (const QuantityReport& q : s.quantities) any_plot_data = any_plot_data || q.plot;
+  }
+  return any_plot_data;
+}
+
+// The result tables, then how it was obtained: the input, its dialect, the options.
+void SetResultAndInput(const SessionReport& report, bool any_plot_data, mustache::data* data) {
+  const ReportInput& input = report.input;
+  const std::string session_note =
+      any_plot_data
+          ? "Time series, histograms and autocorrelations drawn from the plot data computed "
+            "when the session was analysed (the report's \"plot\" objects)."
+          : "This report predates the plot data metro now keeps in a report: it has no time "
+            "series, histograms or autocorrelations. Run characterize analyze on the session "
+            "again for them; tables, Allan curves and budget bars come from the report.";
+  // The result first, then how it was obtained.
+  data->set("result_rows", ResultRows(report));
+  data->set("summary_rows", TypeADetailRows(report));
+  mustache::data noise = NoiseRows(report);
+  data->set("has_noise", !noise.is_empty_list());
+  data->set("noise_rows", noise);
+  data->set("input_path", input.path);
+  data->set("input_sha256", input.sha256);
+  data->set("input_format", input.format);
+  data->set("input_rows", ShortNumber(static_cast<double>(input.rows), 12));
+  data->set("input_rejected_rows", ShortNumber(static_cast<double>(input.rejected_rows), 12));
+  // Each row only when the report has it (a receiver capture has no dialect, a canonical
+  // file no mapping): a missing value renders no section.
+  for (const auto& [key, text] :
+       {std::pair{"input_dialect", DialectText(input)},
+        std::pair{"input_mapping", MappingText(input)}, std::pair{"input_time", TimeText(input)}}) {
+    if (!text.empty()) data->set(key, text);
+  }
+  data->set("input_notes", StringList(input.notes));
+  data->set("input_warnings", StringList(input.warnings));
+  mustache::data option_rows = SessionOptionRows(report);
+  data->set("has_options", !option_rows.is_empty_list());
+  data->set("option_rows", option_rows);
+  data->set("session_ok", any_plot_data);
+  data->set("session_note", session_note);
+}
+
+// The plot budget across the page: at most max_plotted_quantities quantities are drawn.
+struct PlotCount {
+  int plotted = 0;
+  int not_plotted = 0;
+};
+
+// One quantity's figures and Allan terms; nothing when it is not plotted.
+std::optional<mustache::data> QuantityData(const QuantityReport& q, int sensor,
+                                           const HtmlReportOptions& options, bool any_plot_data,
+                                           PlotCount* count) {
+  const std::string& qname = q.name;
+  const bool wanted =
+      options.plot_quantities.empty()
+          ? !IsQuaternionComponent(qname)
+          : std::find(options.plot_quantities.begin(), options.plot_quantities.end(), qname) !=
+                options.plot_quantities.end();
+  if (!q.type_a || !wanted) return std::nullopt;
+  if (count->plotted >= options.max_plotted_quantities) {
+    ++count->not_plotted;
+    return std::nullopt;
+  }
+  ++count->plotted;
+  mustache::data qd;
+  qd.set("sensor", std::to_string(sensor));
+  qd.set("quantity", qname);
+  qd.set("unit", q.unit);
+  qd.set("warnings", StringList(q.warnings));
+  QuantityPlots plots;
+  if (q.plot) {
+    AddSeriesPlots(q, *q.plot, &plots);
+  } else {
+    plots.unavailable.push_back(mustache::data(fmt::format(
+        "time series, histogram and autocorrelation of {}: unavailable ({})", qname,
+        any_plot_data ? "no plot data was kept for it when the session was analysed"
+                      : "the report predates plot data; run characterize analyze again")));
+  }
+  mustache::data terms{mustache::data::type::list};
+  if (q.allan) AddAllanPlot(q, &plots, &terms);
+  qd.set("has_allan_terms", !terms.is_empty_list());
+  qd.set("allan_terms", terms);
+  qd.set("plots", plots.plots);
+  qd.set("unavailable", plots.unavailable);
+  return qd;
+}
+
+// One tag's section: its counts, window, warnings, Allan group plots and quantities.
+mustache::data TagSection(const SensorReport& s, const HtmlReportOptions& options,
+                          bool any_plot_data, PlotCount* count) {
+  const int sensor = static_cast<int>(s.sensor);
+  mustache::data sd;
+  sd.set("sensor", std::to_string(sensor));
+  sd.set("tag", s.name);
+  sd.set("frames", ShortNumber(static_cast<double>(s.frames), 12));
+  sd.set("fresh", ShortNumber(static_cast<double>(s.fresh), 12));
+  sd.set("stale", ShortNumber(static_cast<double>(s.stale), 12));
+  sd.set("loss", fmt::format("{:.2f} %", 100.0 * s.packet_loss_ratio));
+  sd.set("n", ShortNumber(static_cast<double>(s.window.n), 12));
+  sd.set("n_total", ShortNumber(static_cast<double>(s.window.n_total), 12));
+  sd.set("t_first_s", ShortNumber(s.window.t_first_s, 6));
+  sd.set("t_last_s", ShortNumber(s.window.t_last_s, 6));
+  sd.set("settle", SettleText(s.window));
+  sd.set("warnings", StringList(s.warnings));
+  QuantityPlots groups;
+  AddAllanGroupPlots(s, &groups);
+  sd.set("has_allan_groups", !groups.plots.is_empty_list() || !groups.unavailable.is_empty_list());
+  sd.set("allan_group_plots", groups.plots);
+  sd.set("allan_group_unavailable", groups.unavailable);
+  mustache::data quantities{mustache::data::type::list};
+  for (const QuantityReport& q : s.quantities) {
+    std::optional<mustache::data> qd = QuantityData(q, sensor, options, any_plot_data, count);
+    if (qd) quantities.push_back(*qd);
+  }
+  sd.set("quantities", quantities);
+  return sd;
+}
+
 }  // namespace
 
 bool HtmlReportOptions::IsValid(std::string* why) const {
@@ -127,110 +261,16 @@ Result<std::string> RenderSessionReportHtml(const SessionReport& report,
   std::string why;
   if (!options.IsValid(&why)) return MakeError(why);
   const ReportInput& input = report.input;
-  // The figures come from the plot data kept in the report at analysis time; a report from
-  // before metro kept it has the tables and Allan curves only.
-  bool any_plot_data = false;
-  for (const SensorReport& s : report.sensors) {
-    for (const QuantityReport& q : s.quantities) any_plot_data = any_plot_data || q.plot;
-  }
-  const std::string session_note =
-      any_plot_data
-          ? "Time series, histograms and autocorrelations drawn from the plot data computed "
-            "when the session was analysed (the report's \"plot\" objects)."
-          : "This report predates the plot data metro now keeps in a report: it has no time "
-            "series, histograms or autocorrelations. Run characterize analyze on the session "
-            "again for them; tables, Allan curves and budget bars come from the report.";
+  // The figures come from the plot data kept in the report at analysis time.
+  const bool any_plot_data = AnyPlotData(report);
   mustache::data data;
-  // The result first, then how it was obtained.
-  data.set("result_rows", ResultRows(report));
-  data.set("summary_rows", TypeADetailRows(report));
-  mustache::data noise = NoiseRows(report);
-  data.set("has_noise", !noise.is_empty_list());
-  data.set("noise_rows", noise);
-  data.set("input_path", input.path);
-  data.set("input_sha256", input.sha256);
-  data.set("input_format", input.format);
-  data.set("input_rows", ShortNumber(static_cast<double>(input.rows), 12));
-  data.set("input_rejected_rows", ShortNumber(static_cast<double>(input.rejected_rows), 12));
-  // Each row only when the report has it (a receiver capture has no dialect, a canonical
-  // file no mapping): a missing value renders no section.
-  for (const auto& [key, text] :
-       {std::pair{"input_dialect", DialectText(input)},
-        std::pair{"input_mapping", MappingText(input)}, std::pair{"input_time", TimeText(input)}}) {
-    if (!text.empty()) data.set(key, text);
-  }
-  data.set("input_notes", StringList(input.notes));
-  data.set("input_warnings", StringList(input.warnings));
-  mustache::data option_rows = SessionOptionRows(report);
-  data.set("has_options", !option_rows.is_empty_list());
-  data.set("option_rows", option_rows);
-  data.set("session_ok", any_plot_data);
-  data.set("session_note", session_note);
-
+  SetResultAndInput(report, any_plot_data, &data);
   mustache::data sensors{mustache::data::type::list};
-  int plotted = 0;
-  int not_plotted = 0;
-  for (size_t i = 0; i < report.sensors.size(); ++i) {
-    const SensorReport& s = report.sensors[i];
-    const int sensor = static_cast<int>(s.sensor);
-    mustache::data sd;
-    sd.set("sensor", std::to_string(sensor));
-    sd.set("tag", s.name);
-    sd.set("frames", ShortNumber(static_cast<double>(s.frames), 12));
-    sd.set("fresh", ShortNumber(static_cast<double>(s.fresh), 12));
-    sd.set("stale", ShortNumber(static_cast<double>(s.stale), 12));
-    sd.set("loss", fmt::format("{:.2f} %", 100.0 * s.packet_loss_ratio));
-    sd.set("n", ShortNumber(static_cast<double>(s.window.n), 12));
-    sd.set("n_total", ShortNumber(static_cast<double>(s.window.n_total), 12));
-    sd.set("t_first_s", ShortNumber(s.window.t_first_s, 6));
-    sd.set("t_last_s", ShortNumber(s.window.t_last_s, 6));
-    sd.set("settle", SettleText(s.window));
-    sd.set("warnings", StringList(s.warnings));
-    QuantityPlots groups;
-    AddAllanGroupPlots(s, &groups);
-    sd.set("has_allan_groups",
-           !groups.plots.is_empty_list() || !groups.unavailable.is_empty_list());
-    sd.set("allan_group_plots", groups.plots);
-    sd.set("allan_group_unavailable", groups.unavailable);
-    mustache::data quantities{mustache::data::type::list};
-    for (const QuantityReport& q : s.quantities) {
-      const std::string& qname = q.name;
-      const bool wanted =
-          options.plot_quantities.empty()
-              ? !IsQuaternionComponent(qname)
-              : std::find(options.plot_quantities.begin(), options.plot_quantities.end(), qname) !=
-                    options.plot_quantities.end();
-      if (!q.type_a || !wanted) continue;
-      if (plotted >= options.max_plotted_quantities) {
-        ++not_plotted;
-        continue;
-      }
-      ++plotted;
-      mustache::data qd;
-      qd.set("sensor", std::to_string(sensor));
-      qd.set("quantity", qname);
-      qd.set("unit", q.unit);
-      qd.set("warnings", StringList(q.warnings));
-      QuantityPlots plots;
-      if (q.plot) {
-        AddSeriesPlots(q, *q.plot, &plots);
-      } else {
-        plots.unavailable.push_back(mustache::data(fmt::format(
-            "time series, histogram and autocorrelation of {}: unavailable ({})", qname,
-            any_plot_data ? "no plot data was kept for it when the session was analysed"
-                          : "the report predates plot data; run characterize analyze again")));
-      }
-      mustache::data terms{mustache::data::type::list};
-      if (q.allan) AddAllanPlot(q, &plots, &terms);
-      qd.set("has_allan_terms", !terms.is_empty_list());
-      qd.set("allan_terms", terms);
-      qd.set("plots", plots.plots);
-      qd.set("unavailable", plots.unavailable);
-      quantities.push_back(qd);
-    }
-    sd.set("quantities", quantities);
-    sensors.push_back(sd);
+  PlotCount count;
+  for (const SensorReport& s : report.sensors) {
+    sensors.push_back(TagSection(s, options, any_plot_data, &count));
   }
+  const int not_plotted = count.not_plotted;
   data.set("sensors", sensors);
   data.set("has_more_quantities", not_plotted > 0);
   data.set("more_quantities",

@@ -1,8 +1,17 @@
+// SimulateCalibrationSession runs these stages, in this order:
+//
+//   truth     DrawImuTruth (or the given one)    the sensor models, temperature reference
+//   timeline  PoseGravityDirections, Timeline    poses (tilted), hand moves, dwells, table
+//                                                runs
+//   samples   Sample                             true force and rate, readings through the
+//                                                inverse model, noise, counts, saturation
+//   session   AssembleSession                    the session's columns and its one tag
 #include "metro/sim/calibration_session.hpp"
 
 #include <fmt/format.h>
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <pcg_random.hpp>
@@ -148,24 +157,12 @@ ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool
   return t;
 }
 
-Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) {
-  std::string why;
-  if (!o.IsValid(&why)) return MakeError("invalid simulation options: " + why);
-  SimulatedSession out;
-  out.truth = o.random_truth ? DrawImuTruth(o.seed, o.accel_fs_g, o.gyro_fs_dps, o.temperature,
-                                            o.accel_cross_axis, o.gyro_cross_axis)
-                             : o.truth;
-  if (o.temperature) {
-    const double t_mid = 0.5 * (o.temp_start_c + o.temp_end_c);
-    out.truth.accel.has_temperature = out.truth.gyro.has_temperature = true;
-    out.truth.accel.t_ref_c = out.truth.gyro.t_ref_c = t_mid;
-  }
-  pcg64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
-  std::uniform_real_distribution<double> heading(-kPi, kPi);
-  std::normal_distribution<double> normal(0.0, 1.0);
+namespace {
 
-  // Timeline.
-  std::vector<Phase> phases;
+// ---- SimulateCalibrationSession's stages --------------------------------------------------
+
+// The poses' gravity directions, each tilted by up to pose_tilt_deg (its own generator).
+std::vector<Eigen::Vector3d> PoseGravityDirections(const SimulationOptions& o) {
   std::vector<Eigen::Vector3d> dirs = PoseDirections(o.pose_set, o.poses);
   if (o.pose_tilt_deg > 0) {
     pcg64 tilt_rng(o.seed ^ 0x5851f42d4c957f2dULL);
@@ -178,12 +175,21 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
       u = Eigen::AngleAxisd(angle, axis) * u;
     }
   }
+  return dirs;
+}
+
+// The timeline: per pose a hand move from the previous one (to a random heading), a still
+// dwell, and each table run with the still stop after it.
+std::vector<Phase> Timeline(const SimulationOptions& o, const std::vector<Eigen::Vector3d>& dirs,
+                            pcg64* rng) {
+  std::uniform_real_distribution<double> heading(-kPi, kPi);
+  std::vector<Phase> phases;
   Eigen::Matrix3d current = Eigen::Matrix3d::Identity();
   for (size_t i = 0; i < dirs.size(); ++i) {
     const Eigen::Matrix3d align =
         Eigen::Quaterniond::FromTwoVectors(dirs[i], Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const Eigen::Matrix3d target =
-        Eigen::AngleAxisd(heading(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() * align;
+        Eigen::AngleAxisd(heading(*rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() * align;
     if (i > 0) {
       Phase m;
       m.kind = Phase::kMove;
@@ -213,18 +219,26 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
       phases.push_back(stop);
     }
   }
+  return phases;
+}
+
+// The eight columns: ax ay az gx gy gz (raw counts) temp table.
+using SimColumnsData = std::array<std::vector<double>, 8>;
+
+// Every sample along the timeline: the true specific force and rate, the readings through
+// the truth's inverse model with noise, rounded and saturated as counts.
+void Sample(const SimulationOptions& o, const std::vector<Phase>& phases, pcg64* rng, Tag* tag,
+            SimColumnsData* columns, SimulatedSession* out) {
+  std::normal_distribution<double> normal(0.0, 1.0);
   double total_s = 0;
   for (const Phase& p : phases) total_s += p.duration_s;
-
   const double dt = 1.0 / o.rate_hz;
   const size_t n = static_cast<size_t>(std::floor(total_s * o.rate_hz));
   const double accel_sd_g = o.accel_noise_ug_rthz * 1e-6 * std::sqrt(o.bandwidth_hz);
   const double gyro_sd_dps = o.gyro_noise_dps_rthz * std::sqrt(o.bandwidth_hz);
   const double g_norm = o.gravity_mps2 / kStandardGravityMps2;
 
-  Tag tag;
-  tag.sensor = o.sensor;
-  std::vector<double> cols[8];  // ax ay az gx gy gz temp table
+  SimColumnsData& cols = *columns;
   for (auto& c : cols) c.reserve(n);
   size_t phase = 0;
   double phase_start = 0;
@@ -246,10 +260,10 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
     const Eigen::Vector3d f_g = r.transpose() * Eigen::Vector3d::UnitZ() * g_norm;
     double temp_c = o.temp_start_c + (o.temp_end_c - o.temp_start_c) * t / total_s;
     temp_c = std::round(temp_c * 340.0) / 340.0;  // MPU6050: 340 LSB/degC.
-    const Eigen::Vector3d na(normal(rng), normal(rng), normal(rng));
-    const Eigen::Vector3d ng(normal(rng), normal(rng), normal(rng));
-    Eigen::Vector3d ra = out.truth.accel.Invert(f_g + accel_sd_g * na, temp_c);
-    Eigen::Vector3d rg = out.truth.gyro.Invert(w_dps + gyro_sd_dps * ng, temp_c);
+    const Eigen::Vector3d na(normal(*rng), normal(*rng), normal(*rng));
+    const Eigen::Vector3d ng(normal(*rng), normal(*rng), normal(*rng));
+    Eigen::Vector3d ra = out->truth.accel.Invert(f_g + accel_sd_g * na, temp_c);
+    Eigen::Vector3d rg = out->truth.gyro.Invert(w_dps + gyro_sd_dps * ng, temp_c);
     bool sat = false;
     for (int a = 0; a < 3; ++a) {
       for (double* v : {&ra[a], &rg[a]}) {
@@ -258,21 +272,28 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
         *v = std::clamp(*v, -32768.0, 32767.0);
       }
     }
-    out.saturated_samples += sat ? 1 : 0;
-    tag.t_s.push_back(t);
-    tag.line.push_back(static_cast<uint32_t>(k + 2));
+    out->saturated_samples += sat ? 1 : 0;
+    tag->t_s.push_back(t);
+    tag->line.push_back(static_cast<uint32_t>(k + 2));
     for (int a = 0; a < 3; ++a) {
       cols[a].push_back(ra[a]);
       cols[3 + a].push_back(rg[a]);
     }
     cols[6].push_back(temp_c);
     cols[7].push_back(phases[phase].TableRate());
-    out.true_accel_g.push_back(f_g);
-    out.true_gyro_dps.push_back(w_dps);
+    out->true_accel_g.push_back(f_g);
+    out->true_gyro_dps.push_back(w_dps);
   }
+}
+
+// The session: its path, columns and the one tag, the columns o leaves out dropped.
+void AssembleSession(const SimulationOptions& o, Tag tag, SimColumnsData* columns,
+                     SimulatedSession* out) {
+  SimColumnsData& cols = *columns;
+  const size_t n = tag.t_s.size();
   const char* names[8] = {"ax_lsb", "ay_lsb", "az_lsb", "gx_lsb",
                           "gy_lsb", "gz_lsb", "temp_c", "table_rate_dps"};
-  Session& s = out.session;
+  Session& s = out->session;
   s.path = fmt::format("simulated-seed-{}", o.seed);
   s.format = SessionFormat::kCsv;
   s.rows = static_cast<int64_t>(n);
@@ -288,6 +309,29 @@ Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) 
     s.columns.push_back(names[c]);
   }
   s.tags.push_back(std::move(tag));
+}
+
+}  // namespace
+
+Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) return MakeError("invalid simulation options: " + why);
+  SimulatedSession out;
+  out.truth = o.random_truth ? DrawImuTruth(o.seed, o.accel_fs_g, o.gyro_fs_dps, o.temperature,
+                                            o.accel_cross_axis, o.gyro_cross_axis)
+                             : o.truth;
+  if (o.temperature) {
+    const double t_mid = 0.5 * (o.temp_start_c + o.temp_end_c);
+    out.truth.accel.has_temperature = out.truth.gyro.has_temperature = true;
+    out.truth.accel.t_ref_c = out.truth.gyro.t_ref_c = t_mid;
+  }
+  pcg64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
+  const std::vector<Phase> phases = Timeline(o, PoseGravityDirections(o), &rng);
+  Tag tag;
+  tag.sensor = o.sensor;
+  SimColumnsData cols;
+  Sample(o, phases, &rng, &tag, &cols, &out);
+  AssembleSession(o, std::move(tag), &cols, &out);
   return out;
 }
 

@@ -1,3 +1,11 @@
+// SimulateStaticSession runs these stages, in this order:
+//
+//   model     ModelOf                     sampling, AR(1) noise per step, columns
+//   truth     Draws, DrawTruth            the generator; every tag's attitude, transient,
+//                                         biases and starting noise, in sensor order
+//   steps     DrawReading,                per step and tag: the drawn observation, written
+//             AppendReceiverLine,         as a receiver line or a session.csv row (the same
+//             AppendCsvRow                draws for both formats), flushed every 8 MiB
 #include "metro/sim/static_session.hpp"
 
 #include <fmt/format.h>
@@ -7,6 +15,7 @@
 #include <iterator>
 #include <pcg_random.hpp>
 #include <random>
+#include <string>
 
 #include "metro/sim/limits.hpp"
 
@@ -84,26 +93,45 @@ bool StaticSimulationOptions::IsValid(std::string* why) const {
   return true;
 }
 
-Status SimulateStaticSession(const StaticSimulationOptions& options, SessionFormat format,
-                             const TextSink& sink, std::vector<StaticTagTruth>* truth) {
-  std::string why;
-  if (!options.IsValid(&why)) return MakeError("invalid simulation options: " + why);
-  if (format != SessionFormat::kCsv && format != SessionFormat::kReceiver) {
-    return MakeError("the simulator writes session.csv or receiver captures");
-  }
-  const bool receiver = format == SessionFormat::kReceiver;
-  const double dt_s =
-      receiver || options.rate_hz == 0.0 ? options.frame_period_s : 1.0 / options.rate_hz;
-  const double rate_hz = 1.0 / dt_s;
-  const double phi = std::pow(options.noise_ar1, dt_s / options.frame_period_s);
-  const double innovation = std::sqrt(1.0 - phi * phi);
-  const double accel_noise_g = 400e-6 * std::sqrt(rate_hz / 2.0);
-  const double gyro_noise_dps = 0.005 * std::sqrt(rate_hz / 2.0);
+namespace {
 
-  pcg64 rng(options.seed);
+// ---- SimulateStaticSession's stages -------------------------------------------------------
+
+// The sampling and noise the session is drawn with.
+struct StaticModel {
+  bool receiver = false;  // A receiver capture, else session.csv.
+  double dt_s = 0, rate_hz = 0;
+  double phi = 0, innovation = 0;  // AR(1) of the attitude noise per step.
+  double accel_noise_g = 0, gyro_noise_dps = 0;
+  bool angles = false, imu = false;  // Columns of session.csv.
+};
+
+StaticModel ModelOf(const StaticSimulationOptions& options, SessionFormat format) {
+  StaticModel m;
+  m.receiver = format == SessionFormat::kReceiver;
+  m.dt_s = m.receiver || options.rate_hz == 0.0 ? options.frame_period_s : 1.0 / options.rate_hz;
+  m.rate_hz = 1.0 / m.dt_s;
+  m.phi = std::pow(options.noise_ar1, m.dt_s / options.frame_period_s);
+  m.innovation = std::sqrt(1.0 - m.phi * m.phi);
+  m.accel_noise_g = 400e-6 * std::sqrt(m.rate_hz / 2.0);
+  m.gyro_noise_dps = 0.005 * std::sqrt(m.rate_hz / 2.0);
+  m.angles = options.columns != SimColumns::kImu;
+  m.imu = options.columns != SimColumns::kAngles;
+  return m;
+}
+
+// The generator and its distributions, drawn in one fixed order.
+struct Draws {
+  explicit Draws(uint64_t seed) : rng(seed) {}
+  pcg64 rng;
   std::normal_distribution<double> normal;
   std::uniform_real_distribution<double> uniform;
+  double Normal() { return normal(rng); }
+  double Uniform() { return uniform(rng); }
+};
 
+// Every tag's truth, in sensor order.
+std::vector<TagState> DrawTruth(const StaticSimulationOptions& options, Draws* draws) {
   std::vector<int> all = options.sensors;
   all.insert(all.end(), options.never_sensors.begin(), options.never_sensors.end());
   std::sort(all.begin(), all.end());
@@ -114,18 +142,124 @@ Status SimulateStaticSession(const StaticSimulationOptions& options, SessionForm
     s.never = std::count(options.never_sensors.begin(), options.never_sensors.end(), all[k]) > 0;
     // Sensor 2 (chest) lies flat as in thesis 8.4.2; the others at random attitudes.
     if (all[k] != 2) {
-      s.truth.attitude = {360.0 * uniform(rng) - 180.0, 60.0 * uniform(rng) - 30.0,
-                          60.0 * uniform(rng) - 30.0};
+      s.truth.attitude = {360.0 * draws->Uniform() - 180.0, 60.0 * draws->Uniform() - 30.0,
+                          60.0 * draws->Uniform() - 30.0};
     }
-    s.truth.transient_offset = {options.transient_std_deg[0] * normal(rng),
-                                options.transient_std_deg[1] * normal(rng),
-                                options.transient_std_deg[2] * normal(rng)};
+    s.truth.transient_offset = {options.transient_std_deg[0] * draws->Normal(),
+                                options.transient_std_deg[1] * draws->Normal(),
+                                options.transient_std_deg[2] * draws->Normal()};
     for (int a = 0; a < 3; ++a) {
-      s.truth.accel_bias_g[a] = 0.02 * normal(rng);
-      s.truth.gyro_bias_dps[a] = 3.0 * normal(rng);
-      s.noise[a] = options.noise_std_deg[a] * normal(rng);  // Stationary start.
+      s.truth.accel_bias_g[a] = 0.02 * draws->Normal();
+      s.truth.gyro_bias_dps[a] = 3.0 * draws->Normal();
+      s.noise[a] = options.noise_std_deg[a] * draws->Normal();  // Stationary start.
     }
   }
+  return tags;
+}
+
+// One observation of a tag at time t: its DMP angles e, accelerometer, gyroscope,
+// temperature, quaternion and whether the packet is lost.
+struct Reading {
+  double e[3] = {0, 0, 0};
+  double accel[3] = {0, 0, 0}, gyro[3] = {0, 0, 0};
+  double temp_c = 0;
+  bool lost = false;
+  Quaternion q;
+};
+
+// Draw every random number for every step so the two formats share one truth.
+Reading DrawReading(const StaticSimulationOptions& options, const StaticModel& m, double t,
+                    double settle, TagState* tag, Draws* draws) {
+  TagState& s = *tag;
+  Reading r;
+  double* e = r.e;
+  const double phi = m.phi, innovation = m.innovation;
+  for (int a = 0; a < 3; ++a) {
+    s.noise[a] = phi * s.noise[a] + innovation * options.noise_std_deg[a] * draws->Normal();
+  }
+  const double attitude[3] = {s.truth.attitude.yaw_deg, s.truth.attitude.pitch_deg,
+                              s.truth.attitude.roll_deg};
+  const double offset[3] = {s.truth.transient_offset.yaw_deg, s.truth.transient_offset.pitch_deg,
+                            s.truth.transient_offset.roll_deg};
+  for (int a = 0; a < 3; ++a) {
+    e[a] = attitude[a] + offset[a] * settle + s.noise[a];
+    if (a == 0) e[a] = WrapDeg180(e[a] + options.yaw_drift_dps * t);
+    e[a] = Quantize(e[a], options.quantization_deg);
+  }
+  const EulerDeg euler{e[0], e[1], e[2]};
+  // The accelerometer sees the tag's physical (static) attitude, not the DMP's noise.
+  double* accel = r.accel;
+  double* gyro = r.gyro;
+  GravityInBody(s.truth.attitude, accel);
+  for (int a = 0; a < 3; ++a) {
+    accel[a] += s.truth.accel_bias_g[a] + m.accel_noise_g * draws->Normal();
+    gyro[a] = s.truth.gyro_bias_dps[a] + m.gyro_noise_dps * draws->Normal();
+  }
+  r.temp_c = Quantize(25.0 + 5.0 * (1.0 - std::exp(-t / 600.0)), 1.0 / 340.0);
+  r.lost = draws->Uniform() < options.packet_loss;
+  r.q = QuaternionFromEuler(euler);
+  return r;
+}
+
+// A receiver line: fresh with the quaternion and packet #0 (yaw, pitch, roll, counter k),
+// or, when lost, the last packet as stale (never, before the first).
+void AppendReceiverLine(const Reading& r, int64_t k, TagState* tag, std::string* out) {
+  TagState& s = *tag;
+  const double* e = r.e;
+  const Quaternion& q = r.q;
+  if (r.lost) {
+    *out += FormatReceiverLine(
+        s.truth.sensor, s.have_packet ? NewDataFlag::kStale : NewDataFlag::kNever, s.last_payload);
+  } else {
+    ReceiverPayload p{};
+    EncodeQuaternion(q, &p);
+    // Bytes 17..25: packet type #0 with yaw, pitch, roll as int16 at 0.01 deg
+    // (little-endian), then a 16-bit packet counter.
+    p[16] = 0;
+    const int16_t v[3] = {ToInt16(e[0] * 100.0), ToInt16(e[1] * 100.0), ToInt16(e[2] * 100.0)};
+    for (int a = 0; a < 3; ++a) {
+      p[17 + 2 * a] = static_cast<uint8_t>(static_cast<uint16_t>(v[a]) & 0xFF);
+      p[18 + 2 * a] = static_cast<uint8_t>(static_cast<uint16_t>(v[a]) >> 8);
+    }
+    p[23] = static_cast<uint8_t>(k & 0xFF);
+    p[24] = static_cast<uint8_t>((k >> 8) & 0xFF);
+    s.last_payload = p;
+    s.have_packet = true;
+    *out += FormatReceiverLine(s.truth.sensor, NewDataFlag::kFresh, p);
+  }
+  *out += '\n';
+}
+
+// A session.csv row (nothing when the packet is lost).
+void AppendCsvRow(const StaticModel& m, double t, int sensor, const Reading& r, std::string* out) {
+  if (r.lost) return;
+  auto it = std::back_inserter(*out);
+  const Quaternion& q = r.q;
+  const double* accel = r.accel;
+  const double* gyro = r.gyro;
+  fmt::format_to(it, "{:.6f},{}", t, sensor);
+  if (m.angles) {
+    fmt::format_to(it, ",{:.8f},{:.8f},{:.8f},{:.8f}", q.w, q.x, q.y, q.z);
+  }
+  if (m.imu) {
+    fmt::format_to(it, ",{:.6f},{:.6f},{:.6f},{:.4f},{:.4f},{:.4f},{:.3f}", accel[0], accel[1],
+                   accel[2], gyro[0], gyro[1], gyro[2], r.temp_c);
+  }
+  *out += '\n';
+}
+
+}  // namespace
+
+Status SimulateStaticSession(const StaticSimulationOptions& options, SessionFormat format,
+                             const TextSink& sink, std::vector<StaticTagTruth>* truth) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("invalid simulation options: " + why);
+  if (format != SessionFormat::kCsv && format != SessionFormat::kReceiver) {
+    return MakeError("the simulator writes session.csv or receiver captures");
+  }
+  const StaticModel m = ModelOf(options, format);
+  Draws draws(options.seed);
+  std::vector<TagState> tags = DrawTruth(options, &draws);
   if (truth != nullptr) {
     truth->clear();
     for (const TagState& s : tags) truth->push_back(s.truth);
@@ -134,90 +268,32 @@ Status SimulateStaticSession(const StaticSimulationOptions& options, SessionForm
   std::string out;
   out.reserve(kFlushBytes + 4096);
   auto it = std::back_inserter(out);
-  const bool angles = options.columns != SimColumns::kImu;
-  const bool imu = options.columns != SimColumns::kAngles;
-  if (!receiver) {
+  if (!m.receiver) {
     out += "# metro simulate: static session, ";
-    fmt::format_to(it, "seed {}, {} s at {:.6g} Hz\n", options.seed, options.duration_s, rate_hz);
+    fmt::format_to(it, "seed {}, {} s at {:.6g} Hz\n", options.seed, options.duration_s, m.rate_hz);
     out += "t_s,sensor";
-    if (angles) out += ",qw,qx,qy,qz";
-    if (imu) out += ",ax_g,ay_g,az_g,gx_dps,gy_dps,gz_dps,temp_c";
+    if (m.angles) out += ",qw,qx,qy,qz";
+    if (m.imu) out += ",ax_g,ay_g,az_g,gx_dps,gy_dps,gz_dps,temp_c";
     out += '\n';
   }
-  const int64_t steps = static_cast<int64_t>(std::floor(options.duration_s / dt_s));
+  const int64_t steps = static_cast<int64_t>(std::floor(options.duration_s / m.dt_s));
   for (int64_t k = 0; k < steps; ++k) {
-    const double t = static_cast<double>(k) * dt_s;
+    const double t = static_cast<double>(k) * m.dt_s;
     const double settle = std::exp(-t / options.transient_tau_s);
     for (TagState& s : tags) {
       if (s.never) {
-        if (receiver) {
+        if (m.receiver) {
           out += FormatReceiverLine(s.truth.sensor, NewDataFlag::kNever, ReceiverPayload{});
           out += '\n';
         }
         continue;
       }
-      // Draw every random number for every step so the two formats share one truth.
-      double e[3];
-      for (int a = 0; a < 3; ++a) {
-        s.noise[a] = phi * s.noise[a] + innovation * options.noise_std_deg[a] * normal(rng);
+      const Reading r = DrawReading(options, m, t, settle, &s, &draws);
+      if (m.receiver) {
+        AppendReceiverLine(r, k, &s, &out);
+      } else {
+        AppendCsvRow(m, t, s.truth.sensor, r, &out);
       }
-      const double attitude[3] = {s.truth.attitude.yaw_deg, s.truth.attitude.pitch_deg,
-                                  s.truth.attitude.roll_deg};
-      const double offset[3] = {s.truth.transient_offset.yaw_deg,
-                                s.truth.transient_offset.pitch_deg,
-                                s.truth.transient_offset.roll_deg};
-      for (int a = 0; a < 3; ++a) {
-        e[a] = attitude[a] + offset[a] * settle + s.noise[a];
-        if (a == 0) e[a] = WrapDeg180(e[a] + options.yaw_drift_dps * t);
-        e[a] = Quantize(e[a], options.quantization_deg);
-      }
-      const EulerDeg euler{e[0], e[1], e[2]};
-      // The accelerometer sees the tag's physical (static) attitude, not the DMP's noise.
-      double accel[3], gyro[3];
-      GravityInBody(s.truth.attitude, accel);
-      for (int a = 0; a < 3; ++a) {
-        accel[a] += s.truth.accel_bias_g[a] + accel_noise_g * normal(rng);
-        gyro[a] = s.truth.gyro_bias_dps[a] + gyro_noise_dps * normal(rng);
-      }
-      const double temp_c = Quantize(25.0 + 5.0 * (1.0 - std::exp(-t / 600.0)), 1.0 / 340.0);
-      const bool lost = uniform(rng) < options.packet_loss;
-      const Quaternion q = QuaternionFromEuler(euler);
-      if (receiver) {
-        if (lost) {
-          out += FormatReceiverLine(s.truth.sensor,
-                                    s.have_packet ? NewDataFlag::kStale : NewDataFlag::kNever,
-                                    s.last_payload);
-        } else {
-          ReceiverPayload p{};
-          EncodeQuaternion(q, &p);
-          // Bytes 17..25: packet type #0 with yaw, pitch, roll as int16 at 0.01 deg
-          // (little-endian), then a 16-bit packet counter.
-          p[16] = 0;
-          const int16_t v[3] = {ToInt16(e[0] * 100.0), ToInt16(e[1] * 100.0),
-                                ToInt16(e[2] * 100.0)};
-          for (int a = 0; a < 3; ++a) {
-            p[17 + 2 * a] = static_cast<uint8_t>(static_cast<uint16_t>(v[a]) & 0xFF);
-            p[18 + 2 * a] = static_cast<uint8_t>(static_cast<uint16_t>(v[a]) >> 8);
-          }
-          p[23] = static_cast<uint8_t>(k & 0xFF);
-          p[24] = static_cast<uint8_t>((k >> 8) & 0xFF);
-          s.last_payload = p;
-          s.have_packet = true;
-          out += FormatReceiverLine(s.truth.sensor, NewDataFlag::kFresh, p);
-        }
-        out += '\n';
-        continue;
-      }
-      if (lost) continue;
-      fmt::format_to(it, "{:.6f},{}", t, s.truth.sensor);
-      if (angles) {
-        fmt::format_to(it, ",{:.8f},{:.8f},{:.8f},{:.8f}", q.w, q.x, q.y, q.z);
-      }
-      if (imu) {
-        fmt::format_to(it, ",{:.6f},{:.6f},{:.6f},{:.4f},{:.4f},{:.4f},{:.3f}", accel[0], accel[1],
-                       accel[2], gyro[0], gyro[1], gyro[2], temp_c);
-      }
-      out += '\n';
     }
     if (out.size() >= kFlushBytes) {
       if (Status st = sink(out); !st.ok()) return st;

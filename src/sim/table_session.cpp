@@ -1,3 +1,10 @@
+// SimulateTableSession runs these stages, in this order:
+//
+//   schedule   Schedule, FillTruth       the plateaus and their truth
+//   tag log    WriteTagLog, TableTag     per step: the table's angle, the tag's lagged,
+//                                        noisy, tilted angles and packet loss; session.csv
+//                                        or a receiver capture
+//   reference  WriteReferenceLog         the table's own log, when asked for
 #include "metro/sim/table_session.hpp"
 
 #include <fmt/format.h>
@@ -8,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <pcg_random.hpp>
 #include <random>
+#include <string>
 
 #include "metro/sim/limits.hpp"
 
@@ -173,59 +181,89 @@ double TableErrorModelDeg(const TableSimulationOptions& o, double theta_deg, int
          o.sin1_deg * std::sin(th) + 0.5 * direction * o.hysteresis_deg;
 }
 
-Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat format,
-                            const TextSink& sink, const TextSink& reference_sink,
-                            TableTruth* truth) {
-  std::string why;
-  if (!options.IsValid(&why)) return MakeError("invalid table simulation options: " + why);
-  if (format != SessionFormat::kCsv && format != SessionFormat::kReceiver) {
-    return MakeError("the simulator writes session.csv or receiver captures");
-  }
-  const bool receiver = format == SessionFormat::kReceiver;
-  if (receiver && !reference_sink) {
-    return MakeError("a receiver capture has no table column: give a reference log to write");
-  }
-  const std::vector<Stop> stops = Schedule(options);
+namespace {
+
+// ---- SimulateTableSession's stages --------------------------------------------------------
+
+// The plateaus as they are meant: reference, direction, error, times, the other angles.
+void FillTruth(const TableSimulationOptions& options, const std::vector<Stop>& stops,
+               TableTruth* truth) {
   const double duration_s = stops.back().t_leave_s;
-  if (truth != nullptr) {
-    truth->plateaus.clear();
-    for (const Stop& s : stops) {
-      TablePlateauTruth p;
-      p.reference_deg = s.angle_deg;
-      p.direction = s.direction;
-      p.error_deg = TableErrorModelDeg(options, s.angle_deg, s.direction);
-      p.t_start_s = s.t_arrive_s;
-      p.t_end_s = s.t_leave_s;
-      p.t_move_s = s.t_move_s;
-      const double th = s.angle_deg * kRadPerDeg;
-      p.other_deg[0] = options.base_deg[0] + options.tilt_deg * std::sin(th);
-      p.other_deg[1] = options.base_deg[1] + options.tilt_deg * std::cos(th);
-      truth->plateaus.push_back(p);
+  truth->plateaus.clear();
+  for (const Stop& s : stops) {
+    TablePlateauTruth p;
+    p.reference_deg = s.angle_deg;
+    p.direction = s.direction;
+    p.error_deg = TableErrorModelDeg(options, s.angle_deg, s.direction);
+    p.t_start_s = s.t_arrive_s;
+    p.t_end_s = s.t_leave_s;
+    p.t_move_s = s.t_move_s;
+    const double th = s.angle_deg * kRadPerDeg;
+    p.other_deg[0] = options.base_deg[0] + options.tilt_deg * std::sin(th);
+    p.other_deg[1] = options.base_deg[1] + options.tilt_deg * std::cos(th);
+    truth->plateaus.push_back(p);
+  }
+  truth->duration_s = duration_s;
+}
+
+// The tag on the table, step by step: its first-order lag behind the table's angle plus the
+// error model, the AR(1) noise of its three angles, the tilt of the axes not turned, and
+// packet loss. Draws from one generator in a fixed order (the noise's stationary start
+// first, then per step three normals and one uniform).
+class TableTag {
+ public:
+  TableTag(const TableSimulationOptions& options, double dt_s)
+      : options_(options), rng_(options.seed) {
+    phi_ = std::pow(options.noise_ar1, dt_s / options.frame_period_s);
+    innovation_ = std::sqrt(1.0 - phi_ * phi_);
+    lag_gain_ = options.lag_tau_s > 0.0 ? 1.0 - std::exp(-dt_s / options.lag_tau_s) : 1.0;
+    turned_ = static_cast<int>(options.axis);
+    for (int a = 0, j = 0; a < 3; ++a) {
+      if (a != turned_) others_[j++] = a;
     }
-    truth->duration_s = duration_s;
+    for (double& e : noise_) e = options.noise_std_deg * normal_(rng_);  // Stationary start.
   }
 
+  // The tag's angles (yaw, pitch, roll) at step k, the table at theta moving in `direction`;
+  // *lost when the step's packet is lost.
+  void Step(int64_t k, double theta, int direction, double angles[3], bool* lost) {
+    const double target = theta + TableErrorModelDeg(options_, theta, direction);
+    lagged_ = k == 0 ? target : lagged_ + lag_gain_ * (target - lagged_);
+    for (double& e : noise_) e = phi_ * e + innovation_ * options_.noise_std_deg * normal_(rng_);
+    angles[turned_] = lagged_ + noise_[turned_];
+    const double th = theta * kRadPerDeg;
+    angles[others_[0]] =
+        options_.base_deg[0] + options_.tilt_deg * std::sin(th) + noise_[others_[0]];
+    angles[others_[1]] =
+        options_.base_deg[1] + options_.tilt_deg * std::cos(th) + noise_[others_[1]];
+    for (int a = 0; a < 3; ++a)
+      angles[a] = Quantize(WrapDeg180(angles[a]), options_.quantization_deg);
+    *lost = uniform_(rng_) < options_.packet_loss;
+  }
+
+ private:
+  const TableSimulationOptions& options_;
+  pcg64 rng_;
+  std::normal_distribution<double> normal_;
+  std::uniform_real_distribution<double> uniform_;
+  double phi_ = 0, innovation_ = 0, lag_gain_ = 1;
+  int turned_ = 0;
+  int others_[2] = {0, 0};
+  double noise_[3] = {0, 0, 0};
+  double lagged_ = 0.0;
+};
+
+// The tag's log (session.csv, with the table column when there is no reference log, or a
+// receiver capture), flushed to sink every 8 MiB.
+Status WriteTagLog(const TableSimulationOptions& options, const std::vector<Stop>& stops,
+                   double duration_s, bool receiver, bool with_reference, const TextSink& sink) {
   const double dt_s =
       receiver || options.rate_hz == 0.0 ? options.frame_period_s : 1.0 / options.rate_hz;
-  const double phi = std::pow(options.noise_ar1, dt_s / options.frame_period_s);
-  const double innovation = std::sqrt(1.0 - phi * phi);
-  const double lag_gain = options.lag_tau_s > 0.0 ? 1.0 - std::exp(-dt_s / options.lag_tau_s) : 1.0;
-  const int turned = static_cast<int>(options.axis);
-  int others[2];
-  for (int a = 0, j = 0; a < 3; ++a) {
-    if (a != turned) others[j++] = a;
-  }
-
-  pcg64 rng(options.seed);
-  std::normal_distribution<double> normal;
-  std::uniform_real_distribution<double> uniform;
-  double noise[3];
-  for (double& e : noise) e = options.noise_std_deg * normal(rng);  // Stationary start.
-
+  TableTag tag(options, dt_s);
   std::string out;
   out.reserve(kFlushBytes + 4096);
   auto it = std::back_inserter(out);
-  const bool table_column = !receiver && !reference_sink;
+  const bool table_column = !receiver && !with_reference;
   if (!receiver) {
     fmt::format_to(it,
                    "# metro simulate --kind table: {} axis, seed {}, {} sweep(s) {}..{} deg by "
@@ -239,22 +277,14 @@ Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat
   bool have_packet = false;
   ReceiverPayload last_payload{};
   size_t hint = 0;
-  double lagged = 0.0;
   const int64_t steps = static_cast<int64_t>(std::floor(duration_s / dt_s)) + 1;
   for (int64_t k = 0; k < steps; ++k) {
     const double t = static_cast<double>(k) * dt_s;
     int direction = 0;
     const double theta = TableAngle(stops, t, &hint, &direction);
-    const double target = theta + TableErrorModelDeg(options, theta, direction);
-    lagged = k == 0 ? target : lagged + lag_gain * (target - lagged);
-    for (double& e : noise) e = phi * e + innovation * options.noise_std_deg * normal(rng);
     double angles[3];
-    angles[turned] = lagged + noise[turned];
-    const double th = theta * kRadPerDeg;
-    angles[others[0]] = options.base_deg[0] + options.tilt_deg * std::sin(th) + noise[others[0]];
-    angles[others[1]] = options.base_deg[1] + options.tilt_deg * std::cos(th) + noise[others[1]];
-    for (double& a : angles) a = Quantize(WrapDeg180(a), options.quantization_deg);
-    const bool lost = uniform(rng) < options.packet_loss;
+    bool lost = false;
+    tag.Step(k, theta, direction, angles, &lost);
     const Quaternion q = QuaternionFromEuler({angles[0], angles[1], angles[2]});
     if (receiver) {
       if (lost) {
@@ -286,15 +316,19 @@ Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat
   if (!out.empty()) {
     if (Status st = sink(out); !st.ok()) return st;
   }
-  if (!reference_sink) return Status::Ok();
+  return Status::Ok();
+}
 
+// The reference log: the table's readout at reference_rate_hz on its own clock.
+Status WriteReferenceLog(const TableSimulationOptions& options, const std::vector<Stop>& stops,
+                         double duration_s, const TextSink& reference_sink) {
+  size_t hint = 0;
   std::string ref;
   auto rit = std::back_inserter(ref);
   fmt::format_to(rit,
                  "# metro simulate --kind table: reference log, {:.6g} Hz, clock offset {} s\n"
                  "t_s,table_angle_deg\n",
                  options.reference_rate_hz, options.reference_clock_offset_s);
-  hint = 0;
   const int64_t ref_steps =
       static_cast<int64_t>(std::floor(duration_s * options.reference_rate_hz)) + 1;
   for (int64_t k = 0; k < ref_steps; ++k) {
@@ -305,6 +339,31 @@ Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat
                    Readout(options, theta));
   }
   return reference_sink(ref);
+}
+
+}  // namespace
+
+Status SimulateTableSession(const TableSimulationOptions& options, SessionFormat format,
+                            const TextSink& sink, const TextSink& reference_sink,
+                            TableTruth* truth) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("invalid table simulation options: " + why);
+  if (format != SessionFormat::kCsv && format != SessionFormat::kReceiver) {
+    return MakeError("the simulator writes session.csv or receiver captures");
+  }
+  const bool receiver = format == SessionFormat::kReceiver;
+  if (receiver && !reference_sink) {
+    return MakeError("a receiver capture has no table column: give a reference log to write");
+  }
+  const std::vector<Stop> stops = Schedule(options);
+  const double duration_s = stops.back().t_leave_s;
+  if (truth != nullptr) FillTruth(options, stops, truth);
+  if (Status s = WriteTagLog(options, stops, duration_s, receiver, bool(reference_sink), sink);
+      !s.ok()) {
+    return s;
+  }
+  if (!reference_sink) return Status::Ok();
+  return WriteReferenceLog(options, stops, duration_s, reference_sink);
 }
 
 std::string TableTruthJson(const TableSimulationOptions& o, const TableTruth& truth) {

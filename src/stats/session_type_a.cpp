@@ -1,3 +1,12 @@
+// EvaluateSessionTypeA runs these stages, in this order (method: docs/type-a.md):
+//
+//   selection   CheckSelection, Select        --sensor, --quantity; tags, quantities,
+//                                             explicit windows; CheckWindowNotEmpty
+//   settle      DetectTransients, CutSettled, with --settle auto: each quantity's transient
+//               WarnOnTransient               (on all cores), the tag's cut, warnings
+//   times       FillWindowTimes               the window's first and last t_s and lines
+//   evaluation  EvaluateQuantity, WarnOnTypeA, Type A of every (tag, quantity) on all cores,
+//               WarnOnGimbalLock              with its warnings
 #include "metro/stats/session_type_a.hpp"
 
 #include <fmt/format.h>
@@ -180,12 +189,10 @@ Status CheckWindowNotEmpty(const Session& session, const WindowOptions& window,
   return e;
 }
 
-}  // namespace
+// ---- selection ----------------------------------------------------------------------------
 
-Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
-                                          const SessionTypeAOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) return MakeError("invalid options: " + why);
+// Every --sensor and --quantity asked for is in the session.
+Status CheckSelection(const Session& session, const SessionTypeAOptions& options) {
   for (int sensor : options.sensors) {
     if (session.FindTag(sensor) == nullptr) {
       return MakeError(session.path, 0,
@@ -214,18 +221,26 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
                                    name, fmt::join(names, ", ")));
     }
   }
+  return Status::Ok();
+}
 
-  SessionTypeA out;
+// The selected tags, in session order, beside out->tags.
+struct Selection {
   std::vector<const Tag*> tags;
   // source[k][slot]: the index in tags[k]->quantities of out.tags[k].quantities[slot] (no
   // name lookups: a file of 10^4 columns would make them quadratic).
   std::vector<std::vector<size_t>> source;
+};
+
+// The selected tags and quantities, with their explicit windows, as out->tags.
+Selection Select(const Session& session, const SessionTypeAOptions& options, SessionTypeA* out) {
+  Selection selection;
   for (const Tag& tag : session.tags) {
     if (!options.sensors.empty() && std::find(options.sensors.begin(), options.sensors.end(),
                                               tag.sensor) == options.sensors.end()) {
       continue;
     }
-    tags.push_back(&tag);
+    selection.tags.push_back(&tag);
     TagTypeA t;
     t.sensor = tag.sensor;
     t.counts = tag.counts;
@@ -234,11 +249,11 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
       t.warnings.push_back(fmt::format("no fresh observations (frames {}, stale {}, never {})",
                                        tag.counts.frames, tag.counts.stale, tag.counts.never));
     }
-    source.emplace_back();
+    selection.source.emplace_back();
     for (size_t i = 0; i < tag.quantities.size(); ++i) {
       const Quantity& q = tag.quantities[i];
       if (!Selected(options.quantities, q.name)) continue;
-      source.back().push_back(i);
+      selection.source.back().push_back(i);
       QuantityTypeA r;
       r.name = q.name;
       r.unit = q.unit;
@@ -246,209 +261,256 @@ Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
       r.angle_handling = IsWrappingAngle(q.name) ? "unwrapped" : "linear";
       t.quantities.push_back(std::move(r));
     }
-    out.tags.push_back(std::move(t));
+    out->tags.push_back(std::move(t));
   }
-  if (Status s = CheckWindowNotEmpty(session, options.window, tags, &out); !s.ok()) {
-    return s.error();
-  }
+  return selection;
+}
 
-  // Settle detection (stats/settle.hpp): each quantity's own cut; the tag window takes the
-  // largest cut of a non-temperature quantity, and with settle_tag_wide so does every
-  // quantity. The fits run on all cores (each is O(n) per trial tau).
-  if (options.window.settle_auto) {
-    std::vector<Job> settle_jobs;
-    for (size_t k = 0; k < tags.size(); ++k) {
-      for (size_t slot = 0; slot < out.tags[k].quantities.size(); ++slot) {
-        settle_jobs.push_back({k, source[k][slot], slot});
+// One job per (tag, selected quantity).
+std::vector<Job> JobsOf(const Selection& selection, const SessionTypeA& out) {
+  std::vector<Job> jobs;
+  for (size_t k = 0; k < selection.tags.size(); ++k) {
+    for (size_t slot = 0; slot < out.tags[k].quantities.size(); ++slot) {
+      jobs.push_back({k, selection.source[k][slot], slot});
+    }
+  }
+  return jobs;
+}
+
+// ---- settle -------------------------------------------------------------------------------
+
+// Settle detection (stats/settle.hpp): each quantity's own cut (QuantityTypeA::settle). The
+// fits run on all cores (each is O(n) per trial tau).
+void DetectTransients(const Selection& selection, const SessionTypeAOptions& options,
+                      SessionTypeA* out) {
+  const std::vector<Job> settle_jobs = JobsOf(selection, *out);
+  internal::ParallelFor(settle_jobs.size(), options.threads, [&](size_t j) {
+    const Job& job = settle_jobs[j];
+    const TagTypeA& t = out->tags[job.tag];
+    QuantityTypeA& r = out->tags[job.tag].quantities[job.slot];
+    int jumps = 0;
+    size_t dropped = 0;
+    const std::vector<double> x =
+        Finite(WindowValues(selection.tags[job.tag]->quantities[job.quantity], t.window.begin,
+                            t.window.end, &jumps),
+               &dropped);
+    if (dropped > 0) {
+      // Columns with gaps (table_*): no time axis to fit a transient on.
+      r.settle.note = "empty (unknown) values in the window: not examined for a transient";
+      return;
+    }
+    r.settle = DetectSettleTransient(x.data(), x.size(), options.window.settle);
+    r.settle_samples = r.settle.samples;
+  });
+}
+
+// The warning, if any, on a quantity whose transient cut a large part of a window of
+// n_window samples (period_s apart).
+void WarnOnTransient(size_t n_window, double period_s, QuantityTypeA* r) {
+  const SettleResult& s = r->settle;
+  if (!s.fitted || s.samples == 0) return;
+  const std::string what = fmt::format(
+      "--settle auto: {}: start-up transient of tau = {:.3g} samples ({:.3g} s), "
+      "amplitude {:.3g} {} ({:.1f} u(A))",
+      r->name, s.tau_samples, s.tau_samples * period_s, s.amplitude, r->unit, s.t_ratio);
+  if (s.at_limit) {
+    r->warnings.push_back(fmt::format(
+        "{}: it did not decay within the first half of the window ({} of {} samples "
+        "dropped); what remains biases the mean by about {:.2g} u: the quantity may still "
+        "be settling or drifting",
+        what, s.samples, n_window, s.bias_over_u_kept));
+  } else if (static_cast<double>(s.samples) > 0.1 * static_cast<double>(n_window)) {
+    r->warnings.push_back(fmt::format(
+        "{}: {} of {} samples ({:.0f} %) dropped, until the remaining transient biases the "
+        "mean by at most {:.2g} u (it biased the whole window's mean by {:.2g} u)",
+        what, s.samples, n_window,
+        100.0 * static_cast<double>(s.samples) / static_cast<double>(n_window), s.bias_over_u_kept,
+        s.bias_over_u_uncut));
+  }
+}
+
+// The tag window takes the largest cut of a non-temperature quantity, and with
+// settle_tag_wide so does every quantity; the warnings that go with the cuts.
+void CutSettled(const Tag& tag, const std::vector<size_t>& source, const WindowOptions& window,
+                TagTypeA* t) {
+  size_t settle = 0;
+  const QuantityTypeA* driver = nullptr;
+  for (size_t slot = 0; slot < t->quantities.size(); ++slot) {
+    QuantityTypeA& r = t->quantities[slot];
+    const Quantity* q = &tag.quantities[source[slot]];
+    if (!IsTemperature(*q) && r.settle.samples > settle) {
+      settle = r.settle.samples;
+      driver = &r;
+    }
+  }
+  const size_t explicit_begin = t->window.begin;
+  const size_t n_window = t->window.n();
+  t->window.settle_samples = settle;
+  t->window.settle_at_limit = driver != nullptr && driver->settle.at_limit;
+  t->window.settle_driver = driver != nullptr ? driver->name : "";
+  t->window.begin = std::min(t->window.end, explicit_begin + settle);
+  const double period_s = n_window > 1 ? (tag.t_s[t->window.end - 1] - tag.t_s[explicit_begin]) /
+                                             static_cast<double>(n_window - 1)
+                                       : 0.0;
+  for (QuantityTypeA& r : t->quantities) {
+    r.window_begin = window.settle_tag_wide
+                         ? t->window.begin
+                         : std::min(t->window.end, explicit_begin + r.settle_samples);
+    WarnOnTransient(n_window, period_s, &r);
+  }
+  if (driver != nullptr && window.settle_tag_wide) {
+    t->warnings.push_back(fmt::format(
+        "--settle-scope tag: every quantity of the tag cut at {} samples, the cut of {} "
+        "(temperature never decides it)",
+        settle, driver->name));
+  }
+  if (driver != nullptr && driver->settle.at_limit) {
+    t->warnings.push_back(fmt::format(
+        "--settle auto: {}'s transient did not end within the first half of the window ({} "
+        "samples dropped); it may still be settling or drifting",
+        driver->name, settle));
+  }
+}
+
+// ---- evaluation ---------------------------------------------------------------------------
+
+// The warnings a Type A result calls for (autocorrelation, drift).
+void WarnOnTypeA(QuantityTypeA* r) {
+  const TypeAResult& ta = r->type_a;
+  if (ta.autocorr_computed && ta.n_eff < 0.5 * static_cast<double>(ta.n)) {
+    r->warnings.push_back(
+        fmt::format("n_eff = {:.1f} < n/2 = {:.1f}: the observations are autocorrelated; "
+                    "std_of_mean ({:.3g}) understates the uncertainty of the mean, use "
+                    "u_mean ({:.3g}, {} dof)",
+                    ta.n_eff, 0.5 * static_cast<double>(ta.n), ta.std_of_mean, ta.u_mean,
+                    fmt::format("{:.1f}", ta.u_mean_dof)));
+  }
+  if (ta.cutoff_reached_limit) {
+    r->warnings.push_back(
+        "the autocorrelation did not decay within n/4 lags (drift or a trend): even "
+        "std_of_mean_autocorr is optimistic; see u_mean and the Allan deviation");
+  }
+  if (!ta.u_mean_available) r->warnings.push_back(ta.autocorr_note);
+  if (!ta.u_mean_note.empty()) r->warnings.push_back(ta.u_mean_note);
+  if (ta.drift_detected) {
+    r->warnings.push_back(fmt::format(
+        "drift or a random walk: the stationarity check (means of {} batches) gives u of the "
+        "mean {:.3g}, more than 2x the autoregressive {:.3g} (std_of_mean_autocorr {:.3g}); "
+        "u_mean takes the batch-means value ({} dof). The mean of a drifting record depends "
+        "on the window; see the Allan deviation",
+        kStationarityBatches, ta.u_mean_batch, ta.u_mean_ar, ta.std_of_mean_autocorr,
+        kStationarityBatches - 1));
+  }
+}
+
+// The gimbal-lock warnings: on pitch itself (its values x_begin..x_end as evaluated) and on
+// yaw and roll when the tag's pitch nears 90 deg in the window.
+void WarnOnGimbalLock(const Tag& tag, const Quantity& q, const AppliedWindow& w,
+                      const double* x_begin, const double* x_end, QuantityTypeA* r) {
+  if (q.name == "pitch_deg") {
+    double worst = 0.0;
+    for (const double* v = x_begin; v != x_end; ++v) worst = std::max(worst, std::abs(*v));
+    if (worst >= kGimbalLockWarnPitchDeg) {
+      r->warnings.push_back(fmt::format(
+          "|pitch| reaches {:.2f} deg: near gimbal lock yaw and roll are ill-defined", worst));
+    }
+  }
+  // Near pitch +-90 deg only yaw - roll (or yaw + roll) is defined by the attitude: each
+  // of them alone swings by up to 180 deg on a tiny rotation, and its spread is not
+  // noise of the tag.
+  if (q.name == "yaw_deg" || q.name == "roll_deg") {
+    if (const Quantity* pitch = tag.Find("pitch_deg")) {
+      double worst = 0.0;
+      for (size_t i = r->window_begin; i < w.end; ++i) {
+        if (std::isfinite(pitch->values[i])) worst = std::max(worst, std::abs(pitch->values[i]));
+      }
+      if (worst >= kGimbalLockWarnPitchDeg) {
+        r->warnings.push_back(fmt::format(
+            "{}{}: |pitch_deg| reaches {:.2f} deg in the window (gimbal lock at 90): yaw and "
+            "roll are then ill-defined, only their sum or difference is; this mean and "
+            "spread are not the tag's",
+            q.name, q.origin == QuantityOrigin::kDerived ? " (derived from the quaternion)" : "",
+            worst));
       }
     }
-    internal::ParallelFor(settle_jobs.size(), options.threads, [&](size_t j) {
-      const Job& job = settle_jobs[j];
-      const TagTypeA& t = out.tags[job.tag];
-      QuantityTypeA& r = out.tags[job.tag].quantities[job.slot];
-      int jumps = 0;
-      size_t dropped = 0;
-      const std::vector<double> x = Finite(WindowValues(tags[job.tag]->quantities[job.quantity],
-                                                        t.window.begin, t.window.end, &jumps),
-                                           &dropped);
-      if (dropped > 0) {
-        // Columns with gaps (table_*): no time axis to fit a transient on.
-        r.settle.note = "empty (unknown) values in the window: not examined for a transient";
-        return;
-      }
-      r.settle = DetectSettleTransient(x.data(), x.size(), options.window.settle);
-      r.settle_samples = r.settle.samples;
-    });
   }
-  for (size_t k = 0; k < tags.size(); ++k) {
+}
+
+// One quantity of one tag over [r->window_begin, w.end): Type A and its warnings.
+void EvaluateQuantity(const Tag& tag, const Quantity& q, const AppliedWindow& w,
+                      const SessionTypeAOptions& options, QuantityTypeA* r) {
+  size_t dropped = 0;
+  // The window is evaluated where it lies unless it must be unwrapped or has empty
+  // values to leave out: a copy of 360 k samples per series is as slow as the mean.
+  // Empty values (NaN) make EvaluateTypeA fail, so the window is scanned for them only
+  // then (a scan of every series would cost another read of all the columns).
+  const double* window = q.values.data() + r->window_begin;
+  size_t n = w.end - r->window_begin;
+  std::vector<double> copy;
+  auto copy_window = [&] {
+    copy = Finite(WindowValues(q, r->window_begin, w.end, &r->unwrap_jumps), &dropped);
+    window = copy.data();
+    n = copy.size();
+  };
+  if (IsWrappingAngle(q.name)) copy_window();
+  auto a = EvaluateTypeA(window, n, options.type_a);
+  if (!a.ok() && copy.empty() &&
+      !std::all_of(window, window + n, [](double v) { return std::isfinite(v); })) {
+    copy_window();
+    a = EvaluateTypeA(window, n, options.type_a);
+  }
+  if (a.ok() && AtMostTwoValues(window, n)) {
+    // A window whose spread may hide the noise (no spread, or perhaps one step): with the
+    // quantization step of the tag's whole record, Willink's rules for digitized readings
+    // (type_a.hpp). Any other window is evaluated as before, without this extra read.
+    TypeAOptions digitized = options.type_a;
+    digitized.quantization_step = QuantizationStep(q.values);
+    if (digitized.quantization_step > 0.0) a = EvaluateTypeA(window, n, digitized);
+  }
+  if (!a.ok()) {
+    r->error = a.error().message;
+    return;
+  }
+  r->ok = true;
+  r->type_a = a.value();
+  if (r->angle_handling == "unwrapped") r->type_a.mean = WrapDeg180(r->type_a.mean);
+  if (dropped > 0) {
+    r->warnings.push_back(fmt::format("{} empty (unknown) values left out", dropped));
+  }
+  WarnOnTypeA(r);
+  WarnOnGimbalLock(tag, q, w, window, window + n, r);
+}
+
+}  // namespace
+
+Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
+                                          const SessionTypeAOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("invalid options: " + why);
+  if (Status s = CheckSelection(session, options); !s.ok()) return s.error();
+  SessionTypeA out;
+  const Selection selection = Select(session, options, &out);
+  if (Status s = CheckWindowNotEmpty(session, options.window, selection.tags, &out); !s.ok()) {
+    return s.error();
+  }
+  if (options.window.settle_auto) DetectTransients(selection, options, &out);
+  for (size_t k = 0; k < selection.tags.size(); ++k) {
     TagTypeA& t = out.tags[k];
     for (QuantityTypeA& r : t.quantities) r.window_begin = t.window.begin;
     if (!options.window.settle_auto) continue;
-    const Tag& tag = *tags[k];
-    size_t settle = 0;
-    const QuantityTypeA* driver = nullptr;
-    for (size_t slot = 0; slot < t.quantities.size(); ++slot) {
-      QuantityTypeA& r = t.quantities[slot];
-      const Quantity* q = &tag.quantities[source[k][slot]];
-      if (!IsTemperature(*q) && r.settle.samples > settle) {
-        settle = r.settle.samples;
-        driver = &r;
-      }
-    }
-    const size_t explicit_begin = t.window.begin;
-    const size_t n_window = t.window.n();
-    t.window.settle_samples = settle;
-    t.window.settle_at_limit = driver != nullptr && driver->settle.at_limit;
-    t.window.settle_driver = driver != nullptr ? driver->name : "";
-    t.window.begin = std::min(t.window.end, explicit_begin + settle);
-    const double period_s = n_window > 1 ? (tag.t_s[t.window.end - 1] - tag.t_s[explicit_begin]) /
-                                               static_cast<double>(n_window - 1)
-                                         : 0.0;
-    for (QuantityTypeA& r : t.quantities) {
-      r.window_begin = options.window.settle_tag_wide
-                           ? t.window.begin
-                           : std::min(t.window.end, explicit_begin + r.settle_samples);
-      const SettleResult& s = r.settle;
-      if (!s.fitted || s.samples == 0) continue;
-      const std::string what = fmt::format(
-          "--settle auto: {}: start-up transient of tau = {:.3g} samples ({:.3g} s), "
-          "amplitude {:.3g} {} ({:.1f} u(A))",
-          r.name, s.tau_samples, s.tau_samples * period_s, s.amplitude, r.unit, s.t_ratio);
-      if (s.at_limit) {
-        r.warnings.push_back(fmt::format(
-            "{}: it did not decay within the first half of the window ({} of {} samples "
-            "dropped); what remains biases the mean by about {:.2g} u: the quantity may still "
-            "be settling or drifting",
-            what, s.samples, n_window, s.bias_over_u_kept));
-      } else if (static_cast<double>(s.samples) > 0.1 * static_cast<double>(n_window)) {
-        r.warnings.push_back(fmt::format(
-            "{}: {} of {} samples ({:.0f} %) dropped, until the remaining transient biases the "
-            "mean by at most {:.2g} u (it biased the whole window's mean by {:.2g} u)",
-            what, s.samples, n_window,
-            100.0 * static_cast<double>(s.samples) / static_cast<double>(n_window),
-            s.bias_over_u_kept, s.bias_over_u_uncut));
-      }
-    }
-    if (driver != nullptr && options.window.settle_tag_wide) {
-      t.warnings.push_back(fmt::format(
-          "--settle-scope tag: every quantity of the tag cut at {} samples, the cut of {} "
-          "(temperature never decides it)",
-          settle, driver->name));
-    }
-    if (driver != nullptr && driver->settle.at_limit) {
-      t.warnings.push_back(fmt::format(
-          "--settle auto: {}'s transient did not end within the first half of the window ({} "
-          "samples dropped); it may still be settling or drifting",
-          driver->name, settle));
-    }
+    CutSettled(*selection.tags[k], selection.source[k], options.window, &t);
   }
-  for (size_t k = 0; k < tags.size(); ++k) FillWindowTimes(*tags[k], &out.tags[k].window);
+  for (size_t k = 0; k < selection.tags.size(); ++k) {
+    FillWindowTimes(*selection.tags[k], &out.tags[k].window);
+  }
 
   // Evaluate every (tag, quantity) on all cores.
-  std::vector<Job> jobs;
-  for (size_t k = 0; k < tags.size(); ++k) {
-    for (size_t slot = 0; slot < out.tags[k].quantities.size(); ++slot) {
-      jobs.push_back({k, source[k][slot], slot});
-    }
-  }
+  const std::vector<Job> jobs = JobsOf(selection, out);
   internal::ParallelFor(jobs.size(), options.threads, [&](size_t j) {
     const Job& job = jobs[j];
-    const Tag& tag = *tags[job.tag];
+    const Tag& tag = *selection.tags[job.tag];
     TagTypeA& t = out.tags[job.tag];
-    const Quantity& q = tag.quantities[job.quantity];
-    QuantityTypeA& r = t.quantities[job.slot];
-    size_t dropped = 0;
-    // The window is evaluated where it lies unless it must be unwrapped or has empty
-    // values to leave out: a copy of 360 k samples per series is as slow as the mean.
-    // Empty values (NaN) make EvaluateTypeA fail, so the window is scanned for them only
-    // then (a scan of every series would cost another read of all the columns).
-    const double* window = q.values.data() + r.window_begin;
-    size_t n = t.window.end - r.window_begin;
-    std::vector<double> copy;
-    auto copy_window = [&] {
-      copy = Finite(WindowValues(q, r.window_begin, t.window.end, &r.unwrap_jumps), &dropped);
-      window = copy.data();
-      n = copy.size();
-    };
-    if (IsWrappingAngle(q.name)) copy_window();
-    auto a = EvaluateTypeA(window, n, options.type_a);
-    if (!a.ok() && copy.empty() &&
-        !std::all_of(window, window + n, [](double v) { return std::isfinite(v); })) {
-      copy_window();
-      a = EvaluateTypeA(window, n, options.type_a);
-    }
-    if (a.ok() && AtMostTwoValues(window, n)) {
-      // A window whose spread may hide the noise (no spread, or perhaps one step): with the
-      // quantization step of the tag's whole record, Willink's rules for digitized readings
-      // (type_a.hpp). Any other window is evaluated as before, without this extra read.
-      TypeAOptions digitized = options.type_a;
-      digitized.quantization_step = QuantizationStep(q.values);
-      if (digitized.quantization_step > 0.0) a = EvaluateTypeA(window, n, digitized);
-    }
-    const double* x_begin = window;
-    const double* x_end = window + n;
-    if (!a.ok()) {
-      r.error = a.error().message;
-      return;
-    }
-    r.ok = true;
-    r.type_a = a.value();
-    if (r.angle_handling == "unwrapped") r.type_a.mean = WrapDeg180(r.type_a.mean);
-    if (dropped > 0) {
-      r.warnings.push_back(fmt::format("{} empty (unknown) values left out", dropped));
-    }
-    const TypeAResult& ta = r.type_a;
-    if (ta.autocorr_computed && ta.n_eff < 0.5 * static_cast<double>(ta.n)) {
-      r.warnings.push_back(
-          fmt::format("n_eff = {:.1f} < n/2 = {:.1f}: the observations are autocorrelated; "
-                      "std_of_mean ({:.3g}) understates the uncertainty of the mean, use "
-                      "u_mean ({:.3g}, {} dof)",
-                      ta.n_eff, 0.5 * static_cast<double>(ta.n), ta.std_of_mean, ta.u_mean,
-                      fmt::format("{:.1f}", ta.u_mean_dof)));
-    }
-    if (ta.cutoff_reached_limit) {
-      r.warnings.push_back(
-          "the autocorrelation did not decay within n/4 lags (drift or a trend): even "
-          "std_of_mean_autocorr is optimistic; see u_mean and the Allan deviation");
-    }
-    if (!ta.u_mean_available) r.warnings.push_back(ta.autocorr_note);
-    if (!ta.u_mean_note.empty()) r.warnings.push_back(ta.u_mean_note);
-    if (ta.drift_detected) {
-      r.warnings.push_back(fmt::format(
-          "drift or a random walk: the stationarity check (means of {} batches) gives u of the "
-          "mean {:.3g}, more than 2x the autoregressive {:.3g} (std_of_mean_autocorr {:.3g}); "
-          "u_mean takes the batch-means value ({} dof). The mean of a drifting record depends "
-          "on the window; see the Allan deviation",
-          kStationarityBatches, ta.u_mean_batch, ta.u_mean_ar, ta.std_of_mean_autocorr,
-          kStationarityBatches - 1));
-    }
-    if (q.name == "pitch_deg") {
-      double worst = 0.0;
-      for (const double* v = x_begin; v != x_end; ++v) worst = std::max(worst, std::abs(*v));
-      if (worst >= kGimbalLockWarnPitchDeg) {
-        r.warnings.push_back(fmt::format(
-            "|pitch| reaches {:.2f} deg: near gimbal lock yaw and roll are ill-defined", worst));
-      }
-    }
-    // Near pitch +-90 deg only yaw - roll (or yaw + roll) is defined by the attitude: each
-    // of them alone swings by up to 180 deg on a tiny rotation, and its spread is not
-    // noise of the tag.
-    if (q.name == "yaw_deg" || q.name == "roll_deg") {
-      if (const Quantity* pitch = tag.Find("pitch_deg")) {
-        double worst = 0.0;
-        for (size_t i = r.window_begin; i < t.window.end; ++i) {
-          if (std::isfinite(pitch->values[i])) worst = std::max(worst, std::abs(pitch->values[i]));
-        }
-        if (worst >= kGimbalLockWarnPitchDeg) {
-          r.warnings.push_back(fmt::format(
-              "{}{}: |pitch_deg| reaches {:.2f} deg in the window (gimbal lock at 90): yaw and "
-              "roll are then ill-defined, only their sum or difference is; this mean and "
-              "spread are not the tag's",
-              q.name, q.origin == QuantityOrigin::kDerived ? " (derived from the quaternion)" : "",
-              worst));
-        }
-      }
-    }
+    EvaluateQuantity(tag, tag.quantities[job.quantity], t.window, options, &t.quantities[job.slot]);
   });
   return out;
 }

@@ -1,3 +1,12 @@
+// EvaluateTypeAContinuous runs these stages, in this order (method: docs/type-a.md):
+//
+//   sums       SumsOf, CentredLagSums    one pass: the centred sum and direct lag sums
+//   classical  Classical                 mean, s, s(mean) (JCGM 100 4.2.2, 4.2.3); a constant
+//                                        series, autocorrelation off or n <= 3 end here
+//   AR         ArAndBatchMeans           u_mean from the AR(p) spectrum, the batch-means
+//                                        stationarity check
+//   Zhang      DirectLagSums,            autocorrelation to the cut-off lag, variance factor,
+//              ZhangFactor               n_eff (FFT block lag sums beyond kDirectLags)
 #include "metro/stats/type_a.hpp"
 
 #include <fftw3.h>
@@ -345,10 +354,19 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
   return result;
 }
 
-static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t n,
-                                                   const TypeAOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) return MakeError("invalid Type A options: " + why);
+namespace {
+
+// ---- moments ------------------------------------------------------------------------------
+
+// The sums of one pass over the series, centred on a first mean.
+struct CentredSums {
+  double first = 0.0;              // sum x_i / n
+  double s1 = 0.0;                 // sum (x_i - first)
+  double p[kDirectLags + 1] = {};  // p_k = sum_i (x_i - first)(x_{i+k} - first); p_0 = s2
+};
+
+// The sums, or why the series cannot be evaluated (n < 2, a value or a sum not finite).
+Result<CentredSums> SumsOf(const double* values, size_t n) {
   if (n < 2) {
     return MakeError(fmt::format("{} observation{}: a Type A evaluation needs at least 2", n,
                                  n == 1 ? "" : "s"));
@@ -367,14 +385,13 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
   const double dn = static_cast<double>(n);
   // Corrected two-pass algorithm (Chan, Golub & LeVeque 1983): centre on a first mean,
   // then correct with the residual sum, so no large sums of squares cancel.
-  const double first = total / dn;
+  CentredSums sums;
+  sums.first = total / dn;
   // The same pass forms the direct lag sums about `first` (used only if autocorrelation is
   // on; they cost no extra read of the series).
-  double s1 = 0.0;
-  double p[kDirectLags + 1];
-  CentredLagSums(values, n, first, &s1, p);
-  const double s2 = p[0];
-  if (!std::isfinite(s2) || !std::isfinite(s1)) {
+  CentredLagSums(values, n, sums.first, &sums.s1, sums.p);
+  const double s2 = sums.p[0];
+  if (!std::isfinite(s2) || !std::isfinite(sums.s1)) {
     // Deviations beyond about 1e154 square past the largest double: the variance (and so u)
     // cannot be formed; a NaN or infinite u is never reported.
     return MakeError(fmt::format(
@@ -383,6 +400,15 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
         "unit",
         n));
   }
+  return sums;
+}
+
+// The classical evaluation, JCGM 100 4.2.2 and 4.2.3.
+TypeAResult Classical(size_t n, const CentredSums& sums) {
+  const double dn = static_cast<double>(n);
+  const double first = sums.first;
+  const double s1 = sums.s1;
+  const double s2 = sums.p[0];
   TypeAResult r;
   r.n = static_cast<int64_t>(n);
   r.mean = first + s1 / dn;
@@ -397,31 +423,16 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
   r.u_mean = r.std_of_mean;
   r.u_mean_dof = dn - 1.0;
   r.u_mean_method = kUMeanClassical;
-  if (r.variance == 0.0) {
-    // s = 0 says nothing about the mean's uncertainty, for any n (issue #36: n <= 3 gave
-    // u = 0 silently): the readings' resolution bounds it (the digitized rules, when the
-    // step is known; a Type B input otherwise).
-    r.autocorr_note =
-        "constant series (s = 0): no autocorrelation and no uncertainty of the mean can be "
-        "computed from it; the readings' resolution (a Type B input) bounds u";
-    r.u_mean_available = false;
-    r.u_mean = 0.0;
-    r.u_mean_dof = 0.0;
-    r.u_mean_method.clear();
-    return r;
-  }
-  if (!options.autocorrelation) {
-    r.autocorr_note = "autocorrelation off: u_mean is the classical s(mean)";
-    return r;
-  }
-  if (n < 4) {
-    r.autocorr_note = fmt::format(
-        "n = {} <= 3: too few observations to estimate an autocorrelation; u_mean is the "
-        "classical s(mean) with n - 1 dof",
-        n);
-    return r;
-  }
-  // metro's u_mean: the AR(p) spectral density at frequency zero (spectral_mean.hpp).
+  return r;
+}
+
+// ---- AR spectral u and the stationarity check ---------------------------------------------
+
+// metro's u_mean: the AR(p) spectral density at frequency zero (spectral_mean.hpp), unless
+// the series is a deterministic pattern; then the batch-means stationarity check.
+void ArAndBatchMeans(const double* values, size_t n, TypeAResult* result) {
+  TypeAResult& r = *result;
+  const double dn = static_cast<double>(n);
   // A series the AR model predicts almost exactly (innovations below 1e-6 of the variance:
   // a deterministic pattern, not noise) has no noise to test the batch means against; the
   // fit stops as soon as that is certain (the remaining orders would change nothing).
@@ -473,9 +484,18 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
       r.u_mean_method = kUMeanBatchMeans;
     }
   }
-  r.autocorr_computed = true;
+}
 
-  // Zhang (2006): variance factor from the autocorrelation up to the cut-off lag.
+// ---- Zhang's variance factor --------------------------------------------------------------
+
+// Direct lag sums c_0..c_kDirectLags about the mean from those about `first`.
+void DirectLagSums(const double* values, size_t n, const CentredSums& sums,
+                   double direct[kDirectLags + 1]) {
+  const double dn = static_cast<double>(n);
+  const double first = sums.first;
+  const double s1 = sums.s1;
+  const double s2 = sums.p[0];
+  const double* p = sums.p;
   // Direct lag sums about the mean from those about `first`: with e_i = x_i - first and
   // delta = mean - first = s1/n,
   //   c_k = sum_{i=0}^{n-1-k} (e_i - delta)(e_{i+k} - delta)
@@ -484,7 +504,6 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
   // sum s2 - s1^2/n; delta is of the order of the rounding of `first`, so the correction
   // is as small as the two-pass one.
   const double delta = s1 / dn;
-  double direct[kDirectLags + 1];
   direct[0] = s2 - s1 * s1 / dn;
   double head = 0.0, tail = 0.0;
   for (size_t k = 1; k <= kDirectLags; ++k) {
@@ -496,6 +515,14 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
     direct[k] =
         p[k] - delta * (2.0 * s1 - head - tail) + static_cast<double>(n - kn) * delta * delta;
   }
+}
+
+// Zhang (2006): variance factor from the autocorrelation up to the cut-off lag (Bartlett's
+// band), n_eff and std_of_mean_autocorr.
+void ZhangFactor(const double* values, size_t n, const TypeAOptions& options,
+                 const double direct[kDirectLags + 1], TypeAResult* result) {
+  TypeAResult& r = *result;
+  const double dn = static_cast<double>(n);
   const double c0 = direct[0];
   const size_t max_lag = std::max<size_t>(1, static_cast<size_t>(options.max_lag_fraction * dn));
   const boost::math::students_t t_dist(dn - 1.0);
@@ -549,6 +576,46 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
   r.variance_factor = std::max(factor, 1.0 / dn);
   r.n_eff = dn / r.variance_factor;
   r.std_of_mean_autocorr = std::sqrt(r.variance_factor * r.variance / dn);
+}
+
+}  // namespace
+
+static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t n,
+                                                   const TypeAOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("invalid Type A options: " + why);
+  Result<CentredSums> sums = SumsOf(values, n);
+  if (!sums.ok()) return sums.error();
+  TypeAResult r = Classical(n, sums.value());
+  if (r.variance == 0.0) {
+    // s = 0 says nothing about the mean's uncertainty, for any n (issue #36: n <= 3 gave
+    // u = 0 silently): the readings' resolution bounds it (the digitized rules, when the
+    // step is known; a Type B input otherwise).
+    r.autocorr_note =
+        "constant series (s = 0): no autocorrelation and no uncertainty of the mean can be "
+        "computed from it; the readings' resolution (a Type B input) bounds u";
+    r.u_mean_available = false;
+    r.u_mean = 0.0;
+    r.u_mean_dof = 0.0;
+    r.u_mean_method.clear();
+    return r;
+  }
+  if (!options.autocorrelation) {
+    r.autocorr_note = "autocorrelation off: u_mean is the classical s(mean)";
+    return r;
+  }
+  if (n < 4) {
+    r.autocorr_note = fmt::format(
+        "n = {} <= 3: too few observations to estimate an autocorrelation; u_mean is the "
+        "classical s(mean) with n - 1 dof",
+        n);
+    return r;
+  }
+  ArAndBatchMeans(values, n, &r);
+  r.autocorr_computed = true;
+  double direct[kDirectLags + 1];
+  DirectLagSums(values, n, sums.value(), direct);
+  ZhangFactor(values, n, options, direct, &r);
   return r;
 }
 

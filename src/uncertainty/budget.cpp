@@ -1,3 +1,10 @@
+// ParseInput reads one budget input in these stages, in this order:
+//
+//   keys          Fields::OnlyKeys, unit, sensitivity    the keys an input may have
+//   Type A        ReadTypeA                             'type_a' (values, summary, session)
+//   distribution  DistributionFromName, ReadDof         the distribution; dof or reliability
+//   estimate      ReadNormal, ReadBounded,              value and u by distribution, each
+//                 ReadStudentT, Forbid                  refusing the keys that do not apply
 #include "metro/uncertainty/budget.hpp"
 
 #include <fmt/format.h>
@@ -314,6 +321,143 @@ Status ReadTypeA(const Fields& f, const std::string& budget_path,
   return Status();
 }
 
+// ---- ParseInput's stages ------------------------------------------------------------------
+
+// 'dof' or 'reliability' (JCGM 100 G.4.2) into in->dof; the 'dof' given, if any.
+Result<std::optional<double>> ReadDof(const Fields& f, BudgetInput* in) {
+  METRO_ASSIGN_OR_RETURN(dof, f.Number("dof"));
+  METRO_ASSIGN_OR_RETURN(reliability, f.Number("reliability"));
+  if (dof && reliability) return f.Fail("give 'dof' or 'reliability', not both");
+  if (dof && !(*dof > 0.0)) return f.Fail("'dof' must be > 0, got " + std::to_string(*dof));
+  if (reliability) {
+    if (!(*reliability > 0.0)) return f.Fail("'reliability' must be > 0");
+    in->dof = 1.0 / (2.0 * *reliability * *reliability);  // JCGM 100 G.4.2
+  }
+  if (dof) in->dof = *dof;
+  return dof;
+}
+
+// An error naming the first of `keys` given for a distribution it does not apply to.
+Status Forbid(const Fields& f, const std::string& distribution_name,
+              std::initializer_list<const char*> keys) {
+  for (const char* key : keys) {
+    if (f.Has(key)) {
+      return f.Fail("'" + std::string(key) + "' does not apply to a " + distribution_name +
+                    " distribution");
+    }
+  }
+  return Status();
+}
+
+// A normal input: the estimate and u, or U with k or coverage (JCGM 100 4.3.3, 4.3.4, G.3).
+Status ReadNormal(const Fields& f, const std::string& distribution_name, BudgetInput* in) {
+  if (auto s = Forbid(f, distribution_name, {"half_width", "lower", "upper", "beta", "d", "scale"});
+      !s.ok()) {
+    return s;
+  }
+  METRO_ASSIGN_OR_RETURN(value, f.RequiredNumber("value", "the estimate"));
+  METRO_ASSIGN_OR_RETURN(u, f.Number("u"));
+  METRO_ASSIGN_OR_RETURN(expanded, f.Number("expanded"));
+  METRO_ASSIGN_OR_RETURN(k, f.Number("k"));
+  METRO_ASSIGN_OR_RETURN(coverage, f.Number("coverage"));
+  in->value = value;
+  if (u && expanded) return f.Fail("give 'u' or 'expanded', not both");
+  if (u) {
+    if (k || coverage) return f.Fail("'k' and 'coverage' go with 'expanded', not 'u'");
+    if (*u < 0.0) return f.Fail("u must be >= 0, got " + std::to_string(*u));
+    in->u = *u;
+  } else if (expanded) {
+    if (*expanded < 0.0) {
+      return f.Fail("'expanded' must be >= 0, got " + std::to_string(*expanded));
+    }
+    if (k && coverage) return f.Fail("give 'k' or 'coverage' with 'expanded', not both");
+    if (k) {
+      if (!(*k > 0.0)) return f.Fail("'k' must be > 0");
+      in->u = *expanded / *k;  // JCGM 100 4.3.3
+      in->note = "u = U/k";
+    } else if (coverage) {
+      if (!(*coverage > 0.0 && *coverage < 1.0)) {
+        return f.Fail("'coverage' must be in (0, 1), got " + std::to_string(*coverage));
+      }
+      // JCGM 100 4.3.4; with stated dof the quantile is t_p(nu) (G.3).
+      const double tail = 0.5 * (1.0 + *coverage);
+      double factor = 0.0;
+      if (std::isfinite(in->dof)) {
+        factor = boost::math::quantile(boost::math::students_t(in->dof), tail);
+      } else {
+        factor = boost::math::quantile(boost::math::normal(), tail);
+      }
+      in->u = *expanded / factor;
+      in->note = "u = U/" + std::string(std::isfinite(in->dof) ? "t_p(nu)" : "z_p");
+    } else {
+      return f.Fail("'expanded' needs 'k' or 'coverage'");
+    }
+  } else {
+    return f.Fail(
+        "missing 'u' (or 'expanded' with 'k' or 'coverage'); use \"u\": 0 for an exact "
+        "constant");
+  }
+  return Status();
+}
+
+// A bounded input (rectangular, triangular, arcsine, trapezoidal, curvilinear trapezoid):
+// its limits and u from its half-width.
+Status ReadBounded(const Fields& f, const std::string& distribution_name, BudgetInput* in) {
+  const auto forbid = [&](std::initializer_list<const char*> keys) {
+    return Forbid(f, distribution_name, keys);
+  };
+  if (auto s = forbid({"u", "expanded", "k", "coverage", "scale"}); !s.ok()) return s;
+  if (in->distribution != Distribution::kTrapezoidal) {
+    if (auto s = forbid({"beta"}); !s.ok()) return s;
+  }
+  if (in->distribution != Distribution::kCurvilinearTrapezoid) {
+    if (auto s = forbid({"d"}); !s.ok()) return s;
+  }
+  if (auto s = ReadLimits(f, in); !s.ok()) return s;
+  const double a = in->half_width;
+  if (in->distribution == Distribution::kRectangular) {
+    in->u = a / std::sqrt(3.0);  // JCGM 100 4.3.7
+  } else if (in->distribution == Distribution::kTriangular) {
+    in->u = a / std::sqrt(6.0);  // JCGM 100 4.3.9
+  } else if (in->distribution == Distribution::kArcsine) {
+    in->u = a / std::sqrt(2.0);  // JCGM 101 6.4.6.3
+  } else if (in->distribution == Distribution::kTrapezoidal) {
+    METRO_ASSIGN_OR_RETURN(beta, f.RequiredNumber("beta", "top/bottom half-width ratio"));
+    if (!(beta >= 0.0 && beta <= 1.0)) {
+      return f.Fail("'beta' must be in [0, 1], got " + std::to_string(beta));
+    }
+    in->beta = beta;
+    in->u = a * std::sqrt((1.0 + beta * beta) / 6.0);  // JCGM 101 6.4.4.3
+  } else {
+    METRO_ASSIGN_OR_RETURN(d, f.RequiredNumber("d", "half-width of the uncertain limits"));
+    if (!(d >= 0.0 && d <= a)) {
+      return f.Fail("'d' must be in [0, half_width], got " + std::to_string(d));
+    }
+    in->d = d;
+    in->u = std::sqrt(a * a / 3.0 + d * d / 9.0);  // JCGM 101 6.4.3.3
+  }
+  return Status();
+}
+
+// A t-distributed input t_nu(x, s^2): location, scale and the dof it needs.
+Status ReadStudentT(const Fields& f, const std::string& distribution_name,
+                    const std::optional<double>& dof, BudgetInput* in) {
+  if (auto s =
+          Forbid(f, distribution_name,
+                 {"u", "expanded", "k", "coverage", "half_width", "lower", "upper", "beta", "d"});
+      !s.ok()) {
+    return s;
+  }
+  METRO_ASSIGN_OR_RETURN(value, f.RequiredNumber("value", "the location"));
+  METRO_ASSIGN_OR_RETURN(scale, f.RequiredNumber("scale", "the scale s of t_nu(x, s^2)"));
+  if (!dof) return f.Fail("missing 'dof' (degrees of freedom of the t distribution)");
+  if (scale < 0.0) return f.Fail("'scale' must be >= 0, got " + std::to_string(scale));
+  in->value = value;
+  in->scale = scale;
+  in->u = scale;  // As for Type A (JCGM 100 4.2.3; JCGM 101 6.4.9.2).
+  return Status();
+}
+
 Result<BudgetInput> ParseInput(const json& object, size_t index, const std::string& path,
                                const SessionQuantityResolver& resolver) {
   if (!object.is_object()) {
@@ -347,130 +491,26 @@ Result<BudgetInput> ParseInput(const json& object, size_t index, const std::stri
   if (distribution_name.empty()) distribution_name = "normal";
   METRO_ASSIGN_OR_RETURN(distribution, DistributionFromName(f, distribution_name));
   in.distribution = *distribution;
-  METRO_ASSIGN_OR_RETURN(dof, f.Number("dof"));
-  METRO_ASSIGN_OR_RETURN(reliability, f.Number("reliability"));
-  if (dof && reliability) return f.Fail("give 'dof' or 'reliability', not both");
-  if (dof && !(*dof > 0.0)) return f.Fail("'dof' must be > 0, got " + std::to_string(*dof));
-  if (reliability) {
-    if (!(*reliability > 0.0)) return f.Fail("'reliability' must be > 0");
-    in.dof = 1.0 / (2.0 * *reliability * *reliability);  // JCGM 100 G.4.2
-  }
-  if (dof) in.dof = *dof;
-
-  const auto forbid = [&](std::initializer_list<const char*> keys) -> Status {
-    for (const char* key : keys) {
-      if (f.Has(key)) {
-        return f.Fail("'" + std::string(key) + "' does not apply to a " + distribution_name +
-                      " distribution");
-      }
-    }
-    return Status();
-  };
-
+  METRO_ASSIGN_OR_RETURN(dof, ReadDof(f, &in));
+  Status read;
   switch (in.distribution) {
-    case Distribution::kNormal: {
-      if (auto s = forbid({"half_width", "lower", "upper", "beta", "d", "scale"}); !s.ok()) {
-        return s.error();
-      }
-      METRO_ASSIGN_OR_RETURN(value, f.RequiredNumber("value", "the estimate"));
-      METRO_ASSIGN_OR_RETURN(u, f.Number("u"));
-      METRO_ASSIGN_OR_RETURN(expanded, f.Number("expanded"));
-      METRO_ASSIGN_OR_RETURN(k, f.Number("k"));
-      METRO_ASSIGN_OR_RETURN(coverage, f.Number("coverage"));
-      in.value = value;
-      if (u && expanded) return f.Fail("give 'u' or 'expanded', not both");
-      if (u) {
-        if (k || coverage) return f.Fail("'k' and 'coverage' go with 'expanded', not 'u'");
-        if (*u < 0.0) return f.Fail("u must be >= 0, got " + std::to_string(*u));
-        in.u = *u;
-      } else if (expanded) {
-        if (*expanded < 0.0) {
-          return f.Fail("'expanded' must be >= 0, got " + std::to_string(*expanded));
-        }
-        if (k && coverage) return f.Fail("give 'k' or 'coverage' with 'expanded', not both");
-        if (k) {
-          if (!(*k > 0.0)) return f.Fail("'k' must be > 0");
-          in.u = *expanded / *k;  // JCGM 100 4.3.3
-          in.note = "u = U/k";
-        } else if (coverage) {
-          if (!(*coverage > 0.0 && *coverage < 1.0)) {
-            return f.Fail("'coverage' must be in (0, 1), got " + std::to_string(*coverage));
-          }
-          // JCGM 100 4.3.4; with stated dof the quantile is t_p(nu) (G.3).
-          const double tail = 0.5 * (1.0 + *coverage);
-          double factor = 0.0;
-          if (std::isfinite(in.dof)) {
-            factor = boost::math::quantile(boost::math::students_t(in.dof), tail);
-          } else {
-            factor = boost::math::quantile(boost::math::normal(), tail);
-          }
-          in.u = *expanded / factor;
-          in.note = "u = U/" + std::string(std::isfinite(in.dof) ? "t_p(nu)" : "z_p");
-        } else {
-          return f.Fail("'expanded' needs 'k' or 'coverage'");
-        }
-      } else {
-        return f.Fail(
-            "missing 'u' (or 'expanded' with 'k' or 'coverage'); use \"u\": 0 for an exact "
-            "constant");
-      }
+    case Distribution::kNormal:
+      read = ReadNormal(f, distribution_name, &in);
       break;
-    }
     case Distribution::kRectangular:
     case Distribution::kTriangular:
     case Distribution::kArcsine:
     case Distribution::kTrapezoidal:
-    case Distribution::kCurvilinearTrapezoid: {
-      if (auto s = forbid({"u", "expanded", "k", "coverage", "scale"}); !s.ok()) return s.error();
-      if (in.distribution != Distribution::kTrapezoidal) {
-        if (auto s = forbid({"beta"}); !s.ok()) return s.error();
-      }
-      if (in.distribution != Distribution::kCurvilinearTrapezoid) {
-        if (auto s = forbid({"d"}); !s.ok()) return s.error();
-      }
-      if (auto s = ReadLimits(f, &in); !s.ok()) return s.error();
-      const double a = in.half_width;
-      if (in.distribution == Distribution::kRectangular) {
-        in.u = a / std::sqrt(3.0);  // JCGM 100 4.3.7
-      } else if (in.distribution == Distribution::kTriangular) {
-        in.u = a / std::sqrt(6.0);  // JCGM 100 4.3.9
-      } else if (in.distribution == Distribution::kArcsine) {
-        in.u = a / std::sqrt(2.0);  // JCGM 101 6.4.6.3
-      } else if (in.distribution == Distribution::kTrapezoidal) {
-        METRO_ASSIGN_OR_RETURN(beta, f.RequiredNumber("beta", "top/bottom half-width ratio"));
-        if (!(beta >= 0.0 && beta <= 1.0)) {
-          return f.Fail("'beta' must be in [0, 1], got " + std::to_string(beta));
-        }
-        in.beta = beta;
-        in.u = a * std::sqrt((1.0 + beta * beta) / 6.0);  // JCGM 101 6.4.4.3
-      } else {
-        METRO_ASSIGN_OR_RETURN(d, f.RequiredNumber("d", "half-width of the uncertain limits"));
-        if (!(d >= 0.0 && d <= a)) {
-          return f.Fail("'d' must be in [0, half_width], got " + std::to_string(d));
-        }
-        in.d = d;
-        in.u = std::sqrt(a * a / 3.0 + d * d / 9.0);  // JCGM 101 6.4.3.3
-      }
+    case Distribution::kCurvilinearTrapezoid:
+      read = ReadBounded(f, distribution_name, &in);
       break;
-    }
-    case Distribution::kStudentT: {
-      if (auto s = forbid(
-              {"u", "expanded", "k", "coverage", "half_width", "lower", "upper", "beta", "d"});
-          !s.ok()) {
-        return s.error();
-      }
-      METRO_ASSIGN_OR_RETURN(value, f.RequiredNumber("value", "the location"));
-      METRO_ASSIGN_OR_RETURN(scale, f.RequiredNumber("scale", "the scale s of t_nu(x, s^2)"));
-      if (!dof) return f.Fail("missing 'dof' (degrees of freedom of the t distribution)");
-      if (scale < 0.0) return f.Fail("'scale' must be >= 0, got " + std::to_string(scale));
-      in.value = value;
-      in.scale = scale;
-      in.u = scale;  // As for Type A (JCGM 100 4.2.3; JCGM 101 6.4.9.2).
+    case Distribution::kStudentT:
+      read = ReadStudentT(f, distribution_name, dof, &in);
       break;
-    }
     case Distribution::kTypeA:
       METRO_CHECK(false);
   }
+  if (!read.ok()) return read.error();
   if (in.distribution == Distribution::kNormal) in.scale = in.u;
   METRO_ASSIGN_OR_RETURN(note, f.String("note", false));
   if (!note.empty()) in.note = note;

@@ -1,3 +1,12 @@
+// RunMonteCarlo runs these stages, in this order (JCGM 101:2008; docs/uncertainty.md):
+//
+//   plan       MakePlan, StartResult,          the model and the draws; what is undefined
+//              ToleranceScaleFor               (6.4.9.4); delta's scale
+//   fixed      RunFixed                        M trials at once: moments, intervals, delta
+//   adaptive   RunAdaptive: AddBlock,          7.9: blocks until stage 1 (block statistics)
+//              StableBlocks, StableShortest    and stage 2 (shortest end points) are within
+//                                              delta
+//              FinishAdaptive                  the reported numbers from all the trials
 #include "metro/uncertainty/monte_carlo.hpp"
 
 #include <fmt/format.h>
@@ -757,26 +766,12 @@ std::vector<std::string> InputsWithoutVariance(const Budget& budget) {
   return out;
 }
 
-Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, bool keep_samples) {
-  std::string why;
-  if (!options.IsValid(&why)) return MakeError(budget.file, 0, "monte_carlo: " + why);
-  std::vector<std::string> names;
-  std::vector<double> c;
-  for (const auto& in : budget.inputs) {
-    names.push_back(in.name);
-    c.push_back(in.sensitivity.value_or(0.0));
-  }
-  Result<internal::MeasurementModel> parsed =
-      budget.model.empty()
-          ? Result<internal::MeasurementModel>(internal::MeasurementModel::Linear(c))
-          : internal::MeasurementModel::FromExpression(budget.model, names);
-  if (!parsed.ok()) return internal::ModelError(budget, parsed.error());
-  auto plan_result = MakePlan(budget);
-  if (!plan_result.ok()) return plan_result.error();
-  Plan plan = std::move(plan_result).value();
-  plan.model = &parsed.value();
-  plan.seed = options.seed;
+namespace {
 
+// ---- start --------------------------------------------------------------------------------
+
+// The result before any trial: what is undefined (JCGM 101 6.4.9.4) and how it is drawn.
+McResult StartResult(const Budget& budget, const McOptions& options) {
   McResult result;
   // JCGM 101 6.4.9.4: t_nu has a variance for nu > 2, a mean for nu > 1. Named before any
   // trial is drawn; the intervals stay defined, u (and for nu <= 1 the mean) do not.
@@ -791,12 +786,6 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
       result.mean_defined = false;
     }
   }
-  // The scale delta rests on when u(y) is undefined: the symmetric interval's half-width over
-  // the normal coverage factor for p (for a normal y this is u(y)).
-  const double z_p = boost::math::quantile(boost::math::normal(), 0.5 * (1.0 + options.coverage));
-  const auto tolerance_scale = [&](double u, double low, double high) {
-    return result.u_defined ? u : (high - low) / (2.0 * z_p);
-  };
   result.adaptive = options.adaptive;
   result.seed = options.seed;
   result.coverage = options.coverage;
@@ -804,133 +793,193 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
   result.generator =
       "pcg64 (pcg-cpp PCG XSL RR 128/64) x 4 interleaved; chunk c of 1000 trials: engine j "
       "starts at splitmix64(splitmix64(seed) + 4c + j) on stream 4c + j";
-  std::vector<double> y;
+  return result;
+}
 
-  if (!options.adaptive) {
-    // Left uninitialised: the workers write (and first touch) every value. No huge-page
-    // advice: 10^7 trials measured 0.36 s without it and 0.43 s with it, back to back on
-    // the project's VM (docs/benchmarks-history.md, "Huge pages").
-    const size_t m = static_cast<size_t>(options.trials);
-    std::unique_ptr<double[]> values(new double[m]);
-    std::vector<ChunkMoments> chunk_moments;
-    const NanReport nan = Simulate(plan, 0, options.trials, values.get(), result.threads,
-                                   options.on_trials_done, &chunk_moments);
-    if (nan.count > 0) return NanError(budget, nan, options.trials);
-    result.trials = options.trials;
-    result.blocks = 1;
-    result.converged = true;
-    const Moments moments = MergeChunkMoments(chunk_moments);
-    result.value = moments.mean;
-    result.u = moments.u;
-    if (keep_samples) result.samples.assign(values.get(), values.get() + m);
-    const Intervals iv = CoverageIntervals(values.get(), m, options.coverage, result.threads);
-    result.symmetric = iv.symmetric;
-    result.shortest = iv.shortest;
-    result.shortest_discrete = iv.shortest_discrete;
-    result.delta = NumericalTolerance(
-        tolerance_scale(moments.u, iv.symmetric.low, iv.symmetric.high), options.ndig);
-    MarkUndefinedMoments(&result);
-    result.ok = true;
-    return result;
-  } else {
-    // JCGM 101 7.9, with the rule of docs/uncertainty.md ("Adaptive procedure"): stop only
-    // when every reported number is stable to delta (7.9.2), the shortest interval's end
-    // points tested on themselves.
-    const double j = std::ceil(100.0 / (1.0 - options.coverage));
-    int64_t block = std::max<int64_t>(static_cast<int64_t>(j), 10000);
-    block = (block + kChunkTrials - 1) / kChunkTrials * kChunkTrials;
-    std::vector<double> means, us, lows, highs;
-    std::vector<double> scratch(static_cast<size_t>(block));
-    double pooled_sum = 0.0;
-    double pooled_ss = 0.0;                // sum over blocks of (M_b - 1) u_h^2
-    int64_t next_group_test = kMinBlocks;  // h of the next test of the shortest end points
-    for (int64_t h = 1; h * block <= options.max_trials; ++h) {
-      const int64_t first = (h - 1) * block;
-      y.resize(static_cast<size_t>(h * block));
-      const NanReport nan =
-          Simulate(plan, first, block, y.data() + first, result.threads, options.on_trials_done);
-      if (nan.count > 0) return NanError(budget, nan, h * block);
-      const Moments m = MeanAndU(y.data() + first, static_cast<size_t>(block));
-      std::copy(y.begin() + first, y.begin() + first + block, scratch.begin());
-      const Intervals iv = CoverageIntervals(scratch.data(), scratch.size(), options.coverage);
-      means.push_back(m.mean);
-      us.push_back(m.u);
-      lows.push_back(iv.symmetric.low);
-      highs.push_back(iv.symmetric.high);
-      pooled_sum += m.mean * static_cast<double>(block);
-      pooled_ss += m.u * m.u * static_cast<double>(block - 1);
-      result.trials = h * block;
-      result.blocks = h;
-      if (h < kMinBlocks) continue;
-      // Pooled u(y) from the h blocks: within-block and between-block sums of squares.
-      const double total = static_cast<double>(h * block);
-      const double grand = pooled_sum / total;
-      double between = 0.0;
-      for (double mean : means) between += (mean - grand) * (mean - grand);
-      const double u_pooled =
-          std::sqrt((pooled_ss + static_cast<double>(block) * between) / (total - 1.0));
-      const double delta =
-          NumericalTolerance(tolerance_scale(u_pooled, MeanAndU(lows.data(), lows.size()).mean,
-                                             MeanAndU(highs.data(), highs.size()).mean),
-                             options.ndig);
-      // Stage 1, JCGM 101 7.9.4 with t_0.975(h - 1) for its factor 2: the 95 % half-width
-      // t s(z_1..z_h)/sqrt(h) of the pooled value of each block statistic that converges
-      // like M^(-1/2) (mean, u, symmetric end points).
-      const double t =
-          boost::math::quantile(boost::math::students_t(static_cast<double>(h - 1)), 0.975);
-      const auto half_width = [&](const std::vector<double>& z) {
-        return t * MeanAndU(z.data(), z.size()).u / std::sqrt(static_cast<double>(z.size()));
-      };
-      McStability st;
-      st.value = half_width(means);
-      st.u = half_width(us);
-      st.symmetric_low = half_width(lows);
-      st.symmetric_high = half_width(highs);
-      result.stability = st;
-      result.delta = delta;
-      // An undefined mean or u is not a reported number: its block spread never settles
-      // and is not tested (McResult::inputs_without_variance).
-      if (!result.mean_defined) st.value = std::nan("");
-      if (!result.u_defined) st.u = std::nan("");
-      result.stability = st;
-      if ((result.mean_defined && st.value > delta) || (result.u_defined && st.u > delta) ||
-          st.symmetric_low > delta || st.symmetric_high > delta || h < next_group_test ||
-          h % kGroups != 0) {
-        continue;
-      }
-      // Stage 2, the shortest end points themselves: the pooled h blocks split into G = 10
-      // groups of h/G blocks, each group's shortest interval (as reported, fitted minimum);
-      // their spread s_G, scaled to the pooled M = G M_G by the slowest rate of that
-      // estimator (M^(-2/5), docs/uncertainty.md), gives the half-width
-      // t_0.975(G - 1) s_G G^(-2/5). Below delta: settled. Otherwise the next test is where
-      // that rate predicts success (Stein's two-stage idea as applied to JCGM 101 by
-      // Wuebbeler, Harris, Cox and Elster, Metrologia 47 (2010) 317), at least 10 and at
-      // most h blocks further on, on a multiple of G blocks.
-      const GroupSpread g = ShortestSpread(y.data(), static_cast<size_t>(h * block),
-                                           options.coverage, result.threads);
-      const double t_g =
-          boost::math::quantile(boost::math::students_t(static_cast<double>(kGroups - 1)), 0.975);
-      const double reduce = std::pow(static_cast<double>(kGroups), -kShortestRate);
-      st.shortest_low = t_g * g.s_low * reduce;
-      st.shortest_high = t_g * g.s_high * reduce;
-      st.groups = kGroups;
-      result.stability = st;
-      const double worst = std::max(st.shortest_low, st.shortest_high);
-      if (worst <= delta) {
-        result.converged = true;
-        break;
-      }
-      const double predicted =
-          static_cast<double>(h) * std::pow(worst / delta, 1.0 / kShortestRate);
-      const int64_t want = static_cast<int64_t>(std::min(
-          std::max(predicted, static_cast<double>(h + kGroups)), 2.0 * static_cast<double>(h)));
-      next_group_test = (want + kGroups - 1) / kGroups * kGroups;
+// The scale delta rests on when u(y) is undefined: the symmetric interval's half-width over
+// the normal coverage factor for p (for a normal y this is u(y)).
+struct ToleranceScale {
+  bool u_defined = true;
+  double z_p = 0.0;
+  double operator()(double u, double low, double high) const {
+    return u_defined ? u : (high - low) / (2.0 * z_p);
+  }
+};
+
+ToleranceScale ToleranceScaleFor(const McResult& result, const McOptions& options) {
+  return {result.u_defined,
+          boost::math::quantile(boost::math::normal(), 0.5 * (1.0 + options.coverage))};
+}
+
+// ---- fixed number of trials ---------------------------------------------------------------
+
+Status RunFixed(const Budget& budget, const Plan& plan, const McOptions& options, bool keep_samples,
+                const ToleranceScale& tolerance_scale, McResult* out) {
+  McResult& result = *out;
+  // Left uninitialised: the workers write (and first touch) every value. No huge-page
+  // advice: 10^7 trials measured 0.36 s without it and 0.43 s with it, back to back on
+  // the project's VM (docs/benchmarks-history.md, "Huge pages").
+  const size_t m = static_cast<size_t>(options.trials);
+  std::unique_ptr<double[]> values(new double[m]);
+  std::vector<ChunkMoments> chunk_moments;
+  const NanReport nan = Simulate(plan, 0, options.trials, values.get(), result.threads,
+                                 options.on_trials_done, &chunk_moments);
+  if (nan.count > 0) return NanError(budget, nan, options.trials);
+  result.trials = options.trials;
+  result.blocks = 1;
+  result.converged = true;
+  const Moments moments = MergeChunkMoments(chunk_moments);
+  result.value = moments.mean;
+  result.u = moments.u;
+  if (keep_samples) result.samples.assign(values.get(), values.get() + m);
+  const Intervals iv = CoverageIntervals(values.get(), m, options.coverage, result.threads);
+  result.symmetric = iv.symmetric;
+  result.shortest = iv.shortest;
+  result.shortest_discrete = iv.shortest_discrete;
+  result.delta = NumericalTolerance(tolerance_scale(moments.u, iv.symmetric.low, iv.symmetric.high),
+                                    options.ndig);
+  MarkUndefinedMoments(&result);
+  result.ok = true;
+  return Status::Ok();
+}
+
+// ---- adaptive -----------------------------------------------------------------------------
+
+// The block statistics of the adaptive procedure so far.
+struct Blocks {
+  std::vector<double> means, us, lows, highs;
+  double pooled_sum = 0.0;
+  double pooled_ss = 0.0;  // sum over blocks of (M_b - 1) u_h^2
+};
+
+// One block of `block` trials at y: its mean, u and symmetric end points (scratch: room for
+// the block's values, which CoverageIntervals reorders).
+void AddBlock(const double* y, int64_t block, const McOptions& options,
+              std::vector<double>* scratch, Blocks* blocks) {
+  const Moments m = MeanAndU(y, static_cast<size_t>(block));
+  std::copy(y, y + block, scratch->begin());
+  const Intervals iv = CoverageIntervals(scratch->data(), scratch->size(), options.coverage);
+  blocks->means.push_back(m.mean);
+  blocks->us.push_back(m.u);
+  blocks->lows.push_back(iv.symmetric.low);
+  blocks->highs.push_back(iv.symmetric.high);
+  blocks->pooled_sum += m.mean * static_cast<double>(block);
+  blocks->pooled_ss += m.u * m.u * static_cast<double>(block - 1);
+}
+
+// Stage 1 after h blocks: delta from the pooled u(y), and the 95 % half-widths of the
+// block statistics (result->stability, ->delta). True when all are within delta.
+bool StableBlocks(const Blocks& blocks, int64_t h, int64_t block, const McOptions& options,
+                  const ToleranceScale& tolerance_scale, McResult* result) {
+  const std::vector<double>& lows = blocks.lows;
+  const std::vector<double>& highs = blocks.highs;
+  // Pooled u(y) from the h blocks: within-block and between-block sums of squares.
+  const double total = static_cast<double>(h * block);
+  const double grand = blocks.pooled_sum / total;
+  double between = 0.0;
+  for (double mean : blocks.means) between += (mean - grand) * (mean - grand);
+  const double u_pooled =
+      std::sqrt((blocks.pooled_ss + static_cast<double>(block) * between) / (total - 1.0));
+  const double delta =
+      NumericalTolerance(tolerance_scale(u_pooled, MeanAndU(lows.data(), lows.size()).mean,
+                                         MeanAndU(highs.data(), highs.size()).mean),
+                         options.ndig);
+  // Stage 1, JCGM 101 7.9.4 with t_0.975(h - 1) for its factor 2: the 95 % half-width
+  // t s(z_1..z_h)/sqrt(h) of the pooled value of each block statistic that converges
+  // like M^(-1/2) (mean, u, symmetric end points).
+  const double t =
+      boost::math::quantile(boost::math::students_t(static_cast<double>(h - 1)), 0.975);
+  const auto half_width = [&](const std::vector<double>& z) {
+    return t * MeanAndU(z.data(), z.size()).u / std::sqrt(static_cast<double>(z.size()));
+  };
+  McStability st;
+  st.value = half_width(blocks.means);
+  st.u = half_width(blocks.us);
+  st.symmetric_low = half_width(lows);
+  st.symmetric_high = half_width(highs);
+  result->stability = st;
+  result->delta = delta;
+  // An undefined mean or u is not a reported number: its block spread never settles
+  // and is not tested (McResult::inputs_without_variance).
+  if (!result->mean_defined) st.value = std::nan("");
+  if (!result->u_defined) st.u = std::nan("");
+  result->stability = st;
+  return !((result->mean_defined && st.value > delta) || (result->u_defined && st.u > delta) ||
+           st.symmetric_low > delta || st.symmetric_high > delta);
+}
+
+// Stage 2, the shortest end points themselves: the pooled h blocks split into G = 10
+// groups of h/G blocks, each group's shortest interval (as reported, fitted minimum);
+// their spread s_G, scaled to the pooled M = G M_G by the slowest rate of that
+// estimator (M^(-2/5), docs/uncertainty.md), gives the half-width
+// t_0.975(G - 1) s_G G^(-2/5). Below delta: settled (true). Otherwise *next_group_test is
+// where that rate predicts success (Stein's two-stage idea as applied to JCGM 101 by
+// Wuebbeler, Harris, Cox and Elster, Metrologia 47 (2010) 317), at least 10 and at
+// most h blocks further on, on a multiple of G blocks.
+bool StableShortest(const std::vector<double>& y, int64_t h, int64_t block,
+                    const McOptions& options, McResult* result, int64_t* next_group_test) {
+  const double delta = result->delta;
+  McStability st = result->stability;
+  const GroupSpread g =
+      ShortestSpread(y.data(), static_cast<size_t>(h * block), options.coverage, result->threads);
+  const double t_g =
+      boost::math::quantile(boost::math::students_t(static_cast<double>(kGroups - 1)), 0.975);
+  const double reduce = std::pow(static_cast<double>(kGroups), -kShortestRate);
+  st.shortest_low = t_g * g.s_low * reduce;
+  st.shortest_high = t_g * g.s_high * reduce;
+  st.groups = kGroups;
+  result->stability = st;
+  const double worst = std::max(st.shortest_low, st.shortest_high);
+  if (worst <= delta) return true;
+  const double predicted = static_cast<double>(h) * std::pow(worst / delta, 1.0 / kShortestRate);
+  const int64_t want = static_cast<int64_t>(std::min(
+      std::max(predicted, static_cast<double>(h + kGroups)), 2.0 * static_cast<double>(h)));
+  *next_group_test = (want + kGroups - 1) / kGroups * kGroups;
+  return false;
+}
+
+// JCGM 101 7.9, with the rule of docs/uncertainty.md ("Adaptive procedure"): stop only
+// when every reported number is stable to delta (7.9.2), the shortest interval's end
+// points tested on themselves. The trials drawn are left in *y.
+Status RunAdaptive(const Budget& budget, const Plan& plan, const McOptions& options,
+                   const ToleranceScale& tolerance_scale, McResult* result,
+                   std::vector<double>* y) {
+  const double j = std::ceil(100.0 / (1.0 - options.coverage));
+  int64_t block = std::max<int64_t>(static_cast<int64_t>(j), 10000);
+  block = (block + kChunkTrials - 1) / kChunkTrials * kChunkTrials;
+  Blocks blocks;
+  std::vector<double> scratch(static_cast<size_t>(block));
+  int64_t next_group_test = kMinBlocks;  // h of the next test of the shortest end points
+  for (int64_t h = 1; h * block <= options.max_trials; ++h) {
+    const int64_t first = (h - 1) * block;
+    y->resize(static_cast<size_t>(h * block));
+    const NanReport nan =
+        Simulate(plan, first, block, y->data() + first, result->threads, options.on_trials_done);
+    if (nan.count > 0) return NanError(budget, nan, h * block);
+    AddBlock(y->data() + first, block, options, &scratch, &blocks);
+    result->trials = h * block;
+    result->blocks = h;
+    if (h < kMinBlocks) continue;
+    if (!StableBlocks(blocks, h, block, options, tolerance_scale, result) || h < next_group_test ||
+        h % kGroups != 0) {
+      continue;
     }
-    if (!result.converged) {
-      result.message = "adaptive procedure did not settle within max_trials = " +
-                       std::to_string(options.max_trials) + " trials";
+    if (StableShortest(*y, h, block, options, result, &next_group_test)) {
+      result->converged = true;
+      break;
     }
   }
+  if (!result->converged) {
+    result->message = "adaptive procedure did not settle within max_trials = " +
+                      std::to_string(options.max_trials) + " trials";
+  }
+  return Status::Ok();
+}
+
+// The adaptive run's reported numbers from all its trials y.
+void FinishAdaptive(const McOptions& options, bool keep_samples,
+                    const ToleranceScale& tolerance_scale, std::vector<double> y, McResult* out) {
+  McResult& result = *out;
   const Moments m = MeanAndU(y.data(), y.size());
   result.value = m.mean;
   result.u = m.u;
@@ -952,6 +1001,41 @@ Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, b
       tolerance_scale(m.u, result.symmetric.low, result.symmetric.high), options.ndig);
   MarkUndefinedMoments(&result);
   result.ok = result.converged;
+}
+
+}  // namespace
+
+Result<McResult> RunMonteCarlo(const Budget& budget, const McOptions& options, bool keep_samples) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(budget.file, 0, "monte_carlo: " + why);
+  std::vector<std::string> names;
+  std::vector<double> c;
+  for (const auto& in : budget.inputs) {
+    names.push_back(in.name);
+    c.push_back(in.sensitivity.value_or(0.0));
+  }
+  Result<internal::MeasurementModel> parsed =
+      budget.model.empty()
+          ? Result<internal::MeasurementModel>(internal::MeasurementModel::Linear(c))
+          : internal::MeasurementModel::FromExpression(budget.model, names);
+  if (!parsed.ok()) return internal::ModelError(budget, parsed.error());
+  auto plan_result = MakePlan(budget);
+  if (!plan_result.ok()) return plan_result.error();
+  Plan plan = std::move(plan_result).value();
+  plan.model = &parsed.value();
+  plan.seed = options.seed;
+
+  McResult result = StartResult(budget, options);
+  const ToleranceScale tolerance_scale = ToleranceScaleFor(result, options);
+  if (!options.adaptive) {
+    Status fixed = RunFixed(budget, plan, options, keep_samples, tolerance_scale, &result);
+    if (!fixed.ok()) return fixed.error();
+    return result;
+  }
+  std::vector<double> y;
+  Status adaptive = RunAdaptive(budget, plan, options, tolerance_scale, &result, &y);
+  if (!adaptive.ok()) return adaptive.error();
+  FinishAdaptive(options, keep_samples, tolerance_scale, std::move(y), &result);
   return result;
 }
 
