@@ -2,7 +2,6 @@
 #pragma once
 
 #include <algorithm>
-#include <condition_variable>
 #include <cstddef>
 #include <functional>
 #include <mutex>
@@ -52,11 +51,8 @@ class ReleaseBehind {
     std::unique_lock<std::mutex> lock(mutex_);
     if (i >= done_.size()) return;
     done_[i] = true;
-    const size_t before = parsed_;
     while (next_ < done_.size() && done_[next_]) parsed_ = ends_[next_++];
-    const bool moved = parsed_ != before;
     ReleaseBehindBoth(&lock);
-    if (moved) parser_moved_.notify_all();
   }
 
   // The hasher has hashed [0, bytes).
@@ -64,25 +60,6 @@ class ReleaseBehind {
     std::unique_lock<std::mutex> lock(mutex_);
     hashed_ = std::max(hashed_, bytes);
     ReleaseBehindBoth(&lock);
-  }
-
-  // The hasher waits here until [0, bytes) lies within `lead_bytes` of the parser (or the
-  // parser has finished), so a hasher faster than the parser does not map the whole file
-  // ahead of it: the pages it maps are released only once the parser is past them, and a
-  // hasher racing ahead kept most of the file resident beside the growing columns (peak RSS
-  // 1.34 x the file on the 5.4 M-row session, issue #38).
-  void AwaitParser(size_t bytes, size_t lead_bytes) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    parser_moved_.wait(lock, [&] { return parser_finished_ || parsed_ + lead_bytes >= bytes; });
-  }
-
-  // The parser will call nothing more: a waiting hasher goes on at its own pace.
-  void ParserFinished() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      parser_finished_ = true;
-    }
-    parser_moved_.notify_all();
   }
 
  private:
@@ -108,8 +85,6 @@ class ReleaseBehind {
   }
 
   std::mutex mutex_;
-  std::condition_variable parser_moved_;  // parsed_ grew, or the parser finished.
-  bool parser_finished_ = false;
   std::function<void(size_t, size_t)> release_;
   bool hashing_;
   size_t max_gap_bytes_;

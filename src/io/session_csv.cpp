@@ -5,9 +5,11 @@
 // path (csv_clean.cpp), and anything irregular, or any other dialect, the general path
 // (csv_general.cpp), which explains every error exactly.
 // The mapping's pages are released behind the parser and the SHA-256 hasher, whichever is
-// slower (ReleaseBehind), and a faster hasher waits within kHashLeadBytes of the parser, so
-// the file's pages give way to the parsed numbers and peak memory stays near the numbers
-// plus a few tens of MB, not file + numbers, however fast or slow the hasher runs.
+// slower (ReleaseBehind), so the file's pages give way to the parsed numbers. A hasher faster
+// than the parser maps the pages ahead of it, which then stay until the parser is past them:
+// holding the hasher within 12 MB of the parser took 29 MiB off the peak of a 389 MB session
+// but cost 6 % of wall time (the free hasher prefaults the pages the parse threads read), so
+// it runs free (issue #38, docs/benchmarks.md).
 #include <algorithm>
 #include <optional>
 #include <thread>
@@ -22,9 +24,6 @@ namespace {
 
 // The hasher reports its progress (and so lets pages go) this many bytes at a time.
 constexpr size_t kHashChunkBytes = size_t{4} << 20;
-// How far the hasher may run ahead of the parser (ReleaseBehind::AwaitParser): the pages it
-// maps there stay until the parser is past them.
-constexpr size_t kHashLeadBytes = size_t{12} << 20;
 // The file's pages kept mapped ahead of a hasher slower than the parser (a CPU without SHA
 // extensions, or one the hasher shares with other work) (ReleaseBehind): 16 MB, so the peak
 // stays within a few tens of MB of the session's columns however slow the hasher. Pages
@@ -78,7 +77,7 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   // The SHA-256 of the bytes, on a second thread while the parser works, from the parser's
   // own mapping: the file's pages are mapped once for both and released once both are past
   // them; a hasher slower than the parser keeps at most kReleaseGapBytes mapped behind the
-  // parser (ReleaseBehind), a faster one waits within kHashLeadBytes ahead of it.
+  // parser (ReleaseBehind).
   ReleaseBehind release([&file](size_t begin, size_t end) { file.ReleaseBelow(begin, end); }, hash,
                         kReleaseGapBytes);
   std::string digest;
@@ -86,21 +85,10 @@ Result<Session> LoadSessionCsv(const std::string& path, const LoadOptions& optio
   RunBeside(
       [&] {
         if (!hash) return;
-        release.AwaitParser(kHashChunkBytes, kHashLeadBytes);
         digest = Sha256Hex(std::string_view(file.data(), file.size()), kHashChunkBytes,
-                           [&release](size_t hashed) {
-                             release.Hashed(hashed);
-                             release.AwaitParser(hashed + kHashChunkBytes, kHashLeadBytes);
-                           });
+                           [&release](size_t hashed) { release.Hashed(hashed); });
       },
-      [&] {
-        // However the parse ends (a value, an error, an exception), the hasher is let go.
-        struct Finish {
-          ReleaseBehind* release;
-          ~Finish() { release->ParserFinished(); }
-        } finish{&release};
-        session = LoadMappedCsv(path, file, options, format, allow_clean_path, &release);
-      });
+      [&] { session = LoadMappedCsv(path, file, options, format, allow_clean_path, &release); });
   // A file truncated or rewritten while it was read: whatever was parsed (or whatever error
   // its zeros caused) is discarded for the one error that says what happened.
   if (const std::string changed = file.ChangedSinceOpen(); !changed.empty()) {

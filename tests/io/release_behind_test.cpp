@@ -118,34 +118,6 @@ TEST_CASE("Pages far ahead of the trailing reader go behind the leader", "[io][r
   }
 }
 
-TEST_CASE("A hasher ahead of the parser waits within its lead until the parser moves or ends",
-          "[io][release]") {
-  Tracked t(true, 100, {0, 10, 20, 30}, {10, 20, 30, 40});
-  // Within the lead of the parser at 0: no wait.
-  t.release.AwaitParser(5, 5);
-  std::atomic<int> stage{0};
-  std::thread hasher([&] {
-    t.release.AwaitParser(25, 5);  // needs the parser at 20
-    stage = 1;
-    t.release.AwaitParser(40, 5);  // needs 35: the parser ends first
-    stage = 2;
-  });
-  std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  CHECK(stage == 0);
-  t.release.BlockDone(1);  // out of order: the parser is still at 0
-  std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  CHECK(stage == 0);
-  t.release.BlockDone(0);  // now at 20
-  for (int i = 0; i < 10000 && stage < 1; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  CHECK(stage == 1);
-  std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  CHECK(stage == 1);
-  t.release.ParserFinished();  // a strict load that stopped at block 2
-  hasher.join();
-  CHECK(stage == 2);
-}
-
 TEST_CASE("Concurrent parser blocks and hasher release every byte", "[io][release]") {
   constexpr size_t kBlocks = 200;
   std::vector<size_t> begins(kBlocks), ends(kBlocks);
