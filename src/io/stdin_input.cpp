@@ -114,6 +114,57 @@ void StdinFile::Reset() {
   storage_ = StdinStorage::kNone;
 }
 
+namespace {
+
+// Copies `source` to `dest` in 1 MiB reads until its end: the bytes copied, or the error
+// (binary data in the first 64 KiB unless a PX4 ULog's magic starts it, more than max_bytes,
+// a read or write failure) naming the stream.
+Result<int64_t> CopyChunks(int source, int dest, const std::string& name, const std::string& said,
+                           int64_t max_bytes, bool to_memory) {
+  std::vector<char> chunk(size_t{1} << 20);
+  int64_t total = 0;
+  std::string head;  // The first 7 bytes: a PX4 ULog (binary by design) starts with its magic.
+  for (;;) {
+    const ssize_t n = ::read(source, chunk.data(), chunk.size());
+    if (n == 0) break;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if ((errno == EAGAIN || errno == EWOULDBLOCK) && WaitReadable(source)) continue;
+      return StreamError(name, "cannot read " + said, errno);
+    }
+    if (head.size() < 7) head.append(chunk.data(), std::min<size_t>(n, 7 - head.size()));
+    // Binary data is refused on its first bytes, not after the cap (/dev/zero never ends).
+    // The ULog magic has no NUL byte, so a ULog is known before its first NUL is read.
+    if (total < kBinaryCheckBytes && !IsULogMagic(head) &&
+        std::memchr(chunk.data(), '\0',
+                    std::min(static_cast<size_t>(n),
+                             static_cast<size_t>(kBinaryCheckBytes - total))) != nullptr) {
+      return MakeError(name, 0,
+                       "binary data (NUL bytes) in the first 64 KiB: expected a text "
+                       "session.csv, a receiver capture or a PX4 ULog");
+    }
+    if (n > max_bytes - total) {
+      return MakeError(
+          name, 0,
+          "more than " + std::to_string(max_bytes) + " bytes: a stream may hold at most that (" +
+              kMaxStreamBytesVariable +
+              " sets another cap, in bytes); save the input to a file and name it, or raise "
+              "the cap");
+    }
+    if (!WriteAll(dest, chunk.data(), static_cast<size_t>(n))) {
+      const int why = errno;
+      return StreamError(name,
+                         "cannot copy " + said + " to a " + (to_memory ? "memory" : "temporary") +
+                             " file" + kNameTheFile,
+                         why);
+    }
+    total += n;
+  }
+  return total;
+}
+
+}  // namespace
+
 Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
   const int source = options.source_fd;
   // Errors name the stream as given ("<stdin>", a FIFO's path); messages say "stdin".
@@ -187,46 +238,10 @@ Result<StdinFile> CopyStdinToFile(const StdinCopyOptions& options) {
     }
   }
 
-  std::vector<char> chunk(size_t{1} << 20);
-  int64_t total = 0;
-  std::string head;  // The first 7 bytes: a PX4 ULog (binary by design) starts with its magic.
-  for (;;) {
-    const ssize_t n = ::read(source, chunk.data(), chunk.size());
-    if (n == 0) break;
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      if ((errno == EAGAIN || errno == EWOULDBLOCK) && WaitReadable(source)) continue;
-      return StreamError(name, "cannot read " + said, errno);
-    }
-    if (head.size() < 7) head.append(chunk.data(), std::min<size_t>(n, 7 - head.size()));
-    // Binary data is refused on its first bytes, not after the cap (/dev/zero never ends).
-    // The ULog magic has no NUL byte, so a ULog is known before its first NUL is read.
-    if (total < kBinaryCheckBytes && !IsULogMagic(head) &&
-        std::memchr(chunk.data(), '\0',
-                    std::min(static_cast<size_t>(n),
-                             static_cast<size_t>(kBinaryCheckBytes - total))) != nullptr) {
-      return MakeError(name, 0,
-                       "binary data (NUL bytes) in the first 64 KiB: expected a text "
-                       "session.csv, a receiver capture or a PX4 ULog");
-    }
-    if (n > max_bytes - total) {
-      return MakeError(
-          name, 0,
-          "more than " + std::to_string(max_bytes) + " bytes: a stream may hold at most that (" +
-              kMaxStreamBytesVariable +
-              " sets another cap, in bytes); save the input to a file and name it, or raise "
-              "the cap");
-    }
-    if (!WriteAll(out.fd_, chunk.data(), static_cast<size_t>(n))) {
-      const int why = errno;
-      return StreamError(name,
-                         "cannot copy " + said + " to a " +
-                             (out.storage_ == StdinStorage::kMemfd ? "memory" : "temporary") +
-                             " file" + kNameTheFile,
-                         why);
-    }
-    total += n;
-  }
+  Result<int64_t> copied =
+      CopyChunks(source, out.fd_, name, said, max_bytes, out.storage_ == StdinStorage::kMemfd);
+  if (!copied.ok()) return copied.error();
+  const int64_t total = copied.value();
   out.size_bytes_ = total;
   if (out.storage_ == StdinStorage::kMemfd) {
     // The loaders map the file: sealed, its bytes cannot change under a mapping. A kernel
