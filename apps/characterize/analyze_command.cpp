@@ -19,6 +19,7 @@
 #include "metro/report/session_analysis.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
+#include "noise_export_options.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -231,17 +232,11 @@ void AddTypeAOptions(CLI::App& app, AnalyzeOptions* o, bool accuracy) {
                  "with --allan: also write the noise terms as this estimator's noise file: "
                  "kalibr, openvins, basalt, vins, orbslam3, gtsam, px4-ekf2, ros "
                  "(docs/noise.md; characterize noise-export has their options)")
-      ->check(CLI::IsMember(
-          {"kalibr", "openvins", "basalt", "vins", "orbslam3", "gtsam", "px4-ekf2", "ros"}));
+      ->check(CLI::IsMember(NoiseExportFormatNames()));
   app.add_option("--export-file", o->export_file, "the noise file of --export (atomically)");
-  app.add_option_function<std::string>(
-         "--axis-reduction",
-         [o](const std::string& value) {
-           o->export_options.reduction = value == "rms" ? AxisReduction::kRms : AxisReduction::kMax;
-         },
-         "with --export: one value over the three axes, max (the largest axis and its u) or rms")
-      ->check(CLI::IsMember({"max", "rms"}))
-      ->default_str("max");
+  AddAxisReductionOption(&app, &o->export_options.reduction,
+                         "with --export: one value over the three axes, max (the largest axis "
+                         "and its u) or rms");
   if (accuracy) AddAccuracyOptions(app, &o->accuracy);
   app.add_option("--threads", o->threads, "worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);

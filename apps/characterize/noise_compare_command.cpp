@@ -56,8 +56,7 @@ void AddNoiseCompareCommand(CLI::App& app, int* exit_code) {
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("--format", o->format, "the file's format (default: told by its keys)")
-      ->check(CLI::IsMember(
-          {"kalibr", "openvins", "basalt", "vins", "orbslam3", "gtsam", "px4-ekf2", "ros"}));
+      ->check(CLI::IsMember(NoiseExportFormatNames()));
   AddNoiseExportCliOptions(sub, &o->common);
   sub->callback([o, exit_code] { *exit_code = RunNoiseCompare(*o); });
 }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "metro/core/status.hpp"
 #include "metro/noise/noise_export.hpp"
@@ -17,6 +18,12 @@ struct NoiseExportCliOptions {
   std::optional<int64_t> sensor;  // --sensor N.
   NoiseExportOptions library;     // --axis-reduction, --rostopic, --px4-predict-rate-hz.
 };
+
+// The formats' names (NoiseExportFormatName of kAllNoiseExportFormats), for CLI11's checks.
+std::vector<std::string> NoiseExportFormatNames();
+
+// Registers --axis-reduction (max|rms) into `reduction`.
+void AddAxisReductionOption(CLI::App* app, AxisReduction* reduction, const std::string& help);
 
 // Registers --sensor, --axis-reduction, --rostopic and --px4-predict-rate-hz.
 void AddNoiseExportCliOptions(CLI::App* app, NoiseExportCliOptions* o);
