@@ -2,6 +2,7 @@
 // also spelled characterize SESSION --type-a ... (the options on the top-level app, where
 // --accuracy turns it into `characterize accuracy SESSION ...`).
 #include <fmt/format.h>
+#include <sys/stat.h>
 
 #include <cstdio>
 #include <optional>
@@ -17,6 +18,7 @@
 #include "metro/report/html_report.hpp"
 #include "metro/report/noise_export_input.hpp"
 #include "metro/report/session_analysis.hpp"
+#include "metro/report/session_stream_analysis.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "noise_export_options.hpp"
@@ -40,7 +42,53 @@ struct AnalyzeOptions {
   std::string export_format;
   std::string export_file;
   NoiseExportOptions export_options;
+  // --stream: read the record once in groups and evaluate from spill files (issue #38);
+  // chosen by itself, with a note, when the file is larger than --stream-above-memory-share
+  // of the memory available.
+  bool stream = false;
+  double stream_above_memory_share = 0.5;
+  size_t stream_group_bytes = size_t{32} << 20;
 };
+
+// MemAvailable of /proc/meminfo in bytes, 0 when unknown.
+uint64_t AvailableMemoryBytes() {
+  std::FILE* f = std::fopen("/proc/meminfo", "r");
+  if (f == nullptr) return 0;
+  char key[64];
+  unsigned long long kib = 0;
+  uint64_t bytes = 0;
+  while (std::fscanf(f, "%63s %llu kB", key, &kib) == 2) {
+    if (std::string(key) == "MemAvailable:") {
+      bytes = static_cast<uint64_t>(kib) * 1024;
+      break;
+    }
+  }
+  std::fclose(f);
+  return bytes;
+}
+
+// Whether to stream: asked, or a regular file larger than the share of available memory
+// with nothing asked that needs the whole record (then said on stderr).
+bool ChooseStreaming(const AnalyzeOptions& o) {
+  if (o.stream) return true;
+  const WindowOptions& w = o.analysis.window;
+  if (!o.html.empty() || !o.budget.empty() || w.settle_auto || w.skip_samples != 0 ||
+      w.skip_seconds != 0.0 || w.from_s || w.to_s || o.stream_above_memory_share <= 0.0) {
+    return false;
+  }
+  struct stat st {};
+  if (::stat(o.session.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;
+  const uint64_t available = AvailableMemoryBytes();
+  if (available == 0 || static_cast<double>(st.st_size) <=
+                            o.stream_above_memory_share * static_cast<double>(available)) {
+    return false;
+  }
+  Note(
+      fmt::format("note: {} ({} MB) is larger than {:g} of the available memory ({} MB): "
+                  "streaming mode (--stream; --stream-above-memory-share 0 turns this off)\n",
+                  o.session, st.st_size >> 20, o.stream_above_memory_share, available >> 20));
+  return true;
+}
 
 // Options that do nothing in the chosen mode are refused, never silently ignored: the
 // accuracy evaluation's own options without --accuracy; the Allan options without --allan;
@@ -136,11 +184,20 @@ int RunAnalyze(const AnalyzeOptions& o) {
   }
   options.allan_csv = options.allan && !o.allan_csv.empty();
   options.budget_path = o.budget;
+  options.stream_group_bytes = o.stream_group_bytes;
 
   // Load (bytes), Type A, Allan, Monte Carlo (trials): one line each on a terminal.
   TerminalProgress progress(stderr, CliProgressOptions());
   options.progress = &progress;
-  SessionAnalysis analysis = AnalyzeSession(o.session, options);
+  const bool stream = ChooseStreaming(o);
+  if (stream && !o.html.empty()) {
+    return PrintErrorExit(MakeError(
+        "--html: the page plots the record's series, which are not available in streaming "
+        "mode; run without --stream, or write the JSON report and render it with `characterize "
+        "report`"));
+  }
+  SessionAnalysis analysis =
+      stream ? AnalyzeSessionStreamed(o.session, options) : AnalyzeSession(o.session, options);
   progress.Finish();
   if (!analysis.ok) {
     return PrintErrorExit(analysis.error);
@@ -240,6 +297,21 @@ void AddTypeAOptions(CLI::App& app, AnalyzeOptions* o, bool accuracy) {
   if (accuracy) AddAccuracyOptions(app, &o->accuracy);
   app.add_option("--threads", o->threads, "worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
+  if (accuracy) {
+    app.add_flag("--stream", o->stream,
+                 "read the record once in groups and evaluate each quantity from a temporary "
+                 "file (memory independent of the length; docs/streaming.md)");
+    app.add_option("--stream-above-memory-share", o->stream_above_memory_share,
+                   "stream by itself when the file is larger than this share of the available "
+                   "memory (0: never)")
+        ->check(CLI::Range(0.0, 100.0))
+        ->default_str("0.5");
+    app.add_option("--stream-group-bytes", o->stream_group_bytes,
+                   "with --stream: bytes of the file read per group of rows (memory is about "
+                   "three times this)")
+        ->check(CLI::PositiveNumber)
+        ->default_str("33554432");
+  }
 }
 
 }  // namespace

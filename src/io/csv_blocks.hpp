@@ -89,4 +89,14 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
                                const LoadOptions& options, int threads, std::vector<Block>* blocks,
                                BlockProgress* progress, ReleaseBehind* release);
 
+// The general path in groups of about group_bytes (the streaming mode, issue #38): each
+// group's rows are handed to on_group as a session whose tags hold only those rows (no text
+// columns), then dropped, and the file's pages behind the group are released; the rows are
+// checked as LoadGeneralCsv checks them, across groups too. Returns the session without rows
+// (path, format, dialect, columns, row and rejection counts).
+Result<Session> StreamGeneralCsv(const std::string& path, const MappedFile& file,
+                                 const HeaderLine& header, const ColumnPlan& plan,
+                                 const LoadOptions& options, size_t group_bytes,
+                                 const std::function<Status(Session& group)>& on_group);
+
 }  // namespace metro::internal

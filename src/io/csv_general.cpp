@@ -736,4 +736,126 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
   return session;
 }
 
+namespace {
+
+// The builders' rows so far as one group's tags (times in seconds from the session's
+// origin, lines, numeric columns, scaled raw columns; no text), the builders emptied for the
+// next group with their time-order state kept.
+Status DrainGroup(const std::string& path, const ColumnPlan& plan, const Timing& timing,
+                  int64_t origin_ns, Builders* builders, Session* group) {
+  group->tags.clear();
+  for (int s = 1; s < 256; ++s) {
+    TagBuilder* tb = (*builders)[static_cast<size_t>(s)].get();
+    if (tb == nullptr) continue;
+    for (auto& text : tb->text) text.clear();
+    if (tb->tag.line.empty()) continue;
+    Tag tag;
+    tag.sensor = s;
+    tag.line = tb->tag.line;
+    if (timing.integer_time) {
+      tag.t_ns = tb->tag.t_ns;
+      if (!tag.t_ns.empty() && tag.t_ns.front() < origin_ns) {
+        return MakeError(path, tag.line.front(),
+                         fmt::format("sensor {}'s first time is before the session's first row: "
+                                     "the streaming mode needs rows in time order across tags; "
+                                     "expected rows sorted by time (or run without --stream)",
+                                     s));
+      }
+      if (Status sec = SecondsFromOrigin(path, timing.time_name, s, origin_ns, &tag); !sec.ok()) {
+        return sec;
+      }
+    } else {
+      tag.t_s = tb->tag.t_s;
+    }
+    tag.quantities = tb->tag.quantities;
+    AddScaledRawColumns(plan, &tag);
+    tag.counts.frames = tag.counts.fresh = static_cast<int64_t>(tag.line.size());
+    group->tags.push_back(std::move(tag));
+    tb->tag.t_s.clear();
+    tb->tag.t_ns.clear();
+    tb->tag.line.clear();
+    for (Quantity& q : tb->tag.quantities) q.values.clear();
+  }
+  return Status::Ok();
+}
+
+// Builders for the sensors of `blocks` that have none yet.
+void AddBuilders(const std::vector<Block>& blocks, const ColumnPlan& plan, const Timing& timing,
+                 Builders* builders) {
+  Builders fresh = MakeBuilders(blocks, plan, timing);
+  for (size_t s = 0; s < fresh.size(); ++s) {
+    if ((*builders)[s] == nullptr && fresh[s] != nullptr) (*builders)[s] = std::move(fresh[s]);
+  }
+}
+
+}  // namespace
+
+Result<Session> StreamGeneralCsv(const std::string& path, const MappedFile& file,
+                                 const HeaderLine& header, const ColumnPlan& plan,
+                                 const LoadOptions& options, size_t group_bytes,
+                                 const std::function<Status(Session& group)>& on_group) {
+  const int threads = ResolveThreads(options.threads);
+  const char line_end = plan.dialect.line_ends == "CR" ? '\r' : '\n';
+  const Timing timing = TimingOf(plan);
+  Session session = NewSession(path, plan);
+  Builders builders(256);
+  RowMover mover(path, plan, options, timing, &builders, &session);
+  ReleaseBehind release([&file](size_t begin, size_t end) { file.ReleaseBelow(begin, end); }, false,
+                        0);
+  int64_t first_line = header.line_number + 1;
+  int64_t resolution_ns = 0;
+  int64_t origin_ns = std::numeric_limits<int64_t>::max();
+  Session group;
+  group.path = path;
+  size_t begin = header.data_begin;
+  while (begin < plan.data_end) {
+    // One group: about group_bytes, ending at a line end.
+    size_t end = std::min(plan.data_end, begin + group_bytes);
+    if (end < plan.data_end) {
+      const char* nl =
+          static_cast<const char*>(std::memchr(file.data() + end, line_end, plan.data_end - end));
+      end = nl != nullptr ? static_cast<size_t>(nl - file.data()) + 1 : plan.data_end;
+    }
+    std::vector<Block> blocks = CutBlocks(file, begin, end, line_end, threads);
+    BlockProgress progress(options.on_bytes_parsed, blocks.size());
+    ParseBlocks(file, plan, options, threads, &blocks, &progress, &release);
+    AddBuilders(blocks, plan, timing, &builders);
+    for (Block& b : blocks) {
+      if (!b.parsed) break;
+      resolution_ns = std::max(resolution_ns, b.time_resolution_ns);
+      if (Status s = mover.MoveBlock(first_line, &b); !s.ok()) return s.error();
+      first_line += b.lines;
+      b = Block();
+    }
+    if (timing.integer_time && origin_ns == std::numeric_limits<int64_t>::max()) {
+      for (const auto& tb : builders) {
+        if (tb != nullptr && !tb->tag.t_ns.empty()) {
+          origin_ns = std::min(origin_ns, tb->tag.t_ns[0]);
+        }
+      }
+    }
+    if (Status s = DrainGroup(path, plan, timing, origin_ns, &builders, &group); !s.ok()) {
+      return s.error();
+    }
+    file.ReleaseBelow(begin, end);
+    if (!group.tags.empty()) {
+      if (Status s = on_group(group); !s.ok()) return s.error();
+    }
+    begin = end;
+  }
+  if (timing.integer_time) {
+    session.input.time_origin_ns = origin_ns;
+    session.input.time_integer = true;
+  }
+  AddTimingWarnings(plan, timing, resolution_ns, mover.rejected_untimed(), &session);
+  if (session.rows == session.rejected_rows) {
+    return MakeError(path, header.line_number,
+                     session.rejected_rows > 0
+                         ? "no valid data rows: all rows were rejected"
+                         : "header only: no data rows after the header; expected one row per "
+                           "observation");
+  }
+  return session;
+}
+
 }  // namespace metro::internal

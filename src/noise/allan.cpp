@@ -760,6 +760,21 @@ Result<AllanCurve> ComputeAllanInPlace(double* data, int64_t size, double tau0_s
   return AllanFromPhase(data, n_rate, integrated.mean, tau0_s, options);
 }
 
+int64_t PhaseBlockSamples() { return kPhaseBlock; }
+
+void AddCompensated(double v, double* sum, double* carry) { CompensatedAdd(v, sum, carry); }
+
+void RunPhaseBlock(const double* y, int64_t count, double mean, double tau0_s, double* x,
+                   double* carry, double* phase) {
+  METRO_CHECK(count <= kPhaseBlock);
+  RunBlocks(y, count, mean, tau0_s, 0, 1, x, carry, phase);
+}
+
+std::vector<double> VariancesOfSums(const std::vector<double>& sums, int64_t n_phase, double tau0_s,
+                                    const std::vector<int64_t>& m, AllanEstimator estimator) {
+  return VariancesFromSums(sums, n_phase, tau0_s, m, estimator);
+}
+
 }  // namespace internal
 
 namespace {

@@ -53,5 +53,18 @@ void FillAlphaAndIntervals(const std::vector<char>& identified,
 // caller, once the other threads have stopped (it used to end the process).
 void RunAllanTasks(int threads, int64_t count, const std::function<void(int64_t)>& task);
 
+// The pieces of the phase integration (allan.cpp) that the chunked computation
+// (allan_chunked.cpp) repeats block by block, so that both give the same phase bits:
+// rate samples per block; sum += v with Neumaier's compensation; the compensated running
+// sum of one block's centred steps (y_k - mean) tau0 from (*x, *carry), with phase[k + 1] =
+// x + carry after step k when phase is not null; and the variances from the sums of squared
+// differences (NIST SP 1065 5.2.2-5.2.9).
+int64_t PhaseBlockSamples();
+void AddCompensated(double v, double* sum, double* carry);
+void RunPhaseBlock(const double* y, int64_t count, double mean, double tau0_s, double* x,
+                   double* carry, double* phase);
+std::vector<double> VariancesOfSums(const std::vector<double>& sums, int64_t n_phase, double tau0_s,
+                                    const std::vector<int64_t>& m, AllanEstimator estimator);
+
 }  // namespace internal
 }  // namespace metro

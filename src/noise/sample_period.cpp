@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 
 namespace metro {
 namespace {
@@ -45,15 +46,95 @@ bool SamplePeriodOptions::IsValid(std::string* why) const {
 
 namespace {
 
+// The medians FromIntervals takes, for intervals in memory: of all n - 1 intervals (the
+// mean of the two middle ones for an even count), and the upper median of those of
+// [begin, end) at most `limit`, both by nth_element on a copy.
+struct InMemoryMedians {
+  template <typename Interval>
+  double Whole(const Interval& dt, size_t count) const {
+    std::vector<double> sorted(count);
+    for (size_t i = 0; i < count; ++i) sorted[i] = dt(i);
+    const size_t mid = sorted.size() / 2;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid),
+                     sorted.end());
+    double median = sorted[mid];
+    if (sorted.size() % 2 == 0) {
+      const double below =
+          *std::max_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid));
+      median = 0.5 * (median + below);
+    }
+    return median;
+  }
+  // NaN when no interval qualifies.
+  template <typename Interval>
+  double Part(const Interval& dt, size_t begin, size_t end, double limit) const {
+    std::vector<double> piece;
+    for (size_t i = begin; i < end; ++i) {
+      if (dt(i) <= limit) piece.push_back(dt(i));
+    }
+    if (piece.empty()) return std::nan("");
+    std::nth_element(piece.begin(), piece.begin() + static_cast<std::ptrdiff_t>(piece.size() / 2),
+                     piece.end());
+    return piece[piece.size() / 2];
+  }
+};
+
+// The same medians from counts of the distinct interval values (a clock's intervals take
+// few): memory independent of n, for intervals read in order from a spill file. More than
+// kMaxDistinctIntervals distinct values make it give up (NaN, and `failed` set).
+struct CountingMedians {
+  static constexpr size_t kMaxDistinctIntervals = size_t{1} << 16;
+
+  template <typename Interval>
+  double Whole(const Interval& dt, size_t count) const {
+    if (!Count(dt, 0, count, HUGE_VAL)) return std::nan("");
+    const size_t mid = total_ / 2;
+    return total_ % 2 == 0 ? 0.5 * (Kth(mid) + Kth(mid - 1)) : Kth(mid);
+  }
+  template <typename Interval>
+  double Part(const Interval& dt, size_t begin, size_t end, double limit) const {
+    if (!Count(dt, begin, end, limit) || total_ == 0) return std::nan("");
+    return Kth(total_ / 2);
+  }
+
+ private:
+  // Counts the distinct dt(i) <= limit of [begin, end); false past kMaxDistinctIntervals.
+  template <typename Interval>
+  bool Count(const Interval& dt, size_t begin, size_t end, double limit) const {
+    counts_.clear();
+    total_ = 0;
+    for (size_t i = begin; i < end; ++i) {
+      const double v = dt(i);
+      if (!(v <= limit)) continue;
+      ++counts_[v];
+      ++total_;
+      if (counts_.size() > kMaxDistinctIntervals) return false;
+    }
+    return true;
+  }
+  // The k-th smallest (0-based) of the counted values.
+  double Kth(size_t k) const {
+    size_t seen = 0;
+    for (const auto& [value, c] : counts_) {
+      seen += c;
+      if (k < seen) return value;
+    }
+    return std::nan("");
+  }
+  mutable std::map<double, size_t> counts_;
+  mutable size_t total_ = 0;
+};
+
 // The estimate from the n - 1 intervals dt(i) = t[i + 1] - t[i] [s] (computed when asked,
 // so no array of them is kept beside the times) and the whole span t[n - 1] - t[0] [s];
-// `line` has one entry per timestamp.
-template <typename Interval>
-Result<SamplePeriod> FromIntervals(const Interval& dt, size_t n, double span_s,
-                                   const uint32_t* line, const SamplePeriodOptions& options) {
+// line(i) is the source line of timestamp i; `medians` forms the medians (InMemoryMedians
+// or CountingMedians). dt and line are read in increasing i, pass after pass.
+template <typename Interval, typename Line, typename Medians>
+Result<SamplePeriod> FromIntervals(const Interval& dt, size_t n, double span_s, const Line& line,
+                                   const SamplePeriodOptions& options, const Medians& medians) {
   std::vector<uint32_t> reset_lines;
   for (size_t i = 0; i + 1 < n; ++i) {
-    if (!(dt(i) > 0.0)) reset_lines.push_back(line[i + 1]);
+    if (!(dt(i) > 0.0)) reset_lines.push_back(line(i + 1));
   }
   if (!reset_lines.empty()) {
     return MakeError("", reset_lines.front(),
@@ -61,19 +142,12 @@ Result<SamplePeriod> FromIntervals(const Interval& dt, size_t n, double span_s,
                                  "estimators need one uniformly sampled run; split the log there",
                                  LineList(reset_lines), reset_lines.size()));
   }
-  double median = 0.0;
-  {
-    std::vector<double> sorted(n - 1);
-    for (size_t i = 0; i + 1 < n; ++i) sorted[i] = dt(i);
-    const size_t mid = sorted.size() / 2;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid),
-                     sorted.end());
-    median = sorted[mid];
-    if (sorted.size() % 2 == 0) {
-      const double below =
-          *std::max_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid));
-      median = 0.5 * (median + below);
-    }
+  const double median = medians.Whole(dt, n - 1);
+  if (std::isnan(median)) {
+    return MakeError(fmt::format(
+        "sample period: the {} intervals take more than {} distinct values: their median is not "
+        "available in streaming mode (run without --stream)",
+        n - 1, CountingMedians::kMaxDistinctIntervals));
   }
 
   SamplePeriod period;
@@ -87,7 +161,7 @@ Result<SamplePeriod> FromIntervals(const Interval& dt, size_t n, double span_s,
   for (size_t i = 0; i + 1 < n; ++i) {
     if (dt(i) > options.gap_factor * median) {
       TimingGap gap;
-      gap.line = line[i + 1];
+      gap.line = line(i + 1);
       gap.dt_s = dt(i);
       // Counted in double and saturated: a gap of 1e300 s (a corrupt timestamp) must not
       // overflow the int64 count (UBSan: signed overflow, issue #20).
@@ -114,15 +188,9 @@ Result<SamplePeriod> FromIntervals(const Interval& dt, size_t n, double span_s,
     period.drift_min_dt_s = std::numeric_limits<double>::infinity();
     period.drift_max_dt_s = -std::numeric_limits<double>::infinity();
     for (size_t part = 0; part < kParts; ++part) {
-      std::vector<double> piece;
       const size_t end = part + 1 == kParts ? n - 1 : (part + 1) * per;
-      for (size_t i = part * per; i < end; ++i) {
-        if (dt(i) <= options.gap_factor * median) piece.push_back(dt(i));
-      }
-      if (piece.empty()) continue;
-      std::nth_element(piece.begin(), piece.begin() + static_cast<std::ptrdiff_t>(piece.size() / 2),
-                       piece.end());
-      const double part_median = piece[piece.size() / 2];
+      const double part_median = medians.Part(dt, part * per, end, options.gap_factor * median);
+      if (std::isnan(part_median)) continue;
       if (part == 0) period.drift_first_dt_s = part_median;
       if (part + 1 == kParts) period.drift_last_dt_s = part_median;
       period.drift_min_dt_s = std::min(period.drift_min_dt_s, part_median);
@@ -133,8 +201,8 @@ Result<SamplePeriod> FromIntervals(const Interval& dt, size_t n, double span_s,
           "sample interval drifts: the median interval of tenths of the record ranges from "
           "{:.6g} s to {:.6g} s ({:.6g} s in the first tenth, lines {}-{}, {:.6g} s in the "
           "last, lines {}-{}); the Allan taus assume one tau0 = {:.6g} s",
-          period.drift_min_dt_s, period.drift_max_dt_s, period.drift_first_dt_s, line[0], line[per],
-          period.drift_last_dt_s, line[(kParts - 1) * per], line[n - 1], median));
+          period.drift_min_dt_s, period.drift_max_dt_s, period.drift_first_dt_s, line(0), line(per),
+          period.drift_last_dt_s, line((kParts - 1) * per), line(n - 1), median));
     }
   }
   if (!gap_lines.empty() && !options.allow_gaps) {
@@ -193,7 +261,7 @@ Result<SamplePeriod> EstimateSamplePeriod(const double* t_s, const uint32_t* lin
     }
   }
   return FromIntervals([t_s](size_t i) { return t_s[i + 1] - t_s[i]; }, n, t_s[n - 1] - t_s[0],
-                       line, options);
+                       [line](size_t i) { return line[i]; }, options, InMemoryMedians());
 }
 
 Result<SamplePeriod> EstimateSamplePeriodNs(const std::vector<int64_t>& t_ns,
@@ -221,7 +289,82 @@ Result<SamplePeriod> EstimateSamplePeriodNs(const int64_t* t_ns, const uint32_t*
   };
   int64_t span = 0;
   if (__builtin_sub_overflow(t_ns[n - 1], t_ns[0], &span)) span = INT64_MAX;
-  return FromIntervals(dt, n, static_cast<double>(span) / 1e9, line, options);
+  return FromIntervals(
+      dt, n, static_cast<double>(span) / 1e9, [line](size_t i) { return line[i]; }, options,
+      InMemoryMedians());
+}
+
+namespace {
+
+// Values i, i + 1 of a column read in order through a window of kWindow values, reloaded
+// when i leaves it (FromIntervals reads pass after pass in increasing i). A failed read
+// leaves zeros and keeps the first error.
+template <typename T>
+class Sequential {
+ public:
+  static constexpr size_t kWindow = size_t{1} << 16;
+  Sequential(const std::function<Status(size_t, size_t, T*)>& read, size_t n)
+      : read_(read), n_(n), window_(kWindow) {}
+  T operator()(size_t i) const {
+    if (i < begin_ || i >= begin_ + count_) Load(i);
+    return window_[i - begin_];
+  }
+  Status status() const { return status_; }
+
+ private:
+  void Load(size_t i) const {
+    begin_ = i;
+    count_ = std::min(kWindow, n_ - i);
+    Status s = read_(begin_, count_, window_.data());
+    if (!s.ok() && status_.ok()) status_ = s;
+  }
+  const std::function<Status(size_t, size_t, T*)>& read_;
+  size_t n_;
+  mutable std::vector<T> window_;
+  mutable size_t begin_ = 0, count_ = 0;
+  mutable Status status_ = Status::Ok();
+};
+
+}  // namespace
+
+Result<SamplePeriod> EstimateSamplePeriodChunked(const TimeColumnReader& time,
+                                                 const LineColumnReader& line, size_t n,
+                                                 const SamplePeriodOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError("sample period options: " + why);
+  if (Status s = CheckSizes(n, n); !s.ok()) return s.error();
+  Sequential<uint32_t> lines(line, n);
+  const auto line_of = [&lines](size_t i) { return lines(i); };
+  Result<SamplePeriod> period = MakeError("not estimated");
+  if (time.t_ns) {
+    Sequential<int64_t> t(time.t_ns, n);
+    const auto dt = [&t](size_t i) {
+      const int64_t a = t(i), b = t(i + 1);
+      int64_t d = 0;
+      if (__builtin_sub_overflow(b, a, &d)) d = b > a ? INT64_MAX : INT64_MIN;
+      return static_cast<double>(d) / 1e9;
+    };
+    int64_t span = 0;
+    if (__builtin_sub_overflow(t(n - 1), t(0), &span)) span = INT64_MAX;
+    period =
+        FromIntervals(dt, n, static_cast<double>(span) / 1e9, line_of, options, CountingMedians());
+    if (!t.status().ok()) return t.status().error();
+  } else {
+    Sequential<double> t(time.t_s, n);
+    for (size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(t(i))) {
+        return MakeError("", lines(i), fmt::format("timestamp {} is not finite", t(i)));
+      }
+    }
+    const auto dt = [&t](size_t i) {
+      const double a = t(i);
+      return t(i + 1) - a;
+    };
+    period = FromIntervals(dt, n, t(n - 1) - t(0), line_of, options, CountingMedians());
+    if (!t.status().ok()) return t.status().error();
+  }
+  if (!lines.status().ok()) return lines.status().error();
+  return period;
 }
 
 }  // namespace metro

@@ -109,20 +109,127 @@ Result<AllanGapPolicy> ParseAllanGapPolicy(const std::string& text) {
   return MakeError(fmt::format("--gaps '{}': expected skip, split or refuse", text));
 }
 
+namespace {
+
+// The curve of one quantity from the session in memory: its window's sample period, then the
+// curve, through the gaps by `options.gaps` when samples are missing.
+AllanQuantityCurve CurveInMemory(const Session& session, const TagTypeA& t, const QuantityTypeA& q,
+                                 const SessionAllanOptions& options) {
+  AllanQuantityCurve out;
+  const Tag* tag = session.FindTag(t.sensor);
+  METRO_CHECK(tag != nullptr);
+  const Quantity* values = tag->Find(q.name);
+  const auto b = static_cast<ptrdiff_t>(t.window.begin);
+  const auto e = static_cast<ptrdiff_t>(t.window.end);
+  // The window's rates: the column itself when the window is all of it (no copy).
+  std::vector<double> window_copy;
+  const bool whole = b == 0 && static_cast<size_t>(e) == values->values.size();
+  if (!whole) window_copy.assign(values->values.begin() + b, values->values.begin() + e);
+  const std::vector<double>& rate = whole ? values->values : window_copy;
+  // tau0 from exact integer differences when the file's time was integer (t_ns).
+  SamplePeriodOptions period_options = options.period;
+  period_options.allow_gaps = options.gaps != AllanGapPolicy::kRefuse;
+  // The window's times and lines read in place (no copies of 10^7-sample columns).
+  const size_t count = t.window.end - t.window.begin;
+  const uint32_t* line = tag->line.data() + b;
+  out.period = tag->t_ns.size() == tag->t_s.size()
+                   ? EstimateSamplePeriodNs(tag->t_ns.data() + b, line, count, period_options)
+                   : EstimateSamplePeriod(tag->t_s.data() + b, line, count, period_options);
+  if (!out.period.ok()) return out;
+  if (out.period.value().missing_samples == 0) {
+    out.curve = ComputeAllan(rate, out.period.value().tau0_s, options.allan);
+  } else {
+    Result<std::vector<int64_t>> index =
+        GridIndices(*tag, t.window.begin, t.window.end, out.period.value().tau0_s, session.path);
+    if (index.ok()) {
+      out.gaps = AllanGapsReport{};
+      out.curve =
+          CurveThroughGaps(rate, index.value(), out.period.value().tau0_s, options, &*out.gaps);
+    } else {
+      out.curve = index.error();
+    }
+  }
+  return out;
+}
+
+// The report's allan block of one quantity from its curve (or why there is none).
+void AddCurve(const TagTypeA& t, const QuantityTypeA& q, AllanQuantityCurve made,
+              const SessionAllanOptions& options, const std::string& path, QuantityReport* jq,
+              std::string* csv, AllanSectionSummary* summary) {
+  auto failed = [&](const std::string& reason) {
+    summary->failures.push_back(fmt::format("sensor {} {}: {}", t.sensor, q.name, reason));
+  };
+  if (!made.period.ok()) {
+    Error err = made.period.error();
+    err.file = path;
+    if (options.gaps == AllanGapPolicy::kRefuse && err.message.find("gap") != std::string::npos) {
+      err.message += " (--gaps refuse; --gaps skip analyses through them)";
+    }
+    jq->allan = AllanReport{};
+    jq->allan->error = err.ToString();
+    failed(err.ToString());
+    return;
+  }
+  if (!made.curve.ok()) {
+    jq->allan = AllanReport{};
+    jq->allan->error = made.curve.error().ToString();
+    jq->allan->gaps = made.gaps;
+    failed(made.curve.error().ToString());
+    return;
+  }
+  const AllanCurve& curve = made.curve.value();
+  ++summary->analysed;
+  auto fit = FitNoiseTerms(curve, options.fit);
+  const NoiseFit noise_fit = fit.ok() ? fit.value() : NoiseFit{};
+  AllanReport allan = MakeAllanReport(curve, noise_fit, q.unit);
+  const SamplePeriod& p = made.period.value();
+  allan.sample_period = {p.tau0_s,           p.rate_hz,
+                         p.mean_dt_s,        p.jitter_rms_s,
+                         p.max_abs_jitter_s, static_cast<int64_t>(p.missing_samples),
+                         p.warnings};
+  allan.gaps = made.gaps;
+  if (!fit.ok()) {
+    allan.fit_error = fit.error().message;
+    // No model at all: the report says so as for a model it could not test (issue #36).
+    allan.model_check = UnfittedModelCheck(curve, fit.error().message);
+  }
+  // A rejected or untested noise model is said on stderr and in the report (issue #36).
+  if (allan.model_check && !(allan.model_check->tested && !allan.model_check->rejected)) {
+    jq->warnings.push_back(allan.model_check->summary);
+  }
+  jq->allan = std::move(allan);
+  jq->allan_type_a_link =
+      MakeAllanTypeALink(curve, noise_fit, t.window.t_last_s - t.window.t_first_s);
+  if (csv != nullptr) {
+    *csv += fmt::format("# sensor {} {}\n", t.sensor, q.name);
+    *csv += AllanCurveCsv(curve, q.unit);
+  }
+}
+
+}  // namespace
+
 Result<AllanSectionSummary> AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                                              const SessionAllanOptions& options,
                                              SessionReport* report, std::string* csv) {
+  return AddAllanToReportFrom(
+      type_a, options, session.path,
+      [&](const TagTypeA& t, const QuantityTypeA& q) {
+        return CurveInMemory(session, t, q, options);
+      },
+      report, csv);
+}
+
+Result<AllanSectionSummary> AddAllanToReportFrom(const SessionTypeA& type_a,
+                                                 const SessionAllanOptions& options,
+                                                 const std::string& path,
+                                                 const AllanCurveSource& source,
+                                                 SessionReport* report, std::string* csv) {
   std::string why;
   if (!options.allan.IsValid(&why)) return MakeError("invalid --allan options: " + why);
   AllanSectionSummary summary;
-  auto failed = [&summary](const TagTypeA& t, const QuantityTypeA& q, const std::string& reason) {
-    summary.failures.push_back(fmt::format("sensor {} {}: {}", t.sensor, q.name, reason));
-  };
   std::vector<SensorReport>& sensors = report->sensors;
   for (size_t k = 0; k < type_a.tags.size(); ++k) {
     const TagTypeA& t = type_a.tags[k];
-    const Tag* tag = session.FindTag(t.sensor);
-    METRO_CHECK(tag != nullptr);
     SensorReport& jtag = sensors[k];
     for (const QuantityTypeA& q : t.quantities) {
       const bool wanted = options.quantities.empty()
@@ -133,86 +240,11 @@ Result<AllanSectionSummary> AddAllanToReport(const Session& session, const Sessi
       ++summary.requested;
       QuantityReport* jq = jtag.Find(q.name);
       METRO_CHECK(jq != nullptr);
-      const Quantity* values = tag->Find(q.name);
-      const auto b = static_cast<ptrdiff_t>(t.window.begin);
-      const auto e = static_cast<ptrdiff_t>(t.window.end);
-      // The window's rates: the column itself when the window is all of it (no copy).
-      std::vector<double> window_copy;
-      const bool whole = b == 0 && static_cast<size_t>(e) == values->values.size();
-      if (!whole) window_copy.assign(values->values.begin() + b, values->values.begin() + e);
-      const std::vector<double>& rate = whole ? values->values : window_copy;
-      // tau0 from exact integer differences when the file's time was integer (t_ns).
-      SamplePeriodOptions period_options = options.period;
-      period_options.allow_gaps = options.gaps != AllanGapPolicy::kRefuse;
-      // The window's times and lines read in place (no copies of 10^7-sample columns).
-      const size_t count = t.window.end - t.window.begin;
-      const uint32_t* line = tag->line.data() + b;
-      auto period = tag->t_ns.size() == tag->t_s.size()
-                        ? EstimateSamplePeriodNs(tag->t_ns.data() + b, line, count, period_options)
-                        : EstimateSamplePeriod(tag->t_s.data() + b, line, count, period_options);
-      if (!period.ok()) {
-        Error err = period.error();
-        err.file = session.path;
-        if (options.gaps == AllanGapPolicy::kRefuse &&
-            err.message.find("gap") != std::string::npos) {
-          err.message += " (--gaps refuse; --gaps skip analyses through them)";
-        }
-        jq->allan = AllanReport{};
-        jq->allan->error = err.ToString();
-        failed(t, q, err.ToString());
-        continue;
-      }
-      std::optional<AllanGapsReport> gaps;
-      Result<AllanCurve> curve = MakeError("not computed");
-      if (period.value().missing_samples == 0) {
-        curve = ComputeAllan(rate, period.value().tau0_s, options.allan);
-      } else {
-        Result<std::vector<int64_t>> index =
-            GridIndices(*tag, t.window.begin, t.window.end, period.value().tau0_s, session.path);
-        if (index.ok()) {
-          gaps = AllanGapsReport{};
-          curve = CurveThroughGaps(rate, index.value(), period.value().tau0_s, options, &*gaps);
-        } else {
-          curve = index.error();
-        }
-      }
-      if (!curve.ok()) {
-        jq->allan = AllanReport{};
-        jq->allan->error = curve.error().ToString();
-        jq->allan->gaps = gaps;
-        failed(t, q, curve.error().ToString());
-        continue;
-      }
-      ++summary.analysed;
-      auto fit = FitNoiseTerms(curve.value(), options.fit);
-      const NoiseFit noise_fit = fit.ok() ? fit.value() : NoiseFit{};
-      AllanReport allan = MakeAllanReport(curve.value(), noise_fit, q.unit);
-      const SamplePeriod& p = period.value();
-      allan.sample_period = {p.tau0_s,           p.rate_hz,
-                             p.mean_dt_s,        p.jitter_rms_s,
-                             p.max_abs_jitter_s, static_cast<int64_t>(p.missing_samples),
-                             p.warnings};
-      allan.gaps = gaps;
-      if (!fit.ok()) {
-        allan.fit_error = fit.error().message;
-        // No model at all: the report says so as for a model it could not test (issue #36).
-        allan.model_check = UnfittedModelCheck(curve.value(), fit.error().message);
-      }
-      // A rejected or untested noise model is said on stderr and in the report (issue #36).
-      if (allan.model_check && !(allan.model_check->tested && !allan.model_check->rejected)) {
-        jq->warnings.push_back(allan.model_check->summary);
-      }
-      jq->allan = std::move(allan);
-      jq->allan_type_a_link =
-          MakeAllanTypeALink(curve.value(), noise_fit, t.window.t_last_s - t.window.t_first_s);
-      if (csv != nullptr) {
-        *csv += fmt::format("# sensor {} {}\n", t.sensor, q.name);
-        *csv += AllanCurveCsv(curve.value(), q.unit);
-      }
+      AddCurve(t, q, source(t, q), options, path, jq, csv, &summary);
     }
   }
   if (summary.requested == 0) {
-    return MakeError(session.path, 0,
+    return MakeError(path, 0,
                      "--allan: no rate quantity (gyroscope or accelerometer column) in the "
                      "window; name one with --quantity");
   }

@@ -374,6 +374,8 @@ void CutSettled(const Tag& tag, const std::vector<size_t>& source, const WindowO
 
 // ---- evaluation ---------------------------------------------------------------------------
 
+}  // namespace
+
 // The warnings a Type A result calls for (autocorrelation, drift).
 void WarnOnTypeA(QuantityTypeA* r) {
   const TypeAResult& ta = r->type_a;
@@ -403,37 +405,45 @@ void WarnOnTypeA(QuantityTypeA* r) {
   }
 }
 
-// The gimbal-lock warnings: on pitch itself (its values x_begin..x_end as evaluated) and on
-// yaw and roll when the tag's pitch nears 90 deg in the window.
-void WarnOnGimbalLock(const Tag& tag, const Quantity& q, const AppliedWindow& w,
-                      const double* x_begin, const double* x_end, QuantityTypeA* r) {
-  if (q.name == "pitch_deg") {
-    double worst = 0.0;
-    for (const double* v = x_begin; v != x_end; ++v) worst = std::max(worst, std::abs(*v));
-    if (worst >= kGimbalLockWarnPitchDeg) {
-      r->warnings.push_back(fmt::format(
-          "|pitch| reaches {:.2f} deg: near gimbal lock yaw and roll are ill-defined", worst));
-    }
+namespace {}  // namespace
+
+void WarnOnGimbalLockFromMax(const std::string& name, QuantityOrigin origin,
+                             double pitch_max_abs_deg, QuantityTypeA* r) {
+  if (name == "pitch_deg" && pitch_max_abs_deg >= kGimbalLockWarnPitchDeg) {
+    r->warnings.push_back(
+        fmt::format("|pitch| reaches {:.2f} deg: near gimbal lock yaw and roll are ill-defined",
+                    pitch_max_abs_deg));
   }
   // Near pitch +-90 deg only yaw - roll (or yaw + roll) is defined by the attitude: each
   // of them alone swings by up to 180 deg on a tiny rotation, and its spread is not
   // noise of the tag.
-  if (q.name == "yaw_deg" || q.name == "roll_deg") {
+  if ((name == "yaw_deg" || name == "roll_deg") && pitch_max_abs_deg >= kGimbalLockWarnPitchDeg) {
+    r->warnings.push_back(fmt::format(
+        "{}{}: |pitch_deg| reaches {:.2f} deg in the window (gimbal lock at 90): yaw and "
+        "roll are then ill-defined, only their sum or difference is; this mean and "
+        "spread are not the tag's",
+        name, origin == QuantityOrigin::kDerived ? " (derived from the quaternion)" : "",
+        pitch_max_abs_deg));
+  }
+}
+
+namespace {
+
+// The gimbal-lock warnings: on pitch itself (its values x_begin..x_end as evaluated) and on
+// yaw and roll when the tag's pitch nears 90 deg in the window.
+void WarnOnGimbalLock(const Tag& tag, const Quantity& q, const AppliedWindow& w,
+                      const double* x_begin, const double* x_end, QuantityTypeA* r) {
+  double worst = 0.0;
+  if (q.name == "pitch_deg") {
+    for (const double* v = x_begin; v != x_end; ++v) worst = std::max(worst, std::abs(*v));
+  } else if (q.name == "yaw_deg" || q.name == "roll_deg") {
     if (const Quantity* pitch = tag.Find("pitch_deg")) {
-      double worst = 0.0;
       for (size_t i = r->window_begin; i < w.end; ++i) {
         if (std::isfinite(pitch->values[i])) worst = std::max(worst, std::abs(pitch->values[i]));
       }
-      if (worst >= kGimbalLockWarnPitchDeg) {
-        r->warnings.push_back(fmt::format(
-            "{}{}: |pitch_deg| reaches {:.2f} deg in the window (gimbal lock at 90): yaw and "
-            "roll are then ill-defined, only their sum or difference is; this mean and "
-            "spread are not the tag's",
-            q.name, q.origin == QuantityOrigin::kDerived ? " (derived from the quaternion)" : "",
-            worst));
-      }
     }
   }
+  WarnOnGimbalLockFromMax(q.name, q.origin, worst, r);
 }
 
 // One quantity of one tag over [r->window_begin, w.end): Type A and its warnings.

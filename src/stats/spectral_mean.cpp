@@ -13,6 +13,10 @@
 namespace metro {
 namespace {
 
+// Values read per chunk by the chunked estimate: a whole number of kBlock lag-product blocks
+// and of four-value lanes.
+constexpr size_t kStreamChunk = size_t{1} << 16;
+
 // Order cap: min(floor(10 log10 n), floor(n / 10)), at least 1.
 int DefaultMaxOrder(size_t n) {
   const int by_log = static_cast<int>(std::floor(10.0 * std::log10(static_cast<double>(n))));
@@ -168,6 +172,29 @@ double CentreAndSquare(const double* x, size_t n, double centre, double* d) {
   return AddLanes(s);
 }
 
+// LaneSum (squared = false) or CentreAndSquare's sum of squares about `centre` (true) over
+// one chunk of the record, added to *lanes; n must be a multiple of 4 except for the last
+// chunk, so the lanes hold the same terms as the whole record's (and the same clones).
+METRO_SIMD_CLONES
+void AddLaneSums(const double* x, size_t n, double centre, bool squared, Lanes4* lanes) {
+  const Lanes4 c = {centre, centre, centre, centre};
+  const size_t body = n / 4 * 4;
+  for (size_t i = 0; i < body; i += 4) {
+    Lanes4 v;
+    Load4(x + i, &v);
+    if (squared) {
+      v -= c;
+      *lanes += v * v;
+    } else {
+      *lanes += v;
+    }
+  }
+  for (size_t i = body; i < n; ++i) {
+    const double v = squared ? x[i] - centre : x[i];
+    (*lanes)[0] += squared ? v * v : v;
+  }
+}
+
 // acc[l] = sum_{t=t0}^{t1-1} x_t x_{t+l} for l < lags: four lags at a time, each in four
 // lanes over t (lane (t - t0) mod 4, the last (t1 - t0) mod 4 terms in lane 0), so the
 // accumulators stay in registers and every METRO_SIMD_CLONES path gives the same bits.
@@ -232,31 +259,46 @@ class LagProductBurg {
       : n_(d.size()), lags_(max_order + 2) {
     const size_t l_count = lags_;
     c_.assign(l_count, 0.0);
-    head_.assign(l_count * (l_count + 1), 0.0);
-    tail_.assign(l_count * (l_count + 1), 0.0);
     // c_l for every lag in one pass: the inner loop over l keeps independent accumulators.
     const double* x = d.data();
-    const size_t full = n_ > l_count ? n_ - l_count + 1 : 0;
     std::vector<double> block(l_count);
-    for (size_t t0 = 0; t0 < full; t0 += kBlock) {
-      BlockLagProducts(x, t0, std::min(full, t0 + kBlock), l_count, block.data());
-      for (size_t l = 0; l < l_count; ++l) c_[l] += block[l];
+    for (size_t t0 = 0; t0 < FullEnd(); t0 += kBlock) {
+      AddBlock(x, t0, std::min(FullEnd(), t0 + kBlock), block.data());
     }
-    for (size_t t = full; t < n_; ++t) {
-      for (size_t l = 0; l + t < n_; ++l) c_[l] += static_cast<Wide>(x[t]) * x[t + l];
-    }
-    // head_l(k) = sum_{u<k} x_u x_{u+l}, tail_l(k) = sum of the last k products of lag l.
-    for (size_t l = 0; l < l_count; ++l) {
-      for (size_t k = 1; k <= l_count; ++k) {
-        const size_t u_head = k - 1;
-        const Wide h = u_head + l < n_ ? static_cast<Wide>(x[u_head]) * x[u_head + l] : 0.0L;
-        Head(l, k) = Head(l, k - 1) + h;
-        const bool in_range = n_ >= l + k;
-        const size_t u_tail = in_range ? n_ - l - k : 0;
-        Tail(l, k) =
-            Tail(l, k - 1) + (in_range ? static_cast<Wide>(x[u_tail]) * x[u_tail + l] : 0.0L);
+    const auto at = [x](size_t i) { return x[i]; };
+    AddTail(at);
+    InitWindows(at);
+  }
+
+  // The same from a record read in chunks (ChunkReader): x_t - mean formed as above, the same
+  // blocks and lanes, so c_l, the head and the tail are the same bits as in memory.
+  static Result<std::unique_ptr<LagProductBurg>> FromChunks(const ChunkReader& read, size_t n,
+                                                            double mean, size_t max_order) {
+    auto burg = std::unique_ptr<LagProductBurg>(new LagProductBurg(n, max_order + 2));
+    const size_t l_count = burg->lags_;
+    const size_t full = burg->FullEnd();
+    std::vector<double> x(kStreamChunk + l_count), block(l_count);
+    for (size_t base = 0; base < full; base += kStreamChunk) {
+      const size_t count = std::min(kStreamChunk + l_count, n - base);
+      if (Status s = read(base, count, x.data()); !s.ok()) return s.error();
+      for (size_t i = 0; i < count; ++i) x[i] -= mean;
+      const size_t stop = std::min(full, base + kStreamChunk);
+      for (size_t t0 = base; t0 < stop; t0 += kBlock) {
+        burg->AddBlock(x.data(), t0 - base, std::min(stop, t0 + kBlock) - base, block.data());
       }
     }
+    // The first and last 2 (p + 2) values: the tail sums and the head and tail windows.
+    const size_t edge = std::min(n, 2 * l_count);
+    std::vector<double> head(edge), tail(edge);
+    if (Status s = read(0, edge, head.data()); !s.ok()) return s.error();
+    if (Status s = read(n - edge, edge, tail.data()); !s.ok()) return s.error();
+    for (double& v : head) v -= mean;
+    for (double& v : tail) v -= mean;
+    const size_t tail_begin = n - edge;
+    const auto at = [&](size_t i) { return i < edge ? head[i] : tail[i - tail_begin]; };
+    burg->AddTail(at);
+    burg->InitWindows(at);
+    return burg;
   }
 
   double c0() const { return static_cast<double>(c_[0]); }
@@ -283,6 +325,42 @@ class LagProductBurg {
   }
 
  private:
+  LagProductBurg(size_t n, size_t lags) : n_(n), lags_(lags) { c_.assign(lags_, 0.0); }
+
+  // Products x_t x_{t+l} of every lag are summed in kBlock blocks for t < FullEnd(), where
+  // every lag has its partner; the rest one by one (AddTail).
+  size_t FullEnd() const { return n_ > lags_ ? n_ - lags_ + 1 : 0; }
+  void AddBlock(const double* x, size_t t0, size_t t1, double* block) {
+    BlockLagProducts(x, t0, t1, lags_, block);
+    for (size_t l = 0; l < lags_; ++l) c_[l] += block[l];
+  }
+  // at(i) is x_i for i >= FullEnd().
+  template <typename At>
+  void AddTail(const At& at) {
+    for (size_t t = FullEnd(); t < n_; ++t) {
+      for (size_t l = 0; l + t < n_; ++l) c_[l] += static_cast<Wide>(at(t)) * at(t + l);
+    }
+  }
+  // head_l(k) = sum_{u<k} x_u x_{u+l}, tail_l(k) = sum of the last k products of lag l;
+  // at(i) is x_i for the first and last 2 lags_ indices.
+  template <typename At>
+  void InitWindows(const At& at) {
+    const size_t l_count = lags_;
+    head_.assign(l_count * (l_count + 1), 0.0);
+    tail_.assign(l_count * (l_count + 1), 0.0);
+    for (size_t l = 0; l < l_count; ++l) {
+      for (size_t k = 1; k <= l_count; ++k) {
+        const size_t u_head = k - 1;
+        const Wide h = u_head + l < n_ ? static_cast<Wide>(at(u_head)) * at(u_head + l) : 0.0L;
+        Head(l, k) = Head(l, k - 1) + h;
+        const bool in_range = n_ >= l + k;
+        const size_t u_tail = in_range ? n_ - l - k : 0;
+        Tail(l, k) =
+            Tail(l, k - 1) + (in_range ? static_cast<Wide>(at(u_tail)) * at(u_tail + l) : 0.0L);
+      }
+    }
+  }
+
   // G with the first head_terms and the last tail_terms products of lag l left out.
   Wide Window(size_t l, size_t head_terms, size_t tail_terms) const {
     return c_[l] - Head(l, head_terms) - Tail(l, tail_terms);
@@ -314,27 +392,18 @@ double Conditioning(const std::vector<double>& a, double c0, double energy) {
 
 }  // namespace
 
-Result<ArSpectralResult> ArSpectralMeanUncertainty(const double* values, size_t n,
-                                                   const ArSpectralOptions& options) {
-  if (n < 4) {
-    return MakeError(fmt::format("{} observations: an autoregressive fit needs at least 4", n));
-  }
+namespace {
+
+// Burg's recursion over orders m = 0, 1, ... from the lag products (`fast`, or the lattice
+// from the start when it is null), the AIC choice and the estimate. `d` is the centred record
+// for the lattice, null when it is not in memory (the streaming mode): a fallback then
+// returns an Error.
+Result<ArSpectralResult> FitOrders(size_t n, double e0, int max_order,
+                                   std::unique_ptr<LagProductBurg> fast,
+                                   const std::vector<double>* d, const ArSpectralOptions& options) {
   const double dn = static_cast<double>(n);
-  const double mean = LaneSum(values, n) / dn;
-  std::vector<double> d(n);
-  const double e0 = CentreAndSquare(values, n, mean, d.data());
-  if (!std::isfinite(e0)) return MakeError("the series is not finite");
-  if (e0 == 0.0) return MakeError("a constant series has no autocorrelation");
-  const int max_order = std::min(options.max_order > 0 ? options.max_order : DefaultMaxOrder(n),
-                                 static_cast<int>(n) - 2);
-  // Burg's recursion over orders m = 0, 1, ...; a is the prediction filter of order m.
-  std::unique_ptr<LagProductBurg> fast;
   std::unique_ptr<ErrorSeriesBurg> lattice;
-  if (options.method == ArSpectralOptions::Method::kLattice) {
-    lattice = std::make_unique<ErrorSeriesBurg>(d, std::vector<double>{1.0});
-  } else {
-    fast = std::make_unique<LagProductBurg>(d, static_cast<size_t>(std::max(max_order, 0)));
-  }
+  if (!fast) lattice = std::make_unique<ErrorSeriesBurg>(*d, std::vector<double>{1.0});
   std::vector<double> a{1.0}, next;
   double e = e0 / dn;
   double best_aic = dn * std::log(e);
@@ -347,8 +416,15 @@ Result<ArSpectralResult> ArSpectralMeanUncertainty(const double* values, size_t 
       s = fast->Sums(a);
       if (Conditioning(a, fast->c0(), s.energy) > kMaxLagProductConditioning) {
         // Too much cancellation for the lag products: the lattice from here on.
+        if (d == nullptr) {
+          return MakeError(fmt::format(
+              "the autoregressive fit of this strongly correlated series needs the error-series "
+              "lattice from order {}, which reads the whole record in memory: not available in "
+              "streaming mode (run without --stream)",
+              p));
+        }
         fast.reset();
-        lattice = std::make_unique<ErrorSeriesBurg>(d, a);
+        lattice = std::make_unique<ErrorSeriesBurg>(*d, a);
         ++best.lattice_fallbacks;
       }
     }
@@ -408,6 +484,71 @@ Result<ArSpectralResult> ArSpectralMeanUncertainty(const double* values, size_t 
     return MakeError("the autoregressive long-run variance overflows double precision");
   }
   return best;
+}
+
+int MaxOrder(const ArSpectralOptions& options, size_t n) {
+  return std::min(options.max_order > 0 ? options.max_order : DefaultMaxOrder(n),
+                  static_cast<int>(n) - 2);
+}
+
+}  // namespace
+
+Result<ArSpectralResult> ArSpectralMeanUncertainty(const double* values, size_t n,
+                                                   const ArSpectralOptions& options) {
+  if (n < 4) {
+    return MakeError(fmt::format("{} observations: an autoregressive fit needs at least 4", n));
+  }
+  const double mean = LaneSum(values, n) / static_cast<double>(n);
+  std::vector<double> d(n);
+  const double e0 = CentreAndSquare(values, n, mean, d.data());
+  if (!std::isfinite(e0)) return MakeError("the series is not finite");
+  if (e0 == 0.0) return MakeError("a constant series has no autocorrelation");
+  const int max_order = MaxOrder(options, n);
+  std::unique_ptr<LagProductBurg> fast;
+  if (options.method == ArSpectralOptions::Method::kLagProducts) {
+    fast = std::make_unique<LagProductBurg>(d, static_cast<size_t>(std::max(max_order, 0)));
+  }
+  return FitOrders(n, e0, max_order, std::move(fast), &d, options);
+}
+
+Result<ArSpectralResult> ArSpectralMeanUncertaintyChunked(const ChunkReader& read, size_t n,
+                                                          const ArSpectralOptions& options) {
+  if (n < 4) {
+    return MakeError(fmt::format("{} observations: an autoregressive fit needs at least 4", n));
+  }
+  if (options.method != ArSpectralOptions::Method::kLagProducts) {
+    return MakeError("the lattice method reads the record in memory: not available in chunks");
+  }
+  // The mean and e0 in the lanes of LaneSum and CentreAndSquare (chunks are whole lanes).
+  std::vector<double> x(kStreamChunk);
+  double sum = 0.0;
+  {
+    Lanes4 lanes = {0.0, 0.0, 0.0, 0.0};
+    for (size_t base = 0; base < n; base += kStreamChunk) {
+      const size_t count = std::min(kStreamChunk, n - base);
+      if (Status s = read(base, count, x.data()); !s.ok()) return s.error();
+      AddLaneSums(x.data(), count, 0.0, false, &lanes);
+    }
+    sum = AddLanes(lanes);
+  }
+  const double mean = sum / static_cast<double>(n);
+  double e0 = 0.0;
+  {
+    Lanes4 lanes = {0.0, 0.0, 0.0, 0.0};
+    for (size_t base = 0; base < n; base += kStreamChunk) {
+      const size_t count = std::min(kStreamChunk, n - base);
+      if (Status s = read(base, count, x.data()); !s.ok()) return s.error();
+      AddLaneSums(x.data(), count, mean, true, &lanes);
+    }
+    e0 = AddLanes(lanes);
+  }
+  if (!std::isfinite(e0)) return MakeError("the series is not finite");
+  if (e0 == 0.0) return MakeError("a constant series has no autocorrelation");
+  const int max_order = MaxOrder(options, n);
+  auto fast =
+      LagProductBurg::FromChunks(read, n, mean, static_cast<size_t>(std::max(max_order, 0)));
+  if (!fast.ok()) return fast.error();
+  return FitOrders(n, e0, max_order, std::move(fast).value(), nullptr, options);
 }
 
 }  // namespace metro

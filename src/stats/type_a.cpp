@@ -52,17 +52,80 @@ inline double AddLanes(const Lanes4& s) { return (s[0] + s[1]) + (s[2] + s[3]); 
 // the last full group of four go to lane 0.
 inline size_t LaneOf(size_t i, size_t n) { return i < n - n % 4 ? i % 4 : 0; }
 
-// Sum of x in four lanes (pairwise-like accuracy).
+// Adds x to the four lanes *s (pairwise-like accuracy); over consecutive chunks whose sizes
+// are multiples of 4 (the last one aside) the lanes hold the same terms as over the whole.
 METRO_SIMD_CLONES
-double Sum4(const double* x, size_t n) {
-  Lanes4 s = {0.0, 0.0, 0.0, 0.0};
+void AddSum4(const double* x, size_t n, Lanes4* s) {
   size_t i = 0;
   for (; i + 4 <= n; i += 4) {
     Lanes4 v;
     Load4(x + i, &v);
-    s += v;
+    *s += v;
   }
-  for (; i < n; ++i) s[0] += x[i];
+  for (; i < n; ++i) (*s)[0] += x[i];
+}
+
+double Sum4(const double* x, size_t n) {
+  Lanes4 s = {0.0, 0.0, 0.0, 0.0};
+  AddSum4(x, n, &s);
+  return AddLanes(s);
+}
+
+// The record an evaluation reads: in memory, or in chunks through a ChunkReader (the
+// streaming mode, spectral_mean.hpp). Chunks are a whole number of 512-value sub-chunks and
+// of lanes, so every sum adds the same terms in the same order either way.
+class Record {
+ public:
+  static constexpr size_t kChunk = size_t{1} << 16;
+  Record(const double* values, size_t n) : values_(values), n_(n) {}
+  Record(const ChunkReader& read, size_t n) : read_(&read), n_(n) {}
+  size_t size() const { return n_; }
+  bool in_memory() const { return values_ != nullptr; }
+  const double* values() const { return values_; }
+  const ChunkReader& reader() const { return *read_; }
+  Status Read(size_t begin, size_t count, double* out) const {
+    if (values_ != nullptr) {
+      std::copy(values_ + begin, values_ + begin + count, out);
+      return Status::Ok();
+    }
+    return (*read_)(begin, count, out);
+  }
+  // f(x, begin, count) over consecutive chunks covering [begin, end); x[0, count + lookahead)
+  // holds values begin.. (fewer past n). In memory: one call on the values themselves.
+  template <typename F>
+  Status ForEachChunk(size_t begin, size_t end, size_t lookahead, const F& f) const {
+    if (values_ != nullptr) {
+      if (end > begin) f(values_ + begin, begin, end - begin);
+      return Status::Ok();
+    }
+    std::vector<double> buffer(kChunk + lookahead);
+    for (size_t at = begin; at < end; at += kChunk) {
+      const size_t count = std::min(kChunk, end - at);
+      if (Status s = Read(at, std::min(count + lookahead, n_ - at), buffer.data()); !s.ok()) {
+        return s;
+      }
+      f(buffer.data(), at, count);
+    }
+    return Status::Ok();
+  }
+  // What a failed read of the spill file said (the first one).
+  Status error() const { return error_; }
+  void Fail(Status s) const {
+    if (error_.ok()) error_ = std::move(s);
+  }
+
+ private:
+  const double* values_ = nullptr;
+  const ChunkReader* read_ = nullptr;
+  size_t n_ = 0;
+  mutable Status error_ = Status::Ok();
+};
+
+double Sum4(const Record& x) {
+  if (x.in_memory()) return Sum4(x.values(), x.size());
+  Lanes4 s = {0.0, 0.0, 0.0, 0.0};
+  x.Fail(x.ForEachChunk(0, x.size(), 0,
+                        [&s](const double* v, size_t, size_t count) { AddSum4(v, count, &s); }));
   return AddLanes(s);
 }
 
@@ -72,39 +135,54 @@ double Sum4(const double* x, size_t n) {
 // The series is centred chunk by chunk into a buffer that stays in L1, and every sum runs
 // in four lanes (LaneOf), so the nine products per i are independent of each other and of
 // the previous i. s1 and p[0] add the same terms in the same order as a plain four-lane
-// loop would.
-METRO_SIMD_CLONES
-void CentredLagSums(const double* x, size_t n, double centre, double* s1, double* p) {
-  constexpr size_t kChunk = 512;  // A multiple of 4.
-  alignas(32) double e[kChunk + kDirectLags];
+// loop would. (CentredLanes, AddCentredBody, CentredLagSums.)
+struct CentredLanes {
   Lanes4 sum = {0.0, 0.0, 0.0, 0.0};
-  Lanes4 acc[kDirectLags + 1];
-  for (Lanes4& a : acc) a = sum;
+  Lanes4 acc[kDirectLags + 1] = {};
+};
+
+// The body of CentredLagSums for m (a multiple of 4, at most 512) terms starting at x, which
+// holds m + kDirectLags values.
+METRO_SIMD_CLONES
+void AddCentredBody(const double* x, size_t m, double centre, CentredLanes* lanes) {
+  constexpr size_t kChunk = 512;
+  alignas(32) double e[kChunk + kDirectLags];
+  for (size_t j = 0; j < m + kDirectLags; ++j) e[j] = x[j] - centre;
+  for (size_t j = 0; j < m; j += 4) {
+    Lanes4 e0;
+    Load4(e + j, &e0);
+    lanes->sum += e0;
+    for (size_t k = 0; k <= kDirectLags; ++k) {
+      Lanes4 ek;
+      Load4(e + j + k, &ek);
+      lanes->acc[k] += e0 * ek;
+    }
+  }
+}
+
+void CentredLagSums(const Record& x, double centre, double* s1, double* p) {
+  const size_t n = x.size();
+  CentredLanes lanes;
   // Below `body` every lag k <= kDirectLags has its partner e_{i+k} (i + k < n), and
   // `body` is a multiple of 4.
   const size_t body = n > kDirectLags ? (n - kDirectLags) / 4 * 4 : 0;
-  for (size_t i0 = 0; i0 < body; i0 += kChunk) {
-    const size_t m = std::min(kChunk, body - i0);
-    for (size_t j = 0; j < m + kDirectLags; ++j) e[j] = x[i0 + j] - centre;
-    for (size_t j = 0; j < m; j += 4) {
-      Lanes4 e0;
-      Load4(e + j, &e0);
-      sum += e0;
-      for (size_t k = 0; k <= kDirectLags; ++k) {
-        Lanes4 ek;
-        Load4(e + j + k, &ek);
-        acc[k] += e0 * ek;
-      }
+  x.Fail(x.ForEachChunk(0, body, kDirectLags, [&](const double* v, size_t, size_t count) {
+    for (size_t j = 0; j < count; j += 512) {
+      AddCentredBody(v + j, std::min<size_t>(512, count - j), centre, &lanes);
     }
-  }
+  }));
+  std::vector<double> rest(n - body);
+  x.Fail(x.Read(body, n - body, rest.data()));
   for (size_t i = body; i < n; ++i) {
     const size_t lane = LaneOf(i, n);
-    const double ei = x[i] - centre;
-    sum[lane] += ei;
-    for (size_t k = 0; k <= kDirectLags && i + k < n; ++k) acc[k][lane] += ei * (x[i + k] - centre);
+    const double ei = rest[i - body] - centre;
+    lanes.sum[lane] += ei;
+    for (size_t k = 0; k <= kDirectLags && i + k < n; ++k) {
+      lanes.acc[k][lane] += ei * (rest[i + k - body] - centre);
+    }
   }
-  *s1 = AddLanes(sum);
-  for (size_t k = 0; k <= kDirectLags; ++k) p[k] = AddLanes(acc[k]);
+  *s1 = AddLanes(lanes.sum);
+  for (size_t k = 0; k <= kDirectLags; ++k) p[k] = AddLanes(lanes.acc[k]);
 }
 
 // Forward (r2c) and backward (c2r) plans of one transform size, made once per process
@@ -215,7 +293,8 @@ FftWorkspace& WorkspaceFor(size_t block, std::unique_ptr<FftWorkspace>* owned) {
 // transform of size M per block of L samples plus one backward transform in all: about
 // 2n log2(2L) operations, in cache, instead of 3n log2(1.5n) for the whole-series padding.
 // L = ws->block; returns c_0..c_L (in ws->real).
-const double* BlockLagSums(const double* x, double mean, size_t n, FftWorkspace* ws) {
+const double* BlockLagSums(const Record& x, double mean, FftWorkspace* ws) {
+  const size_t n = x.size();
   const size_t block = ws->block;
   const size_t size = 2 * block;
   const size_t bins = block + 1;  // size / 2 + 1
@@ -227,7 +306,12 @@ const double* BlockLagSums(const double* x, double mean, size_t n, FftWorkspace*
   auto transform = [&](size_t b, fftw_complex* out) {
     const size_t begin = b * block;
     const size_t count = begin < n ? std::min(block, n - begin) : 0;
-    for (size_t i = 0; i < count; ++i) real[i] = x[begin + i] - mean;
+    if (x.in_memory()) {
+      for (size_t i = 0; i < count; ++i) real[i] = x.values()[begin + i] - mean;
+    } else {
+      x.Fail(x.Read(begin, count, real));
+      for (size_t i = 0; i < count; ++i) real[i] -= mean;
+    }
     // [block, size) stays zero: the out-of-place r2c transform preserves its input.
     std::fill(real + count, real + block, 0.0);
     fftw_execute_dft_r2c(plans.forward, real, out);
@@ -257,6 +341,9 @@ const double* BlockLagSums(const double* x, double mean, size_t n, FftWorkspace*
 // small blocks still grow 16 x.
 constexpr size_t kFirstLagBlock = 2048;
 constexpr size_t kLargeLagBlock = size_t{1} << 19;
+constexpr size_t kMaxChunkedLagBlock = size_t{1} << 19;
+// Longest record whose AR fit the chunked evaluation runs in memory when the lattice is needed.
+constexpr size_t kMaxLatticeInMemory = size_t{1} << 21;
 
 // rho at lag kDirectLags above which the first block is skipped: an AR(1) decay through it,
 // rho_k = rho_8^(k/8), would still be above 0.5 at lag kFirstLagBlock (0.5^(8/2048)),
@@ -265,7 +352,7 @@ constexpr double kLongCorrelationRho = 0.99729605608547;
 
 }  // namespace
 
-static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t n,
+static Result<TypeAResult> EvaluateTypeAContinuous(const Record& values,
                                                    const TypeAOptions& options);
 
 bool TypeAOptions::IsValid(std::string* why) const {
@@ -297,7 +384,7 @@ void Autocorrelation(const double* x, size_t n, size_t max_lag, double* rho) {
   size_t block = 256;
   while (block < max_lag) block *= 2;
   std::unique_ptr<FftWorkspace> owned;
-  const double* c = BlockLagSums(x, mean, n, &WorkspaceFor(block, &owned));
+  const double* c = BlockLagSums(Record(x, n), mean, &WorkspaceFor(block, &owned));
   const double c0 = c[0];
   for (size_t k = 0; k <= max_lag; ++k) rho[k] = c0 > 0.0 ? c[k] / c0 : 0.0;
   rho[0] = 1.0;
@@ -325,15 +412,26 @@ double DigitizedUMean(size_t n, double step, double x_min, double x_max, double 
   return u_0;
 }
 
-Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOptions& options) {
-  Result<TypeAResult> result = EvaluateTypeAContinuous(values, n, options);
+namespace {
+
+// EvaluateTypeA on a record in memory or in chunks: the continuous evaluation, then
+// Willink's rules when the quantization step is known.
+Result<TypeAResult> EvaluateRecord(const Record& values, const TypeAOptions& options) {
+  const size_t n = values.size();
+  Result<TypeAResult> result = EvaluateTypeAContinuous(values, options);
   if (!result.ok() || !(options.quantization_step > 0.0)) return result;
   TypeAResult& r = result.value();
   const double step = options.quantization_step;
-  const auto [lo, hi] = std::minmax_element(values, values + n);
-  const double spread = *hi - *lo;
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
+  values.Fail(values.ForEachChunk(0, n, 0, [&](const double* v, size_t, size_t count) {
+    const auto [l, h] = std::minmax_element(v, v + count);
+    lo = std::min(lo, *l);
+    hi = std::max(hi, *h);
+  }));
+  if (!values.error().ok()) return values.error().error();
+  const double spread = hi - lo;
   const double u_0 = r.u_mean_available ? r.u_mean : 0.0;
-  const double u = DigitizedUMean(n, step, *lo, *hi, r.mean, u_0);
+  const double u = DigitizedUMean(n, step, lo, hi, r.mean, u_0);
   const bool none = spread <= kStepTolerance * step;
   if (none || u > u_0) {
     r.u_mean_available = true;
@@ -347,11 +445,22 @@ Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOpt
         step,
         none ? "all equal"
              : fmt::format("a spread of one step with the mean {:.6g} off its middle",
-                           r.mean - 0.5 * (*lo + *hi)),
+                           r.mean - 0.5 * (lo + hi)),
         u, n - 1);
   }
   if (options.truncated) r.mean += 0.5 * step;  // GTC's truncate: readings cut, not rounded.
   return result;
+}
+
+}  // namespace
+
+Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOptions& options) {
+  return EvaluateRecord(Record(values, n), options);
+}
+
+Result<TypeAResult> EvaluateTypeAChunked(const ChunkReader& read, size_t n,
+                                         const TypeAOptions& options) {
+  return EvaluateRecord(Record(read, n), options);
 }
 
 namespace {
@@ -366,19 +475,25 @@ struct CentredSums {
 };
 
 // The sums, or why the series cannot be evaluated (n < 2, a value or a sum not finite).
-Result<CentredSums> SumsOf(const double* values, size_t n) {
+Result<CentredSums> SumsOf(const Record& values) {
+  const size_t n = values.size();
   if (n < 2) {
     return MakeError(fmt::format("{} observation{}: a Type A evaluation needs at least 2", n,
                                  n == 1 ? "" : "s"));
   }
   // A NaN or an infinity makes the sum non-finite, so the values are scanned only then.
-  const double total = Sum4(values, n);
+  const double total = Sum4(values);
+  if (!values.error().ok()) return values.error().error();
   if (!std::isfinite(total)) {
-    for (size_t i = 0; i < n; ++i) {
-      if (!std::isfinite(values[i])) {
-        return MakeError(fmt::format("observation {} is not finite", i + 1));
-      }
-    }
+    size_t bad = n;
+    values.Fail(
+        values.ForEachChunk(0, n, 0, [&bad, n](const double* v, size_t begin, size_t count) {
+          for (size_t i = 0; i < count && bad == n; ++i) {
+            if (!std::isfinite(v[i])) bad = begin + i;
+          }
+        }));
+    if (!values.error().ok()) return values.error().error();
+    if (bad < n) return MakeError(fmt::format("observation {} is not finite", bad + 1));
     // Every value is finite but their sum is not: the mean cannot be formed in double.
     return MakeError(fmt::format("the sum of the {} observations overflows double precision", n));
   }
@@ -389,7 +504,8 @@ Result<CentredSums> SumsOf(const double* values, size_t n) {
   sums.first = total / dn;
   // The same pass forms the direct lag sums about `first` (used only if autocorrelation is
   // on; they cost no extra read of the series).
-  CentredLagSums(values, n, sums.first, &sums.s1, sums.p);
+  CentredLagSums(values, sums.first, &sums.s1, sums.p);
+  if (!values.error().ok()) return values.error().error();
   const double s2 = sums.p[0];
   if (!std::isfinite(s2) || !std::isfinite(sums.s1)) {
     // Deviations beyond about 1e154 square past the largest double: the variance (and so u)
@@ -430,7 +546,8 @@ TypeAResult Classical(size_t n, const CentredSums& sums) {
 
 // metro's u_mean: the AR(p) spectral density at frequency zero (spectral_mean.hpp), unless
 // the series is a deterministic pattern; then the batch-means stationarity check.
-void ArAndBatchMeans(const double* values, size_t n, TypeAResult* result) {
+void ArAndBatchMeans(const Record& values, TypeAResult* result) {
+  const size_t n = values.size();
   TypeAResult& r = *result;
   const double dn = static_cast<double>(n);
   // A series the AR model predicts almost exactly (innovations below 1e-6 of the variance:
@@ -439,7 +556,20 @@ void ArAndBatchMeans(const double* values, size_t n, TypeAResult* result) {
   constexpr double kDeterministicInnovationRatio = 1e-6;
   ArSpectralOptions ar_options;
   ar_options.stop_below_innovation_variance = kDeterministicInnovationRatio * r.variance;
-  auto ar = ArSpectralMeanUncertainty(values, n, ar_options);
+  auto ar = values.in_memory() ? ArSpectralMeanUncertainty(values.values(), n, ar_options)
+                               : ArSpectralMeanUncertaintyChunked(values.reader(), n, ar_options);
+  if (!ar.ok() && !values.in_memory()) {
+    // The chunked fit cannot run the lattice (spectral_mean.hpp). A record of at most
+    // kMaxLatticeInMemory values is read in (the lattice's five arrays: 80 MB at most) and
+    // fitted as in memory; a longer one keeps the classical s(mean), said, never guessed.
+    if (n <= kMaxLatticeInMemory) {
+      std::vector<double> whole(n);
+      values.Fail(values.Read(0, n, whole.data()));
+      ar = ArSpectralMeanUncertainty(whole.data(), n, ar_options);
+    } else {
+      r.u_mean_note = "u_mean is the classical s(mean): " + ar.error().message;
+    }
+  }
   const bool deterministic =
       ar.ok() && (ar.value().stopped_below ||
                   ar.value().innovation_variance < kDeterministicInnovationRatio * r.variance);
@@ -464,15 +594,21 @@ void ArAndBatchMeans(const double* values, size_t n, TypeAResult* result) {
     // Stationarity check: batch means of the last b * m values (type_a.hpp).
     const size_t b = kStationarityBatches;
     const size_t m = n / b;
-    const double* x0 = values + (n - b * m);
+    const size_t start = n - b * m;
     double means[kStationarityBatches];
+    double sum = 0.0;
+    values.Fail(values.ForEachChunk(start, n, 0, [&](const double* v, size_t begin, size_t count) {
+      for (size_t i = 0; i < count; ++i) {
+        const size_t at = begin + i - start;
+        sum += v[i] - r.mean;
+        if ((at + 1) % m == 0) {
+          means[at / m] = sum / static_cast<double>(m);
+          sum = 0.0;
+        }
+      }
+    }));
     double grand = 0.0;
-    for (size_t j = 0; j < b; ++j) {
-      double sum = 0.0;
-      for (size_t i = 0; i < m; ++i) sum += x0[j * m + i] - r.mean;
-      means[j] = sum / static_cast<double>(m);
-      grand += means[j];
-    }
+    for (double v : means) grand += v;
     grand /= static_cast<double>(b);
     double ss = 0.0;
     for (double v : means) ss += (v - grand) * (v - grand);
@@ -489,9 +625,14 @@ void ArAndBatchMeans(const double* values, size_t n, TypeAResult* result) {
 // ---- Zhang's variance factor --------------------------------------------------------------
 
 // Direct lag sums c_0..c_kDirectLags about the mean from those about `first`.
-void DirectLagSums(const double* values, size_t n, const CentredSums& sums,
-                   double direct[kDirectLags + 1]) {
+void DirectLagSums(const Record& values, const CentredSums& sums, double direct[kDirectLags + 1]) {
+  const size_t n = values.size();
   const double dn = static_cast<double>(n);
+  // The first and last kDirectLags values (H_k and T_k below).
+  const size_t edge = std::min(n, kDirectLags);
+  double first_values[kDirectLags], last_values[kDirectLags];
+  values.Fail(values.Read(0, edge, first_values));
+  values.Fail(values.Read(n - edge, edge, last_values));
   const double first = sums.first;
   const double s1 = sums.s1;
   const double s2 = sums.p[0];
@@ -509,8 +650,8 @@ void DirectLagSums(const double* values, size_t n, const CentredSums& sums,
   for (size_t k = 1; k <= kDirectLags; ++k) {
     const size_t kn = std::min(k, n);
     if (k <= n) {
-      head += values[k - 1] - first;
-      tail += values[n - k] - first;
+      head += first_values[k - 1] - first;
+      tail += last_values[edge - k] - first;
     }
     direct[k] =
         p[k] - delta * (2.0 * s1 - head - tail) + static_cast<double>(n - kn) * delta * delta;
@@ -519,8 +660,11 @@ void DirectLagSums(const double* values, size_t n, const CentredSums& sums,
 
 // Zhang (2006): variance factor from the autocorrelation up to the cut-off lag (Bartlett's
 // band), n_eff and std_of_mean_autocorr.
-void ZhangFactor(const double* values, size_t n, const TypeAOptions& options,
-                 const double direct[kDirectLags + 1], TypeAResult* result) {
+// In chunks (the streaming mode) the lag sums stop at kMaxChunkedLagBlock lags (64 bytes of
+// buffers per lag): a cut-off beyond it is not computed, and the Error says so.
+Status ZhangFactor(const Record& values, const TypeAOptions& options,
+                   const double direct[kDirectLags + 1], TypeAResult* result) {
+  const size_t n = values.size();
   TypeAResult& r = *result;
   const double dn = static_cast<double>(n);
   const double c0 = direct[0];
@@ -554,7 +698,16 @@ void ZhangFactor(const double* values, size_t n, const TypeAOptions& options,
         size_t max_block = 1;
         while (max_block < max_lag) max_block *= 2;
         block = std::min(block, max_block);
-        lag_sums = BlockLagSums(values, r.mean, n, &WorkspaceFor(block, &owned_workspace));
+        if (!values.in_memory() && block > kMaxChunkedLagBlock) {
+          return MakeError(fmt::format(
+              "the autocorrelation is still outside its band at lag {} (a long correlation "
+              "or drift); Zhang's factor needs lags beyond the {} the streaming mode keeps: "
+              "n_eff and std_of_mean_autocorr are not available in streaming mode (run without "
+              "--stream)",
+              lags_known, kMaxChunkedLagBlock));
+        }
+        lag_sums = BlockLagSums(values, r.mean, &WorkspaceFor(block, &owned_workspace));
+        if (!values.error().ok()) return values.error();
         lags_known = block;
       }
       rho_k = lag_sums[k] / lag_sums[0];
@@ -576,15 +729,17 @@ void ZhangFactor(const double* values, size_t n, const TypeAOptions& options,
   r.variance_factor = std::max(factor, 1.0 / dn);
   r.n_eff = dn / r.variance_factor;
   r.std_of_mean_autocorr = std::sqrt(r.variance_factor * r.variance / dn);
+  return Status::Ok();
 }
 
 }  // namespace
 
-static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t n,
+static Result<TypeAResult> EvaluateTypeAContinuous(const Record& values,
                                                    const TypeAOptions& options) {
+  const size_t n = values.size();
   std::string why;
   if (!options.IsValid(&why)) return MakeError("invalid Type A options: " + why);
-  Result<CentredSums> sums = SumsOf(values, n);
+  Result<CentredSums> sums = SumsOf(values);
   if (!sums.ok()) return sums.error();
   TypeAResult r = Classical(n, sums.value());
   if (r.variance == 0.0) {
@@ -611,11 +766,16 @@ static Result<TypeAResult> EvaluateTypeAContinuous(const double* values, size_t 
         n);
     return r;
   }
-  ArAndBatchMeans(values, n, &r);
-  r.autocorr_computed = true;
+  ArAndBatchMeans(values, &r);
   double direct[kDirectLags + 1];
-  DirectLagSums(values, n, sums.value(), direct);
-  ZhangFactor(values, n, options, direct, &r);
+  DirectLagSums(values, sums.value(), direct);
+  const Status zhang = ZhangFactor(values, options, direct, &r);
+  if (!values.error().ok()) return values.error().error();
+  if (zhang.ok()) {
+    r.autocorr_computed = true;
+  } else {
+    r.autocorr_note = zhang.error().message;
+  }
   return r;
 }
 

@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "metro/core/spill_file.hpp"
 #include "metro/core/status.hpp"
 
 namespace metro {
@@ -175,5 +176,14 @@ Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
 Result<AllanCurve> ComputeAllanWithGaps(const std::vector<double>& rate,
                                         const std::vector<uint8_t>& present, double tau0_s,
                                         const AllanOptions& options = AllanOptions());
+
+// The same curve as ComputeAllan for a record of n_rate samples read in chunks (the streaming
+// mode, issue #38 step 2): memory independent of the length (a few MB), three passes over
+// the record. The phase is regenerated block by block exactly as ComputeAllan integrates it
+// (the same bits); the sums differ from ComputeAllan's only in the order of their terms
+// (relative differences of order 1e-15). oadev and ohdev only, at the spacing's factors;
+// other estimators and explicit m lists return an Error saying so.
+Result<AllanCurve> ComputeAllanChunked(const ChunkReader& read, int64_t n_rate, double tau0_s,
+                                       const AllanOptions& options = AllanOptions());
 
 }  // namespace metro

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -75,5 +76,21 @@ Result<SamplePeriod> EstimateSamplePeriod(const double* t_s, const uint32_t* lin
                                           const SamplePeriodOptions& options = {});
 Result<SamplePeriod> EstimateSamplePeriodNs(const int64_t* t_ns, const uint32_t* line, size_t n,
                                             const SamplePeriodOptions& options = {});
+
+// The times of a record in a spill file (the streaming mode): exact integer times when the
+// session has them (t_ns set), else seconds (t_s set).
+struct TimeColumnReader {
+  std::function<Status(size_t begin, size_t count, double* out)> t_s;
+  std::function<Status(size_t begin, size_t count, int64_t* out)> t_ns;
+};
+using LineColumnReader = std::function<Status(size_t begin, size_t count, uint32_t* out)>;
+
+// The same estimate from columns read in order, in memory independent of n: the medians
+// from counts of the distinct intervals (a clock's intervals take few values). The same
+// result as EstimateSamplePeriod(Ns) on the same times, except that intervals taking more
+// than 65536 distinct values give an Error that names the streaming mode.
+Result<SamplePeriod> EstimateSamplePeriodChunked(const TimeColumnReader& time,
+                                                 const LineColumnReader& line, size_t n,
+                                                 const SamplePeriodOptions& options = {});
 
 }  // namespace metro

@@ -4,6 +4,8 @@
 // (quantities[name].allan_type_a_link).
 #pragma once
 
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,6 +64,23 @@ struct AllanSectionSummary {
 Result<AllanSectionSummary> AddAllanToReport(const Session& session, const SessionTypeA& type_a,
                                              const SessionAllanOptions& options,
                                              SessionReport* report, std::string* csv);
+
+// One quantity's sample period and curve (or why not), and the gaps it went through.
+struct AllanQuantityCurve {
+  Result<SamplePeriod> period = MakeError("not estimated");
+  Result<AllanCurve> curve = MakeError("not computed");
+  std::optional<AllanGapsReport> gaps;
+};
+using AllanCurveSource =
+    std::function<AllanQuantityCurve(const TagTypeA& tag, const QuantityTypeA& quantity)>;
+
+// AddAllanToReport with the curves from `source` (the streaming mode's spill files); the
+// report's blocks are made as AddAllanToReport makes them. `path` names the session.
+Result<AllanSectionSummary> AddAllanToReportFrom(const SessionTypeA& type_a,
+                                                 const SessionAllanOptions& options,
+                                                 const std::string& path,
+                                                 const AllanCurveSource& source,
+                                                 SessionReport* report, std::string* csv);
 
 // The console summary of a report's Allan sections (empty when there is none): per tag and
 // quantity the fitted IEEE 952 N, B and K (IEEE Std 952-1997 Annex C) in the JCGM 100 7.2.2

@@ -101,6 +101,14 @@ struct SessionTypeA {
 Result<SessionTypeA> EvaluateSessionTypeA(const Session& session,
                                           const SessionTypeAOptions& options);
 
+// The warnings EvaluateSessionTypeA adds to a quantity from its Type A result
+// (autocorrelation, u_mean not available, drift), and the gimbal-lock warnings on pitch_deg,
+// yaw_deg and roll_deg from the largest |pitch_deg| in the window; for evaluations made
+// elsewhere (the streaming mode).
+void WarnOnTypeA(QuantityTypeA* r);
+void WarnOnGimbalLockFromMax(const std::string& name, QuantityOrigin origin,
+                             double pitch_max_abs_deg, QuantityTypeA* r);
+
 // True for quantities that wrap at +-180 deg.
 bool IsWrappingAngle(const std::string& quantity_name);
 

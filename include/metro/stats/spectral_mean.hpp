@@ -37,6 +37,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "metro/core/spill_file.hpp"
 #include "metro/core/status.hpp"
 
 namespace metro {
@@ -76,5 +77,13 @@ struct ArSpectralResult {
 // Requires n >= 4 finite values that are not all equal; returns an Error otherwise.
 Result<ArSpectralResult> ArSpectralMeanUncertainty(const double* values, size_t n,
                                                    const ArSpectralOptions& options = {});
+
+// The same estimate from a record read in chunks, three times, with memory independent of n.
+// The sums are formed in the same blocks and lanes as ArSpectralMeanUncertainty's, so the
+// result is the same to the last bit, except where that one hands over to the lattice (a
+// strongly correlated series, see kLagProducts): the lattice needs the record in memory, and
+// this returns an Error that says so. Only Method::kLagProducts.
+Result<ArSpectralResult> ArSpectralMeanUncertaintyChunked(const ChunkReader& read, size_t n,
+                                                          const ArSpectralOptions& options = {});
 
 }  // namespace metro

@@ -45,6 +45,7 @@
 #include <string>
 
 #include "metro/core/status.hpp"
+#include "metro/stats/spectral_mean.hpp"
 
 namespace metro {
 
@@ -132,6 +133,16 @@ double DigitizedUMean(size_t n, double step, double x_min, double x_max, double 
 // Evaluates n observations. Requires n >= 2 (one observation has no Type A evaluation)
 // and finite values; returns an Error otherwise.
 Result<TypeAResult> EvaluateTypeA(const double* values, size_t n, const TypeAOptions& options = {});
+
+// The same evaluation of a record read in chunks (the streaming mode, issue #38): memory
+// independent of n, and the same numbers as EvaluateTypeA to the last bit, with two
+// exceptions said in the result rather than guessed: a strongly correlated series of more
+// than 2^21 values whose AR fit needs the lattice (shorter ones are read in for it; u_mean is
+// then the classical s(mean), u_mean_note says why), and an
+// autocorrelation whose cut-off lies beyond 2^19 lags (autocorr_computed false, autocorr_note
+// says why).
+Result<TypeAResult> EvaluateTypeAChunked(const ChunkReader& read, size_t n,
+                                         const TypeAOptions& options = {});
 
 // Sample autocorrelation rho_0..rho_max_lag of x (rho_0 = 1), normalised by
 // sum (x - mean)^2, via FFT. Exposed for tests and for the noise module.

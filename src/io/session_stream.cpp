@@ -1,0 +1,68 @@
+#include "metro/io/session_stream.hpp"
+
+#include <fmt/format.h>
+
+#include <optional>
+
+#include "core/parallel.hpp"
+#include "io/csv_blocks.hpp"
+#include "io/session_internal.hpp"
+#include "metro/core/file.hpp"
+
+namespace metro {
+
+Result<Session> StreamSession(const std::string& path, const LoadOptions& options,
+                              const std::function<Status(Session& group)>& on_group,
+                              size_t group_bytes) {
+  std::string why;
+  if (!options.IsValid(&why)) return MakeError(path, 0, "invalid load options: " + why);
+  SessionFormat format = options.format;
+  if (format == SessionFormat::kAuto) {
+    auto detected = DetectSessionFormat(path);
+    if (!detected.ok()) return detected.error();
+    format = detected.value();
+  }
+  if (format == SessionFormat::kReceiver || format == SessionFormat::kULog ||
+      format == SessionFormat::kImuTk) {
+    return MakeError(path, 0,
+                     fmt::format("{} input is not available in streaming mode (text sessions "
+                                 "are: session.csv, euroc, raw, phyphox, sensor-logger); run "
+                                 "without --stream",
+                                 SessionFormatName(format)));
+  }
+  if (!options.topics.empty()) {
+    return MakeError(path, 0, "--topic: topics are chosen in ULog input, not in streaming mode");
+  }
+  internal::MappedFile file;
+  if (Status s = file.Open(path); !s.ok()) return s.error();
+  if (file.size() == 0) {
+    return MakeError(path, 0,
+                     "empty file: expected a session.csv header line (t_s,...) followed by data "
+                     "rows");
+  }
+  internal::HeaderLine header;
+  auto plan = internal::PlanCsv(path, file, options, format, &header);
+  if (!plan.ok()) return plan.error();
+  const auto derive = [&](Session& group) {
+    if (options.derive_euler) {
+      for (Tag& tag : group.tags) internal::DeriveEulerIfAbsent(&tag);
+    }
+    return on_group(group);
+  };
+  Result<std::string> digest = std::string();
+  std::optional<Result<Session>> session;
+  internal::RunBeside([&] { digest = Sha256File(path); },
+                      [&] {
+                        session = internal::StreamGeneralCsv(path, file, header, plan.value(),
+                                                             options, group_bytes, derive);
+                      });
+  if (const std::string changed = file.ChangedSinceOpen(); !changed.empty()) {
+    return MakeError(path, 0, changed);
+  }
+  if (!session->ok()) return *std::move(session);
+  if (!digest.ok()) return digest.error();
+  session->value().sha256 = digest.value();
+  return *std::move(session);
+}
+
+}  // namespace metro
