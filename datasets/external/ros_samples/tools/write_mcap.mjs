@@ -8,7 +8,7 @@ import { MessageWriter } from "@foxglove/rosmsg2-serialization";
 import { parse } from "@foxglove/rosmsg";
 import * as zstd from "@foxglove/wasm-zstd";
 import lz4 from "lz4js";
-import { writeFileSync } from "node:fs";
+import { mkdirSync, writeFileSync } from "node:fs";
 
 const IMU_DEF = `std_msgs/Header header
 geometry_msgs/Quaternion orientation
@@ -92,7 +92,7 @@ const compressors = {
 
 // streams: [{topic, count, period_ns, t0_ns, orientation, swaps: [k...] (message k and k+1
 // exchange stamps), dups: [k...] (message k+1 gets message k's stamp)}], plus a Temperature topic.
-async function writeFile(name, options, streams, seed) {
+async function writeFile(name, options, streams, seed, expectedName = name.replace(/\.mcap$/, ".expected.json")) {
   const rnd = mulberry32(seed);
   const buffer = new TempBuffer();
   const writer = new McapWriter({
@@ -148,7 +148,7 @@ async function writeFile(name, options, streams, seed) {
   for (const m of queue) await writer.addMessage(m);
   await writer.end();
   writeFileSync("../" + name, buffer.get());
-  writeFileSync("../" + name.replace(/\.mcap$/, ".expected.json"), JSON.stringify(expected) + "\n");
+  writeFileSync("../" + expectedName, JSON.stringify(expected) + "\n");
 }
 
 await zstd.isLoaded;
@@ -166,3 +166,35 @@ await writeFile("two_imus_zstd.mcap", { compression: "zstd" },
   [{ topic: "/imu0", count: 48, period_ns: 5000000n, t0_ns: T0, orientation: false,
      swaps: [10, 30], dups: [40] },
    { topic: "/imu1", count: 24, period_ns: 10000000n, t0_ns: T0 + 2000000n, orientation: true }], 5);
+
+// A ROS 2 bag folder with MCAP storage (rosbag2_storage_mcap): metadata.yaml (rosbag2's
+// version 5 layout, written here) and one zstd-chunked file.
+mkdirSync("../rosbag2_mcap", { recursive: true });
+await writeFile("rosbag2_mcap/rosbag2_mcap_0.mcap", { compression: "zstd" }, one(), 6,
+                "rosbag2_mcap.expected.json");
+writeFileSync("../rosbag2_mcap/metadata.yaml", `rosbag2_bagfile_information:
+  version: 5
+  storage_identifier: mcap
+  duration:
+    nanoseconds: ${59n * 5000000n}
+  starting_time:
+    nanoseconds_since_epoch: ${T0 + 700000n}
+  message_count: 65
+  topics_with_message_count:
+    - topic_metadata:
+        name: /imu/data
+        type: sensor_msgs/msg/Imu
+        serialization_format: cdr
+        offered_qos_profiles: ""
+      message_count: 60
+    - topic_metadata:
+        name: /imu/temperature
+        type: sensor_msgs/msg/Temperature
+        serialization_format: cdr
+        offered_qos_profiles: ""
+      message_count: 5
+  compression_format: ""
+  compression_mode: ""
+  relative_file_paths:
+    - rosbag2_mcap_0.mcap
+`);
