@@ -127,11 +127,11 @@ Status BagReader::ReadRecords(std::string_view region, bool in_chunk, uint64_t c
       const std::string what = fmt::format(
           "a record runs past the {}'s end ({} bytes left); expected header_len, header, "
           "data_len, data{}",
-          in_chunk ? "chunk" : "file", c.left(),
+          in_chunk ? "chunk" : "file", region.size() - (at - base),
           in_chunk ? "" : " (a bag cut short: --lenient reads the complete records before the cut)");
       if (in_chunk) return FailIn(chunk_offset, at, what);
       if (!options_.lenient) return Fail(at, what);
-      log_->truncated_bytes = static_cast<int64_t>(c.left());
+      log_->truncated_bytes = static_cast<int64_t>(region.size() - (at - base));
       log_->problems.push_back(fmt::format("{}: byte offset {}: {}", log_->path, at, what));
       return Status::Ok();
     }
