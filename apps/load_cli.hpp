@@ -23,9 +23,9 @@ struct LoadCliOptions {
   LoadOptions library;
 };
 
-// Registers --format, --topic, --time, --time-order, --frame-period-s, --lenient, --column, --columns-file, --rate-hz
-// and,
-// with `full_scale_flags`, --accel-fs-g and --gyro-fs-dps (calibrate fit has its own).
+// Registers --format, --topic, --time, --time-order, --frame-period-s, --lenient, --column,
+// --columns-file, --rate-hz and, with `full_scale_flags`, --accel-fs-g and --gyro-fs-dps (calibrate
+// fit has its own).
 void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags = true);
 
 // The library's load options for these flags (threads left as they are). Errors (a bad

@@ -71,9 +71,9 @@ std::string DecompressBz2(std::string_view in, uint64_t size, std::string* out) 
   if (rc != BZ_OK) {
     return fmt::format("bz2: error {} ({})", rc,
                        rc == BZ_OUTBUFF_FULL ? "more data than the chunk's size"
-                       : rc == BZ_DATA_ERROR || rc == BZ_DATA_ERROR_MAGIC
-                           ? "corrupt data"
-                           : rc == BZ_UNEXPECTED_EOF ? "the data ends early" : "libbz2");
+                       : rc == BZ_DATA_ERROR || rc == BZ_DATA_ERROR_MAGIC ? "corrupt data"
+                       : rc == BZ_UNEXPECTED_EOF                          ? "the data ends early"
+                                                                          : "libbz2");
   }
   if (out_n != size) {
     return fmt::format("bz2: {} bytes decompressed; the chunk says {}", out_n, size);

@@ -13,8 +13,8 @@ constexpr size_t kDoubles = 4 + 9 + 3 + 9 + 3 + 9;  // After the header, in fiel
 
 // The 37 float64 after the header, from `at` (aligned as the caller requires).
 void ReadDoubles(std::string_view data, size_t at, bool big_endian, ImuMessage* m) {
-  double* dst[] = {m->orientation_xyzw,        m->orientation_covariance,
-                   m->angular_velocity_rads,   m->angular_velocity_covariance,
+  double* dst[] = {m->orientation_xyzw,         m->orientation_covariance,
+                   m->angular_velocity_rads,    m->angular_velocity_covariance,
                    m->linear_acceleration_mps2, m->linear_acceleration_covariance};
   const size_t sizes[] = {4, 9, 3, 9, 3, 9};
   for (size_t f = 0; f < 6; ++f) {
@@ -57,9 +57,10 @@ std::string DecodeImuCdr(std::string_view data, ImuMessage* m) {
     return fmt::format("{} bytes: expected a CDR sensor_msgs/msg/Imu of at least 312", data.size());
   }
   if (data[0] != 0 || (data[1] != 0 && data[1] != 1)) {
-    return fmt::format("encapsulation {:02x} {:02x}: expected CDR (00 01 little endian or 00 00 "
-                       "big endian)",
-                       static_cast<unsigned char>(data[0]), static_cast<unsigned char>(data[1]));
+    return fmt::format(
+        "encapsulation {:02x} {:02x}: expected CDR (00 01 little endian or 00 00 "
+        "big endian)",
+        static_cast<unsigned char>(data[0]), static_cast<unsigned char>(data[1]));
   }
   const bool be = data[1] == 0;
   const std::string_view body = data.substr(4);  // Alignment counts from here.
@@ -67,16 +68,18 @@ std::string DecodeImuCdr(std::string_view data, ImuMessage* m) {
   const uint32_t nsec = Load32(body, 4, be);
   const uint32_t len = Load32(body, 8, be);
   if (len == 0 || len > body.size() - 12 || body[12 + len - 1] != '\0') {
-    return fmt::format("header.frame_id of {} bytes at byte 16: expected a NUL-terminated string "
-                       "within the message's {} bytes",
-                       len, data.size());
+    return fmt::format(
+        "header.frame_id of {} bytes at byte 16: expected a NUL-terminated string "
+        "within the message's {} bytes",
+        len, data.size());
   }
   size_t at = 12 + len;
   at = (at + 7) / 8 * 8;  // float64 alignment.
   if (at + kDoubles * 8 > body.size()) {
-    return fmt::format("{} bytes: expected {} for sensor_msgs/msg/Imu with a {}-byte frame_id "
-                       "(is the message another type?)",
-                       data.size(), 4 + at + kDoubles * 8, len - 1);
+    return fmt::format(
+        "{} bytes: expected {} for sensor_msgs/msg/Imu with a {}-byte frame_id "
+        "(is the message another type?)",
+        data.size(), 4 + at + kDoubles * 8, len - 1);
   }
   ReadDoubles(body, at, be, m);
   return CheckStamp(sec, nsec, m);

@@ -32,9 +32,9 @@ enum Opcode : uint8_t {
 
 const char* OpName(uint8_t op) {
   static const char* const kNames[] = {
-      "invalid",  "Header",       "Footer",           "Schema",     "Channel",
-      "Message",  "Chunk",        "Message Index",    "Chunk Index", "Attachment",
-      "Attachment Index", "Statistics", "Metadata", "Metadata Index", "Summary Offset",
+      "invalid",          "Header",     "Footer",        "Schema",         "Channel",
+      "Message",          "Chunk",      "Message Index", "Chunk Index",    "Attachment",
+      "Attachment Index", "Statistics", "Metadata",      "Metadata Index", "Summary Offset",
       "Data End"};
   return op < 16 ? kNames[op] : "unknown";
 }
@@ -181,11 +181,14 @@ Status McapReader::OnSchema(std::string_view body, const Place& place) {
   uint16_t id = 0;
   std::string_view name, encoding, data;
   if (!c.U16(&id) || !c.Prefixed32(&name) || !c.Prefixed32(&encoding) || !c.Prefixed32(&data)) {
-    return Fail(place, "a Schema record cut short; expected id (uint16), name, encoding and "
-                       "data (uint32 length-prefixed)");
+    return Fail(place,
+                "a Schema record cut short; expected id (uint16), name, encoding and "
+                "data (uint32 length-prefixed)");
   }
-  if (id == 0) return Fail(place, "a Schema record with id 0; expected an id from 1 (0 means "
-                                  "\"no schema\")");
+  if (id == 0)
+    return Fail(place,
+                "a Schema record with id 0; expected an id from 1 (0 means "
+                "\"no schema\")");
   schemas_.emplace(id, std::string(name));
   return Status::Ok();
 }
@@ -195,8 +198,9 @@ Status McapReader::OnChannel(std::string_view body, const Place& place) {
   uint16_t id = 0, schema_id = 0;
   std::string_view topic, encoding;
   if (!c.U16(&id) || !c.U16(&schema_id) || !c.Prefixed32(&topic) || !c.Prefixed32(&encoding)) {
-    return Fail(place, "a Channel record cut short; expected id, schema_id (uint16), topic "
-                       "and message_encoding (uint32 length-prefixed)");
+    return Fail(place,
+                "a Channel record cut short; expected id, schema_id (uint16), topic "
+                "and message_encoding (uint32 length-prefixed)");
   }
   if (channels_.count(id) != 0) return Status::Ok();  // Repeated in the summary.
   auto schema = schemas_.find(schema_id);
@@ -220,8 +224,9 @@ Status McapReader::OnMessage(std::string_view body, const Place& place) {
   uint32_t sequence = 0;
   uint64_t log_time = 0, publish_time = 0;
   if (!c.U16(&channel) || !c.U32(&sequence) || !c.U64(&log_time) || !c.U64(&publish_time)) {
-    return Fail(place, "a Message record cut short; expected channel_id (uint16), sequence "
-                       "(uint32), log_time and publish_time (uint64), data");
+    return Fail(place,
+                "a Message record cut short; expected channel_id (uint16), sequence "
+                "(uint32), log_time and publish_time (uint64), data");
   }
   auto it = channels_.find(channel);
   if (it == channels_.end()) {
@@ -249,9 +254,11 @@ Status McapReader::OnChunk(std::string_view body, const Place& place) {
   uint32_t crc = 0;
   std::string_view compression, records;
   if (!c.U64(&start) || !c.U64(&end) || !c.U64(&size) || !c.U32(&crc) ||
-      !c.Prefixed32(&compression) || !c.U64(&records_length) || !c.Bytes(records_length, &records)) {
-    return Fail(place, "a Chunk record cut short; expected message start and end times, "
-                       "uncompressed size (uint64), CRC (uint32), compression, records");
+      !c.Prefixed32(&compression) || !c.U64(&records_length) ||
+      !c.Bytes(records_length, &records)) {
+    return Fail(place,
+                "a Chunk record cut short; expected message start and end times, "
+                "uncompressed size (uint64), CRC (uint32), compression, records");
   }
   std::string why;
   std::string_view plain = records;
@@ -262,15 +269,15 @@ Status McapReader::OnChunk(std::string_view body, const Place& place) {
     why = internal::DecompressLz4Frame(records, size, &chunk_);
     plain = chunk_;
   } else if (!compression.empty()) {
-    why = fmt::format("compression \"{}\": expected \"\" (none), \"zstd\" or \"lz4\"",
-                      compression);
+    why = fmt::format("compression \"{}\": expected \"\" (none), \"zstd\" or \"lz4\"", compression);
   } else if (size != records.size()) {
     why = fmt::format("uncompressed chunk of {} bytes whose header says {}", records.size(), size);
   }
   if (why.empty() && crc != 0 && internal::Crc32(plain) != crc) {
-    why = fmt::format("the chunk's records have CRC-32 {:08x}; its header says {:08x} (a corrupt "
-                      "chunk)",
-                      internal::Crc32(plain), crc);
+    why = fmt::format(
+        "the chunk's records have CRC-32 {:08x}; its header says {:08x} (a corrupt "
+        "chunk)",
+        internal::Crc32(plain), crc);
   }
   if (!why.empty()) return Fail(place, "Chunk: " + why);
   internal::CountRosChunk(log_, compression);

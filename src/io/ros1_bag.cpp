@@ -110,9 +110,9 @@ class BagReader {
 Status BagReader::Read() {
   if (bytes_.substr(0, kMagic.size()) != kMagic) {
     const std::string_view line = bytes_.substr(0, std::min(bytes_.find('\n'), size_t{16}));
-    return Fail(0, fmt::format("expected the ROS bag version line \"#ROSBAG V2.0\", found \"{}\"{}",
-                               line,
-                               line.substr(0, 9) == "#ROSBAG V" ? " (metro reads format 2.0)" : ""));
+    return Fail(
+        0, fmt::format("expected the ROS bag version line \"#ROSBAG V2.0\", found \"{}\"{}", line,
+                       line.substr(0, 9) == "#ROSBAG V" ? " (metro reads format 2.0)" : ""));
   }
   return ReadRecords(bytes_.substr(kMagic.size()), false, 0);
 }
@@ -128,7 +128,8 @@ Status BagReader::ReadRecords(std::string_view region, bool in_chunk, uint64_t c
           "a record runs past the {}'s end ({} bytes left); expected header_len, header, "
           "data_len, data{}",
           in_chunk ? "chunk" : "file", region.size() - (at - base),
-          in_chunk ? "" : " (a bag cut short: --lenient reads the complete records before the cut)");
+          in_chunk ? ""
+                   : " (a bag cut short: --lenient reads the complete records before the cut)");
       if (in_chunk) return FailIn(chunk_offset, at, what);
       if (!options_.lenient) return Fail(at, what);
       log_->truncated_bytes = static_cast<int64_t>(region.size() - (at - base));
@@ -173,10 +174,11 @@ Status BagReader::OnRecord(uint8_t op, const Fields& header, std::string_view da
     case kChunkInfo:
       break;
     default:
-      why = fmt::format("record op 0x{:02x}: expected 0x02 (message data), 0x03 (bag header), "
-                        "0x04 (index data), 0x05 (chunk), 0x06 (chunk info) or 0x07 "
-                        "(connection)",
-                        op);
+      why = fmt::format(
+          "record op 0x{:02x}: expected 0x02 (message data), 0x03 (bag header), "
+          "0x04 (index data), 0x05 (chunk), 0x06 (chunk info) or 0x07 "
+          "(connection)",
+          op);
   }
   if (!s.ok()) return s;
   if (why.empty()) return Status::Ok();
@@ -215,9 +217,10 @@ Status BagReader::OnMessage(const Fields& header, std::string_view data, uint64_
   }
   auto it = connections_.find(static_cast<uint32_t>(id));
   if (it == connections_.end()) {
-    *why = fmt::format("a message of connection {}, which no connection record before it "
-                       "defines; expected the connection first",
-                       id);
+    *why = fmt::format(
+        "a message of connection {}, which no connection record before it "
+        "defines; expected the connection first",
+        id);
     return Status::Ok();
   }
   // time: uint32 sec, then uint32 nsec.

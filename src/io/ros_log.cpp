@@ -1,7 +1,8 @@
+#include "metro/io/ros_log.hpp"
+
 #include <fmt/format.h>
 
 #include "io/ros_log_internal.hpp"
-#include "metro/io/ros_log.hpp"
 
 namespace metro {
 
@@ -14,14 +15,14 @@ std::vector<const RosConnection*> RosLog::Find(std::string_view topic) const {
 }
 
 std::string FormatRosTopics(const RosLog& log) {
-  std::string out = fmt::format("{:<32} {:<34} {:>10} {:>10}\n", "topic", "type", "messages",
-                                "rate_hz");
+  std::string out =
+      fmt::format("{:<32} {:<34} {:>10} {:>10}\n", "topic", "type", "messages", "rate_hz");
   for (const RosConnection& c : log.connections) {
     const double span_s = static_cast<double>(c.last_log_time_ns - c.first_log_time_ns) * 1e-9;
-    const std::string rate = c.message_count >= 2 && span_s > 0
-                                 ? fmt::format("{:.2f}", static_cast<double>(c.message_count - 1) /
-                                                             span_s)
-                                 : "-";
+    const std::string rate =
+        c.message_count >= 2 && span_s > 0
+            ? fmt::format("{:.2f}", static_cast<double>(c.message_count - 1) / span_s)
+            : "-";
     out += fmt::format("{:<32} {:<34} {:>10} {:>10}\n", c.topic, c.type, c.message_count, rate);
   }
   std::string chunks;
@@ -29,9 +30,11 @@ std::string FormatRosTopics(const RosLog& log) {
     chunks += fmt::format("{}{} {}", chunks.empty() ? "" : ", ", n, name);
   }
   out += fmt::format("{}{}, {} messages; chunks: {}; {}\n", log.format,
-                     log.profile.empty() ? "" : " (profile " + log.profile + ")",
-                     log.message_count, chunks.empty() ? "none" : chunks,
-                     log.has_summary ? "indexed" : "no index or summary (read sequentially)");
+                     log.profile.empty() ? "" : " (profile " + log.profile + ")", log.message_count,
+                     chunks.empty() ? "none" : chunks,
+                     log.format.find("sqlite3") != std::string::npos ? "sqlite3 storage (no chunks)"
+                     : log.has_summary                               ? "indexed"
+                                       : "no index or summary (read sequentially)");
   if (log.truncated_bytes > 0) {
     out += fmt::format("truncated: the last {} bytes are an incomplete record (--lenient)\n",
                        log.truncated_bytes);

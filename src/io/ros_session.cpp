@@ -24,12 +24,12 @@ namespace {
 // The messages of one topic, decoded, in file order.
 struct TopicData {
   std::string topic;
-  std::vector<int64_t> t_ns;         // The sample time chosen (header.stamp or log time).
-  std::vector<int64_t> index;        // 1-based message index in the file.
-  std::vector<uint64_t> offset;      // Byte offset of the record (or its chunk).
-  std::vector<double> columns[10];   // qw qx qy qz, gx gy gz, ax ay az.
-  int64_t with_orientation = 0;      // Messages whose orientation_covariance[0] != -1.
-  double covariance[3][9] = {};      // The first message's orientation, gyro, accel ones.
+  std::vector<int64_t> t_ns;           // The sample time chosen (header.stamp or log time).
+  std::vector<int64_t> index;          // 1-based message index in the file.
+  std::vector<uint64_t> offset;        // Byte offset of the record (or its chunk).
+  std::vector<double> columns[10];     // qw qx qy qz, gx gy gz, ax ay az.
+  int64_t with_orientation = 0;        // Messages whose orientation_covariance[0] != -1.
+  double covariance[3][9] = {};        // The first message's orientation, gyro, accel ones.
   int64_t covariance_changes[3] = {};  // Messages whose covariance differs from the first's.
 };
 
@@ -81,7 +81,7 @@ TopicData* Collector::DataOf(const RosLog& log, size_t connection) {
 
 void Collector::Add(TopicData* d, const ImuMessage& msg, const RosMessageView& m) {
   d->t_ns.push_back(options_.ros_time == LoadOptions::RosTime::kReceive ? m.log_time_ns
-                                                                         : msg.stamp_ns);
+                                                                        : msg.stamp_ns);
   d->index.push_back(m.index);
   d->offset.push_back(m.record_offset);
   const double* q = msg.orientation_xyzw;
@@ -120,9 +120,10 @@ Status Collector::Visit(const RosLog& log, const RosMessageView& m) {
   } else if (c.encoding == "ros1") {
     why = c.md5sum.empty() || c.md5sum == kRos1ImuMd5
               ? DecodeImuRos1(m.data, &msg)
-              : fmt::format("the connection's md5sum {} is not sensor_msgs/Imu's {}: another "
-                            "definition of the type",
-                            c.md5sum, kRos1ImuMd5);
+              : fmt::format(
+                    "the connection's md5sum {} is not sensor_msgs/Imu's {}: another "
+                    "definition of the type",
+                    c.md5sum, kRos1ImuMd5);
   } else {
     why = fmt::format("message encoding \"{}\": expected \"cdr\" (ROS 2) or \"ros1\"", c.encoding);
   }
@@ -132,7 +133,7 @@ Status Collector::Visit(const RosLog& log, const RosMessageView& m) {
   }
   const Error e = MakeError(log.path, 0,
                             fmt::format("{} {}: message {} ({} {}): {}", log.offset_name,
-                                   m.record_offset, m.index, c.topic, c.type, why));
+                                        m.record_offset, m.index, c.topic, c.type, why));
   if (!options_.lenient) return e;
   ++session_->rejected_rows;
   if (session_->rejected_lines.size() < options_.max_rejected_kept) {
@@ -175,8 +176,8 @@ Status CheckTopics(const RosLog& log, const LoadOptions& options,
                                    t, found.front()->type, TopicList(log, imu)));
     }
     if (std::count(options.topics.begin(), options.topics.end(), t) > 1) {
-      return MakeError(log.path, 0, fmt::format("--topic {}: chosen twice; each topic is one tag",
-                                                t));
+      return MakeError(log.path, 0,
+                       fmt::format("--topic {}: chosen twice; each topic is one tag", t));
     }
   }
   if (data.empty()) {
@@ -239,15 +240,14 @@ Status OrderTimes(const RosLog& log, const LoadOptions& options, TopicData* d,
   Permute(keep, &d->index);
   Permute(keep, &d->offset);
   for (std::vector<double>& c : d->columns) Permute(keep, &c);
-  notes->push_back(fmt::format("{}: {} messages out of {} order, sorted; {} repeated {} dropped "
-                               "(the first in the file kept) (--time-order sort)",
-                               d->topic, late, TimeName(options), repeats, TimeName(options)));
+  notes->push_back(
+      fmt::format("{}: {} messages out of {} order, sorted; {} repeated {} dropped "
+                  "(the first in the file kept) (--time-order sort)",
+                  d->topic, late, TimeName(options), repeats, TimeName(options)));
   return Status::Ok();
 }
 
-std::string Matrix(const double* m) {
-  return fmt::format("[{}]", fmt::join(m, m + 9, ", "));
-}
+std::string Matrix(const double* m) { return fmt::format("[{}]", fmt::join(m, m + 9, ", ")); }
 
 // The message's covariances, which the session has no column for, as notes.
 void CovarianceNotes(const TopicData& d, std::vector<std::string>* notes) {
@@ -258,10 +258,9 @@ void CovarianceNotes(const TopicData& d, std::vector<std::string>* notes) {
     if (k == 0 && d.with_orientation == 0) continue;
     notes->push_back(fmt::format(
         "{}: {} (row major, x y z) = {} {}", d.topic, names[k], Matrix(d.covariance[k]),
-        d.covariance_changes[k] == 0
-            ? std::string("in every message")
-            : fmt::format("in the first message; {} later messages differ",
-                          d.covariance_changes[k])));
+        d.covariance_changes[k] == 0 ? std::string("in every message")
+                                     : fmt::format("in the first message; {} later messages differ",
+                                                   d.covariance_changes[k])));
   }
 }
 
@@ -292,9 +291,10 @@ void AddLogNotes(const RosLog& log, const LoadOptions& options, Session* session
                               "1-based message indexes in the file",
                               log.format, TimeName(options), in.time_origin_ns));
   if (log.truncated_bytes > 0) {
-    in.warnings.push_back(fmt::format("truncated file: the last {} bytes are an incomplete "
-                                      "record, skipped (--lenient)",
-                                      log.truncated_bytes));
+    in.warnings.push_back(
+        fmt::format("truncated file: the last {} bytes are an incomplete "
+                    "record, skipped (--lenient)",
+                    log.truncated_bytes));
   }
   for (const std::string& p : log.problems) {
     ++session->rejected_rows;
@@ -339,9 +339,10 @@ Result<Session> BuildSession(const RosLog& log, std::vector<TopicData> data,
     const int64_t n = static_cast<int64_t>(d.t_ns.size());
     const bool orientation = d.with_orientation > 0 && d.with_orientation == n;
     if (d.with_orientation > 0 && !orientation) {
-      in.warnings.push_back(fmt::format("{}: {} of {} messages have an orientation: qw..qz left "
-                                        "out",
-                                        d.topic, d.with_orientation, n));
+      in.warnings.push_back(
+          fmt::format("{}: {} of {} messages have an orientation: qw..qz left "
+                      "out",
+                      d.topic, d.with_orientation, n));
     }
     in.notes.push_back(fmt::format("sensor {} = {} ({} messages{})", k + 1, d.topic, n,
                                    orientation ? ", with orientation" : ""));

@@ -9,7 +9,6 @@
 #include <unistd.h>
 
 #include <fstream>
-
 #include <memory>
 #include <unordered_map>
 
@@ -33,7 +32,8 @@ bool IsDirectory(const std::string& path) {
 
 std::string Trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\r' || s.back() == '\t')) s.remove_suffix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\r' || s.back() == '\t'))
+    s.remove_suffix(1);
   if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front()) {
     s = s.substr(1, s.size() - 2);
   }
@@ -74,9 +74,9 @@ Status ParseMetadata(const std::string& yaml_path, const std::string& text, Bag2
     }
   }
   if (out->storage != "sqlite3" && out->storage != "mcap") {
-    return MakeError(yaml_path, 0,
-                     fmt::format("storage_identifier \"{}\": expected sqlite3 or mcap",
-                                 out->storage));
+    return MakeError(
+        yaml_path, 0,
+        fmt::format("storage_identifier \"{}\": expected sqlite3 or mcap", out->storage));
   }
   if (out->files.empty()) {
     return MakeError(yaml_path, files_line,
@@ -145,7 +145,7 @@ Result<Stmt> Prepare(sqlite3* db, const std::string& file, const char* sql) {
 
 // The topics table: topic_id -> outer connection index.
 Result<std::unordered_map<int64_t, size_t>> ReadTopics(sqlite3* db, const std::string& file,
-                                                        RosLog* log) {
+                                                       RosLog* log) {
   auto stmt = Prepare(db, file, "SELECT id, name, type, serialization_format FROM topics");
   if (!stmt.ok()) return stmt.error();
   std::unordered_map<int64_t, size_t> out;
@@ -177,9 +177,10 @@ Status ReadDb3(const std::string& file, RosLog* log, const RosMessageVisitor& vi
     const int64_t id = sqlite3_column_int64(s, 0);
     auto it = topics.value().find(sqlite3_column_int64(s, 1));
     if (it == topics.value().end()) {
-      return MakeError(file, 0, fmt::format("messages row id {}: topic_id {} is not in the topics "
-                                            "table; expected one of its ids",
-                                            id, sqlite3_column_int64(s, 1)));
+      return MakeError(file, 0,
+                       fmt::format("messages row id {}: topic_id {} is not in the topics "
+                                   "table; expected one of its ids",
+                                   id, sqlite3_column_int64(s, 1)));
     }
     const int64_t t_ns = sqlite3_column_int64(s, 2);
     internal::CountRosMessage(log, it->second, t_ns);
@@ -235,7 +236,8 @@ bool IsRosbag2Path(const std::string& path) {
   if (path.size() >= 13 && path.compare(path.size() - 13, 13, "metadata.yaml") == 0) return true;
   std::ifstream in(path, std::ios::binary);
   char head[16] = {};
-  return in.read(head, 16) && std::string_view(head, 16) == std::string_view("SQLite format 3\0", 16);
+  return in.read(head, 16) &&
+         std::string_view(head, 16) == std::string_view("SQLite format 3\0", 16);
 }
 
 Result<RosLog> ReadRosbag2(const std::string& path, const RosLogReadOptions& options,

@@ -25,8 +25,8 @@
 #include "metro/core/file.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/io/receiver.hpp"
-#include "metro/io/session_io.hpp"
 #include "metro/io/ros_log.hpp"
+#include "metro/io/session_io.hpp"
 #include "metro/io/ulog.hpp"
 
 namespace metro {

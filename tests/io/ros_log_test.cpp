@@ -3,6 +3,8 @@
 // @foxglove/rosmsg2-serialization, Debian's python3-rosbag, Python's sqlite3): every value
 // read must equal, bit for bit, what the writer wrote (its JSON beside each file); then each
 // class of bad input, made from those files.
+#include "metro/io/ros_log.hpp"
+
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <fstream>
@@ -11,7 +13,6 @@
 #include <string>
 #include <vector>
 
-#include "metro/io/ros_log.hpp"
 #include "metro/io/session_io.hpp"
 #include "support/temp_file.hpp"
 
@@ -92,18 +93,19 @@ TEST_CASE("MCAP files of @mcap/core read as written, every chunk kind", "[io][ro
     const char* name;
     SessionFormat format;
   };
-  for (const Case& c : {Case{"imu_zstd", SessionFormat::kMcap},
-                        Case{"imu_lz4", SessionFormat::kMcap},
-                        Case{"imu_none_nosummary", SessionFormat::kMcap},
-                        Case{"imu_unchunked", SessionFormat::kMcap}}) {
+  for (const Case& c :
+       {Case{"imu_zstd", SessionFormat::kMcap}, Case{"imu_lz4", SessionFormat::kMcap},
+        Case{"imu_none_nosummary", SessionFormat::kMcap},
+        Case{"imu_unchunked", SessionFormat::kMcap}}) {
     SECTION(c.name) {
       const Session s = Load(kDir + c.name + ".mcap");
       CHECK(s.format == c.format);
       REQUIRE(s.tags.size() == 1);
       CheckTag(s.tags[0], Expected(c.name)["topics"]["/imu/data"]["messages"]);
       CHECK(HasNote(s, "sensor 1 = /imu/data (60 messages"));
-      CHECK(HasNote(s, "angular_velocity_covariance [(rad/s)^2] (row major, x y z) = [2.5e-07, 0, "
-                       "0, 0, 2.5e-07, 0, 0, 0, 2.5e-07] in every message"));
+      CHECK(HasNote(s,
+                    "angular_velocity_covariance [(rad/s)^2] (row major, x y z) = [2.5e-07, 0, "
+                    "0, 0, 2.5e-07, 0, 0, 0, 2.5e-07] in every message"));
     }
   }
 }
@@ -124,9 +126,9 @@ TEST_CASE("MCAP topics: counts and rates as written", "[io][ros][mcap]") {
   CHECK(log.value().Find("/imu/temperature")[0]->message_count == 5);
   CHECK(log.value().Find("/imu/data")[0]->type == "sensor_msgs/msg/Imu");
   // 60 messages 5 ms apart: 59 intervals over 0.295 s = 200 Hz.
-  CHECK(FormatRosTopics(log.value()).find("/imu/data                        sensor_msgs/msg/Imu    "
-                                          "                    60     200.00") !=
-        std::string::npos);
+  CHECK(FormatRosTopics(log.value())
+            .find("/imu/data                        sensor_msgs/msg/Imu    "
+                  "                    60     200.00") != std::string::npos);
   auto indexed = ReadMcap(kDir + "imu_zstd.mcap", {}, nullptr);
   REQUIRE(indexed.ok());
   CHECK(indexed.value().has_summary);
@@ -137,9 +139,10 @@ TEST_CASE("Two IMU topics: listed when none is chosen, one tag each, stamps sort
           "[io][ros][mcap]") {
   const std::string path = kDir + "two_imus_zstd.mcap";
   CHECK(LoadError(path) ==
-        path + ": 2 IMU topics: /imu0 (sensor_msgs/msg/Imu, 48 messages), /imu1 "
-               "(sensor_msgs/msg/Imu, 24 messages); choose with --topic NAME (repeatable: each "
-               "topic one tag)");
+        path +
+            ": 2 IMU topics: /imu0 (sensor_msgs/msg/Imu, 48 messages), /imu1 "
+            "(sensor_msgs/msg/Imu, 24 messages); choose with --topic NAME (repeatable: each "
+            "topic one tag)");
   LoadOptions o;
   o.topics = {"/imu1", "/imu0"};
   const Session s = Load(path, o);
@@ -153,8 +156,9 @@ TEST_CASE("Two IMU topics: listed when none is chosen, one tag each, stamps sort
   std::swap(sorted[30], sorted[31]);
   sorted.erase(41);
   CheckTag(s.tags[1], sorted);
-  CHECK(HasNote(s, "/imu0: 2 messages out of header.stamp order, sorted; 1 repeated header.stamp "
-                   "dropped"));
+  CHECK(HasNote(s,
+                "/imu0: 2 messages out of header.stamp order, sorted; 1 repeated header.stamp "
+                "dropped"));
   o.time_order = LoadOptions::TimeOrder::kRefuse;
   CHECK(LoadError(path, o).find("message 19 (/imu0): header.stamp 1700000000173456789 ns is not "
                                 "after the previous message's 1700000000178456789 ns; expected "
@@ -242,7 +246,8 @@ TEST_CASE("MCAP bad chunk CRC and unknown compression: file, byte offset, what w
   bad_crc[chunk + 9 + 24] ^= 0x01;
   TempFile crc_file(bad_crc, ".mcap");
   const std::string e = LoadError(crc_file.path());
-  CHECK(e.find(crc_file.path() + ": byte offset " + std::to_string(chunk) + ": Chunk: the chunk's "
+  CHECK(e.find(crc_file.path() + ": byte offset " + std::to_string(chunk) +
+               ": Chunk: the chunk's "
                "records have CRC-32 ") != std::string::npos);
   CHECK(e.find("(a corrupt chunk)") != std::string::npos);
 
@@ -263,8 +268,9 @@ TEST_CASE("ROS 1 bag: unknown compression and a foreign sensor_msgs/Imu definiti
   REQUIRE(at != std::string::npos);
   bytes.replace(at + 12, 3, "xz2");
   TempFile codec(bytes, ".bag");
-  CHECK(LoadError(codec.path()).find("chunk: compression \"xz2\": expected \"none\", \"bz2\" or "
-                                     "\"lz4\"") != std::string::npos);
+  CHECK(LoadError(codec.path())
+            .find("chunk: compression \"xz2\": expected \"none\", \"bz2\" or "
+                  "\"lz4\"") != std::string::npos);
 
   std::string md5 = Slurp(kDir + "ros1_none.bag");
   size_t m = 0;
@@ -272,8 +278,9 @@ TEST_CASE("ROS 1 bag: unknown compression and a foreign sensor_msgs/Imu definiti
     md5[m] = '7';
   }
   TempFile other(md5, ".bag");
-  CHECK(LoadError(other.path()).find("the connection's md5sum 7a62c6daae103f4ff57a132d6f95cec2 "
-                                     "is not sensor_msgs/Imu's 6a62c6daae103f4ff57a132d6f95cec2") !=
+  CHECK(LoadError(other.path())
+            .find("the connection's md5sum 7a62c6daae103f4ff57a132d6f95cec2 "
+                  "is not sensor_msgs/Imu's 6a62c6daae103f4ff57a132d6f95cec2") !=
         std::string::npos);
 }
 
@@ -283,14 +290,16 @@ TEST_CASE("A missing topic and a topic that is not sensor_msgs/Imu list the log'
   o.topics = {"/imu/raw"};
   const std::string path = kDir + "ros1_lz4.bag";
   CHECK(LoadError(path, o) ==
-        path + ": --topic /imu/raw: no such topic; expected one of the log's: /imu/data "
-               "(sensor_msgs/Imu, 60 messages), /imu/temperature (sensor_msgs/Temperature, 5 "
-               "messages)");
+        path +
+            ": --topic /imu/raw: no such topic; expected one of the log's: /imu/data "
+            "(sensor_msgs/Imu, 60 messages), /imu/temperature (sensor_msgs/Temperature, 5 "
+            "messages)");
   o.topics = {"/imu/temperature"};
   CHECK(LoadError(kDir + "rosbag2_sqlite", o) ==
-        kDir + "rosbag2_sqlite: --topic /imu/temperature: its messages are "
-               "sensor_msgs/msg/Temperature; expected sensor_msgs/Imu (the log's IMU topics: "
-               "/imu/data (sensor_msgs/msg/Imu, 60 messages))");
+        kDir +
+            "rosbag2_sqlite: --topic /imu/temperature: its messages are "
+            "sensor_msgs/msg/Temperature; expected sensor_msgs/Imu (the log's IMU topics: "
+            "/imu/data (sensor_msgs/msg/Imu, 60 messages))");
 }
 
 }  // namespace

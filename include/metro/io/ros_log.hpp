@@ -48,9 +48,9 @@ struct RosConnection {
 
 // One message as the reader hands it over; `data` is valid during the visitor call only.
 struct RosMessageView {
-  size_t connection = 0;     // Index into RosLog::connections.
-  int64_t log_time_ns = 0;   // MCAP log_time, ROS 1 record time, rosbag2 timestamp.
-  std::string_view data;     // The serialized message.
+  size_t connection = 0;       // Index into RosLog::connections.
+  int64_t log_time_ns = 0;     // MCAP log_time, ROS 1 record time, rosbag2 timestamp.
+  std::string_view data;       // The serialized message.
   uint64_t record_offset = 0;  // File byte offset of the message's record, or of its chunk.
   int64_t index = 0;           // 1-based index of the message among all messages read.
 };
@@ -61,7 +61,7 @@ struct RosLogReadOptions {
 
 struct RosLog {
   std::string path;
-  std::string format;  // "MCAP", "ROS 1 bag", "ROS 2 bag (sqlite3)", "ROS 2 bag (MCAP)".
+  std::string format;   // "MCAP", "ROS 1 bag", "ROS 2 bag (sqlite3)", "ROS 2 bag (MCAP)".
   std::string profile;  // MCAP header profile ("ros2", ...); "" elsewhere.
   std::vector<RosConnection> connections;  // In the order they were first met.
   int64_t message_count = 0;
@@ -72,8 +72,8 @@ struct RosLog {
   // What RosMessageView::record_offset counts in errors: "byte offset" (MCAP, ROS 1), or
   // "messages row id" (rosbag2's sqlite3 storage), with the file it is in.
   std::string offset_name = "byte offset";
-  int64_t truncated_bytes = 0;         // Lenient: bytes of a record cut by the file's end.
-  std::vector<std::string> problems;   // Lenient: what was skipped (file: byte offset: what).
+  int64_t truncated_bytes = 0;        // Lenient: bytes of a record cut by the file's end.
+  std::vector<std::string> problems;  // Lenient: what was skipped (file: byte offset: what).
 
   // The connections of `topic`.
   std::vector<const RosConnection*> Find(std::string_view topic) const;
