@@ -96,7 +96,7 @@ Status McapReader::Read() {
   if (Status s = ReadRecords(bytes_.substr(kMagic.size()), false, 0); !s.ok()) return s;
   if (footer_ || log_->truncated_bytes > 0) return Status::Ok();
   const std::string what = fmt::format(
-      "the file ends after {} complete records of the data section{} without MCAP's Footer "
+      "the file ends after {} messages in complete records{} without MCAP's Footer "
       "record and closing magic; expected a complete file (a recording cut short: --lenient "
       "reads its complete records)",
       log_->message_count, data_end_ ? " and its Data End" : "");

@@ -236,6 +236,28 @@ size_t FirstChunk(const std::string& bytes) {
   return at;
 }
 
+TEST_CASE("MCAP cut between records (no Data End, no footer): an error, or all with --lenient",
+          "[io][ros][mcap]") {
+  const std::string bytes = Slurp(kDir + "imu_none_nosummary.mcap");
+  size_t at = 8;  // Walk the records to the Data End (opcode 0x0f).
+  while (at + 9 <= bytes.size() && bytes[at] != 0x0f) {
+    uint64_t len = 0;
+    for (int i = 7; i >= 0; --i) len = (len << 8) | static_cast<unsigned char>(bytes[at + 1 + i]);
+    at += 9 + len;
+  }
+  REQUIRE(at < bytes.size());
+  TempFile cut(bytes.substr(0, at), ".mcap");
+  CHECK(LoadError(cut.path()) ==
+        cut.path() + ": byte offset " + std::to_string(at) +
+            ": the file ends after 65 messages in complete records without MCAP's "
+            "Footer record and closing magic; expected a complete file (a recording cut short: "
+            "--lenient reads its complete records)");
+  LoadOptions lenient;
+  lenient.lenient = true;
+  const Session s = Load(cut.path(), lenient);
+  CheckTag(s.tags[0], Expected("imu_none_nosummary")["topics"]["/imu/data"]["messages"]);
+}
+
 TEST_CASE("MCAP bad chunk CRC and unknown compression: file, byte offset, what was expected",
           "[io][ros][mcap]") {
   std::string bytes = Slurp(kDir + "imu_none_nosummary.mcap");
