@@ -5,13 +5,25 @@ namespace metro::apps {
 void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags) {
   app->add_option("--format", o->format,
                   "input format (auto: detected; csv is session.csv in any dialect)")
-      ->check(CLI::IsMember(
-          {"auto", "csv", "receiver", "euroc", "raw", "phyphox", "sensorlogger", "ulog"}))
+      ->check(CLI::IsMember({"auto", "csv", "receiver", "euroc", "raw", "phyphox", "sensorlogger",
+                             "ulog", "mcap", "rosbag1", "rosbag2"}))
       ->capture_default_str();
   app->add_option("--topic", o->library.topics,
                   "ULog input: an IMU topic to read (sensor_combined, sensor_accel, sensor_gyro, "
-                  "vehicle_imu), each instance one tag, NAME[K] instance K only; repeatable "
-                  "(default: sensor_combined, else sensor_accel and sensor_gyro)");
+                  "vehicle_imu), each instance one tag, NAME[K] instance K only (default: "
+                  "sensor_combined, else sensor_accel and sensor_gyro); MCAP and ROS bags: a "
+                  "sensor_msgs/Imu topic, e.g. /imu/data (default: the log's one IMU topic); "
+                  "repeatable, each topic one tag");
+  app->add_option("--time", o->time,
+                  "MCAP and ROS bags: the sample time, header (the message's header.stamp) or "
+                  "receive (the time the recorder logged it)")
+      ->check(CLI::IsMember({"header", "receive"}))
+      ->capture_default_str();
+  app->add_option("--time-order", o->time_order,
+                  "MCAP and ROS bags: stamps out of order or repeated are sorted (repeats after "
+                  "the first dropped, both counted in input.notes) or refused")
+      ->check(CLI::IsMember({"sort", "refuse"}))
+      ->capture_default_str();
   app->add_option("--frame-period-s", o->library.frame_period_s,
                   "receiver frame period in seconds (default 3281/32768 = 0.10013)")
       ->check(CLI::PositiveNumber);
@@ -45,6 +57,10 @@ Status MakeLoadOptions(const LoadCliOptions& o, LoadOptions* load) {
   load->accel_fs_g = o.library.accel_fs_g;
   load->gyro_fs_dps = o.library.gyro_fs_dps;
   load->topics = o.library.topics;
+  load->ros_time =
+      o.time == "receive" ? LoadOptions::RosTime::kReceive : LoadOptions::RosTime::kHeader;
+  load->time_order =
+      o.time_order == "refuse" ? LoadOptions::TimeOrder::kRefuse : LoadOptions::TimeOrder::kSort;
   load->column_map.clear();
   if (!o.columns_file.empty()) {
     auto file = LoadColumnMappings(o.columns_file);

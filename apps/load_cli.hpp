@@ -15,15 +15,17 @@ struct LoadCliOptions {
   std::string format = "auto";
   std::vector<std::string> columns;  // --column 'SRC=DST', repeatable.
   std::string columns_file;          // --columns-file FILE: SRC=DST lines.
+  std::string time = "header";       // --time header|receive (MCAP, ROS bags).
+  std::string time_order = "sort";   // --time-order sort|refuse (MCAP, ROS bags).
   // --frame-period-s, --lenient, --rate-hz (a file without a time column), --accel-fs-g,
   // --gyro-fs-dps (raw counts scaled beside the counts) and --topic (ULog), bound to the
   // library's struct (its defaults); MakeLoadOptions copies these six fields.
   LoadOptions library;
 };
 
-// Registers --format, --topic, --frame-period-s, --lenient, --column, --columns-file, --rate-hz
-// and,
-// with `full_scale_flags`, --accel-fs-g and --gyro-fs-dps (calibrate fit has its own).
+// Registers --format, --topic, --time, --time-order, --frame-period-s, --lenient, --column,
+// --columns-file, --rate-hz and, with `full_scale_flags`, --accel-fs-g and --gyro-fs-dps (calibrate
+// fit has its own).
 void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags = true);
 
 // The library's load options for these flags (threads left as they are). Errors (a bad

@@ -23,6 +23,7 @@
 #include "metro/core/status.hpp"
 #include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
+#include "metro/io/ros_log.hpp"
 
 namespace metro::apps {
 
@@ -245,11 +246,12 @@ inline Status CheckStdinInputs(const std::vector<std::string>& inputs, bool imut
   return Status::Ok();
 }
 
-// CLI11 check of a session input: an existing file, or `-` (stdin).
+// CLI11 check of a session input: an existing file, a ROS 2 bag folder (with its
+// metadata.yaml), or `-` (stdin).
 inline CLI::Validator ExistingFileOrStdin() {
   return CLI::Validator(
       [](std::string& path) -> std::string {
-        if (IsStdio(path)) return std::string();
+        if (IsStdio(path) || IsRosbag2Path(path)) return std::string();
         return CLI::ExistingFile(path);
       },
       "FILE|-");

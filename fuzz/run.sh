@@ -29,6 +29,7 @@ push_client_fuzz   2048   100
 intel_hex_fuzz     4096   110
 inspect_fuzz       4096   550
 registry_fuzz     40960  1000
+ros_log_fuzz      16384   850
 "
 all_targets=$(awk 'NF {print $1}' <<<"$table")
 targets="${*:-$all_targets}"
@@ -61,6 +62,8 @@ seed() {
       printf 'time,seconds_elapsed,z,y,x\n1700000000000000000,0,0.3,0.2,0.1\n1700000000010000000,0.01,0.3,0.2,0.1\n' > "$corpus/sensorlogger.csv"
       ;;
     budget_fuzz) cp datasets/budgets/*.json "$corpus/" ;;
+    # MCAP and ROS 1 samples of independent writers (datasets/external/ros_samples/SOURCE.md).
+    ros_log_fuzz) cp datasets/external/ros_samples/*.mcap datasets/external/ros_samples/*.bag "$corpus/" ;;
     intel_hex_fuzz) cp datasets/golden/tag_sensor2.hex "$corpus/" ;;
     # and the firmware blob fuzzer's sections v2.0 (issue #25, firmware/fuzz/make_seeds.py)
     inspect_fuzz) cp datasets/golden/tag_sensor2.hex datasets/golden/tag_sensor2.bin \

@@ -105,8 +105,8 @@ void AddConvertCommand(CLI::App& app, int* exit_code) {
   CLI::App* sub = app.add_subcommand(
       "convert",
       "turn any readable session (receiver capture, EuRoC, raw prints, phyphox, Sensor Logger, PX4 "
-      "ULog, "
-      "imu_tk's two files) into canonical session.csv; several files are joined on time");
+      "ULog, MCAP, ROS 1 and ROS 2 bags, imu_tk's two files) into canonical session.csv; several "
+      "files are joined on time");
   sub->add_option("inputs", o->inputs,
                   "INPUT, several files of one recording (joined on time), or ACC GYRO with "
                   "--imutk; - reads stdin")

@@ -1,8 +1,11 @@
 // characterize topics FILE [--lenient]: the topics of a PX4 ULog (name, multi id, message
-// count, size, rate), its dropouts and appended data (docs/cli.md "topics").
+// count, size, rate), its dropouts and appended data; of an MCAP file or a ROS 1 or 2 bag
+// (topic, message type, count, rate, chunks) (docs/cli.md "topics").
 #include <memory>
 
 #include "commands.hpp"
+#include "metro/io/ros_log.hpp"
+#include "metro/io/session_io.hpp"
 #include "metro/io/ulog.hpp"
 #include "output.hpp"
 
@@ -14,7 +17,7 @@ struct TopicsOptions {
   bool lenient = false;
 };
 
-int RunTopics(const TopicsOptions& o) {
+int RunULogTopics(const TopicsOptions& o) {
   ULogReadOptions options;
   options.lenient = o.lenient;
   options.keep_topics = {""};  // Counts only: no data message kept.
@@ -27,15 +30,53 @@ int RunTopics(const TopicsOptions& o) {
   return kExitOk;
 }
 
+int RunTopics(const TopicsOptions& o) {
+  Result<SessionFormat> format = DetectSessionFormat(o.file);
+  if (!format.ok()) return PrintErrorExit(format.error());
+  RosLogReadOptions options;
+  options.lenient = o.lenient;
+  Result<RosLog> log = MakeError(o.file, 0, "not read");
+  switch (format.value()) {
+    case SessionFormat::kULog:
+      return RunULogTopics(o);
+    case SessionFormat::kMcap:
+      log = ReadMcap(o.file, options, nullptr);
+      break;
+    case SessionFormat::kRosbag1:
+      log = ReadRosbag1(o.file, options, nullptr);
+      break;
+    case SessionFormat::kRosbag2:
+      log = ReadRosbag2(o.file, options, nullptr);
+      break;
+    default:
+      return PrintErrorExit(MakeError(
+          o.file, 0,
+          fmt::format("{} input has no topics; expected a PX4 ULog, an MCAP file, a ROS 1 bag "
+                      "or a ROS 2 bag folder",
+                      SessionFormatName(format.value()))));
+  }
+  if (!log.ok()) return PrintErrorExit(log.error());
+  for (const std::string& p : log.value().problems) Note("warning: " + p + " (skipped)\n");
+  if (Status s = WriteOutput("-", FormatRosTopics(log.value())); !s.ok()) {
+    return PrintErrorExit(s.error());
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 void AddTopicsCommand(CLI::App& app, int* exit_code) {
   auto o = std::make_shared<TopicsOptions>();
   CLI::App* sub = app.add_subcommand(
       "topics",
-      "list a PX4 ULog's topics: name, multi id, messages, message size, rate; then its "
-      "dropouts and appended data (choose IMU topics with --topic)");
-  sub->add_option("file", o->file, "a PX4 ULog file (.ulg)")->required()->check(CLI::ExistingFile);
+      "list the topics of a PX4 ULog (name, multi id, messages, message size, rate, dropouts, "
+      "appended data) or of an MCAP file, a ROS 1 bag or a ROS 2 bag folder (topic, message "
+      "type, messages, rate, chunks); choose IMU topics with --topic");
+  sub->add_option("file", o->file,
+                  "a PX4 ULog (.ulg), an MCAP file (.mcap), a ROS 1 bag (.bag) or a ROS 2 bag "
+                  "folder (or its metadata.yaml)")
+      ->required()
+      ->check(CLI::ExistingPath);
   sub->add_flag("--lenient", o->lenient,
                 "read the complete messages of a truncated file, counting the loss");
   sub->callback([o, exit_code] { *exit_code = RunTopics(*o); });

@@ -25,6 +25,7 @@
 #include "metro/core/file.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/io/receiver.hpp"
+#include "metro/io/ros_log.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/io/ulog.hpp"
 
@@ -41,10 +42,16 @@ constexpr FormatName kFormatNames[] = {
     {SessionFormat::kReceiver, "receiver"}, {SessionFormat::kImuTk, "imutk"},
     {SessionFormat::kEuroc, "euroc"},       {SessionFormat::kRaw, "raw"},
     {SessionFormat::kPhyphox, "phyphox"},   {SessionFormat::kSensorLogger, "sensorlogger"},
-    {SessionFormat::kULog, "ulog"},
+    {SessionFormat::kULog, "ulog"},         {SessionFormat::kMcap, "mcap"},
+    {SessionFormat::kRosbag1, "rosbag1"},   {SessionFormat::kRosbag2, "rosbag2"},
 };
 
 }  // namespace
+
+bool IsBinaryLogFormat(SessionFormat format) {
+  return format == SessionFormat::kULog || format == SessionFormat::kMcap ||
+         format == SessionFormat::kRosbag1 || format == SessionFormat::kRosbag2;
+}
 
 const char* SessionFormatName(SessionFormat format) {
   for (const FormatName& f : kFormatNames) {
@@ -303,6 +310,7 @@ bool LooksLikeReceiverLine(std::string_view line) {
 }  // namespace
 
 Result<SessionFormat> DetectSessionFormat(const std::string& path) {
+  if (IsRosbag2Path(path)) return SessionFormat::kRosbag2;
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return MakeError(path, 0, std::string("cannot open: ") + std::strerror(errno));
   std::string head(1 << 16, '\0');
@@ -315,6 +323,8 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
   if (got < 0) return MakeError(path, 0, std::string("cannot read: ") + std::strerror(errno));
   head.resize(static_cast<size_t>(got));
   if (IsULogMagic(head)) return SessionFormat::kULog;
+  if (IsMcapMagic(head)) return SessionFormat::kMcap;
+  if (IsRosbag1Magic(head)) return SessionFormat::kRosbag1;
   if (head.compare(0, 3, "\xEF\xBB\xBF") == 0) head.erase(0, 3);  // UTF-8 byte-order mark.
   if (head.empty()) {
     return MakeError(path, 0, "empty file: expected a session.csv or a receiver capture");
@@ -324,14 +334,16 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
     if (c == 0) {
       return MakeError(path, 0,
                        "binary data (NUL bytes): expected a text session.csv, a "
-                       "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35)");
+                       "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35), an "
+                       "MCAP (89 \"MCAP0\" 0d 0a) or a ROS 1 bag (\"#ROSBAG V2.0\")");
     }
     if (c < 0x20 && c != '\n' && c != '\r' && c != '\t') ++control;
   }
   if (control * 20 > head.size()) {
     return MakeError(path, 0,
                      "binary data (control bytes): expected a text session.csv, a "
-                     "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35)");
+                     "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35), an "
+                     "MCAP (89 \"MCAP0\" 0d 0a) or a ROS 1 bag (\"#ROSBAG V2.0\")");
   }
   // The first meaningful lines: a receiver capture when most of them are receiver lines
   // (a cut first line or a terminal program's banner does not defeat it).
@@ -379,14 +391,17 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
   if (format == SessionFormat::kImuTk) {
     return MakeError(path, 0, "imu_tk input is two files: use LoadImuTk(acc, gyro)");
   }
-  if (!options.topics.empty() && format != SessionFormat::kULog) {
+  if (!options.topics.empty() && !IsBinaryLogFormat(format)) {
     return MakeError(path, 0,
-                     fmt::format("--topic {}: topics are chosen in ULog input; this is {} input",
+                     fmt::format("--topic {}: topics are chosen in ULog, MCAP and ROS bag input; "
+                                 "this is {} input",
                                  options.topics.front(), SessionFormatName(format)));
   }
   Result<Session> session = MakeError(path, 0, "not loaded");
   if (format == SessionFormat::kULog) {
     session = internal::LoadULogSession(path, options);
+  } else if (IsBinaryLogFormat(format)) {
+    session = internal::LoadRosSession(path, format, options);
   } else if (format != SessionFormat::kReceiver) {
     session =
         internal::LoadSessionCsv(path, options, /*allow_clean_path=*/true, /*hash=*/true, format);

@@ -29,6 +29,10 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
 // A PX4 ULog's IMU topics (options.topics), one tag per topic instance (ulog_session.cpp);
 // sets the session's sha256.
 Result<Session> LoadULogSession(const std::string& path, const LoadOptions& options);
+// An MCAP file's or a ROS bag's sensor_msgs/Imu topics (options.topics), one tag per topic
+// (ros_session.cpp); sets the session's sha256.
+Result<Session> LoadRosSession(const std::string& path, SessionFormat format,
+                               const LoadOptions& options);
 
 // Adds a text column to the tag, or, for an unknown column whose every value is a finite
 // number, a numeric Quantity with origin kUnknown.

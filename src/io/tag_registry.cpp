@@ -148,6 +148,9 @@ bool IsThesisTagFormat(SessionFormat format) {
     case SessionFormat::kPhyphox:
     case SessionFormat::kSensorLogger:
     case SessionFormat::kULog:
+    case SessionFormat::kMcap:
+    case SessionFormat::kRosbag1:
+    case SessionFormat::kRosbag2:
       return false;
   }
   return true;

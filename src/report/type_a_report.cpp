@@ -68,7 +68,7 @@ ReportInput MakeInput(const Session& session) {
   } else {
     AddInputDialect(session.input, &input);
   }
-  if (session.format == SessionFormat::kULog) {
+  if (IsBinaryLogFormat(session.format)) {
     // A binary log: no delimiter, line ends or header to report, only its time.
     input.dialect.reset();
     input.mapping.reset();

@@ -187,7 +187,8 @@ TEST_CASE("session.csv bad input: each class names file, line and what was expec
                             "ELF\x02\x01\x01\0\0\0",
                             10)) ==
         "session.csv: binary data (NUL bytes): expected a text session.csv, a receiver "
-        "capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35)");
+        "capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35), an MCAP (89 \"MCAP0\" 0d "
+        "0a) or a ROS 1 bag (\"#ROSBAG V2.0\")");
 }
 
 TEST_CASE("Lenient mode skips and counts malformed rows", "[io][csv]") {

@@ -35,10 +35,16 @@ enum class SessionFormat {
   kPhyphox,       // phyphox CSV exports ("Time (s)", "Gyroscope x (rad/s)", ...).
   kSensorLogger,  // Sensor Logger per-sensor files: time (epoch ns), seconds_elapsed, z, y, x.
   kULog,          // PX4 ULog flight logs (binary; metro/io/ulog.hpp): IMU topics, one tag each.
+  kMcap,          // MCAP files (metro/io/ros_log.hpp): sensor_msgs/msg/Imu topics, one tag each.
+  kRosbag1,       // ROS 1 bags 2.0 (metro/io/ros_log.hpp): sensor_msgs/Imu topics.
+  kRosbag2,       // ROS 2 bag folders (metadata.yaml; sqlite3 or MCAP storage).
 };
 
-// "csv", "receiver", "imutk", "euroc", "raw", "phyphox", "sensorlogger", "ulog" ("auto" for
-// kAuto).
+// The binary logs (ULog, MCAP, ROS bags): no delimiter, line ends or header to report.
+bool IsBinaryLogFormat(SessionFormat format);
+
+// "csv", "receiver", "imutk", "euroc", "raw", "phyphox", "sensorlogger", "ulog", "mcap",
+// "rosbag1", "rosbag2" ("auto" for kAuto).
 const char* SessionFormatName(SessionFormat format);
 // The format with that name; false if none.
 bool ParseSessionFormat(std::string_view name, SessionFormat* format);

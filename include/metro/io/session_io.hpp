@@ -38,7 +38,17 @@ struct LoadOptions {
   // ULog input: the topics to read (--topic, repeatable), each instance (multi_id) one tag;
   // "NAME[K]" or "NAME:K" reads instance K only; empty: sensor_combined if the log has it,
   // else sensor_accel and sensor_gyro. Any other format refuses topics.
+  // MCAP and ROS bags: topics by name ("/imu/data"), each one tag; empty: the log's one
+  // sensor_msgs/Imu topic (several are an error that lists them).
   std::vector<std::string> topics;
+  // ROS logs: the sample time, header.stamp (kHeader) or the time the recorder logged the
+  // message (kReceive: MCAP log_time, the ROS 1 record time, rosbag2's timestamp).
+  enum class RosTime { kHeader, kReceive };
+  RosTime ros_time = RosTime::kHeader;
+  // ROS logs: stamps out of order are sorted and repeated stamps dropped after the first
+  // (both counted in input.notes), or the first one refused with an error (kRefuse).
+  enum class TimeOrder { kSort, kRefuse };
+  TimeOrder time_order = TimeOrder::kSort;
   int threads = 0;                // Parser threads; 0 = all cores.
   size_t max_rejected_kept = 10;  // How many rejected line numbers to keep.
   // Progress of a load: called with the byte count of each stretch of the file once it is
