@@ -6,9 +6,12 @@
 # sanitizer, or counts fewer edges than its floor (a library built without coverage again).
 #
 # Usage: fuzz/run.sh [seconds per target, default 15] [target...]     (default: all targets)
-# Environment: METRO_FUZZ_JOBS build jobs (default nproc).
-# Corpora grow in build-fuzz/corpus/<target>/, crash reproducers land in
-# build-fuzz/artifacts/<target>/ (commit a reproducer under fuzz/crashes/<target>/).
+# Environment: METRO_FUZZ_JOBS build jobs (default nproc); METRO_FUZZ_BUILD_DIR a build tree
+# already configured with clang, -DMETRO_FUZZ=ON and -DMETRO_SANITIZE=ON to build the targets in
+# (CI's sanitizer tree, so the library is compiled once for the tests and the fuzzers; default:
+# build-fuzz/, configured here).
+# Corpora grow in <build dir>/corpus/<target>/, crash reproducers land in
+# <build dir>/artifacts/<target>/ (commit a reproducer under fuzz/crashes/<target>/).
 # docs/security.md section 9 says what each target covers and how the floors were measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -34,18 +37,30 @@ ros_log_fuzz      16384   850
 all_targets=$(awk 'NF {print $1}' <<<"$table")
 targets="${*:-$all_targets}"
 
-CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
-  -DMETRO_FUZZ=ON -DMETRO_SANITIZE=ON -DMETRO_BUILD_TESTS=OFF -DMETRO_BUILD_APPS=OFF \
-  -DMETRO_BUILD_BENCH=OFF -DMETRO_BUILD_FIRMWARE=OFF \
-  -DMETRO_MODULES="core;io;stats;uncertainty;noise;calibration;blob;sim;accuracy;report" > /dev/null
+dir="${METRO_FUZZ_BUILD_DIR:-build-fuzz}"
+if [ -n "${METRO_FUZZ_BUILD_DIR:-}" ]; then
+  # A tree configured elsewhere: only one that instruments the library as build-fuzz/ does.
+  for want in 'METRO_FUZZ:BOOL=ON' 'METRO_SANITIZE:BOOL=ON' 'CMAKE_CXX_COMPILER:.*clang'; do
+    if ! grep -q "^$want" "$dir/CMakeCache.txt" 2>/dev/null; then
+      echo "fuzz/run.sh: $dir/CMakeCache.txt lacks $want (configure it with clang," \
+        "-DMETRO_FUZZ=ON and -DMETRO_SANITIZE=ON, or leave METRO_FUZZ_BUILD_DIR unset)" >&2
+      exit 2
+    fi
+  done
+else
+  CC=clang CXX=clang++ cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
+    -DMETRO_FUZZ=ON -DMETRO_SANITIZE=ON -DMETRO_BUILD_TESTS=OFF -DMETRO_BUILD_APPS=OFF \
+    -DMETRO_BUILD_BENCH=OFF -DMETRO_BUILD_FIRMWARE=OFF \
+    -DMETRO_MODULES="core;io;stats;uncertainty;noise;calibration;blob;sim;accuracy;report" > /dev/null
+fi
 # shellcheck disable=SC2086
-cmake --build build-fuzz -j"${METRO_FUZZ_JOBS:-$(nproc)}" --target $targets
+cmake --build "$dir" -j"${METRO_FUZZ_JOBS:-$(nproc)}" --target $targets
 
 # Seeds: the committed ones (fuzz/seeds/<target>/, hostile files from issue #20) plus
 # datasets/.
 seed() {
-  local target=$1 corpus=build-fuzz/corpus/$1
+  local target=$1 corpus=$dir/corpus/$1
   mkdir -p "$corpus"
   if [ -d "fuzz/seeds/$target" ]; then cp fuzz/seeds/"$target"/* "$corpus/"; fi
   case "$target" in
@@ -75,7 +90,7 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1}"
 # CLN (under GiNaC) keeps one small allocation it never frees: tests/lsan.supp.
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/tests/lsan.supp:print_suppressions=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
-mkdir -p build-fuzz/logs
+mkdir -p "$dir/logs"
 summary=()
 failed=0
 for target in $targets; do
@@ -85,13 +100,13 @@ for target in $targets; do
     exit 2
   fi
   seed "$target"
-  corpus=build-fuzz/corpus/$target
-  log=build-fuzz/logs/$target.log
-  mkdir -p "build-fuzz/artifacts/$target"
+  corpus=$dir/corpus/$target
+  log=$dir/logs/$target.log
+  mkdir -p "$dir/artifacts/$target"
   echo "== $target for ${seconds} s (seeds: $(find "$corpus" -type f | wc -l) files)"
   status=0
-  build-fuzz/fuzz/"$target" -max_total_time="$seconds" -max_len="$max_len" -timeout=10 \
-    -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="build-fuzz/artifacts/$target/" \
+  "$dir"/fuzz/"$target" -max_total_time="$seconds" -max_len="$max_len" -timeout=10 \
+    -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$dir/artifacts/$target/" \
     "$corpus" > "$log" 2>&1 || status=$?
   # The CI log shows the edges at start and end and the final stats.
   grep -E '^#[0-9]+[[:space:]]+(INITED|DONE)|^stat::' "$log" || true
@@ -119,7 +134,7 @@ done
 echo "== fuzz summary"
 printf '%s\n' "${summary[@]}"
 if [ "$failed" -ne 0 ]; then
-  echo "fuzz/run.sh: a target failed; reproducers in build-fuzz/artifacts/<target>/" >&2
+  echo "fuzz/run.sh: a target failed; reproducers in $dir/artifacts/<target>/" >&2
   exit 1
 fi
 echo "fuzzing finished without findings"

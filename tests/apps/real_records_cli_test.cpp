@@ -84,8 +84,8 @@ bool SaidOnStderr(const std::string& err, const std::string& name, const std::st
     if (line.find("more like it:") != std::string::npos) {
       if (in_group && (line.find(" " + name + ",") != std::string::npos ||
                        line.find(" " + name + ";") != std::string::npos ||
-                       line.size() >= name.size() &&
-                           line.compare(line.size() - name.size(), name.size(), name) == 0)) {
+                       (line.size() >= name.size() &&
+                        line.compare(line.size() - name.size(), name.size(), name) == 0))) {
         return true;
       }
       continue;

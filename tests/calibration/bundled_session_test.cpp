@@ -101,6 +101,7 @@ TEST_CASE("calibrate fit recovers the bundled session's truth within 3 u", "[cal
     tables += s.kind == SegmentKind::kTable ? 1 : 0;
   }
   const int poses = truth["poses"].get<int>();
+  CHECK(statics >= poses);
   CHECK(tables == poses * static_cast<int>(truth["table_rates_dps"].size()));
   CHECK(t.accel->segments.size() >= static_cast<size_t>(poses));
   CheckWithin(*t.accel, TruthModel(truth["accel"], ImuSensor::kAccel), 3.0);

@@ -17,6 +17,7 @@
 #include "metro/io/session.hpp"
 #include "metro/io/session_io.hpp"
 #include "support/allocation_limit.hpp"
+#include "support/sanitizer.hpp"
 #include "support/temp_file.hpp"
 
 namespace metro {
@@ -111,7 +112,8 @@ TEST_CASE("A session's large columns go back to the system, small ones are left 
 // size at the fork plus `extra_bytes`: 'L' loaded, 'M' the out-of-memory error naming the
 // file, 'E' another error naming the file (the file could not be mapped), 'X' any other
 // error, 'T' an exception out of LoadSession, 'C' a crash (a signal, std::terminate).
-char LoadUnderLimit(const std::string& path, const LoadOptions& options, int64_t extra_bytes) {
+[[maybe_unused]] char LoadUnderLimit(const std::string& path, const LoadOptions& options,
+                                     int64_t extra_bytes) {
   const pid_t pid = fork();
   if (pid == 0) {
     long long size_pages = 0;
@@ -152,7 +154,7 @@ char LoadUnderLimit(const std::string& path, const LoadOptions& options, int64_t
 
 TEST_CASE("Loads under address-space limits end in a session or an error, never a crash",
           "[io][memory]") {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || !defined(__linux__)
+#if METRO_UNDER_SANITIZER || !defined(__linux__)
   WARN("not run here: the sanitizers reserve terabytes of address space (RLIMIT_AS)");
 #else
   // 12 MB of short rows (3.4 x as many bytes of columns as of text, so that the columns

@@ -5,7 +5,10 @@
 #include <cstdlib>
 #include <new>
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#include "support/sanitizer.hpp"
+
+// A sanitizer's runtime replaces operator new itself.
+#if METRO_UNDER_SANITIZER
 #define METRO_REPLACE_OPERATOR_NEW 0
 #else
 #define METRO_REPLACE_OPERATOR_NEW 1
