@@ -234,6 +234,10 @@ Status ReadMcapStorage(const std::string& file, const RosLogReadOptions& options
 bool IsRosbag2Path(const std::string& path) {
   if (IsDirectory(path)) return ::access((path + "/metadata.yaml").c_str(), R_OK) == 0;
   if (path.size() >= 13 && path.compare(path.size() - 13, 13, "metadata.yaml") == 0) return true;
+  // Only a regular file is peeked at: opening a FIFO would take the bytes (or block) that the
+  // loader is to read.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;
   std::ifstream in(path, std::ios::binary);
   char head[16] = {};
   return in.read(head, 16) &&

@@ -53,7 +53,8 @@ void CompareReports(const nlohmann::json& a, const nlohmann::json& b, const std:
 
 }  // namespace
 
-TEST_CASE("--stream reports the in-memory numbers on the bundled sessions", "[apps][stream]") {
+TEST_CASE("characterize --stream reports the in-memory numbers on the bundled sessions",
+          "[apps][stream]") {
   struct Case {
     std::string file, args;
   };
@@ -84,7 +85,7 @@ TEST_CASE("--stream reports the in-memory numbers on the bundled sessions", "[ap
   }
 }
 
-TEST_CASE("--stream refuses what needs the whole record", "[apps][stream]") {
+TEST_CASE("characterize --stream refuses what needs the whole record", "[apps][stream]") {
   const std::string imu = kDatasets + "static_imu_100hz.csv --type-a --stream ";
   auto settle = Characterize(imu + "--settle auto");
   CHECK(settle.exit_code == 2);
