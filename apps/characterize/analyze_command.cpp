@@ -47,7 +47,7 @@ struct AnalyzeOptions {
   // of the memory available.
   bool stream = false;
   double stream_above_memory_share = 0.5;
-  size_t stream_group_bytes = size_t{32} << 20;
+  size_t stream_group_bytes = size_t{8} << 20;
 };
 
 // MemAvailable of /proc/meminfo in bytes, 0 when unknown.
@@ -307,10 +307,10 @@ void AddTypeAOptions(CLI::App& app, AnalyzeOptions* o, bool accuracy) {
         ->check(CLI::Range(0.0, 100.0))
         ->default_str("0.5");
     app.add_option("--stream-group-bytes", o->stream_group_bytes,
-                   "with --stream: bytes of the file read per group of rows (memory is about "
-                   "three times this)")
+                   "with --stream: bytes of the file read per group of rows (memory is about 3 "
+                   "to 15 times this, the more the narrower the rows)")
         ->check(CLI::PositiveNumber)
-        ->default_str("33554432");
+        ->default_str("8388608");
   }
 }
 

@@ -751,9 +751,11 @@ Status DrainGroup(const std::string& path, const ColumnPlan& plan, const Timing&
     if (tb->tag.line.empty()) continue;
     Tag tag;
     tag.sensor = s;
-    tag.line = tb->tag.line;
+    // The builder's columns move to the group (no copy on the peak); the builder starts the
+    // next group empty.
+    tag.line = std::move(tb->tag.line);
     if (timing.integer_time) {
-      tag.t_ns = tb->tag.t_ns;
+      tag.t_ns = std::move(tb->tag.t_ns);
       if (!tag.t_ns.empty() && tag.t_ns.front() < origin_ns) {
         return MakeError(path, tag.line.front(),
                          fmt::format("sensor {}'s first time is before the session's first row: "
@@ -765,9 +767,16 @@ Status DrainGroup(const std::string& path, const ColumnPlan& plan, const Timing&
         return sec;
       }
     } else {
-      tag.t_s = tb->tag.t_s;
+      tag.t_s = std::move(tb->tag.t_s);
     }
-    tag.quantities = tb->tag.quantities;
+    tag.quantities.resize(tb->tag.quantities.size());
+    for (size_t q = 0; q < tag.quantities.size(); ++q) {
+      Quantity& from = tb->tag.quantities[q];
+      tag.quantities[q].name = from.name;
+      tag.quantities[q].unit = from.unit;
+      tag.quantities[q].origin = from.origin;
+      tag.quantities[q].values = std::move(from.values);
+    }
     AddScaledRawColumns(plan, &tag);
     tag.counts.frames = tag.counts.fresh = static_cast<int64_t>(tag.line.size());
     group->tags.push_back(std::move(tag));

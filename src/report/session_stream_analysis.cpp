@@ -288,7 +288,8 @@ SessionAnalysis AnalyzeSessionStreamed(const std::string& path,
   }
   std::map<int, TagSpill> spills;
   auto session = StreamSession(
-      path, load, [&](Session& group) { return AppendGroup(group, options.type_a, &spills); });
+      path, load, [&](Session& group) { return AppendGroup(group, options.type_a, &spills); },
+      std::max<size_t>(options.stream_group_bytes, 1));
   if (!session.ok()) return fail(session.error(), true);
   out.session = std::move(session).value();
   for (auto& [sensor, s] : spills) {

@@ -392,15 +392,21 @@ void WarnOnTypeA(QuantityTypeA* r) {
         "the autocorrelation did not decay within n/4 lags (drift or a trend): even "
         "std_of_mean_autocorr is optimistic; see u_mean and the Allan deviation");
   }
-  if (!ta.u_mean_available) r->warnings.push_back(ta.autocorr_note);
+  // Without the autocorrelation (autocorrelation off, n <= 3, or a cut-off beyond what the
+  // streaming mode keeps) its note says why.
+  if (!ta.u_mean_available || (!ta.autocorr_computed && ta.u_mean_ar > 0.0)) {
+    r->warnings.push_back(ta.autocorr_note);
+  }
   if (!ta.u_mean_note.empty()) r->warnings.push_back(ta.u_mean_note);
   if (ta.drift_detected) {
     r->warnings.push_back(fmt::format(
         "drift or a random walk: the stationarity check (means of {} batches) gives u of the "
-        "mean {:.3g}, more than 2x the autoregressive {:.3g} (std_of_mean_autocorr {:.3g}); "
+        "mean {:.3g}, more than 2x the autoregressive {:.3g} (std_of_mean_autocorr {}); "
         "u_mean takes the batch-means value ({} dof). The mean of a drifting record depends "
         "on the window; see the Allan deviation",
-        kStationarityBatches, ta.u_mean_batch, ta.u_mean_ar, ta.std_of_mean_autocorr,
+        kStationarityBatches, ta.u_mean_batch, ta.u_mean_ar,
+        ta.autocorr_computed ? fmt::format("{:.3g}", ta.std_of_mean_autocorr)
+                             : std::string("not computed"),
         kStationarityBatches - 1));
   }
 }

@@ -148,16 +148,19 @@ void AddCentredBody(const double* x, size_t m, double centre, CentredLanes* lane
   constexpr size_t kChunk = 512;
   alignas(32) double e[kChunk + kDirectLags];
   for (size_t j = 0; j < m + kDirectLags; ++j) e[j] = x[j] - centre;
+  // The accumulators in registers for the loop (a local copy: no store through `lanes`).
+  CentredLanes l = *lanes;
   for (size_t j = 0; j < m; j += 4) {
     Lanes4 e0;
     Load4(e + j, &e0);
-    lanes->sum += e0;
+    l.sum += e0;
     for (size_t k = 0; k <= kDirectLags; ++k) {
       Lanes4 ek;
       Load4(e + j + k, &ek);
-      lanes->acc[k] += e0 * ek;
+      l.acc[k] += e0 * ek;
     }
   }
+  *lanes = l;
 }
 
 void CentredLagSums(const Record& x, double centre, double* s1, double* p) {
@@ -598,10 +601,14 @@ void ArAndBatchMeans(const Record& values, TypeAResult* result) {
     double means[kStationarityBatches];
     double sum = 0.0;
     values.Fail(values.ForEachChunk(start, n, 0, [&](const double* v, size_t begin, size_t count) {
-      for (size_t i = 0; i < count; ++i) {
+      // Batch by batch within the chunk (no division per value), in order.
+      for (size_t i = 0; i < count;) {
         const size_t at = begin + i - start;
-        sum += v[i] - r.mean;
-        if ((at + 1) % m == 0) {
+        const size_t batch_end = (at / m + 1) * m;
+        const size_t take = std::min(count - i, batch_end - at);
+        for (size_t k = 0; k < take; ++k) sum += v[i + k] - r.mean;
+        i += take;
+        if (at + take == batch_end) {
           means[at / m] = sum / static_cast<double>(m);
           sum = 0.0;
         }

@@ -20,7 +20,7 @@
 
 namespace metro {
 
-inline constexpr size_t kDefaultStreamGroupBytes = size_t{32} << 20;
+inline constexpr size_t kDefaultStreamGroupBytes = size_t{8} << 20;
 
 // Calls on_group for each group of rows in file order (its tags hold only that group's rows;
 // an Error it returns stops the read and is returned). Returns the session without rows:

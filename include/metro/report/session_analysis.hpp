@@ -40,8 +40,8 @@ struct SessionAnalysisOptions {
   // Optional, not owned: hears of each phase (load with its bytes, Type A, Allan, the
   // budget's Monte Carlo trials) as it runs. Results never depend on it.
   ProgressSink* progress = nullptr;
-  // AnalyzeSessionStreamed: bytes of the file read per group of rows (memory ~ 3x this).
-  size_t stream_group_bytes = size_t{32} << 20;
+  // AnalyzeSessionStreamed: bytes of the file read per group of rows (memory 3-15x this).
+  size_t stream_group_bytes = size_t{8} << 20;
 
   bool IsValid(std::string* why) const;
 };
