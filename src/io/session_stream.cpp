@@ -1,19 +1,73 @@
 #include "metro/io/session_stream.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <optional>
 
 #include "core/parallel.hpp"
 #include "io/csv_blocks.hpp"
 #include "io/session_internal.hpp"
+#include "io/stdin_input.hpp"
 #include "metro/core/file.hpp"
 
 namespace metro {
 
+namespace {
+
+Result<Session> StreamFile(const std::string& path, const LoadOptions& options,
+                           const std::function<Status(Session& group)>& on_group,
+                           size_t group_bytes);
+
+// stdin, a FIFO or a device: copied once to a temporary file on disk (not in memory: the
+// streaming mode's point), which is then streamed; the session and its errors name `name`.
+Result<Session> StreamCopy(internal::StdinCopyOptions copy_options, const LoadOptions& options,
+                           const std::function<Status(Session& group)>& on_group,
+                           size_t group_bytes) {
+  copy_options.try_memfd = false;
+  auto copy = internal::CopyStdinToFile(copy_options);
+  if (!copy.ok()) return copy.error();
+  Result<Session> session = StreamFile(copy.value().path(), options, on_group, group_bytes);
+  if (session.ok()) {
+    session.value().path = copy_options.display_name;
+    return session;
+  }
+  Error error = session.error();
+  if (error.file == copy.value().path()) error.file = copy_options.display_name;
+  return error;
+}
+
+}  // namespace
+
 Result<Session> StreamSession(const std::string& path, const LoadOptions& options,
                               const std::function<Status(Session& group)>& on_group,
                               size_t group_bytes) {
+  if (internal::IsStdinPath(path)) {
+    return StreamCopy(internal::StdinCopyOptions(), options, on_group, group_bytes);
+  }
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return MakeError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+    internal::StdinCopyOptions copy_options;
+    copy_options.source_fd = fd;
+    copy_options.display_name = path;
+    Result<Session> session = StreamCopy(copy_options, options, on_group, group_bytes);
+    ::close(fd);
+    return session;
+  }
+  return StreamFile(path, options, on_group, group_bytes);
+}
+
+namespace {
+
+Result<Session> StreamFile(const std::string& path, const LoadOptions& options,
+                           const std::function<Status(Session& group)>& on_group,
+                           size_t group_bytes) {
   std::string why;
   if (!options.IsValid(&why)) return MakeError(path, 0, "invalid load options: " + why);
   SessionFormat format = options.format;
@@ -64,5 +118,7 @@ Result<Session> StreamSession(const std::string& path, const LoadOptions& option
   session->value().sha256 = digest.value();
   return *std::move(session);
 }
+
+}  // namespace
 
 }  // namespace metro

@@ -3,6 +3,8 @@
 // crosses many group boundaries; and what cannot be streamed is refused or named.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -83,6 +85,26 @@ TEST_CASE("characterize --stream reports the in-memory numbers on the bundled se
     CHECK(diff.empty());
     CHECK(b["input"]["notes"].dump().find("streaming mode") != std::string::npos);
   }
+}
+
+TEST_CASE("characterize - --stream reads stdin once and streams it", "[apps][stream]") {
+  const std::string file = kDatasets + "static_imu_100hz.csv";
+  std::ifstream in(file, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto memory = Characterize(file + " --type-a --allan");
+  auto piped = testing::RunProgramWithStdin(
+      METRO_CHARACTERIZE_EXE, "- --type-a --allan --stream --stream-group-bytes 65536", bytes);
+  INFO(piped.err);
+  REQUIRE(memory.exit_code == 0);
+  REQUIRE(piped.exit_code == 0);
+  const auto a = nlohmann::json::parse(memory.out);
+  auto b = nlohmann::json::parse(piped.out);
+  CHECK(b["input"]["path"] == "<stdin>");
+  b["input"]["path"] = a["input"]["path"];
+  std::vector<std::string> diff;
+  CompareReports(a, b, "", &diff);
+  for (const std::string& d : diff) UNSCOPED_INFO(d);
+  CHECK(diff.empty());
 }
 
 TEST_CASE("characterize --stream refuses what needs the whole record", "[apps][stream]") {

@@ -7,7 +7,9 @@
 // Rows are checked as LoadSession checks them (strict or lenient, time order per tag across
 // groups); with integer times the session's origin is the first group's earliest time, and a
 // tag whose rows start earlier than it is refused (rows not in time order across tags).
-// Euler angles are derived per group as LoadSession derives them.
+// Euler angles are derived per group as LoadSession derives them. `-` (stdin), a FIFO or a
+// device is first copied once to a temporary file on disk (LoadSession's cap on stream size
+// applies) and streamed from there; the session and its errors keep the name given.
 #pragma once
 
 #include <cstddef>
