@@ -182,6 +182,17 @@ bool LoadOptions::IsValid(std::string* why) const {
 
 namespace internal {
 
+Result<Session> NamedAsStream(Result<Session> session, const std::string& copy_path,
+                              const std::string& display_name) {
+  if (session.ok()) {
+    session.value().path = display_name;
+    return session;
+  }
+  Error error = session.error();
+  if (error.file == copy_path) error.file = display_name;
+  return error;
+}
+
 Error TooManyLinesError(const std::string& path, int64_t line) {
   return MakeError(path, line,
                    fmt::format("more than {} lines: metro keeps each observation's source line "
@@ -436,14 +447,8 @@ Result<Session> LoadStream(const internal::StdinCopyOptions& copy_options,
                            const LoadOptions& options) {
   auto copy = internal::CopyStdinToFile(copy_options);
   if (!copy.ok()) return copy.error();
-  Result<Session> session = LoadSessionOrThrow(copy.value().path(), options);
-  if (session.ok()) {
-    session.value().path = copy_options.display_name;
-    return session;
-  }
-  Error error = session.error();
-  if (error.file == copy.value().path()) error.file = copy_options.display_name;
-  return error;
+  return internal::NamedAsStream(LoadSessionOrThrow(copy.value().path(), options),
+                                 copy.value().path(), copy_options.display_name);
 }
 
 // A named path that is no regular file or directory (a FIFO, /dev/stdin on a pipe, a

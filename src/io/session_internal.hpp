@@ -48,6 +48,11 @@ std::string DeriveEulerIfAbsent(Tag* tag);
 // Tag::line keeps source lines as uint32_t: the error for a line beyond that, from every
 // loader (a file of more than 4,294,967,295 lines, some 40 GB at least).
 constexpr int64_t kMaxLineNumber = UINT32_MAX;
+// A session read from the copy of a stream (stdin, a FIFO) at copy_path, named display_name:
+// the session's path, and an error's file when it is the copy's.
+Result<Session> NamedAsStream(Result<Session> session, const std::string& copy_path,
+                              const std::string& display_name);
+
 Error TooManyLinesError(const std::string& path, int64_t line);
 
 // The error a loader returns when a session's columns do not fit in memory (it catches

@@ -31,14 +31,8 @@ Result<Session> StreamCopy(internal::StdinCopyOptions copy_options, const LoadOp
   copy_options.try_memfd = false;
   auto copy = internal::CopyStdinToFile(copy_options);
   if (!copy.ok()) return copy.error();
-  Result<Session> session = StreamFile(copy.value().path(), options, on_group, group_bytes);
-  if (session.ok()) {
-    session.value().path = copy_options.display_name;
-    return session;
-  }
-  Error error = session.error();
-  if (error.file == copy.value().path()) error.file = copy_options.display_name;
-  return error;
+  return internal::NamedAsStream(StreamFile(copy.value().path(), options, on_group, group_bytes),
+                                 copy.value().path(), copy_options.display_name);
 }
 
 }  // namespace

@@ -775,6 +775,28 @@ std::vector<double> VariancesOfSums(const std::vector<double>& sums, int64_t n_p
   return VariancesFromSums(sums, n_phase, tau0_s, m, estimator);
 }
 
+void FinishGapFreeCurve(const std::vector<int64_t>& m, const std::vector<double>& variance,
+                        int64_t n_phase, const std::vector<char>& identified,
+                        const std::vector<int>& identified_alpha, const AllanOptions& options,
+                        AllanCurve* curve) {
+  const size_t n = m.size();
+  const double tau0_s = curve->tau0_s;
+  curve->m = m;
+  curve->tau_s.resize(n);
+  curve->dev.resize(n);
+  curve->n_terms.resize(n);
+  std::vector<EdfRecords> records(n);
+  for (size_t k = 0; k < n; ++k) {
+    curve->tau_s[k] = static_cast<double>(m[k]) * tau0_s;
+    curve->dev[k] = std::sqrt(std::max(variance[k], 0.0));
+    curve->n_terms[k] = AllanTermCount(options.estimator, n_phase, m[k]);
+    records[k].run_phase_points = {n_phase};
+    records[k].whole_phase_points = n_phase;
+  }
+  curve->n_terms_gap_free = curve->n_terms;
+  FillAlphaAndIntervals(identified, identified_alpha, records, options, curve);
+}
+
 }  // namespace internal
 
 namespace {
@@ -847,20 +869,7 @@ Result<AllanCurve> AllanFromPhase(const double* phase, int64_t n_rate, double ra
     internal::RunAllanTasks(threads, n_id, [&](int64_t t) { identify(static_cast<size_t>(t)); });
   }
 
-  curve.m = m;
-  curve.tau_s.resize(n);
-  curve.dev.resize(n);
-  curve.n_terms.resize(n);
-  std::vector<internal::EdfRecords> records(n);
-  for (size_t k = 0; k < n; ++k) {
-    curve.tau_s[k] = static_cast<double>(m[k]) * tau0_s;
-    curve.dev[k] = std::sqrt(std::max(variance[k], 0.0));
-    curve.n_terms[k] = AllanTermCount(options.estimator, n_phase, m[k]);
-    records[k].run_phase_points = {n_phase};
-    records[k].whole_phase_points = n_phase;
-  }
-  curve.n_terms_gap_free = curve.n_terms;
-  internal::FillAlphaAndIntervals(identified, identified_alpha, records, options, &curve);
+  internal::FinishGapFreeCurve(m, variance, n_phase, identified, identified_alpha, options, &curve);
   return curve;
 }
 

@@ -278,20 +278,7 @@ Result<AllanCurve> ComputeAllanChunked(const ChunkReader& read, int64_t n_rate, 
   curve.n_rate_samples = n_rate;
   curve.confidence = options.confidence;
   curve.rate_mean = blocks.value().mean;
-  curve.m = m;
-  curve.tau_s.resize(n);
-  curve.dev.resize(n);
-  curve.n_terms.resize(n);
-  std::vector<internal::EdfRecords> records(n);
-  for (size_t k = 0; k < n; ++k) {
-    curve.tau_s[k] = static_cast<double>(m[k]) * tau0_s;
-    curve.dev[k] = std::sqrt(std::max(variance[k], 0.0));
-    curve.n_terms[k] = AllanTermCount(options.estimator, n_phase, m[k]);
-    records[k].run_phase_points = {n_phase};
-    records[k].whole_phase_points = n_phase;
-  }
-  curve.n_terms_gap_free = curve.n_terms;
-  internal::FillAlphaAndIntervals(identified, identified_alpha, records, options, &curve);
+  internal::FinishGapFreeCurve(m, variance, n_phase, identified, identified_alpha, options, &curve);
   return curve;
 }
 

@@ -48,6 +48,14 @@ void FillAlphaAndIntervals(const std::vector<char>& identified,
                            const std::vector<EdfRecords>& records, const AllanOptions& options,
                            AllanCurve* curve);
 
+// The curve of a record without gaps from its variances at each m (tau, deviation, terms;
+// one run of n_phase points for the EDF), then FillAlphaAndIntervals. curve->tau0_s and the
+// curve's header (estimator, counts, mean) must be set.
+void FinishGapFreeCurve(const std::vector<int64_t>& m, const std::vector<double>& variance,
+                        int64_t n_phase, const std::vector<char>& identified,
+                        const std::vector<int>& identified_alpha, const AllanOptions& options,
+                        AllanCurve* curve);
+
 // How the Allan module runs its parallel work: task(0..count-1) on up to `threads` threads
 // (core/parallel.hpp ParallelFor); an exception thrown by a task is rethrown here, in the
 // caller, once the other threads have stopped (it used to end the process).
