@@ -76,8 +76,28 @@ bool ChooseStreaming(const AnalyzeOptions& o) {
       w.skip_seconds != 0.0 || w.from_s || w.to_s || o.stream_above_memory_share <= 0.0) {
     return false;
   }
+  // Only what the streaming mode reads as the in-memory path would: text sessions, and the
+  // estimators it has (never a run that works in memory turned into refusals).
+  const AllanEstimator estimator = o.analysis.allan_options.allan.estimator;
+  if (o.analysis.allan && estimator != AllanEstimator::kOadev &&
+      estimator != AllanEstimator::kOhdev) {
+    return false;
+  }
   struct stat st {};
   if (::stat(o.session.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;
+  SessionFormat format = SessionFormat::kAuto;
+  if (o.analysis.load.format != "auto" && !ParseSessionFormat(o.analysis.load.format, &format)) {
+    return false;
+  }
+  if (format == SessionFormat::kAuto) {
+    Result<SessionFormat> detected = DetectSessionFormat(o.session);
+    if (!detected.ok()) return false;
+    format = detected.value();
+  }
+  if (format == SessionFormat::kReceiver || format == SessionFormat::kImuTk ||
+      IsBinaryLogFormat(format)) {
+    return false;
+  }
   const uint64_t available = AvailableMemoryBytes();
   if (available == 0 || static_cast<double>(st.st_size) <=
                             o.stream_above_memory_share * static_cast<double>(available)) {

@@ -588,6 +588,21 @@ class RowMover {
   int64_t rejected_untimed_ = 0;
 };
 
+// The parsed blocks' rows into the tags, in file order (up to the first block not parsed);
+// *first_line follows the blocks, *resolution_ns keeps the coarsest time resolution seen.
+// Each block's buffers are freed as soon as it is moved.
+Status MoveParsedBlocks(RowMover* mover, std::vector<Block>* blocks, int64_t* first_line,
+                        int64_t* resolution_ns) {
+  for (Block& b : *blocks) {
+    if (!b.parsed) break;
+    *resolution_ns = std::max(*resolution_ns, b.time_resolution_ns);
+    if (Status s = mover->MoveBlock(*first_line, &b); !s.ok()) return s;
+    *first_line += b.lines;
+    b = Block();
+  }
+  return Status::Ok();
+}
+
 // ---- tags ---------------------------------------------------------------------------------
 
 // Integer time: seconds of tag `sensor` from the session's first time, from exact differences.
@@ -710,13 +725,8 @@ Result<Session> LoadGeneralCsv(const std::string& path, const MappedFile& file,
   RowMover mover(path, plan, options, timing, &builders, &session);
   int64_t first_line = header.line_number + 1;
   int64_t resolution_ns = 0;
-  for (Block& b : blocks) {
-    if (!b.parsed) break;
-    resolution_ns = std::max(resolution_ns, b.time_resolution_ns);
-    if (Status s = mover.MoveBlock(first_line, &b); !s.ok()) return s.error();
-    first_line += b.lines;
-    // Free the block's buffers as soon as they are moved.
-    b = Block();
+  if (Status s = MoveParsedBlocks(&mover, &blocks, &first_line, &resolution_ns); !s.ok()) {
+    return s.error();
   }
 
   if (Status s = FinishTags(path, plan, timing, &builders, &session); !s.ok()) return s.error();
@@ -829,12 +839,8 @@ Result<Session> StreamGeneralCsv(const std::string& path, const MappedFile& file
     BlockProgress progress(options.on_bytes_parsed, blocks.size());
     ParseBlocks(file, plan, options, threads, &blocks, &progress, &release);
     AddBuilders(blocks, plan, timing, &builders);
-    for (Block& b : blocks) {
-      if (!b.parsed) break;
-      resolution_ns = std::max(resolution_ns, b.time_resolution_ns);
-      if (Status s = mover.MoveBlock(first_line, &b); !s.ok()) return s.error();
-      first_line += b.lines;
-      b = Block();
+    if (Status s = MoveParsedBlocks(&mover, &blocks, &first_line, &resolution_ns); !s.ok()) {
+      return s.error();
     }
     if (timing.integer_time && origin_ns == std::numeric_limits<int64_t>::max()) {
       for (const auto& tb : builders) {

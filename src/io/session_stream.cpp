@@ -7,6 +7,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <map>
 #include <optional>
 
 #include "core/parallel.hpp"
@@ -91,9 +92,19 @@ Result<Session> StreamFile(const std::string& path, const LoadOptions& options,
   internal::HeaderLine header;
   auto plan = internal::PlanCsv(path, file, options, format, &header);
   if (!plan.ok()) return plan.error();
+  // Euler angles per group, as LoadSession derives them; a quaternion off unit norm is
+  // warned about once per tag, from the first group that shows it (its norms are that
+  // group's, and the warning says so).
+  std::map<int, std::string> euler_warnings;
   const auto derive = [&](Session& group) {
     if (options.derive_euler) {
-      for (Tag& tag : group.tags) internal::DeriveEulerIfAbsent(&tag);
+      for (Tag& tag : group.tags) {
+        std::string w = internal::DeriveEulerIfAbsent(&tag);
+        if (!w.empty() && euler_warnings.count(tag.sensor) == 0) {
+          euler_warnings[tag.sensor] = fmt::format(
+              "{} (in the group of rows from line {}, streaming mode)", w, tag.line.front());
+        }
+      }
     }
     return on_group(group);
   };
@@ -110,6 +121,9 @@ Result<Session> StreamFile(const std::string& path, const LoadOptions& options,
   if (!session->ok()) return *std::move(session);
   if (!digest.ok()) return digest.error();
   session->value().sha256 = digest.value();
+  for (auto& [sensor, w] : euler_warnings) {
+    session->value().input.warnings.push_back(std::move(w));
+  }
   return *std::move(session);
 }
 

@@ -107,6 +107,26 @@ TEST_CASE("characterize - --stream reads stdin once and streams it", "[apps][str
   CHECK(diff.empty());
 }
 
+TEST_CASE("characterize streams by itself only what it can stream", "[apps][stream]") {
+  // A share of memory so small that every file is "larger": a text session streams (said on
+  // stderr); a ULog, or an estimator the streaming mode lacks, stays in memory and works.
+  const std::string tiny = " --stream-above-memory-share 1e-12";
+  auto csv = Characterize(kDatasets + "static_imu_100hz.csv --type-a" + tiny);
+  INFO(csv.err);
+  CHECK(csv.exit_code == 0);
+  CHECK_THAT(csv.err, Catch::Contains("streaming mode"));
+  auto ulog = Characterize(std::string(METRO_EXTERNAL_DATA_DIR) +
+                           "/px4_pyulog_samples/sample.ulg --type-a" + tiny);
+  INFO(ulog.err);
+  CHECK(ulog.exit_code == 0);
+  CHECK_THAT(ulog.err, !Catch::Contains("streaming mode"));
+  auto mdev = Characterize(kDatasets + "static_imu_100hz.csv --type-a --allan --estimator mdev" +
+                           " --quantity gx_dps" + tiny);
+  INFO(mdev.err);
+  CHECK(mdev.exit_code == 0);
+  CHECK_THAT(mdev.err, !Catch::Contains("streaming mode"));
+}
+
 TEST_CASE("characterize --stream refuses what needs the whole record", "[apps][stream]") {
   const std::string imu = kDatasets + "static_imu_100hz.csv --type-a --stream ";
   auto settle = Characterize(imu + "--settle auto");
