@@ -76,13 +76,8 @@ bool ChooseStreaming(const AnalyzeOptions& o) {
       w.skip_seconds != 0.0 || w.from_s || w.to_s || o.stream_above_memory_share <= 0.0) {
     return false;
   }
-  // Only what the streaming mode reads as the in-memory path would: text sessions, and the
-  // estimators it has (never a run that works in memory turned into refusals).
-  const AllanEstimator estimator = o.analysis.allan_options.allan.estimator;
-  if (o.analysis.allan && estimator != AllanEstimator::kOadev &&
-      estimator != AllanEstimator::kOhdev) {
-    return false;
-  }
+  // Only what the streaming mode reads as the in-memory path would: text sessions (never a
+  // run that works in memory turned into refusals).
   struct stat st {};
   if (::stat(o.session.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;
   SessionFormat format = SessionFormat::kAuto;

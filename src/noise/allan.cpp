@@ -180,31 +180,31 @@ class OverlappingSums {
   std::vector<std::vector<double>> partial_;
 };
 
-// Modified Allan sum for one m: sum_{j=0}^{N-3m} (sum_{i=j}^{j+m-1} d_i)^2, d_i the second
-// difference at lag m. The inner sum slides in O(1) per j and is recomputed from scratch
-// every kResync steps so that rounding cannot accumulate.
+// Modified Allan sum for one m (NIST SP 1065 5.2.5): sum_{j=0}^{N-3m} (sum_{i=j}^{j+m-1} d_i)^2,
+// d_i the second difference at lag m. The inner sum slides in O(1) per j and is recomputed
+// from scratch at the start of every segment of ModifiedSegmentTerms(m) terms, so that
+// rounding cannot accumulate; the segments' totals are added in their order, so the sum does
+// not depend on the thread count, and ComputeAllanChunked reproduces it bit for bit.
 double ModifiedSum(const double* p, int64_t n_phase, int64_t m, int threads) {
   const int64_t n_terms = AllanTermCount(AllanEstimator::kMdev, n_phase, m);
+  const int64_t segment = internal::ModifiedSegmentTerms(m);
+  const int64_t segments = (n_terms + segment - 1) / segment;
   auto d = [p, m](int64_t i) { return (p[i + 2 * m] - 2.0 * p[i + m]) + p[i]; };
-  const int64_t resync = std::max<int64_t>(int64_t{1} << 16, 16 * m);
-  const int n_threads = ResolveThreads(threads, n_terms);
-  std::vector<double> partial(static_cast<size_t>(n_threads), 0.0);
-  internal::ParallelSlices(n_threads, n_terms, [&](int64_t lo, int64_t hi, int t) {
-    double total = 0.0;
-    for (int64_t start = lo; start < hi; start += resync) {
-      const int64_t stop = std::min(start + resync, hi);
-      double inner = 0.0;
-      for (int64_t i = start; i < start + m; ++i) inner += d(i);
+  std::vector<double> totals(static_cast<size_t>(segments), 0.0);
+  internal::RunAllanTasks(ResolveThreads(threads, n_terms), segments, [&](int64_t s) {
+    const int64_t start = s * segment;
+    const int64_t stop = std::min(start + segment, n_terms);
+    double inner = 0.0;
+    for (int64_t i = start; i < start + m; ++i) inner += d(i);
+    double total = inner * inner;
+    for (int64_t j = start + 1; j < stop; ++j) {
+      inner += d(j + m - 1) - d(j - 1);
       total += inner * inner;
-      for (int64_t j = start + 1; j < stop; ++j) {
-        inner += d(j + m - 1) - d(j - 1);
-        total += inner * inner;
-      }
     }
-    partial[static_cast<size_t>(t)] = total;
+    totals[static_cast<size_t>(s)] = total;
   });
   double sum = 0.0;
-  for (double s : partial) sum += s;
+  for (double t : totals) sum += t;
   return sum;
 }
 
@@ -769,6 +769,8 @@ void RunPhaseBlock(const double* y, int64_t count, double mean, double tau0_s, d
   METRO_CHECK(count <= kPhaseBlock);
   RunBlocks(y, count, mean, tau0_s, 0, 1, x, carry, phase);
 }
+
+int64_t ModifiedSegmentTerms(int64_t m) { return std::max<int64_t>(int64_t{1} << 16, 16 * m); }
 
 std::vector<double> VariancesOfSums(const std::vector<double>& sums, int64_t n_phase, double tau0_s,
                                     const std::vector<int64_t>& m, AllanEstimator estimator) {

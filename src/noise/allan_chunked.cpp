@@ -17,6 +17,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <tuple>
 
 #include "metro/noise/noise_id.hpp"
 #include "noise/allan_internal.hpp"
@@ -135,17 +136,147 @@ class PhaseCursor {
   int64_t loaded_ = -1;
 };
 
+// The largest offset, in multiples of m, at which an estimator's terms read the phase: x_i
+// .. x_{i+2m} (oadev, adev), x_i .. x_{i+3m} (ohdev, hdev; mdev, whose slide at i reads
+// d_i and d_{i+m}).
+int64_t OffsetOrder(AllanEstimator estimator) {
+  return estimator == AllanEstimator::kOadev || estimator == AllanEstimator::kAdev ? 2 : 3;
+}
+
+// What one averaging factor accumulates over the sweep.
+struct TermSums {
+  double sum = 0.0;  // The sum of squares (mdev: of the closed segments).
+  // mdev: the inner sum at each segment's first term (ModifiedStarts; empty when 3 m <=
+  // kNearOffsets, where the sweep's window holds it: InnerSum), the running inner sum and the
+  // open segment's total.
+  std::vector<double> starts;
+  double inner = 0.0, segment_total = 0.0;
+};
+
+// mdev: inner + d_0 + ... + d_{count-1}, d_k = (x2[k] - 2 x1[k]) + x0[k], in allan.cpp's
+// ModifiedSum's order and form.
+double InnerSum(double inner, const double* x0, const double* x1, const double* x2,
+                int64_t count) {
+  for (int64_t k = 0; k < count; ++k) inner += (x2[k] - 2.0 * x1[k]) + x0[k];
+  return inner;
+}
+
+// mdev: the inner sum sum_{i=s}^{s+m-1} d_i at the first term s of every segment, in the
+// order of allan.cpp's ModifiedSum (the same bits), from three cursors at x_s, x_{s+m} and
+// x_{s+2m}.
+Result<std::vector<double>> ModifiedStarts(const ChunkReader& read, int64_t n_phase,
+                                           double tau0_s, const Blocks& blocks, int64_t m) {
+  const int64_t n_terms = AllanTermCount(AllanEstimator::kMdev, n_phase, m);
+  const int64_t segment = internal::ModifiedSegmentTerms(m);
+  PhaseCursor c0(read, n_phase - 1, tau0_s, blocks), c1(read, n_phase - 1, tau0_s, blocks),
+      c2(read, n_phase - 1, tau0_s, blocks);
+  const int64_t piece = std::min(m, kChunk);
+  std::vector<double> x0(static_cast<size_t>(piece)), x1(x0.size()), x2(x0.size());
+  std::vector<double> starts;
+  for (int64_t s = 0; s < n_terms; s += segment) {
+    double inner = 0.0;
+    for (int64_t i = s; i < s + m; i += piece) {
+      const int64_t c = std::min(piece, s + m - i);
+      for (auto [cursor, out, offset] : {std::tuple{&c0, &x0, int64_t{0}}, std::tuple{&c1, &x1, m},
+                                         std::tuple{&c2, &x2, 2 * m}}) {
+        if (Status st = cursor->Fill(i + offset, c, out->data()); !st.ok()) return st.error();
+      }
+      inner = InnerSum(inner, x0.data(), x1.data(), x2.data(), c);
+    }
+    starts.push_back(inner);
+  }
+  return starts;
+}
+
+// One chunk's terms for one m: at[q][i] = x_{j0 + i + q m}, i < count.
+void AddChunkTerms(AllanEstimator estimator, const double* const at[4], int64_t mk, int64_t j0,
+                   int64_t count, int64_t n_terms, TermSums* t) {
+  switch (estimator) {
+    case AllanEstimator::kOadev:
+    case AllanEstimator::kOhdev: {
+      // x_i - 2 x_{i+m} + x_{i+2m} (NIST SP 1065 5.2.4) and x_i - 3 x_{i+m} + 3 x_{i+2m} -
+      // x_{i+3m} (5.2.9), every i < n_terms.
+      const int64_t stop = std::min(count, n_terms - j0);
+      double sum = 0.0;
+      for (int64_t i = 0; i < stop; ++i) {
+        const double d = estimator == AllanEstimator::kOadev
+                             ? at[0][i] - 2.0 * at[1][i] + at[2][i]
+                             : at[0][i] - 3.0 * at[1][i] + 3.0 * at[2][i] - at[3][i];
+        sum += d * d;
+      }
+      t->sum += sum;
+      break;
+    }
+    case AllanEstimator::kAdev:
+    case AllanEstimator::kHdev: {
+      // The same differences at i = k m, k < n_terms (5.2.2, 5.2.8), added in allan.cpp's
+      // NonOverlappingSum's order and form.
+      for (int64_t i = (j0 + mk - 1) / mk * mk - j0; i < count && (j0 + i) / mk < n_terms;
+           i += mk) {
+        const double v = estimator == AllanEstimator::kHdev
+                             ? (at[3][i] - at[0][i]) - 3.0 * (at[2][i] - at[1][i])
+                             : (at[2][i] - 2.0 * at[1][i]) + at[0][i];
+        t->sum += v * v;
+      }
+      break;
+    }
+    case AllanEstimator::kMdev: {
+      // Term j = b + 1 slides from d_b to d_{b+m}, or starts a segment (ModifiedSum).
+      const int64_t segment = internal::ModifiedSegmentTerms(mk);
+      if (j0 == 0 && t->starts.empty()) {
+        t->inner = InnerSum(0.0, at[0], at[0] + mk, at[0] + 2 * mk, mk);
+        t->segment_total = t->inner * t->inner;
+      }
+      const int64_t stop = std::min(count, n_terms - 1 - j0);
+      for (int64_t i = 0; i < stop; ++i) {
+        const int64_t j = j0 + i + 1;
+        if (j % segment == 0) {
+          t->sum += t->segment_total;
+          t->segment_total = 0.0;
+          t->inner = t->starts.empty()
+                         ? InnerSum(0.0, at[0] + i + 1, at[0] + i + 1 + mk, at[0] + i + 1 + 2 * mk, mk)
+                         : t->starts[static_cast<size_t>(j / segment)];
+        } else {
+          const double d_hi = (at[3][i] - 2.0 * at[2][i]) + at[1][i];
+          const double d_lo = (at[2][i] - 2.0 * at[1][i]) + at[0][i];
+          t->inner += d_hi - d_lo;
+        }
+        t->segment_total += t->inner * t->inner;
+      }
+      break;
+    }
+  }
+}
+
 struct Sweep {
-  std::vector<double> sums;                    // Per m.
+  std::vector<TermSums> terms;                 // Per m.
   std::vector<std::vector<double>> decimated;  // Per m: x_{k m}, k < used (noise id).
 };
+
+// Before the sweep: mdev's segment starts and its first term.
+Status PrepareTerms(const ChunkReader& read, int64_t n_phase, double tau0_s, const Blocks& blocks,
+                    const std::vector<int64_t>& m, AllanEstimator estimator, Sweep* out) {
+  out->terms.assign(m.size(), TermSums());
+  out->decimated.resize(m.size());
+  if (estimator != AllanEstimator::kMdev) return Status::Ok();
+  for (size_t k = 0; k < m.size(); ++k) {
+    if (3 * m[k] <= kNearOffsets) continue;  // The window holds them (AddChunkTerms).
+    Result<std::vector<double>> starts = ModifiedStarts(read, n_phase, tau0_s, blocks, m[k]);
+    if (!starts.ok()) return starts.error();
+    TermSums& t = out->terms[k];
+    t.starts = std::move(starts).value();
+    t.inner = t.starts.front();
+    t.segment_total = t.inner * t.inner;
+  }
+  return Status::Ok();
+}
 
 // Stage 3 (see the top of the file).
 Result<Sweep> SweepTerms(const ChunkReader& read, int64_t n_phase, double tau0_s,
                          const Blocks& blocks, const std::vector<int64_t>& m,
                          const std::vector<int64_t>& used, AllanEstimator estimator) {
   const int64_t n_rate = n_phase - 1;
-  const int64_t order = estimator == AllanEstimator::kOadev ? 2 : 3;
+  const int64_t order = OffsetOrder(estimator);
   // The far offsets (q m > kNearOffsets) and a cursor for each.
   std::map<int64_t, std::unique_ptr<PhaseCursor>> far;
   for (int64_t mk : m) {
@@ -160,8 +291,9 @@ Result<Sweep> SweepTerms(const ChunkReader& read, int64_t n_phase, double tau0_s
   PhaseCursor near(read, n_rate, tau0_s, blocks);
   std::vector<double> window(static_cast<size_t>(kChunk + kNearOffsets));
   Sweep out;
-  out.sums.assign(m.size(), 0.0);
-  out.decimated.resize(m.size());
+  if (Status s = PrepareTerms(read, n_phase, tau0_s, blocks, m, estimator, &out); !s.ok()) {
+    return s.error();
+  }
   int64_t filled_to = 0;  // The window holds x_{j0} .. x_{filled_to - 1}.
   for (int64_t j0 = 0; j0 < n_phase; j0 += kChunk) {
     const int64_t count = std::min(kChunk, n_phase - j0);
@@ -186,33 +318,19 @@ Result<Sweep> SweepTerms(const ChunkReader& read, int64_t n_phase, double tau0_s
     }
     for (size_t k = 0; k < m.size(); ++k) {
       const int64_t mk = m[k];
-      // Terms i < n_phase - order m.
-      const int64_t stop = std::min(count, n_phase - order * mk - j0);
       const double* at[4] = {window.data(), nullptr, nullptr, nullptr};
       for (int64_t q = 1; q <= order; ++q) {
         at[q] = q * mk > kNearOffsets ? far_values[q * mk].data() : window.data() + q * mk;
       }
-      double sum = 0.0;
-      if (order == 2) {
-        for (int64_t i = 0; i < stop; ++i) {
-          const double d = at[0][i] - 2.0 * at[1][i] + at[2][i];
-          sum += d * d;
-        }
-      } else {
-        for (int64_t i = 0; i < stop; ++i) {
-          const double d = at[0][i] - 3.0 * at[1][i] + 3.0 * at[2][i] - at[3][i];
-          sum += d * d;
-        }
-      }
-      // The phase differences x_i - 2 x_{i+m} + x_{i+2m} (oadev, NIST SP 1065 5.2.4) and
-      // x_i - 3 x_{i+m} + 3 x_{i+2m} - x_{i+3m} (ohdev, 5.2.9).
-      out.sums[k] += sum;
+      AddChunkTerms(estimator, at, mk, j0, count, AllanTermCount(estimator, n_phase, mk),
+                    &out.terms[k]);
       std::vector<double>& z = out.decimated[k];
       for (int64_t p = (j0 + mk - 1) / mk; p < used[k] && p * mk < j0 + count; ++p) {
         z.push_back(window[static_cast<size_t>(p * mk - j0)]);
       }
     }
   }
+  for (TermSums& t : out.terms) t.sum += t.segment_total;  // mdev's last segment; 0 otherwise.
   return out;
 }
 
@@ -224,12 +342,6 @@ Result<AllanCurve> ComputeAllanChunked(const ChunkReader& read, int64_t n_rate, 
   if (!options.IsValid(&why)) return MakeError("Allan options: " + why);
   if (!(std::isfinite(tau0_s) && tau0_s > 0.0)) {
     return MakeError(fmt::format("sample period tau0 = {} s is not a positive number", tau0_s));
-  }
-  if (options.estimator != AllanEstimator::kOadev && options.estimator != AllanEstimator::kOhdev) {
-    return MakeError(fmt::format(
-        "the {} estimator is not available in streaming mode (oadev and ohdev are); run without "
-        "--stream",
-        AllanEstimatorName(options.estimator)));
   }
   if (!options.m_list.empty()) {
     return MakeError("explicit averaging factors are not available in streaming mode");
@@ -256,8 +368,10 @@ Result<AllanCurve> ComputeAllanChunked(const ChunkReader& read, int64_t n_rate, 
   Result<Sweep> sweep =
       SweepTerms(read, n_phase, tau0_s, blocks.value(), m, used, options.estimator);
   if (!sweep.ok()) return sweep.error();
+  std::vector<double> sums;
+  for (const TermSums& t : sweep.value().terms) sums.push_back(t.sum);
   const std::vector<double> variance =
-      internal::VariancesOfSums(sweep.value().sums, n_phase, tau0_s, m, options.estimator);
+      internal::VariancesOfSums(sums, n_phase, tau0_s, m, options.estimator);
   const EstimatorShape shape = ShapeOf(options.estimator);
   std::vector<char> identified(n, 0);
   std::vector<int> identified_alpha(n, 0);

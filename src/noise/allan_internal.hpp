@@ -71,6 +71,10 @@ int64_t PhaseBlockSamples();
 void AddCompensated(double v, double* sum, double* carry);
 void RunPhaseBlock(const double* y, int64_t count, double mean, double tau0_s, double* x,
                    double* carry, double* phase);
+// The modified Allan sum's segments: its inner sum is recomputed from scratch at the start of
+// every segment of this many terms (at least 16 m, so that the recomputation, O(m), stays a
+// small share of the segment's work).
+int64_t ModifiedSegmentTerms(int64_t m);
 std::vector<double> VariancesOfSums(const std::vector<double>& sums, int64_t n_phase, double tau0_s,
                                     const std::vector<int64_t>& m, AllanEstimator estimator);
 

@@ -41,33 +41,72 @@ void RequireSameCurve(const AllanCurve& a, const AllanCurve& b) {
 
 }  // namespace
 
+ChunkReader ReaderOf(const SpillColumn<double>& column) {
+  return [&column](size_t begin, size_t count, double* out) {
+    return column.Read(begin, count, out);
+  };
+}
+
+Status Spill(const std::vector<double>& rate, SpillColumn<double>* column) {
+  if (Status s = column->Open(); !s.ok()) return s;
+  if (Status s = column->Append(rate.data(), rate.size()); !s.ok()) return s;
+  return column->Finish();
+}
+
 TEST_CASE("Allan in chunks equals ComputeAllan", "[allan][stream]") {
   // 2^19 + 3 samples: far offsets (> 2^16) and a record that is not a whole number of blocks.
   const std::vector<double> rate = Gyro((size_t{1} << 19) + 3, 21);
   SpillColumn<double> column;
-  REQUIRE(column.Open().ok());
-  REQUIRE(column.Append(rate.data(), rate.size()).ok());
-  REQUIRE(column.Finish().ok());
-  const ChunkReader read = [&column](size_t begin, size_t count, double* out) {
-    return column.Read(begin, count, out);
-  };
+  REQUIRE(Spill(rate, &column).ok());
   for (AllanEstimator estimator : {AllanEstimator::kOadev, AllanEstimator::kOhdev}) {
     AllanOptions options;
     options.estimator = estimator;
     INFO(AllanEstimatorName(estimator));
     auto memory = ComputeAllan(rate, 0.0025, options);
-    auto chunked = ComputeAllanChunked(read, static_cast<int64_t>(rate.size()), 0.0025, options);
+    auto chunked =
+        ComputeAllanChunked(ReaderOf(column), static_cast<int64_t>(rate.size()), 0.0025, options);
     REQUIRE(memory.ok());
     REQUIRE(chunked.ok());
     RequireSameCurve(memory.value(), chunked.value());
   }
-  SECTION("estimators the streaming mode does not have are refused by name") {
+}
+
+TEST_CASE("mdev, adev and hdev in chunks are ComputeAllan's bits", "[allan][stream]") {
+  // 1.5 M samples: mdev's inner sums restart every max(2^16, 16 m) terms (several segments at
+  // every m up to 32768), from the sweep's window where 3 m <= 2^16 and from cursors beyond;
+  // the non-overlapping terms fall on chunk boundaries and between them.
+  const std::vector<double> rate = Gyro(1500007, 8);
+  SpillColumn<double> column;
+  REQUIRE(Spill(rate, &column).ok());
+  for (AllanEstimator estimator :
+       {AllanEstimator::kMdev, AllanEstimator::kAdev, AllanEstimator::kHdev}) {
+    INFO(AllanEstimatorName(estimator));
     AllanOptions options;
-    options.estimator = AllanEstimator::kMdev;
-    auto chunked = ComputeAllanChunked(read, static_cast<int64_t>(rate.size()), 0.0025, options);
-    REQUIRE_FALSE(chunked.ok());
-    CHECK_THAT(chunked.error().message, Catch::Contains("not available in streaming mode"));
+    options.estimator = estimator;
+    options.threads = 3;
+    auto memory = ComputeAllan(rate, 0.0025, options);
+    auto chunked =
+        ComputeAllanChunked(ReaderOf(column), static_cast<int64_t>(rate.size()), 0.0025, options);
+    REQUIRE(memory.ok());
+    REQUIRE(chunked.ok());
+    REQUIRE(chunked.value().m.back() > 32768);
+    RequireSameCurve(memory.value(), chunked.value());
+    CHECK(chunked.value().dev == memory.value().dev);
   }
+}
+
+TEST_CASE("mdev does not depend on the thread count", "[allan]") {
+  // Its sum is a total per fixed segment, added in order (allan.cpp ModifiedSum).
+  const std::vector<double> rate = Gyro(400000, 3);
+  AllanOptions options;
+  options.estimator = AllanEstimator::kMdev;
+  options.threads = 1;
+  auto one = ComputeAllan(rate, 0.01, options);
+  options.threads = 3;
+  auto three = ComputeAllan(rate, 0.01, options);
+  REQUIRE(one.ok());
+  REQUIRE(three.ok());
+  CHECK(one.value().dev == three.value().dev);
 }
 
 TEST_CASE("Allan in chunks names a non-finite sample", "[allan][stream]") {

@@ -181,8 +181,9 @@ Result<AllanCurve> ComputeAllanWithGaps(const std::vector<double>& rate,
 // mode, issue #38 step 2): memory independent of the length (a few MB), three passes over
 // the record. The phase is regenerated block by block exactly as ComputeAllan integrates it
 // (the same bits); the sums differ from ComputeAllan's only in the order of their terms
-// (relative differences of order 1e-15). oadev and ohdev only, at the spacing's factors;
-// other estimators and explicit m lists return an Error saying so.
+// (relative differences of order 1e-15); mdev, adev and hdev sums are added in
+// ComputeAllan's order, so they are the same bits. Every estimator, at the spacing's
+// factors; explicit m lists return an Error saying so.
 Result<AllanCurve> ComputeAllanChunked(const ChunkReader& read, int64_t n_rate, double tau0_s,
                                        const AllanOptions& options = AllanOptions());
 
