@@ -155,8 +155,7 @@ struct TermSums {
 
 // mdev: inner + d_0 + ... + d_{count-1}, d_k = (x2[k] - 2 x1[k]) + x0[k], in allan.cpp's
 // ModifiedSum's order and form.
-double InnerSum(double inner, const double* x0, const double* x1, const double* x2,
-                int64_t count) {
+double InnerSum(double inner, const double* x0, const double* x1, const double* x2, int64_t count) {
   for (int64_t k = 0; k < count; ++k) inner += (x2[k] - 2.0 * x1[k]) + x0[k];
   return inner;
 }
@@ -164,8 +163,8 @@ double InnerSum(double inner, const double* x0, const double* x1, const double* 
 // mdev: the inner sum sum_{i=s}^{s+m-1} d_i at the first term s of every segment, in the
 // order of allan.cpp's ModifiedSum (the same bits), from three cursors at x_s, x_{s+m} and
 // x_{s+2m}.
-Result<std::vector<double>> ModifiedStarts(const ChunkReader& read, int64_t n_phase,
-                                           double tau0_s, const Blocks& blocks, int64_t m) {
+Result<std::vector<double>> ModifiedStarts(const ChunkReader& read, int64_t n_phase, double tau0_s,
+                                           const Blocks& blocks, int64_t m) {
   const int64_t n_terms = AllanTermCount(AllanEstimator::kMdev, n_phase, m);
   const int64_t segment = internal::ModifiedSegmentTerms(m);
   PhaseCursor c0(read, n_phase - 1, tau0_s, blocks), c1(read, n_phase - 1, tau0_s, blocks),
@@ -233,9 +232,9 @@ void AddChunkTerms(AllanEstimator estimator, const double* const at[4], int64_t 
         if (j % segment == 0) {
           t->sum += t->segment_total;
           t->segment_total = 0.0;
-          t->inner = t->starts.empty()
-                         ? InnerSum(0.0, at[0] + i + 1, at[0] + i + 1 + mk, at[0] + i + 1 + 2 * mk, mk)
-                         : t->starts[static_cast<size_t>(j / segment)];
+          t->inner = t->starts.empty() ? InnerSum(0.0, at[0] + i + 1, at[0] + i + 1 + mk,
+                                                  at[0] + i + 1 + 2 * mk, mk)
+                                       : t->starts[static_cast<size_t>(j / segment)];
         } else {
           const double d_hi = (at[3][i] - 2.0 * at[2][i]) + at[1][i];
           const double d_lo = (at[2][i] - 2.0 * at[1][i]) + at[0][i];

@@ -42,9 +42,8 @@ void RequireSameCurve(const AllanCurve& a, const AllanCurve& b) {
 }  // namespace
 
 ChunkReader ReaderOf(const SpillColumn<double>& column) {
-  return [&column](size_t begin, size_t count, double* out) {
-    return column.Read(begin, count, out);
-  };
+  return
+      [&column](size_t begin, size_t count, double* out) { return column.Read(begin, count, out); };
 }
 
 Status Spill(const std::vector<double>& rate, SpillColumn<double>* column) {
