@@ -6,7 +6,7 @@ void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags) 
   app->add_option("--format", o->format,
                   "input format (auto: detected; csv is session.csv in any dialect)")
       ->check(CLI::IsMember({"auto", "csv", "receiver", "euroc", "raw", "phyphox", "sensorlogger",
-                             "ulog", "mcap", "rosbag1", "rosbag2"}))
+                             "phone", "ulog", "mcap", "rosbag1", "rosbag2"}))
       ->capture_default_str();
   app->add_option("--topic", o->library.topics,
                   "ULog input: an IMU topic to read (sensor_combined, sensor_accel, sensor_gyro, "

@@ -121,7 +121,8 @@ void AddConvertCommand(CLI::App& app, int* exit_code) {
           ->excludes(format);
   sub->add_option("--from", o->from, "the older spelling of --format (--from imutk: --imutk)")
       ->check(CLI::IsMember(
-          {"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox", "sensorlogger", "ulog"}))
+          {"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox", "sensorlogger", "phone",
+           "ulog"}))
       ->excludes(format)
       ->excludes(imutk);
   sub->callback([o, exit_code] { *exit_code = RunConvert(*o); });

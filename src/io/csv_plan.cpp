@@ -199,9 +199,20 @@ const Unit* UnitFromText(std::string unit) {
 std::vector<std::string> Words(std::string_view s) {
   std::vector<std::string> words;
   std::string w;
+  char previous = 0;
   for (char c : s) {
-    if (std::isalnum(static_cast<unsigned char>(c))) {
-      w += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const unsigned char u = static_cast<unsigned char>(c);
+    // A camel-case word boundary ("accX", "gyroZ", "AccelX"): lower case or digit, then
+    // upper case.
+    if (std::isupper(u) && !w.empty() &&
+        (std::islower(static_cast<unsigned char>(previous)) ||
+         std::isdigit(static_cast<unsigned char>(previous)))) {
+      words.push_back(w);
+      w.clear();
+    }
+    previous = c;
+    if (std::isalnum(u)) {
+      w += static_cast<char>(std::tolower(u));
     } else if (!w.empty()) {
       words.push_back(w);
       w.clear();
@@ -218,6 +229,30 @@ bool Has(const std::vector<std::string>& words, std::string_view w) {
 bool HasPrefix(const std::vector<std::string>& words, std::string_view prefix) {
   return std::any_of(words.begin(), words.end(),
                      [&](const std::string& w) { return w.rfind(prefix, 0) == 0; });
+}
+
+// The axis letter among a header name's words, 0 if none.
+char AxisOfWords(const std::vector<std::string>& words) {
+  char axis = 0;
+  for (const std::string& w : words) {
+    if (w == "x" || w == "y" || w == "z") axis = w[0];
+  }
+  return axis;
+}
+
+// The sensor a header name's words spell: "gyro", "gyroscope", "w", "omega", "angular",
+// "rate"; "acc", "accel", "accelerometer", "acceleration", "a".
+SensorKind SensorOfWords(const std::vector<std::string>& words) {
+  if (HasPrefix(words, "gyr") || Has(words, "w") || Has(words, "omega") || Has(words, "angular") ||
+      Has(words, "rate")) {
+    return SensorKind::kGyroscope;
+  }
+  if (HasPrefix(words, "acc") || Has(words, "a")) return SensorKind::kAccelerometer;
+  return SensorKind::kNone;
+}
+
+bool NamesTime(const std::vector<std::string>& words) {
+  return Has(words, "time") || Has(words, "timestamp") || Has(words, "t");
 }
 
 // Sensor Logger's per-sensor files say which sensor only in their file name.
@@ -255,10 +290,11 @@ std::string NamedFormatColumn(SessionFormat format, const std::string& path,
       break;
     }
     case SessionFormat::kEuroc:
-    case SessionFormat::kPhyphox: {
+    case SessionFormat::kPhyphox:
+    case SessionFormat::kPhone: {
       const std::string inferred = InferCanonicalName(source);
       if (!inferred.empty()) return inferred;
-      if (format == SessionFormat::kPhyphox) {
+      if (format != SessionFormat::kEuroc) {
         // phyphox's other columns ("Absolute (rad/s)"): carried as unknown columns named
         // by their words and unit suffix ("absolute_rads").
         const size_t open = source.find_last_of("([");
@@ -430,6 +466,22 @@ std::string ProposeMapping(std::string_view source) {
   if (!inferred.empty()) {
     return fmt::format("map it: --column '{}={}'", source, inferred);
   }
+  // An axis spelled without its unit ("accX", "accelerometer_x"): the unit is the user's.
+  const std::vector<std::string> words = Words(source);
+  const char axis = AxisOfWords(words);
+  const SensorKind sensor = SensorOfWords(words);
+  if (axis != 0 && sensor == SensorKind::kAccelerometer) {
+    return fmt::format(
+        "it names the accelerometer's {} axis but not its unit: map it with yours, --column "
+        "'{}=a{}_mps2' (m/s^2) or --column '{}=a{}_g' (g)",
+        axis, source, axis, source, axis);
+  }
+  if (axis != 0 && sensor == SensorKind::kGyroscope) {
+    return fmt::format(
+        "it names the gyroscope's {} axis but not its unit: map it with yours, --column "
+        "'{}=g{}_rads' (rad/s) or --column '{}=g{}_dps' (deg/s)",
+        axis, source, axis, source, axis);
+  }
   return fmt::format(
       "map it to a canonical name with its unit: --column '{}=NAME' (e.g. gx_dps, ax_g, "
       "t_s; docs/formats.md), or leave it out with --column '{}='",
@@ -445,6 +497,9 @@ std::string FormatHint(SessionFormat detected) {
       return "; this looks like a phyphox export: pass --format phyphox";
     case SessionFormat::kSensorLogger:
       return "; this looks like a Sensor Logger file: pass --format sensorlogger";
+    case SessionFormat::kPhone:
+      return "; this looks like a phone or logger app's export whose columns spell their "
+             "sensor, axis and unit: pass --format phone";
     case SessionFormat::kRaw:
       return "; this looks like a raw-count logger print: pass --format raw";
     default:
@@ -512,21 +567,11 @@ std::string InferCanonicalName(std::string_view source) {
       return "";
     }
   }
-  char axis = 0;
-  for (const std::string& w : words) {
-    if (w == "x" || w == "y" || w == "z") axis = w[0];
-  }
-  if (unit->dimension == Dimension::kTime &&
-      (Has(words, "time") || Has(words, "timestamp") || Has(words, "t"))) {
+  const char axis = AxisOfWords(words);
+  if (unit->dimension == Dimension::kTime && NamesTime(words)) {
     return "t_" + std::string(unit->suffix);
   }
-  SensorKind sensor = SensorKind::kNone;
-  if (HasPrefix(words, "gyr") || Has(words, "w") || Has(words, "omega") || Has(words, "angular") ||
-      Has(words, "rate")) {
-    sensor = SensorKind::kGyroscope;
-  } else if (HasPrefix(words, "acc") || Has(words, "a")) {
-    sensor = SensorKind::kAccelerometer;
-  }
+  const SensorKind sensor = SensorOfWords(words);
   if (sensor != SensorKind::kNone && axis != 0) {
     for (const Unit* allowed : AxisUnits(sensor)) {
       if (allowed == unit) return AxisColumn(sensor, axis, *unit);
@@ -542,6 +587,31 @@ std::string InferCanonicalName(std::string_view source) {
   return "";
 }
 
+namespace {
+
+// A header that spells at least one sensor axis with its unit in an app's words ("Accel_X
+// (m/s^2)", "accX [g]", "Acc X (m/s^2)", "gyroscope_x_rads") and names no canonical
+// quantity (a session.csv's ax_g): the kPhone format. `fields` in the header's own case
+// (camel-case words).
+bool SpellsSensorAxes(const std::vector<std::string>& fields) {
+  int axes = 0;
+  for (const std::string& f : fields) {
+    const std::string lower = Lower(f);
+    if (IsValidColumnName(lower) && ClassifyColumn(lower).role == ColumnRole::kQuantity) {
+      return false;
+    }
+    const std::string inferred = InferCanonicalName(f);
+    if (inferred.empty() || inferred.rfind("t_", 0) == 0) continue;
+    const ColumnInfo info = ClassifyColumn(inferred);
+    if (info.sensor == SensorKind::kAccelerometer || info.sensor == SensorKind::kGyroscope) {
+      ++axes;
+    }
+  }
+  return axes > 0;
+}
+
+}  // namespace
+
 SessionFormat DetectNamedFormat(const std::string& path, std::string_view head) {
   // The header, whichever line it is: look at the first lines' names.
   const std::string lower = Lower(head.substr(0, std::min<size_t>(head.size(), 4096)));
@@ -556,6 +626,7 @@ SessionFormat DetectNamedFormat(const std::string& path, std::string_view head) 
     if (nl == std::string::npos) nl = lower.size();
     std::string_view line(lower.data() + pos, nl - pos);
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    const std::string_view spelled(head.data() + pos, line.size());  // Its own case.
     pos = nl + 1;
     if (IsBlank(line) || IsComment(line)) continue;
     for (char d : {',', ';', '\t'}) {
@@ -567,6 +638,7 @@ SessionFormat DetectNamedFormat(const std::string& path, std::string_view head) 
           })) {
         return SessionFormat::kPhyphox;
       }
+      if (SpellsSensorAxes(SplitFields(spelled, d))) return SessionFormat::kPhone;
       std::vector<std::string> sorted = f;
       std::sort(sorted.begin(), sorted.end());
       if (sorted == std::vector<std::string>{"seconds_elapsed", "time", "x", "y", "z"}) {
@@ -855,6 +927,16 @@ Status NameColumns(const std::string& path, std::string_view head, const HeaderL
     plan->source_names.push_back(source);
     plan->names.push_back(name);
     plan->info.push_back(name.empty() ? ColumnInfo{} : ClassifyColumn(name));
+    const std::vector<std::string> words = Words(source);
+    if (!name.empty() && plan->info.back().role == ColumnRole::kUnknown &&
+        plan->info.back().unit == nullptr && AxisOfWords(words) != 0 &&
+        SensorOfWords(words) != SensorKind::kNone) {
+      // "accX": carried as a unit-less unknown column, which its reader may not expect.
+      dialect.warnings.push_back(
+          fmt::format("{}:{}:{}: column '{}' is carried as an unknown column without a unit "
+                      "(unit 1): {}",
+                      path, header.line_number, column, Printable(source), ProposeMapping(source)));
+    }
   }
   dialect.header_line = header.line_number;
   dialect.header_names = plan->names;
@@ -931,6 +1013,13 @@ Status CheckTiming(const std::string& path, std::string_view head, const HeaderL
     const std::string inferred = InferCanonicalName(s);
     if (inferred.rfind("t_", 0) == 0 && ClassifyColumn(inferred).role == ColumnRole::kTime) {
       proposal = fmt::format("; map yours: --column '{}={}'", s, inferred);
+      break;
+    }
+    if (inferred.empty() && NamesTime(Words(s))) {
+      proposal = fmt::format(
+          "; '{}' names a time without its unit: map it with your clock's, --column '{}=t_s' "
+          "(or t_ms, t_us, t_ns)",
+          s, s);
       break;
     }
   }

@@ -147,6 +147,7 @@ bool IsThesisTagFormat(SessionFormat format) {
     case SessionFormat::kRaw:
     case SessionFormat::kPhyphox:
     case SessionFormat::kSensorLogger:
+    case SessionFormat::kPhone:
     case SessionFormat::kULog:
     case SessionFormat::kMcap:
     case SessionFormat::kRosbag1:

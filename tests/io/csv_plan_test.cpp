@@ -102,7 +102,15 @@ TEST_CASE("tab separated, CR-only line ends, quoted header", "[io][csv][dialect]
 
 TEST_CASE("a non-canonical header is named with the mapping it needs", "[io][csv][dialect]") {
   const std::string text = "t_s,gyro_x (deg/s)\n0,1\n1,2\n";
-  const std::string e = ErrorOf(text);
+  // Detected, it is a phone app's spelling (--format phone); read as session.csv, it is named
+  // with the mapping it needs.
+  auto detected = LoadText(text);
+  REQUIRE(detected.ok());
+  CHECK(detected.value().format == SessionFormat::kPhone);
+  CHECK(Values(detected.value(), "gx_dps") == std::vector<double>{1, 2});
+  LoadOptions csv;
+  csv.format = SessionFormat::kCsv;
+  const std::string e = ErrorOf(text, csv);
   CHECK_THAT(e, Catch::Contains("in.csv:1:2:"));
   CHECK_THAT(e, Catch::Contains("--column 'gyro_x (deg/s)=gx_dps'"));
   LoadOptions mapped;
@@ -293,6 +301,65 @@ TEST_CASE("phyphox exports in each delimiter and decimal choice", "[io][csv][for
   auto deg = LoadText("Time (s),Gyroscope x (deg/s)\n0,1.5\n0.01,2.5\n");
   REQUIRE(deg.ok());
   CHECK(Values(deg.value(), "gx_dps") == std::vector<double>{1.5, 2.5});
+}
+
+TEST_CASE("Phone apps' spellings of a sensor axis with its unit (--format phone)",
+          "[io][csv][formats]") {
+  // Each header spells the accelerometer (or gyroscope) axes its own way, with a unit; the
+  // values are the decimals written, under the canonical name of that sensor, axis and unit.
+  struct Case {
+    std::string header, time, x, y, z;
+  };
+  const std::vector<Case> cases = {
+      {"Time (s),Accel_X (m/s^2),Accel_Y (m/s^2),Accel_Z (m/s^2)", "t_s", "ax_mps2", "ay_mps2",
+       "az_mps2"},
+      {"Time (s),Acc X (m/s^2),Acc Y (m/s^2),Acc Z (m/s^2)", "t_s", "ax_mps2", "ay_mps2",
+       "az_mps2"},
+      {"Time [s],accX [g],accY [g],accZ [g]", "t_s", "ax_g", "ay_g", "az_g"},
+      {"time_ms,accelerometer_x_g,accelerometer_y_g,accelerometer_z_g", "t_ms", "ax_g", "ay_g",
+       "az_g"},
+      {"Time (s),Gyro_X (rad/s),Gyro_Y (rad/s),Gyro_Z (rad/s)", "t_s", "gx_rads", "gy_rads",
+       "gz_rads"},
+      {"Time (s),gyroX (deg/s),gyroY (deg/s),gyroZ (deg/s)", "t_s", "gx_dps", "gy_dps", "gz_dps"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.header);
+    auto r = LoadText(c.header + "\n0,0.125,-0.5,9.75\n10,0.25,-0.25,9.5\n");
+    REQUIRE(r.ok());
+    CHECK(r.value().format == SessionFormat::kPhone);
+    CHECK(r.value().columns == std::vector<std::string>{c.time, c.x, c.y, c.z});
+    CHECK(Values(r.value(), c.x) == std::vector<double>{0.125, 0.25});
+    CHECK(Values(r.value(), c.y) == std::vector<double>{-0.5, -0.25});
+    CHECK(Values(r.value(), c.z) == std::vector<double>{9.75, 9.5});
+  }
+  // A session.csv naming a canonical quantity stays one, with its spelled extra column
+  // carried as an unknown column.
+  auto canonical = LoadText("t_s,ax_g,acc_x_raw_lsb\n0,1,2\n0.01,1,2\n");
+  REQUIRE(canonical.ok());
+  CHECK(canonical.value().format == SessionFormat::kCsv);
+  // Forced as csv, the error proposes --format phone.
+  LoadOptions csv;
+  csv.format = SessionFormat::kCsv;
+  CHECK_THAT(ErrorOf("Time (s),Accel_X (m/s^2)\n0,1\n", csv),
+             Catch::Contains("pass --format phone"));
+}
+
+TEST_CASE("A sensor axis or time spelled without its unit is named, with the mappings to choose",
+          "[io][csv][formats]") {
+  // No time unit: the error names the column and the time units to choose from.
+  CHECK_THAT(ErrorOf("timestamp,accelerometer_x\n0,1\n"),
+             Catch::Contains("'timestamp' names a time without its unit") &&
+                 Catch::Contains("--column 'timestamp=t_s'"));
+  // An axis without a unit is carried as a unit-less unknown column, with a warning at its
+  // file:line:column proposing the mappings.
+  auto r = LoadText("t_s,accX,gyroZ\n0,1,2\n0.01,1,2\n");
+  REQUIRE(r.ok());
+  const std::string warnings = fmt::format("{}", fmt::join(r.value().input.warnings, "\n"));
+  CHECK_THAT(warnings, Catch::Contains(":1:2: column 'accX'") &&
+                           Catch::Contains("--column 'accX=ax_mps2' (m/s^2) or --column "
+                                           "'accX=ax_g' (g)"));
+  CHECK_THAT(warnings, Catch::Contains(":1:3: column 'gyroZ'") &&
+                           Catch::Contains("--column 'gyroZ=gz_rads'"));
 }
 
 TEST_CASE("Sensor Logger per-sensor files, and joining them on time", "[io][csv][formats]") {

@@ -164,7 +164,8 @@ TEST_CASE("session.csv bad input: each class names file, line and what was expec
         "session.csv:1:3: header: column 'pitch_deg' appears twice (columns 2 and 3)");
   CHECK(ErrorOf("time,ax,ay\n0,1,1\n") ==
         "session.csv:1: header: no time column; expected t_s, t_ms, t_us or t_ns (or --rate-hz "
-        "R for a file without one); found 'time,ax,ay'");
+        "R for a file without one); 'time' names a time without its unit: map it with your "
+        "clock's, --column 'time=t_s' (or t_ms, t_us, t_ns); found 'time,ax,ay'");
   CHECK(ErrorOf("Time (ms),gz_dps\n0,1\n") ==
         "session.csv:1:1: header: column 1 is 'Time (ms)', not a canonical column name "
         "([a-z][a-z0-9_]* with its unit, e.g. gx_dps); map it: --column 'Time (ms)=t_ms'");
