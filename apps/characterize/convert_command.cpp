@@ -120,9 +120,8 @@ void AddConvertCommand(CLI::App& app, int* exit_code) {
       sub->add_flag("--imutk", o->imutk, "the inputs are imu_tk's two files: ACC GYRO")
           ->excludes(format);
   sub->add_option("--from", o->from, "the older spelling of --format (--from imutk: --imutk)")
-      ->check(CLI::IsMember(
-          {"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox", "sensorlogger", "phone",
-           "ulog"}))
+      ->check(CLI::IsMember({"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox",
+                             "sensorlogger", "phone", "ulog"}))
       ->excludes(format)
       ->excludes(imutk);
   sub->callback([o, exit_code] { *exit_code = RunConvert(*o); });

@@ -42,9 +42,9 @@ constexpr FormatName kFormatNames[] = {
     {SessionFormat::kReceiver, "receiver"}, {SessionFormat::kImuTk, "imutk"},
     {SessionFormat::kEuroc, "euroc"},       {SessionFormat::kRaw, "raw"},
     {SessionFormat::kPhyphox, "phyphox"},   {SessionFormat::kSensorLogger, "sensorlogger"},
-    {SessionFormat::kPhone, "phone"},
-    {SessionFormat::kULog, "ulog"},         {SessionFormat::kMcap, "mcap"},
-    {SessionFormat::kRosbag1, "rosbag1"},   {SessionFormat::kRosbag2, "rosbag2"},
+    {SessionFormat::kPhone, "phone"},       {SessionFormat::kULog, "ulog"},
+    {SessionFormat::kMcap, "mcap"},         {SessionFormat::kRosbag1, "rosbag1"},
+    {SessionFormat::kRosbag2, "rosbag2"},
 };
 
 }  // namespace

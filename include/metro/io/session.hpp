@@ -34,8 +34,8 @@ enum class SessionFormat {
   kRaw,           // Arduino-style raw-count prints: ax,ay,az,gx,gy,gz (+ metadata lines).
   kPhyphox,       // phyphox CSV exports ("Time (s)", "Gyroscope x (rad/s)", ...).
   kSensorLogger,  // Sensor Logger per-sensor files: time (epoch ns), seconds_elapsed, z, y, x.
-  kPhone,  // Another phone or logger app's CSV whose header spells each sensor axis with its
-           // unit ("Time (s)", "Accel_X (m/s^2)", "accX [g]", "gyroscope_x_rads").
+  kPhone,         // Another phone or logger app's CSV whose header spells each sensor axis with its
+                  // unit ("Time (s)", "Accel_X (m/s^2)", "accX [g]", "gyroscope_x_rads").
   kULog,          // PX4 ULog flight logs (binary; metro/io/ulog.hpp): IMU topics, one tag each.
   kMcap,          // MCAP files (metro/io/ros_log.hpp): sensor_msgs/msg/Imu topics, one tag each.
   kRosbag1,       // ROS 1 bags 2.0 (metro/io/ros_log.hpp): sensor_msgs/Imu topics.
