@@ -36,12 +36,12 @@ Result<std::string> RenderWithTags(const ReportCommandOptions& o) {
   if (schema == kReportSchema) {
     Result<SessionReport> report = SessionReportFromJson(text.value(), o.json);
     if (!report.ok()) return report.error();
-    // Each sensor's name from the tags file, as `characterize analyze --tags FILE` names them
-    // (for the report's input format: a third-party file's sensors are not thesis tags).
+    // Each sensor's name from the tags file where it names the sensor, as `characterize
+    // analyze --tags FILE` names them; else the report's own (a topic, a default name).
     SessionFormat format = SessionFormat::kCsv;
     ParseSessionFormat(report.value().input.format, &format);
     for (SensorReport& s : report.value().sensors) {
-      s.name = tags.value().Name(static_cast<int>(s.sensor), format);
+      s.name = tags.value().Name(static_cast<int>(s.sensor), format, s.name);
     }
     return RenderSessionReportHtml(report.value());
   }

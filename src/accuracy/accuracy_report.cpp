@@ -201,7 +201,8 @@ AccuracyReport MakeAccuracyReport(const AccuracyResult& r, const Session& sessio
   in.quantity = r.quantity;
   const TagEntry* entry = tags.Find(r.sensor);
   AccuracyReportTag tag;
-  tag.name = tags.Name(r.sensor, session.format);
+  const Tag* source = session.FindTag(r.sensor);
+  tag.name = tags.Name(r.sensor, session.format, source != nullptr ? source->source_name : "");
   if (entry != nullptr && entry->device_id) tag.device_id = FormatDeviceIdText(*entry->device_id);
   in.tag = tag;
   if (reference != nullptr && r.alignment) {

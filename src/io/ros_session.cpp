@@ -267,6 +267,7 @@ void CovarianceNotes(const TopicData& d, std::vector<std::string>* notes) {
 Tag MakeTag(const TopicData& d, int sensor, int64_t t0_ns, bool orientation) {
   Tag tag;
   tag.sensor = sensor;
+  tag.source_name = d.topic;
   tag.t_ns = d.t_ns;
   tag.t_s.reserve(d.t_ns.size());
   for (int64_t t : d.t_ns) tag.t_s.push_back(static_cast<double>(t - t0_ns) * 1e-9);

@@ -163,6 +163,13 @@ std::string TagRegistry::Name(int sensor, SessionFormat format) const {
   return fmt::format("sensor {}", sensor);
 }
 
+std::string TagRegistry::Name(int sensor, SessionFormat format,
+                              const std::string& source_name) const {
+  const TagEntry* e = Find(sensor);
+  if (source_name.empty() || (e != nullptr && !e->thesis_default)) return Name(sensor, format);
+  return source_name;
+}
+
 const TagEntry* TagRegistry::Find(int sensor) const {
   const auto it = tags_.find(sensor);
   return it != tags_.end() ? &it->second : nullptr;

@@ -170,6 +170,7 @@ struct TagBuild {
   std::string topic;
   int multi_id = 0;
   std::string label;    // "sensor_accel[1]: 6 messages", extended when paired.
+  std::string name;     // "sensor_accel[1]", extended when paired (Tag::source_name).
   bool merged = false;  // Merged into another build (PairAccelGyro).
 };
 
@@ -206,6 +207,7 @@ void PairAccelGyro(std::vector<TagBuild>* builds, std::vector<std::string>* note
                         a.multi_id, most));
       }
       a.label += " + " + g.label;
+      a.name += " + " + g.name;
       g.merged = true;
     }
   }
@@ -431,6 +433,7 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
       if (!build.ok()) return build.error();
       build.value().topic = topic;
       build.value().multi_id = sub->multi_id;
+      build.value().name = fmt::format("{}[{}]", topic, sub->multi_id);
       build.value().label = fmt::format("{}[{}] ({} messages, time from {})", topic, sub->multi_id,
                                         sub->message_count, build.value().time_field);
       builds.push_back(std::move(build).value());
@@ -441,6 +444,7 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
   PairAccelGyro(&builds, &pair_notes);
   for (size_t k = 0; k < builds.size(); ++k) {
     builds[k].tag.sensor = static_cast<int>(k) + 1;
+    builds[k].tag.source_name = builds[k].name;
     session.input.notes.push_back(fmt::format("sensor {} = {}", k + 1, builds[k].label));
   }
   session.input.notes.insert(session.input.notes.end(), pair_notes.begin(), pair_notes.end());

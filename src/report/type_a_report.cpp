@@ -129,7 +129,8 @@ SessionReport MakeSessionReport(const Session& session, const SessionTypeA& resu
   for (const TagTypeA& t : result.tags) {
     SensorReport s;
     s.sensor = t.sensor;
-    s.name = registry.Name(t.sensor, session.format);
+    const Tag* tag = session.FindTag(t.sensor);
+    s.name = registry.Name(t.sensor, session.format, tag != nullptr ? tag->source_name : "");
     s.frames = t.counts.frames;
     s.fresh = t.counts.fresh;
     s.stale = t.counts.stale;

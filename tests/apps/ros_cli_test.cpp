@@ -36,10 +36,19 @@ TEST_CASE("characterize BAG --type-a reads the IMU topic of MCAP, ROS 1 and ROS 
       CHECK(report["input"].count("dialect") == 0);  // Binary: no text dialect to report.
       CHECK(report["input"]["time"]["unit"] == "ns");
       REQUIRE(report["sensors"].size() == 1);
+      CHECK(report["sensors"][0]["name"] == "/imu/data");  // Named by its topic.
       CHECK(report["sensors"][0]["quantities"]["gx_rads"]["type_a"]["n"] == 60);
       CHECK(report["sensors"][0]["quantities"]["az_mps2"]["type_a"]["n"] == 60);
     }
   }
+}
+
+TEST_CASE("A tags file's name for a sensor wins over its topic", "[apps][ros]") {
+  testing::TempFile tags(R"({"1": {"name": "left IMU"}})", ".json");
+  auto named = Characterize(kDir + "imu_zstd.mcap --type-a --tags " + tags.path());
+  INFO(named.err);
+  REQUIRE(named.exit_code == 0);
+  CHECK(nlohmann::json::parse(named.out)["sensors"][0]["name"] == "left IMU");
 }
 
 TEST_CASE("characterize topics lists an MCAP's topics; bad ROS input is exit 2", "[apps][ros]") {

@@ -147,6 +147,8 @@ TEST_CASE("Two IMU topics: listed when none is chosen, one tag each, stamps sort
   o.topics = {"/imu1", "/imu0"};
   const Session s = Load(path, o);
   REQUIRE(s.tags.size() == 2);
+  CHECK(s.tags[0].source_name == "/imu1");  // Each tag named by its topic, as chosen.
+  CHECK(s.tags[1].source_name == "/imu0");
   const nlohmann::json e = Expected("two_imus_zstd")["topics"];
   CheckTag(s.tags[0], e["/imu1"]["messages"]);
   // /imu0 was written with stamps 10<->11 and 30<->31 swapped and 41 a repeat of 40: sorted,

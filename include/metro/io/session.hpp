@@ -127,6 +127,10 @@ struct FrameCounts {
 
 struct Tag {
   int sensor = 1;
+  // The name the input gives this tag's source: a ROS topic ("/imu/data"), a ULog topic
+  // instance ("sensor_combined[0]"); empty for files whose tags are numbers. Reports name the
+  // tag by it unless a tags file names the sensor (TagRegistry::Name).
+  std::string source_name;
   std::vector<double> t_s;  // Observation times [s], strictly increasing.
   // Exact integer times [ns] when the file's time column was integer (t_ms, t_us, t_ns);
   // empty otherwise. Sample periods and gaps come from their differences, never from

@@ -64,6 +64,9 @@ class TagRegistry {
   // own files (IsThesisTagFormat); for another tool's file the tags file's name, or
   // "sensor N" where only a default body-part name would apply.
   std::string Name(int sensor, SessionFormat format) const;
+  // The same for a tag its input names (Tag::source_name, e.g. a ROS topic): the tags file's
+  // name if it has one for `sensor`, else `source_name` when not empty, else the above.
+  std::string Name(int sensor, SessionFormat format, const std::string& source_name) const;
   // The tag's entry (the default's or the file's), or nullptr.
   const TagEntry* Find(int sensor) const;
   // The sensor whose device ID this is, if any tag has it.
