@@ -24,8 +24,7 @@ struct ExportCliOptions {
   AutopilotExportOptions options;
 };
 
-int RunAutopilotExport(const ExportCliOptions& c, AutopilotFormat format,
-                       const Calibration& cal) {
+int RunAutopilotExport(const ExportCliOptions& c, AutopilotFormat format, const Calibration& cal) {
   AutopilotExportOptions o = c.options;
   o.format = format;
   Result<AutopilotExport> exported = ExportAutopilotParameters(cal, o);
@@ -34,8 +33,8 @@ int RunAutopilotExport(const ExportCliOptions& c, AutopilotFormat format,
   std::string sidecar;
   if (!c.covariance.empty()) {
     InterchangeExportOptions io;
-    io.format = format == AutopilotFormat::kPx4 ? InterchangeFormat::kPx4
-                                                : InterchangeFormat::kArduPilot;
+    io.format =
+        format == AutopilotFormat::kPx4 ? InterchangeFormat::kPx4 : InterchangeFormat::kArduPilot;
     io.sensor = o.sensor;
     io.instance = o.instance;
     Result<InterchangeExport> values = ExportInterchange(cal, io);
@@ -52,9 +51,10 @@ int RunAutopilotExport(const ExportCliOptions& c, AutopilotFormat format,
 int RunExport(const ExportCliOptions& c) {
   const std::optional<InterchangeFormat> format = ParseInterchangeFormat(c.to);
   if (!format) {
-    apps::PrintErrorText("--to '" + c.to +
-                         "': expected px4 or ardupilot (autopilots), or kalibr, openvins, basalt or "
-                         "realsense (estimators)");
+    apps::PrintErrorText(
+        "--to '" + c.to +
+        "': expected px4 or ardupilot (autopilots), or kalibr, openvins, basalt or "
+        "realsense (estimators)");
     return kExitUsage;
   }
   Result<Calibration> cal = LoadCalibration(c.calibration);
@@ -69,10 +69,9 @@ int RunExport(const ExportCliOptions& c) {
   Result<InterchangeExport> exported = ExportInterchange(cal.value(), o);
   if (!exported.ok()) return apps::PrintErrorExit(exported.error());
   for (const std::string& w : exported.value().warnings) apps::PrintWarning(w);
-  const std::string sidecar_path =
-      !c.covariance.empty() ? c.covariance
-      : apps::IsStdio(c.output) ? std::string()
-                                : InterchangeSidecarPath(c.output);
+  const std::string sidecar_path = !c.covariance.empty()     ? c.covariance
+                                   : apps::IsStdio(c.output) ? std::string()
+                                                             : InterchangeSidecarPath(c.output);
   const std::string sidecar =
       sidecar_path.empty()
           ? std::string()

@@ -73,7 +73,8 @@ FramedForms BodyForms(const TagParameters& p, const Eigen::VectorXd& theta) {
   Eigen::Index at = 0;
   for (size_t s = 0; s < p.sensors.size(); ++s) {
     SensorModel m = p.sensors[s]->model;
-    for (const std::string& name : p.sensors[s]->parameter_names) SetParameter(name, theta(at++), &m);
+    for (const std::string& name : p.sensors[s]->parameter_names)
+      SetParameter(name, theta(at++), &m);
     (m.sensor == ImuSensor::kAccel ? f.accel : f.gyro) = SiOf(m, p.c_in[s], p.c_out[s]);
   }
   return f;
@@ -105,10 +106,10 @@ std::string YamlMatrix(const std::string& indent, const Eigen::VectorXd& v, int 
 }
 
 std::string MatrixLine(const Eigen::Matrix3d& m) {
-  return fmt::format("[[{:.12g}, {:.12g}, {:.12g}], [{:.12g}, {:.12g}, {:.12g}], [{:.12g}, "
-                     "{:.12g}, {:.12g}]]",
-                     m(0, 0), m(0, 1), m(0, 2), m(1, 0), m(1, 1), m(1, 2), m(2, 0), m(2, 1),
-                     m(2, 2));
+  return fmt::format(
+      "[[{:.12g}, {:.12g}, {:.12g}], [{:.12g}, {:.12g}, {:.12g}], [{:.12g}, "
+      "{:.12g}, {:.12g}]]",
+      m(0, 0), m(0, 1), m(0, 2), m(1, 0), m(1, 1), m(1, 2), m(2, 0), m(2, 1), m(2, 2));
 }
 
 // The convention lines every format carries (a YAML comment block or a JSON key).
@@ -119,41 +120,49 @@ std::vector<std::string> ConventionLines(InterchangeFormat format, const Interch
                           InterchangeFormatName(format)));
   switch (format) {
     case InterchangeFormat::kKalibr:
-      l.push_back("Kalibr imu-chain yaml, model scale-misalignment (Kalibr IccSensors.py "
-                  "IccScaledMisalignedImu): a_raw = M_a a_i + b_a; w_raw = M_g C_gyro_i w_i + "
-                  "A C_gyro_i a_i + b_g; M lower triangular; SI units");
-      l.push_back("A = 0: metro does not model g-sensitivity; b_a, b_g are Kalibr's bias states "
-                  "(not in this file)");
+      l.push_back(
+          "Kalibr imu-chain yaml, model scale-misalignment (Kalibr IccSensors.py "
+          "IccScaledMisalignedImu): a_raw = M_a a_i + b_a; w_raw = M_g C_gyro_i w_i + "
+          "A C_gyro_i a_i + b_g; M lower triangular; SI units");
+      l.push_back(
+          "A = 0: metro does not model g-sensitivity; b_a, b_g are Kalibr's bias states "
+          "(not in this file)");
       break;
     case InterchangeFormat::kOpenVins:
-      l.push_back("OpenVINS kalibr_imu_chain.yaml, imu model kalibr (OpenVINS docs 'IMU "
-                  "Intrinsic Models'): w_I = R_IMUtoGYRO^T Tw^-1 (w_m - Tg a_I - b_g); a_I = "
-                  "R_IMUtoACC^T Ta^-1 (a_m - b_a); Tw, Ta lower triangular; SI units");
-      l.push_back("Tg = 0: metro does not model g-sensitivity; b_g, b_a are the filter's states "
-                  "(not in this file); set the estimator's imu model to kalibr");
+      l.push_back(
+          "OpenVINS kalibr_imu_chain.yaml, imu model kalibr (OpenVINS docs 'IMU "
+          "Intrinsic Models'): w_I = R_IMUtoGYRO^T Tw^-1 (w_m - Tg a_I - b_g); a_I = "
+          "R_IMUtoACC^T Ta^-1 (a_m - b_a); Tw, Ta lower triangular; SI units");
+      l.push_back(
+          "Tg = 0: metro does not model g-sensitivity; b_g, b_a are the filter's states "
+          "(not in this file); set the estimator's imu model to kalibr");
       break;
     case InterchangeFormat::kBasalt:
-      l.push_back("basalt calibration.json value0 (basalt-headers calib_bias.hpp): a_I = (I + "
-                  "S_a) a_raw - b_a, calib_accel_bias = [b_a, s1..s6], S_a = [[s1,0,0],[s2,s4,0],"
-                  "[s3,s5,s6]]; w_I = (I + S_g) w_raw - b_g, calib_gyro_bias = [b_g, s1..s9] "
-                  "column by column; bias after scaling; m/s^2, rad/s");
+      l.push_back(
+          "basalt calibration.json value0 (basalt-headers calib_bias.hpp): a_I = (I + "
+          "S_a) a_raw - b_a, calib_accel_bias = [b_a, s1..s6], S_a = [[s1,0,0],[s2,s4,0],"
+          "[s3,s5,s6]]; w_I = (I + S_g) w_raw - b_g, calib_gyro_bias = [b_g, s1..s9] "
+          "column by column; bias after scaling; m/s^2, rad/s");
       l.push_back("merge these two keys into your calibration.json's value0");
       break;
     case InterchangeFormat::kRealSense:
-      l.push_back("librealsense rs-imu-calibration.py calibration.json: a = S^T a_raw - bias with "
-                  "S = scale_and_alignment row by row (its check_X); bias after scaling; m/s^2, "
-                  "rad/s. The device table holds S^T; the convention is that of check_X");
+      l.push_back(
+          "librealsense rs-imu-calibration.py calibration.json: a = S^T a_raw - bias with "
+          "S = scale_and_alignment row by row (its check_X); bias after scaling; m/s^2, "
+          "rad/s. The device table holds S^T; the convention is that of check_X");
       break;
     case InterchangeFormat::kPx4:
     case InterchangeFormat::kArduPilot:
       break;
   }
-  l.push_back("metro: calibrated = M (data - b) in SI, bias before scaling "
-              "(docs/calibration-interchange.md)");
+  l.push_back(
+      "metro: calibrated = M (data - b) in SI, bias before scaling "
+      "(docs/calibration-interchange.md)");
   const double angle = ii::RotationAngle(e.body_from_format);
-  l.push_back(fmt::format("frame: a_metro = R a_file, R = {} (a turn of {:.3g} mrad; the "
-                          "format holds a lower triangular accelerometer matrix)",
-                          MatrixLine(e.body_from_format), 1e3 * angle));
+  l.push_back(
+      fmt::format("frame: a_metro = R a_file, R = {} (a turn of {:.3g} mrad; the "
+                  "format holds a lower triangular accelerometer matrix)",
+                  MatrixLine(e.body_from_format), 1e3 * angle));
   for (const std::string& n : e.not_held) l.push_back("NOT HELD: " + n);
   l.push_back("standard uncertainties and covariance: the sidecar FILE.covariance.json");
   return l;
@@ -233,16 +242,18 @@ std::vector<std::string> NotHeld(InterchangeFormat format, const TagCalibration&
     }
     const SensorModel& m = (*s)->model;
     if (m.has_temperature && m.bias_per_c.cwiseAbs().maxCoeff() > 0.0) {
-      out.push_back(fmt::format("the {} bias temperature term b1 = {:.4g} {:.4g} {:.4g} {}/degC "
-                                "(the bias written is at t_ref {:g} degC)",
-                                ImuSensorLongName(m.sensor), m.bias_per_c(0), m.bias_per_c(1),
-                                m.bias_per_c(2), m.input_unit, m.t_ref_c));
+      out.push_back(
+          fmt::format("the {} bias temperature term b1 = {:.4g} {:.4g} {:.4g} {}/degC "
+                      "(the bias written is at t_ref {:g} degC)",
+                      ImuSensorLongName(m.sensor), m.bias_per_c(0), m.bias_per_c(1),
+                      m.bias_per_c(2), m.input_unit, m.t_ref_c));
     }
   }
   if (angle > 0.0) {
-    out.push_back(fmt::format("metro's body frame: the file's frame is turned by {:.4g} mrad "
-                              "from it (R above; the extrinsics the estimator calibrates absorb it)",
-                              1e3 * angle));
+    out.push_back(
+        fmt::format("metro's body frame: the file's frame is turned by {:.4g} mrad "
+                    "from it (R above; the extrinsics the estimator calibrates absorb it)",
+                    1e3 * angle));
   }
   return out;
 }
@@ -348,7 +359,8 @@ Result<InterchangeExport> ExportInterchange(const Calibration& calibration,
       calibration.source_file.empty() ? "calibration" : calibration.source_file;
   if (format == InterchangeFormat::kPx4 || format == InterchangeFormat::kArduPilot) {
     AutopilotExportOptions ao;
-    ao.format = format == InterchangeFormat::kPx4 ? AutopilotFormat::kPx4 : AutopilotFormat::kArduPilot;
+    ao.format =
+        format == InterchangeFormat::kPx4 ? AutopilotFormat::kPx4 : AutopilotFormat::kArduPilot;
     ao.sensor = options.sensor;
     ao.instance = options.instance;
     Result<AutopilotExport> ap = ExportAutopilotParameters(calibration, ao);

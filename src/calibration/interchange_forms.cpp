@@ -20,7 +20,8 @@ void AddMatrix(std::vector<InterchangeValue>* out, const std::string& name,
 
 void AddArray(std::vector<InterchangeValue>* out, const std::string& name, int n,
               const std::string& unit, int first = 0) {
-  for (int i = first; i < first + n; ++i) out->push_back({fmt::format("{}[{}]", name, i), 0.0, unit});
+  for (int i = first; i < first + n; ++i)
+    out->push_back({fmt::format("{}[{}]", name, i), 0.0, unit});
 }
 
 // Row-major 3 x 3 from values starting at `at`.
@@ -87,15 +88,21 @@ std::vector<InterchangeValue> Layout(InterchangeFormat format, int instance) {
       break;
     }
     case InterchangeFormat::kPx4:
-      for (int a = 0; a < 3; ++a) out.push_back({fmt::format("CAL_ACC{}_{}OFF", instance, kAxes[a]), 0, "m/s^2"});
-      for (int a = 0; a < 3; ++a) out.push_back({fmt::format("CAL_ACC{}_{}SCALE", instance, kAxes[a]), 0, "1"});
-      for (int a = 0; a < 3; ++a) out.push_back({fmt::format("CAL_GYRO{}_{}OFF", instance, kAxes[a]), 0, "rad/s"});
+      for (int a = 0; a < 3; ++a)
+        out.push_back({fmt::format("CAL_ACC{}_{}OFF", instance, kAxes[a]), 0, "m/s^2"});
+      for (int a = 0; a < 3; ++a)
+        out.push_back({fmt::format("CAL_ACC{}_{}SCALE", instance, kAxes[a]), 0, "1"});
+      for (int a = 0; a < 3; ++a)
+        out.push_back({fmt::format("CAL_GYRO{}_{}OFF", instance, kAxes[a]), 0, "rad/s"});
       break;
     case InterchangeFormat::kArduPilot: {
       const std::string n = instance == 0 ? "" : std::to_string(instance + 1);
-      for (int a = 0; a < 3; ++a) out.push_back({fmt::format("INS_ACC{}OFFS_{}", n, kAxes[a]), 0, "m/s^2"});
-      for (int a = 0; a < 3; ++a) out.push_back({fmt::format("INS_ACC{}SCAL_{}", n, kAxes[a]), 0, "1"});
-      for (int a = 0; a < 3; ++a) out.push_back({fmt::format("INS_GYR{}OFFS_{}", n, kAxes[a]), 0, "rad/s"});
+      for (int a = 0; a < 3; ++a)
+        out.push_back({fmt::format("INS_ACC{}OFFS_{}", n, kAxes[a]), 0, "m/s^2"});
+      for (int a = 0; a < 3; ++a)
+        out.push_back({fmt::format("INS_ACC{}SCAL_{}", n, kAxes[a]), 0, "1"});
+      for (int a = 0; a < 3; ++a)
+        out.push_back({fmt::format("INS_GYR{}OFFS_{}", n, kAxes[a]), 0, "rad/s"});
       break;
     }
   }

@@ -25,14 +25,14 @@ constexpr char kAxisNames[3] = {'x', 'y', 'z'};
 // nominal value (MPU-6000/6050 PS-MPU-6000A-00 rev 3.4: sensitivity tolerance +-3 %), its zero
 // offsets within +-150 mg (accelerometer z) and +-20 deg/s (gyroscope), its cross-axis
 // sensitivity +-2 %.
-constexpr double kGainLimit = 0.10;            // |gain - 1|
-constexpr double kAccelBiasLimitMps2 = 1.5;    // about 150 mg
-constexpr double kGyroBiasLimitRadps = 0.35;   // about 20 deg/s
+constexpr double kGainLimit = 0.10;           // |gain - 1|
+constexpr double kAccelBiasLimitMps2 = 1.5;   // about 150 mg
+constexpr double kGyroBiasLimitRadps = 0.35;  // about 20 deg/s
 constexpr double kMisalignmentLimitRad = 0.05;
 constexpr double kConditionLimit = 1e6;
 
 struct Layout {
-  int accel_first, gyro_first;  // First value of each sensor's block (for positions).
+  int accel_first, gyro_first;      // First value of each sensor's block (for positions).
   int accel_diag[3], gyro_diag[3];  // The values on each sensor's diagonal (gains).
 };
 
@@ -136,11 +136,12 @@ Status CheckPhysical(const InterchangeFile& f, const ii::FramedForms& forms, boo
     for (int a = 0; a < 3; ++a) {
       const int d = accel ? l.accel_diag[a] : l.gyro_diag[a];
       if (d >= 0 && !(m(a, a) > 0.0)) {
-        return At(f, d,
-                  fmt::format("{} = {:.6g}: the {}'s gain on {} is {:.6g}: expected > 0 (a gain "
-                              "<= 0 reverses or kills the axis; no physical sensor has one)",
-                              f.values[static_cast<size_t>(d)].name,
-                              f.values[static_cast<size_t>(d)].value, name, kAxisNames[a], m(a, a)));
+        return At(
+            f, d,
+            fmt::format("{} = {:.6g}: the {}'s gain on {} is {:.6g}: expected > 0 (a gain "
+                        "<= 0 reverses or kills the axis; no physical sensor has one)",
+                        f.values[static_cast<size_t>(d)].name,
+                        f.values[static_cast<size_t>(d)].value, name, kAxisNames[a], m(a, a)));
       }
     }
     const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3d>(m).singularValues();
@@ -162,7 +163,8 @@ std::string UnitHint(double gain) {
   if (near(kStandardGravityMps2) || near(1.0 / kStandardGravityMps2)) {
     return " (the ratio of m/s^2 to g: data in the wrong unit?)";
   }
-  if (near(kRadToDeg) || near(1.0 / kRadToDeg)) return " (the ratio of deg/s to rad/s: data in the wrong unit?)";
+  if (near(kRadToDeg) || near(1.0 / kRadToDeg))
+    return " (the ratio of deg/s to rad/s: data in the wrong unit?)";
   return "";
 }
 
@@ -189,25 +191,27 @@ std::vector<std::string> PlausibilityFlags(const InterchangeFile& f, const Model
     }
     const double bias_limit = s == 0 ? kAccelBiasLimitMps2 : kGyroBiasLimitRadps;
     if (sm.bias.cwiseAbs().maxCoeff() > bias_limit) {
-      out.push_back(fmt::format("implausible {} bias {:.6g} {:.6g} {:.6g} {}: beyond {:g} {} "
-                                "(MPU-6050 zero offsets: +-150 mg, +-20 deg/s)",
-                                name, sm.bias(0), sm.bias(1), sm.bias(2), sm.input_unit,
-                                bias_limit, sm.input_unit));
+      out.push_back(fmt::format(
+          "implausible {} bias {:.6g} {:.6g} {:.6g} {}: beyond {:g} {} "
+          "(MPU-6050 zero offsets: +-150 mg, +-20 deg/s)",
+          name, sm.bias(0), sm.bias(1), sm.bias(2), sm.input_unit, bias_limit, sm.input_unit));
     }
     for (double t : sm.misalignment) {
       if (std::fabs(t) > kMisalignmentLimitRad) {
-        out.push_back(fmt::format("implausible {} misalignment term {:.4g} rad (beyond {:g} rad; "
-                                  "cross-axis sensitivity is about +-2 %)",
-                                  name, t, kMisalignmentLimitRad));
+        out.push_back(
+            fmt::format("implausible {} misalignment term {:.4g} rad (beyond {:g} rad; "
+                        "cross-axis sensitivity is about +-2 %)",
+                        name, t, kMisalignmentLimitRad));
         break;
       }
     }
   }
   const double angle = ii::RotationAngle(m.body_from_format);
   if (angle > kMisalignmentLimitRad) {
-    out.push_back(fmt::format("the file's frame is turned {:.4g} rad from the accelerometer's "
-                              "axes: more than a misalignment",
-                              angle));
+    out.push_back(
+        fmt::format("the file's frame is turned {:.4g} rad from the accelerometer's "
+                    "axes: more than a misalignment",
+                    angle));
   }
   return out;
 }
@@ -217,31 +221,35 @@ std::vector<std::string> NotCarried(const InterchangeFile& f, const Eigen::Vecto
                                     bool has_gyro, double angle) {
   std::vector<std::string> out;
   if (!CarriesBias(f.format)) {
-    out.push_back(fmt::format("the biases ({} estimates them as states): written as 0, "
-                              "uncertainty unknown",
-                              f.format == InterchangeFormat::kKalibr ? "Kalibr" : "OpenVINS"));
+    out.push_back(
+        fmt::format("the biases ({} estimates them as states): written as 0, "
+                    "uncertainty unknown",
+                    f.format == InterchangeFormat::kKalibr ? "Kalibr" : "OpenVINS"));
   }
   if (GyroBiasOnly(f.format)) {
-    out.push_back("the misalignment of both sensors and the gyroscope's scale: not in the "
-                  "autopilot's parameters (taken as I and the nominal scale)");
+    out.push_back(
+        "the misalignment of both sensors and the gyroscope's scale: not in the "
+        "autopilot's parameters (taken as I and the nominal scale)");
   }
   if (!has_gyro) out.push_back("the gyroscope: not in the file");
   out.push_back("a bias temperature term: no format holds one");
-  const int g_at = f.format == InterchangeFormat::kKalibr    ? 18
+  const int g_at = f.format == InterchangeFormat::kKalibr     ? 18
                    : f.format == InterchangeFormat::kOpenVins ? 36
                                                               : -1;
   if (g_at >= 0) {
     const double g = v.segment(g_at, 9).cwiseAbs().maxCoeff();
     if (g > 0.0) {
-      out.push_back(fmt::format("the g-sensitivity {} (largest |element| {:.4g} (rad/s)/(m/s^2)): "
-                                "metro has no g-sensitivity term",
-                                f.format == InterchangeFormat::kKalibr ? "A" : "Tg", g));
+      out.push_back(
+          fmt::format("the g-sensitivity {} (largest |element| {:.4g} (rad/s)/(m/s^2)): "
+                      "metro has no g-sensitivity term",
+                      f.format == InterchangeFormat::kKalibr ? "A" : "Tg", g));
     }
   }
   if (angle > 0.0) {
-    out.push_back(fmt::format("the file's frame: the constants are in the accelerometer's axes "
-                              "(metro's body frame), turned {:.4g} mrad from the file's frame",
-                              1e3 * angle));
+    out.push_back(
+        fmt::format("the file's frame: the constants are in the accelerometer's axes "
+                    "(metro's body frame), turned {:.4g} mrad from the file's frame",
+                    1e3 * angle));
   }
   for (const std::string& n : f.notes) out.push_back(n);
   return out;
@@ -257,7 +265,8 @@ Result<Eigen::MatrixXd> SidecarCovariance(const InterchangeFile& f,
     root["schema"].Fail("\"metro.interchange_covariance/1\"");
   }
   if (root.ok() && root["format"].String() != InterchangeFormatName(f.format)) {
-    root["format"].Fail(fmt::format("\"{}\" (the format of {})", InterchangeFormatName(f.format), f.file));
+    root["format"].Fail(
+        fmt::format("\"{}\" (the format of {})", InterchangeFormatName(f.format), f.file));
   }
   const JsonCursor values = root["values"];
   const size_t n = f.values.size();
@@ -270,15 +279,17 @@ Result<Eigen::MatrixXd> SidecarCovariance(const InterchangeFile& f,
     if (!root.ok()) break;
     const double w = f.values[i].value;
     if (name != f.values[i].name) {
-      values[i]["name"].Fail(fmt::format("\"{}\" (the sidecar does not belong to {})",
-                                         f.values[i].name, f.file));
+      values[i]["name"].Fail(
+          fmt::format("\"{}\" (the sidecar does not belong to {})", f.values[i].name, f.file));
     } else if (std::fabs(v - w) > 1e-12 * std::max(std::fabs(v), std::fabs(w))) {
-      values[i]["value"].Fail(fmt::format("{:.17g}, the value in {} (the sidecar belongs to "
-                                          "another export)",
-                                          w, f.file));
+      values[i]["value"].Fail(
+          fmt::format("{:.17g}, the value in {} (the sidecar belongs to "
+                      "another export)",
+                      w, f.file));
     }
   }
-  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  Eigen::MatrixXd cov =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   const JsonCursor c = root["covariance"];
   if (root.ok() && (!c.IsArray() || c.Size() != n)) c.Fail(fmt::format("a {} x {} matrix", n, n));
   for (size_t r = 0; r < n && root.ok(); ++r) {
@@ -327,8 +338,10 @@ Result<InterchangeImport> ImportInterchange(const InterchangeFile& f,
   out.body_from_format = m.body_from_format;
   out.flags = PlausibilityFlags(f, m, has_gyro);
   out.not_carried = NotCarried(f, v, has_gyro, ii::RotationAngle(m.body_from_format));
-  const Eigen::Index na = static_cast<Eigen::Index>(PB::FreeCount(ImuSensor::kAccel, accel_kind, false));
-  const Eigen::Index ng = static_cast<Eigen::Index>(PB::FreeCount(ImuSensor::kGyro, gyro_kind, false));
+  const Eigen::Index na =
+      static_cast<Eigen::Index>(PB::FreeCount(ImuSensor::kAccel, accel_kind, false));
+  const Eigen::Index ng =
+      static_cast<Eigen::Index>(PB::FreeCount(ImuSensor::kGyro, gyro_kind, false));
   Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(na + (has_gyro ? ng : 0), na + (has_gyro ? ng : 0));
   if (!o.sidecar_text.empty()) {
     Result<Eigen::MatrixXd> cv = SidecarCovariance(f, o);
@@ -348,16 +361,19 @@ Result<InterchangeImport> ImportInterchange(const InterchangeFile& f,
   }
   const std::string why =
       o.sidecar_text.empty()
-          ? fmt::format("imported from {} ({}) without a covariance sidecar: the standard "
-                        "uncertainties are unknown (the zeros in covariance are placeholders)",
-                        InterchangeFormatName(f.format), f.file)
-          : fmt::format("imported from {} ({}): the biases were not carried, their "
-                        "uncertainty is unknown",
-                        InterchangeFormatName(f.format), f.file);
+          ? fmt::format(
+                "imported from {} ({}) without a covariance sidecar: the standard "
+                "uncertainties are unknown (the zeros in covariance are placeholders)",
+                InterchangeFormatName(f.format), f.file)
+          : fmt::format(
+                "imported from {} ({}): the biases were not carried, their "
+                "uncertainty is unknown",
+                InterchangeFormatName(f.format), f.file);
   const std::string reason = out.uncertainty_known
-                                 ? fmt::format("imported from {} ({}) with its covariance sidecar "
-                                               "({}); not tested by metro",
-                                               InterchangeFormatName(f.format), f.file, o.sidecar_file)
+                                 ? fmt::format(
+                                       "imported from {} ({}) with its covariance sidecar "
+                                       "({}); not tested by metro",
+                                       InterchangeFormatName(f.format), f.file, o.sidecar_file)
                                  : why;
   Calibration& cal = out.calibration;
   cal.gravity_mps2 = kStandardGravityMps2;
@@ -369,7 +385,8 @@ Result<InterchangeImport> ImportInterchange(const InterchangeFile& f,
   TagCalibration tag;
   tag.sensor = o.sensor;
   tag.accel = Imported(m.accel, cov.topLeftCorner(na, na), out.uncertainty_known, reason);
-  if (has_gyro) tag.gyro = Imported(m.gyro, cov.bottomRightCorner(ng, ng), out.uncertainty_known, reason);
+  if (has_gyro)
+    tag.gyro = Imported(m.gyro, cov.bottomRightCorner(ng, ng), out.uncertainty_known, reason);
   for (const std::string& n : out.not_carried) tag.warnings.push_back("not carried: " + n);
   for (const std::string& flag : out.flags) tag.warnings.push_back(flag);
   cal.tags.push_back(std::move(tag));

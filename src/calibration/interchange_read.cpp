@@ -12,9 +12,10 @@
 
 #include "calibration/interchange_forms.hpp"
 #include "core/json_reader.hpp"
+#include "core/nearest_name.hpp"
 #include "core/yaml_document.hpp"
-#include "metro/core/file.hpp"
 #include "metro/calibration/interchange.hpp"
+#include "metro/core/file.hpp"
 
 namespace metro {
 namespace {
@@ -74,17 +75,19 @@ Status ReadYamlMatrix(const YamlNode& node, const std::string& path, Filling* f,
       const YamlNode& x = row.items[static_cast<size_t>(c)];
       const std::optional<double> v = x.Number();
       const std::string name = fmt::format("{}[{}][{}]", path, r, c);
-      if (!v) return YamlError(file, x, name, fmt::format("expected a number, found {}", x.Describe()));
+      if (!v)
+        return YamlError(file, x, name, fmt::format("expected a number, found {}", x.Describe()));
       m(r, c) = *v;
       f->Set(name, *v, x.line, x.column);
     }
   }
   if (rotation && !IsRotation(m)) {
-    return YamlError(file, node, path,
-                     fmt::format("expected a rotation matrix (R^T R = I to 1e-6, det +1), found "
-                                 "|R^T R - I| = {:.3g}, det {:.6g}",
-                                 (m.transpose() * m - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(),
-                                 m.determinant()));
+    return YamlError(
+        file, node, path,
+        fmt::format("expected a rotation matrix (R^T R = I to 1e-6, det +1), found "
+                    "|R^T R - I| = {:.3g}, det {:.6g}",
+                    (m.transpose() * m - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(),
+                    m.determinant()));
   }
   return {};
 }
@@ -93,30 +96,39 @@ Status ReadYamlMatrix(const YamlNode& node, const std::string& path, Filling* f,
 Status CheckKeys(const YamlNode& node, const std::string& path, const std::set<std::string>& known,
                  const std::string& file) {
   if (!node.IsMapping()) {
-    return YamlError(file, node, path, fmt::format("expected a mapping, found {}", node.Describe()));
+    return YamlError(file, node, path,
+                     fmt::format("expected a mapping, found {}", node.Describe()));
   }
   std::set<std::string> seen;
   for (const auto& [k, v] : node.members) {
     const std::string name = path.empty() ? k.scalar : path + "." + k.scalar;
     if (!k.IsScalar() || known.count(k.scalar) == 0) {
-      return YamlError(file, k, name,
-                       fmt::format("unknown key; expected one of: {}", fmt::join(known, ", ")));
+      return YamlError(
+          file, k, name,
+          fmt::format("unknown key (nearest: {}); expected one of: {}",
+                      Nearest(k.scalar, {known.begin(), known.end()}), fmt::join(known, ", ")));
     }
     if (!seen.insert(k.scalar).second) return YamlError(file, k, name, "a duplicate key");
   }
   return {};
 }
 
-const std::set<std::string> kNoiseKeys = {
-    "T_i_b",        "accelerometer_noise_density", "accelerometer_random_walk",
-    "gyroscope_noise_density", "gyroscope_random_walk", "model",
-    "rostopic",     "time_offset",                 "update_rate"};
+const std::set<std::string> kNoiseKeys = {"T_i_b",
+                                          "accelerometer_noise_density",
+                                          "accelerometer_random_walk",
+                                          "gyroscope_noise_density",
+                                          "gyroscope_random_walk",
+                                          "model",
+                                          "rostopic",
+                                          "time_offset",
+                                          "update_rate"};
 
 // The imuN node of an imu-chain yaml, or the root when it is one imu's keys (Kalibr's imu.yaml).
 Result<const YamlNode*> ImuNode(const YamlNode& root, int instance, const std::string& file,
                                 const std::set<std::string>& imu_keys) {
   if (!root.IsMapping()) {
-    return YamlError(file, root, "(top)", fmt::format("expected a mapping, found {}", root.Describe()));
+    return YamlError(file, root, "(top)",
+                     fmt::format("expected a mapping, found {}", root.Describe()));
   }
   bool chain = false;
   for (const auto& [k, v] : root.members) {
@@ -172,9 +184,9 @@ Status ReadKalibr(const YamlNode& root, int instance, Filling* f) {
   const std::set<std::string> models = {"calibrated", "scale-misalignment",
                                         "scale-misalignment-size-effect"};
   if (model != nullptr && (!model->IsScalar() || models.count(model->scalar) == 0)) {
-    return YamlError(f->out.file, *model, p + ".model",
-                     fmt::format("expected one of: {}; found {}", fmt::join(models, ", "),
-                                 model->Describe()));
+    return YamlError(
+        f->out.file, *model, p + ".model",
+        fmt::format("expected one of: {}; found {}", fmt::join(models, ", "), model->Describe()));
   }
   for (size_t i = 0; i < f->out.values.size(); ++i) {
     // Identity M and C, zero A: Kalibr's `calibrated` model.
@@ -200,8 +212,9 @@ Status ReadKalibr(const YamlNode& root, int instance, Filling* f) {
     return s;
   }
   if (acc->Find("rx_i") != nullptr) {
-    f->out.notes.push_back("accelerometers rx_i, ry_i, rz_i (size effect lever arms): metro has "
-                           "no size-effect term");
+    f->out.notes.push_back(
+        "accelerometers rx_i, ry_i, rz_i (size effect lever arms): metro has "
+        "no size-effect term");
   }
   if (Status s = RequireMatrix(*acc, "M", p + ".accelerometers", f); !s.ok()) return s;
   if (Status s = RequireMatrix(*gyr, "M", p + ".gyroscopes", f); !s.ok()) return s;
@@ -222,9 +235,9 @@ Status ReadOpenVins(const YamlNode& root, int instance, Filling* f) {
   f->out.model = model != nullptr ? model->scalar : "kalibr";
   const std::set<std::string> models = {"calibrated", "kalibr", "rpng"};
   if (model != nullptr && (!model->IsScalar() || models.count(model->scalar) == 0)) {
-    return YamlError(f->out.file, *model, p + ".model",
-                     fmt::format("expected one of: {}; found {}", fmt::join(models, ", "),
-                                 model->Describe()));
+    return YamlError(
+        f->out.file, *model, p + ".model",
+        fmt::format("expected one of: {}; found {}", fmt::join(models, ", "), model->Describe()));
   }
   // VioManagerOptions.h requires all five (parse_external with required = true).
   for (const char* k : {"Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC", "Tg"}) {
@@ -251,8 +264,10 @@ Status CheckJsonKeys(const JsonCursor& j, const JsonDocument& doc,
     if (known.count(k) == 0) {
       std::vector<JsonPathStep> at = path;
       at.emplace_back(k);
-      return JsonErrorAt(doc, at, j.Path().empty() ? k : j.Path() + "." + k,
-                         fmt::format("unknown key; expected one of: {}", fmt::join(known, ", ")));
+      return JsonErrorAt(
+          doc, at, j.Path().empty() ? k : j.Path() + "." + k,
+          fmt::format("unknown key (nearest: {}); expected one of: {}",
+                      Nearest(k, {known.begin(), known.end()}), fmt::join(known, ", ")));
     }
   }
   return {};
@@ -282,11 +297,12 @@ Status ReadBasalt(const JsonDocument& doc, Filling* f) {
   if (Status s = CheckJsonKeys(root, doc, {}, {"value0", "metro_convention"}); !s.ok()) return s;
   const JsonCursor v = root["value0"];
   const std::set<std::string> known = {
-      "T_imu_cam",       "intrinsics",      "resolution",           "vignette",
-      "calib_accel_bias", "calib_gyro_bias", "imu_update_rate",      "accel_noise_std",
-      "gyro_noise_std",  "accel_bias_std",  "gyro_bias_std",        "T_mocap_world",
-      "T_imu_marker",    "mocap_time_offset_ns", "mocap_to_imu_offset_ns", "cam_time_offset_ns",
-      "view_offset"};
+      "T_imu_cam",          "intrinsics",           "resolution",
+      "vignette",           "calib_accel_bias",     "calib_gyro_bias",
+      "imu_update_rate",    "accel_noise_std",      "gyro_noise_std",
+      "accel_bias_std",     "gyro_bias_std",        "T_mocap_world",
+      "T_imu_marker",       "mocap_time_offset_ns", "mocap_to_imu_offset_ns",
+      "cam_time_offset_ns", "view_offset"};
   if (Status s = CheckJsonKeys(v, doc, {"value0"}, known); !s.ok()) return s;
   if (Status s = ReadJsonArray(v["calib_accel_bias"], doc, {"value0", "calib_accel_bias"},
                                "value0.calib_accel_bias", 9, f);
@@ -312,7 +328,8 @@ Status ReadRealSense(const JsonDocument& doc, int instance, Filling* f) {
     return imus.error();
   }
   const std::vector<JsonPathStep> ip = {std::string("imus"), i};
-  if (Status s = CheckJsonKeys(imus[i], doc, ip, {"accelerometer", "gyroscope", "extrinsics", "id", "name"});
+  if (Status s = CheckJsonKeys(imus[i], doc, ip,
+                               {"accelerometer", "gyroscope", "extrinsics", "id", "name"});
       !s.ok()) {
     return s;
   }
@@ -320,14 +337,15 @@ Status ReadRealSense(const JsonDocument& doc, int instance, Filling* f) {
     std::vector<JsonPathStep> sp = ip;
     sp.emplace_back(std::string(sensor));
     const JsonCursor sj = imus[i][sensor];
-    if (Status s = CheckJsonKeys(sj, doc, sp,
-                                 {"scale_and_alignment", "bias", "bias_variance", "noise_variance",
-                                  "decimate_by"});
+    if (Status s = CheckJsonKeys(
+            sj, doc, sp,
+            {"scale_and_alignment", "bias", "bias_variance", "noise_variance", "decimate_by"});
         !s.ok()) {
       return s;
     }
     const std::string base = fmt::format("imus[{}].{}", instance, sensor);
-    for (const auto& [key, n] : {std::pair<const char*, size_t>{"scale_and_alignment", 9}, {"bias", 3}}) {
+    for (const auto& [key, n] :
+         {std::pair<const char*, size_t>{"scale_and_alignment", 9}, {"bias", 3}}) {
       std::vector<JsonPathStep> kp = sp;
       kp.emplace_back(std::string(key));
       if (Status s = ReadJsonArray(sj[key], doc, kp, base + "." + key, n, f); !s.ok()) return s;
@@ -391,8 +409,9 @@ Status ReadParameters(std::string_view text, Filling* f) {
                      fmt::format("missing parameter {} (expected the {} of instance; see "
                                  "docs/calibration-interchange.md)",
                                  f->out.values[i].name,
-                                 i < 3 ? "accelerometer offsets" : i < 6 ? "accelerometer scales"
-                                                                         : "gyroscope offsets"));
+                                 i < 3   ? "accelerometer offsets"
+                                 : i < 6 ? "accelerometer scales"
+                                         : "gyroscope offsets"));
   }
   if (!gyro_any) f->out.notes.push_back("no gyroscope offsets: accelerometer only");
   return {};

@@ -27,9 +27,9 @@ struct YamlNode {
   Kind kind = Kind::kScalar;
   std::string scalar;  // kScalar: the text as written (quotes removed).
   bool quoted = false;
-  std::vector<YamlNode> items;                               // kSequence
-  std::vector<std::pair<YamlNode, YamlNode>> members;        // kMapping: key node, value node
-  int64_t line = 0, column = 0;                              // 1-based start of the node
+  std::vector<YamlNode> items;                         // kSequence
+  std::vector<std::pair<YamlNode, YamlNode>> members;  // kMapping: key node, value node
+  int64_t line = 0, column = 0;                        // 1-based start of the node
 
   bool IsScalar() const { return kind == Kind::kScalar; }
   bool IsSequence() const { return kind == Kind::kSequence; }

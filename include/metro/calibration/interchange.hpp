@@ -106,8 +106,8 @@ struct InterchangeExportOptions {
 
 struct InterchangeExport {
   InterchangeFormat format = InterchangeFormat::kKalibr;
-  std::string text;                   // The file, its conventions in a comment block or key.
-  std::vector<std::string> warnings;  // What the form does not hold, the frame turn.
+  std::string text;                      // The file, its conventions in a comment block or key.
+  std::vector<std::string> warnings;     // What the form does not hold, the frame turn.
   std::vector<InterchangeValue> values;  // Every number the file holds, in layout order.
   Eigen::VectorXd u;                     // Standard uncertainty of each value (k = 1).
   Eigen::MatrixXd covariance;            // Of `values` (see above).
@@ -137,7 +137,7 @@ struct InterchangeFile {
   std::vector<InterchangeValue> values;
   std::vector<bool> present;  // Per value: in the file (false: a default, e.g. Kalibr's A).
   std::vector<std::pair<int64_t, int64_t>> positions;  // Per value: line, column (1-based).
-  std::string model;          // kalibr: model; openvins: model ("kalibr", "rpng").
+  std::string model;               // kalibr: model; openvins: model ("kalibr", "rpng").
   std::vector<std::string> notes;  // What the file held that metro does not read (noise, ...).
 };
 
@@ -154,10 +154,10 @@ Result<InterchangeFile> ReadInterchangeFile(std::string_view text,
                                             const std::string& file);
 
 struct InterchangeImportOptions {
-  int sensor = 1;                   // The tag number calibration.json gets.
-  std::string sidecar_text;         // The covariance sidecar's text; empty: none.
-  std::string sidecar_file;         // Its name, for errors.
-  std::string date_utc;             // The calibration.json's date_utc (the import's time).
+  int sensor = 1;            // The tag number calibration.json gets.
+  std::string sidecar_text;  // The covariance sidecar's text; empty: none.
+  std::string sidecar_file;  // Its name, for errors.
+  std::string date_utc;      // The calibration.json's date_utc (the import's time).
   std::string tool_version;
 };
 
