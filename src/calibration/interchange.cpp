@@ -258,12 +258,13 @@ std::vector<std::string> NotHeld(InterchangeFormat format, const TagCalibration&
   return out;
 }
 
-// Steps for the Jacobian: 1e-4 u (the derivative where the law of propagation uses it), or
+// Steps for the Jacobian: u / 100 (the derivative over the span the law of propagation uses
+// it on; rounding then costs about eps |v| / h, 1e-9 relative), or
 // 1e-7 of the value's size for a held one (no variance: its column does not matter).
 Eigen::VectorXd Steps(const Eigen::VectorXd& theta, const Eigen::VectorXd& u) {
   Eigen::VectorXd h(theta.size());
   for (Eigen::Index i = 0; i < theta.size(); ++i) {
-    h(i) = u(i) > 0.0 ? 1e-4 * u(i) : 1e-7 * std::max(1.0, std::fabs(theta(i)));
+    h(i) = u(i) > 0.0 ? 1e-2 * u(i) : 1e-7 * std::max(1.0, std::fabs(theta(i)));
   }
   return h;
 }

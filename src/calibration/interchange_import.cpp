@@ -349,7 +349,7 @@ Result<InterchangeImport> ImportInterchange(const InterchangeFile& f,
     const Eigen::VectorXd u = cv.value().diagonal().cwiseMax(0.0).cwiseSqrt();
     Eigen::VectorXd h(v.size());
     for (Eigen::Index i = 0; i < v.size(); ++i) {
-      h(i) = u(i) > 0.0 ? 1e-4 * u(i) : 1e-7 * std::max(1.0, std::fabs(v(i)));
+      h(i) = u(i) > 0.0 ? 1e-2 * u(i) : 1e-7 * std::max(1.0, std::fabs(v(i)));
     }
     const auto theta = [&](const Eigen::VectorXd& x) {
       return Theta(ModelsFromValues(f.format, x, accel_kind, gyro_kind), has_gyro);
