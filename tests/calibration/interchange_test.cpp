@@ -534,6 +534,24 @@ TEST_CASE("Interchange: values outside physical sense are refused at their posit
   CHECK_THAT(r.error().ToString(), Catch::StartsWith("in.txt:5:21: CAL_ACC0_YSCALE = 0"));
 }
 
+TEST_CASE("Interchange: a gain that is the ratio of two units is named as such",
+          "[calibration][interchange]") {
+  // rs-imu-calibration fitted to data in g while the device gives m/s^2: gains 1/9.80665.
+  const std::string rs =
+      "{\"imus\": [{\"accelerometer\": {\"bias\": [0, 0, 0], \"scale_and_alignment\": "
+      "[0.10197, 0, 0, 0, 0.10197, 0, 0, 0, 0.10197]},\n \"gyroscope\": {\"bias\": [0, 0, 0], "
+      "\"scale_and_alignment\": [1, 0, 0, 0, 1, 0, 0, 0, 1]}}]}";
+  const Result<InterchangeImport> r =
+      ImportInterchange(Read(rs, InterchangeFormat::kRealSense), {});
+  REQUIRE(r.ok());
+  REQUIRE(r.value().flags.size() == 3);
+  CHECK_THAT(r.value().flags[0],
+             Catch::StartsWith("implausible accelerometer gain: "
+                               "imus[0].accelerometer.scale_and_alignment[0] = 0.10197"));
+  CHECK_THAT(r.value().flags[0],
+             Catch::Contains("the ratio of m/s^2 to g: data in the wrong unit?"));
+}
+
 TEST_CASE("Interchange: malformed files give file:line:column and what was expected",
           "[calibration][interchange]") {
   std::string unknown = kKalibr334;
