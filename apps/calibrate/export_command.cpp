@@ -69,8 +69,9 @@ int RunExport(const ExportCliOptions& c) {
   Result<InterchangeExport> exported = ExportInterchange(cal.value(), o);
   if (!exported.ok()) return apps::PrintErrorExit(exported.error());
   for (const std::string& w : exported.value().warnings) apps::PrintWarning(w);
-  const std::string sidecar_path = !c.covariance.empty()     ? c.covariance
-                                   : apps::IsStdio(c.output) ? std::string()
+  const std::string sidecar_path = !exported.value().uncertainty_known ? std::string()
+                                   : !c.covariance.empty()             ? c.covariance
+                                   : apps::IsStdio(c.output)           ? std::string()
                                                              : InterchangeSidecarPath(c.output);
   const std::string sidecar =
       sidecar_path.empty()

@@ -135,7 +135,8 @@ std::vector<std::string> ConventionLines(InterchangeFormat format, const Interch
           "R_IMUtoACC^T Ta^-1 (a_m - b_a); Tw, Ta lower triangular; SI units");
       l.push_back(
           "Tg = 0: metro does not model g-sensitivity; b_g, b_a are the filter's states "
-          "(not in this file); set the estimator's imu model to kalibr");
+          "(not in this file); set the estimator's imu model to kalibr; the noise keys come from "
+          "characterize noise-export");
       break;
     case InterchangeFormat::kBasalt:
       l.push_back(
@@ -273,7 +274,10 @@ Status CheckExportable(const Calibration& calibration, int sensor, const TagCali
   for (const auto* s : {&tag.accel, &tag.gyro}) {
     if (!s->has_value()) continue;
     const SensorCalibration& c = **s;
-    if (c.model_check && c.model_check->model_rejected) {
+    // An import's constants without their uncertainties pass on (ExportInterchange says so
+    // and writes no covariance); a fit's rejected model does not.
+    const bool imported = c.model_check && c.model_check->selection == "imported";
+    if (c.model_check && c.model_check->model_rejected && !imported) {
       return CalibrationErrorAt(
           calibration, CalibrationSensorPath(calibration, sensor, c.model.sensor),
           fmt::format("the {} model is model_rejected ({}): its constants are not exported",
@@ -356,6 +360,12 @@ Result<InterchangeExport> ExportInterchange(const Calibration& calibration,
   const Eigen::MatrixXd jac = ii::NumericJacobian(values_at, p.theta, Steps(p.theta, p.u));
   e.covariance = jac * p.covariance * jac.transpose();
   e.u = e.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (const SensorCalibration* c : p.sensors) {
+    if (c->model_check && c->model_check->selection == "imported" &&
+        c->model_check->model_rejected) {
+      e.uncertainty_known = false;
+    }
+  }
   const std::string source =
       calibration.source_file.empty() ? "calibration" : calibration.source_file;
   if (format == InterchangeFormat::kPx4 || format == InterchangeFormat::kArduPilot) {
@@ -389,6 +399,12 @@ Result<InterchangeExport> ExportInterchange(const Calibration& calibration,
   for (const std::string& n : e.not_held) {
     e.warnings.push_back(fmt::format("sensor {}: {} cannot hold {}", options.sensor,
                                      InterchangeFormatName(format), n));
+  }
+  if (!e.uncertainty_known) {
+    e.warnings.push_back(
+        fmt::format("sensor {}: the constants were imported without their "
+                    "uncertainties: no covariance sidecar is written",
+                    options.sensor));
   }
   return e;
 }

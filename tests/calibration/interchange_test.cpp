@@ -326,6 +326,13 @@ TEST_CASE("Interchange: export -> import returns metro's constants to 1e-12",
     CHECK_FALSE(imp.uncertainty_known);
     CHECK(t.accel->model_check->model_rejected);
     CHECK_THAT(t.accel->model_check->reason, Catch::Contains("uncertaint"));
+    // The import passes on to another format, without a sidecar (its u are not known).
+    InterchangeExportOptions again;
+    again.format = InterchangeFormat::kBasalt;
+    again.sensor = 3;
+    const Result<InterchangeExport> onward = ExportInterchange(imp.calibration, again);
+    REQUIRE(onward.ok());
+    CHECK_FALSE(onward.value().uncertainty_known);
     // calibration.json reads back.
     const Result<Calibration> back =
         CalibrationFromJson(FormatCalibrationJson(imp.calibration), "imported.json");

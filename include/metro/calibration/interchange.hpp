@@ -111,11 +111,15 @@ struct InterchangeExport {
   std::vector<InterchangeValue> values;  // Every number the file holds, in layout order.
   Eigen::VectorXd u;                     // Standard uncertainty of each value (k = 1).
   Eigen::MatrixXd covariance;            // Of `values` (see above).
+  // False when a sensor was imported without its uncertainties (interchange import): the
+  // covariance is then zeros that mean nothing, and no sidecar is written.
+  bool uncertainty_known = true;
   Eigen::Matrix3d body_from_format = Eigen::Matrix3d::Identity();  // R: a_B = R a_I
   std::vector<std::string> not_held;
 };
 
-// Errors: the tag is missing, a model_rejected sensor, a matrix with det <= 0, SiForm's.
+// Errors: the tag is missing, a model_rejected sensor (except an import's, below), a matrix
+// with det <= 0, SiForm's.
 // px4 / ardupilot: the text is ExportAutopilotParameters's (unchanged); values and covariance
 // are its offsets and scales.
 Result<InterchangeExport> ExportInterchange(const Calibration& calibration,
