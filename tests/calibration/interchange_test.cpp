@@ -341,6 +341,27 @@ TEST_CASE("Interchange: export -> import returns metro's constants to 1e-12",
   }
 }
 
+TEST_CASE("Interchange: PX4 and ArduPilot parameters round trip what they hold",
+          "[calibration][interchange]") {
+  Calibration cal = Cal(ModelKind::kScale, ModelKind::kBias, "m/s^2", "rad/s");
+  cal.tags[0].gyro->model.scale = Eigen::Vector3d::Constant(1.0 / kDeg);
+  for (InterchangeFormat fmt : {InterchangeFormat::kPx4, InterchangeFormat::kArduPilot}) {
+    INFO(InterchangeFormatName(fmt));
+    const InterchangeImport imp = RoundTrip(cal, fmt, true);
+    CHECK(imp.uncertainty_known);
+    const TagCalibration& t = imp.calibration.tags[0];
+    CHECK(t.accel->model.kind == ModelKind::kScale);
+    CHECK(t.gyro->model.kind == ModelKind::kBias);
+    for (int a = 0; a < 3; ++a) {
+      CheckSame(t.accel->model.bias(a), cal.tags[0].accel->model.bias(a));
+      CheckSame(t.accel->model.scale(a), cal.tags[0].accel->model.scale(a));
+      CheckSame(t.gyro->model.bias(a), cal.tags[0].gyro->model.bias(a));
+      CHECK(t.accel->bias_u(a) == Approx(cal.tags[0].accel->bias_u(a)).epsilon(1e-6));
+      CHECK(t.accel->scale_u(a) == Approx(cal.tags[0].accel->scale_u(a)).epsilon(1e-6));
+    }
+  }
+}
+
 TEST_CASE("Interchange: the sidecar's covariance agrees with the closed form and a Monte Carlo",
           "[calibration][interchange]") {
   // PX4: offset = b, scale = k c_out / c_in (m/s^2 in, g out): u exactly c_out u(k).
