@@ -126,7 +126,7 @@ std::vector<std::string> ConventionLines(InterchangeFormat format, const Interch
           "A C_gyro_i a_i + b_g; M lower triangular; SI units");
       l.push_back(
           "A = 0: metro does not model g-sensitivity; b_a, b_g are Kalibr's bias states "
-          "(not in this file)");
+          "(not in this file); the noise keys come from characterize noise-export");
       break;
     case InterchangeFormat::kOpenVins:
       l.push_back(
@@ -137,6 +137,10 @@ std::vector<std::string> ConventionLines(InterchangeFormat format, const Interch
           "Tg = 0: metro does not model g-sensitivity; b_g, b_a are the filter's states "
           "(not in this file); set the estimator's imu model to kalibr; the noise keys come from "
           "characterize noise-export");
+      l.push_back(
+          "not certain: the model key is written as OpenVINS's example configs write it; "
+          "whether your OpenVINS version takes the imu model from it or from "
+          "estimator_config.yaml was not verified");
       break;
     case InterchangeFormat::kBasalt:
       l.push_back(
