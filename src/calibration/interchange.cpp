@@ -358,7 +358,8 @@ Result<InterchangeExport> ExportInterchange(const Calibration& calibration,
   const FramedForms body = BodyForms(p, p.theta);
   const FramedForms framed = ToFormatFrame(format, body, &e.body_from_format);
   const Eigen::VectorXd v = ii::ValuesFromForms(format, framed);
-  e.values = ii::Layout(format, options.instance);
+  // realsense: the file holds one imu, imus[0].
+  e.values = ii::Layout(format, format == InterchangeFormat::kRealSense ? 0 : options.instance);
   for (size_t i = 0; i < e.values.size(); ++i) e.values[i].value = v(static_cast<Eigen::Index>(i));
   // JCGM 102:2011 6.2.1.3: U_v = C U_theta C^T with C the sensitivity matrix df/dtheta.
   const Eigen::MatrixXd jac = ii::NumericJacobian(values_at, p.theta, Steps(p.theta, p.u));
