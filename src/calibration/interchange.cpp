@@ -130,8 +130,9 @@ std::vector<std::string> ConventionLines(InterchangeFormat format, const Interch
       break;
     case InterchangeFormat::kOpenVins:
       l.push_back(
-          "OpenVINS kalibr_imu_chain.yaml, imu model kalibr (OpenVINS docs 'IMU "
-          "Intrinsic Models'): w_I = R_IMUtoGYRO^T Tw^-1 (w_m - Tg a_I - b_g); a_I = "
+          "OpenVINS kalibr_imu_chain.yaml, imu model kalibr (OpenVINS "
+          "docs/propagation-analytical.dox, "
+          "'IMU Intrinsic Models'): w_I = R_IMUtoGYRO^T Tw^-1 (w_m - Tg a_I - b_g); a_I = "
           "R_IMUtoACC^T Ta^-1 (a_m - b_a); Tw, Ta lower triangular; SI units");
       l.push_back(
           "Tg = 0: metro does not model g-sensitivity; b_g, b_a are the filter's states "

@@ -17,9 +17,10 @@
 //   M_a (`accelerometers: M`) and M_g (`gyroscopes: M`) lower triangular (the design variables'
 //   pattern [[1,0,0],[1,1,0],[1,1,1]]), C_gyro_i a rotation, A [(rad/s)/(m/s^2)] the
 //   g-sensitivity. b_a, b_g are Kalibr's bias states (splines), not in the file.
-// openvins: OpenVINS's kalibr_imu_chain.yaml with `model: kalibr` (OpenVINS docs "IMU Intrinsic
-//   Models"; ov_msckf VioManagerOptions.h reads Tw, Ta, R_IMUtoGYRO, R_IMUtoACC, Tg and takes
-//   Dw = Tw^-1, Da = Ta^-1, R_GYROtoIMU = R_IMUtoGYRO^T, R_ACCtoIMU = R_IMUtoACC^T):
+// openvins: OpenVINS's kalibr_imu_chain.yaml with `model: kalibr` (OpenVINS
+//   docs/propagation-analytical.dox "IMU Intrinsic Models"; ov_msckf VioManagerOptions.h reads
+//   Tw, Ta, R_IMUtoGYRO, R_IMUtoACC, Tg and takes Dw = Tw^-1, Da = Ta^-1,
+//   R_GYROtoIMU = R_IMUtoGYRO^T, R_ACCtoIMU = R_IMUtoACC^T):
 //     w_I = R_IMUtoGYRO^T Tw^-1 (w_m - Tg a_I - b_g)
 //     a_I = R_IMUtoACC^T  Ta^-1 (a_m - b_a)
 //   kalibr model: Tw, Ta lower triangular, R_IMUtoACC = I (rpng model: upper triangular,
