@@ -449,6 +449,39 @@ TEST_CASE("Interchange: the sidecar carries the covariance back through the impo
         Approx(cal.tags[0].gyro->misalignment_u[0]).epsilon(1e-6));
 }
 
+TEST_CASE("Interchange: a sidecar that belongs to another export is refused at its position",
+          "[calibration][interchange]") {
+  const Calibration cal = Cal(ModelKind::kFull, ModelKind::kFull, "m/s^2", "rad/s");
+  InterchangeExportOptions o;
+  o.format = InterchangeFormat::kBasalt;
+  o.sensor = 3;
+  const Result<InterchangeExport> e = ExportInterchange(cal, o);
+  REQUIRE(e.ok());
+  InterchangeReadOptions ro;
+  ro.format = InterchangeFormat::kBasalt;
+  Result<InterchangeFile> f = ReadInterchangeFile(e.value().text, ro, "c.json");
+  REQUIRE(f.ok());
+  InterchangeImportOptions io;
+  io.sidecar_text = InterchangeSidecarJson(e.value(), "c.json", "cal.json", 3);
+  io.sidecar_file = "c.json.covariance.json";
+  // The file edited after the export: its first value no longer the sidecar's.
+  f.value().values[0].value += 1e-6;
+  Result<InterchangeImport> r = ImportInterchange(f.value(), io);
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().ToString(), Catch::StartsWith("c.json.covariance.json:"));
+  CHECK_THAT(r.error().ToString(), Catch::Contains("values[0].value: expected"));
+  CHECK_THAT(r.error().ToString(), Catch::Contains("the sidecar belongs to another export"));
+  // Another format's sidecar.
+  o.format = ro.format = InterchangeFormat::kRealSense;
+  const Result<InterchangeExport> rs = ExportInterchange(cal, o);
+  REQUIRE(rs.ok());
+  f = ReadInterchangeFile(rs.value().text, ro, "c.json");
+  REQUIRE(f.ok());
+  r = ImportInterchange(f.value(), io);
+  REQUIRE_FALSE(r.ok());
+  CHECK_THAT(r.error().ToString(), Catch::Contains("format: expected \"realsense\""));
+}
+
 InterchangeFile Read(const std::string& text, InterchangeFormat fmt, Error* error = nullptr) {
   InterchangeReadOptions o;
   o.format = fmt;
