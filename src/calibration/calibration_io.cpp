@@ -74,6 +74,12 @@ namespace {
 void ReportSensor(const SensorCalibration& c, std::string* out) {
   const SensorModel& m = c.model;
   const char* axes = "xyz";
+  // An import without its covariance (interchange.hpp): the zeros are placeholders.
+  const bool u_unknown =
+      c.model_check && c.model_check->selection == "imported" && c.model_check->model_rejected;
+  const auto value_u = [u_unknown](double v, double u) {
+    return u_unknown ? fmt::format("{:.7g} (u unknown)", v) : ValueU(v, u);
+  };
   *out += fmt::format("  {}: model {}, {} -> {}\n", ImuSensorName(m.sensor), ModelKindName(m.kind),
                       m.input_unit, m.output_unit);
   *out += fmt::format(
@@ -82,21 +88,21 @@ void ReportSensor(const SensorCalibration& c, std::string* out) {
       c.coverage_factor_95, c.dof);
   for (int a = 0; a < 3; ++a) {
     *out += fmt::format("    b_{}  = {} {}    k_{} = {} {}/{}\n", axes[a],
-                        ValueU(m.bias[a], c.bias_u[a]), m.input_unit, axes[a],
-                        ValueU(m.scale[a], c.scale_u[a]), m.output_unit, m.input_unit);
+                        value_u(m.bias[a], c.bias_u[a]), m.input_unit, axes[a],
+                        value_u(m.scale[a], c.scale_u[a]), m.output_unit, m.input_unit);
   }
   const char* const acc_names[] = {"a_yz", "a_zy", "a_zx"};
   const char* const gyr_names[] = {"g_yz", "g_zy", "g_xz", "g_zx", "g_xy", "g_yx"};
   const char* const* names = m.sensor == ImuSensor::kAccel ? acc_names : gyr_names;
   for (size_t i = 0; i < m.misalignment.size(); ++i) {
     const double u = i < c.misalignment_u.size() ? c.misalignment_u[i] : 0.0;
-    *out += fmt::format("    {} = {} rad\n", names[i], ValueU(m.misalignment[i], u));
+    *out += fmt::format("    {} = {} rad\n", names[i], value_u(m.misalignment[i], u));
   }
   if (m.has_temperature) {
     *out += fmt::format("    temperature: t_ref = {:.2f} degC\n", m.t_ref_c);
     for (int a = 0; a < 3; ++a) {
       *out += fmt::format("    b1_{} = {} {}/degC\n", axes[a],
-                          ValueU(m.bias_per_c[a], c.bias_per_c_u[a]), m.input_unit);
+                          value_u(m.bias_per_c[a], c.bias_per_c_u[a]), m.input_unit);
     }
   }
   const Eigen::Matrix3d mm = c.M();

@@ -30,7 +30,7 @@ TEST_CASE("calibrate export writes PX4 and ArduPilot parameters and names what t
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.out, Catch::Contains("1\t1\tCAL_ACC0_ID\t2490378\t6"));
   CHECK_THAT(r.out, Catch::Contains("CAL_GYRO0_ID not written"));
-  r = Calibrate("export " + fit + " --to kalibr --sensor 2 -o -");
+  r = Calibrate("export " + fit + " --to vins --sensor 2 -o -");
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.err, Catch::Contains("expected px4 or ardupilot"));
   r = Calibrate("export " + fit + " --to px4 --sensor 9 -o -");
