@@ -13,6 +13,9 @@ namespace metro {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// Standard gravity (CGPM 1901, exact), the g of every ug and mg figure (the same value as
+// calibration/imu_model.hpp's, which this layer may not include).
+constexpr double kG0 = 9.80665;
 
 struct UnitRow {
   const char* unit;
@@ -25,15 +28,15 @@ const UnitRow kUnits[] = {
     {"mdps/sqrt(Hz)", kPi / 180.0e3, "rad/s/sqrt(Hz)"},
     {"rad/s/sqrt(Hz)", 1.0, "rad/s/sqrt(Hz)"},
     {"deg/sqrt(h)", kPi / 180.0 / 60.0, "rad/s/sqrt(Hz)"},
-    {"ug/sqrt(Hz)", 1e-6 * kStandardGravityMps2, "m/s^2/sqrt(Hz)"},
-    {"mg/sqrt(Hz)", 1e-3 * kStandardGravityMps2, "m/s^2/sqrt(Hz)"},
+    {"ug/sqrt(Hz)", 1e-6 * kG0, "m/s^2/sqrt(Hz)"},
+    {"mg/sqrt(Hz)", 1e-3 * kG0, "m/s^2/sqrt(Hz)"},
     {"m/s^2/sqrt(Hz)", 1.0, "m/s^2/sqrt(Hz)"},
     {"m/s/sqrt(h)", 1.0 / 60.0, "m/s^2/sqrt(Hz)"},
     {"deg/h", kPi / 180.0 / 3600.0, "rad/s"},
     {"deg/s", kPi / 180.0, "rad/s"},
     {"rad/s", 1.0, "rad/s"},
-    {"ug", 1e-6 * kStandardGravityMps2, "m/s^2"},
-    {"mg", 1e-3 * kStandardGravityMps2, "m/s^2"},
+    {"ug", 1e-6 * kG0, "m/s^2"},
+    {"mg", 1e-3 * kG0, "m/s^2"},
     {"m/s^2", 1.0, "m/s^2"},
     {"rad/s^2/sqrt(Hz)", 1.0, "rad/s^2/sqrt(Hz)"},
     {"m/s^3/sqrt(Hz)", 1.0, "m/s^3/sqrt(Hz)"},

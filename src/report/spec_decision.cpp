@@ -66,7 +66,12 @@ std::string DocumentLine(const SpecPart& part, const SpecFigure& f) {
 
 SpecDecisionRow JudgeAxis(const SpecPart& part, const NoiseExportAxis& axis, SensorKind sensor,
                           const SpecFigure& f, double to_si, const SpecDecisionOptions& o) {
-  SpecDecisionRow r{axis.quantity, sensor, f.term(), f, DocumentLine(part, f)};
+  SpecDecisionRow r;
+  r.quantity = axis.quantity;
+  r.sensor = sensor;
+  r.term = f.term();
+  r.figure = f;
+  r.document = DocumentLine(part, f);
   Result<std::pair<double, double>> m = MeasuredSi(axis, f.term(), to_si);
   if (!m.ok()) {
     r.note = "not resolved by the record: " + m.error().message + "; nothing filled in";
@@ -107,7 +112,12 @@ Result<SpecDecisions> DecideAgainstSpec(const NoiseExportInput& input, const Spe
                                  "--spec-part); see datasets/specs/SOURCE.md",
                                  library_file, part.part));
   }
-  SpecDecisions out{part.part, library_file, o.rule, o.coverage_factor, o.max_consumer_risk, {}};
+  SpecDecisions out;
+  out.part = part.part;
+  out.library = library_file;
+  out.rule = o.rule;
+  out.coverage_factor = o.coverage_factor;
+  out.max_consumer_risk = o.max_consumer_risk;
   for (SensorKind sensor : {SensorKind::kAccelerometer, SensorKind::kGyroscope}) {
     const char* target = sensor == SensorKind::kGyroscope ? "rad/s" : "m/s^2";
     std::vector<const NoiseExportAxis*> axes;

@@ -42,9 +42,6 @@
 
 namespace metro {
 
-// Standard gravity (CGPM 1901, exact), the g of every ug and mg figure.
-inline constexpr double kStandardGravityMps2 = 9.80665;
-
 enum class SpecConvention {
   kOneSidedDensity,
   kRandomWalkCoefficient,
