@@ -319,7 +319,7 @@ int RunAnalyze(const AnalyzeOptions& o) {
     PrintErrorText("--allan produced no curve for any quantity (reasons above and in the report)");
     return kExitFailed;
   }
-  if (analysis.report.spec) PrintText(stderr, SpecDecisionsTable(*analysis.report.spec));
+  if (analysis.report.spec) Note(SpecDecisionsTable(*analysis.report.spec));
   if (spec_error) return PrintErrorExit(*spec_error);
   if (export_error) {
     return PrintErrorExit(

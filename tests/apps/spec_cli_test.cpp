@@ -46,7 +46,7 @@ TEST_CASE("--spec-part judges N against the MPU-6050's typ densities", "[apps][s
   testing::TempFile session(TypicalMpu6050Session());
   const std::string report = dir.path() + "r.json";
   testing::ProgramRun r =
-      Characterize(session.path() + " --allan --spec-part mpu-6050 -o " + report + " --quiet");
+      Characterize(session.path() + " --allan --spec-part mpu-6050 -o " + report);
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.err, Catch::Contains("typ is not a specification limit"));

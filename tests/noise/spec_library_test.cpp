@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "metro/noise/noise_config_reader.hpp"
@@ -127,15 +128,15 @@ TEST_CASE("datasheet -> Kalibr: N = d/sqrt(2) in SI, K refused by name", "[specs
 
 // A one-part library with `figure` as its only figure.
 std::string OnePart(const std::string& figure) {
-  return R"({"schema": "metro.specs/1", "parts": [{"part": "X1", "names": [],
+  return R"j({"schema": "metro.specs/1", "parts": [{"part": "X1", "names": [],
   "manufacturer": "m", "documents": [{"id": "ds", "title": "t", "number": "n",
-  "revision": "1", "read_at": "here"}], "figures": [)" +
+  "revision": "1", "read_at": "here"}], "figures": [)j" +
          figure + "]}]}";
 }
 
 const std::string kGood =
-    R"({"source": "ds", "sensor": "gyroscope", "convention": "one_sided_density", "kind": "max",
-  "value": 0.01, "unit": "deg/s/sqrt(Hz)", "printed": "0.01", "page": "1", "table": "T"})";
+    R"j({"source": "ds", "sensor": "gyroscope", "convention": "one_sided_density", "kind": "max",
+  "value": 0.01, "unit": "deg/s/sqrt(Hz)", "printed": "0.01", "page": "1", "table": "T"})j";
 
 std::string Replace(std::string s, const std::string& from, const std::string& to) {
   s.replace(s.find(from), from.size(), to);

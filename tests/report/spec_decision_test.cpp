@@ -32,15 +32,15 @@ NoiseExportInput Record() {
 }
 
 SpecPart Part(const std::string& n_kind, const std::string& b_kind) {
-  const std::string text = R"({"schema": "metro.specs/1", "parts": [{"part": "X1", "names": [],
+  const std::string text = R"j({"schema": "metro.specs/1", "parts": [{"part": "X1", "names": [],
   "manufacturer": "m", "documents": [{"id": "ds", "title": "t", "number": "DS-1",
   "revision": "2", "read_at": "here"}], "figures": [
-  {"source": "ds", "sensor": "gyroscope", "convention": "one_sided_density", "kind": ")" +
-                           n_kind + R"(", "value": 0.006, "unit": "deg/s/sqrt(Hz)",
+  {"source": "ds", "sensor": "gyroscope", "convention": "one_sided_density", "kind": ")j" +
+                           n_kind + R"j(", "value": 0.006, "unit": "deg/s/sqrt(Hz)",
    "printed": "0.006", "page": "3", "table": "T1"},
-  {"source": "ds", "sensor": "gyroscope", "convention": "allan_minimum", "kind": ")" + b_kind +
-                           R"(", "value": 10, "unit": "deg/h", "printed": "10 °/hr", "page": "3",
-   "table": "T1"}]}]})";
+  {"source": "ds", "sensor": "gyroscope", "convention": "allan_minimum", "kind": ")j" + b_kind +
+                           R"j(", "value": 10, "unit": "deg/h", "printed": "10 °/hr", "page": "3",
+   "table": "T1"}]}]})j";
   Result<SpecLibrary> lib = ParseSpecLibrary(text, "test.json");
   REQUIRE(lib.ok());
   return lib.value().parts.front();
