@@ -120,9 +120,29 @@ Result<SpecDecisions> DecideAgainstSpec(const NoiseExportInput& input, const Spe
   out.max_consumer_risk = o.max_consumer_risk;
   for (SensorKind sensor : {SensorKind::kAccelerometer, SensorKind::kGyroscope}) {
     const char* target = sensor == SensorKind::kGyroscope ? "rad/s" : "m/s^2";
-    std::vector<const NoiseExportAxis*> axes;
+    // The axes with an SI scale, one quantity per axis (a session's raw `_lsb` columns beside
+    // the scaled ones are skipped); an error only when the sensor has none.
+    std::vector<std::pair<const NoiseExportAxis*, double>> axes;
+    std::string unscaled;
     for (const NoiseExportAxis& a : input.axes) {
-      if (ClassifyColumn(a.quantity).sensor == sensor) axes.push_back(&a);
+      const ColumnInfo info = ClassifyColumn(a.quantity);
+      if (info.sensor != sensor) continue;
+      const Unit* unit = UnitBySymbol(a.unit);
+      const std::optional<double> to_si =
+          unit != nullptr ? ConversionFactor(*unit, *UnitBySymbol(target)) : std::nullopt;
+      if (!to_si) {
+        unscaled = fmt::format("{} is in {}", a.quantity, a.unit.empty() ? "no unit" : a.unit);
+        continue;
+      }
+      if (std::none_of(axes.begin(), axes.end(), [&](const auto& p) {
+            return ClassifyColumn(p.first->quantity).axis == info.axis;
+          })) {
+        axes.push_back({&a, *to_si});
+      }
+    }
+    if (axes.empty() && !unscaled.empty()) {
+      return MakeError(
+          fmt::format("{}: a datasheet figure needs an SI scale ({})", unscaled, target));
     }
     if (axes.empty()) continue;
     for (NoiseTerm term :
@@ -138,17 +158,7 @@ Result<SpecDecisions> DecideAgainstSpec(const NoiseExportInput& input, const Spe
         out.rows.push_back(std::move(r));
         continue;
       }
-      for (const NoiseExportAxis* a : axes) {
-        const Unit* unit = UnitBySymbol(a->unit);
-        const std::optional<double> to_si =
-            unit != nullptr ? ConversionFactor(*unit, *UnitBySymbol(target)) : std::nullopt;
-        if (!to_si) {
-          return MakeError(fmt::format("{} is in {}: a datasheet figure needs an SI scale ({})",
-                                       a->quantity, a->unit.empty() ? "no unit" : a->unit,
-                                       target));
-        }
-        out.rows.push_back(JudgeAxis(part, *a, sensor, *f, *to_si, o));
-      }
+      for (const auto& [a, to_si] : axes) out.rows.push_back(JudgeAxis(part, *a, sensor, *f, to_si, o));
     }
   }
   if (out.rows.empty()) {

@@ -96,6 +96,23 @@ TEST_CASE("a max figure is a limit: JCGM 106 guarded decision with p_c", "[specs
   CHECK(t.value().rows[0].conformity->decision == ConformityDecision::kFail);
 }
 
+TEST_CASE("raw LSB columns beside scaled ones are skipped, alone refused", "[specs]") {
+  NoiseExportInput in = Record();
+  NoiseExportAxis raw = in.axes.front();
+  raw.quantity = "gx_lsb";
+  raw.unit = "LSB";
+  in.axes.insert(in.axes.begin(), raw);
+  Result<SpecDecisions> d = DecideAgainstSpec(in, Part("typ", "typ"), "test.json", {});
+  REQUIRE(d.ok());
+  REQUIRE(d.value().rows.size() == 3);
+  CHECK(d.value().rows[0].quantity == "gx_dps");
+  in.axes.pop_back();  // Only the LSB column left.
+  d = DecideAgainstSpec(in, Part("typ", "typ"), "test.json", {});
+  REQUIRE_FALSE(d.ok());
+  CHECK_THAT(d.error().message,
+             Catch::Contains("gx_lsb is in LSB: a datasheet figure needs an SI scale (rad/s)"));
+}
+
 TEST_CASE("a part with only published configurations is not a datasheet", "[specs]") {
   SpecPart p = Part("typ", "typ");
   for (SpecFigure& f : p.figures) f.kind = SpecKind::kConfig;
