@@ -20,8 +20,8 @@ const metro::NoiseExportInput& Record() {
     metro::NoiseExportInput r;
     r.source = "fuzz";
     for (char axis : {'x', 'y', 'z'}) {
-      for (auto [name, unit, n, k] : {std::tuple{"a", "m/s^2", 2e-3, 3e-3},
-                                     std::tuple{"g", "rad/s", 1.7e-4, 2e-5}}) {
+      for (auto [name, unit, n, k] :
+           {std::tuple{"a", "m/s^2", 2e-3, 3e-3}, std::tuple{"g", "rad/s", 1.7e-4, 2e-5}}) {
         metro::NoiseExportAxis a;
         a.quantity = std::string(name) + axis + (unit[0] == 'm' ? "_mps2" : "_rads");
         a.unit = unit;

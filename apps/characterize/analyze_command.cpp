@@ -157,7 +157,8 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
     return MakeError("--axis-reduction needs --export");
   }
   for (const char* name : {"--spec-library", "--spec-rule"}) {
-    if (given(name) && !given("--spec-part")) return MakeError(fmt::format("{} needs --spec-part", name));
+    if (given(name) && !given("--spec-part"))
+      return MakeError(fmt::format("{} needs --spec-part", name));
   }
   return {};
 }
@@ -186,7 +187,8 @@ Result<SpecDecisions> SpecDecisionsOf(const SessionAnalysis& analysis, const Spe
   if (!part.ok()) return part.error();
   std::optional<int64_t> sensor;
   if (o.analysis.sensors.size() == 1) sensor = o.analysis.sensors.front();
-  Result<NoiseExportInput> input = NoiseExportInputFromReport(analysis.report, "the report", sensor);
+  Result<NoiseExportInput> input =
+      NoiseExportInputFromReport(analysis.report, "the report", sensor);
   if (!input.ok()) return input.error();
   SpecDecisionOptions options;
   options.rule = *ParseDecisionRule(o.spec_rule);

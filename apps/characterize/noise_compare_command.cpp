@@ -44,9 +44,9 @@ int RunSpecCompare(const NoiseCompareOptions& o) {
 int RunNoiseCompare(const NoiseCompareOptions& o) {
   if (!o.spec_part.empty()) return RunSpecCompare(o);
   if (o.file.empty() || o.common.report.empty()) {
-    return PrintErrorExit(MakeError(
-        "expected FILE REPORT.json (a noise file and a report made with --allan), or "
-        "--spec-part PART"));
+    return PrintErrorExit(
+        MakeError("expected FILE REPORT.json (a noise file and a report made with --allan), or "
+                  "--spec-part PART"));
   }
   Result<std::string> text = ReadFile(o.file);
   if (!text.ok()) return PrintErrorExit(text.error());

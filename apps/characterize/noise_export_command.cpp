@@ -48,7 +48,8 @@ int RunSpecExport(const NoiseExportCommandOptions& o) {
 int RunNoiseExport(const NoiseExportCommandOptions& o) {
   if (!o.from_spec.empty()) return RunSpecExport(o);
   if (o.common.report.empty()) {
-    return PrintErrorExit(MakeError("expected REPORT.json (made with --allan), or --from-spec PART"));
+    return PrintErrorExit(
+        MakeError("expected REPORT.json (made with --allan), or --from-spec PART"));
   }
   if (Status s = CheckOutputs({{"-o", o.output}}, {{"REPORT", o.common.report}}); !s.ok()) {
     return PrintErrorExit(s.error());

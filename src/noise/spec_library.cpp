@@ -171,9 +171,11 @@ SpecPart ReadPart(const JsonCursor& c, const JsonDocument& doc, size_t index) {
   const JsonCursor figs = c["figures"];
   if (!figs.IsArray()) figs.Fail("an array of figures");
   for (size_t i = 0; i < figs.Size() && c.ok(); ++i) {
-    SpecFigure f = ReadFigure(figs[i], doc, {std::string("parts"), index, std::string("figures"), i});
+    SpecFigure f =
+        ReadFigure(figs[i], doc, {std::string("parts"), index, std::string("figures"), i});
     if (c.ok() && p.Document(f.source) == nullptr) {
-      figs[i]["source"].Fail(fmt::format("the id of one of {}'s documents, not '{}'", p.part, f.source));
+      figs[i]["source"].Fail(
+          fmt::format("the id of one of {}'s documents, not '{}'", p.part, f.source));
     }
     p.figures.push_back(std::move(f));
   }
@@ -226,13 +228,13 @@ Result<double> KalibrDensity(const SpecPart& part, const std::string& source, Se
                                  SensorName(sensor)));
   }
   const double n = f->CoefficientSi();
-  *note = fmt::format(
-      "# {}: {} = {} ({}, {}, page {}, {}{}) -> {} x {:.12g}{} = {:.12g} {}\n",
-      KalibrKey(sensor, NoiseTerm::kRandomWalk), f->printed, f->value, SpecKindName(f->kind),
-      SpecConventionName(f->convention), f->page, f->table,
-      f->conditions.empty() ? "" : ", " + f->conditions, f->unit, SpecUnitOf(f->unit)->si_factor,
-      f->convention == SpecConvention::kOneSidedDensity ? " / sqrt(2)" : "", n,
-      SpecUnitOf(f->unit)->si_unit);
+  *note = fmt::format("# {}: {} = {} ({}, {}, page {}, {}{}) -> {} x {:.12g}{} = {:.12g} {}\n",
+                      KalibrKey(sensor, NoiseTerm::kRandomWalk), f->printed, f->value,
+                      SpecKindName(f->kind), SpecConventionName(f->convention), f->page, f->table,
+                      f->conditions.empty() ? "" : ", " + f->conditions, f->unit,
+                      SpecUnitOf(f->unit)->si_factor,
+                      f->convention == SpecConvention::kOneSidedDensity ? " / sqrt(2)" : "", n,
+                      SpecUnitOf(f->unit)->si_unit);
   return n;
 }
 
@@ -367,9 +369,10 @@ Result<std::string> SpecSourcesTable(const SpecPart& part, const std::string& re
     return MakeError(fmt::format("--reference {}: not a document of {} ({})", ref, part.part, ids));
   }
   const size_t r = static_cast<size_t>(ref_it - part.documents.begin());
-  std::string s = fmt::format("{}: published noise figures as IEEE 952 coefficients in SI "
-                              "(N = d/sqrt(2) for a one-sided density), ratio to {}\n",
-                              part.part, ref);
+  std::string s = fmt::format(
+      "{}: published noise figures as IEEE 952 coefficients in SI "
+      "(N = d/sqrt(2) for a one-sided density), ratio to {}\n",
+      part.part, ref);
   for (const SpecDocument& d : part.documents) {
     s += fmt::format("  {}: {}, {} rev. {}\n", d.id, d.title, d.number, d.revision);
   }
@@ -383,7 +386,8 @@ Result<std::string> SpecSourcesTable(const SpecPart& part, const std::string& re
       if (!v.value) {
         s += fmt::format("  {:<24} {:>14}\n", v.source, "-");
       } else if (base && *base > 0.0) {
-        s += fmt::format("  {:<24} {:>14.6g}  ratio {:.4g}\n", v.source, *v.value, *v.value / *base);
+        s +=
+            fmt::format("  {:<24} {:>14.6g}  ratio {:.4g}\n", v.source, *v.value, *v.value / *base);
       } else {
         s += fmt::format("  {:<24} {:>14.6g}\n", v.source, *v.value);
       }
@@ -431,9 +435,10 @@ Result<std::string> SpecToKalibrYaml(const SpecPart& part, const SpecToKalibrOpt
       "of the Allan deviation, not a random walk, and metro does not derive K from it",
       part.part, doc->number, doc->revision);
   if (!missing.empty() && !o.partial) {
-    return MakeError(fmt::format("{}: refused: {}; measure K (characterize SESSION --allan, "
-                                 "then noise-export) or write the file without it (--partial)",
-                                 fmt::join(missing, ", "), why));
+    return MakeError(
+        fmt::format("{}: refused: {}; measure K (characterize SESSION --allan, "
+                    "then noise-export) or write the file without it (--partial)",
+                    fmt::join(missing, ", "), why));
   }
   std::string s = fmt::format(
       "# Kalibr imu.yaml from a datasheet, written by metro (characterize noise-export "
@@ -443,18 +448,21 @@ Result<std::string> SpecToKalibrYaml(const SpecPart& part, const SpecToKalibrOpt
       "section 5);\n# deg = pi/180 rad; ug = 1e-6 x 9.80665 m/s^2 (standard gravity); the "
       "figure holds for every axis;\n# a typ figure describes a typical part, not this one; "
       "update_rate and rostopic are the user's.\n",
-      part.part, doc->title, doc->number, doc->revision,
-      doc->date.empty() ? "" : ", " + doc->date, part.manufacturer, doc->read_at, library_file);
+      part.part, doc->title, doc->number, doc->revision, doc->date.empty() ? "" : ", " + doc->date,
+      part.manufacturer, doc->read_at, library_file);
   s += notes[0] + notes[1];
   if (!missing.empty()) {
-    s += fmt::format("# NOT WRITTEN: {}: {}.\n# Kalibr needs them: this file is incomplete "
-                     "(--partial).\n",
-                     fmt::join(missing, ", "), why);
+    s += fmt::format(
+        "# NOT WRITTEN: {}: {}.\n# Kalibr needs them: this file is incomplete "
+        "(--partial).\n",
+        fmt::join(missing, ", "), why);
   }
   s += fmt::format("accelerometer_noise_density: {:.17g}\n", acc.value());
-  if (k_acc != nullptr) s += fmt::format("accelerometer_random_walk: {:.17g}\n", k_acc->CoefficientSi());
+  if (k_acc != nullptr)
+    s += fmt::format("accelerometer_random_walk: {:.17g}\n", k_acc->CoefficientSi());
   s += fmt::format("gyroscope_noise_density: {:.17g}\n", gyr.value());
-  if (k_gyr != nullptr) s += fmt::format("gyroscope_random_walk: {:.17g}\n", k_gyr->CoefficientSi());
+  if (k_gyr != nullptr)
+    s += fmt::format("gyroscope_random_walk: {:.17g}\n", k_gyr->CoefficientSi());
   s += fmt::format("rostopic: {}\nupdate_rate: {:.17g}\n", o.rostopic, o.update_rate_hz);
   return s;
 }

@@ -35,14 +35,14 @@ const SpecFigure* DatasheetFigure(const SpecPart& part, SensorKind sensor, Noise
 // The measured coefficient of `term` in SI (N, the Allan minimum for B, K) with its u, or why
 // there is none.
 Result<std::pair<double, double>> MeasuredSi(const NoiseExportAxis& axis, NoiseTerm term,
-                                            double to_si) {
+                                             double to_si) {
   const AllanReport& a = axis.allan;
   if (!a.ok()) return MakeError("the Allan analysis failed: " + a.error);
   if (term == NoiseTerm::kBiasInstability) {
     // The datasheet's "in-run bias stability" is the curve's minimum, not the fitted B.
     if (a.adev.empty()) return MakeError("no Allan curve");
-    const size_t i = static_cast<size_t>(std::min_element(a.adev.begin(), a.adev.end()) -
-                                         a.adev.begin());
+    const size_t i =
+        static_cast<size_t>(std::min_element(a.adev.begin(), a.adev.end()) - a.adev.begin());
     const double z = TwoSidedNormalQuantile(a.confidence);
     const double u = (a.ci_high[i] - a.ci_low[i]) / (2.0 * z);
     if (!std::isfinite(u)) return MakeError("the Allan minimum has no confidence interval");
@@ -93,9 +93,10 @@ SpecDecisionRow JudgeAxis(const SpecPart& part, const NoiseExportAxis& axis, Sen
                                     lower, upper, o.rule, o.coverage_factor, o.max_consumer_risk);
     r.conformity->unit = f.unit;
   } else {
-    r.note = fmt::format("{} is not a specification limit: ratio and E_n only, no conformity "
-                         "decision",
-                         SpecKindName(f.kind));
+    r.note = fmt::format(
+        "{} is not a specification limit: ratio and E_n only, no conformity "
+        "decision",
+        SpecKindName(f.kind));
   }
   return r;
 }
@@ -107,10 +108,11 @@ Result<SpecDecisions> DecideAgainstSpec(const NoiseExportInput& input, const Spe
                                         const SpecDecisionOptions& o) {
   if (std::none_of(part.figures.begin(), part.figures.end(),
                    [](const SpecFigure& f) { return f.kind != SpecKind::kConfig; })) {
-    return MakeError(fmt::format("{}: the spec library holds no datasheet figure of {} (only "
-                                 "published configurations: compare them with noise-compare "
-                                 "--spec-part); see datasets/specs/SOURCE.md",
-                                 library_file, part.part));
+    return MakeError(
+        fmt::format("{}: the spec library holds no datasheet figure of {} (only "
+                    "published configurations: compare them with noise-compare "
+                    "--spec-part); see datasets/specs/SOURCE.md",
+                    library_file, part.part));
   }
   SpecDecisions out;
   out.part = part.part;
@@ -158,7 +160,8 @@ Result<SpecDecisions> DecideAgainstSpec(const NoiseExportInput& input, const Spe
         out.rows.push_back(std::move(r));
         continue;
       }
-      for (const auto& [a, to_si] : axes) out.rows.push_back(JudgeAxis(part, *a, sensor, *f, to_si, o));
+      for (const auto& [a, to_si] : axes)
+        out.rows.push_back(JudgeAxis(part, *a, sensor, *f, to_si, o));
     }
   }
   if (out.rows.empty()) {
@@ -177,13 +180,14 @@ std::string SpecDecisionsTable(const SpecDecisions& d) {
       continue;
     }
     const std::string decision =
-        r.conformity ? fmt::format("{} (p_c {:.3f})", ConformityDecisionName(r.conformity->decision),
-                                   r.conformity->p_conformance)
-                     : r.note;
-    s += fmt::format("{:<10} {:<2} {:>8.4g} {:<3} {:<18} {:>12.4g} {:>9.2g} {:>8.4g} {:>7.3g}  {}\n",
-                     r.quantity, TermSymbol(r.term), r.figure->value,
-                     SpecKindName(r.figure->kind), r.figure->unit, r.measured, r.u, r.ratio,
-                     r.e_n, decision);
+        r.conformity
+            ? fmt::format("{} (p_c {:.3f})", ConformityDecisionName(r.conformity->decision),
+                          r.conformity->p_conformance)
+            : r.note;
+    s +=
+        fmt::format("{:<10} {:<2} {:>8.4g} {:<3} {:<18} {:>12.4g} {:>9.2g} {:>8.4g} {:>7.3g}  {}\n",
+                    r.quantity, TermSymbol(r.term), r.figure->value, SpecKindName(r.figure->kind),
+                    r.figure->unit, r.measured, r.u, r.ratio, r.e_n, decision);
   }
   ConformityStatement rule{d.rule, d.coverage_factor, d.max_consumer_risk, {}};
   s += fmt::format(
@@ -198,15 +202,19 @@ nlohmann::ordered_json SpecDecisionsJson(const SpecDecisions& d) {
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   for (const SpecDecisionRow& r : d.rows) {
     nlohmann::ordered_json j;
-    j["quantity"] = r.quantity.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(r.quantity);
+    j["quantity"] =
+        r.quantity.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(r.quantity);
     j["sensor"] = r.sensor == SensorKind::kGyroscope ? "gyroscope" : "accelerometer";
     j["term"] = NoiseTermKey(r.term);
     if (r.figure) {
       const SpecFigure& f = *r.figure;
-      j["figure"] = {{"value", f.value},         {"unit", f.unit},
-                     {"printed", f.printed},     {"kind", SpecKindName(f.kind)},
+      j["figure"] = {{"value", f.value},
+                     {"unit", f.unit},
+                     {"printed", f.printed},
+                     {"kind", SpecKindName(f.kind)},
                      {"convention", SpecConventionName(f.convention)},
-                     {"document", r.document},   {"table", f.table},
+                     {"document", r.document},
+                     {"table", f.table},
                      {"conditions", f.conditions}};
       j["measured"] = r.measured;
       j["u"] = r.u;

@@ -37,7 +37,8 @@ std::string TypicalMpu6050Session() {
   const std::vector<double> a = testing::KalibrImuRate(n, dt, 400e-6 / std::sqrt(2.0), 1e-9, 71);
   const std::vector<double> g = testing::KalibrImuRate(n, dt, 0.005 / std::sqrt(2.0), 1e-9, 72);
   std::string csv = "t_s,sensor,az_g,gx_dps\n";
-  for (size_t k = 0; k < n; ++k) csv += fmt::format("{:.2f},1,{:.9e},{:.9e}\n", k * dt, 1.0 + a[k], g[k]);
+  for (size_t k = 0; k < n; ++k)
+    csv += fmt::format("{:.2f},1,{:.9e},{:.9e}\n", k * dt, 1.0 + a[k], g[k]);
   return csv;
 }
 
@@ -73,6 +74,12 @@ TEST_CASE("--spec-part refusals", "[apps][specs]") {
   r = Characterize(session.path() + " --spec-part MPU6050 --quiet");
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.err, Catch::Contains("--spec-part needs --allan"));
+  // A bad library stops before the analysis, at its file:line:column.
+  testing::TempFile bad("{\"schema\": \"metro.specs/1\", \"parts\": [{\"prat\": 1}]}\n");
+  r = Characterize(session.path() + " --allan --spec-part MPU6050 --spec-library " + bad.path() +
+                   " --quiet");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains(bad.path() + ":1:48: ") && Catch::Contains("no member 'prat'"));
   // Only published configurations: the report is written, the spec decision refused.
   r = Characterize(session.path() + " --allan --spec-part ADIS16448 --quiet");
   CHECK(r.exit_code == 2);
@@ -94,8 +101,9 @@ TEST_CASE("noise-compare --spec-part ADIS16448 shows EuRoC against Kalibr", "[ap
 }
 
 TEST_CASE("noise-export --from-spec writes Kalibr's imu.yaml or refuses K", "[apps][specs]") {
-  testing::ProgramRun r = Characterize("noise-export --from-spec MPU6050 --to kalibr "
-                                       "--update-rate-hz 200");
+  testing::ProgramRun r = Characterize(
+      "noise-export --from-spec MPU6050 --to kalibr "
+      "--update-rate-hz 200");
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.err, Catch::Contains("accelerometer_random_walk, gyroscope_random_walk: refused"));
   r = Characterize("noise-export --from-spec MPU6050 --to kalibr --update-rate-hz 200 --partial");

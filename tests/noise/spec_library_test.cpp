@@ -66,8 +66,8 @@ TEST_CASE("the shipped library holds the published figures as printed", "[specs]
   CHECK(Part("ICM-42688-P").figures[0].kind == SpecKind::kUnstated);
   Result<const SpecPart*> missing = Shipped().Find("BMI999");
   REQUIRE_FALSE(missing.ok());
-  CHECK_THAT(missing.error().message, Catch::Contains("no part 'BMI999'") &&
-                                          Catch::Contains("MPU6050, MPU9250"));
+  CHECK_THAT(missing.error().message,
+             Catch::Contains("no part 'BMI999'") && Catch::Contains("MPU6050, MPU9250"));
 }
 
 TEST_CASE("ADIS16448: EuRoC's accelerometer random walk is 6.93x Kalibr's", "[specs]") {
@@ -112,7 +112,8 @@ TEST_CASE("datasheet -> Kalibr: N = d/sqrt(2) in SI, K refused by name", "[specs
   }
   CHECK(v.at("accelerometer_noise_density") ==
         Approx(400e-6 * 9.80665 / std::sqrt(2.0)).epsilon(1e-15));
-  CHECK(v.at("gyroscope_noise_density") == Approx(0.005 * kPi / 180.0 / std::sqrt(2.0)).epsilon(1e-15));
+  CHECK(v.at("gyroscope_noise_density") ==
+        Approx(0.005 * kPi / 180.0 / std::sqrt(2.0)).epsilon(1e-15));
   CHECK(v.at("update_rate") == 200.0);
   CHECK(v.count("accelerometer_random_walk") == 0);
   o.update_rate_hz = std::nan("");
@@ -168,6 +169,11 @@ TEST_CASE("spec library bad input stops at file:line:column", "[specs]") {
               "\"metro.specs/1\", not 'metro.specs/2'");
   ExpectError(Replace(good, "\"convention\": \"one_sided_density\", ", ""), "{\"source\": \"ds\"",
               "convention");
+  // The same part twice (spelled differently): at the second one's name.
+  const std::string two = Replace(good, "]}]}",
+                                  "]}, {\"part\": \"x-1\", \"names\": [], "
+                                  "\"manufacturer\": \"m\", \"documents\": [], \"figures\": []}]}");
+  ExpectError(two, "\"x-1\"", "a part named once, not 'x-1' again");
   Result<SpecLibrary> syntax = ParseSpecLibrary("{\"schema\": ", "s.json");
   REQUIRE_FALSE(syntax.ok());
   CHECK_THAT(syntax.error().ToString(), Catch::StartsWith("s.json:1:"));

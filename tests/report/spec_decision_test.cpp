@@ -38,7 +38,8 @@ SpecPart Part(const std::string& n_kind, const std::string& b_kind) {
   {"source": "ds", "sensor": "gyroscope", "convention": "one_sided_density", "kind": ")j" +
                            n_kind + R"j(", "value": 0.006, "unit": "deg/s/sqrt(Hz)",
    "printed": "0.006", "page": "3", "table": "T1"},
-  {"source": "ds", "sensor": "gyroscope", "convention": "allan_minimum", "kind": ")j" + b_kind +
+  {"source": "ds", "sensor": "gyroscope", "convention": "allan_minimum", "kind": ")j" +
+                           b_kind +
                            R"j(", "value": 10, "unit": "deg/h", "printed": "10 °/hr", "page": "3",
    "table": "T1"}]}]})j";
   Result<SpecLibrary> lib = ParseSpecLibrary(text, "test.json");

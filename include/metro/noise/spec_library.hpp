@@ -72,17 +72,17 @@ struct SpecDocument {
 };
 
 struct SpecFigure {
-  std::string source;  // SpecDocument::id.
+  std::string source;                     // SpecDocument::id.
   SensorKind sensor = SensorKind::kNone;  // kGyroscope or kAccelerometer.
   SpecConvention convention = SpecConvention::kOneSidedDensity;
   SpecKind kind = SpecKind::kTyp;
   double value = std::nan("");  // As printed, in `unit`.
   std::string unit;
-  std::string printed;     // The figure as printed, e.g. "0.005 º/s/√Hz".
-  std::string page;        // "12".
-  std::string table;       // "6.1 Gyroscope Specifications: Rate Noise Spectral Density".
-  std::string conditions;  // "at 10 Hz, FS_SEL=0".
-  std::string key;         // config figures: the file's key ("accelerometer_random_walk").
+  std::string printed;           // The figure as printed, e.g. "0.005 º/s/√Hz".
+  std::string page;              // "12".
+  std::string table;             // "6.1 Gyroscope Specifications: Rate Noise Spectral Density".
+  std::string conditions;        // "at 10 Hz, FS_SEL=0".
+  std::string key;               // config figures: the file's key ("accelerometer_random_walk").
   int64_t line = 0, column = 0;  // Where the figure is in the library (for messages).
 
   NoiseTerm term() const { return SpecConventionTerm(convention); }

@@ -36,12 +36,12 @@ struct SpecDecisionRow {
   std::string quantity;  // "gx_dps"; empty for a row about the datasheet (no figure).
   SensorKind sensor = SensorKind::kNone;
   NoiseTerm term = NoiseTerm::kRandomWalk;
-  std::optional<SpecFigure> figure;  // nullopt: the datasheet gives none.
-  std::string document;              // "PS-MPU-6000A-00 rev. 3.4 page 12".
-  double measured = std::nan("");    // In the figure's unit and convention.
-  double u = std::nan("");           // k = 1.
-  double ratio = std::nan("");       // measured / figure.
-  double e_n = std::nan("");         // (measured - figure) / (2 u).
+  std::optional<SpecFigure> figure;           // nullopt: the datasheet gives none.
+  std::string document;                       // "PS-MPU-6000A-00 rev. 3.4 page 12".
+  double measured = std::nan("");             // In the figure's unit and convention.
+  double u = std::nan("");                    // k = 1.
+  double ratio = std::nan("");                // measured / figure.
+  double e_n = std::nan("");                  // (measured - figure) / (2 u).
   std::optional<ConformityEntry> conformity;  // max/min figures only.
   std::string note;
 };
