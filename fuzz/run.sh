@@ -33,7 +33,7 @@ intel_hex_fuzz     4096   110
 inspect_fuzz       4096   550
 registry_fuzz     40960  1000
 ros_log_fuzz      16384   850
-noise_config_fuzz  8192   300
+noise_config_fuzz  8192  1150
 "
 all_targets=$(awk 'NF {print $1}' <<<"$table")
 targets="${*:-$all_targets}"
