@@ -42,7 +42,7 @@ std::string TypicalMpu6050Session() {
   return csv;
 }
 
-TEST_CASE("--spec-part judges N against the MPU-6050's typ densities", "[apps][specs]") {
+TEST_CASE("--spec-part judges N against the MPU-6050 densities (not limits)", "[apps][specs]") {
   testing::ScratchFolder dir("metro_spec_cli");
   testing::TempFile session(TypicalMpu6050Session());
   const std::string report = dir.path() + "r.json";
@@ -50,7 +50,7 @@ TEST_CASE("--spec-part judges N against the MPU-6050's typ densities", "[apps][s
       Characterize(session.path() + " --allan --spec-part mpu-6050 -o " + report);
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
-  CHECK_THAT(r.err, Catch::Contains("typ is not a specification limit"));
+  CHECK_THAT(r.err, Catch::Contains("unstated is not a specification limit"));
   const nlohmann::json j = nlohmann::json::parse(ReadText(report));
   REQUIRE(j.contains("spec"));
   CHECK(j["spec"]["part"] == "MPU6050");
@@ -61,7 +61,7 @@ TEST_CASE("--spec-part judges N against the MPU-6050's typ densities", "[apps][s
     // The simulated density is the typical one: ratio 1 within a few u (10 min record).
     const double ratio = row["ratio"], u = row["u"], figure = row["figure"]["value"];
     CHECK(std::abs(ratio - 1.0) < 4.0 * u / figure);
-    CHECK_FALSE(row.contains("decision"));  // typ: no pass or fail.
+    CHECK_FALSE(row.contains("decision"));  // unstated (as typ): no pass or fail.
   }
   CHECK(judged == 2);
 }

@@ -56,7 +56,7 @@ TEST_CASE("the shipped library holds the published figures as printed", "[specs]
   CHECK(mpu.part == "MPU6050");
   REQUIRE(mpu.figures.size() == 2);
   CHECK(mpu.figures[0].value == 0.005);
-  CHECK(mpu.figures[0].kind == SpecKind::kTyp);
+  CHECK(mpu.figures[0].kind == SpecKind::kUnstated);  // Column not visible: not "typ".
   CHECK(mpu.Document("datasheet")->number == "PS-MPU-6000A-00");
   // N = d / sqrt(2) (docs/noise.md section 5): 0.005 deg/s/sqrt(Hz) -> rad/s/sqrt(Hz).
   CHECK(mpu.figures[0].CoefficientSi() ==
