@@ -127,6 +127,46 @@ TEST_CASE("datasheet -> Kalibr: N = d/sqrt(2) in SI, K refused by name", "[specs
              Catch::Contains("no gyroscope noise figure"));
 }
 
+TEST_CASE("datasheet -> Kalibr with every term given writes the four keys", "[specs]") {
+  // A test part (not a datasheet): ARW 0.5 deg/sqrt(h), VRW 0.06 m/s/sqrt(h) as N, and K.
+  const std::string text = R"j({"schema": "metro.specs/1", "parts": [{"part": "T1", "names": [],
+  "manufacturer": "m", "documents": [{"id": "ds", "title": "t", "number": "n", "revision": "1",
+  "read_at": "here"}], "figures": [
+  {"source": "ds", "sensor": "gyroscope", "convention": "random_walk_coefficient", "kind": "typ",
+   "value": 0.5, "unit": "deg/sqrt(h)", "printed": "0.5", "page": "1", "table": "T"},
+  {"source": "ds", "sensor": "accelerometer", "convention": "random_walk_coefficient",
+   "kind": "typ", "value": 0.06, "unit": "m/s/sqrt(h)", "printed": "0.06", "page": "1",
+   "table": "T"},
+  {"source": "ds", "sensor": "gyroscope", "convention": "bias_random_walk_coefficient",
+   "kind": "typ", "value": 1e-5, "unit": "rad/s^2/sqrt(Hz)", "printed": "1e-5", "page": "1",
+   "table": "T"},
+  {"source": "ds", "sensor": "accelerometer", "convention": "bias_random_walk_coefficient",
+   "kind": "typ", "value": 2e-4, "unit": "m/s^3/sqrt(Hz)", "printed": "2e-4", "page": "1",
+   "table": "T"}]}]})j";
+  Result<SpecLibrary> lib = ParseSpecLibrary(text, "t.json");
+  REQUIRE(lib.ok());
+  SpecToKalibrOptions o;
+  o.update_rate_hz = 400.0;
+  o.rostopic = "/imu";
+  Result<std::string> yaml = SpecToKalibrYaml(lib.value().parts.front(), o, "t.json");
+  REQUIRE(yaml.ok());
+  CHECK(yaml.value().find("NOT WRITTEN") == std::string::npos);
+  Result<NoiseConfigFile> back = ReadNoiseConfig(yaml.value(), "imu.yaml");
+  REQUIRE(back.ok());
+  std::map<std::string, std::string> v;
+  for (const NoiseConfigEntry& e : back.value().entries) v[e.key] = e.text;
+  // ARW and VRW are N already (no sqrt(2)): deg/sqrt(h) = pi/180/60 rad/sqrt(s).
+  CHECK(std::stod(v.at("gyroscope_noise_density")) ==
+        Approx(0.5 * kPi / 180.0 / 60.0).epsilon(1e-15));
+  CHECK(std::stod(v.at("accelerometer_noise_density")) == Approx(0.06 / 60.0).epsilon(1e-15));
+  CHECK(std::stod(v.at("gyroscope_random_walk")) == 1e-5);
+  CHECK(std::stod(v.at("accelerometer_random_walk")) == 2e-4);
+  CHECK(v.at("rostopic") == "/imu");
+  o.source = "nope";
+  CHECK_THAT(SpecToKalibrYaml(lib.value().parts.front(), o, "t.json").error().message,
+             Catch::Contains("no datasheet document with noise figures named nope"));
+}
+
 // A one-part library with `figure` as its only figure.
 std::string OnePart(const std::string& figure) {
   return R"j({"schema": "metro.specs/1", "parts": [{"part": "X1", "names": [],
