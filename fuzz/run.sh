@@ -33,6 +33,7 @@ intel_hex_fuzz     4096   110
 inspect_fuzz       4096   550
 registry_fuzz     40960  1000
 ros_log_fuzz      16384   850
+noise_config_fuzz  8192  1150
 "
 all_targets=$(awk 'NF {print $1}' <<<"$table")
 targets="${*:-$all_targets}"
@@ -80,6 +81,7 @@ seed() {
     # MCAP and ROS 1 samples of independent writers (datasets/external/ros_samples/SOURCE.md).
     ros_log_fuzz) cp datasets/external/ros_samples/*.mcap datasets/external/ros_samples/*.bag "$corpus/" ;;
     intel_hex_fuzz) cp datasets/golden/tag_sensor2.hex "$corpus/" ;;
+    noise_config_fuzz) cp datasets/specs/specs.json "$corpus/" ;;
     # and the firmware blob fuzzer's sections v2.0 (issue #25, firmware/fuzz/make_seeds.py)
     inspect_fuzz) cp datasets/golden/tag_sensor2.hex datasets/golden/tag_sensor2.bin \
       firmware/fuzz/seeds/*.bin "$corpus/" ;;

@@ -15,10 +15,12 @@
 #include "metro/core/progress.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/noise/noise_export.hpp"
+#include "metro/noise/spec_library.hpp"
 #include "metro/report/html_report.hpp"
 #include "metro/report/noise_export_input.hpp"
 #include "metro/report/session_analysis.hpp"
 #include "metro/report/session_stream_analysis.hpp"
+#include "metro/report/spec_decision.hpp"
 #include "metro/report/type_a_report.hpp"
 #include "metro/uncertainty/budget.hpp"
 #include "noise_export_options.hpp"
@@ -42,6 +44,11 @@ struct AnalyzeOptions {
   std::string export_format;
   std::string export_file;
   NoiseExportOptions export_options;
+  // --spec-part PART [--spec-library FILE] [--spec-rule R]: the noise terms judged against the
+  // part's datasheet figures (docs/specs.md), added to the report as "spec".
+  std::string spec_part;
+  std::string spec_library = DefaultSpecLibrary();
+  std::string spec_rule = "guarded";
   // --stream: read the record once in groups and evaluate from spill files (issue #38);
   // chosen by itself, with a note, when the file is larger than --stream-above-memory-share
   // of the memory available.
@@ -116,7 +123,7 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
   if (o.accuracy.enabled) {
     for (const char* name :
          {"--allan", "--taus", "--estimator", "--gaps", "--allan-csv", "--budget", "--quantity",
-          "--settle-scope", "--export", "--export-file", "--axis-reduction"}) {
+          "--settle-scope", "--export", "--export-file", "--axis-reduction", "--spec-part"}) {
       if (given(name)) {
         return MakeError(fmt::format(
             "{} does nothing with --accuracy (the accuracy evaluation takes the table axis's "
@@ -133,7 +140,8 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
     }
   }
   if (!o.analysis.allan) {
-    for (const char* name : {"--taus", "--estimator", "--gaps", "--allan-csv", "--export"}) {
+    for (const char* name :
+         {"--taus", "--estimator", "--gaps", "--allan-csv", "--export", "--spec-part"}) {
       if (given(name)) return MakeError(fmt::format("{} needs --allan", name));
     }
   }
@@ -142,6 +150,10 @@ Status CheckModeOptions(const CLI::App& app, const AnalyzeOptions& o) {
   }
   if (given("--axis-reduction") && !given("--export")) {
     return MakeError("--axis-reduction needs --export");
+  }
+  for (const char* name : {"--spec-library", "--spec-rule"}) {
+    if (given(name) && !given("--spec-part"))
+      return MakeError(fmt::format("{} needs --spec-part", name));
   }
   return {};
 }
@@ -161,6 +173,21 @@ Result<std::string> ExportText(const SessionAnalysis& analysis, const AnalyzeOpt
   Result<NoiseExport> exported = ExportNoise(input.value(), options);
   if (!exported.ok()) return exported.error();
   return exported.value().text;
+}
+
+// --spec-part: the tag's noise terms judged against the part's datasheet figures.
+Result<SpecDecisions> SpecDecisionsOf(const SessionAnalysis& analysis, const SpecLibrary& library,
+                                      const AnalyzeOptions& o) {
+  Result<const SpecPart*> part = library.Find(o.spec_part);
+  if (!part.ok()) return part.error();
+  std::optional<int64_t> sensor;
+  if (o.analysis.sensors.size() == 1) sensor = o.analysis.sensors.front();
+  Result<NoiseExportInput> input =
+      NoiseExportInputFromReport(analysis.report, "the report", sensor);
+  if (!input.ok()) return input.error();
+  SpecDecisionOptions options;
+  options.rule = *ParseDecisionRule(o.spec_rule);
+  return DecideAgainstSpec(input.value(), *part.value(), library.file, options);
 }
 
 int RunAnalyze(const AnalyzeOptions& o) {
@@ -193,6 +220,15 @@ int RunAnalyze(const AnalyzeOptions& o) {
       !s.ok()) {
     return PrintErrorExit(s.error());
   }
+  SpecLibrary spec_library;
+  if (!o.spec_part.empty()) {  // A part the library does not have stops before the analysis.
+    Result<SpecLibrary> lib = LoadSpecLibrary(o.spec_library);
+    if (!lib.ok()) return PrintErrorExit(lib.error().WithContext("--spec-library"));
+    if (Result<const SpecPart*> p = lib.value().Find(o.spec_part); !p.ok()) {
+      return PrintErrorExit(p.error().WithContext("--spec-part"));
+    }
+    spec_library = std::move(lib).value();
+  }
   SessionAnalysisOptions options;
   if (Status s = MakeSessionAnalysisOptions(o.analysis, o.threads, &options); !s.ok()) {
     return PrintErrorExit(s.error());
@@ -220,6 +256,15 @@ int RunAnalyze(const AnalyzeOptions& o) {
   if (analysis.session.rejected_rows > 0) {
     Note(fmt::format("note: --lenient skipped {} malformed rows (first at line {})\n",
                      analysis.session.rejected_rows, analysis.session.rejected_lines.front()));
+  }
+  std::optional<Error> spec_error;
+  if (!o.spec_part.empty()) {
+    Result<SpecDecisions> d = SpecDecisionsOf(analysis, spec_library, o);
+    if (d.ok()) {
+      analysis.report.spec = std::move(d).value();
+    } else {
+      spec_error = d.error().WithContext("--spec-part " + o.spec_part);
+    }
   }
   const std::string json = ToJson(analysis.report) + "\n";
   std::string html;
@@ -271,6 +316,8 @@ int RunAnalyze(const AnalyzeOptions& o) {
     PrintErrorText("--allan produced no curve for any quantity (reasons above and in the report)");
     return kExitFailed;
   }
+  if (analysis.report.spec) Note(SpecDecisionsTable(*analysis.report.spec));
+  if (spec_error) return PrintErrorExit(*spec_error);
   if (export_error) {
     return PrintErrorExit(
         export_error->WithContext("--export " + o.export_format + ": not written"));
@@ -309,6 +356,17 @@ void AddTypeAOptions(CLI::App& app, AnalyzeOptions* o, bool accuracy) {
   AddAxisReductionOption(&app, &o->export_options.reduction,
                          "with --export: one value over the three axes, max (the largest axis "
                          "and its u) or rms");
+  app.add_option("--spec-part", o->spec_part,
+                 "with --allan: judge N, B, K against this part's datasheet figures "
+                 "(MPU6050, MPU9250, ICM20948, ICM42688P, ...; docs/specs.md): a JCGM 106 "
+                 "decision for max/min figures, ratio and E_n for typ ones");
+  app.add_option("--spec-library", o->spec_library, "the spec library (datasets/specs/specs.json)")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  app.add_option("--spec-rule", o->spec_rule,
+                 "with --spec-part: the JCGM 106 decision rule for max/min figures")
+      ->check(CLI::IsMember({"simple", "guarded", "risk"}))
+      ->capture_default_str();
   if (accuracy) AddAccuracyOptions(app, &o->accuracy);
   app.add_option("--threads", o->threads, "worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "metro/noise/spec_library.hpp"
 #include "noise_export_options.hpp"
 #include "output.hpp"
 
@@ -14,9 +15,42 @@ namespace {
 struct NoiseExportCommandOptions {
   NoiseExportCliOptions common;
   std::string output = "-";
+  // --from-spec PART: a datasheet's figures as Kalibr's imu.yaml (docs/specs.md "To Kalibr").
+  std::string from_spec;
+  std::string spec_library = DefaultSpecLibrary();
+  SpecToKalibrOptions spec;
 };
 
+int RunSpecExport(const NoiseExportCommandOptions& o) {
+  if (!o.common.report.empty()) {
+    return PrintErrorExit(MakeError("--from-spec writes a datasheet's figures: give no REPORT"));
+  }
+  if (o.common.library.format != NoiseExportFormat::kKalibr) {
+    return PrintErrorExit(
+        MakeError("--from-spec: only --to kalibr (convert the imu.yaml onward with a measured "
+                  "report; the other formats' conventions need the record's rate and u)"));
+  }
+  if (Status s = CheckOutputs({{"-o", o.output}}, {{"--spec-library", o.spec_library}}); !s.ok()) {
+    return PrintErrorExit(s.error());
+  }
+  Result<SpecLibrary> lib = LoadSpecLibrary(o.spec_library);
+  if (!lib.ok()) return PrintErrorExit(lib.error());
+  Result<const SpecPart*> part = lib.value().Find(o.from_spec);
+  if (!part.ok()) return PrintErrorExit(part.error());
+  SpecToKalibrOptions spec = o.spec;
+  spec.rostopic = o.common.library.rostopic;
+  Result<std::string> text = SpecToKalibrYaml(*part.value(), spec, o.spec_library);
+  if (!text.ok()) return PrintErrorExit(text.error().WithContext("--from-spec " + o.from_spec));
+  if (Status s = WriteOutput(o.output, text.value()); !s.ok()) return PrintErrorExit(s.error());
+  return kExitOk;
+}
+
 int RunNoiseExport(const NoiseExportCommandOptions& o) {
+  if (!o.from_spec.empty()) return RunSpecExport(o);
+  if (o.common.report.empty()) {
+    return PrintErrorExit(
+        MakeError("expected REPORT.json (made with --allan), or --from-spec PART"));
+  }
   if (Status s = CheckOutputs({{"-o", o.output}}, {{"REPORT", o.common.report}}); !s.ok()) {
     return PrintErrorExit(s.error());
   }
@@ -44,7 +78,6 @@ void AddNoiseExportCommand(CLI::App& app, int* exit_code) {
       "write a report's IEEE 952 noise terms as an estimator's noise file (kalibr, openvins, "
       "basalt, vins, orbslam3, gtsam, px4-ekf2, ros), each value's convention and u beside it");
   sub->add_option("report", o->common.report, "REPORT.json made with --allan")
-      ->required()
       ->check(CLI::ExistingFile);
   sub->add_option_function<std::string>(
          "--to",
@@ -57,6 +90,20 @@ void AddNoiseExportCommand(CLI::App& app, int* exit_code) {
       ->required();
   sub->add_option("-o,--output", o->output, "the file to write (atomically; default -: stdout)");
   AddNoiseExportCliOptions(sub, &o->common);
+  sub->add_option("--from-spec", o->from_spec,
+                  "instead of REPORT: a part's datasheet noise figures as Kalibr's imu.yaml, "
+                  "assumptions stated in the file (docs/specs.md)");
+  sub->add_option("--spec-library", o->spec_library, "the spec library")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  sub->add_option("--spec-source", o->spec.source,
+                  "with --from-spec: the document of the part (default: its first datasheet)");
+  sub->add_option("--update-rate-hz", o->spec.update_rate_hz,
+                  "with --from-spec: the rate the IMU is read at (Kalibr's update_rate)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--partial", o->spec.partial,
+                "with --from-spec: write the file without the K keys the datasheet cannot give "
+                "(Kalibr will not read it as is)");
   sub->callback([o, exit_code] { *exit_code = RunNoiseExport(*o); });
 }
 

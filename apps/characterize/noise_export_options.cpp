@@ -12,6 +12,8 @@ std::vector<std::string> NoiseExportFormatNames() {
   return names;
 }
 
+std::string DefaultSpecLibrary() { return METRO_SPEC_LIBRARY; }
+
 void AddAxisReductionOption(CLI::App* app, AxisReduction* reduction, const std::string& help) {
   app->add_option_function<std::string>(
          "--axis-reduction",

@@ -22,6 +22,9 @@ struct NoiseExportCliOptions {
 // The formats' names (NoiseExportFormatName of kAllNoiseExportFormats), for CLI11's checks.
 std::vector<std::string> NoiseExportFormatNames();
 
+// The spec library shipped with metro (datasets/specs/specs.json of the source tree).
+std::string DefaultSpecLibrary();
+
 // Registers --axis-reduction (max|rms) into `reduction`.
 void AddAxisReductionOption(CLI::App* app, AxisReduction* reduction, const std::string& help);
 

@@ -8,6 +8,7 @@
 #include "core/json_text.hpp"
 #include "noise/allan_report_json.hpp"
 #include "plot_data_json.hpp"
+#include "report/spec_decision_json.hpp"
 #include "uncertainty/budget_report_json.hpp"
 
 namespace metro {
@@ -419,6 +420,7 @@ Json ToJsonValue(const SessionReport& report) {
   j["sensors"] = std::move(sensors);
   if (report.allan_skipped) j["allan_skipped"] = *report.allan_skipped;
   if (report.budget) j["budget"] = ToJsonValue(*report.budget);
+  if (report.spec) j["spec"] = SpecDecisionsJson(*report.spec);
   NullNonFinite(&j);
   return j;
 }

@@ -24,6 +24,7 @@
 #include "metro/core/status.hpp"
 #include "metro/noise/allan_report.hpp"
 #include "metro/report/plot_data.hpp"
+#include "metro/report/spec_decision.hpp"
 #include "metro/uncertainty/budget_report.hpp"
 
 namespace metro {
@@ -245,6 +246,9 @@ struct SessionReport {
   std::optional<std::string> allan_skipped;
   // --budget: the "budget" object, a whole metro.budget-report/1 (docs/budget-format.md).
   std::optional<BudgetReport> budget;
+  // --spec-part: the "spec" object, the noise terms judged against a datasheet
+  // (spec_decision.hpp). Written only: a saved report read back does not carry it.
+  std::optional<SpecDecisions> spec;
 
   // The sensor numbered `sensor`, or nullptr.
   const SensorReport* FindSensor(int64_t number) const;
