@@ -42,7 +42,7 @@ std::string TypicalMpu6050Session() {
   return csv;
 }
 
-TEST_CASE("--spec-part judges N against the MPU-6050 densities (not limits)", "[apps][specs]") {
+TEST_CASE("characterize --spec-part judges N against the MPU-6050 densities (not limits)", "[apps][specs]") {
   testing::ScratchFolder dir("metro_spec_cli");
   testing::TempFile session(TypicalMpu6050Session());
   const std::string report = dir.path() + "r.json";
@@ -66,7 +66,7 @@ TEST_CASE("--spec-part judges N against the MPU-6050 densities (not limits)", "[
   CHECK(judged == 2);
 }
 
-TEST_CASE("--spec-part refusals", "[apps][specs]") {
+TEST_CASE("characterize --spec-part refusals", "[apps][specs]") {
   testing::TempFile session(TypicalMpu6050Session());
   testing::ProgramRun r = Characterize(session.path() + " --allan --spec-part BMI999 --quiet");
   CHECK(r.exit_code == 2);

@@ -26,7 +26,7 @@ TEST_CASE("the input block records the dialect, mapping and time", "[report][dia
   REQUIRE(a.ok);
   nlohmann::ordered_json report_a = ToJsonValue(a.report);
   const auto& input = report_a["input"];
-  CHECK(input["format"] == "csv");
+  CHECK(input["format"] == "phone");  // The header spells its axis and unit (Time (ms)).
   CHECK(input["dialect"]["delimiter"] == ";");
   CHECK(input["dialect"]["decimal_point"] == ",");
   CHECK(input["dialect"]["line_ends"] == "CRLF");
