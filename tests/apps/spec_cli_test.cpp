@@ -42,7 +42,8 @@ std::string TypicalMpu6050Session() {
   return csv;
 }
 
-TEST_CASE("characterize --spec-part judges N against the MPU-6050 densities (not limits)", "[apps][specs]") {
+TEST_CASE("characterize --spec-part judges N against the MPU-6050 densities (not limits)",
+          "[apps][specs]") {
   testing::ScratchFolder dir("metro_spec_cli");
   testing::TempFile session(TypicalMpu6050Session());
   const std::string report = dir.path() + "r.json";
