@@ -170,24 +170,37 @@ void NoteNoiseKeys(const YamlNode& imu, Filling* f) {
   }
 }
 
-Status ReadKalibr(const YamlNode& root, int instance, Filling* f) {
+// The imu<instance> node of a Kalibr-style IMU chain (Kalibr, OpenVINS) with its keys
+// checked against `keys` and the noise keys, the noise keys noted, and its `model` (or
+// `fallback`) one of `models`, into f->out.model.
+Result<const YamlNode*> ChainImu(const YamlNode& root, int instance,
+                                 const std::set<std::string>& own_keys, const std::string& fallback,
+                                 const std::set<std::string>& models, Filling* f) {
   std::set<std::string> keys = kNoiseKeys;
-  keys.insert({"accelerometers", "gyroscopes"});
+  keys.insert(own_keys.begin(), own_keys.end());
   Result<const YamlNode*> imu_r = ImuNode(root, instance, f->out.file, keys);
   if (!imu_r.ok()) return imu_r.error();
   const YamlNode& imu = *imu_r.value();
   const std::string p = fmt::format("imu{}", instance);
-  if (Status s = CheckKeys(imu, p, keys, f->out.file); !s.ok()) return s;
+  if (Status s = CheckKeys(imu, p, keys, f->out.file); !s.ok()) return s.error();
   NoteNoiseKeys(imu, f);
   const YamlNode* model = imu.Find("model");
-  f->out.model = model != nullptr ? model->scalar : "calibrated";
-  const std::set<std::string> models = {"calibrated", "scale-misalignment",
-                                        "scale-misalignment-size-effect"};
+  f->out.model = model != nullptr ? model->scalar : fallback;
   if (model != nullptr && (!model->IsScalar() || models.count(model->scalar) == 0)) {
     return YamlError(
         f->out.file, *model, p + ".model",
         fmt::format("expected one of: {}; found {}", fmt::join(models, ", "), model->Describe()));
   }
+  return &imu;
+}
+
+Status ReadKalibr(const YamlNode& root, int instance, Filling* f) {
+  Result<const YamlNode*> imu_r =
+      ChainImu(root, instance, {"accelerometers", "gyroscopes"}, "calibrated",
+               {"calibrated", "scale-misalignment", "scale-misalignment-size-effect"}, f);
+  if (!imu_r.ok()) return imu_r.error();
+  const YamlNode& imu = *imu_r.value();
+  const std::string p = fmt::format("imu{}", instance);
   for (size_t i = 0; i < f->out.values.size(); ++i) {
     // Identity M and C, zero A: Kalibr's `calibrated` model.
     const std::string& n = f->out.values[i].name;
@@ -223,22 +236,12 @@ Status ReadKalibr(const YamlNode& root, int instance, Filling* f) {
 }
 
 Status ReadOpenVins(const YamlNode& root, int instance, Filling* f) {
-  std::set<std::string> keys = kNoiseKeys;
-  keys.insert({"Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC", "Tg"});
-  Result<const YamlNode*> imu_r = ImuNode(root, instance, f->out.file, keys);
+  Result<const YamlNode*> imu_r =
+      ChainImu(root, instance, {"Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC", "Tg"}, "kalibr",
+               {"calibrated", "kalibr", "rpng"}, f);
   if (!imu_r.ok()) return imu_r.error();
   const YamlNode& imu = *imu_r.value();
   const std::string p = fmt::format("imu{}", instance);
-  if (Status s = CheckKeys(imu, p, keys, f->out.file); !s.ok()) return s;
-  NoteNoiseKeys(imu, f);
-  const YamlNode* model = imu.Find("model");
-  f->out.model = model != nullptr ? model->scalar : "kalibr";
-  const std::set<std::string> models = {"calibrated", "kalibr", "rpng"};
-  if (model != nullptr && (!model->IsScalar() || models.count(model->scalar) == 0)) {
-    return YamlError(
-        f->out.file, *model, p + ".model",
-        fmt::format("expected one of: {}; found {}", fmt::join(models, ", "), model->Describe()));
-  }
   // VioManagerOptions.h requires all five (parse_external with required = true).
   for (const char* k : {"Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC", "Tg"}) {
     const bool rotation = k[0] == 'R';

@@ -21,12 +21,7 @@ testing::ProgramRun Characterize(const std::string& args) {
   return testing::RunProgram(METRO_CHARACTERIZE_EXE, args);
 }
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing::ReadText;
 
 // 30 min at 100 Hz of Kalibr's discrete model on six axes in SI columns, N and K chosen so
 // that K rules from ~10 s (sqrt(3) N / K = 10 s) and the fit resolves both.

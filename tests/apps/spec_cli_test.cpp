@@ -21,12 +21,7 @@ testing::ProgramRun Characterize(const std::string& args) {
   return testing::RunProgram(METRO_CHARACTERIZE_EXE, args);
 }
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing::ReadText;
 
 // 10 min at 100 Hz, one accelerometer and one gyroscope axis whose white noise is the
 // MPU-6050's typical one-sided density d (400 ug/sqrt(Hz), 0.005 deg/s/sqrt(Hz)) as
