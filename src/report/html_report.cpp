@@ -51,6 +51,7 @@ using report_internal::QuantityPlots;
 using report_internal::ResultRows;
 using report_internal::SessionOptionRows;
 using report_internal::ShortNumber;
+using report_internal::SpecRows;
 using report_internal::TypeADetailRows;
 
 namespace {
@@ -149,6 +150,13 @@ void SetResultAndInput(const SessionReport& report, bool any_plot_data, mustache
   mustache::data noise = NoiseRows(report);
   data->set("has_noise", !noise.is_empty_list());
   data->set("noise_rows", noise);
+  if (report.spec) {
+    data->set("has_spec", true);
+    data->set("spec_part", report.spec->part);
+    data->set("spec_library", report.spec->library);
+    data->set("spec_rows", SpecRows(report));
+    data->set("spec_rules", SpecRulesText(*report.spec));
+  }
   data->set("input_path", input.path);
   data->set("input_sha256", input.sha256);
   data->set("input_format", input.format);

@@ -94,6 +94,38 @@ mustache::data TypeADetailRows(const SessionReport& report) {
   return rows;
 }
 
+mustache::data SpecRows(const SessionReport& report) {
+  mustache::data rows = mustache::data::type::list;
+  if (!report.spec) return rows;
+  for (const SpecDecisionRow& r : report.spec->rows) {
+    mustache::data row;
+    row.set("quantity", r.quantity.empty() ? "-" : r.quantity);
+    row.set("term", SpecTermSymbol(r.term));
+    if (r.figure) {
+      row.set("has_figure", true);
+      row.set("figure", fmt::format("{} {}", ShortNumber(r.figure->value, 4), r.figure->unit));
+      row.set("kind", SpecKindName(r.figure->kind));
+      row.set("convention", SpecConventionName(r.figure->convention));
+      row.set("document", r.document);
+      row.set("measured", ShortNumber(r.measured, 4));
+      row.set("u", ShortNumber(r.u, 2));
+      row.set("ratio", ShortNumber(r.ratio, 3));
+      row.set("e_n", ShortNumber(r.e_n, 3));
+    }
+    if (r.conformity) {
+      row.set("decision",
+              fmt::format("{} (p_c {:.3f})", ConformityDecisionName(r.conformity->decision),
+                          r.conformity->p_conformance));
+      row.set("pass", r.conformity->decision == ConformityDecision::kPass);
+    } else {
+      row.set("decision", r.note.empty() ? "-" : r.note);
+      row.set("pass", true);
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 mustache::data NoiseRows(const SessionReport& report) {
   mustache::data rows{mustache::data::type::list};
   ForEachQuantity(report, [&rows](const SensorReport& s, const QuantityReport& q) {

@@ -35,6 +35,12 @@ kainjow::mustache::data TypeADetailRows(const SessionReport& report);
 // tested"; its summary as the cell's title).
 kainjow::mustache::data NoiseRows(const SessionReport& report);
 
+// "spec_rows": with --spec-part, per quantity and term the datasheet figure (value, unit,
+// kind, convention, document), the measured value in its convention with u, ratio, E_n and
+// the JCGM 106 decision with p_c (max/min figures) or the note (spec_decision.hpp); empty
+// without the report's "spec".
+kainjow::mustache::data SpecRows(const SessionReport& report);
+
 // "option_rows": the report's options as {option, value} rows (OptionRows of html_common).
 kainjow::mustache::data SessionOptionRows(const SessionReport& report);
 

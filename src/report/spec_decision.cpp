@@ -8,11 +8,22 @@
 #include "report/spec_decision_json.hpp"
 
 namespace metro {
-namespace {
+namespace {}  // namespace
 
-const char* TermSymbol(NoiseTerm t) {
+const char* SpecTermSymbol(NoiseTerm t) {
   return t == NoiseTerm::kRandomWalk ? "N" : t == NoiseTerm::kBiasInstability ? "B" : "K";
 }
+
+std::string SpecRulesText(const SpecDecisions& d) {
+  ConformityStatement rule{d.rule, d.coverage_factor, d.max_consumer_risk, {}};
+  return fmt::format(
+      "N as a one-sided density is sqrt(2) N; an in-run bias stability is the Allan deviation's "
+      "minimum.\nmax/min figures are specification limits: {}.\ntyp/unstated figures are not "
+      "limits: ratio and E_n = (measured - figure) / (2 u) only (ISO 13528:2015 9.7).\n",
+      rule.DescribeRule());
+}
+
+namespace {
 
 // z with P(|Z| <= z) = confidence for a standard normal Z, by bisection on erf
 // (P(|Z| <= z) = erf(z / sqrt(2))).
@@ -156,7 +167,7 @@ Result<SpecDecisions> DecideAgainstSpec(const NoiseExportInput& input, const Spe
         r.term = term;
         r.note = fmt::format("{} {}: the datasheet gives no figure; not judged",
                              sensor == SensorKind::kGyroscope ? "gyroscope" : "accelerometer",
-                             TermSymbol(term));
+                             SpecTermSymbol(term));
         out.rows.push_back(std::move(r));
         continue;
       }
@@ -176,7 +187,7 @@ std::string SpecDecisionsTable(const SpecDecisions& d) {
                    "figure", "unit", "measured", "u", "ratio", "E_n", "decision");
   for (const SpecDecisionRow& r : d.rows) {
     if (!r.figure) {
-      s += fmt::format("{:<10} {:<2}  {}\n", "-", TermSymbol(r.term), r.note);
+      s += fmt::format("{:<10} {:<2}  {}\n", "-", SpecTermSymbol(r.term), r.note);
       continue;
     }
     const std::string decision =
@@ -184,18 +195,12 @@ std::string SpecDecisionsTable(const SpecDecisions& d) {
             ? fmt::format("{} (p_c {:.3f})", ConformityDecisionName(r.conformity->decision),
                           r.conformity->p_conformance)
             : r.note;
-    s +=
-        fmt::format("{:<10} {:<2} {:>8.4g} {:<3} {:<18} {:>12.4g} {:>9.2g} {:>8.4g} {:>7.3g}  {}\n",
-                    r.quantity, TermSymbol(r.term), r.figure->value, SpecKindName(r.figure->kind),
-                    r.figure->unit, r.measured, r.u, r.ratio, r.e_n, decision);
+    s += fmt::format(
+        "{:<10} {:<2} {:>8.4g} {:<3} {:<18} {:>12.4g} {:>9.2g} {:>8.4g} {:>7.3g}  {}\n", r.quantity,
+        SpecTermSymbol(r.term), r.figure->value, SpecKindName(r.figure->kind), r.figure->unit,
+        r.measured, r.u, r.ratio, r.e_n, decision);
   }
-  ConformityStatement rule{d.rule, d.coverage_factor, d.max_consumer_risk, {}};
-  s += fmt::format(
-      "N as a one-sided density is sqrt(2) N; an in-run bias stability is the Allan deviation's "
-      "minimum.\nmax/min figures are specification limits: {}.\ntyp/unstated figures are not "
-      "limits: ratio and E_n = (measured - figure) / (2 u) only (ISO 13528:2015 9.7).\n",
-      rule.DescribeRule());
-  return s;
+  return s + SpecRulesText(d);
 }
 
 nlohmann::ordered_json SpecDecisionsJson(const SpecDecisions& d) {

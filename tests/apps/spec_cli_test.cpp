@@ -42,8 +42,9 @@ TEST_CASE("characterize --spec-part judges N against the MPU-6050 densities (not
   testing::ScratchFolder dir("metro_spec_cli");
   testing::TempFile session(TypicalMpu6050Session());
   const std::string report = dir.path() + "r.json";
-  testing::ProgramRun r =
-      Characterize(session.path() + " --allan --spec-part mpu-6050 -o " + report);
+  const std::string page = dir.path() + "r.html";
+  testing::ProgramRun r = Characterize(session.path() + " --allan --spec-part mpu-6050 -o " +
+                                       report + " --html " + page);
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.err, Catch::Contains("unstated is not a specification limit"));
@@ -60,6 +61,12 @@ TEST_CASE("characterize --spec-part judges N against the MPU-6050 densities (not
     CHECK_FALSE(row.contains("decision"));  // unstated (as typ): no pass or fail.
   }
   CHECK(judged == 2);
+  // The page shows the same rows: each judged figure with its document and the note.
+  const std::string html = ReadText(page);
+  CHECK_THAT(html, Catch::Contains("<table id=\"spec-table\">"));
+  CHECK_THAT(html, Catch::Contains("Against the datasheet: MPU6050"));
+  CHECK_THAT(html, Catch::Contains("PS-MPU-6000A-00"));
+  CHECK_THAT(html, Catch::Contains("unstated is not a specification limit"));
 }
 
 TEST_CASE("characterize --spec-part refusals", "[apps][specs]") {

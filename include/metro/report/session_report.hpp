@@ -247,7 +247,9 @@ struct SessionReport {
   // --budget: the "budget" object, a whole metro.budget-report/1 (docs/budget-format.md).
   std::optional<BudgetReport> budget;
   // --spec-part: the "spec" object, the noise terms judged against a datasheet
-  // (spec_decision.hpp). Written only: a saved report read back does not carry it.
+  // (spec_decision.hpp), and the page's "Against the datasheet" section when the page is
+  // drawn in the same run. Written only: a saved report read back does not carry it, so a
+  // page re-drawn from it (characterize report) has no such section.
   std::optional<SpecDecisions> spec;
 
   // The sensor numbered `sensor`, or nullptr.

@@ -69,6 +69,13 @@ Result<SpecDecisions> DecideAgainstSpec(const NoiseExportInput& input, const Spe
                                         const std::string& library_file,
                                         const SpecDecisionOptions& options);
 
+// "N", "B" or "K".
+const char* SpecTermSymbol(NoiseTerm term);
+
+// How the figures are judged: the conventions, the rule for max/min figures, typ figures'
+// ratio and E_n (three lines, the end of SpecDecisionsTable and the page's note).
+std::string SpecRulesText(const SpecDecisions& decisions);
+
 // The plain-text table: quantity, term, figure (kind, convention), measured, u, ratio, E_n,
 // decision or note; then how typ and max figures are judged.
 std::string SpecDecisionsTable(const SpecDecisions& decisions);
