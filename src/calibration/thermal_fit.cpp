@@ -1,0 +1,281 @@
+// FitThermalBias runs these stages (thermal_fit.hpp):
+//   glitches   FindTemperatureGlitches    read errors found and left out, with their lines
+//   legs       SplitLegs                  heating / cooling about the hottest sample
+//   bins       BinMeans                   per (leg, temperature bin) means
+//   order      ChooseOrder                nested F-tests on the bin means
+//   solution   SolveAxis                  coefficients, covariance, hysteresis
+#include "metro/calibration/thermal_fit.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <cmath>
+#include <limits>
+#include <map>
+
+namespace metro {
+
+bool ThermalFitOptions::IsValid(std::string* why) const {
+  auto fail = [&](std::string text) {
+    if (why) *why = std::move(text);
+    return false;
+  };
+  if (!(bin_width_c > 0)) return fail("bin_width_c must be > 0");
+  if (min_samples_per_bin < 2) return fail("min_samples_per_bin must be >= 2");
+  if (max_order < 1 || max_order > 4) return fail("max_order must be 1 .. 4");
+  if (order < 0 || order > max_order) return fail("order must be 0 (auto) .. max_order");
+  if (!(alpha > 0 && alpha < 1)) return fail("alpha must be in (0, 1)");
+  if (!(span_per_order_c > 0 && glitch_c > 0 && min_leg_span_c > 0)) {
+    return fail("span_per_order_c, glitch_c and min_leg_span_c must be > 0");
+  }
+  if (glitch_window < 1) return fail("glitch_window must be >= 1");
+  return true;
+}
+
+std::vector<size_t> FindTemperatureGlitches(const std::vector<double>& temp_c, double glitch_c,
+                                            int window) {
+  std::vector<size_t> out;
+  const size_t n = temp_c.size(), w = static_cast<size_t>(window);
+  std::vector<double> around;
+  for (size_t i = 0; i < n; ++i) {
+    around.clear();
+    for (size_t k = i > w ? i - w : 0; k < std::min(n, i + w + 1); ++k) {
+      if (k != i && std::isfinite(temp_c[k])) around.push_back(temp_c[k]);
+    }
+    if (around.empty()) continue;
+    auto mid = around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2);
+    std::nth_element(around.begin(), mid, around.end());
+    if (!std::isfinite(temp_c[i]) || std::abs(temp_c[i] - *mid) > glitch_c) out.push_back(i);
+  }
+  return out;
+}
+
+Result<ThermalSamples> ThermalSamplesFromTag(const Tag& tag, ImuSensor sensor,
+                                             const std::string& path) {
+  ThermalSamples s;
+  s.what = fmt::format("{}: sensor {} {}", path, tag.sensor, ImuSensorName(sensor));
+  std::string have;
+  for (const Quantity& q : tag.quantities) have += (have.empty() ? "" : ", ") + q.name;
+  const Quantity* temp = tag.Find("temp_c");
+  if (temp == nullptr) {
+    return MakeError(fmt::format(
+        "{}: no temp_c column: a thermal fit needs the die temperature per sample (columns: {})",
+        s.what, have));
+  }
+  const std::vector<std::string> names = InputColumns(sensor, "LSB");
+  for (int a = 0; a < 3; ++a) {
+    const Quantity* q = tag.Find(names[a]);
+    if (q == nullptr) {
+      return MakeError(fmt::format("{}: no {} column: a thermal fit reads raw counts (columns: {})",
+                                   s.what, names[a], have));
+    }
+    s.values[a] = q->values;
+  }
+  s.temp_c = temp->values;
+  s.lines.assign(tag.line.begin(), tag.line.end());
+  return s;
+}
+
+double ThermalAxisFit::BiasAt(double temp_c, double t_ref_c) const {
+  const double x = temp_c - t_ref_c;
+  double b = 0;
+  for (int j = order; j >= 0; --j) b = b * x + coefficients[j];
+  return b;
+}
+
+double ThermalAxisFit::UBiasAt(double temp_c, double t_ref_c) const {
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(covariance.rows());
+  const double x = temp_c - t_ref_c;
+  for (int j = 0; j <= order; ++j) g[j] = std::pow(x, j);
+  return std::sqrt(std::max(0.0, g.dot(covariance * g)));  // JCGM 100:2008 5.2.2
+}
+
+namespace {
+
+struct Bins {
+  std::vector<double> temp_c;  // Mean temperature of each bin.
+  std::vector<double> leg;     // +1 heating, -1 cooling, 0 one leg only.
+  std::array<std::vector<double>, 3> mean;
+};
+
+// +1 before the hottest sample, -1 after it, when each side spans min_leg_span_c; else all 0.
+std::vector<int> SplitLegs(const std::vector<double>& temp_c, double min_leg_span_c) {
+  std::vector<int> leg(temp_c.size(), 0);
+  if (temp_c.empty()) return leg;
+  const auto hot = std::max_element(temp_c.begin(), temp_c.end());
+  const double rise = *hot - *std::min_element(temp_c.begin(), hot + 1);
+  const double fall = *hot - *std::min_element(hot, temp_c.end());
+  if (rise < min_leg_span_c || fall < min_leg_span_c) return leg;
+  const size_t k = static_cast<size_t>(hot - temp_c.begin());
+  for (size_t i = 0; i < leg.size(); ++i) leg[i] = i <= k ? 1 : -1;
+  return leg;
+}
+
+Bins BinMeans(const ThermalSamples& s, const std::vector<int>& leg, const std::vector<bool>& use,
+              const ThermalFitOptions& o) {
+  struct Sum {
+    double temp = 0;
+    std::array<double, 3> v{};
+    int n = 0;
+  };
+  std::map<std::pair<int, long>, Sum> sums;
+  for (size_t i = 0; i < s.temp_c.size(); ++i) {
+    if (!use[i]) continue;
+    Sum& b = sums[{leg[i], std::lround(std::floor(s.temp_c[i] / o.bin_width_c))}];
+    b.temp += s.temp_c[i];
+    for (int a = 0; a < 3; ++a) b.v[a] += s.values[a][i];
+    ++b.n;
+  }
+  Bins out;
+  for (const auto& [key, b] : sums) {
+    if (b.n < o.min_samples_per_bin) continue;
+    out.temp_c.push_back(b.temp / b.n);
+    out.leg.push_back(key.first);
+    for (int a = 0; a < 3; ++a) out.mean[a].push_back(b.v[a] / b.n);
+  }
+  return out;
+}
+
+// Columns 1, z, .., z^order (z = (T - t_ref_c) / scale_c) and leg / 2 when legs.
+Eigen::MatrixXd Design(const Bins& b, int order, bool legs, double t_ref_c, double scale_c) {
+  const Eigen::Index n = static_cast<Eigen::Index>(b.temp_c.size());
+  Eigen::MatrixXd x(n, order + 1 + (legs ? 1 : 0));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double z = (b.temp_c[i] - t_ref_c) / scale_c;
+    for (int j = 0; j <= order; ++j) x(i, j) = std::pow(z, j);
+    if (legs) x(i, order + 1) = 0.5 * b.leg[i];
+  }
+  return x;
+}
+
+struct Solution {
+  Eigen::VectorXd beta;
+  Eigen::MatrixXd xtx_inv;
+  double rss = 0;
+  double dof = 0;
+};
+
+Solution Solve(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
+  Solution s;
+  s.beta = x.colPivHouseholderQr().solve(y);
+  s.rss = (y - x * s.beta).squaredNorm();
+  s.dof = static_cast<double>(x.rows() - x.cols());
+  s.xtx_inv = (x.transpose() * x).ldlt().solve(Eigen::MatrixXd::Identity(x.cols(), x.cols()));
+  return s;
+}
+
+// Nested F-tests from order 1 up (thermal_fit.hpp); `tests` gets each statistic.
+int ChooseOrder(const Bins& b, const Eigen::VectorXd& y, int max_order, bool legs, double t_ref_c,
+                double scale_c, double alpha, std::vector<OrderTest>* tests) {
+  Solution prev = Solve(Design(b, 1, legs, t_ref_c, scale_c), y);
+  int chosen = 1;
+  bool stopped = false;
+  for (int p = 2; p <= max_order; ++p) {
+    const Solution next = Solve(Design(b, p, legs, t_ref_c, scale_c), y);
+    OrderTest t;
+    t.order = p;
+    t.dof = next.dof;
+    t.f = next.rss > 0 ? std::max(0.0, prev.rss - next.rss) / (next.rss / next.dof)
+                       : std::numeric_limits<double>::infinity();
+    t.p_value = std::isfinite(t.f) ? boost::math::cdf(boost::math::complement(
+                                         boost::math::fisher_f(1.0, next.dof), t.f))
+                                   : 0.0;
+    tests->push_back(t);
+    if (!stopped && t.p_value < alpha) {
+      chosen = p;
+    } else {
+      stopped = true;  // The first order that does not improve ends the climb.
+    }
+    prev = next;
+  }
+  return chosen;
+}
+
+ThermalAxisFit SolveAxis(const Bins& b, int axis, int order, bool legs, double t_ref_c,
+                         double scale_c) {
+  const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(
+      b.mean[axis].data(), static_cast<Eigen::Index>(b.mean[axis].size()));
+  const Solution s = Solve(Design(b, order, legs, t_ref_c, scale_c), y);
+  const Eigen::Index k = s.beta.size();
+  // Back to degC: c_j = beta_j / scale^j, V = D (s^2 (X'X)^-1) D (JCGM 100:2008 H.3.4).
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(k);
+  for (int j = 0; j <= order; ++j) d[j] = std::pow(scale_c, -j);
+  ThermalAxisFit f;
+  f.order = order;
+  f.dof = s.dof;
+  const double s2 = s.dof > 0 ? s.rss / s.dof : 0.0;
+  f.covariance = d.asDiagonal() * (s2 * s.xtx_inv) * d.asDiagonal();
+  const Eigen::VectorXd c = d.cwiseProduct(s.beta);
+  f.coefficients = c.head(order + 1);
+  f.u = f.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  f.residual_rms = std::sqrt(s.rss / static_cast<double>(y.size()));
+  f.has_hysteresis = legs;
+  if (legs) {
+    f.hysteresis = c[k - 1];
+    f.u_hysteresis = f.u[k - 1];
+  }
+  return f;
+}
+
+}  // namespace
+
+Result<ThermalFit> FitThermalBias(const ThermalSamples& s, const ThermalFitOptions& o,
+                                  double t_ref_c) {
+  std::string why;
+  if (!o.IsValid(&why)) return MakeError(s.what + ": invalid thermal fit options: " + why);
+  ThermalFit fit;
+  std::vector<bool> use(s.temp_c.size(), true);
+  for (size_t i : FindTemperatureGlitches(s.temp_c, o.glitch_c, o.glitch_window)) {
+    use[i] = false;
+    fit.excluded_lines.push_back(i < s.lines.size() ? s.lines[i] : static_cast<int64_t>(i));
+  }
+  std::vector<double> kept;
+  for (size_t i = 0; i < use.size(); ++i) {
+    if (use[i]) kept.push_back(s.temp_c[i]);
+  }
+  const std::vector<int> kept_leg =
+      o.separate_legs ? SplitLegs(kept, o.min_leg_span_c) : std::vector<int>(kept.size(), 0);
+  std::vector<int> leg(use.size(), 0);
+  for (size_t i = 0, k = 0; i < use.size(); ++i) {
+    if (use[i]) leg[i] = kept_leg[k++];
+  }
+  const Bins b = BinMeans(s, leg, use, o);
+  fit.bins = static_cast<int>(b.temp_c.size());
+  fit.legs = std::any_of(leg.begin(), leg.end(), [](int l) { return l != 0; });
+  if (b.temp_c.empty()) {
+    return MakeError(fmt::format("{}: no temperature bin of {} degC holds {} samples", s.what,
+                                 o.bin_width_c, o.min_samples_per_bin));
+  }
+  fit.t_min_c = *std::min_element(b.temp_c.begin(), b.temp_c.end());
+  fit.t_max_c = *std::max_element(b.temp_c.begin(), b.temp_c.end());
+  const double span = fit.t_max_c - fit.t_min_c;
+  const int needed = std::max(1, o.order);
+  // Each order needs its span and at least two bins more than parameters (a residual dof).
+  const int by_span = static_cast<int>(std::floor(span / o.span_per_order_c + 1e-9));
+  const int by_bins = fit.bins - 3 - (fit.legs ? 1 : 0);
+  const int max_order = std::min({o.max_order, by_span, by_bins});
+  if (max_order < needed) {
+    return MakeError(fmt::format(
+        "{}: the temperature spans {:.2f} degC ({:.2f} .. {:.2f} degC, {} bins of {} degC); a "
+        "bias fit of order {} needs at least {:.1f} degC and {} bins",
+        s.what, span, fit.t_min_c, fit.t_max_c, fit.bins, o.bin_width_c, needed,
+        o.span_per_order_c * needed, needed + 3 + (fit.legs ? 1 : 0)));
+  }
+  fit.t_ref_c = std::isnan(t_ref_c) ? 0.5 * (fit.t_min_c + fit.t_max_c) : t_ref_c;
+  const double scale_c = std::max(0.5 * span, 1e-3);
+  for (int a = 0; a < 3; ++a) {
+    const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(
+        b.mean[a].data(), static_cast<Eigen::Index>(b.mean[a].size()));
+    std::vector<OrderTest> tests;
+    const int order = o.order > 0 ? o.order
+                                  : ChooseOrder(b, y, max_order, fit.legs, fit.t_ref_c, scale_c,
+                                                o.alpha, &tests);
+    fit.axes[a] = SolveAxis(b, a, order, fit.legs, fit.t_ref_c, scale_c);
+    fit.axes[a].tests = std::move(tests);
+  }
+  return fit;
+}
+
+}  // namespace metro
