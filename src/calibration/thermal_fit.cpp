@@ -14,6 +14,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <nlohmann/json.hpp>
 
 namespace metro {
 
@@ -179,9 +180,10 @@ int ChooseOrder(const Bins& b, const Eigen::VectorXd& y, int max_order, bool leg
     t.dof = next.dof;
     t.f = next.rss > 0 ? std::max(0.0, prev.rss - next.rss) / (next.rss / next.dof)
                        : std::numeric_limits<double>::infinity();
-    t.p_value = std::isfinite(t.f) ? boost::math::cdf(boost::math::complement(
-                                         boost::math::fisher_f(1.0, next.dof), t.f))
-                                   : 0.0;
+    t.p_value =
+        std::isfinite(t.f)
+            ? boost::math::cdf(boost::math::complement(boost::math::fisher_f(1.0, next.dof), t.f))
+            : 0.0;
     tests->push_back(t);
     if (!stopped && t.p_value < alpha) {
       chosen = p;
@@ -269,13 +271,106 @@ Result<ThermalFit> FitThermalBias(const ThermalSamples& s, const ThermalFitOptio
     const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(
         b.mean[a].data(), static_cast<Eigen::Index>(b.mean[a].size()));
     std::vector<OrderTest> tests;
-    const int order = o.order > 0 ? o.order
-                                  : ChooseOrder(b, y, max_order, fit.legs, fit.t_ref_c, scale_c,
-                                                o.alpha, &tests);
+    const int order =
+        o.order > 0 ? o.order
+                    : ChooseOrder(b, y, max_order, fit.legs, fit.t_ref_c, scale_c, o.alpha, &tests);
     fit.axes[a] = SolveAxis(b, a, order, fit.legs, fit.t_ref_c, scale_c);
     fit.axes[a].tests = std::move(tests);
   }
   return fit;
+}
+
+Result<ThermalTagFit> FitThermalTag(const Tag& tag, const std::string& path,
+                                    const ThermalFitOptions& o) {
+  ThermalTagFit out;
+  out.sensor = tag.sensor;
+  out.path = path;
+  for (ImuSensor sensor : {ImuSensor::kAccel, ImuSensor::kGyro}) {
+    Result<ThermalSamples> s = ThermalSamplesFromTag(tag, sensor, path);
+    if (!s.ok()) return s.error();
+    Result<ThermalFit> f = FitThermalBias(s.value(), o, std::nan(""));
+    if (!f.ok()) return f.error();
+    (sensor == ImuSensor::kAccel ? out.accel : out.gyro) = std::move(f).value();
+  }
+  return out;
+}
+
+namespace {
+
+using OrderedJson = nlohmann::ordered_json;
+
+OrderedJson MatrixJson(const Eigen::MatrixXd& m) {
+  OrderedJson rows = OrderedJson::array();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    std::vector<double> row(static_cast<size_t>(m.cols()));
+    for (Eigen::Index c = 0; c < m.cols(); ++c) row[static_cast<size_t>(c)] = m(r, c);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+OrderedJson AxisJson(const ThermalAxisFit& f) {
+  static const char* kNames[5] = {"bias", "bias_per_c", "bias_per_c2", "bias_per_c3",
+                                  "bias_per_c4"};
+  OrderedJson j = {{"order", f.order}};
+  std::vector<std::string> params;
+  for (int k = 0; k <= f.order; ++k) {
+    j[kNames[k]] = f.coefficients[k];
+    j[std::string(kNames[k]) + "_u"] = f.u[k];
+    params.push_back(kNames[k]);
+  }
+  if (f.has_hysteresis) {
+    j["hysteresis"] = f.hysteresis;
+    j["hysteresis_u"] = f.u_hysteresis;
+    params.push_back("hysteresis");
+  }
+  j["parameters"] = params;
+  j["covariance"] = MatrixJson(f.covariance);
+  j["residual_rms"] = f.residual_rms;
+  j["dof"] = f.dof;
+  OrderedJson tests = OrderedJson::array();
+  for (const OrderTest& t : f.tests) {
+    tests.push_back({{"order", t.order}, {"f", t.f}, {"dof", t.dof}, {"p_value", t.p_value}});
+  }
+  j["order_tests"] = tests;
+  return j;
+}
+
+OrderedJson SensorJson(const ThermalFit& f, const char* input_unit) {
+  OrderedJson axes = OrderedJson::array();
+  for (const ThermalAxisFit& a : f.axes) axes.push_back(AxisJson(a));
+  return {{"input_unit", input_unit},
+          {"t_ref_c", f.t_ref_c},
+          {"t_valid_min_c", f.t_min_c},
+          {"t_valid_max_c", f.t_max_c},
+          {"bins", f.bins},
+          {"legs", f.legs ? "heating and cooling" : "one"},
+          {"excluded_temp_lines", f.excluded_lines},
+          {"axes", axes}};
+}
+
+}  // namespace
+
+std::string ThermalFitJson(const std::vector<ThermalTagFit>& fits, const ThermalFitOptions& o) {
+  OrderedJson tags = OrderedJson::array();
+  for (const ThermalTagFit& t : fits) {
+    tags.push_back({{"sensor", t.sensor},
+                    {"input", t.path},
+                    {"accel", SensorJson(t.accel, "LSB")},
+                    {"gyro", SensorJson(t.gyro, "LSB")}});
+  }
+  OrderedJson j = {
+      {"schema", "metro.thermal-fit/1"},
+      {"model_equation",
+       "b(T) = bias + bias_per_c x + bias_per_c2 x^2 + bias_per_c3 x^3 + bias_per_c4 x^4 "
+       "[+ leg hysteresis / 2], x = T - t_ref_c, leg +1 heating, -1 cooling (docs/thermal.md)"},
+      {"method",
+       "ordinary least squares on temperature-bin means (uniform in temperature); covariance "
+       "s^2 (X'X)^-1 (JCGM 100:2008 H.3); order by nested F-tests"},
+      {"bin_width_c", o.bin_width_c},
+      {"alpha", o.alpha},
+      {"tags", tags}};
+  return j.dump(2) + "\n";
 }
 
 }  // namespace metro

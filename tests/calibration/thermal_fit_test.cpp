@@ -2,6 +2,8 @@
 // Per axis case: the held-out-temperature bias error within 2u, the chosen order equal to the
 // truth's, and the residual RMS against a fixed order-3 offset-only least-squares fit on the
 // samples (PX4 / ArduPilot's method), computed here from the samples.
+#include "metro/calibration/thermal_fit.hpp"
+
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
@@ -11,7 +13,6 @@
 #include <map>
 #include <random>
 
-#include "metro/calibration/thermal_fit.hpp"
 #include "metro/sim/thermal_session.hpp"
 
 namespace metro {
@@ -78,9 +79,8 @@ void RunCase(const ThermalSimulationOptions& o, Tally* tally) {
   const ThermalTruth& truth = sim.value().truth;
   std::mt19937_64 rng(o.seed * 7919u + 17u);
   const double span = o.temp_high_c - o.temp_low_c;
-  const double held_c =
-      std::uniform_real_distribution<double>(o.temp_low_c + 0.25 * span,
-                                             o.temp_high_c - 0.25 * span)(rng);
+  const double held_c = std::uniform_real_distribution<double>(o.temp_low_c + 0.25 * span,
+                                                               o.temp_high_c - 0.25 * span)(rng);
   for (ImuSensor sensor : {ImuSensor::kAccel, ImuSensor::kGyro}) {
     auto all = ThermalSamplesFromTag(tag, sensor, "sim.csv");
     REQUIRE(all.ok());
@@ -108,8 +108,8 @@ void RunCase(const ThermalSimulationOptions& o, Tally* tally) {
       if (!fit.value().legs) {
         std::vector<double> bt, bm;
         BinMeansForTest(fit_in, std::vector<bool>(fit_in.temp_c.size(), true), a, &bt, &bm);
-        const double px4 = Px4ResidualRms(fit_in, std::vector<bool>(fit_in.temp_c.size(), true),
-                                          a, bt, bm, truth.t_ref_c);
+        const double px4 = Px4ResidualRms(fit_in, std::vector<bool>(fit_in.temp_c.size(), true), a,
+                                          bt, bm, truth.t_ref_c);
         tally->rms_at_or_below_px4 += f.residual_rms <= px4 ? 1 : 0;
         tally->worst_rms_ratio = std::max(tally->worst_rms_ratio, f.residual_rms / px4);
       }
@@ -138,10 +138,11 @@ void Report(const char* name, const Tally& t) {
       "worst RMS ratio {:.3f}",
       name, t.cases, 100.0 * t.within_2u / t.cases, 100.0 * t.order_right / t.cases,
       t.rms_at_or_below_px4, t.worst_rms_ratio));
-  WARN(fmt::format("{}: {} axis cases; within 2u {:.1f} %, order right {:.1f} %, RMS <= "
-                   "order-3 (PX4) {}, worst RMS ratio {:.3f}",
-                   name, t.cases, 100.0 * t.within_2u / t.cases, 100.0 * t.order_right / t.cases,
-                   t.rms_at_or_below_px4, t.worst_rms_ratio));
+  WARN(
+      fmt::format("{}: {} axis cases; within 2u {:.1f} %, order right {:.1f} %, RMS <= "
+                  "order-3 (PX4) {}, worst RMS ratio {:.3f}",
+                  name, t.cases, 100.0 * t.within_2u / t.cases, 100.0 * t.order_right / t.cases,
+                  t.rms_at_or_below_px4, t.worst_rms_ratio));
 }
 
 ThermalSimulationOptions Case(int order, ThermalProfile profile, bool cooling, bool hysteresis) {
@@ -206,8 +207,7 @@ TEST_CASE("thermal fit: hysteresis estimated within 2u of the truth", "[thermal]
   }
 }
 
-TEST_CASE("thermal fit: a span too small for the order is refused with its figures",
-          "[thermal]") {
+TEST_CASE("thermal fit: a span too small for the order is refused with its figures", "[thermal]") {
   ThermalSimulationOptions o;
   o.temp_low_c = 25.0;
   o.temp_high_c = 28.0;  // 3 degC: order 1 needs 5.

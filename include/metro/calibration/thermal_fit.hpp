@@ -73,7 +73,7 @@ struct ThermalFit {
   double t_min_c = 0;  // Validity range: the span of the bin means.
   double t_max_c = 0;
   int bins = 0;
-  bool legs = false;  // Heating and cooling legs fitted with a hysteresis term.
+  bool legs = false;                    // Heating and cooling legs fitted with a hysteresis term.
   std::vector<int64_t> excluded_lines;  // Temperature read errors left out.
   std::array<ThermalAxisFit, 3> axes;
 };
@@ -97,6 +97,22 @@ Result<ThermalFit> FitThermalBias(const ThermalSamples& samples, const ThermalFi
 // die temperature per sample") and the columns the tag has.
 Result<ThermalSamples> ThermalSamplesFromTag(const Tag& tag, ImuSensor sensor,
                                              const std::string& path);
+
+// Both sensors of one tag from one record (`calibrate fit --thermal`).
+struct ThermalTagFit {
+  int sensor = 0;
+  std::string path;
+  ThermalFit accel;  // [LSB], [LSB/degC^j]
+  ThermalFit gyro;
+};
+Result<ThermalTagFit> FitThermalTag(const Tag& tag, const std::string& path,
+                                    const ThermalFitOptions& options);
+
+// The fits as JSON ("metro.thermal-fit/1", docs/thermal.md "Output"): per tag and sensor the
+// reference, validity range, bins, excluded lines and, per axis, the order with its F-tests,
+// c_0..c_p under calibration.json's names (bias, bias_per_c, bias_per_c2, bias_per_c3,
+// bias_per_c4) with u, the covariance, the residual RMS and the hysteresis when fitted.
+std::string ThermalFitJson(const std::vector<ThermalTagFit>& fits, const ThermalFitOptions& o);
 
 // Indices of temperature read errors (ThermalFitOptions::glitch_c, glitch_window).
 std::vector<size_t> FindTemperatureGlitches(const std::vector<double>& temp_c, double glitch_c,
