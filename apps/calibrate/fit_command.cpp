@@ -83,7 +83,9 @@ int RunThermalFit(const FitOptions& f) {
   }
   if (fits.empty()) {
     apps::PrintErrorText(
-        fmt::format("{}: no tag {} in the session", f.inputs.front(), f.calibration.sensor));
+        f.calibration.sensor != 0
+            ? fmt::format("{}: no tag {} in the session", f.inputs.front(), f.calibration.sensor)
+            : fmt::format("{}: the session has no tags", f.inputs.front()));
     return kExitUsage;
   }
   if (Status w = apps::WriteOutputs({{f.output, ThermalFitJson(fits, f.thermal_options)}});

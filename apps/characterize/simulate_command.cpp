@@ -323,8 +323,9 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--yaw-drift-dps", o->sim.yaw_drift_dps, "yaw drift rate")->capture_default_str();
   sub->add_option("--kind", o->kind,
                   "static; table: a rotation-table sweep; calibration: a multi-pose calibration "
-                  "session in raw LSB (docs/simulator.md)")
-      ->check(CLI::IsMember({"static", "table", "calibration"}))
+                  "session in raw LSB; thermal: one pose over a temperature profile in raw LSB "
+                  "(docs/simulator.md)")
+      ->check(CLI::IsMember({"static", "table", "calibration", "thermal"}))
       ->capture_default_str();
   sub->add_option("--poses", o->calibration.poses,
                   "calibration: static poses (cube faces, corners, edges, cycled)")

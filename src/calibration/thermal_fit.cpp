@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 namespace metro {
 
@@ -53,8 +54,36 @@ std::vector<size_t> FindTemperatureGlitches(const std::vector<double>& temp_c, d
   return out;
 }
 
+namespace {
+
+// Removes the nominal 1 g from the accelerometer axis that reads it (ThermalSamplesFromTag).
+Status RemoveGravity(double accel_fs_g, ThermalSamples* s) {
+  const std::optional<double> scale = NominalScale(ImuSensor::kAccel, "LSB", accel_fs_g);
+  if (!scale) return MakeError(fmt::format("accel_fs_g {} is not a full scale", accel_fs_g));
+  const double one_g_lsb = 1.0 / *scale;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int a = 0; a < 3; ++a) {
+    double sum = 0;
+    for (double v : s->values[a]) sum += v;
+    mean[a] = s->values[a].empty() ? 0.0 : sum / static_cast<double>(s->values[a].size());
+  }
+  Eigen::Index axis = 0;
+  mean.cwiseAbs().maxCoeff(&axis);
+  if (std::abs(std::abs(mean[axis]) - one_g_lsb) > 0.15 * one_g_lsb) {
+    return MakeError(fmt::format(
+        "{}: the largest mean reading, {:.0f} LSB on {}, is not 1 g ({:.0f} LSB at +-{} g) "
+        "within 15 %: a thermal fit takes one static pose on a face",
+        s->what, mean[axis], "xyz"[axis], one_g_lsb, accel_fs_g));
+  }
+  const double g = mean[axis] > 0 ? one_g_lsb : -one_g_lsb;
+  for (double& v : s->values[static_cast<size_t>(axis)]) v -= g;
+  return Status::Ok();
+}
+
+}  // namespace
+
 Result<ThermalSamples> ThermalSamplesFromTag(const Tag& tag, ImuSensor sensor,
-                                             const std::string& path) {
+                                             const std::string& path, double accel_fs_g) {
   ThermalSamples s;
   s.what = fmt::format("{}: sensor {} {}", path, tag.sensor, ImuSensorName(sensor));
   std::string have;
@@ -76,6 +105,9 @@ Result<ThermalSamples> ThermalSamplesFromTag(const Tag& tag, ImuSensor sensor,
   }
   s.temp_c = temp->values;
   s.lines.assign(tag.line.begin(), tag.line.end());
+  if (sensor == ImuSensor::kAccel) {
+    if (Status g = RemoveGravity(accel_fs_g, &s); !g.ok()) return g.error();
+  }
   return s;
 }
 
@@ -97,7 +129,10 @@ namespace {
 
 struct Bins {
   std::vector<double> temp_c;  // Mean temperature of each bin.
-  std::vector<double> leg;     // +1 heating, -1 cooling, 0 one leg only.
+  // Central moments of the bin's temperatures, mean((T - mean T)^k), k = 0..4, so that the
+  // design row is the bin mean of the powers (exact for a polynomial), not powers of the mean.
+  std::vector<std::array<double, 5>> moments;
+  std::vector<double> leg;  // +1 heating, -1 cooling, 0 one leg only.
   std::array<std::vector<double>, 3> mean;
 };
 
@@ -119,33 +154,54 @@ Bins BinMeans(const ThermalSamples& s, const std::vector<int>& leg, const std::v
   struct Sum {
     double temp = 0;
     std::array<double, 3> v{};
+    std::array<double, 5> m{};
     int n = 0;
   };
   std::map<std::pair<int, long>, Sum> sums;
+  auto key = [&](size_t i) {
+    return std::make_pair(leg[i], std::lround(std::floor(s.temp_c[i] / o.bin_width_c)));
+  };
   for (size_t i = 0; i < s.temp_c.size(); ++i) {
     if (!use[i]) continue;
-    Sum& b = sums[{leg[i], std::lround(std::floor(s.temp_c[i] / o.bin_width_c))}];
+    Sum& b = sums[key(i)];
     b.temp += s.temp_c[i];
     for (int a = 0; a < 3; ++a) b.v[a] += s.values[a][i];
     ++b.n;
   }
+  for (size_t i = 0; i < s.temp_c.size(); ++i) {
+    if (!use[i]) continue;
+    Sum& b = sums[key(i)];
+    const double d = s.temp_c[i] - b.temp / b.n;
+    for (int k = 0; k < 5; ++k) b.m[k] += std::pow(d, k);
+  }
   Bins out;
-  for (const auto& [key, b] : sums) {
+  for (const auto& [k, b] : sums) {
     if (b.n < o.min_samples_per_bin) continue;
     out.temp_c.push_back(b.temp / b.n);
-    out.leg.push_back(key.first);
+    std::array<double, 5> m;
+    for (int j = 0; j < 5; ++j) m[j] = b.m[j] / b.n;
+    out.moments.push_back(m);
+    out.leg.push_back(k.first);
     for (int a = 0; a < 3; ++a) out.mean[a].push_back(b.v[a] / b.n);
   }
   return out;
 }
 
-// Columns 1, z, .., z^order (z = (T - t_ref_c) / scale_c) and leg / 2 when legs.
+// Columns mean(z^j), j = 0..order, over each bin (z = (T - t_ref_c) / scale_c; from the
+// bin's mean and central moments, binomial expansion) and leg / 2 when legs.
 Eigen::MatrixXd Design(const Bins& b, int order, bool legs, double t_ref_c, double scale_c) {
+  static const double kBinomial[5][5] = {
+      {1, 0, 0, 0, 0}, {1, 1, 0, 0, 0}, {1, 2, 1, 0, 0}, {1, 3, 3, 1, 0}, {1, 4, 6, 4, 1}};
   const Eigen::Index n = static_cast<Eigen::Index>(b.temp_c.size());
   Eigen::MatrixXd x(n, order + 1 + (legs ? 1 : 0));
   for (Eigen::Index i = 0; i < n; ++i) {
-    const double z = (b.temp_c[i] - t_ref_c) / scale_c;
-    for (int j = 0; j <= order; ++j) x(i, j) = std::pow(z, j);
+    const double d = b.temp_c[i] - t_ref_c;
+    const std::array<double, 5>& m = b.moments[i];
+    for (int j = 0; j <= order; ++j) {
+      double sum = 0;  // mean((d + e)^j) = sum_k C(j, k) d^(j-k) mean(e^k)
+      for (int k = 0; k <= j; ++k) sum += kBinomial[j][k] * std::pow(d, j - k) * m[k];
+      x(i, j) = sum / std::pow(scale_c, j);
+    }
     if (legs) x(i, order + 1) = 0.5 * b.leg[i];
   }
   return x;
@@ -167,12 +223,14 @@ Solution Solve(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
   return s;
 }
 
-// Nested F-tests from order 1 up (thermal_fit.hpp); `tests` gets each statistic.
+// Nested F-tests of each order p against p - 1 (thermal_fit.hpp); `tests` gets each statistic.
+// The chosen order is the highest whose test is significant at alpha / (max_order - 1)
+// (Bonferroni over the tests), so a small intermediate term does not stop the climb.
 int ChooseOrder(const Bins& b, const Eigen::VectorXd& y, int max_order, bool legs, double t_ref_c,
                 double scale_c, double alpha, std::vector<OrderTest>* tests) {
   Solution prev = Solve(Design(b, 1, legs, t_ref_c, scale_c), y);
   int chosen = 1;
-  bool stopped = false;
+  const double level = alpha / std::max(1, max_order - 1);
   for (int p = 2; p <= max_order; ++p) {
     const Solution next = Solve(Design(b, p, legs, t_ref_c, scale_c), y);
     OrderTest t;
@@ -185,11 +243,7 @@ int ChooseOrder(const Bins& b, const Eigen::VectorXd& y, int max_order, bool leg
             ? boost::math::cdf(boost::math::complement(boost::math::fisher_f(1.0, next.dof), t.f))
             : 0.0;
     tests->push_back(t);
-    if (!stopped && t.p_value < alpha) {
-      chosen = p;
-    } else {
-      stopped = true;  // The first order that does not improve ends the climb.
-    }
+    if (t.p_value < level) chosen = p;
     prev = next;
   }
   return chosen;

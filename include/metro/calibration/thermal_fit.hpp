@@ -8,8 +8,9 @@
 // (uniform in temperature, not in time: a slow part of a ramp does not dominate). The fit is
 // ordinary least squares on the bin means; covariance V = s^2 (X'X)^-1 with s^2 the residual
 // variance on n_bins - n_params degrees of freedom (JCGM 100:2008 H.3.3-H.3.4; JCGM 100:2008
-// 4.2.3 for type A). The order is chosen by nested F-tests, p = 1, 2, .. max: order p+1 is kept
-// while F = (RSS_p - RSS_{p+1}) / (RSS_{p+1} / nu_{p+1}) exceeds F(1, nu_{p+1}; 1 - alpha).
+// 4.2.3 for type A). The order is chosen by nested F-tests of each order p = 2 .. max against
+// p - 1, F = (RSS_{p-1} - RSS_p) / (RSS_p / nu_p) ~ F(1, nu_p) when c_p = 0: the highest order
+// whose upper-tail probability is below alpha / (max - 1) (Bonferroni), else 1.
 // Validity range: the fitted span [t_min_c, t_max_c] of the bin means.
 #pragma once
 
@@ -30,7 +31,7 @@ struct ThermalFitOptions {
   int min_samples_per_bin = 10;  // Bins with fewer are left out.
   int max_order = 4;
   int order = 0;        // 0: chosen by the data; 1..max_order: fixed.
-  double alpha = 0.05;  // Level of each nested F-test.
+  double alpha = 0.05;  // Family level of the nested F-tests (each at alpha / (max - 1)).
   // The span an order needs: span_per_order_c * order (5 degC for order 1, issue #42).
   double span_per_order_c = 5.0;
   // A read error: |temp_c - median of the glitch_window samples each side| > glitch_c.
@@ -93,10 +94,15 @@ Result<ThermalFit> FitThermalBias(const ThermalSamples& samples, const ThermalFi
                                   double t_ref_c);
 
 // The raw LSB columns of `sensor` (InputColumns(sensor, "LSB")) and temp_c of `tag`; an error
-// names the missing column ("s.csv: sensor 2 has no temp_c column: a thermal fit needs the
+// names the missing column ("s.csv: sensor 2 gyro: no temp_c column: a thermal fit needs the
 // die temperature per sample") and the columns the tag has.
+// The record is one static pose. For the accelerometer the gravity reading is removed: on the
+// axis whose mean reading is largest, +-32768 / accel_fs_g LSB (the nominal 1 g, imu_model.hpp
+// NominalScale); that mean must lie within 15 % of it (else an error: not one pose on a face).
+// So that axis's c_0 holds its scale error at 1 g and its c_1.. the scale's temperature terms
+// times 1 g; the other axes' c_0 hold any tilt of the pose (docs/thermal.md).
 Result<ThermalSamples> ThermalSamplesFromTag(const Tag& tag, ImuSensor sensor,
-                                             const std::string& path);
+                                             const std::string& path, double accel_fs_g = 2.0);
 
 // Both sensors of one tag from one record (`calibrate fit --thermal`).
 struct ThermalTagFit {
