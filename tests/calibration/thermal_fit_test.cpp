@@ -10,8 +10,6 @@
 #include <boost/math/distributions/binomial.hpp>
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <random>
 
@@ -104,12 +102,6 @@ void RunCase(const ThermalSimulationOptions& o, Tally* tally) {
       const ThermalAxisFit& f = fit.value().axes[a];
       const double err = f.BiasAt(held_c, truth.t_ref_c) - st.BiasAt(a, held_c, truth.t_ref_c, 0);
       ++tally->cases;
-      if (std::getenv("THERMAL_DEBUG")) {
-        std::fprintf(stderr, "%s axis %d order %d/%d err %.4g u %.4g z %.2f rms %.4g dof %.0f\n",
-                     ImuSensorName(sensor), a, f.order, truth.order, err,
-                     f.UBiasAt(held_c, truth.t_ref_c), err / f.UBiasAt(held_c, truth.t_ref_c),
-                     f.residual_rms, f.dof);
-      }
       tally->within_2u += std::abs(err) <= 2.0 * f.UBiasAt(held_c, truth.t_ref_c) ? 1 : 0;
       tally->order_right += f.order == truth.order ? 1 : 0;
       if (!fit.value().legs) {
