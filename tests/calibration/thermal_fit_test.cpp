@@ -161,9 +161,17 @@ ThermalSimulationOptions Case(int order, ThermalProfile profile, bool cooling, b
   return o;
 }
 
-void CheckCoverage(const Tally& t) {
-  // About 95 % within 2u (k = 2, JCGM 100:2008 6.3.3) and >= 90 % right orders.
-  CHECK(Consistent(t.within_2u, t.cases, 0.9545));
+// About 95 % within 2u (k = 2, JCGM 100:2008 6.3.3) and >= 90 % right orders. CI-sized runs:
+// the count inside the central 99.8 % of Binomial(n, 0.9545). 100-tag runs: the issue's
+// acceptance, 95 +- 3 % (the binomial band of 600 cases is +-2.6 points, and the uniform bin
+// weighting under-covers by 1-3 points where bin counts differ most, docs/thermal.md).
+void CheckCoverage(const Tally& t, bool issue_band = false) {
+  if (issue_band) {
+    CHECK(t.within_2u >= 0.92 * t.cases);
+    CHECK(t.within_2u <= 0.98 * t.cases);
+  } else {
+    CHECK(Consistent(t.within_2u, t.cases, 0.9545));
+  }
   const boost::math::binomial_distribution<double> b(t.cases, 0.90);
   CHECK(t.order_right >= boost::math::quantile(b, 0.001));
 }
@@ -193,9 +201,37 @@ TEST_CASE("thermal fit: 100 tags per case, ramp and steps, with and without hyst
                            : h == 1 ? "heating+cooling, no hysteresis"
                                     : "heating+cooling, hysteresis"),
                t);
-        CheckCoverage(t);
+        CheckCoverage(t, true);
       }
     }
+  }
+}
+
+// A power-on warm-up of 23 degC: with the 2 degC held out, the span still allows order 4
+// (5 degC per order).
+ThermalSimulationOptions Warmup(int order) {
+  ThermalSimulationOptions o = Case(order, ThermalProfile::kWarmup, false, false);
+  o.temp_low_c = 25.0;
+  o.temp_high_c = 48.0;
+  o.warmup_tau_s = 600.0;
+  o.warmup_s = 3600.0;
+  return o;
+}
+
+TEST_CASE("thermal fit: a power-on warm-up 25 -> 48 degC (CI-sized with binomial bounds)",
+          "[thermal]") {
+  for (int order = 1; order <= 4; ++order) {
+    const Tally t = RunCases(Warmup(order), 10, 500 + 100 * order);
+    Report(fmt::format("warm-up order {}", order), t);
+    CheckCoverage(t);
+  }
+}
+
+TEST_CASE("thermal fit: a power-on warm-up with 100 tags per order", "[thermal][slow]") {
+  for (int order = 1; order <= 4; ++order) {
+    const Tally t = RunCases(Warmup(order), 100, 5000 + 1000 * order);
+    Report(fmt::format("warm-up order {}", order), t);
+    CheckCoverage(t, true);
   }
 }
 
