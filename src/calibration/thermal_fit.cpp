@@ -313,10 +313,12 @@ Result<ThermalFit> FitThermalBias(const ThermalSamples& s, const ThermalFitOptio
   const int by_bins = fit.bins - 3 - (fit.legs ? 1 : 0);
   const int max_order = std::min({o.max_order, by_span, by_bins});
   if (max_order < needed) {
+    const auto [lo, hi] = std::minmax_element(kept.begin(), kept.end());
     return MakeError(fmt::format(
-        "{}: the temperature spans {:.2f} degC ({:.2f} .. {:.2f} degC, {} bins of {} degC); a "
-        "bias fit of order {} needs at least {:.1f} degC and {} bins",
-        s.what, span, fit.t_min_c, fit.t_max_c, fit.bins, o.bin_width_c, needed,
+        "{}: the temperature spans {:.2f} degC between bin means ({:.2f} .. {:.2f} degC, {} "
+        "bins of {} degC; samples {:.2f} .. {:.2f} degC); a bias fit of order {} needs at least "
+        "{:.1f} degC and {} bins",
+        s.what, span, fit.t_min_c, fit.t_max_c, fit.bins, o.bin_width_c, *lo, *hi, needed,
         o.span_per_order_c * needed, needed + 3 + (fit.legs ? 1 : 0)));
   }
   fit.t_ref_c = std::isnan(t_ref_c) ? 0.5 * (fit.t_min_c + fit.t_max_c) : t_ref_c;
