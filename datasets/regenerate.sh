@@ -32,3 +32,8 @@ calibrate="${2:-build/apps/calibrate/calibrate}"
 # hand rotations, a 90 deg/s table run at every pose, 22 -> 34 degC; truth in the .truth.json.
 "$characterize" simulate --kind calibration --seed 25 --sensor 2 \
   -o "$here/calibration_session.csv"
+# Thermal session (docs/thermal.md, docs/simulator.md "Thermal sessions"): one pose, ramp
+# -10 -> 35 -> -10 degC at 1 Hz, order-3 bias truth, hysteresis, three temperature read errors.
+"$characterize" simulate --kind thermal --seed 42 --sensor 2 --rate-hz 1 --thermal-profile ramp \
+  --ramp-s 1800 --cooling-leg --bias-order 3 --accel-hysteresis-g 0.004 \
+  --gyro-hysteresis-dps 0.15 --temp-glitches 3 -o "$here/thermal_session.csv"

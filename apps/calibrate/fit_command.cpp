@@ -11,6 +11,7 @@
 #include "conformity_cli.hpp"
 #include "load_cli.hpp"
 #include "metro/calibration/calibration_io.hpp"
+#include "metro/calibration/thermal_fit.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/report/certificate.hpp"
@@ -37,9 +38,73 @@ struct FitOptions {
   apps::LoadCliOptions load;    // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
   SpecCliOptions spec;          // --spec, --fail-on-nonconformity (docs/conformity.md)
   RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
+  // --thermal: bias versus temperature from one static record per tag (docs/thermal.md).
+  bool thermal = false;
+  ThermalFitOptions thermal_options;
 };
 
+// calibrate fit --thermal SESSION -o thermal.json: FitThermalTag per tag, one JSON document.
+int RunThermalFit(const FitOptions& f) {
+  if (f.imutk || !f.segments.empty() || !f.html.empty() || !f.spec.spec.empty() ||
+      !f.registry.url.empty() || f.inputs.size() != 1) {
+    apps::PrintErrorText(
+        "--thermal takes one session (a static record over a temperature range) and -o; it "
+        "does not take --imutk, --segments, --html, --spec or --registry (docs/thermal.md)");
+    return kExitUsage;
+  }
+  std::string why;
+  if (!f.thermal_options.IsValid(&why)) {
+    apps::PrintErrorText("--thermal: " + why);
+    return kExitUsage;
+  }
+  if (Status s = apps::CheckOutputs({{"-o", f.output}}, {{"SESSION", f.inputs.front()}}, {});
+      !s.ok()) {
+    return apps::PrintErrorExit(s.error());
+  }
+  LoadOptions load;
+  if (Status st = apps::MakeLoadOptions(f.load, &load); !st.ok()) {
+    return apps::PrintErrorExit(st.error());
+  }
+  Result<Session> session = LoadSession(f.inputs.front(), load);
+  if (!session.ok()) return apps::PrintErrorExit(session.error());
+  std::vector<ThermalTagFit> fits;
+  for (const Tag& tag : session.value().tags) {
+    if (f.calibration.sensor != 0 && tag.sensor != f.calibration.sensor) continue;
+    Result<ThermalTagFit> fit = FitThermalTag(tag, f.inputs.front(), f.thermal_options);
+    if (!fit.ok()) return apps::PrintErrorExit(fit.error());
+    // Both sensors read the same temp_c column: one warning per excluded line.
+    for (int64_t line : fit.value().accel.excluded_lines) {
+      apps::PrintWarning(
+          fmt::format("{}:{}: temp_c is a read error (more than {} degC from its "
+                      "neighbours' median): sample excluded",
+                      f.inputs.front(), line, f.thermal_options.glitch_c));
+    }
+    fits.push_back(std::move(fit).value());
+  }
+  if (fits.empty()) {
+    apps::PrintErrorText(
+        f.calibration.sensor != 0
+            ? fmt::format("{}: no tag {} in the session", f.inputs.front(), f.calibration.sensor)
+            : fmt::format("{}: the session has no tags", f.inputs.front()));
+    return kExitUsage;
+  }
+  if (Status w = apps::WriteOutputs({{f.output, ThermalFitJson(fits, f.thermal_options)}});
+      !w.ok()) {
+    return apps::PrintErrorExit(w.error());
+  }
+  for (const ThermalTagFit& t : fits) {
+    apps::Note(fmt::format(
+        "sensor {}: valid {:.2f} .. {:.2f} degC, orders accel {} {} {}, gyro "
+        "{} {} {}\n",
+        t.sensor, t.gyro.t_min_c, t.gyro.t_max_c, t.accel.axes[0].order, t.accel.axes[1].order,
+        t.accel.axes[2].order, t.gyro.axes[0].order, t.gyro.axes[1].order, t.gyro.axes[2].order));
+  }
+  apps::Note(fmt::format("wrote {}\n", apps::IsStdio(f.output) ? "stdout" : f.output));
+  return kExitOk;
+}
+
 int RunFit(const FitOptions& f) {
+  if (f.thermal) return RunThermalFit(f);
   CalibrationOptions o = f.calibration;
   const bool accel_none = !o.fit_accel;
   if (accel_none && !o.fit_gyro) {
@@ -326,6 +391,17 @@ void AddFitCommand(CLI::App& app, int* exit_code) {
                   "kind,start_s,end_s[,table_rate_dps][,input] (docs/calibration-model.md)")
       ->check(CLI::ExistingFile);
   sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
+  sub->add_flag("--thermal", o->thermal,
+                "bias versus temperature (polynomial, order by F-tests) from one static record "
+                "over a temperature range; writes metro.thermal-fit/1 JSON (docs/thermal.md)");
+  sub->add_option("--thermal-order", o->thermal_options.order,
+                  "--thermal: fixed polynomial order 1..4 (0: chosen by the data)")
+      ->check(CLI::Range(0, 4))
+      ->capture_default_str();
+  sub->add_option("--thermal-bin-c", o->thermal_options.bin_width_c,
+                  "--thermal: temperature bin width; every bin weighs the same")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
                 "certify constants marked model_rejected (a model the data reject or an exact "
                 "fit), with that notice on the certificate");

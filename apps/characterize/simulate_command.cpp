@@ -11,6 +11,7 @@
 #include "metro/sim/calibration_session.hpp"
 #include "metro/sim/static_session.hpp"
 #include "metro/sim/table_session.hpp"
+#include "metro/sim/thermal_session.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
@@ -33,6 +34,9 @@ struct SimulateOptions {
   // sessions"); --seed, --sensor and --rate-hz are shared.
   SimulationOptions calibration = DefaultCalibrationSimulation();
   bool no_temperature = false;
+  // --kind thermal: one pose over a temperature profile (docs/simulator.md, "Thermal sessions").
+  ThermalSimulationOptions thermal;
+  std::string thermal_profile = "ramp";
 
   static SimulationOptions DefaultCalibrationSimulation() {
     SimulationOptions c;
@@ -84,6 +88,48 @@ int RunCalibrationSimulate(SimulateOptions o) {
   Note(fmt::format("wrote {} (calibration, {} rows, {} poses, seed {}){}\n",
                    IsStdio(o.output) ? "stdout" : o.output, sim.value().session.rows, c.poses,
                    c.seed,
+                   o.truth_output.empty() ? "; no truth written (give --truth-output)"
+                                          : "; truth in " + o.truth_output));
+  return kExitOk;
+}
+
+int RunThermalSimulate(SimulateOptions o) {
+  if (o.format != "csv") {
+    return PrintErrorExit(MakeError(
+        "--kind thermal writes session.csv (raw LSB columns): drop --format " + o.format));
+  }
+  if (o.sim.sensors.size() != 1) {
+    return PrintErrorExit(MakeError("--kind thermal simulates one tag: give one --sensor"));
+  }
+  ThermalSimulationOptions& t = o.thermal;
+  t.sensor = o.sim.sensors.front();
+  t.seed = o.sim.seed;
+  if (o.sim.rate_hz > 0) t.rate_hz = o.sim.rate_hz;
+  t.profile = o.thermal_profile == "steps"    ? ThermalProfile::kSteps
+              : o.thermal_profile == "warmup" ? ThermalProfile::kWarmup
+                                              : ThermalProfile::kRamp;
+  if (o.truth_output.empty() && !IsStdio(o.output)) o.truth_output = o.output + ".truth.json";
+  std::string why;
+  if (!t.IsValid(&why)) {
+    return PrintErrorExit(MakeError(why));
+  }
+  if (Status s = CheckOutputs({{"-o", o.output}, {"--truth-output", o.truth_output}}, {});
+      !s.ok()) {
+    return PrintErrorExit(s.error());
+  }
+  Result<SimulatedThermalSession> sim = SimulateThermalSession(t);
+  if (!sim.ok()) {
+    return PrintErrorExit(sim.error());
+  }
+  // The session and its truth are replaced together or not at all.
+  Status s = WriteOutputs({{o.output, FormatSessionCsv(sim.value().session)},
+                           {o.truth_output, ThermalTruthJson(t, sim.value())}});
+  if (!s.ok()) {
+    return PrintErrorExit(s.error());
+  }
+  Note(fmt::format("wrote {} (thermal, {}, order {}, {} rows, seed {}){}\n",
+                   IsStdio(o.output) ? "stdout" : o.output, ThermalProfileName(t.profile),
+                   t.bias_order, sim.value().session.rows, t.seed,
                    o.truth_output.empty() ? "; no truth written (give --truth-output)"
                                           : "; truth in " + o.truth_output));
   return kExitOk;
@@ -161,11 +207,13 @@ int RunSimulate(SimulateOptions o) {
   }
   if (o.kind == "static" && !o.truth_output.empty()) {
     return PrintErrorExit(MakeError(
-        "--truth-output writes the truth of a table or calibration session (--kind table or "
-        "calibration); a static session's truth is its options (docs/simulator.md)"));
+        "--truth-output writes the truth of a table, calibration or thermal session (--kind "
+        "table, calibration or thermal); a static session's truth is its options "
+        "(docs/simulator.md)"));
   }
   if (o.kind == "table") return RunTableSimulate(std::move(o));
   if (o.kind == "calibration") return RunCalibrationSimulate(std::move(o));
+  if (o.kind == "thermal") return RunThermalSimulate(std::move(o));
   if (o.tags > 0) {
     o.sim.sensors.resize(static_cast<size_t>(o.tags));
     std::iota(o.sim.sensors.begin(), o.sim.sensors.end(), 1);
@@ -204,6 +252,47 @@ int RunSimulate(SimulateOptions o) {
   return kExitOk;
 }
 
+void AddThermalSimulateOptions(CLI::App* sub, SimulateOptions* o) {
+  ThermalSimulationOptions& t = o->thermal;
+  sub->add_option("--thermal-profile", o->thermal_profile,
+                  "thermal: ramp (chamber ramp), steps (chamber steps) or warmup (power-on)")
+      ->check(CLI::IsMember({"ramp", "steps", "warmup"}))
+      ->capture_default_str();
+  sub->add_option("--temp-low-c", t.temp_low_c, "thermal: lowest temperature")
+      ->capture_default_str();
+  sub->add_option("--temp-high-c", t.temp_high_c, "thermal: highest temperature")
+      ->capture_default_str();
+  sub->add_option("--ramp-s", t.ramp_s, "thermal: ramp duration (one leg)")->capture_default_str();
+  sub->add_option("--steps", t.steps, "thermal: chamber levels")->capture_default_str();
+  sub->add_option("--step-dwell-s", t.step_dwell_s, "thermal: time at each level")
+      ->capture_default_str();
+  sub->add_option("--step-tau-s", t.step_tau_s, "thermal: die time constant after a step")
+      ->capture_default_str();
+  sub->add_option("--warmup-tau-s", t.warmup_tau_s, "thermal: warm-up time constant")
+      ->capture_default_str();
+  sub->add_option("--warmup-s", t.warmup_s, "thermal: warm-up record length")
+      ->capture_default_str();
+  sub->add_flag("--cooling-leg", t.cooling_leg, "thermal: return from high to low (ramp, steps)");
+  sub->add_option("--bias-order", t.bias_order, "thermal truth: bias polynomial order")
+      ->check(CLI::Range(1, 4))
+      ->capture_default_str();
+  sub->add_option("--accel-excursion-g", t.accel_excursion_g,
+                  "thermal truth: accel bias excursion scale over the span")
+      ->capture_default_str();
+  sub->add_option("--gyro-excursion-dps", t.gyro_excursion_dps,
+                  "thermal truth: gyro bias excursion scale over the span")
+      ->capture_default_str();
+  sub->add_option("--accel-hysteresis-g", t.accel_hysteresis_g,
+                  "thermal truth: heating minus cooling accel bias (needs --cooling-leg)")
+      ->capture_default_str();
+  sub->add_option("--gyro-hysteresis-dps", t.gyro_hysteresis_dps,
+                  "thermal truth: heating minus cooling gyro bias (needs --cooling-leg)")
+      ->capture_default_str();
+  sub->add_option("--temp-glitches", t.temp_glitches,
+                  "thermal: isolated temperature read errors (+40 degC) at random rows")
+      ->capture_default_str();
+}
+
 }  // namespace
 
 void AddSimulateCommand(CLI::App& app, int* exit_code) {
@@ -234,8 +323,9 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--yaw-drift-dps", o->sim.yaw_drift_dps, "yaw drift rate")->capture_default_str();
   sub->add_option("--kind", o->kind,
                   "static; table: a rotation-table sweep; calibration: a multi-pose calibration "
-                  "session in raw LSB (docs/simulator.md)")
-      ->check(CLI::IsMember({"static", "table", "calibration"}))
+                  "session in raw LSB; thermal: one pose over a temperature profile in raw LSB "
+                  "(docs/simulator.md)")
+      ->check(CLI::IsMember({"static", "table", "calibration", "thermal"}))
       ->capture_default_str();
   sub->add_option("--poses", o->calibration.poses,
                   "calibration: static poses (cube faces, corners, edges, cycled)")
@@ -318,6 +408,7 @@ void AddSimulateCommand(CLI::App& app, int* exit_code) {
   sub->add_option("--noise-ar1", o->table.noise_ar1,
                   "table truth: lag-1 correlation of the noise per frame")
       ->capture_default_str();
+  AddThermalSimulateOptions(sub, o.get());
   sub->callback([o, exit_code] { *exit_code = RunSimulate(*o); });
 }
 
