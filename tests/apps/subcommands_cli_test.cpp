@@ -142,7 +142,7 @@ TEST_CASE("characterize simulate refuses an output its kind does not write (exit
     const Run r = Characterize(args);
     CHECK(r.exit_code == 2);
     CHECK_THAT(r.err, Catch::Contains("only with --kind table") ||
-                          Catch::Contains("--kind table or calibration"));
+                          Catch::Contains("--kind table, calibration or thermal"));
     CHECK_FALSE(std::filesystem::exists(out));
   }
 }
