@@ -20,7 +20,7 @@ void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags) 
       ->check(CLI::IsMember({"header", "receive"}))
       ->capture_default_str();
   app->add_option("--time-order", o->time_order,
-                  "MCAP and ROS bags: stamps out of order or repeated are sorted (repeats after "
+                  "MCAP, ROS bags, ULog: times out of order or repeated are sorted (repeats after "
                   "the first dropped, both counted in input.notes) or refused")
       ->check(CLI::IsMember({"sort", "refuse"}))
       ->capture_default_str();
