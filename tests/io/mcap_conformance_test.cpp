@@ -41,7 +41,8 @@ const nlohmann::json& Field(const nlohmann::json& record, const std::string& nam
 // Bytes written as an array of decimal strings.
 std::string Bytes(const nlohmann::json& a) {
   std::string out;
-  for (const nlohmann::json& b : a) out.push_back(static_cast<char>(std::stoi(b.get<std::string>())));
+  for (const nlohmann::json& b : a)
+    out.push_back(static_cast<char>(std::stoi(b.get<std::string>())));
   return out;
 }
 

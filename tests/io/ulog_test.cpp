@@ -4,6 +4,8 @@
 // (a walk over the 3-byte message headers and memcpy of the floats, not the reader's code).
 #include "metro/io/ulog.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -14,8 +16,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <fmt/format.h>
 
 #include "metro/io/session_io.hpp"
 #include "support/temp_file.hpp"
