@@ -228,9 +228,9 @@ Status Reader::Read() {
 
 }  // namespace
 
-const DataFlashField* DataFlashFormat::Find(std::string_view name) const {
+const DataFlashField* DataFlashFormat::Find(std::string_view column) const {
   for (const DataFlashField& f : fields) {
-    if (f.name == name) return &f;
+    if (f.name == column) return &f;
   }
   return nullptr;
 }
@@ -359,3 +359,4 @@ std::string FormatDataFlashTopics(const DataFlash& log) {
   if (log.skipped_bytes > 0) out += fmt::format("; {} bytes skipped", log.skipped_bytes);
   return out + "\n";
 }
+}  // namespace metro

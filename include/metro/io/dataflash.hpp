@@ -46,8 +46,8 @@ struct DataFlashFormat {
   std::vector<int64_t> indexes;   // and their 1-based indexes among the file's messages.
   uint64_t first_offset = 0, last_offset = 0;  // Of its first and last message.
 
-  // The field named `name`; null if none.
-  const DataFlashField* Find(std::string_view name) const;
+  // The field of that column name; null if none.
+  const DataFlashField* Find(std::string_view column) const;
 };
 
 struct DataFlashReadOptions {
