@@ -12,7 +12,7 @@ build="${1:-build}"
 runs="${2:-3}"
 hours="${3:-3}"
 work="${4:-$(mktemp -d)}"
-characterize="$build/apps/characterize"
+characterize="$build/apps/characterize/characterize"
 [ -x "$characterize" ] || { echo "$characterize: not built (cmake --build $build --target characterize)" >&2; exit 2; }
 mkdir -p "$work"
 cp "$here/package.json" "$here/package-lock.json" "$here/write_imu_bag.mjs" "$work/"

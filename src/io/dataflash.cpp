@@ -203,10 +203,10 @@ Status Reader::Read() {
         log_->truncated_bytes = static_cast<int64_t>(left);
         break;
       }
-      return Fail(at, fmt::format("truncated file: a {} message (type {}) of {} bytes, {} left; "
+      return Fail(at, fmt::format("truncated file: a message of type {} ({}) of {} bytes, {} left; "
                                   "expected a complete message (--lenient reads the messages "
                                   "before it)",
-                                  EscapeControlChars(f.name), type, f.length_bytes, left));
+                                  type, EscapeControlChars(f.name), f.length_bytes, left));
     }
     const size_t length = f.length_bytes;
     if (f.message_count == 0) f.first_offset = at;

@@ -63,11 +63,16 @@ TEST_CASE("DataFlash: test.BIN's message counts equal pymavlink's", "[io][datafl
   const std::string path = kDir + "test.BIN";
   CHECK(DetectSessionFormat(path).value() == SessionFormat::kDataFlash);
   // The file is the first 65536 bytes of a log: its last message is cut.
+  // The test's walk: the message at 65512 is of type 141, which an FMT names AHR2, 45 bytes.
+  const std::string b = Slurp(path);
+  REQUIRE(b.size() == 65536);
+  REQUIRE(static_cast<unsigned char>(b[65512 + 2]) == 141);
+  REQUIRE(b.find(std::string("\xA3\x95\x80\x8d\x2d" "AHR2", 9)) != std::string::npos);
   auto strict = ReadDataFlash(path);
   REQUIRE_FALSE(strict.ok());
   CHECK(strict.error().ToString() ==
         path +
-            ": byte offset 65512: truncated file: a VIBE message (type 177) of 45 bytes, 24 "
+            ": byte offset 65512: truncated file: a message of type 141 (AHR2) of 45 bytes, 24 "
             "left; expected a complete message (--lenient reads the messages before it)");
   auto log = ReadDataFlash(path, {true, {}});
   REQUIRE(log.ok());
