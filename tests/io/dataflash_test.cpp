@@ -67,7 +67,9 @@ TEST_CASE("DataFlash: test.BIN's message counts equal pymavlink's", "[io][datafl
   const std::string b = Slurp(path);
   REQUIRE(b.size() == 65536);
   REQUIRE(static_cast<unsigned char>(b[65512 + 2]) == 141);
-  REQUIRE(b.find(std::string("\xA3\x95\x80\x8d\x2d" "AHR2", 9)) != std::string::npos);
+  REQUIRE(b.find(std::string("\xA3\x95\x80\x8d\x2d"
+                             "AHR2",
+                             9)) != std::string::npos);
   auto strict = ReadDataFlash(path);
   REQUIRE_FALSE(strict.ok());
   CHECK(strict.error().ToString() ==
