@@ -74,6 +74,13 @@ Result<std::vector<Choice>> Choose(const DataFlash& log, const LoadOptions& opti
                       "topics {}` lists all)",
                       t, ImuList(log), log.path));
     }
+    for (const Choice& earlier : out) {
+      if (earlier.name == c.name &&
+          (earlier.instance < 0 || c.instance < 0 || earlier.instance == c.instance)) {
+        return MakeError(log.path, 0,
+                         fmt::format("--topic {}: chosen twice; each IMU is one tag", t));
+      }
+    }
     out.push_back(c);
   }
   if (!out.empty()) return out;

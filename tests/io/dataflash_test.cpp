@@ -152,7 +152,6 @@ TEST_CASE("DataFlash: out-of-order and repeated TimeUS are sorted or refused (--
   b.replace(imu[11] + 3, body, good.substr(imu[10] + 3, body));
   b.replace(imu[21] + 3, body, good.substr(imu[20] + 3, body));
   TempFile file(b, ".bin");
-  auto orig = LoadSession(TempFile(good, ".bin").path());
   auto sorted = LoadSession(file.path());
   REQUIRE(sorted.ok());
   const Tag& t = sorted.value().tags[0];
