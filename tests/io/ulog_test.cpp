@@ -706,7 +706,7 @@ TEST_CASE("ULog: bad input names the file and the byte offset", "[io][ulog]") {
     auto r = LoadSession(file.path(), o);
     REQUIRE_FALSE(r.ok());
     CHECK_THAT(r.error().message,
-               Catch::Contains("topics are chosen in ULog, MCAP and ROS bag input"));
+               Catch::Contains("topics are chosen in ULog, MCAP, ROS bag and DataFlash input"));
   }
 }
 
