@@ -6,21 +6,22 @@ void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags) 
   app->add_option("--format", o->format,
                   "input format (auto: detected; csv is session.csv in any dialect)")
       ->check(CLI::IsMember({"auto", "csv", "receiver", "euroc", "raw", "phyphox", "sensorlogger",
-                             "phone", "ulog", "mcap", "rosbag1", "rosbag2"}))
+                             "phone", "ulog", "mcap", "rosbag1", "rosbag2", "dataflash"}))
       ->capture_default_str();
   app->add_option("--topic", o->library.topics,
                   "ULog input: an IMU topic to read (sensor_combined, sensor_accel, sensor_gyro, "
                   "vehicle_imu), each instance one tag, NAME[K] instance K only (default: "
                   "sensor_combined, else sensor_accel and sensor_gyro); MCAP and ROS bags: a "
                   "sensor_msgs/Imu topic, e.g. /imu/data (default: the log's one IMU topic); "
-                  "repeatable, each topic one tag");
+                  "ArduPilot DataFlash: IMU, IMU2, IMU3, or IMU[K] for instance K of an IMU "
+                  "message with an I column (default: all); repeatable, each topic one tag");
   app->add_option("--time", o->time,
                   "MCAP and ROS bags: the sample time, header (the message's header.stamp) or "
                   "receive (the time the recorder logged it)")
       ->check(CLI::IsMember({"header", "receive"}))
       ->capture_default_str();
   app->add_option("--time-order", o->time_order,
-                  "MCAP and ROS bags: stamps out of order or repeated are sorted (repeats after "
+                  "MCAP, ROS bags, ULog: times out of order or repeated are sorted (repeats after "
                   "the first dropped, both counted in input.notes) or refused")
       ->check(CLI::IsMember({"sort", "refuse"}))
       ->capture_default_str();

@@ -16,7 +16,7 @@ struct LoadCliOptions {
   std::vector<std::string> columns;  // --column 'SRC=DST', repeatable.
   std::string columns_file;          // --columns-file FILE: SRC=DST lines.
   std::string time = "header";       // --time header|receive (MCAP, ROS bags).
-  std::string time_order = "sort";   // --time-order sort|refuse (MCAP, ROS bags).
+  std::string time_order = "sort";   // --time-order sort|refuse (MCAP, ROS bags, ULog).
   // --frame-period-s, --lenient, --rate-hz (a file without a time column), --accel-fs-g,
   // --gyro-fs-dps (raw counts scaled beside the counts) and --topic (ULog), bound to the
   // library's struct (its defaults); MakeLoadOptions copies these six fields.

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "metro/io/dataflash.hpp"
 #include "metro/io/ros_log.hpp"
 #include "metro/io/session_io.hpp"
 #include "metro/io/ulog.hpp"
@@ -30,6 +31,16 @@ int RunULogTopics(const TopicsOptions& o) {
   return kExitOk;
 }
 
+int RunDataFlashTopics(const TopicsOptions& o) {
+  Result<DataFlash> log = ReadDataFlash(o.file, {o.lenient, {}});
+  if (!log.ok()) return PrintErrorExit(log.error());
+  for (const std::string& p : log.value().problems) Note("warning: " + p + "\n");
+  if (Status s = WriteOutput("-", FormatDataFlashTopics(log.value())); !s.ok()) {
+    return PrintErrorExit(s.error());
+  }
+  return kExitOk;
+}
+
 int RunTopics(const TopicsOptions& o) {
   Result<SessionFormat> format = DetectSessionFormat(o.file);
   if (!format.ok()) return PrintErrorExit(format.error());
@@ -39,6 +50,8 @@ int RunTopics(const TopicsOptions& o) {
   switch (format.value()) {
     case SessionFormat::kULog:
       return RunULogTopics(o);
+    case SessionFormat::kDataFlash:
+      return RunDataFlashTopics(o);
     case SessionFormat::kMcap:
       log = ReadMcap(o.file, options, nullptr);
       break;
@@ -51,8 +64,8 @@ int RunTopics(const TopicsOptions& o) {
     default:
       return PrintErrorExit(MakeError(
           o.file, 0,
-          fmt::format("{} input has no topics; expected a PX4 ULog, an MCAP file, a ROS 1 bag "
-                      "or a ROS 2 bag folder",
+          fmt::format("{} input has no topics; expected a PX4 ULog, an MCAP file, a ROS 1 bag, "
+                      "a ROS 2 bag folder or an ArduPilot DataFlash log",
                       SessionFormatName(format.value()))));
   }
   if (!log.ok()) return PrintErrorExit(log.error());

@@ -9,12 +9,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
 #include "core/parallel.hpp"
 #include "io/imu_message.hpp"
 #include "io/ros_log_internal.hpp"
 #include "io/session_internal.hpp"
+#include "io/time_order.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/ros_log.hpp"
 
@@ -199,51 +199,29 @@ const char* TimeName(const LoadOptions& options) {
   return options.ros_time == LoadOptions::RosTime::kReceive ? "log time" : "header.stamp";
 }
 
-template <typename T>
-void Permute(const std::vector<size_t>& keep, std::vector<T>* v) {
-  std::vector<T> out;
-  out.reserve(keep.size());
-  for (size_t i : keep) out.push_back((*v)[i]);
-  v->swap(out);
-}
-
-// Sample times strictly increasing: sorted (stable, so equal stamps keep file order) with
-// repeats after the first dropped, or refused (--time-order refuse). Counts in the notes.
+// Sample times strictly increasing (PlanTimeOrder): sorted with repeats after the first
+// dropped, or refused (--time-order refuse). Counts in the notes.
 Status OrderTimes(const RosLog& log, const LoadOptions& options, TopicData* d,
                   std::vector<std::string>* notes) {
-  const std::vector<int64_t>& t = d->t_ns;
-  int64_t late = 0;  // Messages stamped before one earlier in the file.
-  int64_t high = std::numeric_limits<int64_t>::min();
-  for (size_t i = 0; i < t.size(); ++i) {
-    if (i > 0 && t[i] <= t[i - 1] && options.time_order == LoadOptions::TimeOrder::kRefuse) {
-      return MakeError(log.path, 0,
-                       fmt::format("{} {}: message {} ({}): {} {} ns is not after the "
-                                   "previous message's {} ns; expected increasing times "
-                                   "(--time-order sort sorts them)",
-                                   log.offset_name, d->offset[i], d->index[i], d->topic,
-                                   TimeName(options), t[i], t[i - 1]));
-    }
-    if (t[i] < high) ++late;
-    high = std::max(high, t[i]);
+  const TimeOrderPlan plan = PlanTimeOrder(d->t_ns);
+  if (plan.in_order()) return Status::Ok();
+  if (options.time_order == LoadOptions::TimeOrder::kRefuse) {
+    const size_t i = plan.first_not_after;
+    return MakeError(log.path, 0,
+                     fmt::format("{} {}: message {} ({}): {} {} ns is not after the "
+                                 "previous message's {} ns; expected increasing times "
+                                 "(--time-order sort sorts them)",
+                                 log.offset_name, d->offset[i], d->index[i], d->topic,
+                                 TimeName(options), d->t_ns[i], d->t_ns[i - 1]));
   }
-  std::vector<size_t> order(t.size());
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return t[a] < t[b]; });
-  std::vector<size_t> keep;
-  keep.reserve(order.size());
-  for (size_t j = 0; j < order.size(); ++j) {
-    if (j == 0 || t[order[j]] != t[order[j - 1]]) keep.push_back(order[j]);
-  }
-  const size_t repeats = order.size() - keep.size();
-  if (late == 0 && repeats == 0) return Status::Ok();
-  Permute(keep, &d->t_ns);
-  Permute(keep, &d->index);
-  Permute(keep, &d->offset);
-  for (std::vector<double>& c : d->columns) Permute(keep, &c);
+  Permute(plan.keep, &d->t_ns);
+  Permute(plan.keep, &d->index);
+  Permute(plan.keep, &d->offset);
+  for (std::vector<double>& c : d->columns) Permute(plan.keep, &c);
   notes->push_back(
       fmt::format("{}: {} messages out of {} order, sorted; {} repeated {} dropped "
                   "(the first in the file kept) (--time-order sort)",
-                  d->topic, late, TimeName(options), repeats, TimeName(options)));
+                  d->topic, plan.late, TimeName(options), plan.repeats, TimeName(options)));
   return Status::Ok();
 }
 

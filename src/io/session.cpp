@@ -24,6 +24,7 @@
 #include "metro/core/angles.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/columns.hpp"
+#include "metro/io/dataflash.hpp"
 #include "metro/io/receiver.hpp"
 #include "metro/io/ros_log.hpp"
 #include "metro/io/session_io.hpp"
@@ -44,14 +45,15 @@ constexpr FormatName kFormatNames[] = {
     {SessionFormat::kPhyphox, "phyphox"},   {SessionFormat::kSensorLogger, "sensorlogger"},
     {SessionFormat::kPhone, "phone"},       {SessionFormat::kULog, "ulog"},
     {SessionFormat::kMcap, "mcap"},         {SessionFormat::kRosbag1, "rosbag1"},
-    {SessionFormat::kRosbag2, "rosbag2"},
+    {SessionFormat::kRosbag2, "rosbag2"},   {SessionFormat::kDataFlash, "dataflash"},
 };
 
 }  // namespace
 
 bool IsBinaryLogFormat(SessionFormat format) {
   return format == SessionFormat::kULog || format == SessionFormat::kMcap ||
-         format == SessionFormat::kRosbag1 || format == SessionFormat::kRosbag2;
+         format == SessionFormat::kRosbag1 || format == SessionFormat::kRosbag2 ||
+         format == SessionFormat::kDataFlash;
 }
 
 const char* SessionFormatName(SessionFormat format) {
@@ -337,6 +339,7 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
   if (IsULogMagic(head)) return SessionFormat::kULog;
   if (IsMcapMagic(head)) return SessionFormat::kMcap;
   if (IsRosbag1Magic(head)) return SessionFormat::kRosbag1;
+  if (IsDataFlashMagic(head)) return SessionFormat::kDataFlash;
   if (head.compare(0, 3, "\xEF\xBB\xBF") == 0) head.erase(0, 3);  // UTF-8 byte-order mark.
   if (head.empty()) {
     return MakeError(path, 0, "empty file: expected a session.csv or a receiver capture");
@@ -347,7 +350,8 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
       return MakeError(path, 0,
                        "binary data (NUL bytes): expected a text session.csv, a "
                        "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35), an "
-                       "MCAP (89 \"MCAP0\" 0d 0a) or a ROS 1 bag (\"#ROSBAG V2.0\")");
+                       "MCAP (89 \"MCAP0\" 0d 0a), a ROS 1 bag (\"#ROSBAG V2.0\") or an ArduPilot "
+                       "DataFlash log (a3 95 80 80 59 \"FMT\")");
     }
     if (c < 0x20 && c != '\n' && c != '\r' && c != '\t') ++control;
   }
@@ -355,7 +359,8 @@ Result<SessionFormat> DetectSessionFormat(const std::string& path) {
     return MakeError(path, 0,
                      "binary data (control bytes): expected a text session.csv, a "
                      "receiver capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35), an "
-                     "MCAP (89 \"MCAP0\" 0d 0a) or a ROS 1 bag (\"#ROSBAG V2.0\")");
+                     "MCAP (89 \"MCAP0\" 0d 0a), a ROS 1 bag (\"#ROSBAG V2.0\") or an ArduPilot "
+                     "DataFlash log (a3 95 80 80 59 \"FMT\")");
   }
   // The first meaningful lines: a receiver capture when most of them are receiver lines
   // (a cut first line or a terminal program's banner does not defeat it).
@@ -404,14 +409,17 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
     return MakeError(path, 0, "imu_tk input is two files: use LoadImuTk(acc, gyro)");
   }
   if (!options.topics.empty() && !IsBinaryLogFormat(format)) {
-    return MakeError(path, 0,
-                     fmt::format("--topic {}: topics are chosen in ULog, MCAP and ROS bag input; "
-                                 "this is {} input",
-                                 options.topics.front(), SessionFormatName(format)));
+    return MakeError(
+        path, 0,
+        fmt::format("--topic {}: topics are chosen in ULog, MCAP, ROS bag and DataFlash input; "
+                    "this is {} input",
+                    options.topics.front(), SessionFormatName(format)));
   }
   Result<Session> session = MakeError(path, 0, "not loaded");
   if (format == SessionFormat::kULog) {
     session = internal::LoadULogSession(path, options);
+  } else if (format == SessionFormat::kDataFlash) {
+    session = internal::LoadDataFlashSession(path, options);
   } else if (IsBinaryLogFormat(format)) {
     session = internal::LoadRosSession(path, format, options);
   } else if (format != SessionFormat::kReceiver) {

@@ -29,6 +29,8 @@ Result<Session> LoadReceiverCapture(const std::string& path, const LoadOptions& 
 // A PX4 ULog's IMU topics (options.topics), one tag per topic instance (ulog_session.cpp);
 // sets the session's sha256.
 Result<Session> LoadULogSession(const std::string& path, const LoadOptions& options);
+// An ArduPilot DataFlash log's IMU messages (dataflash_session.cpp).
+Result<Session> LoadDataFlashSession(const std::string& path, const LoadOptions& options);
 // An MCAP file's or a ROS bag's sensor_msgs/Imu topics (options.topics), one tag per topic
 // (ros_session.cpp); sets the session's sha256.
 Result<Session> LoadRosSession(const std::string& path, SessionFormat format,

@@ -72,7 +72,7 @@ Result<Session> StreamFile(const std::string& path, const LoadOptions& options,
     format = detected.value();
   }
   if (format == SessionFormat::kReceiver || format == SessionFormat::kULog ||
-      format == SessionFormat::kImuTk) {
+      format == SessionFormat::kImuTk || format == SessionFormat::kDataFlash) {
     return MakeError(path, 0,
                      fmt::format("{} input is not available in streaming mode (text sessions "
                                  "are: session.csv, euroc, raw, phyphox, sensor-logger); run "

@@ -152,6 +152,7 @@ bool IsThesisTagFormat(SessionFormat format) {
     case SessionFormat::kMcap:
     case SessionFormat::kRosbag1:
     case SessionFormat::kRosbag2:
+    case SessionFormat::kDataFlash:
       return false;
   }
   return true;

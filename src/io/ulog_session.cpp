@@ -10,6 +10,7 @@
 
 #include "core/parallel.hpp"
 #include "io/session_internal.hpp"
+#include "io/time_order.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/ulog.hpp"
 
@@ -166,6 +167,8 @@ struct BoundChannel {
 struct TagBuild {
   Tag tag;
   std::vector<int64_t> t_us;
+  std::vector<uint64_t> offset;  // Byte offset of each message read.
+  std::vector<int64_t> number;   // Its 1-based number among the instance's messages.
   std::string time_field;
   std::string topic;
   int multi_id = 0;
@@ -302,10 +305,6 @@ Result<TagBuild> ReadTag(const ULog& log, const ULogSubscription& sub, const Top
         t_us > static_cast<uint64_t>(std::numeric_limits<int64_t>::max() / 1000)) {
       problem = fmt::format("{} = {} us: beyond the range metro keeps in ns", time->name, t_us);
     }
-    if (problem.empty() && !out.t_us.empty() && static_cast<int64_t>(t_us) <= out.t_us.back()) {
-      problem = fmt::format("{} {} us is not after the previous message's {} us", time->name, t_us,
-                            out.t_us.back());
-    }
     if (!problem.empty()) {
       const Error e =
           MakeError(log.path, 0,
@@ -320,10 +319,39 @@ Result<TagBuild> ReadTag(const ULog& log, const ULogSubscription& sub, const Top
       continue;
     }
     out.t_us.push_back(static_cast<int64_t>(t_us));
+    out.offset.push_back(sub.data_offsets[i] - 5);
+    out.number.push_back(static_cast<int64_t>(i) + 1);
     out.tag.line.push_back(sub.message_index[i]);
     for (size_t k = 0; k < row.size(); ++k) out.tag.quantities[k].values.push_back(row[k]);
   }
   return out;
+}
+
+// The instance's times strictly increasing (PlanTimeOrder, shared with the ROS logs): sorted
+// with repeats after the first dropped, or refused (--time-order refuse). Counts in the notes.
+Status OrderTimes(const ULog& log, const LoadOptions& options, TagBuild* b,
+                  std::vector<std::string>* notes) {
+  const TimeOrderPlan plan = PlanTimeOrder(b->t_us);
+  if (plan.in_order()) return Status::Ok();
+  if (options.time_order == LoadOptions::TimeOrder::kRefuse) {
+    const size_t i = plan.first_not_after;
+    return MakeError(log.path, 0,
+                     fmt::format("byte offset {}: {} message {}: {} {} us is not after the "
+                                 "previous message's {} us; expected increasing times "
+                                 "(--time-order sort sorts them)",
+                                 b->offset[i], b->name, b->number[i], b->time_field, b->t_us[i],
+                                 b->t_us[i - 1]));
+  }
+  Permute(plan.keep, &b->t_us);
+  Permute(plan.keep, &b->offset);
+  Permute(plan.keep, &b->number);
+  Permute(plan.keep, &b->tag.line);
+  for (Quantity& q : b->tag.quantities) Permute(plan.keep, &q.values);
+  notes->push_back(fmt::format(
+      "{}: {} messages out of {} order, sorted; {} repeated {} dropped (the first in the "
+      "file kept) (--time-order sort)",
+      b->name, plan.late, b->time_field, plan.repeats, b->time_field));
+  return Status::Ok();
 }
 
 // sensor_combined's accelerometer was sampled at timestamp + accelerometer_timestamp_relative;
@@ -439,7 +467,11 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
       builds.push_back(std::move(build).value());
     }
   }
-  for (const TagBuild& b : builds) session.rows += static_cast<int64_t>(b.t_us.size());
+  std::vector<std::string> order_notes;
+  for (TagBuild& b : builds) {
+    if (Status s = OrderTimes(log, options, &b, &order_notes); !s.ok()) return s.error();
+    session.rows += static_cast<int64_t>(b.t_us.size());
+  }
   std::vector<std::string> pair_notes;
   PairAccelGyro(&builds, &pair_notes);
   for (size_t k = 0; k < builds.size(); ++k) {
@@ -448,6 +480,7 @@ Result<Session> LoadULogSessionFrom(ULog log, const LoadOptions& options) {
     session.input.notes.push_back(fmt::format("sensor {} = {}", k + 1, builds[k].label));
   }
   session.input.notes.insert(session.input.notes.end(), pair_notes.begin(), pair_notes.end());
+  session.input.notes.insert(session.input.notes.end(), order_notes.begin(), order_notes.end());
   int64_t t0_us = std::numeric_limits<int64_t>::max();
   for (const TagBuild& b : builds) {
     if (!b.t_us.empty()) t0_us = std::min(t0_us, b.t_us.front());

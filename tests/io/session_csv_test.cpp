@@ -189,7 +189,8 @@ TEST_CASE("session.csv bad input: each class names file, line and what was expec
                             10)) ==
         "session.csv: binary data (NUL bytes): expected a text session.csv, a receiver "
         "capture or a PX4 ULog (its first bytes \"ULog\" 01 12 35), an MCAP (89 \"MCAP0\" 0d "
-        "0a) or a ROS 1 bag (\"#ROSBAG V2.0\")");
+        "0a), a ROS 1 bag (\"#ROSBAG V2.0\") or an ArduPilot DataFlash log (a3 95 80 80 59 "
+        "\"FMT\")");
 }
 
 TEST_CASE("Lenient mode skips and counts malformed rows", "[io][csv]") {

@@ -4,6 +4,8 @@
 // (a walk over the 3-byte message headers and memcpy of the floats, not the reader's code).
 #include "metro/io/ulog.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -534,6 +536,84 @@ TEST_CASE("ULog: a truncated file is an error, or its complete messages with --l
   CHECK(r.value().rejected_lines[0] == static_cast<int64_t>(complete.size()) + 1);
 }
 
+TEST_CASE("ULog: out-of-order and repeated timestamps are sorted or refused (--time-order)",
+          "[io][ulog]") {
+  // sample.ulg's sensor_combined with two messages' payloads swapped (100 <-> 101: one
+  // message late) and message 200's payload copied over 201's (a repeated timestamp), by
+  // byte edits here; the payloads are equal-sized, so every other byte stays in place.
+  const std::string path = kDir + "sample.ulg";
+  const std::string good = Slurp(path);
+  const auto ms = Walk(good);
+  const auto offsets = DataOffsets(good, ms, MsgId(good, ms, "sensor_combined", 0));
+  REQUIRE(offsets.size() == 17070);
+  const size_t payload = 72;  // sensor_combined's size in sample_info.txt (ulog_info).
+  std::string b = good;
+  b.replace(offsets[100], payload, good.substr(offsets[101], payload));
+  b.replace(offsets[101], payload, good.substr(offsets[100], payload));
+  b.replace(offsets[201], payload, good.substr(offsets[200], payload));
+  REQUIRE(U64(b, offsets[100]) > U64(b, offsets[101]));
+  REQUIRE(U64(b, offsets[200]) == U64(b, offsets[201]));
+  TempFile file(b, ".ulg");
+
+  auto orig = LoadSession(path);
+  REQUIRE(orig.ok());
+  const Tag& o = orig.value().tags[0];
+  auto sorted = LoadSession(file.path());
+  REQUIRE(sorted.ok());
+  const Tag& t = sorted.value().tags[0];
+  REQUIRE(t.size() == 17069);  // 201 dropped: the first of the repeated pair is kept.
+  const std::vector<std::string>& notes = sorted.value().input.notes;
+  CHECK(std::count(notes.begin(), notes.end(),
+                   "sensor_combined[0]: 1 messages out of timestamp order, sorted; 1 repeated "
+                   "timestamp dropped (the first in the file kept) (--time-order sort)") == 1);
+  // Sample i of the sorted tag is the file's message at offsets[j], decoded by hand.
+  auto check = [&](size_t i, size_t j) {
+    INFO("sorted sample " << i << " = file message " << j);
+    CHECK(t.t_ns[i] == static_cast<int64_t>(U64(b, offsets[j])) * 1000);
+    CHECK(t.Find("gx_rads")->values[i] == static_cast<double>(F32(b, offsets[j] + 8)));
+    CHECK(t.Find("az_mps2")->values[i] == static_cast<double>(F32(b, offsets[j] + 36)));
+    CHECK(t.line[i] == o.line[j]);  // The message index in the file, unchanged.
+  };
+  check(99, 99);
+  check(100, 101);  // The earlier time, written second.
+  check(101, 100);
+  check(200, 200);
+  check(201, 202);  // 201 (the repeat) dropped.
+  check(17068, 17069);
+  // And the sorted values are the untouched file's, apart from the dropped message.
+  for (size_t i = 0; i < 17069; ++i) {
+    const size_t j = i < 201 ? i : i + 1;
+    if (t.t_ns[i] != o.t_ns[j] || t.Find("ax_mps2")->values[i] != o.Find("ax_mps2")->values[j]) {
+      FAIL("sample " << i);
+    }
+  }
+
+  LoadOptions refuse;
+  refuse.time_order = LoadOptions::TimeOrder::kRefuse;
+  auto r = LoadSession(file.path(), refuse);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().ToString() ==
+        fmt::format("{}: byte offset {}: sensor_combined[0] message 102: timestamp {} us is not "
+                    "after the previous message's {} us; expected increasing times "
+                    "(--time-order sort sorts them)",
+                    file.path(), offsets[101] - 5, U64(good, offsets[100]),
+                    U64(good, offsets[101])));
+  // Refused also when only the repeat is left (the swap undone).
+  std::string repeat_only = b;
+  for (size_t j : {size_t{100}, size_t{101}}) {
+    repeat_only.replace(offsets[j], payload, good.substr(offsets[j], payload));
+  }
+  TempFile repeat_file(repeat_only, ".ulg");
+  auto rr = LoadSession(repeat_file.path(), refuse);
+  REQUIRE_FALSE(rr.ok());
+  CHECK_THAT(rr.error().message,
+             Catch::StartsWith(fmt::format("byte offset {}: sensor_combined[0] message 202: "
+                                           "timestamp {} us is not after the previous "
+                                           "message's {} us",
+                                           offsets[201] - 5, U64(good, offsets[200]),
+                                           U64(good, offsets[200]))));
+}
+
 TEST_CASE("ULog: bad input names the file and the byte offset", "[io][ulog]") {
   const std::string good = Slurp(kDir + "sample_log_small.ulg");
   const auto ms = Walk(good);
@@ -626,7 +706,7 @@ TEST_CASE("ULog: bad input names the file and the byte offset", "[io][ulog]") {
     auto r = LoadSession(file.path(), o);
     REQUIRE_FALSE(r.ok());
     CHECK_THAT(r.error().message,
-               Catch::Contains("topics are chosen in ULog, MCAP and ROS bag input"));
+               Catch::Contains("topics are chosen in ULog, MCAP, ROS bag and DataFlash input"));
   }
 }
 

@@ -40,13 +40,14 @@ enum class SessionFormat {
   kMcap,          // MCAP files (metro/io/ros_log.hpp): sensor_msgs/msg/Imu topics, one tag each.
   kRosbag1,       // ROS 1 bags 2.0 (metro/io/ros_log.hpp): sensor_msgs/Imu topics.
   kRosbag2,       // ROS 2 bag folders (metadata.yaml; sqlite3 or MCAP storage).
+  kDataFlash,     // ArduPilot DataFlash .bin logs (metro/io/dataflash.hpp): IMU, IMU2, IMU3.
 };
 
-// The binary logs (ULog, MCAP, ROS bags): no delimiter, line ends or header to report.
+// The binary logs (ULog, MCAP, ROS bags, DataFlash): no delimiter, line ends or header to report.
 bool IsBinaryLogFormat(SessionFormat format);
 
 // "csv", "receiver", "imutk", "euroc", "raw", "phyphox", "sensorlogger", "phone", "ulog",
-// "mcap", "rosbag1", "rosbag2" ("auto" for kAuto).
+// "mcap", "rosbag1", "rosbag2", "dataflash" ("auto" for kAuto).
 const char* SessionFormatName(SessionFormat format);
 // The format with that name; false if none.
 bool ParseSessionFormat(std::string_view name, SessionFormat* format);

@@ -45,7 +45,7 @@ struct LoadOptions {
   // message (kReceive: MCAP log_time, the ROS 1 record time, rosbag2's timestamp).
   enum class RosTime { kHeader, kReceive };
   RosTime ros_time = RosTime::kHeader;
-  // ROS logs: stamps out of order are sorted and repeated stamps dropped after the first
+  // ROS logs, PX4 ULog: times out of order are sorted, repeats dropped after the first
   // (both counted in input.notes), or the first one refused with an error (kRefuse).
   enum class TimeOrder { kSort, kRefuse };
   TimeOrder time_order = TimeOrder::kSort;
