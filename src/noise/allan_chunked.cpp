@@ -197,11 +197,16 @@ void AddChunkTerms(AllanEstimator estimator, const double* const at[4], int64_t 
       // x_{i+3m} (5.2.9), every i < n_terms.
       const int64_t stop = std::min(count, n_terms - j0);
       double sum = 0.0;
-      for (int64_t i = 0; i < stop; ++i) {
-        const double d = estimator == AllanEstimator::kOadev
-                             ? at[0][i] - 2.0 * at[1][i] + at[2][i]
-                             : at[0][i] - 3.0 * at[1][i] + 3.0 * at[2][i] - at[3][i];
-        sum += d * d;
+      if (estimator == AllanEstimator::kOadev) {
+        for (int64_t i = 0; i < stop; ++i) {
+          const double d = at[0][i] - 2.0 * at[1][i] + at[2][i];
+          sum += d * d;
+        }
+      } else {
+        for (int64_t i = 0; i < stop; ++i) {
+          const double d = at[0][i] - 3.0 * at[1][i] + 3.0 * at[2][i] - at[3][i];
+          sum += d * d;
+        }
       }
       t->sum += sum;
       break;
