@@ -33,6 +33,7 @@ intel_hex_fuzz     4096   110
 inspect_fuzz       4096   550
 registry_fuzz     40960  1000
 ros_log_fuzz      16384   850
+dataflash_fuzz    16384   440
 noise_config_fuzz  8192  1150
 "
 all_targets=$(awk 'NF {print $1}' <<<"$table")
@@ -80,6 +81,8 @@ seed() {
     budget_fuzz) cp datasets/budgets/*.json "$corpus/" ;;
     # MCAP and ROS 1 samples of independent writers (datasets/external/ros_samples/SOURCE.md).
     ros_log_fuzz) cp datasets/external/ros_samples/*.mcap datasets/external/ros_samples/*.bag "$corpus/" ;;
+    # A real ArduPlane log (datasets/external/ardupilot_pymavlink_test_bin/SOURCE.md).
+    dataflash_fuzz) cp datasets/external/ardupilot_pymavlink_test_bin/test.BIN "$corpus/" ;;
     intel_hex_fuzz) cp datasets/golden/tag_sensor2.hex "$corpus/" ;;
     noise_config_fuzz) cp datasets/specs/specs.json "$corpus/" ;;
     # and the firmware blob fuzzer's sections v2.0 (issue #25, firmware/fuzz/make_seeds.py)
