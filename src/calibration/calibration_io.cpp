@@ -74,9 +74,7 @@ namespace {
 void ReportSensor(const SensorCalibration& c, std::string* out) {
   const SensorModel& m = c.model;
   const char* axes = "xyz";
-  // An import without its covariance (interchange.hpp): the zeros are placeholders.
-  const bool u_unknown =
-      c.model_check && c.model_check->selection == "imported" && c.model_check->model_rejected;
+  const bool u_unknown = UncertaintyUnknown(c);
   const auto value_u = [u_unknown](double v, double u) {
     return u_unknown ? fmt::format("{:.7g} (u unknown)", v) : ValueU(v, u);
   };

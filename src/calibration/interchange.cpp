@@ -281,7 +281,7 @@ Status CheckExportable(const Calibration& calibration, int sensor, const TagCali
     const SensorCalibration& c = **s;
     // An import's constants without their uncertainties pass on (ExportInterchange says so
     // and writes no covariance); a fit's rejected model does not.
-    const bool imported = c.model_check && c.model_check->selection == "imported";
+    const bool imported = c.model_check && c.model_check->selection == kImportedSelection;
     if (c.model_check && c.model_check->model_rejected && !imported) {
       return CalibrationErrorAt(
           calibration, CalibrationSensorPath(calibration, sensor, c.model.sensor),
@@ -367,10 +367,7 @@ Result<InterchangeExport> ExportInterchange(const Calibration& calibration,
   e.covariance = jac * p.covariance * jac.transpose();
   e.u = e.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   for (const SensorCalibration* c : p.sensors) {
-    if (c->model_check && c->model_check->selection == "imported" &&
-        c->model_check->model_rejected) {
-      e.uncertainty_known = false;
-    }
+    if (UncertaintyUnknown(*c)) e.uncertainty_known = false;
   }
   const std::string source =
       calibration.source_file.empty() ? "calibration" : calibration.source_file;

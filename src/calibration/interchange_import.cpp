@@ -311,7 +311,7 @@ SensorCalibration Imported(const SensorModel& m, const Eigen::MatrixXd& cov, boo
   c.covariance = cov;
   DeriveUncertainties(&c);
   ModelCheck check;
-  check.selection = "imported";
+  check.selection = kImportedSelection;
   check.status = "not_tested";
   check.model_rejected = !known;
   check.reason = reason;
@@ -363,7 +363,7 @@ Result<InterchangeImport> ImportInterchange(const InterchangeFile& f,
       o.sidecar_text.empty()
           ? fmt::format(
                 "imported from {} ({}) without a covariance sidecar: the standard "
-                "uncertainties are unknown (the zeros in covariance are placeholders)",
+                "uncertainties are unknown (the covariance's zeros stand for nothing)",
                 InterchangeFormatName(f.format), f.file)
           : fmt::format(
                 "imported from {} ({}): the biases were not carried, their "

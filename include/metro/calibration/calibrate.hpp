@@ -153,7 +153,7 @@ struct CrossAxisTypeB {
 // scatter); a rejected or exact bias model, and an exact full model, are `model_rejected`:
 // `calibrate blob`, `push` and the certificate refuse them without --accept-rejected-model.
 struct ModelCheck {
-  std::string selection;  // "auto" (--model auto) or "given".
+  std::string selection;  // "auto" (--model auto), "given", or "imported" (kImportedSelection).
   std::vector<ModelComparison> comparisons;
   std::string status;
   double chi2 = -1;     // Of the fitted model against the noise; -1 when not measured.
@@ -207,6 +207,17 @@ struct SensorCalibration {
   // The M that apply, the report and the blob use: `matrix` when read from a file.
   Eigen::Matrix3d M() const { return matrix ? *matrix : model.Matrix(); }
 };
+
+// ModelCheck::selection of a sensor read by `calibrate import` (interchange.hpp).
+inline constexpr const char* kImportedSelection = "imported";
+
+// An import whose standard uncertainties are unknown (no covariance sidecar, or a format that
+// does not carry the biases): its u and covariance hold zeros that stand for nothing, and it is
+// model_rejected, so blobs, pushes and certificates refuse it. Readers print "u unknown".
+inline bool UncertaintyUnknown(const SensorCalibration& c) {
+  return c.model_check && c.model_check->selection == kImportedSelection &&
+         c.model_check->model_rejected;
+}
 
 // Fills every value derived from c->model and c->covariance (rows in FreeNames order, as
 // c->parameter_names): bias_u, scale_u, misalignment_u, bias_per_c_u (square roots of the
