@@ -2,7 +2,6 @@
 // and raw-count scales (docs/formats.md). One definition, so the commands cannot drift.
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
 
@@ -22,11 +21,6 @@ struct LoadCliOptions {
   // library's struct (its defaults); MakeLoadOptions copies these six fields.
   LoadOptions library;
 };
-
-// Registers --format, --topic, --time, --time-order, --frame-period-s, --lenient, --column,
-// --columns-file, --rate-hz and, with `full_scale_flags`, --accel-fs-g and --gyro-fs-dps (calibrate
-// fit has its own).
-void AddLoadCliOptions(CLI::App* app, LoadCliOptions* o, bool full_scale_flags = true);
 
 // The library's load options for these flags (threads left as they are). Errors (a bad
 // --column, an unreadable --columns-file) are usage errors.

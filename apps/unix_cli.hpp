@@ -8,7 +8,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <CLI/CLI.hpp>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -23,7 +22,6 @@
 #include "metro/core/status.hpp"
 #include "metro/core/terminal_text.hpp"
 #include "metro/core/version.hpp"
-#include "metro/io/ros_log.hpp"
 
 namespace metro::apps {
 
@@ -39,22 +37,6 @@ inline bool& QuietFlag() {
   return quiet;
 }
 inline bool Quiet() { return QuietFlag(); }
-
-// --version: "<program> (metro) <version>" on stdout, exit 0 (metro/core/version.hpp).
-inline void AddVersionFlag(CLI::App& app, const std::string& program) {
-  app.set_version_flag("--version", fmt::format("{} ({}) {}", program, kToolName, kVersion),
-                       "print the version and exit");
-}
-
-// -q,--quiet on `app` and on each of its subcommands (so call it after adding them): it may
-// be given before or after the subcommand's name.
-inline void AddQuietFlag(CLI::App& app) {
-  const char* help = "no progress, notes or tables: results, warnings and errors only";
-  app.add_flag("-q,--quiet", QuietFlag(), help);
-  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
-    sub->add_flag("-q,--quiet", QuietFlag(), help);
-  }
-}
 
 // Everything below that prints text (errors, notes, tables, warnings) escapes the control
 // characters in it (metro/core/terminal_text.hpp): file names, CSV headers, tag names and
@@ -244,17 +226,6 @@ inline Status CheckStdinInputs(const std::vector<std::string>& inputs, bool imut
   }
   if (count > 1) return MakeError("stdin (-) can be read only once: name the other inputs");
   return Status::Ok();
-}
-
-// CLI11 check of a session input: an existing file, a ROS 2 bag folder (with its
-// metadata.yaml), or `-` (stdin).
-inline CLI::Validator ExistingFileOrStdin() {
-  return CLI::Validator(
-      [](std::string& path) -> std::string {
-        if (IsStdio(path) || IsRosbag2Path(path)) return std::string();
-        return CLI::ExistingFile(path);
-      },
-      "FILE|-");
 }
 
 }  // namespace metro::apps

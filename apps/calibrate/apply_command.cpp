@@ -1,5 +1,7 @@
 // calibrate apply calibration.json SESSION -o calibrated.csv [--t-valid-min-c C]
 //   [--t-valid-max-c C] [--tags FILE]
+#include "apply_command.hpp"
+
 #include <fmt/format.h>
 
 #include <memory>
@@ -15,19 +17,6 @@
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
-namespace {
-
-struct ApplyOptions {
-  std::string calibration;
-  std::vector<std::string> inputs;  // SESSION, or ACC GYRO with --imutk.
-  std::string output;
-  bool imutk = false;
-  std::optional<double> t_valid_min_c;  // As given to `calibrate blob`.
-  std::optional<double> t_valid_max_c;
-  RegistryCliOptions registry;  // --registry: records the calibration applied (docs/registry.md)
-  std::string tags;  // --tags FILE: checks calibration.json's device IDs, names the tags.
-};
-
 int RunApply(const ApplyOptions& a) {
   if (a.inputs.size() != (a.imutk ? 2u : 1u)) {
     apps::PrintErrorText("apply takes one SESSION (or ACC GYRO with --imutk)");
@@ -93,34 +82,6 @@ int RunApply(const ApplyOptions& a) {
                            apps::CalibrationTagLines(cal.value())));
   }
   return RecordAppliedCalibration(registry.registry.get(), cal.value(), a.calibration, a.registry);
-}
-
-}  // namespace
-
-void AddApplyCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<ApplyOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "apply",
-      "write a session with calibrated ax_g.. and gx_dps.. columns (all rows and "
-      "columns kept)");
-  sub->add_option("calibration", o->calibration, "calibration.json")
-      ->required()
-      ->check(CLI::ExistingFile);
-  sub->add_option("session", o->inputs, "SESSION (or ACC GYRO with --imutk); - reads stdin")
-      ->required()
-      ->check(apps::ExistingFileOrStdin());
-  sub->add_option("-o,--output", o->output, "calibrated session.csv to write (- for stdout)")
-      ->required();
-  sub->add_flag("--imutk", o->imutk, "the session is an imu_tk pair: ACC GYRO");
-  sub->add_option("--t-valid-min-c", o->t_valid_min_c,
-                  "lower end of the temperature validity range, as given to calibrate blob "
-                  "(default: the fitted span - 5 degC)");
-  sub->add_option("--t-valid-max-c", o->t_valid_max_c,
-                  "upper end of the temperature validity range (default: the fitted span + 5 "
-                  "degC)");
-  AddRegistryOptions(sub, &o->registry);
-  AddTagsOption(sub, &o->tags);
-  sub->callback([o, exit_code] { *exit_code = RunApply(*o); });
 }
 
 }  // namespace metro::calibrate_app

@@ -2,6 +2,8 @@
 // calibrate blob calibration.json --all --tags FILE -o DIR   (every tag: DIR/tag<N>.bin, .hex)
 //   [--hex tag.hex] [--slot-address ADDR] [--dlpf-cfg N] [--t-valid-min-c C] [--t-valid-max-c C]
 //   [--profile mpu6050|generic] [--accel-fs-g G] [--gyro-fs-dps D]
+#include "blob_command.hpp"
+
 #include <fmt/format.h>
 #include <sys/stat.h>
 
@@ -21,26 +23,6 @@
 
 namespace metro::calibrate_app {
 namespace {
-
-struct BlobOptions {
-  std::string calibration;
-  int sensor = 0;
-  std::string device_id;
-  uint32_t seq = 1;
-  std::string output;
-  std::string hex;
-  std::string slot_address = "0x3B000";
-  int dlpf_cfg = 3;
-  std::optional<double> t_valid_min_c;
-  std::optional<double> t_valid_max_c;
-  std::string profile;  // "" = the tags file's, else mpu6050
-  std::string tags;     // --tags FILE
-  bool all = false;     // --all: every tag of calibration.json into the directory -o
-  std::optional<double> accel_fs_g;
-  std::optional<double> gyro_fs_dps;
-  bool accept_rejected_model = false;  // --accept-rejected-model (issue #36)
-  RegistryCliOptions registry;         // --registry, --station, --operator (docs/registry.md)
-};
 
 // "0x3B000" or "241664" -> address; a page-aligned slot A whose slot B (the next page) lies
 // in the nRF51's 256 KiB of flash.
@@ -64,6 +46,74 @@ Result<uint32_t> ParseSlotAddress(const std::string& text) {
 
 int RunBlobAll(const BlobOptions& b);
 
+// The chip the blob is bound to (docs/calibration-blob.md 1.1): --device-id, else the tags
+// file's or calibration.json's device_id.
+Result<uint64_t> BlobDeviceId(const BlobOptions& b, const std::optional<TagRegistry>& tags,
+                              const Calibration& cal) {
+  Result<std::optional<uint64_t>> resolved = ResolveDeviceId(b.device_id, tags, cal, b.sensor);
+  if (!resolved.ok()) return resolved.error();
+  if (!resolved.value()) {
+    return MakeError(fmt::format(
+        "no device ID for sensor {}: give --device-id, or --tags FILE with its device_id (the "
+        "blob is bound to one chip, docs/calibration-blob.md 1.1)",
+        b.sensor));
+  }
+  return *resolved.value();
+}
+
+// The blob's options from the flags and the tags file's profile.
+blob::BlobFromCalibrationOptions BlobOptionsFor(const BlobOptions& b,
+                                                const std::optional<TagRegistry>& tags,
+                                                uint64_t device_id) {
+  blob::BlobFromCalibrationOptions o;
+  o.sensor = b.sensor;
+  o.device_id = device_id;
+  o.t_valid_min_c = b.t_valid_min_c;
+  o.t_valid_max_c = b.t_valid_max_c;
+  o.seq = b.seq;
+  o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
+  o.profile = ResolveProfile(b.profile, tags, b.sensor);
+  o.accel_fs_g = b.accel_fs_g;
+  o.gyro_fs_dps = b.gyro_fs_dps;
+  o.accept_rejected_model = b.accept_rejected_model;
+  return o;
+}
+
+// What was written: the blob (size, tag, seq, CRC), the temperature range the tag clamps to,
+// and the HEX's layout with the command that programs it.
+void NoteBlobWritten(const BlobOptions& b, const blob::BlobContents& contents, size_t size,
+                     uint64_t device_id, uint32_t crc, uint32_t slot_a) {
+  apps::Note(fmt::format("wrote {}: {} bytes, sensor {}, device {}, seq {}, CRC-32 0x{:08X}\n",
+                         apps::IsStdio(b.output) ? "stdout" : b.output, size, b.sensor,
+                         blob::FormatDeviceId(device_id), b.seq, crc));
+  for (const auto& [sensor, name] :
+       {std::pair{&contents.accel, "accel"}, std::pair{&contents.gyro, "gyro"}}) {
+    if (*sensor) {
+      apps::Note(fmt::format("{}: the tag clamps the temperature to {:.2f} .. {:.2f} degC\n", name,
+                             (*sensor)->t_valid_min_c, (*sensor)->t_valid_max_c));
+    }
+  }
+  if (b.hex.empty()) return;
+  apps::Note(fmt::format("wrote {}: blob at 0x{:05X} (slot A), tombstone at 0x{:05X} (slot B)\n",
+                         apps::IsStdio(b.hex) ? "stdout" : b.hex, slot_a,
+                         slot_a + blob::kPageSize));
+  if (!apps::IsStdio(b.hex)) {
+    apps::Note(fmt::format("program with: {}\n", blob::NrfjprogCommand(b.hex)));
+  }
+}
+
+// The blob's contents with the firmware's checks, its warnings printed, and its bytes.
+Result<std::pair<blob::BlobContents, std::vector<uint8_t>>> BuildBlob(
+    const Calibration& cal, const blob::BlobFromCalibrationOptions& o) {
+  std::vector<std::string> warnings;
+  Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal, o, &warnings);
+  if (!contents.ok()) return contents.error();
+  for (const std::string& w : warnings) apps::PrintWarning(w);
+  Result<std::vector<uint8_t>> bytes = blob::WriteBlob(contents.value());
+  if (!bytes.ok()) return bytes.error();
+  return std::make_pair(std::move(contents).value(), std::move(bytes).value());
+}
+
 int RunBlob(const BlobOptions& b) {
   if (b.all) return RunBlobAll(b);
   if (b.sensor < 1) {
@@ -71,9 +121,7 @@ int RunBlob(const BlobOptions& b) {
     return kExitUsage;
   }
   Result<std::optional<TagRegistry>> tags = LoadTagsOption(b.tags);
-  if (!tags.ok()) {
-    return apps::PrintErrorExit(tags.error());
-  }
+  if (!tags.ok()) return apps::PrintErrorExit(tags.error());
   Result<uint32_t> slot_a = ParseSlotAddress(b.slot_address);
   if (!slot_a.ok()) {
     apps::PrintErrorText(slot_a.error().message);
@@ -83,57 +131,23 @@ int RunBlob(const BlobOptions& b) {
                                       {{"CALIBRATION", b.calibration}, {"--tags", b.tags}},
                                       RegistryFiles(b.registry.url)),
                    apps::CheckBinaryStdout(b.output)}) {
-    if (!s.ok()) {
-      return apps::PrintErrorExit(s.error());
-    }
+    if (!s.ok()) return apps::PrintErrorExit(s.error());
   }
   Result<Calibration> cal = LoadCalibration(b.calibration);
   if (!cal.ok()) {
     apps::PrintErrorText(cal.error().ToString());
     return apps::ExitCodeFor(cal.error());
   }
-  Result<std::optional<uint64_t>> resolved =
-      ResolveDeviceId(b.device_id, tags.value(), cal.value(), b.sensor);
-  if (!resolved.ok()) {
-    return apps::PrintErrorExit(resolved.error());
-  }
-  if (!resolved.value()) {
-    apps::PrintErrorText(fmt::format(
-        "no device ID for sensor {}: give --device-id, or --tags FILE with its device_id (the "
-        "blob is bound to one chip, docs/calibration-blob.md 1.1)",
-        b.sensor));
-    return kExitUsage;
-  }
-  const Result<uint64_t> id = *resolved.value();
+  const Result<uint64_t> id = BlobDeviceId(b, tags.value(), cal.value());
+  if (!id.ok()) return apps::PrintErrorExit(id.error());
   OpenedRegistry registry = OpenRegistryOption(b.registry);
   if (registry.exit_code != 0) return registry.exit_code;
-  blob::BlobFromCalibrationOptions o;
-  o.sensor = b.sensor;
-  o.device_id = id.value();
-  o.t_valid_min_c = b.t_valid_min_c;
-  o.t_valid_max_c = b.t_valid_max_c;
-  o.seq = b.seq;
-  o.dlpf_cfg = static_cast<uint8_t>(b.dlpf_cfg);
-  o.profile = ResolveProfile(b.profile, tags.value(), b.sensor);
-  o.accel_fs_g = b.accel_fs_g;
-  o.gyro_fs_dps = b.gyro_fs_dps;
-  o.accept_rejected_model = b.accept_rejected_model;
-  std::vector<std::string> warnings;
-  Result<blob::BlobContents> contents =
-      blob::BlobContentsFromCalibration(cal.value(), o, &warnings);
-  if (!contents.ok()) {
-    apps::PrintErrorText(CalibrationErrorText(b.calibration, contents.error()));
-    return apps::ExitCodeFor(contents.error());
+  auto built = BuildBlob(cal.value(), BlobOptionsFor(b, tags.value(), id.value()));
+  if (!built.ok()) {
+    apps::PrintErrorText(CalibrationErrorText(b.calibration, built.error()));
+    return apps::ExitCodeFor(built.error());
   }
-  for (const std::string& w : warnings) {
-    apps::PrintWarning(w);
-  }
-  Result<std::vector<uint8_t>> bytes = blob::WriteBlob(contents.value());
-  if (!bytes.ok()) {
-    apps::PrintErrorText(CalibrationErrorText(b.calibration, bytes.error()));
-    return apps::ExitCodeFor(bytes.error());
-  }
-  const std::vector<uint8_t>& v = bytes.value();
+  const auto& [contents, v] = built.value();
   std::string hex;
   if (!b.hex.empty()) {
     Result<std::string> image = blob::WriteIntelHex(
@@ -151,26 +165,9 @@ int RunBlob(const BlobOptions& b) {
     return apps::ExitCodeFor(w.error());
   }
   const uint32_t crc = blob::Crc32(v.data(), v.size() - 4);
-  apps::Note(fmt::format("wrote {}: {} bytes, sensor {}, device {}, seq {}, CRC-32 0x{:08X}\n",
-                         apps::IsStdio(b.output) ? "stdout" : b.output, v.size(), b.sensor,
-                         blob::FormatDeviceId(id.value()), b.seq, crc));
-  for (const auto& [sensor, name] :
-       {std::pair{&contents.value().accel, "accel"}, std::pair{&contents.value().gyro, "gyro"}}) {
-    if (*sensor) {
-      apps::Note(fmt::format("{}: the tag clamps the temperature to {:.2f} .. {:.2f} degC\n", name,
-                             (*sensor)->t_valid_min_c, (*sensor)->t_valid_max_c));
-    }
-  }
-  if (!b.hex.empty()) {
-    apps::Note(fmt::format("wrote {}: blob at 0x{:05X} (slot A), tombstone at 0x{:05X} (slot B)\n",
-                           apps::IsStdio(b.hex) ? "stdout" : b.hex, slot_a.value(),
-                           slot_a.value() + blob::kPageSize));
-    if (!apps::IsStdio(b.hex)) {
-      apps::Note(fmt::format("program with: {}\n", blob::NrfjprogCommand(b.hex)));
-    }
-  }
-  return RecordBlobResult(registry.registry.get(), cal.value(), b.calibration, b.sensor,
-                          contents.value(), id.value(), b.seq, crc, b.output, b.registry);
+  NoteBlobWritten(b, contents, v.size(), id.value(), crc, slot_a.value());
+  return RecordBlobResult(registry.registry.get(), cal.value(), b.calibration, b.sensor, contents,
+                          id.value(), b.seq, crc, b.output, b.registry);
 }
 
 // --all: every tag of calibration.json, each with its device ID (tags file or calibration.json),
@@ -267,47 +264,6 @@ int RunBlobAll(const BlobOptions& b) {
 
 }  // namespace
 
-void AddBlobCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<BlobOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "blob",
-      "write a tag's calibration blob (docs/calibration-blob.md) and, with --hex, the Intel "
-      "HEX for nrfjprog");
-  sub->add_option("calibration", o->calibration, "calibration.json")
-      ->required()
-      ->check(CLI::ExistingFile);
-  sub->add_option("--sensor", o->sensor, "the tag in calibration.json (or --all)");
-  sub->add_option("--device-id", o->device_id,
-                  "the tag's FICR DEVICEID: 16 hex digits DEVICEID[1] then DEVICEID[0], or the "
-                  "two words nrfjprog --memrd 0x10000060 --n 8 prints (DEVICEID[0] DEVICEID[1]), "
-                  "with or without 0x (default: the tags file's, else calibration.json's)");
-  AddTagsOption(sub, &o->tags);
-  sub->add_flag("--all", o->all,
-                "every tag of calibration.json: -o names a directory, DIR/tag<N>.bin and .hex, "
-                "device IDs from --tags or calibration.json");
-  sub->add_option("--seq", o->seq, "blob sequence number, 1..4294967294 (default 1)")
-      ->check(CLI::Range(1u, 0xFFFFFFFEu));
-  sub->add_option("-o,--output", o->output,
-                  "tag.bin to write (- for stdout, not a terminal); with --all a directory")
-      ->required();
-  sub->add_option("--hex", o->hex,
-                  "also write this Intel HEX: blob at slot A, tombstone at B (- for stdout)");
-  sub->add_option("--slot-address", o->slot_address,
-                  "slot A address in the HEX (default 0x3B000); slot B is the next page");
-  sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")
-      ->check(CLI::Range(0, 6));
-  sub->add_option("--t-valid-min-c", o->t_valid_min_c,
-                  "lower end of the temperature validity range the tag clamps to (default: the "
-                  "fitted span - 5 degC; lower is extrapolation, with a warning)");
-  sub->add_option("--t-valid-max-c", o->t_valid_max_c,
-                  "upper end of the temperature validity range (default: the fitted span + 5 "
-                  "degC)");
-  AddSensorProfileOptions(sub, &o->profile, &o->accel_fs_g, &o->gyro_fs_dps);
-  sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
-                "write constants calibration.json marks model_rejected (a model the data reject "
-                "or an exact fit; docs/calibration-model.md) anyway");
-  AddRegistryOptions(sub, &o->registry);
-  sub->callback([o, exit_code] { *exit_code = RunBlob(*o); });
-}
+int RunBlobCommand(const BlobOptions& o) { return RunBlob(o); }
 
 }  // namespace metro::calibrate_app

@@ -7,15 +7,6 @@
 
 namespace metro::calibrate_app {
 
-void AddSpecOptions(CLI::App* sub, SpecCliOptions* o) {
-  sub->add_option("--spec", o->spec,
-                  "SPEC.json: tolerance limits per constant and a decision rule; writes a "
-                  "statement of conformity (docs/conformity.md)")
-      ->check(CLI::ExistingFile);
-  sub->add_flag("--fail-on-nonconformity", o->fail_on_nonconformity,
-                "exit 1 when any constant's decision is fail (with --spec)");
-}
-
 LoadedSpec LoadSpecOption(const SpecCliOptions& o) {
   LoadedSpec out;
   if (o.spec.empty()) {

@@ -2,7 +2,6 @@
 // (docs/conformity.md). The hooks fit calls; the work is metro/calibration/conformity.hpp.
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
 
@@ -15,8 +14,6 @@ struct SpecCliOptions {
   std::string spec;
   bool fail_on_nonconformity = false;
 };
-
-void AddSpecOptions(CLI::App* sub, SpecCliOptions* options);
 
 // Before the fit: the spec, parsed (an error is printed; exit 2). No --spec: nullopt, ok.
 struct LoadedSpec {

@@ -1,4 +1,6 @@
 // calibrate fit SESSION... -o calibration.json [--sensor N] [--model auto|bias|scale|full] ...
+#include "fit_command.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -22,26 +24,6 @@
 
 namespace metro::calibrate_app {
 namespace {
-
-struct FitOptions {
-  std::vector<std::string> inputs;
-  std::string output;
-  bool imutk = false;  // Inputs are imu_tk pairs: ACC GYRO [ACC GYRO ...].
-  // --sensor, --model, --accel-model, --gyro-model, --gravity-mps2, --accel-fs-g, --gyro-fs-dps,
-  // --temperature, --loss, --loss-scale, --accel-only, --min-static-s: the library's options
-  // and defaults, bound directly (--accel-model none is fit_accel = false).
-  CalibrationOptions calibration;
-  std::string segments;                // Annotated segments instead of the detector.
-  std::string html;                    // Calibration certificate (docs/reports.md).
-  bool accept_rejected_model = false;  // --accept-rejected-model: certify them anyway.
-  std::string tags;                    // --tags FILE: device IDs into calibration.json.
-  apps::LoadCliOptions load;    // --format, --column, --rate-hz, ... (--accel-fs-g is fit's).
-  SpecCliOptions spec;          // --spec, --fail-on-nonconformity (docs/conformity.md)
-  RegistryCliOptions registry;  // --registry, --station, --operator (docs/registry.md)
-  // --thermal: bias versus temperature from one static record per tag (docs/thermal.md).
-  bool thermal = false;
-  ThermalFitOptions thermal_options;
-};
 
 // calibrate fit --thermal SESSION -o thermal.json: FitThermalTag per tag, one JSON document.
 int RunThermalFit(const FitOptions& f) {
@@ -103,144 +85,126 @@ int RunThermalFit(const FitOptions& f) {
   return kExitOk;
 }
 
-int RunFit(const FitOptions& f) {
-  if (f.thermal) return RunThermalFit(f);
+// The fit's options as the library takes them, checked: --accel-model none with what it
+// allows, --segments read, the options' own consistency. Errors are usage errors (exit 2).
+Result<CalibrationOptions> FitCalibrationOptions(const FitOptions& f) {
   CalibrationOptions o = f.calibration;
   const bool accel_none = !o.fit_accel;
   if (accel_none && !o.fit_gyro) {
-    apps::PrintErrorText("--accel-model none and --accel-only leave nothing to calibrate");
-    return kExitUsage;
+    return MakeError("--accel-model none and --accel-only leave nothing to calibrate");
   }
   if (accel_none && (o.gyro_model != ModelKind::kBias || o.gyro_auto)) {
-    apps::PrintErrorText(
+    return MakeError(
         "--accel-model none evaluates the gyroscope's bias at rest from one static record: give "
         "--gyro-model bias (a scale or misalignment needs poses, rotations and the "
         "accelerometer)");
-    return kExitUsage;
   }
   if (accel_none && !f.segments.empty()) {
-    apps::PrintErrorText(
+    return MakeError(
         "--segments does not apply to --accel-model none (the whole record is "
         "the static pose)");
-    return kExitUsage;
   }
   if (!f.segments.empty()) {
     Result<std::vector<AnnotatedSegment>> given = ReadSegmentsFile(f.segments);
-    if (!given.ok()) {
-      return apps::PrintErrorExit(given.error());
-    }
+    if (!given.ok()) return given.error();
     o.annotated_segments = std::move(given).value();
     o.segments_path = f.segments;
   }
   std::string why;
-  if (!o.IsValid(&why)) {
-    apps::PrintErrorText(why);
-    return kExitUsage;
-  }
+  if (!o.IsValid(&why)) return MakeError(why);
+  return o;
+}
+
+// The inputs and outputs, checked before anything is read: imu_tk pairs, stdin read once, no
+// certificate to stdout, no output that names an input or the registry's files.
+Status CheckFitFiles(const FitOptions& f) {
   if (f.imutk && f.inputs.size() % 2 != 0) {
-    apps::PrintErrorText("--imutk takes pairs of files: ACC GYRO [ACC GYRO ...]");
-    return kExitUsage;
+    return MakeError("--imutk takes pairs of files: ACC GYRO [ACC GYRO ...]");
   }
-  if (Status s = apps::CheckStdinInputs(f.inputs, f.imutk); !s.ok()) {
-    return apps::PrintErrorExit(s.error());
-  }
+  if (Status s = apps::CheckStdinInputs(f.inputs, f.imutk); !s.ok()) return s;
   if (Status s = apps::RefuseStdout(f.html, "--html", "the certificate goes to a file"); !s.ok()) {
-    return apps::PrintErrorExit(s.error());
+    return s;
   }
   std::vector<apps::NamedPath> inputs = {
       {"--columns-file", f.load.columns_file}, {"--segments", f.segments}, {"--spec", f.spec.spec}};
   for (const std::string& in : f.inputs) inputs.push_back({"SESSION", in});
   inputs.push_back({"--tags", f.tags});
-  if (Status s = apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs,
-                                    RegistryFiles(f.registry.url));
-      !s.ok()) {
-    return apps::PrintErrorExit(s.error());
-  }
-  Result<std::optional<TagRegistry>> tags = LoadTagsOption(f.tags);
-  if (!tags.ok()) {
-    return apps::PrintErrorExit(tags.error());
-  }
-  const LoadedSpec spec = LoadSpecOption(f.spec);
-  if (spec.exit_code != 0) return spec.exit_code;
-  OpenedRegistry registry = OpenRegistryOption(f.registry);
-  if (registry.exit_code != 0) return registry.exit_code;
+  return apps::CheckOutputs({{"-o", f.output}, {"--html", f.html}}, inputs,
+                            RegistryFiles(f.registry.url));
+}
+
+// The sessions (imu_tk pairs: one session per pair), with a progress line per file.
+Result<std::vector<Session>> LoadFitSessions(const FitOptions& f, TerminalProgress* progress) {
   std::vector<Session> sessions;
   const size_t step = f.imutk ? 2 : 1;
-  TerminalProgress progress(stderr, apps::CliProgressOptions());  // Loads (bytes), then the fit.
   for (size_t i = 0; i < f.inputs.size(); i += step) {
     LoadOptions load;
-    if (Status st = apps::MakeLoadOptions(f.load, &load); !st.ok()) {
-      return apps::PrintErrorExit(st.error());
-    }
+    if (Status st = apps::MakeLoadOptions(f.load, &load); !st.ok()) return st.error();
     if (!f.imutk) {
-      BeginLoadPhase(&progress, f.inputs[i]);
-      load.on_bytes_parsed = [&progress](int64_t n) { progress.Advance(n); };
+      BeginLoadPhase(progress, f.inputs[i]);
+      load.on_bytes_parsed = [progress](int64_t n) { progress->Advance(n); };
     }
     Result<Session> s =
         f.imutk ? LoadImuTk(f.inputs[i], f.inputs[i + 1]) : LoadSession(f.inputs[i], load);
-    progress.Finish();
-    if (!s.ok()) {
-      return apps::PrintErrorExit(s.error());
-    }
+    progress->Finish();
+    if (!s.ok()) return s.error();
     sessions.push_back(std::move(s).value());
   }
-  std::vector<const Session*> ptrs;
-  for (const Session& s : sessions) ptrs.push_back(&s);
-  // Missing columns are bad input (exit 2), named with the file before any fitting.
-  if (Status c = CheckCalibrationColumns(ptrs, o); !c.ok()) {
-    return apps::PrintErrorExit(c.error());
+  return sessions;
+}
+
+// calibration.json carries each tag's device ID, name and profile from the tags file (a
+// default body-part name only for the thesis tags' own records: none for other tools').
+void NameTags(const std::optional<TagRegistry>& tags, Calibration* cal) {
+  const bool thesis_records = IsThesisTagFormat(apps::CalibrationRecordsFormat(*cal));
+  for (TagCalibration& t : cal->tags) {
+    const TagEntry* entry = tags ? tags->Find(t.sensor) : nullptr;
+    if (entry == nullptr) continue;
+    t.device_id = entry->device_id;
+    if (thesis_records || !entry->thesis_default) t.name = entry->name;
+    t.profile = entry->profile;
   }
-  progress.BeginPhase("fit (Ceres)", kUncountedWork);
-  Result<Calibration> cal = CalibrateSessions(ptrs, o);
-  progress.Finish();
-  if (!cal.ok()) {
-    return apps::PrintErrorExit(cal.error());
+}
+
+// The certificate of --html. Constants marked model_rejected are not certified without
+// --accept-rejected-model (an input decision, exit 2; nothing is written).
+Result<std::string> FitCertificate(const Calibration& cal, const FitOptions& f) {
+  const std::vector<std::string> rejected = ModelRejectedConstants(cal);
+  if (!rejected.empty() && !f.accept_rejected_model) {
+    std::string list;
+    for (const std::string& r : rejected) list += (list.empty() ? " " : "; ") + r;
+    return MakeError(fmt::format(
+        "the certificate refuses constants marked model_rejected (nothing written):{}. Refit "
+        "as the reason says, drop --html to write calibration.json alone (`characterize "
+        "report calibration.json --html PAGE.html` then shows it as a page that is not a "
+        "certificate), or give --accept-rejected-model to certify them with that notice",
+        list));
   }
-  // calibration.json carries each tag's device ID, name and profile from the tags file (a
-  // default body-part name only for the thesis tags' own records: none for other tools').
-  const bool thesis_records = IsThesisTagFormat(apps::CalibrationRecordsFormat(cal.value()));
-  for (TagCalibration& t : cal.value().tags) {
-    const TagEntry* entry = tags.value() ? tags.value()->Find(t.sensor) : nullptr;
-    if (entry != nullptr) {
-      t.device_id = entry->device_id;
-      if (thesis_records || !entry->thesis_default) t.name = entry->name;
-      t.profile = entry->profile;
-    }
+  CertificateOptions certificate;
+  certificate.accept_rejected_model = f.accept_rejected_model;
+  Result<std::string> rendered = RenderCalibrationCertificate(cal, certificate);
+  // The certificate of the fit just made: a failure is the run's, not the input's.
+  if (!rendered.ok()) return rendered.error().WithKind(ErrorKind::kFailed);
+  return rendered;
+}
+
+// The gyroscope's bias at rest (--accel-model none): value, u (k = 1) and the 95 % coverage
+// factor, per axis.
+void NoteBiasAtRest(const SensorCalibration& g) {
+  for (int a = 0; a < 3; ++a) {
+    apps::Note(fmt::format(
+        "  gyro bias at rest {}: {:.6g} {} u {:.3g} {} ({:.4g} u {:.2g} deg/s; k95 {:.3g}, "
+        "dof {})\n",
+        "xyz"[a], g.model.bias[a], g.model.input_unit, g.bias_u[a], g.model.input_unit,
+        g.model.bias[a] * g.model.scale[a], g.bias_u[a] * g.model.scale[a], g.coverage_factor_95,
+        g.dof));
   }
-  if (int rc = ApplySpec(spec.spec, &cal.value()); rc != kExitOk) return rc;
-  std::string html;
-  if (!f.html.empty()) {
-    // Constants marked model_rejected are not certified without --accept-rejected-model (an
-    // input decision, exit 2; nothing is written).
-    const std::vector<std::string> rejected = ModelRejectedConstants(cal.value());
-    if (!rejected.empty() && !f.accept_rejected_model) {
-      std::string list;
-      for (const std::string& r : rejected) list += (list.empty() ? " " : "; ") + r;
-      apps::PrintErrorText(fmt::format(
-          "the certificate refuses constants marked model_rejected (nothing written):{}. Refit "
-          "as the reason says, drop --html to write calibration.json alone (`characterize "
-          "report calibration.json --html PAGE.html` then shows it as a page that is not a "
-          "certificate), or give --accept-rejected-model to certify them with that notice",
-          list));
-      return kExitUsage;
-    }
-    CertificateOptions certificate;
-    certificate.accept_rejected_model = f.accept_rejected_model;
-    Result<std::string> rendered = RenderCalibrationCertificate(cal.value(), certificate);
-    if (!rendered.ok()) {
-      // The certificate of the fit just made: a failure is the run's, not the input's.
-      return apps::PrintErrorExit(rendered.error().WithKind(ErrorKind::kFailed));
-    }
-    html = std::move(rendered).value();
-  }
-  // calibration.json and its certificate are replaced together or not at all.
-  if (Status w =
-          apps::WriteOutputs({{f.output, FormatCalibrationJson(cal.value())}, {f.html, html}});
-      !w.ok()) {
-    return apps::PrintErrorExit(w.error());
-  }
-  // The summary is a note (not under --quiet); the warnings always print.
-  for (const TagCalibration& t : cal.value().tags) {
+}
+
+// Per tag: its segments, residuals and warnings. The summary is a note (not under --quiet);
+// the warnings always print.
+void PrintFitSummary(const Calibration& cal, const CalibrationOptions& o) {
+  for (const TagCalibration& t : cal.tags) {
     std::map<SegmentKind, int> counts;
     for (const Segment& s : t.segments) ++counts[s.kind];
     apps::Note(fmt::format(
@@ -258,18 +222,7 @@ int RunFit(const FitOptions& f) {
     if (t.gyro) {
       apps::Note(fmt::format("  gyro residual rms {:.3g} {}\n", t.gyro->residual_rms,
                              t.gyro->residual_unit));
-      if (!o.fit_accel) {
-        // The bias at rest: value, u (k = 1) and the 95 % coverage factor, per axis.
-        const SensorCalibration& g = *t.gyro;
-        for (int a = 0; a < 3; ++a) {
-          apps::Note(fmt::format(
-              "  gyro bias at rest {}: {:.6g} {} u {:.3g} {} ({:.4g} u {:.2g} deg/s; k95 {:.3g}, "
-              "dof {})\n",
-              "xyz"[a], g.model.bias[a], g.model.input_unit, g.bias_u[a], g.model.input_unit,
-              g.model.bias[a] * g.model.scale[a], g.bias_u[a] * g.model.scale[a],
-              g.coverage_factor_95, g.dof));
-        }
-      }
+      if (!o.fit_accel) NoteBiasAtRest(*t.gyro);
     }
     for (const std::string& w : t.warnings) {
       if (apps::Quiet()) {
@@ -279,6 +232,49 @@ int RunFit(const FitOptions& f) {
       }
     }
   }
+}
+
+// Loads the sessions, checks their columns (missing ones are bad input, exit 2, named with the
+// file before any fitting) and fits.
+Result<Calibration> Fit(const FitOptions& f, const CalibrationOptions& o) {
+  TerminalProgress progress(stderr, apps::CliProgressOptions());  // Loads (bytes), then the fit.
+  Result<std::vector<Session>> sessions = LoadFitSessions(f, &progress);
+  if (!sessions.ok()) return sessions.error();
+  std::vector<const Session*> ptrs;
+  for (const Session& s : sessions.value()) ptrs.push_back(&s);
+  if (Status c = CheckCalibrationColumns(ptrs, o); !c.ok()) return c.error();
+  progress.BeginPhase("fit (Ceres)", kUncountedWork);
+  Result<Calibration> cal = CalibrateSessions(ptrs, o);
+  progress.Finish();
+  return cal;
+}
+
+}  // namespace
+
+int RunFit(const FitOptions& f) {
+  if (f.thermal) return RunThermalFit(f);
+  Result<CalibrationOptions> o = FitCalibrationOptions(f);
+  if (!o.ok()) return apps::PrintErrorExit(o.error());
+  if (Status s = CheckFitFiles(f); !s.ok()) return apps::PrintErrorExit(s.error());
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(f.tags);
+  if (!tags.ok()) return apps::PrintErrorExit(tags.error());
+  const LoadedSpec spec = LoadSpecOption(f.spec);
+  if (spec.exit_code != 0) return spec.exit_code;
+  OpenedRegistry registry = OpenRegistryOption(f.registry);
+  if (registry.exit_code != 0) return registry.exit_code;
+  Result<Calibration> cal = Fit(f, o.value());
+  if (!cal.ok()) return apps::PrintErrorExit(cal.error());
+  NameTags(tags.value(), &cal.value());
+  if (int rc = ApplySpec(spec.spec, &cal.value()); rc != kExitOk) return rc;
+  Result<std::string> html = f.html.empty() ? std::string() : FitCertificate(cal.value(), f);
+  if (!html.ok()) return apps::PrintErrorExit(html.error());
+  // calibration.json and its certificate are replaced together or not at all.
+  if (Status w = apps::WriteOutputs(
+          {{f.output, FormatCalibrationJson(cal.value())}, {f.html, html.value()}});
+      !w.ok()) {
+    return apps::PrintErrorExit(w.error());
+  }
+  PrintFitSummary(cal.value(), o.value());
   apps::Note(fmt::format("wrote {}\n", apps::IsStdio(f.output) ? "stdout" : f.output));
   if (!f.html.empty()) apps::Note(fmt::format("wrote {}\n", f.html));
   int rc = ConformityExitCode(f.spec, cal.value());
@@ -289,129 +285,6 @@ int RunFit(const FitOptions& f) {
                                                                cal.value().tags.size())));
   }
   return rc;
-}
-
-}  // namespace
-
-void AddFitCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<FitOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "fit",
-      "fit the calibration of every tag in the sessions (static poses, table runs, "
-      "hand rotations) and write calibration.json");
-  sub->add_option("sessions", o->inputs,
-                  "SESSION... (session.csv; ACC GYRO pairs with --imutk); - reads stdin")
-      ->required()
-      ->check(apps::ExistingFileOrStdin());
-  sub->add_option("-o,--output", o->output, "calibration.json to write (- for stdout)")->required();
-  sub->add_flag("--imutk", o->imutk, "inputs are imu_tk file pairs: ACC GYRO [ACC GYRO ...]");
-  apps::AddLoadCliOptions(sub, &o->load, /*full_scale_flags=*/false);
-  CalibrationOptions& c = o->calibration;
-  sub->add_option("--sensor", c.sensor, "calibrate only this tag (0 = every tag)");
-  // --model sets both sensors' model unless --accel-model or --gyro-model names its own
-  // (callbacks run once the whole command line is parsed, so the counts are final). The
-  // default is auto (issue #36): the smallest model of bias < scale < full the data accept.
-  c.accel_auto = true;
-  c.gyro_auto = true;
-  c.compare_models = true;
-  const auto model_kind = [](const std::string& name) { return *ParseModelKind(name); };
-  sub->add_option_function<std::string>(
-         "--model",
-         [o, sub, model_kind](const std::string& v) {
-           const bool automatic = v == "auto";
-           if (sub->count("--accel-model") == 0) {
-             o->calibration.accel_auto = automatic;
-             if (!automatic) o->calibration.accel_model = model_kind(v);
-           }
-           if (sub->count("--gyro-model") == 0) {
-             o->calibration.gyro_auto = automatic;
-             if (!automatic) o->calibration.gyro_model = model_kind(v);
-           }
-         },
-         "auto (default: the smallest model the data accept) | bias | scale | full, for both "
-         "sensors")
-      ->check(CLI::IsMember({"auto", "bias", "scale", "full"}));
-  sub->add_option_function<std::string>(
-         "--accel-model",
-         [o, model_kind](const std::string& v) {
-           o->calibration.accel_auto = v == "auto";
-           if (v == "none") {
-             o->calibration.fit_accel = false;  // The accel model stays --model's (unused).
-           } else if (v != "auto") {
-             o->calibration.accel_model = model_kind(v);
-           }
-         },
-         "override --model for the accelerometer: auto | bias | scale | full, or none (with "
-         "--gyro-model bias: the gyroscope's bias at rest from one static record)")
-      ->check(CLI::IsMember({"auto", "bias", "scale", "full", "none"}));
-  sub->add_option_function<std::string>(
-         "--gyro-model",
-         [o, model_kind](const std::string& v) {
-           o->calibration.gyro_auto = v == "auto";
-           if (v != "auto") o->calibration.gyro_model = model_kind(v);
-         },
-         "override --model for the gyroscope: auto | bias | scale | full")
-      ->check(CLI::IsMember({"auto", "bias", "scale", "full"}));
-  sub->add_option("--gravity-mps2", c.gravity_mps2,
-                  "local gravity [m/s^2] (default: standard gravity 9.80665, CGPM 1901)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option_function<double>(
-      "--gravity-u-mps2", [o](double v) { o->calibration.gravity_u_mps2 = v; },
-      "standard uncertainty of --gravity-mps2 [m/s^2], stated in calibration.json and in the "
-      "certificate's accelerometer budget");
-  sub->add_option("--accel-fs-g", c.accel_fs_g, "accelerometer full scale of raw counts [g]")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sub->add_option("--gyro-fs-dps", c.gyro_fs_dps, "gyroscope full scale of raw counts [deg/s]")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sub->add_option_function<std::string>(
-         "--temperature",
-         [o](const std::string& v) {
-           o->calibration.temperature = v == "on"    ? TemperatureMode::kOn
-                                        : v == "off" ? TemperatureMode::kOff
-                                                     : TemperatureMode::kAuto;
-         },
-         "linear temperature term of the biases: auto (when temp_c varies), on, off")
-      ->check(CLI::IsMember({"auto", "on", "off"}));
-  sub->add_option_function<std::string>(
-         "--loss", [o](const std::string& v) { o->calibration.loss = *ParseLossKind(v); },
-         "robust loss: none | huber | cauchy")
-      ->check(CLI::IsMember({"none", "huber", "cauchy"}));
-  sub->add_option("--loss-scale", c.loss_scale, "robust loss scale, in standard deviations")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sub->add_flag_callback(
-      "--accel-only", [o] { o->calibration.fit_gyro = false; }, "calibrate the accelerometer only");
-  sub->add_option("--min-static-s", c.segmentation.min_static_s,
-                  "shortest still period kept as a pose [s] (default 1; below 1 s the detector's "
-                  "window shrinks with it, so poses of about twice this are found)");
-  sub->add_option("--segments", o->segments,
-                  "CSV of annotated segments used instead of the static detector: "
-                  "kind,start_s,end_s[,table_rate_dps][,input] (docs/calibration-model.md)")
-      ->check(CLI::ExistingFile);
-  sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
-  sub->add_flag("--thermal", o->thermal,
-                "bias versus temperature (polynomial, order by F-tests) from one static record "
-                "over a temperature range; writes metro.thermal-fit/1 JSON (docs/thermal.md)");
-  sub->add_option("--thermal-order", o->thermal_options.order,
-                  "--thermal: fixed polynomial order 1..4 (0: chosen by the data)")
-      ->check(CLI::Range(0, 4))
-      ->capture_default_str();
-  sub->add_option("--thermal-bin-c", o->thermal_options.bin_width_c,
-                  "--thermal: temperature bin width; every bin weighs the same")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
-                "certify constants marked model_rejected (a model the data reject or an exact "
-                "fit), with that notice on the certificate");
-  AddTagsOption(sub, &o->tags);
-  AddSpecOptions(sub, &o->spec);
-  AddRegistryOptions(sub, &o->registry);
-  sub->callback([o, exit_code, sub] {
-    o->calibration.gravity_given = sub->count("--gravity-mps2") > 0;
-    *exit_code = RunFit(*o);
-  });
 }
 
 }  // namespace metro::calibrate_app

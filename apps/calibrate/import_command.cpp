@@ -3,6 +3,8 @@
 // Another tool's intrinsics as calibration.json (interchange.hpp): what the format did not
 // carry and every implausible constant named on stderr and in the tag's warnings; the
 // uncertainties from the covariance sidecar (FILE.covariance.json when present) or unknown.
+#include "import_command.hpp"
+
 #include <memory>
 
 #include "commands.hpp"
@@ -14,17 +16,6 @@
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
-namespace {
-
-struct ImportCliOptions {
-  std::string file;
-  std::string from;
-  std::string output = "-";
-  std::string covariance;  // The sidecar; empty: FILE.covariance.json when it exists.
-  int instance = 0;
-  int sensor = 1;
-};
-
 int RunImport(const ImportCliOptions& c) {
   const std::optional<InterchangeFormat> format = ParseInterchangeFormat(c.from);
   if (!format) {
@@ -62,29 +53,6 @@ int RunImport(const ImportCliOptions& c) {
   const std::string json = FormatCalibrationJson(imported.value().calibration);
   if (Status s = apps::WriteOutput(c.output, json); !s.ok()) return apps::PrintErrorExit(s.error());
   return 0;
-}
-
-}  // namespace
-
-void AddImportCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<ImportCliOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "import",
-      "read another tool's intrinsics (Kalibr, OpenVINS, basalt, librealsense, PX4, ArduPilot) "
-      "as calibration.json; what the format did not carry and implausible constants are named "
-      "(docs/calibration-interchange.md)");
-  sub->add_option("FILE", o->file, "the tool's file")->required()->check(CLI::ExistingFile);
-  sub->add_option("--from", o->from, "kalibr, openvins, basalt, realsense, px4 or ardupilot")
-      ->required();
-  sub->add_option("--instance", o->instance,
-                  "imu<i> (kalibr, openvins), imus[i] (realsense), the autopilot's IMU index "
-                  "(default 0)");
-  sub->add_option("--sensor", o->sensor, "the tag number calibration.json gets (default 1)");
-  sub->add_option("--covariance", o->covariance,
-                  "the covariance sidecar (default FILE.covariance.json when it exists; "
-                  "without one the uncertainties are unknown)");
-  sub->add_option("-o,--output", o->output, "calibration.json to write (default - for stdout)");
-  sub->callback([o, exit_code] { *exit_code = RunImport(*o); });
 }
 
 }  // namespace metro::calibrate_app

@@ -1,6 +1,8 @@
 // calibrate inspect tag.bin|tag.hex [--device-id ID] [--tags FILE [--sensor N]] [--slot-address
 // ADDR]
 //   [--json]
+#include "inspect_command.hpp"
+
 #include <fmt/format.h>
 
 #include <memory>
@@ -11,17 +13,6 @@
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
-namespace {
-
-struct InspectCliOptions {
-  std::string input;
-  std::string device_id;
-  std::string slot_address = "0x3B000";
-  bool json = false;
-  std::string tags;  // --tags FILE: name the tag of each blob's device
-  int sensor = 0;    // with --tags: check against this tag's device
-};
-
 // Exit codes: 0 a valid calibration (the .bin validates; in a .hex a slot is active), 1 none,
 // 2 unreadable file, HEX syntax or bad options.
 int RunInspect(const InspectCliOptions& c) {
@@ -96,27 +87,6 @@ int RunInspect(const InspectCliOptions& c) {
     }
   }
   return r.value().ok() ? kExitOk : kExitFailed;
-}
-
-}  // namespace
-
-void AddInspectCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<InspectCliOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "inspect",
-      "decode and validate a calibration blob (.bin) or programmer image (.hex) with the tag "
-      "firmware's rules; exit 0 valid, 1 no valid calibration, 2 unreadable");
-  sub->add_option("file", o->input, "tag.bin or tag.hex")->required()->check(CLI::ExistingFile);
-  sub->add_option("--device-id", o->device_id,
-                  "check against this tag (16 hex digits DEVICEID[1] DEVICEID[0], or nrfjprog "
-                  "--memrd's words DEVICEID[0] DEVICEID[1]); default: each blob's own id");
-  AddTagsOption(sub, &o->tags);
-  sub->add_option("--sensor", o->sensor,
-                  "with --tags: check the blob against this tag's device_id");
-  sub->add_option("--slot-address", o->slot_address,
-                  "slot A address in a .hex (default 0x3B000); slot B is the next page");
-  sub->add_flag("--json", o->json, "print JSON instead of text");
-  sub->callback([o, exit_code] { *exit_code = RunInspect(*o); });
 }
 
 }  // namespace metro::calibrate_app

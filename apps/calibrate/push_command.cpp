@@ -1,5 +1,7 @@
 // calibrate push --port /dev/ttyX calibration.json --sensor N [--device-id HEX16] [--seq N]
 //   [--timeout-ms MS] [--retries N] [--profile mpu6050|generic] [--accel-fs-g G] [--gyro-fs-dps D]
+#include "push_command.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -19,27 +21,6 @@
 
 namespace metro::calibrate_app {
 namespace {
-
-struct PushCliOptions {
-  std::string port;
-  std::string calibration;
-  int sensor = 0;
-  std::string device_id;
-  uint32_t seq = 0;
-  int dlpf_cfg = 3;
-  std::optional<double> t_valid_min_c;
-  std::optional<double> t_valid_max_c;
-  int timeout_ms = 1000;
-  int retries = 5;
-  std::string profile;  // "" = the tags file's, else mpu6050
-  std::optional<double> accel_fs_g;
-  std::optional<double> gyro_fs_dps;
-  bool accept_rejected_model = false;  // --accept-rejected-model (issue #36)
-  std::string tags;                    // --tags FILE
-  bool any_device = false;             // --any-device: write to whichever tag answers
-  bool all = false;                    // --all: every tag of calibration.json, one after another
-  RegistryCliOptions registry;         // --registry, --station, --operator (docs/registry.md)
-};
 
 int RunPushAll(const PushCliOptions& c);
 
@@ -61,6 +42,141 @@ bool LoadPushInputs(const PushCliOptions& c, std::optional<TagRegistry>* tags, C
   return true;
 }
 
+// The tag the push must reach (docs/calibration-blob.md 1.1): a push to a tag whose device ID
+// is not known is refused unless --any-device (whichever tag answers, whatever the tags file or
+// calibration.json say: nullopt).
+Result<std::optional<uint64_t>> PushTarget(const PushCliOptions& c,
+                                           const std::optional<TagRegistry>& tags,
+                                           const Calibration& cal) {
+  Result<std::optional<uint64_t>> resolved = ResolveDeviceId(c.device_id, tags, cal, c.sensor);
+  if (!resolved.ok()) return resolved;
+  if (c.any_device && !c.device_id.empty()) {
+    return MakeError("--any-device and --device-id contradict each other: give one");
+  }
+  if (c.any_device) return std::optional<uint64_t>();
+  if (!resolved.value()) {
+    return MakeError(fmt::format(
+        "no device ID known for sensor {}: give --device-id, --tags FILE with its device_id, or "
+        "--any-device to write to whichever tag answers (nothing sent; {} not opened)",
+        c.sensor, c.port));
+  }
+  return resolved;
+}
+
+// The blob's options from the flags and the tags file's profile.
+blob::BlobFromCalibrationOptions PushBlobOptions(const PushCliOptions& c,
+                                                 const std::optional<TagRegistry>& tags) {
+  blob::BlobFromCalibrationOptions bo;
+  bo.sensor = c.sensor;
+  bo.seq = c.seq;
+  bo.dlpf_cfg = static_cast<uint8_t>(c.dlpf_cfg);
+  bo.t_valid_min_c = c.t_valid_min_c;
+  bo.t_valid_max_c = c.t_valid_max_c;
+  bo.profile = ResolveProfile(c.profile, tags, c.sensor);
+  bo.accel_fs_g = c.accel_fs_g;
+  bo.gyro_fs_dps = c.gyro_fs_dps;
+  bo.accept_rejected_model = c.accept_rejected_model;
+  return bo;
+}
+
+// Whether the blob format can represent the constants does not depend on the tag's device id or
+// seq: checked with the firmware's own rules (WriteBlob) before any port is opened. The push
+// builds the blob again for the tag that answers.
+Status CheckBlobWritable(const Calibration& cal, blob::BlobFromCalibrationOptions trial) {
+  trial.seq = 1;
+  Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal, trial);
+  if (!contents.ok()) return contents.error();
+  return blob::WriteBlob(contents.value()).status();
+}
+
+// The push over the open port, with one progress bar per phase ("write 320/540 B") on a
+// terminal only.
+blob::PushSummary PushOverPort(serial::SerialPort* port, const Calibration& cal,
+                               const blob::BlobFromCalibrationOptions& bo,
+                               const std::optional<uint64_t>& expect, const PushCliOptions& c) {
+  blob::PushOptions po;
+  po.timeout_ms = c.timeout_ms;
+  po.execute_timeout_ms = 3 * c.timeout_ms;  // CAL_EXECUTE erases and programs a page
+  po.max_retries = c.retries;
+  TerminalProgress bar(stderr, apps::CliProgressOptions());
+  std::string phase_shown;
+  size_t done_shown = 0;
+  const blob::PushProgress progress = [&](const char* phase, size_t done, size_t total) {
+    if (phase_shown != phase) {
+      bar.BeginPhase(phase, static_cast<int64_t>(total), "B");
+      phase_shown = phase;
+      done_shown = 0;
+    }
+    if (done > done_shown) {
+      bar.Advance(static_cast<int64_t>(done - done_shown));
+      done_shown = done;
+    }
+  };
+  blob::PushSummary s = blob::PushCalibration(port, cal, bo, expect, po, progress);
+  bar.Finish();
+  return s;
+}
+
+// What the tag and the link did: notes (not under --quiet), except on failure; the warnings
+// always.
+void PrintPushLink(const blob::PushSummary& s) {
+  for (const std::string& w : s.warnings) apps::PrintWarning(w);
+  const bool notes = !s.ok || !apps::Quiet();
+  if (s.tag_answered && notes) {
+    apps::PrintText(
+        stderr, fmt::format("tag {}: format {}.{}, active slot {}, seq {}\n",
+                            blob::FormatDeviceId(s.tag.device_id), s.tag.fmt_major, s.tag.fmt_minor,
+                            s.tag.active_slot < 0 ? "none" : (s.tag.active_slot == 0 ? "A" : "B"),
+                            s.tag.active_seq));
+  }
+  if (notes) {
+    apps::PrintText(
+        stderr, fmt::format("link: {} requests, {} frames sent, {} retries, {} NAKs, {} timeouts\n",
+                            s.stats.requests, s.stats.frames_sent, s.stats.retries, s.stats.naks,
+                            s.stats.timeouts));
+  }
+}
+
+// The verdict for --all's table.
+std::string PushOutcome(const blob::PushSummary& s) {
+  if (s.ok) {
+    return fmt::format("OK: seq {} in slot {}, read back identical", s.seq,
+                       s.slot == 0 ? "A" : "B");
+  }
+  if (s.contradiction != blob::TagContradiction::kNone) {
+    return "MISMATCH: " + blob::TagContradictionName(s.contradiction);
+  }
+  return s.commit == blob::CommitState::kUnknown     ? "outcome unknown"
+         : s.commit == blob::CommitState::kCommitted ? "UNVERIFIED"
+                                                     : "FAILED";
+}
+
+// The result, one line (a newline in the message, from a port or file name, is escaped), and
+// on failure what to do next; the exit code. An unknown outcome or a live but unchecked
+// calibration is not a failure to write: the message says what the tag may hold
+// (docs/calibration-blob.md section 11). A tag that contradicted what it acknowledged is
+// neither (issue #37).
+int FinishPush(const blob::PushSummary& s, const PushCliOptions& c, int recorded) {
+  const std::string message = EscapeControlChars(s.message);
+  if (s.ok) {
+    apps::Note(fmt::format("OK: {}\n", message));
+    return recorded;
+  }
+  if (s.contradiction != blob::TagContradiction::kNone) {
+    apps::PrintText(stderr, fmt::format("MISMATCH: {}\n", message));
+  } else if (s.commit == blob::CommitState::kUnknown) {
+    apps::PrintText(stderr, message + "\n");
+  } else if (s.commit == blob::CommitState::kCommitted) {
+    apps::PrintText(stderr, fmt::format("UNVERIFIED: {}\n", message));
+  } else {
+    apps::PrintText(stderr, fmt::format("FAILED: {}\n", message));
+  }
+  // One command per line: the port and file names are data (escaped).
+  apps::PrintText(stderr, blob::PushRecoveryAdvice(s, EscapeControlChars(c.port),
+                                                   EscapeControlChars(c.calibration), c.sensor));
+  return s.input_error ? kExitUsage : kExitFailed;
+}
+
 // `outcome`, when not null, receives the final line's verdict for --all's table.
 int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   if (c.all) return RunPushAll(c);
@@ -76,50 +192,13 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
                          fmt::format(" (nothing sent; {} not opened)", c.port));
     return kExitUsage;
   }
-  // The tag the push must reach (docs/calibration-blob.md 1.1): a push to a tag whose device ID
-  // is not known is refused unless --any-device.
-  Result<std::optional<uint64_t>> resolved = ResolveDeviceId(c.device_id, tags, cal, c.sensor);
-  if (!resolved.ok()) {
-    return apps::PrintErrorExit(resolved.error());
-  }
-  if (c.any_device && !c.device_id.empty()) {
-    apps::PrintErrorText("--any-device and --device-id contradict each other: give one");
-    return kExitUsage;
-  }
-  // --any-device: whichever tag answers, whatever the tags file or calibration.json say.
-  const std::optional<uint64_t> expect = c.any_device ? std::nullopt : resolved.value();
-  if (!expect && !c.any_device) {
-    apps::PrintErrorText(fmt::format(
-        "no device ID known for sensor {}: give --device-id, --tags FILE with its device_id, or "
-        "--any-device to write to whichever tag answers (nothing sent; {} not opened)",
-        c.sensor, c.port));
-    return kExitUsage;
-  }
-  blob::BlobFromCalibrationOptions bo;
-  bo.sensor = c.sensor;
-  bo.seq = c.seq;
-  bo.dlpf_cfg = static_cast<uint8_t>(c.dlpf_cfg);
-  bo.t_valid_min_c = c.t_valid_min_c;
-  bo.t_valid_max_c = c.t_valid_max_c;
-  bo.profile = ResolveProfile(c.profile, tags, c.sensor);
-  bo.accel_fs_g = c.accel_fs_g;
-  bo.gyro_fs_dps = c.gyro_fs_dps;
-  bo.accept_rejected_model = c.accept_rejected_model;
-  // Whether the blob format can represent the constants does not depend on the tag's device
-  // id or seq: checked here, with the firmware's own rules (WriteBlob), before any port is
-  // opened. The push builds the blob again for the tag that answers.
-  {
-    blob::BlobFromCalibrationOptions trial = bo;
-    trial.seq = 1;
-    Result<blob::BlobContents> contents = blob::BlobContentsFromCalibration(cal, trial);
-    Result<std::vector<uint8_t>> bytes = contents.ok()
-                                             ? blob::WriteBlob(contents.value())
-                                             : Result<std::vector<uint8_t>>(contents.error());
-    if (!bytes.ok()) {
-      apps::PrintErrorText(fmt::format("{} (nothing sent; {} not opened)",
-                                       CalibrationErrorText(c.calibration, bytes.error()), c.port));
-      return apps::ExitCodeFor(bytes.error());
-    }
+  Result<std::optional<uint64_t>> expect = PushTarget(c, tags, cal);
+  if (!expect.ok()) return apps::PrintErrorExit(expect.error());
+  const blob::BlobFromCalibrationOptions bo = PushBlobOptions(c, tags);
+  if (Status w = CheckBlobWritable(cal, bo); !w.ok()) {
+    apps::PrintErrorText(fmt::format("{} (nothing sent; {} not opened)",
+                                     CalibrationErrorText(c.calibration, w.error()), c.port));
+    return apps::ExitCodeFor(w.error());
   }
   OpenedRegistry registry = OpenRegistryOption(c.registry);
   if (registry.exit_code != 0) return registry.exit_code;
@@ -130,80 +209,12 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
     // docs/calibration-blob.md).
     return apps::ExitCodeFor(port.error().WithKind(ErrorKind::kFailed));
   }
-  blob::PushOptions po;
-  po.timeout_ms = c.timeout_ms;
-  po.execute_timeout_ms = 3 * c.timeout_ms;  // CAL_EXECUTE erases and programs a page
-  po.max_retries = c.retries;
-  // One bar per phase ("write 320/540 B"), on a terminal only.
-  TerminalProgress bar(stderr, apps::CliProgressOptions());
-  std::string phase_shown;
-  size_t done_shown = 0;
-  const blob::PushProgress progress = [&](const char* phase, size_t done, size_t total) {
-    if (phase_shown != phase) {
-      bar.BeginPhase(phase, static_cast<int64_t>(total), "B");
-      phase_shown = phase;
-      done_shown = 0;
-    }
-    if (done > done_shown) {
-      bar.Advance(static_cast<int64_t>(done - done_shown));
-      done_shown = done;
-    }
-  };
-  blob::PushSummary s = blob::PushCalibration(port.value().get(), cal, bo, expect, po, progress);
-  bar.Finish();
-  for (const std::string& w : s.warnings) {
-    apps::PrintWarning(w);
-  }
-  // What the tag and the link did: notes (not under --quiet), except on failure.
-  const bool notes = !s.ok || !apps::Quiet();
-  if (s.tag_answered && notes) {
-    apps::PrintText(
-        stderr, fmt::format("tag {}: format {}.{}, active slot {}, seq {}\n",
-                            blob::FormatDeviceId(s.tag.device_id), s.tag.fmt_major, s.tag.fmt_minor,
-                            s.tag.active_slot < 0 ? "none" : (s.tag.active_slot == 0 ? "A" : "B"),
-                            s.tag.active_seq));
-  }
-  if (notes) {
-    apps::PrintText(
-        stderr, fmt::format("link: {} requests, {} frames sent, {} retries, {} NAKs, {} timeouts\n",
-                            s.stats.requests, s.stats.frames_sent, s.stats.retries, s.stats.naks,
-                            s.stats.timeouts));
-  }
-  // The result is one line: a newline in the message (from a port or file name) is escaped.
-  const std::string message = EscapeControlChars(s.message);
+  const blob::PushSummary s = PushOverPort(port.value().get(), cal, bo, expect.value(), c);
+  PrintPushLink(s);
   const int recorded = RecordPushResult(registry.registry.get(), cal, c.calibration, c.sensor, s,
-                                        expect, c.port, c.registry);
-  if (s.ok) {
-    apps::Note(fmt::format("OK: {}\n", message));
-    if (outcome != nullptr) {
-      *outcome =
-          fmt::format("OK: seq {} in slot {}, read back identical", s.seq, s.slot == 0 ? "A" : "B");
-    }
-    return recorded;
-  }
-  const bool lied = s.contradiction != blob::TagContradiction::kNone;
-  if (outcome != nullptr) {
-    *outcome = lied ? "MISMATCH: " + blob::TagContradictionName(s.contradiction)
-               : s.commit == blob::CommitState::kUnknown   ? "outcome unknown"
-               : s.commit == blob::CommitState::kCommitted ? "UNVERIFIED"
-                                                           : "FAILED";
-  }
-  // An unknown outcome or a live but unchecked calibration is not a failure to write: the
-  // message says what the tag may hold (docs/calibration-blob.md section 11). A tag that
-  // contradicted what it acknowledged is neither (issue #37).
-  if (lied) {
-    apps::PrintText(stderr, fmt::format("MISMATCH: {}\n", message));
-  } else if (s.commit == blob::CommitState::kUnknown) {
-    apps::PrintText(stderr, message + "\n");
-  } else if (s.commit == blob::CommitState::kCommitted) {
-    apps::PrintText(stderr, fmt::format("UNVERIFIED: {}\n", message));
-  } else {
-    apps::PrintText(stderr, fmt::format("FAILED: {}\n", message));
-  }
-  // One command per line: the port and file names are data (escaped).
-  apps::PrintText(stderr, blob::PushRecoveryAdvice(s, EscapeControlChars(c.port),
-                                                   EscapeControlChars(c.calibration), c.sensor));
-  return s.input_error ? kExitUsage : kExitFailed;
+                                        expect.value(), c.port, c.registry);
+  if (outcome != nullptr) *outcome = PushOutcome(s);
+  return FinishPush(s, c, recorded);
 }
 
 // --all: every tag of calibration.json over the one port, in sensor order, each to its own
@@ -260,48 +271,6 @@ int RunPushAll(const PushCliOptions& c) {
 
 }  // namespace
 
-void AddPushCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<PushCliOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "push",
-      "send a tag's calibration over the central's serial link (230400 8N1) with the push "
-      "protocol, then read it back");
-  sub->add_option("--port", o->port, "serial device of the BLE central, e.g. /dev/ttyACM0")
-      ->required();
-  sub->add_option("calibration", o->calibration, "calibration.json")
-      ->required()
-      ->check(CLI::ExistingFile);
-  sub->add_option("--sensor", o->sensor, "the tag in calibration.json (or --all)");
-  sub->add_option("--device-id", o->device_id,
-                  "the tag's FICR DEVICEID (16 hex digits DEVICEID[1] DEVICEID[0], or nrfjprog "
-                  "--memrd's two words DEVICEID[0] DEVICEID[1]); another tag is refused. "
-                  "Default: the tags file's, else calibration.json's");
-  AddTagsOption(sub, &o->tags);
-  sub->add_flag("--all", o->all,
-                "every tag of calibration.json, each to its device (--tags or calibration.json), "
-                "read back, then a table (sensor, name, device, result)");
-  sub->add_flag("--any-device", o->any_device,
-                "no device ID is known: write to whichever tag answers (else refused)");
-  sub->add_option("--seq", o->seq, "blob seq (default: the tag's active seq + 1)")
-      ->check(CLI::Range(1u, 0xFFFFFFFEu));
-  sub->add_option("--dlpf-cfg", o->dlpf_cfg, "the tag firmware's MPU6050 DLPF_CFG (default 3)")
-      ->check(CLI::Range(0, 6));
-  sub->add_option("--t-valid-min-c", o->t_valid_min_c,
-                  "lower end of the temperature validity range the tag clamps to (default: the "
-                  "fitted span - 5 degC; lower is extrapolation, with a warning)");
-  sub->add_option("--t-valid-max-c", o->t_valid_max_c,
-                  "upper end of the temperature validity range (default: the fitted span + 5 "
-                  "degC)");
-  sub->add_option("--timeout-ms", o->timeout_ms, "wait for each answer (default 1000)")
-      ->check(CLI::Range(1, 60000));
-  sub->add_option("--retries", o->retries, "resends of one request (default 5)")
-      ->check(CLI::Range(0, 100));
-  AddSensorProfileOptions(sub, &o->profile, &o->accel_fs_g, &o->gyro_fs_dps);
-  sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
-                "send constants calibration.json marks model_rejected (a model the data reject "
-                "or an exact fit; docs/calibration-model.md) anyway");
-  AddRegistryOptions(sub, &o->registry);
-  sub->callback([o, exit_code] { *exit_code = RunPush(*o); });
-}
+int RunPushCommand(const PushCliOptions& o) { return RunPush(o); }
 
 }  // namespace metro::calibrate_app

@@ -1,5 +1,7 @@
 // calibrate registry history|drift|due|export: queries over the calibration registry
 // (docs/registry.md). The work is metro/registry/registry.hpp.
+#include "registry_command.hpp"
+
 #include <fmt/format.h>
 #include <sys/stat.h>
 
@@ -16,17 +18,6 @@
 
 namespace metro::calibrate_app {
 namespace {
-
-struct RegistryQueryOptions {
-  std::string url;
-  std::string device_id;
-  bool json = false;
-  double interval_days = kDefaultRecalibrationIntervalDays;
-  std::string at_utc;  // `due`: the time to judge at (default now)
-  bool all = false;    // `due`: every device, due or not
-  std::string format = "csv";
-  std::string output = "-";
-};
 
 // A query never creates a registry: a SQLite file must exist.
 Result<std::unique_ptr<Registry>> OpenForQuery(const std::string& flag) {
@@ -59,7 +50,9 @@ std::string Csv(const std::string& data) {
 // Prints `e` and returns its exit code (apps::ExitCodeFor).
 int Fail(const Error& e) { return apps::PrintErrorExit(e); }
 
-int RunHistory(const RegistryQueryOptions& o) {
+}  // namespace
+
+int RunRegistryHistory(const RegistryQueryOptions& o) {
   Result<uint64_t> id = DeviceId(o.device_id);
   if (!id.ok()) return Fail(id.error());
   Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
@@ -101,7 +94,7 @@ int RunHistory(const RegistryQueryOptions& o) {
   return kExitOk;
 }
 
-int RunDrift(const RegistryQueryOptions& o) {
+int RunRegistryDrift(const RegistryQueryOptions& o) {
   Result<uint64_t> id = DeviceId(o.device_id);
   if (!id.ok()) return Fail(id.error());
   Result<std::unique_ptr<Registry>> r = OpenForQuery(o.url);
@@ -132,7 +125,7 @@ int RunDrift(const RegistryQueryOptions& o) {
   return kExitOk;
 }
 
-int RunDue(const RegistryQueryOptions& o) {
+int RunRegistryDue(const RegistryQueryOptions& o) {
   if (!(o.interval_days > 0) || !std::isfinite(o.interval_days)) {
     apps::PrintErrorText("--interval-days must be a number > 0");
     return kExitUsage;
@@ -163,7 +156,7 @@ int RunDue(const RegistryQueryOptions& o) {
   return kExitOk;
 }
 
-int RunExport(const RegistryQueryOptions& o) {
+int RunRegistryExport(const RegistryQueryOptions& o) {
   // The registry is the export's input: never written over.
   if (Status s = apps::CheckOutputs({{"-o", o.output}}, RegistryFiles(o.url)); !s.ok()) {
     return Fail(s.error());
@@ -193,50 +186,6 @@ int RunExport(const RegistryQueryOptions& o) {
   }
   if (Status w = apps::WriteOutput(o.output, text); !w.ok()) return Fail(w.error());
   return kExitOk;
-}
-
-}  // namespace
-
-void AddRegistryCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<RegistryQueryOptions>();
-  CLI::App* reg = app.add_subcommand(
-      "registry", "query the calibration registry: history, drift, due, export (docs/registry.md)");
-  reg->require_subcommand(1);
-  auto url = [&](CLI::App* sub) {
-    sub->add_option("--registry", o->url,
-                    "the registry: a SQLite file or postgresql://... (default: $METRO_REGISTRY)");
-  };
-  CLI::App* history = reg->add_subcommand("history", "every calibration of a device, oldest first");
-  url(history);
-  history->add_option("--device-id", o->device_id, "the tag's device ID (16 hex digits)")
-      ->required();
-  history->add_flag("--json", o->json, "JSON: {\"device_id\", \"calibrations\": [...]}");
-  history->callback([o, exit_code] { *exit_code = RunHistory(*o); });
-
-  CLI::App* drift = reg->add_subcommand(
-      "drift", "change of each constant between a device's last two calibrations, with E_n");
-  url(drift);
-  drift->add_option("--device-id", o->device_id, "the tag's device ID (16 hex digits)")->required();
-  drift->add_flag("--json", o->json, "JSON: {\"device_id\", \"constants\": [...]}");
-  drift->callback([o, exit_code] { *exit_code = RunDrift(*o); });
-
-  CLI::App* due = reg->add_subcommand("due", "devices whose recalibration interval has run out");
-  url(due);
-  due->add_option("--interval-days", o->interval_days,
-                  "recalibration interval [days] (default 365)");
-  due->add_option("--at", o->at_utc, "judge at this ISO 8601 UTC time (default now)");
-  due->add_flag("--all", o->all, "list every device with its due date");
-  due->add_flag("--json", o->json,
-                R"(JSON: {"at_utc", "interval_days", "devices": [{"device_id", "due", ...}]})");
-  due->callback([o, exit_code] { *exit_code = RunDue(*o); });
-
-  CLI::App* exported = reg->add_subcommand("export",
-                                           "every calibration as CSV (one row per constant) "
-                                           "or JSON");
-  url(exported);
-  exported->add_option("--format", o->format, "csv or json")->check(CLI::IsMember({"csv", "json"}));
-  exported->add_option("-o,--output", o->output, "file to write (default - : stdout)");
-  exported->callback([o, exit_code] { *exit_code = RunExport(*o); });
 }
 
 }  // namespace metro::calibrate_app

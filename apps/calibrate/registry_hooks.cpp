@@ -8,14 +8,6 @@
 
 namespace metro::calibrate_app {
 
-void AddRegistryOptions(CLI::App* sub, RegistryCliOptions* o) {
-  sub->add_option("--registry", o->url,
-                  "record this in the calibration registry: a SQLite file or "
-                  "postgresql://... (default: $METRO_REGISTRY; docs/registry.md)");
-  sub->add_option("--station", o->station, "station name recorded with a calibration");
-  sub->add_option("--operator", o->operator_name, "operator recorded with a calibration");
-}
-
 std::vector<apps::NamedPath> RegistryFiles(const std::string& flag) {
   const std::string url = Registry::UrlFromFlagOrEnvironment(flag);
   const std::string file = Registry::FileOf(url);

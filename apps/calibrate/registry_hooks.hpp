@@ -3,7 +3,6 @@
 // The hooks the commands call; the work is metro/registry/registry.hpp.
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,8 +21,6 @@ struct RegistryCliOptions {
 
   RecordContext Context() const { return {station, operator_name, ""}; }
 };
-
-void AddRegistryOptions(CLI::App* sub, RegistryCliOptions* options);
 
 // The registry as apps::CheckOutputs sees it (an `updated` file: read and written in place,
 // so no output or input of the command may be it): the SQLite file of --registry FLAG, else

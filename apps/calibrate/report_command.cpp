@@ -1,4 +1,6 @@
 // calibrate report calibration.json [--html CERTIFICATE.html] [--tags FILE]
+#include "report_command.hpp"
+
 #include <fmt/format.h>
 
 #include <memory>
@@ -12,15 +14,6 @@
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
-namespace {
-
-struct ReportOptions {
-  std::string calibration;
-  std::string html;                    // Calibration certificate (docs/reports.md).
-  std::string tags;                    // --tags FILE: the tags' names, device IDs and profiles.
-  bool accept_rejected_model = false;  // --accept-rejected-model: certify them anyway.
-};
-
 int RunReport(const ReportOptions& r) {
   if (Status s = apps::RefuseStdout(r.html, "--html",
                                     "the summary goes to stdout: name a file for the certificate");
@@ -76,22 +69,6 @@ int RunReport(const ReportOptions& r) {
     apps::Note(fmt::format("wrote {}\n", r.html));
   }
   return kExitOk;
-}
-
-}  // namespace
-
-void AddReportCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<ReportOptions>();
-  CLI::App* sub = app.add_subcommand("report", "print a readable summary of calibration.json");
-  sub->add_option("calibration", o->calibration, "calibration.json")
-      ->required()
-      ->check(CLI::ExistingFile);
-  sub->add_option("--html", o->html, "also write the calibration certificate (HTML) here");
-  sub->add_flag("--accept-rejected-model", o->accept_rejected_model,
-                "certify constants marked model_rejected (a model the data reject or an exact "
-                "fit), with that notice on the certificate");
-  AddTagsOption(sub, &o->tags);
-  sub->callback([o, exit_code] { *exit_code = RunReport(*o); });
 }
 
 }  // namespace metro::calibrate_app

@@ -4,7 +4,6 @@
 
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
 
@@ -16,13 +15,6 @@
 #include "metro/io/tag_registry.hpp"
 
 namespace metro::calibrate_app {
-
-inline void AddTagsOption(CLI::App* sub, std::string* tags) {
-  sub->add_option("--tags,--tag-registry", *tags,
-                  "tags file: per sensor its name, device_id (either word order) and profile "
-                  "(docs/formats.md \"Tags file\")")
-      ->check(CLI::ExistingFile);
-}
 
 // The tags file, or nullopt when none was given.
 inline Result<std::optional<TagRegistry>> LoadTagsOption(const std::string& path) {

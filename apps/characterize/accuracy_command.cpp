@@ -41,51 +41,6 @@ Result<ReferenceUncertainty> ParseReferenceU(const std::string& text) {
 
 }  // namespace
 
-void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* o) {
-  app.add_flag("--accuracy", o->enabled,
-               "accuracy against a rotation table: plateaus, error curve, hysteresis, budget "
-               "(docs/accuracy.md)");
-  app.add_option("--table-axis", o->table_axis, "the tag axis the table turns")
-      ->type_name("TEXT:{yaw,pitch,roll}")
-      ->capture_default_str();
-  app.add_option("--reference", o->reference,
-                 "separate reference log (t_s, table_angle_deg), aligned on t_s; - reads stdin")
-      ->check(ExistingFileOrStdin());
-  app.add_option("--reference-u", o->reference_u,
-                 "the table's standard uncertainty in deg, or a budget file for it "
-                 "(docs/budget-format.md)");
-  app.add_option("--reference-offset-s", o->library.alignment.offset_s,
-                 "reference clock minus tag clock in s (default: estimated)");
-  app.add_option("--error-model", o->model,
-                 "the fitted error curve (auto: the order the data support; docs/accuracy.md)")
-      ->type_name("TEXT:{auto,linear,harmonic1,harmonic2}")
-      ->capture_default_str();
-  app.add_option("--min-dwell-s", o->library.plateaus.min_dwell_s,
-                 "shortest table rest that is a plateau")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  app.add_option("--settle-s", o->library.plateaus.settle_s,
-                 "seconds dropped after the table stops")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  app.add_option("--plateau-tolerance-deg", o->library.plateaus.tolerance_deg,
-                 "largest reference change within a plateau")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  app.add_option("--assumed-hysteresis-deg", o->library.assumed_hysteresis_deg,
-                 "hysteresis the corrected U assumes when no angle was visited both ways")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  app.add_option("--lag-tau-s", o->library.lag_tau_s,
-                 "the tag's response time in s (default: estimated from the motion)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_flag("--no-lag-model", o->no_lag_model,
-               "do not model the tag's lag: plateaus settle by --settle-s alone");
-  app.add_flag("--keep-departures", o->keep_departures,
-               "keep a plateau's start and end where the tag's error departs from its level "
-               "(default: trimmed and said so)");
-}
-
 const std::vector<std::string>& AccuracyOnlyOptionNames() {
   static const std::vector<std::string> names = {"--table-axis",
                                                  "--reference",
@@ -102,109 +57,125 @@ const std::vector<std::string>& AccuracyOnlyOptionNames() {
   return names;
 }
 
-int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
-  if (in.type_a) {
-    return PrintErrorExit(MakeError("--accuracy and --type-a are separate analyses: give one"));
-  }
-  if (Status s = CheckStdinInputs({in.session, a.reference}); !s.ok()) {
-    return PrintErrorExit(s.error());
-  }
+namespace {
+
+// The inputs and outputs, checked before anything is read: one analysis, stdin read once, no
+// page to stdout, no output that names an input (--reference-u is a budget file unless it is a
+// number).
+Status CheckAccuracyFiles(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
+  if (in.type_a) return MakeError("--accuracy and --type-a are separate analyses: give one");
+  if (Status s = CheckStdinInputs({in.session, a.reference}); !s.ok()) return s;
   if (Status s = RefuseStdout(in.html, "--html", "the HTML view goes to a file"); !s.ok()) {
-    return PrintErrorExit(s.error());
+    return s;
   }
-  // --reference-u is a budget file unless it is a number.
   char* number_end = nullptr;
   std::strtod(a.reference_u.c_str(), &number_end);
   const bool reference_u_is_number = number_end != a.reference_u.c_str() && *number_end == '\0';
   const std::string reference_u_file = reference_u_is_number ? "" : a.reference_u;
-  if (Status s = CheckOutputs({{"-o", in.output}, {"--html", in.html}},
-                              {{"SESSION", in.session},
-                               {"--reference", a.reference},
-                               {"--reference-u", reference_u_file},
-                               {"--columns-file", in.load.columns_file},
-                               {"--tags", in.tags}});
-      !s.ok()) {
-    return PrintErrorExit(s.error());
-  }
+  return CheckOutputs({{"-o", in.output}, {"--html", in.html}},
+                      {{"SESSION", in.session},
+                       {"--reference", a.reference},
+                       {"--reference-u", reference_u_file},
+                       {"--columns-file", in.load.columns_file},
+                       {"--tags", in.tags}});
+}
+
+// The library's options from the flags (the table axis, the error model, the reference's u),
+// checked.
+Result<AccuracyOptions> MakeAccuracyOptions(const AccuracyCliOptions& a,
+                                            const AccuracyRunInputs& in) {
   AccuracyOptions options = a.library;
-  auto axis = ParseTableAxis(a.table_axis);
-  if (!axis.ok()) {
-    return PrintErrorExit(axis.error());
-  }
+  Result<TableAxis> axis = ParseTableAxis(a.table_axis);
+  if (!axis.ok()) return axis.error();
   options.axis = axis.value();
-  auto model = ParseErrorModel(a.model);
-  if (!model.ok()) {
-    return PrintErrorExit(model.error());
-  }
+  Result<ErrorModel> model = ParseErrorModel(a.model);
+  if (!model.ok()) return model.error();
   options.model = model.value();
   if (in.sensors.size() > 1) {
-    return PrintErrorExit(MakeError("--accuracy evaluates one tag: give at most one --sensor"));
+    return MakeError("--accuracy evaluates one tag: give at most one --sensor");
   }
   options.sensor = in.sensors.empty() ? 0 : in.sensors.front();
   options.plateaus.settle_auto = in.settle_auto;
   options.window = in.window;
   options.model_lag = !a.no_lag_model;
   options.plateaus.trim_departures = !a.keep_departures;
-  auto reference_u = ParseReferenceU(a.reference_u);
-  if (!reference_u.ok()) {
-    return PrintErrorExit(reference_u.error());
-  }
+  Result<ReferenceUncertainty> reference_u = ParseReferenceU(a.reference_u);
+  if (!reference_u.ok()) return reference_u.error();
   options.reference = reference_u.value();
   std::string why;
-  if (!options.IsValid(&why)) {
-    return PrintErrorExit(MakeError(why));
+  if (!options.IsValid(&why)) return MakeError(why);
+  return options;
+}
+
+// The tag's session (a progress line in bytes on a terminal) and the separate reference log.
+struct AccuracyInputs {
+  Session session;
+  std::optional<Session> reference;
+};
+
+Result<AccuracyInputs> LoadAccuracyInputs(const AccuracyCliOptions& a, const AccuracyRunInputs& in,
+                                          TerminalProgress* progress) {
+  LoadOptions load;
+  if (Status s = MakeLoadOptions(in.load, &load); !s.ok()) return s.error();
+  load.threads = in.threads;
+  BeginLoadPhase(progress, in.session);
+  load.on_bytes_parsed = [progress](int64_t n) { progress->Advance(n); };
+  Result<Session> session = LoadSession(in.session, load);
+  progress->Finish();
+  if (!session.ok()) return session.error();
+  AccuracyInputs inputs{std::move(session).value(), std::nullopt};
+  if (!a.reference.empty()) {
+    LoadOptions ref_load;
+    ref_load.format = SessionFormat::kCsv;
+    ref_load.threads = in.threads;
+    Result<Session> loaded = LoadSession(a.reference, ref_load);
+    if (!loaded.ok()) return loaded.error();
+    inputs.reference = std::move(loaded).value();
   }
+  return inputs;
+}
+
+// The report's JSON and, with --html, its page.
+Result<std::pair<std::string, std::string>> RenderAccuracy(const AccuracyReport& report,
+                                                           const AccuracyRunInputs& in) {
+  std::string html;
+  if (!in.html.empty()) {
+    Result<std::string> rendered = RenderAccuracyReportHtml(report, in.output);
+    // The view of the evaluation just made: a failure is the run's, not the input's.
+    if (!rendered.ok()) return rendered.error().WithKind(ErrorKind::kFailed);
+    html = std::move(rendered).value();
+  }
+  return std::make_pair(ToJson(report) + "\n", std::move(html));
+}
+
+}  // namespace
+
+int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
+  if (Status s = CheckAccuracyFiles(a, in); !s.ok()) return PrintErrorExit(s.error());
+  Result<AccuracyOptions> options = MakeAccuracyOptions(a, in);
+  if (!options.ok()) return PrintErrorExit(options.error());
   TagRegistry tags = TagRegistry::Default();
   if (!in.tags.empty()) {
     Result<TagRegistry> loaded = TagRegistry::Load(in.tags);
     if (!loaded.ok()) return PrintErrorExit(loaded.error());
     tags = std::move(loaded).value();
   }
-  LoadOptions load;
-  if (Status s = MakeLoadOptions(in.load, &load); !s.ok()) {
-    return PrintErrorExit(s.error());
-  }
-  load.threads = in.threads;
   // One line per phase on a terminal: the load in bytes, then the evaluation.
   TerminalProgress progress(stderr, CliProgressOptions());
-  BeginLoadPhase(&progress, in.session);
-  load.on_bytes_parsed = [&progress](int64_t n) { progress.Advance(n); };
-  auto session = LoadSession(in.session, load);
-  progress.Finish();
-  if (!session.ok()) {
-    return PrintErrorExit(session.error());
-  }
-  std::optional<Session> reference;
-  if (!a.reference.empty()) {
-    LoadOptions ref_load;
-    ref_load.format = SessionFormat::kCsv;
-    ref_load.threads = in.threads;
-    auto loaded = LoadSession(a.reference, ref_load);
-    if (!loaded.ok()) {
-      return PrintErrorExit(loaded.error());
-    }
-    reference = std::move(loaded).value();
-  }
-  const Session* ref = reference ? &*reference : nullptr;
+  Result<AccuracyInputs> inputs = LoadAccuracyInputs(a, in, &progress);
+  if (!inputs.ok()) return PrintErrorExit(inputs.error());
+  const Session& session = inputs.value().session;
+  const Session* ref = inputs.value().reference ? &*inputs.value().reference : nullptr;
   progress.BeginPhase("accuracy: plateaus, error curve, budget", kUncountedWork);
-  auto result = EvaluateAccuracy(session.value(), ref, options);
+  Result<AccuracyResult> result = EvaluateAccuracy(session, ref, options.value());
   progress.Finish();
-  if (!result.ok()) {
-    return PrintErrorExit(result.error());
-  }
-  const AccuracyReport report = MakeAccuracyReport(result.value(), session.value(), ref, tags);
-  const std::string json = ToJson(report) + "\n";
-  std::string html;
-  if (!in.html.empty()) {
-    Result<std::string> rendered = RenderAccuracyReportHtml(report, in.output);
-    if (!rendered.ok()) {
-      // The view of the evaluation just made: a failure is the run's, not the input's.
-      return PrintErrorExit(rendered.error().WithKind(ErrorKind::kFailed));
-    }
-    html = std::move(rendered).value();
-  }
+  if (!result.ok()) return PrintErrorExit(result.error());
+  const AccuracyReport report = MakeAccuracyReport(result.value(), session, ref, tags);
+  Result<std::pair<std::string, std::string>> rendered = RenderAccuracy(report, in);
+  if (!rendered.ok()) return PrintErrorExit(rendered.error());
   // No -o: the JSON to stdout and no table; -o -: the same, and the table to stderr. The
   // JSON and the HTML are replaced together or not at all.
+  const auto& [json, html] = rendered.value();
   if (Status s = WriteOutputs({{in.output.empty() ? "-" : in.output, json}, {in.html, html}});
       !s.ok()) {
     return PrintErrorExit(s.error());
@@ -213,43 +184,11 @@ int RunAccuracy(const AccuracyCliOptions& a, const AccuracyRunInputs& in) {
   return kExitOk;
 }
 
-namespace {
-
-struct AccuracyCommandOptions {
-  std::string session;
-  AnalysisCliOptions analysis;  // Input and window (AnalysisCliKind::kAccuracy).
-  AccuracyCliOptions accuracy;
-  std::string output;
-  std::string html;
-  int threads = 0;
-};
-
-}  // namespace
-
-void AddAccuracyCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<AccuracyCommandOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "accuracy",
-      "accuracy of a tag against a rotation table: plateaus, error curve, hysteresis, budget "
-      "(docs/accuracy.md; also: characterize SESSION --accuracy ...)");
-  sub->add_option("session", o->session, "session.csv or receiver capture; - reads stdin")
-      ->required()
-      ->check(ExistingFileOrStdin());
-  AddAnalysisCliOptions(sub, &o->analysis, AnalysisCliKind::kAccuracy);
-  sub->add_option("-o,--output", o->output,
-                  "write the JSON report here (atomically) and print a table to stdout; -o - "
-                  "writes it to stdout and the table to stderr (default: the JSON to stdout)");
-  sub->add_option("--html", o->html, "also write the HTML view here (docs/reports.md)");
-  AddAccuracyOptions(*sub, &o->accuracy);
-  sub->add_option("--threads", o->threads, "worker threads (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
-  sub->callback([o, exit_code] {
-    o->accuracy.enabled = true;  // --accuracy is implied here.
-    const AnalysisCliOptions& a = o->analysis;
-    *exit_code =
-        RunAccuracy(o->accuracy, {o->session, a.load, a.sensors, o->output, a.window.settle_auto,
-                                  o->threads, false, o->html, AccuracyWindow(a), a.tag_registry});
-  });
+int RunAccuracyCommand(AccuracyCommandOptions o) {
+  o.accuracy.enabled = true;  // --accuracy is implied here.
+  const AnalysisCliOptions& a = o.analysis;
+  return RunAccuracy(o.accuracy, {o.session, a.load, a.sensors, o.output, a.window.settle_auto,
+                                  o.threads, false, o.html, AccuracyWindow(a), a.tag_registry});
 }
 
 }  // namespace metro::apps

@@ -5,11 +5,11 @@
 // when --accuracy is given.
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "analysis_options.hpp"
 #include "load_cli.hpp"
 #include "metro/accuracy/accuracy.hpp"
 #include "metro/stats/session_type_a.hpp"
@@ -44,13 +44,20 @@ struct AccuracyRunInputs {
   std::string tags;      // --tags FILE: the tag's name and device ID in the report.
 };
 
-// --accuracy and the accuracy evaluation's own options (on the `accuracy` subcommand
-// --accuracy is implied, and accepted).
-void AddAccuracyOptions(CLI::App& app, AccuracyCliOptions* options);
-// `characterize accuracy SESSION ...`.
-void AddAccuracyCommand(CLI::App& app, int* exit_code);
-// The options AddAccuracyOptions adds that only --accuracy uses (refused without it).
+// The options of --accuracy that only the accuracy evaluation uses (refused without it).
 const std::vector<std::string>& AccuracyOnlyOptionNames();
 int RunAccuracy(const AccuracyCliOptions& options, const AccuracyRunInputs& inputs);
+
+// `characterize accuracy SESSION ...` (--accuracy implied).
+struct AccuracyCommandOptions {
+  std::string session;
+  AnalysisCliOptions analysis;  // Input and window (AnalysisCliKind::kAccuracy).
+  AccuracyCliOptions accuracy;
+  std::string output;
+  std::string html;
+  int threads = 0;
+};
+
+int RunAccuracyCommand(AccuracyCommandOptions o);
 
 }  // namespace metro::apps

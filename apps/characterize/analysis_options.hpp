@@ -2,7 +2,6 @@
 // tag names and the Allan analysis. One definition, so the two commands cannot drift apart.
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -35,12 +34,6 @@ struct AnalysisCliOptions {
 // top-level `characterize SESSION`), or the accuracy evaluation (`accuracy`), which takes the
 // input and window options only.
 enum class AnalysisCliKind { kTypeA, kAccuracy };
-
-// Registers the load flags (load_cli.hpp), --skip-samples, --skip-seconds, --from-s, --to-s,
-// --settle and --sensor on `app`; for kTypeA also --settle-scope, --quantity, --tags
-// (--tag-registry), --allan, --taus, --estimator and --gaps.
-void AddAnalysisCliOptions(CLI::App* app, AnalysisCliOptions* o,
-                           AnalysisCliKind kind = AnalysisCliKind::kTypeA);
 
 // The window the accuracy evaluation takes from these flags.
 WindowOptions AccuracyWindow(const AnalysisCliOptions& o);

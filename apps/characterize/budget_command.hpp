@@ -7,7 +7,6 @@
 // input error (the message names the input).
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <string>
 
 #include "metro/uncertainty/budget.hpp"
@@ -24,16 +23,6 @@ struct BudgetOptions {
   SessionQuantityResolver session_resolver;
 };
 
-// Registers the `budget` subcommand. Its callback stores RunBudget's exit code in
-// *exit_code (the dispatch style of commands.hpp); with exit_code null a non-zero code is
-// raised as CLI::RuntimeError(code) for CLI11_PARSE. Session quantities in the budget are
-// evaluated from the sessions it names, in full (BudgetOptions::session_resolver).
-void AddBudgetCommand(CLI::App& app, int* exit_code = nullptr);
-
 int RunBudget(const BudgetOptions& options);
-
-namespace apps {
-using metro::AddBudgetCommand;
-}  // namespace apps
 
 }  // namespace metro

@@ -1,6 +1,8 @@
 // characterize capture --port DEV [--baud 230400] [--duration-s S] -o capture.txt [--force]
 //   [--reconnect|--no-reconnect] [--analyze -o REPORT.json --capture capture.txt] [--tags FILE]
 // Records the central receiver's serial stream (docs/capture.md).
+#include "capture_command.hpp"
+
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -16,7 +18,6 @@
 #include <vector>
 
 #include "analysis_options.hpp"
-#include "commands.hpp"
 #include "metro/capture/capture.hpp"
 #include "metro/core/version.hpp"
 #include "metro/io/tag_registry.hpp"
@@ -28,20 +29,6 @@ namespace {
 
 volatile std::sig_atomic_t g_capture_stop = 0;
 void OnCaptureSignal(int) { g_capture_stop = 1; }
-
-struct CaptureCliOptions {
-  std::string port;
-  int baud = 230400;
-  double duration_s = 0.0;
-  std::string output;
-  std::string capture;
-  bool force = false;
-  bool reconnect = false;
-  bool no_reconnect = false;
-  double frame_period_s = kReceiverFramePeriodS;
-  bool analyze = false;
-  std::string tags;  // --tags FILE: the tags' names under the live view and the final table.
-};
 
 // "names (tags.json): 1 Forehead, 2 Chest" for the sensors of `rows`, or "" without a tags
 // file. The capture's table keeps its columns; the names go below it.
@@ -129,37 +116,39 @@ class LiveView {
   std::vector<capture::TagLiveRow> rows_;
 };
 
-int RunCaptureCommand(const CaptureCliOptions& c) {
+// The capture's file: --capture with --analyze (-o then names the report), else -o or
+// --capture; checked before the port is opened (docs/unix.md "Outputs never destroy"): a
+// regular file (never a device, the port itself, a FIFO), not the tags file, not the report,
+// never replaced without --force.
+Result<std::string> CapturePath(const CaptureCliOptions& c) {
   const std::string capture_path =
       c.analyze ? c.capture : (c.output.empty() ? c.capture : c.output);
   if (c.analyze && c.capture.empty()) {
-    PrintErrorText("--analyze: name the capture with --capture FILE (-o then names the report)");
-    return kExitUsage;
+    return MakeError("--analyze: name the capture with --capture FILE (-o then names the report)");
   }
   if (!c.analyze && !c.output.empty() && !c.capture.empty()) {
-    PrintErrorText("-o and --capture both name the capture; give one (or add --analyze)");
-    return kExitUsage;
+    return MakeError("-o and --capture both name the capture; give one (or add --analyze)");
   }
   if (capture_path.empty() || IsStdio(capture_path)) {
-    PrintErrorText("capture: name the capture file with -o FILE");
-    return kExitUsage;
+    return MakeError("capture: name the capture file with -o FILE");
   }
-  // The output rule before the port is opened (docs/unix.md "Outputs never destroy"): the
-  // capture and the --analyze report are regular files (never a device, the port itself, a
-  // FIFO), neither is the tags file, and they are not the same file.
   const char* capture_option = !c.analyze && capture_path == c.output ? "-o" : "--capture";
   if (Status s = CheckOutputs(
           {{capture_option, capture_path}, {"-o", c.analyze ? c.output : std::string()}},
           {{"--port", c.port}, {"--tags", c.tags}});
       !s.ok()) {
-    return PrintErrorExit(s.error());
+    return s.error();
   }
   if (OutputExists(capture_path) && !c.force) {
-    PrintErrorText(fmt::format(
+    return MakeError(fmt::format(
         "{}: exists: a capture is never replaced; pass --force to replace it", capture_path));
-    return kExitUsage;
   }
-  const bool replacing = c.force && OutputExists(capture_path);
+  return capture_path;
+}
+
+// The library's capture options from the flags, checked.
+Result<capture::CaptureOptions> MakeCaptureOptions(const CaptureCliOptions& c,
+                                                   const std::string& capture_path) {
   capture::CaptureOptions o;
   o.port = c.port;
   o.baud = c.baud;
@@ -170,60 +159,32 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
   o.frame_period_s = c.frame_period_s;
   o.version = fmt::format("metro characterize {}", kVersion);
   o.stop = &g_capture_stop;
-  if (std::string why; !o.IsValid(&why)) {
-    PrintErrorText(why);
-    return kExitUsage;
-  }
-  // The tags file is read before the port is opened: a bad one records nothing.
-  std::optional<TagRegistry> tags;
-  if (!c.tags.empty()) {
-    Result<TagRegistry> loaded = TagRegistry::Load(c.tags);
-    if (!loaded.ok()) return PrintErrorExit(loaded.error());
-    tags = std::move(loaded).value();
-  }
-  const TagRegistry* names = tags ? &*tags : nullptr;
+  if (std::string why; !o.IsValid(&why)) return MakeError(why);
+  return o;
+}
 
+// SIGINT and SIGTERM end the capture (the file is kept, complete to its last line).
+void StopCaptureOnSignals() {
   struct sigaction sa {};
   sa.sa_handler = OnCaptureSignal;
   sigemptyset(&sa.sa_mask);
   ::sigaction(SIGINT, &sa, nullptr);
   ::sigaction(SIGTERM, &sa, nullptr);
+}
 
-  Note(fmt::format("capturing {} at {} baud to {}{}{}; Ctrl-C ends the capture\n", c.port, c.baud,
-                   capture_path, replacing ? " (--force: replacing the existing file)" : "",
-                   c.duration_s > 0 ? fmt::format(" for {:g} s", c.duration_s) : ""));
-  LiveView view(names, c.tags);
-  capture::CaptureObserver observer;
-  observer.on_tick = [&](const capture::CaptureTally& t, double s) { view.Tick(t, s); };
-  observer.on_event = [&](const std::string& e) { view.Event(e); };
-  capture::CaptureTally tally(c.frame_period_s);
-  const capture::CaptureSummary sum = capture::RunCapture(o, observer, &tally);
-  // The capture has ended: a signal now interrupts the report being written (its temporary
-  // removed, docs/unix.md).
-  InstallInterruptCleanup();
-  if (sum.input_error) {
-    PrintErrorText(sum.message);
-    return kExitUsage;
-  }
-  const std::string notes = fmt::format(
+// The summary line and the final per-tag table (not under --quiet).
+std::string CaptureNotes(const capture::CaptureSummary& sum) {
+  return fmt::format(
       "{}{}{}\n", sum.message,
       sum.cut_lines > 0 ? fmt::format(", {} cut first line(s) dropped", sum.cut_lines) : "",
       sum.other_lines > 0
           ? fmt::format(", {} line(s) that are not receiver lines kept as # comments",
                         sum.other_lines)
           : "");
-  if (!Quiet()) {
-    const std::vector<capture::TagLiveRow> rows = capture::LiveRows(tally, view.rates());
-    PrintText(stdout, capture::FormatLiveTable(rows, false) + NamesFooter(rows, names, c.tags));
-    std::fflush(stdout);
-  }
-  if (!sum.ok) {
-    PrintErrorText(sum.message);
-    return kExitFailed;
-  }
-  Note("wrote " + notes);
-  if (!c.analyze) return kExitOk;
+}
 
+// --analyze: the capture analysed as `analyze --settle auto --tags` would, the report to -o.
+int AnalyzeCapture(const CaptureCliOptions& c, const std::string& capture_path) {
   AnalysisCliOptions a;
   a.window.settle_auto = true;
   a.load.library.frame_period_s = c.frame_period_s;
@@ -233,9 +194,7 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
     return PrintErrorExit(s.error());
   }
   SessionAnalysis analysis = AnalyzeSession(capture_path, options);
-  if (!analysis.ok) {
-    return PrintErrorExit(analysis.error);
-  }
+  if (!analysis.ok) return PrintErrorExit(analysis.error);
   const std::string json = ToJson(analysis.report) + "\n";
   if (Status s = WriteOutputs({{c.output.empty() ? "-" : c.output, json}}); !s.ok()) {
     return PrintErrorExit(s.error());
@@ -246,35 +205,45 @@ int RunCaptureCommand(const CaptureCliOptions& c) {
 
 }  // namespace
 
-void AddCaptureCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<CaptureCliOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "capture", "record the central receiver's serial stream, with a live per-tag view");
-  sub->add_option("--port", o->port, "the receiver's serial port, e.g. /dev/ttyACM0")->required();
-  sub->add_option("--baud", o->baud, "baud rate (8N1, raw)")->capture_default_str();
-  sub->add_option("--duration-s", o->duration_s, "stop after this many seconds (0: at Ctrl-C)")
-      ->check(CLI::NonNegativeNumber);
-  sub->add_option("-o,--output", o->output,
-                  "the capture file (never replaced without --force); with --analyze: the "
-                  "JSON report");
-  sub->add_option("--capture", o->capture, "the capture file when -o names the report");
-  sub->add_flag("--force", o->force, "replace an existing capture file");
-  CLI::Option* on = sub->add_flag(
-      "--reconnect", o->reconnect,
-      "reopen the port when it returns after an unplug (default without --duration-s)");
-  sub->add_flag("--no-reconnect", o->no_reconnect,
-                "finish the capture when the port disappears (default with --duration-s)")
-      ->excludes(on);
-  sub->add_option("--frame-period-s", o->frame_period_s,
-                  "the receiver's frame period for the live statistics and --analyze")
-      ->capture_default_str();
-  sub->add_flag("--analyze", o->analyze,
-                "then the full Type A report of the capture (--settle auto)");
-  sub->add_option("--tags,--tag-registry", o->tags,
-                  "tags file naming the tags (docs/formats.md \"Tags file\"): below the live "
-                  "view and the final table, and in the --analyze report")
-      ->check(CLI::ExistingFile);
-  sub->callback([o, exit_code] { *exit_code = RunCaptureCommand(*o); });
+int RunCaptureCommand(const CaptureCliOptions& c) {
+  Result<std::string> capture_path = CapturePath(c);
+  if (!capture_path.ok()) return PrintErrorExit(capture_path.error());
+  const bool replacing = c.force && OutputExists(capture_path.value());
+  Result<capture::CaptureOptions> o = MakeCaptureOptions(c, capture_path.value());
+  if (!o.ok()) return PrintErrorExit(o.error());
+  // The tags file is read before the port is opened: a bad one records nothing.
+  std::optional<TagRegistry> tags;
+  if (!c.tags.empty()) {
+    Result<TagRegistry> loaded = TagRegistry::Load(c.tags);
+    if (!loaded.ok()) return PrintErrorExit(loaded.error());
+    tags = std::move(loaded).value();
+  }
+  const TagRegistry* names = tags ? &*tags : nullptr;
+  StopCaptureOnSignals();
+  Note(fmt::format("capturing {} at {} baud to {}{}{}; Ctrl-C ends the capture\n", c.port, c.baud,
+                   capture_path.value(), replacing ? " (--force: replacing the existing file)" : "",
+                   c.duration_s > 0 ? fmt::format(" for {:g} s", c.duration_s) : ""));
+  LiveView view(names, c.tags);
+  capture::CaptureObserver observer;
+  observer.on_tick = [&](const capture::CaptureTally& t, double s) { view.Tick(t, s); };
+  observer.on_event = [&](const std::string& e) { view.Event(e); };
+  capture::CaptureTally tally(c.frame_period_s);
+  const capture::CaptureSummary sum = capture::RunCapture(o.value(), observer, &tally);
+  // The capture has ended: a signal now interrupts the report being written (its temporary
+  // removed, docs/unix.md).
+  InstallInterruptCleanup();
+  if (sum.input_error) return PrintErrorExit(MakeError(sum.message));
+  if (!Quiet()) {
+    const std::vector<capture::TagLiveRow> rows = capture::LiveRows(tally, view.rates());
+    PrintText(stdout, capture::FormatLiveTable(rows, false) + NamesFooter(rows, names, c.tags));
+    std::fflush(stdout);
+  }
+  if (!sum.ok) {
+    PrintErrorText(sum.message);
+    return kExitFailed;
+  }
+  Note("wrote " + CaptureNotes(sum));
+  return c.analyze ? AnalyzeCapture(c, capture_path.value()) : kExitOk;
 }
 
 }  // namespace metro::apps

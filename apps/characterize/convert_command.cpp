@@ -3,9 +3,10 @@
 //   recording joined on time, or imu_tk's two files. --format is the flag every command that
 //   loads a session has (load_cli.hpp); --from FORMAT is its older spelling here (--from imutk:
 //   --imutk).
+#include "convert_command.hpp"
+
 #include <fmt/format.h>
 
-#include "commands.hpp"
 #include "load_cli.hpp"
 #include "metro/core/file.hpp"
 #include "metro/io/session_io.hpp"
@@ -15,67 +16,45 @@
 namespace metro::apps {
 namespace {
 
-struct ConvertOptions {
-  std::vector<std::string> inputs;
-  std::string from;    // --from FORMAT, the older spelling of --format (and of --imutk).
-  bool imutk = false;  // --imutk: the inputs are imu_tk's two files, ACC GYRO.
-  std::string output;
-  LoadCliOptions load;  // --format and the other load flags.
-};
+// The per-sensor files of one recording, joined on time (docs/formats.md); one line per file,
+// in the note and in the output's comments (`comments`): the file name is data (escaped).
+Result<Session> LoadJoined(const std::vector<std::string>& files, const LoadOptions& load,
+                           std::string* comments) {
+  std::vector<Session> parts;
+  for (const std::string& input : files) {
+    Result<Session> part = LoadSession(input, load);
+    if (!part.ok()) return part.error();
+    parts.push_back(std::move(part).value());
+  }
+  JoinSummary summary;
+  Result<Session> session = JoinSessionsOnTime(parts, &summary);
+  for (size_t i = 0; session.ok() && i < parts.size(); ++i) {
+    const std::string line =
+        fmt::format("joined {}: {} samples, {} in no joined row", EscapeControlChars(parts[i].path),
+                    summary.samples[i], summary.unmatched[i]);
+    *comments += "# " + line + "\n";
+    Note(line + "\n");
+  }
+  return session;
+}
 
-int RunConvert(const ConvertOptions& o) {
-  LoadCliOptions flags = o.load;
-  if (!o.from.empty() && o.from != "imutk") flags.format = o.from;
-  const bool imutk = o.imutk || o.from == "imutk";
-  LoadOptions load;
-  if (Status s = MakeLoadOptions(flags, &load); !s.ok()) {
-    return PrintErrorExit(s.error());
-  }
-  if (Status s = CheckStdinInputs(o.inputs, imutk); !s.ok()) {
-    return PrintErrorExit(s.error());
-  }
-  std::vector<NamedPath> inputs = {{"--columns-file", o.load.columns_file}};
-  for (const std::string& input : o.inputs) inputs.push_back({"INPUT", input});
-  if (Status s = CheckOutputs({{"-o", o.output}}, inputs); !s.ok()) {
-    return PrintErrorExit(s.error());
-  }
-  Result<Session> session = MakeError("no input");
-  std::string join_comments;
+// The inputs as one session: imu_tk's two files, one file, or several joined on time.
+Result<Session> LoadConvertInputs(const ConvertOptions& o, const LoadOptions& load, bool imutk,
+                                  std::string* comments) {
   if (imutk) {
     if (o.inputs.size() != 2) {
-      return PrintErrorExit(MakeError(std::string(o.imutk ? "--imutk" : "--from imutk") +
-                                      " takes two inputs: ACC GYRO"));
+      return MakeError(std::string(o.imutk ? "--imutk" : "--from imutk") +
+                       " takes two inputs: ACC GYRO");
     }
-    session = LoadImuTk(o.inputs[0], o.inputs[1], load);
-  } else if (o.inputs.size() == 1) {
-    session = LoadSession(o.inputs[0], load);
-  } else {
-    // The per-sensor files of one recording, joined on time (docs/formats.md).
-    std::vector<Session> parts;
-    for (const std::string& input : o.inputs) {
-      auto part = LoadSession(input, load);
-      if (!part.ok()) {
-        return PrintErrorExit(part.error());
-      }
-      parts.push_back(std::move(part).value());
-    }
-    JoinSummary summary;
-    session = JoinSessionsOnTime(parts, &summary);
-    for (size_t i = 0; session.ok() && i < parts.size(); ++i) {
-      // One line, in the note and in the file's comment: the file name is data (escaped).
-      const std::string line =
-          fmt::format("joined {}: {} samples, {} in no joined row",
-                      EscapeControlChars(parts[i].path), summary.samples[i], summary.unmatched[i]);
-      join_comments += "# " + line + "\n";
-      Note(line + "\n");
-    }
+    return LoadImuTk(o.inputs[0], o.inputs[1], load);
   }
-  if (!session.ok()) {
-    return PrintErrorExit(session.error());
-  }
-  const Session& s = session.value();
-  // Provenance and the frame counts, which session.csv rows cannot carry, as comments (one
-  // line each: a newline in the input's name must not start a data row).
+  if (o.inputs.size() == 1) return LoadSession(o.inputs[0], load);
+  return LoadJoined(o.inputs, load, comments);
+}
+
+// session.csv with the provenance and the frame counts, which its rows cannot carry, as
+// comments (one line each: a newline in the input's name must not start a data row).
+std::string ConvertedText(const Session& s, const std::string& join_comments) {
   std::string text = fmt::format("# metro convert: {} ({}, sha256 {})\n",
                                  EscapeControlChars(s.path), SessionFormatName(s.format), s.sha256);
   if (s.format == SessionFormat::kReceiver) {
@@ -86,9 +65,28 @@ int RunConvert(const ConvertOptions& o) {
     }
   }
   if (s.rejected_rows > 0) text += fmt::format("# rejected_rows {}\n", s.rejected_rows);
-  text += join_comments;
-  text += FormatSessionCsv(s, true);
-  if (Status w = WriteOutput(o.output, text); !w.ok()) {
+  return text + join_comments + FormatSessionCsv(s, true);
+}
+
+}  // namespace
+
+int RunConvert(const ConvertOptions& o) {
+  LoadCliOptions flags = o.load;
+  if (!o.from.empty() && o.from != "imutk") flags.format = o.from;
+  const bool imutk = o.imutk || o.from == "imutk";
+  LoadOptions load;
+  if (Status s = MakeLoadOptions(flags, &load); !s.ok()) return PrintErrorExit(s.error());
+  if (Status s = CheckStdinInputs(o.inputs, imutk); !s.ok()) return PrintErrorExit(s.error());
+  std::vector<NamedPath> inputs = {{"--columns-file", o.load.columns_file}};
+  for (const std::string& input : o.inputs) inputs.push_back({"INPUT", input});
+  if (Status s = CheckOutputs({{"-o", o.output}}, inputs); !s.ok()) {
+    return PrintErrorExit(s.error());
+  }
+  std::string join_comments;
+  Result<Session> session = LoadConvertInputs(o, load, imutk, &join_comments);
+  if (!session.ok()) return PrintErrorExit(session.error());
+  const Session& s = session.value();
+  if (Status w = WriteOutput(o.output, ConvertedText(s, join_comments)); !w.ok()) {
     return PrintErrorExit(w.error());
   }
   int64_t observations = 0;
@@ -96,35 +94,6 @@ int RunConvert(const ConvertOptions& o) {
   Note(fmt::format("wrote {}: {} tags, {} observations\n", IsStdio(o.output) ? "stdout" : o.output,
                    s.tags.size(), observations));
   return kExitOk;
-}
-
-}  // namespace
-
-void AddConvertCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<ConvertOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "convert",
-      "turn any readable session (receiver capture, EuRoC, raw prints, phyphox, Sensor Logger, PX4 "
-      "ULog, MCAP, ROS 1 and ROS 2 bags, imu_tk's two files) into canonical session.csv; several "
-      "files are joined on time");
-  sub->add_option("inputs", o->inputs,
-                  "INPUT, several files of one recording (joined on time), or ACC GYRO with "
-                  "--imutk; - reads stdin")
-      ->required()
-      ->check(ExistingFileOrStdin());
-  sub->add_option("-o,--output", o->output, "session.csv to write (- for stdout)")->required();
-  // The load flags, --format among them, as every command that loads a session has them.
-  AddLoadCliOptions(sub, &o->load);
-  CLI::Option* format = sub->get_option("--format");
-  CLI::Option* imutk =
-      sub->add_flag("--imutk", o->imutk, "the inputs are imu_tk's two files: ACC GYRO")
-          ->excludes(format);
-  sub->add_option("--from", o->from, "the older spelling of --format (--from imutk: --imutk)")
-      ->check(CLI::IsMember({"auto", "receiver", "csv", "imutk", "euroc", "raw", "phyphox",
-                             "sensorlogger", "phone", "ulog"}))
-      ->excludes(format)
-      ->excludes(imutk);
-  sub->callback([o, exit_code] { *exit_code = RunConvert(*o); });
 }
 
 }  // namespace metro::apps

@@ -1,10 +1,11 @@
 // characterize noise-compare FILE REPORT.json: an estimator's noise file read back and each
 // value compared with the measurement (ratio, E_n; docs/noise.md "Compare a noise file").
+#include "noise_compare_command.hpp"
+
 #include <fmt/format.h>
 
 #include <memory>
 
-#include "commands.hpp"
 #include "metro/core/file.hpp"
 #include "metro/noise/noise_config_reader.hpp"
 #include "metro/noise/spec_library.hpp"
@@ -13,16 +14,6 @@
 
 namespace metro::apps {
 namespace {
-
-struct NoiseCompareOptions {
-  std::string file;
-  std::string format;  // --format: empty, told by the keys.
-  NoiseExportCliOptions common;
-  // --spec-part PART [--reference DOC]: the part's published figures compared with each other.
-  std::string spec_part;
-  std::string spec_library = DefaultSpecLibrary();
-  std::string reference;
-};
 
 // noise-compare --spec-part PART: every published source of the part side by side.
 int RunSpecCompare(const NoiseCompareOptions& o) {
@@ -40,6 +31,8 @@ int RunSpecCompare(const NoiseCompareOptions& o) {
   if (Status s = WriteOutput("-", table.value()); !s.ok()) return PrintErrorExit(s.error());
   return kExitOk;
 }
+
+}  // namespace
 
 int RunNoiseCompare(const NoiseCompareOptions& o) {
   if (!o.spec_part.empty()) return RunSpecCompare(o);
@@ -67,33 +60,6 @@ int RunNoiseCompare(const NoiseCompareOptions& o) {
     return PrintErrorExit(s.error());
   }
   return kExitOk;
-}
-
-}  // namespace
-
-void AddNoiseCompareCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<NoiseCompareOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "noise-compare",
-      "read an estimator's noise file (any noise-export format) and compare each value with a "
-      "report's measurement: ratio and E_n");
-  sub->add_option("file", o->file, "imu.yaml, a VINS/ORB-SLAM3 config, PX4 params, ...")
-      ->check(CLI::ExistingFile);
-  sub->add_option("report", o->common.report, "REPORT.json made with --allan")
-      ->check(CLI::ExistingFile);
-  sub->add_option("--spec-part", o->spec_part,
-                  "instead of FILE REPORT: the part's published noise figures (datasheet, "
-                  "EuRoC's sensor.yaml, Kalibr's sample) side by side, with ratios "
-                  "(docs/specs.md)");
-  sub->add_option("--spec-library", o->spec_library, "the spec library")
-      ->check(CLI::ExistingFile)
-      ->capture_default_str();
-  sub->add_option("--reference", o->reference,
-                  "with --spec-part: the document the ratios are to (default: the first)");
-  sub->add_option("--format", o->format, "the file's format (default: told by its keys)")
-      ->check(CLI::IsMember(NoiseExportFormatNames()));
-  AddNoiseExportCliOptions(sub, &o->common);
-  sub->callback([o, exit_code] { *exit_code = RunNoiseCompare(*o); });
 }
 
 }  // namespace metro::apps

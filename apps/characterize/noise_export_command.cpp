@@ -1,25 +1,17 @@
 // characterize noise-export REPORT.json --to FORMAT [-o FILE]: the noise terms of a report's
 // tag as an estimator's noise file (docs/noise.md "Export to estimators").
+#include "noise_export_command.hpp"
+
 #include <fmt/format.h>
 
 #include <memory>
 
-#include "commands.hpp"
 #include "metro/noise/spec_library.hpp"
 #include "noise_export_options.hpp"
 #include "output.hpp"
 
 namespace metro::apps {
 namespace {
-
-struct NoiseExportCommandOptions {
-  NoiseExportCliOptions common;
-  std::string output = "-";
-  // --from-spec PART: a datasheet's figures as Kalibr's imu.yaml (docs/specs.md "To Kalibr").
-  std::string from_spec;
-  std::string spec_library = DefaultSpecLibrary();
-  SpecToKalibrOptions spec;
-};
 
 int RunSpecExport(const NoiseExportCommandOptions& o) {
   if (!o.common.report.empty()) {
@@ -45,6 +37,8 @@ int RunSpecExport(const NoiseExportCommandOptions& o) {
   return kExitOk;
 }
 
+}  // namespace
+
 int RunNoiseExport(const NoiseExportCommandOptions& o) {
   if (!o.from_spec.empty()) return RunSpecExport(o);
   if (o.common.report.empty()) {
@@ -67,44 +61,6 @@ int RunNoiseExport(const NoiseExportCommandOptions& o) {
                      exported.value().values.size()));
   }
   return kExitOk;
-}
-
-}  // namespace
-
-void AddNoiseExportCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<NoiseExportCommandOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "noise-export",
-      "write a report's IEEE 952 noise terms as an estimator's noise file (kalibr, openvins, "
-      "basalt, vins, orbslam3, gtsam, px4-ekf2, ros), each value's convention and u beside it");
-  sub->add_option("report", o->common.report, "REPORT.json made with --allan")
-      ->check(CLI::ExistingFile);
-  sub->add_option_function<std::string>(
-         "--to",
-         [o](const std::string& value) {
-           Result<NoiseExportFormat> f = ParseNoiseExportFormat(value);
-           if (!f.ok()) throw CLI::ValidationError("--to", f.error().message);
-           o->common.library.format = f.value();
-         },
-         "kalibr, openvins, basalt, vins, orbslam3, gtsam, px4-ekf2 or ros")
-      ->required();
-  sub->add_option("-o,--output", o->output, "the file to write (atomically; default -: stdout)");
-  AddNoiseExportCliOptions(sub, &o->common);
-  sub->add_option("--from-spec", o->from_spec,
-                  "instead of REPORT: a part's datasheet noise figures as Kalibr's imu.yaml, "
-                  "assumptions stated in the file (docs/specs.md)");
-  sub->add_option("--spec-library", o->spec_library, "the spec library")
-      ->check(CLI::ExistingFile)
-      ->capture_default_str();
-  sub->add_option("--spec-source", o->spec.source,
-                  "with --from-spec: the document of the part (default: its first datasheet)");
-  sub->add_option("--update-rate-hz", o->spec.update_rate_hz,
-                  "with --from-spec: the rate the IMU is read at (Kalibr's update_rate)")
-      ->check(CLI::PositiveNumber);
-  sub->add_flag("--partial", o->spec.partial,
-                "with --from-spec: write the file without the K keys the datasheet cannot give "
-                "(Kalibr will not read it as is)");
-  sub->callback([o, exit_code] { *exit_code = RunNoiseExport(*o); });
 }
 
 }  // namespace metro::apps

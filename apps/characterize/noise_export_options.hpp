@@ -2,7 +2,6 @@
 // the reduction over axes and the formats' own settings, and the report they read (issue #40).
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -24,12 +23,6 @@ std::vector<std::string> NoiseExportFormatNames();
 
 // The spec library shipped with metro (datasets/specs/specs.json of the source tree).
 std::string DefaultSpecLibrary();
-
-// Registers --axis-reduction (max|rms) into `reduction`.
-void AddAxisReductionOption(CLI::App* app, AxisReduction* reduction, const std::string& help);
-
-// Registers --sensor, --axis-reduction, --rostopic and --px4-predict-rate-hz.
-void AddNoiseExportCliOptions(CLI::App* app, NoiseExportCliOptions* o);
 
 // The record of REPORT.json's tag (report/noise_export_input.hpp).
 Result<NoiseExportInput> LoadNoiseExportInput(const NoiseExportCliOptions& o);

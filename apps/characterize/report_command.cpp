@@ -1,9 +1,10 @@
 // characterize report REPORT.json --html FILE [--session SESSION] [--tags FILE]
+#include "report_command.hpp"
+
 #include <fmt/format.h>
 
 #include <memory>
 
-#include "commands.hpp"
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/file.hpp"
 #include "metro/report/html_report.hpp"
@@ -13,13 +14,6 @@
 
 namespace metro::apps {
 namespace {
-
-struct ReportCommandOptions {
-  std::string json;
-  std::string html;
-  std::string session;
-  std::string tags;  // --tags FILE: the tags' names on the page.
-};
 
 // The page of REPORT.json with the tags named from `tags_path`: a session report
 // (metro.report/1) takes each sensor's name from the file, a calibration.json (its
@@ -74,6 +68,8 @@ void RejectedModelNote(const std::string& path) {
   }
 }
 
+}  // namespace
+
 int RunReportCommand(const ReportCommandOptions& o) {
   if (Status s = CheckOutputs({{"--html", o.html}},
                               {{"REPORT", o.json}, {"--session", o.session}, {"--tags", o.tags}});
@@ -97,28 +93,6 @@ int RunReportCommand(const ReportCommandOptions& o) {
   Note(fmt::format("wrote {}\n", IsStdio(o.html) ? "stdout" : o.html));
   RejectedModelNote(o.json);
   return kExitOk;
-}
-
-}  // namespace
-
-void AddReportCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<ReportCommandOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "report",
-      "render a saved JSON (metro.report/1, metro.calibration/1, metro.accuracy-report/1, any "
-      "other schema as tables) "
-      "as a self-contained HTML page");
-  sub->add_option("json", o->json, "REPORT.json")->required()->check(CLI::ExistingFile);
-  sub->add_option("--html", o->html, "HTML file to write (- for stdout)")->required();
-  sub->add_option("--session", o->session,
-                  "accepted for older scripts and not used: a page is drawn from the report alone "
-                  "(its plot data), no input is reloaded")
-      ->check(CLI::ExistingFile);
-  sub->add_option("--tags,--tag-registry", o->tags,
-                  "tags file naming the tags on the page (docs/formats.md \"Tags file\"): a "
-                  "session report's sensors, a calibration.json's tags (name, device_id, profile)")
-      ->check(CLI::ExistingFile);
-  sub->callback([o, exit_code] { *exit_code = RunReportCommand(*o); });
 }
 
 }  // namespace metro::apps

@@ -1,9 +1,10 @@
 // characterize topics FILE [--lenient]: the topics of a PX4 ULog (name, multi id, message
 // count, size, rate), its dropouts and appended data; of an MCAP file or a ROS 1 or 2 bag
 // (topic, message type, count, rate, chunks) (docs/cli.md "topics").
+#include "topics_command.hpp"
+
 #include <memory>
 
-#include "commands.hpp"
 #include "metro/io/dataflash.hpp"
 #include "metro/io/ros_log.hpp"
 #include "metro/io/session_io.hpp"
@@ -12,11 +13,6 @@
 
 namespace metro::apps {
 namespace {
-
-struct TopicsOptions {
-  std::string file;
-  bool lenient = false;
-};
 
 int RunULogTopics(const TopicsOptions& o) {
   ULogReadOptions options;
@@ -40,6 +36,8 @@ int RunDataFlashTopics(const TopicsOptions& o) {
   }
   return kExitOk;
 }
+
+}  // namespace
 
 int RunTopics(const TopicsOptions& o) {
   Result<SessionFormat> format = DetectSessionFormat(o.file);
@@ -74,25 +72,6 @@ int RunTopics(const TopicsOptions& o) {
     return PrintErrorExit(s.error());
   }
   return kExitOk;
-}
-
-}  // namespace
-
-void AddTopicsCommand(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<TopicsOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "topics",
-      "list the topics of a PX4 ULog (name, multi id, messages, message size, rate, dropouts, "
-      "appended data) or of an MCAP file, a ROS 1 bag or a ROS 2 bag folder (topic, message "
-      "type, messages, rate, chunks); choose IMU topics with --topic");
-  sub->add_option("file", o->file,
-                  "a PX4 ULog (.ulg), an MCAP file (.mcap), a ROS 1 bag (.bag) or a ROS 2 bag "
-                  "folder (or its metadata.yaml)")
-      ->required()
-      ->check(CLI::ExistingPath);
-  sub->add_flag("--lenient", o->lenient,
-                "read the complete messages of a truncated file, counting the loss");
-  sub->callback([o, exit_code] { *exit_code = RunTopics(*o); });
 }
 
 }  // namespace metro::apps
