@@ -36,6 +36,7 @@
 #include "metro/blob/inspect.hpp"
 #include "metro/calibration/calibrate.hpp"
 #include "metro/calibration/calibration_io.hpp"
+#include "metro/calibration/imu_model.hpp"
 #include "metro/core/cancel.hpp"
 #include "metro/core/status.hpp"
 #include "metro/core/version.hpp"
@@ -554,11 +555,22 @@ Calibration CalibrationOf(py::handle source) {
   return Value(LoadCalibration(path));
 }
 
-PyCalibration Fit(py::handle sessions) {
+PyCalibration Fit(py::handle sessions, const std::string& model, int sensor) {
   const std::vector<SessionPtr> loaded = SessionsOf(sessions);
   std::vector<const Session*> ptrs;
   for (const SessionPtr& s : loaded) ptrs.push_back(s.get());
-  const CalibrationOptions options;
+  // `calibrate fit`'s defaults: --model auto, and the model ladder always compared.
+  CalibrationOptions options;
+  options.compare_models = true;
+  options.accel_auto = options.gyro_auto = model == "auto";
+  if (model != "auto") {
+    const std::optional<ModelKind> kind = ParseModelKind(model);
+    if (!kind) Raise(MakeError("model=" + model + ": expected auto, bias, scale or full"));
+    options.accel_model = options.gyro_model = *kind;
+  }
+  options.sensor = sensor;
+  std::string why;
+  if (!options.IsValid(&why)) Raise(MakeError(why));
   // Missing columns are bad input, named with the file before any fitting (as `calibrate fit`).
   Result<Calibration> cal = RunReleased([&]() -> Result<Calibration> {
     if (Status c = CheckCalibrationColumns(ptrs, options); !c.ok()) return c.error();
@@ -895,9 +907,11 @@ PYBIND11_MODULE(metro, m) {
   calibrate.def(
       "load", [](py::handle path) { return PyCalibration{CalibrationOf(path)}; }, py::arg("path"),
       "reads a calibration.json");
-  calibrate.def("fit", &Fit, py::arg("sessions"),
-                "Fits every tag of the calibration session(s) (paths or metro.Session), as "
-                "`calibrate fit SESSION... -o calibration.json` with its default options");
+  calibrate.def("fit", &Fit, py::arg("sessions"), py::kw_only(), py::arg("model") = "auto",
+                py::arg("sensor") = 0,
+                "Fits every tag (or `sensor`) of the calibration session(s) (paths or "
+                "metro.Session), as `calibrate fit SESSION... [--model M] [--sensor N] -o "
+                "calibration.json` with its other options at their defaults");
   calibrate.def("apply", &Apply, py::arg("session"), py::arg("calibration"), py::kw_only(),
                 py::arg("t_valid_min_c") = py::none(), py::arg("t_valid_max_c") = py::none(),
                 "A new session with the calibration applied, as `calibrate apply`");
