@@ -36,6 +36,32 @@ def test_type_a_equals_cli(cli, path):
     assert metro.type_a(metro.load(path)).to_json() == expected
 
 
+EXTERNAL = DATASETS / "external"
+
+
+@pytest.mark.parametrize("path, cli_args, load_kwargs", [
+    (EXTERNAL / "px4_pyulog_samples" / "sample.ulg", [], {}),
+    (EXTERNAL / "ros_samples" / "imu_lz4.mcap", [], {}),
+    (EXTERNAL / "ros_samples" / "two_imus_zstd.mcap", ["--topic", "/imu1"], {"topics": ["/imu1"]}),
+    (EXTERNAL / "ros_samples" / "ros1_lz4.bag", [], {}),
+    (EXTERNAL / "ros_samples" / "rosbag2_sqlite", [], {}),
+    (EXTERNAL / "ardupilot_pymavlink_test_bin" / "test.BIN", ["--lenient"], {"lenient": True}),
+    (EXTERNAL / "mpu6050_imucalibration_static_7min" / "example_data_tinit_calc.csv", [], {}),
+], ids=lambda v: v.name if hasattr(v, "name") else None)
+def test_other_formats_equal_cli(cli, path, cli_args, load_kwargs):
+    expected = cli_json(cli, path, "--type-a", *cli_args)
+    assert metro.type_a(metro.load(path, **load_kwargs)).to_json() == expected
+
+
+def test_format_errors_equal_cli(cli):
+    path = EXTERNAL / "ros_samples" / "two_imus_zstd.mcap"
+    code, _, err = cli(path, "--type-a")
+    assert code == 2
+    with pytest.raises(metro.InputError) as e:
+        metro.load(path)
+    assert err == f"error: {e.value}\n"
+
+
 def test_type_a_allan_settle_equals_cli(cli):
     expected = cli_json(cli, STATIC, "--type-a", "--allan", "--settle", "auto", "--taus", "decade:5")
     report = metro.type_a(STATIC, allan=True, settle="auto", taus="decade:5")
