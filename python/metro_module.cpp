@@ -639,18 +639,11 @@ struct PyRegistry {
 }  // namespace
 }  // namespace metro::python
 
-PYBIND11_MODULE(metro, m) {
-  using namespace metro;
-  using namespace metro::python;
-  m.doc() =
-      "metro: GUM Type A/B, Monte Carlo (JCGM 101), Allan deviation (IEEE 952), "
-      "calibration and registry of IMU tags; the library the characterize and calibrate "
-      "programs call (docs/python.md)";
-  m.attr("__version__") = kVersion;
-  g_module = m;
-  py::exec(kExceptionClasses, m.attr("__dict__"));
+namespace metro::python {
+namespace {
 
-  // --- Session ---
+// metro.Session, metro.Tag, metro.load.
+void AddSessions(py::module_& m) {
   py::class_<TagView>(m, "Tag", "One tag of a session: times and quantities as read-only arrays")
       .def_property_readonly("sensor", [](const TagView& t) { return t.tag().sensor; })
       .def_property_readonly("source_name", [](const TagView& t) { return t.tag().source_name; })
@@ -759,8 +752,10 @@ PYBIND11_MODULE(metro, m) {
       "Loads a session file in any format the CLI reads (the CLI's --format, --lenient, "
       "--rate-hz, --column SRC=DST, --columns-file, --topic, --accel-fs-g, --gyro-fs-dps, "
       "--time, --time-order, --frame-period-s); a (ACC, GYRO) pair is imu_tk input");
+}
 
-  // --- Allan ---
+// metro.NoiseTerm, metro.Allan, metro.allan.
+void AddAllan(py::module_& m) {
   py::class_<AllanNoiseTermReport>(m, "NoiseTerm", "An IEEE 952 noise term of an Allan fit")
       .def_readonly("value", &AllanNoiseTermReport::value)
       .def_readonly("u", &AllanNoiseTermReport::u)
@@ -807,8 +802,10 @@ PYBIND11_MODULE(metro, m) {
         "estimator oadev|mdev|ohdev|adev|hdev, taus octave|decade:K|all|every (or m=[...]), "
         "chi-squared intervals (NIST SP 1065 5.3.2) and IEEE 952 terms in `unit` (deg/s, rad/s, "
         "g, m/s^2)");
+}
 
-  // --- Session analysis ---
+// metro.Report, metro.type_a.
+void AddAnalysis(py::module_& m) {
   py::class_<PyReport>(m, "Report", "A session report (metro.report/1), the CLI's JSON")
       .def(
           "to_json", [](const PyReport& r) { return ToJson(r.report) + "\n"; },
@@ -868,8 +865,10 @@ PYBIND11_MODULE(metro, m) {
       "session. session: a path (as the CLI) or a metro.Session. The CLI's --settle, "
       "--settle-scope, --skip-samples, --skip-seconds, --from-s, --to-s, --sensor, --quantity, "
       "--allan, --taus, --estimator, --gaps, --budget, --tags, --threads");
+}
 
-  // --- Budget ---
+// metro.Budget, metro.budget.
+void AddBudget(py::module_& m) {
   py::class_<PyBudget>(m, "Budget", "An evaluated uncertainty budget (metro.budget-report/1)")
       .def(
           "to_json", [](const PyBudget& b) { return ToJson(b.report) + "\n"; },
@@ -890,8 +889,10 @@ PYBIND11_MODULE(metro, m) {
         if (!b.report.monte_carlo) return py::none();
         return JsonLoads(ToJson(b.report))["monte_carlo"];
       });
+}
 
-  // --- metro.calibrate, metro.blob, metro.registry ---
+// metro.calibrate, metro.blob, metro.registry.
+void AddCalibration(py::module_& m) {
   py::module_ calibrate = m.def_submodule("calibrate", "Ceres calibration (`calibrate fit|apply`)");
   py::class_<PyCalibration>(calibrate, "Calibration", "A calibration.json model")
       .def(
@@ -971,4 +972,24 @@ PYBIND11_MODULE(metro, m) {
         "Evaluates an uncertainty budget (a path, or a dict in the budget format, "
         "docs/budget-format.md): GUM with exact sensitivities (JCGM 100), adaptive Monte Carlo "
         "(JCGM 101) and the GUF validation, as `characterize budget`");
+}
+
+}  // namespace
+}  // namespace metro::python
+
+PYBIND11_MODULE(metro, m) {
+  using namespace metro;
+  using namespace metro::python;
+  m.doc() =
+      "metro: GUM Type A/B, Monte Carlo (JCGM 101), Allan deviation (IEEE 952), "
+      "calibration and registry of IMU tags; the library the characterize and calibrate "
+      "programs call (docs/python.md)";
+  m.attr("__version__") = kVersion;
+  g_module = m;
+  py::exec(kExceptionClasses, m.attr("__dict__"));
+  AddSessions(m);
+  AddAllan(m);
+  AddAnalysis(m);
+  AddBudget(m);
+  AddCalibration(m);
 }

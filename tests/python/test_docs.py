@@ -2,6 +2,7 @@
 # ```python block under "## Worked example", in a scratch directory where `datasets` is the
 # repository's.
 import os
+import pathlib
 import re
 import subprocess
 import sys
@@ -21,7 +22,9 @@ def test_worked_example_runs_as_written(tmp_path):
     (tmp_path / "datasets").symlink_to(SOURCE_DIR / "datasets")
     script = tmp_path / "example.py"
     script.write_text(worked_example())
-    env = dict(os.environ, PYTHONPATH=str(BINARY_DIR / "python"))
+    # The module this run imports (PYTHONPATH made absolute: the example runs elsewhere).
+    path = os.environ.get("PYTHONPATH", str(BINARY_DIR / "python")).split(os.pathsep)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(str(pathlib.Path(p).resolve()) for p in path))
     done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
                           text=True, env=env)
     assert done.returncode == 0, done.stderr
