@@ -297,3 +297,24 @@ def test_ctrl_c_interrupts_within_a_second():
     assert sent and stopped - sent[0] < 1.0, stopped - sent[0]
     # The module still works after an interrupted call.
     assert metro.allan(x[:10_000].copy(), 0.01).adev.size > 0
+
+
+@pytest.mark.skipif(threading.current_thread() is not threading.main_thread(),
+                    reason="signals reach the main thread only")
+def test_ctrl_c_interrupts_a_monte_carlo_run():
+    # 2e7 fixed trials of JCGM 101 9.5: several seconds uninterrupted (12 s for 3e7 at load 8).
+    budget = json.loads((BUDGETS / "jcgm101_9_5_gauge_block.json").read_text())
+    budget["monte_carlo"] = {"trials": 20_000_000, "seed": 1, "adaptive": False}
+    sent = []
+
+    def interrupt():
+        sent.append(time.perf_counter())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(0.3, interrupt)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        metro.budget(budget)
+    stopped = time.perf_counter()
+    timer.join()
+    assert sent and stopped - sent[0] < 1.0, stopped - sent[0]
