@@ -370,6 +370,21 @@ SessionPtr SessionFromArrays(py::handle t_obj, const py::dict& columns, int sens
 
 // --- Results --------------------------------------------------------------------------------
 
+const SensorReport& FindSensorOrRaise(const SessionReport& report, std::optional<int64_t> sensor) {
+  if (report.sensors.empty()) throw py::key_error("the report has no sensor");
+  const SensorReport* s = sensor ? report.FindSensor(*sensor) : &report.sensors.front();
+  if (s == nullptr)
+    throw py::key_error("sensor " + std::to_string(*sensor) + ": not in the report");
+  return *s;
+}
+
+const QuantityReport& FindQuantityOrRaise(const SessionReport& report, const std::string& quantity,
+                                          std::optional<int64_t> sensor) {
+  const QuantityReport* q = FindSensorOrRaise(report, sensor).Find(quantity);
+  if (q == nullptr) throw py::key_error(quantity + ": not in the report");
+  return *q;
+}
+
 // What a session analysis produced (metro.type_a).
 struct PyReport {
   SessionReport report;
@@ -806,6 +821,27 @@ void AddAllan(py::module_& m) {
 
 // metro.Report, metro.type_a.
 void AddAnalysis(py::module_& m) {
+  py::class_<TypeAReport>(m, "TypeA", "A quantity's GUM Type A result (JCGM 100 4.2)")
+      .def_readonly("n", &TypeAReport::n)
+      .def_readonly("mean", &TypeAReport::mean)
+      .def_readonly("variance", &TypeAReport::variance)
+      .def_readonly("std", &TypeAReport::std)
+      .def_readonly("std_of_mean", &TypeAReport::std_of_mean)
+      .def_readonly("dof", &TypeAReport::dof)
+      .def_readonly("n_eff", &TypeAReport::n_eff)
+      .def_readonly("std_of_mean_autocorr", &TypeAReport::std_of_mean_autocorr)
+      .def_readonly("u_mean", &TypeAReport::u_mean,
+                    "metro's recommended u(mean), autocorrelation included")
+      .def_readonly("u_mean_dof", &TypeAReport::u_mean_dof)
+      .def_readonly("u_mean_method", &TypeAReport::u_mean_method)
+      .def_readonly("coverage", &TypeAReport::coverage)
+      .def_readonly("k", &TypeAReport::k)
+      .def_readonly("U_mean", &TypeAReport::U_mean)
+      .def("__repr__", [](const TypeAReport& t) {
+        return "<metro.TypeA n " + std::to_string(t.n) + ", mean " + std::to_string(t.mean) +
+               ", u_mean " + std::to_string(t.u_mean) + ">";
+      });
+
   py::class_<PyReport>(m, "Report", "A session report (metro.report/1), the CLI's JSON")
       .def(
           "to_json", [](const PyReport& r) { return ToJson(r.report) + "\n"; },
@@ -822,15 +858,29 @@ void AddAnalysis(py::module_& m) {
                                return v;
                              })
       .def(
+          "quantities",
+          [](const PyReport& r, std::optional<int64_t> sensor) {
+            std::vector<std::string> names;
+            for (const QuantityReport& q : FindSensorOrRaise(r.report, sensor).quantities) {
+              names.push_back(q.name);
+            }
+            return names;
+          },
+          py::arg("sensor") = py::none(), "the quantities of a tag (None: the first), in order")
+      .def(
+          "type_a",
+          [](const PyReport& r, const std::string& quantity, std::optional<int64_t> sensor) {
+            const QuantityReport& q = FindQuantityOrRaise(r.report, quantity, sensor);
+            if (!q.type_a) Raise(MakeFailedError(quantity + ": " + q.error));
+            return *q.type_a;
+          },
+          py::arg("quantity"), py::arg("sensor") = py::none(),
+          "the Type A result of a quantity, as metro.TypeA")
+      .def(
           "allan",
           [](const PyReport& r, const std::string& quantity, std::optional<int64_t> sensor) {
-            if (r.report.sensors.empty()) throw py::key_error("the report has no sensor");
-            const SensorReport* s =
-                sensor ? r.report.FindSensor(*sensor) : &r.report.sensors.front();
-            if (s == nullptr)
-              throw py::key_error("sensor " + std::to_string(*sensor) + ": not in the report");
-            const QuantityReport* q = s->Find(quantity);
-            if (q == nullptr || !q->allan) {
+            const QuantityReport* q = &FindQuantityOrRaise(r.report, quantity, sensor);
+            if (!q->allan) {
               throw py::key_error(quantity + ": no Allan section (type_a(..., allan=True))");
             }
             if (!q->allan->ok()) Raise(MakeFailedError(q->allan->error));

@@ -113,6 +113,23 @@ def test_allan_of_array_equals_cli_section(cli):
     assert a.noise["random_walk"].value == section["noise"]["random_walk"]["value"]
 
 
+def test_report_type_a_accessor(cli):
+    expected = json.loads(cli_json(cli, CHEST, "--type-a"))
+    report = metro.type_a(CHEST)
+    for sensor in expected["sensors"]:
+        names = report.quantities(sensor["sensor"])
+        assert names == list(sensor["quantities"])
+        for name in names:
+            want = sensor["quantities"][name]["type_a"]
+            got = report.type_a(name, sensor=sensor["sensor"])
+            assert (got.n, got.mean, got.std) == (want["n"], want["mean"], want["std"])
+            assert got.u_mean == want["u_mean"] or (want["u_mean"] is None and math.isnan(got.u_mean))
+    with pytest.raises(KeyError, match="sensor 99"):
+        report.type_a("pitch_deg", sensor=99)
+    with pytest.raises(KeyError, match="nope_deg: not in the report"):
+        report.type_a("nope_deg")
+
+
 def test_report_allan_accessor(cli):
     report = metro.type_a(STATIC, allan=True, quantities=["gz_dps"])
     a = report.allan("gz_dps", sensor=1)
