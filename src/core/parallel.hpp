@@ -12,6 +12,8 @@
 #include <thread>
 #include <vector>
 
+#include "metro/core/cancel.hpp"
+
 namespace metro::internal {
 
 // Worker threads for `threads` (0 or less: all cores), at least 1.
@@ -25,12 +27,15 @@ inline int ResolveThreads(int threads) {
 // large for the machine), `on_failure()` runs in the throwing thread, to stop the others,
 // and the first exception is rethrown in the calling thread once every thread has finished:
 // an exception leaving a std::thread would end the process. A thread that cannot be
-// started leaves its share of the work to the others.
+// started leaves its share of the work to the others. The caller's CancelFlag
+// (metro/core/cancel.hpp) is installed in every thread.
 template <typename Fn, typename OnFailure>
 void RunOnThreads(size_t threads, Fn&& fn, OnFailure&& on_failure) {
   std::mutex failure_mutex;
   std::exception_ptr failure;
+  const CancelFlag* cancel = CurrentCancelFlag();
   auto guarded = [&] {
+    ScopedCancel scope(cancel);
     try {
       fn();
     } catch (...) {
@@ -52,14 +57,18 @@ void RunOnThreads(size_t threads, Fn&& fn, OnFailure&& on_failure) {
 
 // Runs fn(i) for every i in [0, n), items handed out one at a time to up to
 // ResolveThreads(threads) threads (RunOnThreads); once an item throws, no further items
-// are handed out, and the exception reaches the caller.
+// are handed out, and the exception reaches the caller. Each item first checks the caller's
+// CancelFlag (ThrowIfCancelled).
 template <typename Fn>
 void ParallelFor(size_t n, int threads, Fn&& fn) {
   std::atomic<size_t> next{0};
   RunOnThreads(
       std::min(static_cast<size_t>(ResolveThreads(threads)), n),
       [&] {
-        for (size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i);
+        for (size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) {
+          ThrowIfCancelled();
+          fn(i);
+        }
       },
       [&] { next.store(n); });
 }
@@ -82,11 +91,14 @@ void ParallelSlices(int threads, int64_t n, Fn&& fn) {
 // Runs `beside` on a second thread while the calling thread runs `here`, and returns once
 // both are done. An exception from either is rethrown here after both have finished (the
 // one from `here` first), never left to end the process from a thread; if no thread can be
-// started, `beside` runs after `here` on this thread.
+// started, `beside` runs after `here` on this thread. The caller's CancelFlag is installed
+// in the second thread.
 template <typename Beside, typename Here>
 void RunBeside(Beside&& beside, Here&& here) {
   std::exception_ptr beside_failure;
+  const CancelFlag* cancel = CurrentCancelFlag();
   auto run_beside = [&] {
+    ScopedCancel scope(cancel);
     try {
       beside();
     } catch (...) {

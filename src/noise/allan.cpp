@@ -13,6 +13,7 @@
 
 #include "core/parallel.hpp"
 #include "core/simd_clones.hpp"
+#include "metro/core/cancel.hpp"
 #include "metro/noise/edf.hpp"
 #include "metro/noise/noise_id.hpp"
 #include "noise/allan_internal.hpp"
@@ -155,6 +156,7 @@ class OverlappingSums {
       for (size_t k = 0; k < m_.size(); ++k) {
         const int64_t end = std::min(block_end, limit_[k]);
         if (end <= b) continue;
+        ThrowIfCancelled();  // A block at one m is microseconds: Ctrl-C stops "every" at once.
         sums[k] += hadamard_ ? SumThirdDifferences(x_, m_[k], b, end)
                              : SumSecondDifferences(x_, m_[k], b, end);
       }
@@ -650,21 +652,26 @@ Result<AllanCurve> AllanFromPhase(const double* phase, int64_t n_rate, double ra
 
 Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
                                 const AllanOptions& options) {
+  return ComputeAllan(rate.data(), static_cast<int64_t>(rate.size()), tau0_s, options);
+}
+
+Result<AllanCurve> ComputeAllan(const double* rate, int64_t n, double tau0_s,
+                                const AllanOptions& options) {
+  METRO_CHECK(rate != nullptr || n == 0);
   std::string why;
   if (!options.IsValid(&why)) return MakeError("Allan options: " + why);
   if (!(std::isfinite(tau0_s) && tau0_s > 0.0)) {
     return MakeError(fmt::format("sample period tau0 = {} s is not a positive number", tau0_s));
   }
   std::vector<double> phase;
-  const PhaseResult integrated =
-      IntegratePhase(rate.data(), static_cast<int64_t>(rate.size()), tau0_s, options.threads, true,
-                     [&] { return NewPhase(rate.size() + 1, &phase); });
+  const PhaseResult integrated = IntegratePhase(rate, n, tau0_s, options.threads, true, [&] {
+    return NewPhase(static_cast<size_t>(n) + 1, &phase);
+  });
   if (integrated.first_bad >= 0) {
-    const size_t i = static_cast<size_t>(integrated.first_bad);
+    const int64_t i = integrated.first_bad;
     return MakeError(fmt::format("rate sample {} (0-based) is not finite ({})", i, rate[i]));
   }
-  return AllanFromPhase(phase.data(), static_cast<int64_t>(rate.size()), integrated.mean, tau0_s,
-                        options);
+  return AllanFromPhase(phase.data(), n, integrated.mean, tau0_s, options);
 }
 
 namespace internal {

@@ -156,6 +156,20 @@ AllanReport MakeAllanReport(const AllanCurve& curve, const NoiseFit& fit,
   return r;
 }
 
+AllanReport AllanReportOfCurve(const AllanCurve& curve, const NoiseFitOptions& options,
+                               const std::string& quantity_unit, NoiseFit* fit_out) {
+  const Result<NoiseFit> fit = FitNoiseTerms(curve, options);
+  const NoiseFit noise_fit = fit.ok() ? fit.value() : NoiseFit{};
+  AllanReport allan = MakeAllanReport(curve, noise_fit, quantity_unit);
+  if (!fit.ok()) {
+    allan.fit_error = fit.error().message;
+    // No model at all: the report says so as for a model it could not test (issue #36).
+    allan.model_check = UnfittedModelCheck(curve, fit.error().message);
+  }
+  if (fit_out != nullptr) *fit_out = noise_fit;
+  return allan;
+}
+
 AllanTypeALink MakeAllanTypeALink(const AllanCurve& curve, const NoiseFit& fit, double duration_s) {
   AllanTypeALink link;
   const AllanMinimum min = FindAllanMinimum(curve);

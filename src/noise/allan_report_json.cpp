@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "core/json_text.hpp"
 #include "metro/noise/noise_export.hpp"
 
 namespace metro {
@@ -299,5 +300,7 @@ AllanTypeALink AllanTypeALinkFromJsonValue(const JsonCursor& c) {
   link.noise_model = c["noise_model"].OptionalString();
   return link;
 }
+
+std::string ToJson(const AllanReport& allan) { return JsonText(ToJsonValue(allan), 2); }
 
 }  // namespace metro

@@ -179,20 +179,14 @@ void AddCurve(const TagTypeA& t, const QuantityTypeA& q, AllanQuantityCurve made
   }
   const AllanCurve& curve = made.curve.value();
   ++summary->analysed;
-  auto fit = FitNoiseTerms(curve, options.fit);
-  const NoiseFit noise_fit = fit.ok() ? fit.value() : NoiseFit{};
-  AllanReport allan = MakeAllanReport(curve, noise_fit, q.unit);
+  NoiseFit noise_fit;
+  AllanReport allan = AllanReportOfCurve(curve, options.fit, q.unit, &noise_fit);
   const SamplePeriod& p = made.period.value();
   allan.sample_period = {p.tau0_s,           p.rate_hz,
                          p.mean_dt_s,        p.jitter_rms_s,
                          p.max_abs_jitter_s, static_cast<int64_t>(p.missing_samples),
                          p.warnings};
   allan.gaps = made.gaps;
-  if (!fit.ok()) {
-    allan.fit_error = fit.error().message;
-    // No model at all: the report says so as for a model it could not test (issue #36).
-    allan.model_check = UnfittedModelCheck(curve, fit.error().message);
-  }
   // A rejected or untested noise model is said on stderr and in the report (issue #36).
   if (allan.model_check && !(allan.model_check->tested && !allan.model_check->rejected)) {
     jq->warnings.push_back(allan.model_check->summary);

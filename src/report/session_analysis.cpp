@@ -18,6 +18,27 @@ bool SessionAnalysisOptions::IsValid(std::string* why) const {
 }
 
 SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOptions& options) {
+  SessionAnalysis out;  // Its defaults read as an input error.
+  std::string why;
+  if (!options.IsValid(&why)) {
+    out.error = MakeError(why);
+    return out;
+  }
+  ProgressSink* progress = options.progress;
+  LoadOptions load = options.load;
+  if (progress != nullptr) {
+    BeginLoadPhase(progress, path);
+    load.on_bytes_parsed = [progress](int64_t n) { progress->Advance(n); };
+  }
+  auto session = LoadSession(path, load);
+  if (!session.ok()) {
+    out.error = session.error();
+    return out;
+  }
+  return AnalyzeLoadedSession(std::move(session).value(), options);
+}
+
+SessionAnalysis AnalyzeLoadedSession(Session session, const SessionAnalysisOptions& options) {
   SessionAnalysis out;
   auto fail = [&out](Error error, bool input_error) {
     out.ok = false;
@@ -28,14 +49,7 @@ SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOpt
   std::string why;
   if (!options.IsValid(&why)) return fail(MakeError(why), true);
   ProgressSink* progress = options.progress;
-  LoadOptions load = options.load;
-  if (progress != nullptr) {
-    BeginLoadPhase(progress, path);
-    load.on_bytes_parsed = [progress](int64_t n) { progress->Advance(n); };
-  }
-  auto session = LoadSession(path, load);
-  if (!session.ok()) return fail(session.error(), true);
-  out.session = std::move(session).value();
+  out.session = std::move(session);
   if (progress != nullptr) progress->BeginPhase("Type A", kUncountedWork);
   auto type_a = EvaluateSessionTypeA(out.session, options.type_a);
   if (!type_a.ok()) return fail(type_a.error(), true);

@@ -25,6 +25,7 @@
 #include <pcg_random.hpp>
 
 #include "core/parallel.hpp"
+#include "metro/core/cancel.hpp"
 #include "uncertainty/mc_sampling.hpp"
 #include "uncertainty/model.hpp"
 #include "uncertainty/model_quote.hpp"
@@ -380,6 +381,7 @@ NanReport Simulate(const Plan& plan, int64_t first, int64_t count, double* out, 
     const int64_t end = chunks * (w + 1) / workers;
     int64_t unreported = 0;
     for (int64_t c = begin; c < end && !stop.load(std::memory_order_relaxed); ++c) {
+      ThrowIfCancelled();  // The caller's Ctrl-C (metro/core/cancel.hpp), between chunks.
       const int64_t global = first_chunk + c;
       WordSource rng(plan.seed, static_cast<uint64_t>(global));
       const int64_t offset = c * kChunkTrials;

@@ -149,6 +149,10 @@ std::vector<double> AllanVariances(const std::vector<double>& phase, double tau0
 // computes the variance, identifies the noise type and the confidence interval at each tau.
 Result<AllanCurve> ComputeAllan(const std::vector<double>& rate, double tau0_s,
                                 const AllanOptions& options = AllanOptions());
+// The same on the n samples at `rate`, read in place (not copied; the Python module's
+// zero-copy input). Precondition: rate is not null when n > 0.
+Result<AllanCurve> ComputeAllan(const double* rate, int64_t n, double tau0_s,
+                                const AllanOptions& options = AllanOptions());
 
 // Rate samples on a regular grid of period tau0_s, some of them missing (present[k] == 0: a
 // lost BLE packet, a stale or never frame, an absent row), with the gap handling of NIST

@@ -214,6 +214,16 @@ AllanTypeALink MakeAllanTypeALink(const AllanCurve& curve, const NoiseFit& fit, 
 // holds (issue #36: a model that cannot be tested says so and states no goodness of fit).
 AllanModelCheckReport UnfittedModelCheck(const AllanCurve& curve, const std::string& why);
 
+// The report object of a curve as the session report makes it: the IEEE 952 terms fitted with
+// `options` (FitNoiseTerms; *fit_out, when not null, receives the fit, empty when none), the
+// fit's error and the unfitted model check when there is none. sample_period and gaps are left
+// for the caller.
+AllanReport AllanReportOfCurve(const AllanCurve& curve, const NoiseFitOptions& options,
+                               const std::string& quantity_unit, NoiseFit* fit_out = nullptr);
+
+// The "allan" object as JSON text, indented as the session report is (NaN as null).
+std::string ToJson(const AllanReport& allan);
+
 std::string AllanCurveCsv(const AllanCurve& curve, const std::string& quantity_unit);
 
 // 1 - n_terms / n_terms_gap_free at each tau (0 where nothing is missing).

@@ -71,4 +71,9 @@ struct SessionAnalysis {
 
 SessionAnalysis AnalyzeSession(const std::string& path, const SessionAnalysisOptions& options);
 
+// The same on a session already in memory (loaded by LoadSession, or built by a caller such as
+// the Python module's Session.from_arrays); options.load is not used. A budget's inputs
+// without a "session" refer to this session.
+SessionAnalysis AnalyzeLoadedSession(Session session, const SessionAnalysisOptions& options);
+
 }  // namespace metro
