@@ -25,36 +25,27 @@
 namespace metro::calibrate_app {
 namespace {
 
-// calibrate fit --thermal SESSION -o thermal.json: FitThermalTag per tag, one JSON document.
-int RunThermalFit(const FitOptions& f) {
+// --thermal takes one static record over a temperature range and -o, and its own options.
+Status CheckThermalFitOptions(const FitOptions& f) {
   if (f.imutk || !f.segments.empty() || !f.html.empty() || !f.spec.spec.empty() ||
       !f.registry.url.empty() || f.inputs.size() != 1) {
-    apps::PrintErrorText(
+    return MakeError(
         "--thermal takes one session (a static record over a temperature range) and -o; it "
         "does not take --imutk, --segments, --html, --spec or --registry (docs/thermal.md)");
-    return kExitUsage;
   }
   std::string why;
-  if (!f.thermal_options.IsValid(&why)) {
-    apps::PrintErrorText("--thermal: " + why);
-    return kExitUsage;
-  }
-  if (Status s = apps::CheckOutputs({{"-o", f.output}}, {{"SESSION", f.inputs.front()}}, {});
-      !s.ok()) {
-    return apps::PrintErrorExit(s.error());
-  }
-  LoadOptions load;
-  if (Status st = apps::MakeLoadOptions(f.load, &load); !st.ok()) {
-    return apps::PrintErrorExit(st.error());
-  }
-  Result<Session> session = LoadSession(f.inputs.front(), load);
-  if (!session.ok()) return apps::PrintErrorExit(session.error());
+  if (!f.thermal_options.IsValid(&why)) return MakeError("--thermal: " + why);
+  return apps::CheckOutputs({{"-o", f.output}}, {{"SESSION", f.inputs.front()}}, {});
+}
+
+// FitThermalTag of every tag of the session (or --sensor's), with a warning per excluded
+// temperature read error (both sensors read the same temp_c column: one per line).
+Result<std::vector<ThermalTagFit>> FitThermalTags(const FitOptions& f, const Session& session) {
   std::vector<ThermalTagFit> fits;
-  for (const Tag& tag : session.value().tags) {
+  for (const Tag& tag : session.tags) {
     if (f.calibration.sensor != 0 && tag.sensor != f.calibration.sensor) continue;
     Result<ThermalTagFit> fit = FitThermalTag(tag, f.inputs.front(), f.thermal_options);
-    if (!fit.ok()) return apps::PrintErrorExit(fit.error());
-    // Both sensors read the same temp_c column: one warning per excluded line.
+    if (!fit.ok()) return fit.error();
     for (int64_t line : fit.value().accel.excluded_lines) {
       apps::PrintWarning(
           fmt::format("{}:{}: temp_c is a read error (more than {} degC from its "
@@ -64,17 +55,30 @@ int RunThermalFit(const FitOptions& f) {
     fits.push_back(std::move(fit).value());
   }
   if (fits.empty()) {
-    apps::PrintErrorText(
+    return MakeError(
         f.calibration.sensor != 0
             ? fmt::format("{}: no tag {} in the session", f.inputs.front(), f.calibration.sensor)
             : fmt::format("{}: the session has no tags", f.inputs.front()));
-    return kExitUsage;
   }
-  if (Status w = apps::WriteOutputs({{f.output, ThermalFitJson(fits, f.thermal_options)}});
+  return fits;
+}
+
+// calibrate fit --thermal SESSION -o thermal.json: FitThermalTag per tag, one JSON document.
+int RunThermalFit(const FitOptions& f) {
+  if (Status s = CheckThermalFitOptions(f); !s.ok()) return apps::PrintErrorExit(s.error());
+  LoadOptions load;
+  if (Status st = apps::MakeLoadOptions(f.load, &load); !st.ok()) {
+    return apps::PrintErrorExit(st.error());
+  }
+  Result<Session> session = LoadSession(f.inputs.front(), load);
+  if (!session.ok()) return apps::PrintErrorExit(session.error());
+  Result<std::vector<ThermalTagFit>> fits = FitThermalTags(f, session.value());
+  if (!fits.ok()) return apps::PrintErrorExit(fits.error());
+  if (Status w = apps::WriteOutputs({{f.output, ThermalFitJson(fits.value(), f.thermal_options)}});
       !w.ok()) {
     return apps::PrintErrorExit(w.error());
   }
-  for (const ThermalTagFit& t : fits) {
+  for (const ThermalTagFit& t : fits.value()) {
     apps::Note(fmt::format(
         "sensor {}: valid {:.2f} .. {:.2f} degC, orders accel {} {} {}, gyro "
         "{} {} {}\n",

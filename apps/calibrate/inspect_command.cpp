@@ -13,38 +13,33 @@
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
-// Exit codes: 0 a valid calibration (the .bin validates; in a .hex a slot is active), 1 none,
-// 2 unreadable file, HEX syntax or bad options.
-int RunInspect(const InspectCliOptions& c) {
-  blob::InspectOptions o;
-  Result<std::optional<TagRegistry>> tags = LoadTagsOption(c.tags);
-  if (!tags.ok()) {
-    return apps::PrintErrorExit(tags.error());
+namespace {
+
+// The device to check against: --device-id, else the tags file's for --sensor (none: the blob
+// is checked without one).
+Result<std::optional<uint64_t>> InspectDevice(const InspectCliOptions& c,
+                                              const std::optional<TagRegistry>& tags) {
+  if (c.sensor != 0 && !tags) {
+    return MakeError("--sensor N names a tag of the tags file: give --tags FILE");
   }
-  if (c.sensor != 0 && !tags.value()) {
-    apps::PrintErrorText("--sensor N names a tag of the tags file: give --tags FILE");
-    return kExitUsage;
-  }
-  // The device to check against: --device-id, else the tags file's for --sensor.
-  Result<std::optional<uint64_t>> resolved =
-      c.sensor != 0 ? ResolveDeviceId(c.device_id, tags.value(), Calibration{}, c.sensor)
-                    : Result<std::optional<uint64_t>>(std::optional<uint64_t>());
-  if (c.sensor == 0 && !c.device_id.empty()) {
+  if (c.sensor == 0) {
+    if (c.device_id.empty()) return std::optional<uint64_t>();
     Result<uint64_t> id = blob::ParseDeviceId(c.device_id);
-    resolved =
-        id.ok() ? Result<std::optional<uint64_t>>(std::optional<uint64_t>(id.value()))
-                : Result<std::optional<uint64_t>>(MakeError("--device-id: " + id.error().message));
+    if (!id.ok()) return MakeError("--device-id: " + id.error().message);
+    return std::optional<uint64_t>(id.value());
   }
-  if (!resolved.ok()) {
-    apps::PrintErrorText(resolved.error().message);
-    return apps::ExitCodeFor(resolved.error());
-  }
-  if (c.sensor != 0 && !resolved.value()) {
-    apps::PrintErrorText(
+  Result<std::optional<uint64_t>> resolved =
+      ResolveDeviceId(c.device_id, tags, Calibration{}, c.sensor);
+  if (!resolved.ok()) return MakeError(resolved.error().message).WithKind(resolved.error().kind);
+  if (!resolved.value()) {
+    return MakeError(
         fmt::format("sensor {} has no device_id in {} (or give --device-id)", c.sensor, c.tags));
-    return kExitUsage;
   }
-  o.device_id = resolved.value();
+  return resolved;
+}
+
+// --slot-address: slot A's page (slot B is the next), both below the 256 KiB flash's end.
+Result<uint32_t> InspectSlotAddress(const InspectCliOptions& c) {
   size_t used = 0;
   unsigned long long a = 0;
   try {
@@ -53,39 +48,54 @@ int RunInspect(const InspectCliOptions& c) {
     used = 0;
   }
   if (used == 0 || used != c.slot_address.size() || a + 2 * blob::kPageSize > 0x40000) {
-    apps::PrintErrorText(
+    return MakeError(
         fmt::format("--slot-address '{}': expected an address below 0x3F800", c.slot_address));
-    return kExitUsage;
   }
-  o.slot_a_address = static_cast<uint32_t>(a);
-  o.slot_b_address = static_cast<uint32_t>(a) + blob::kPageSize;
+  return static_cast<uint32_t>(a);
+}
+
+// Which tag of the fleet each valid blob is for (a note), or a warning when none. One line
+// each: the tag's name and the file's are data (escaped).
+void NoteFleetTags(const blob::InspectReport& report, const TagRegistry& tags,
+                   const std::string& tags_path) {
+  for (const blob::SlotReport& slot : report.slots) {
+    if (!slot.contents) continue;
+    const uint64_t id = slot.contents->device_id;
+    if (const std::optional<int> sensor = tags.SensorOfDevice(id)) {
+      apps::Note(fmt::format(
+          "slot {}: device {} is sensor {} ({}) in {}\n", slot.label, blob::FormatDeviceId(id),
+          *sensor, EscapeControlChars(tags.Name(*sensor)), EscapeControlChars(tags_path)));
+    } else {
+      apps::PrintText(stderr,
+                      fmt::format("warning: slot {}: device {} is no tag's in {}\n", slot.label,
+                                  blob::FormatDeviceId(id), EscapeControlChars(tags_path)));
+    }
+  }
+}
+
+}  // namespace
+
+// Exit codes: 0 a valid calibration (the .bin validates; in a .hex a slot is active), 1 none,
+// 2 unreadable file, HEX syntax or bad options.
+int RunInspect(const InspectCliOptions& c) {
+  Result<std::optional<TagRegistry>> tags = LoadTagsOption(c.tags);
+  if (!tags.ok()) return apps::PrintErrorExit(tags.error());
+  Result<std::optional<uint64_t>> device = InspectDevice(c, tags.value());
+  if (!device.ok()) return apps::PrintErrorExit(device.error());
+  Result<uint32_t> slot_a = InspectSlotAddress(c);
+  if (!slot_a.ok()) return apps::PrintErrorExit(slot_a.error());
+  blob::InspectOptions o;
+  o.device_id = device.value();
+  o.slot_a_address = slot_a.value();
+  o.slot_b_address = slot_a.value() + blob::kPageSize;
   Result<blob::InspectReport> r = blob::InspectFile(c.input, o);
-  if (!r.ok()) {
-    return apps::PrintErrorExit(r.error());
-  }
+  if (!r.ok()) return apps::PrintErrorExit(r.error());
   if (c.json) {
     fmt::print("{}\n", blob::ToJson(r.value()));
   } else {
     apps::PrintText(stdout, blob::FormatInspect(r.value()));  // Blob metadata is data.
   }
-  // Which tag of the fleet each valid blob is for (a note), or a warning when none.
-  if (tags.value()) {
-    for (const blob::SlotReport& slot : r.value().slots) {
-      if (!slot.contents) continue;
-      const uint64_t id = slot.contents->device_id;
-      const std::optional<int> sensor = tags.value()->SensorOfDevice(id);
-      if (sensor) {
-        // One line each: the tag's name and the file's are data (escaped).
-        apps::Note(fmt::format(
-            "slot {}: device {} is sensor {} ({}) in {}\n", slot.label, blob::FormatDeviceId(id),
-            *sensor, EscapeControlChars(tags.value()->Name(*sensor)), EscapeControlChars(c.tags)));
-      } else {
-        apps::PrintText(stderr,
-                        fmt::format("warning: slot {}: device {} is no tag's in {}\n", slot.label,
-                                    blob::FormatDeviceId(id), EscapeControlChars(c.tags)));
-      }
-    }
-  }
+  if (tags.value()) NoteFleetTags(r.value(), *tags.value(), c.tags);
   return r.value().ok() ? kExitOk : kExitFailed;
 }
 

@@ -177,16 +177,30 @@ int FinishPush(const blob::PushSummary& s, const PushCliOptions& c, int recorded
   return s.input_error ? kExitUsage : kExitFailed;
 }
 
-// `outcome`, when not null, receives the final line's verdict for --all's table.
-int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
-  if (c.all) return RunPushAll(c);
-  if (c.sensor < 1) {
-    apps::PrintErrorText("--sensor N names the tag in calibration.json (or --all for every tag)");
-    return kExitUsage;
+// The registry of --registry, opened on first use (after the checks that need none, so a push
+// refused before the port is opened never touches it) and kept for every tag of --all.
+class PushRegistry {
+ public:
+  explicit PushRegistry(const RegistryCliOptions& options) : options_(options) {}
+  // False (said on stderr, the exit code in *exit_code) when it cannot be opened; *registry is
+  // null without --registry.
+  bool Get(Registry** registry, int* exit_code) {
+    if (!opened_) opened_ = OpenRegistryOption(options_);
+    *exit_code = opened_->exit_code;
+    *registry = opened_->registry.get();
+    return opened_->exit_code == 0;
   }
-  std::optional<TagRegistry> tags;
-  Calibration cal;
-  if (!LoadPushInputs(c, &tags, &cal)) return kExitUsage;
+
+ private:
+  const RegistryCliOptions& options_;
+  std::optional<OpenedRegistry> opened_;
+};
+
+// One tag's push from the loaded inputs: its device, the blob checked before the port is
+// opened, the push and its read-back, recorded. `outcome`, when not null, receives the final
+// line's verdict for --all's table.
+int PushTag(const PushCliOptions& c, const std::optional<TagRegistry>& tags, const Calibration& cal,
+            PushRegistry* registry, std::string* outcome) {
   if (cal.FindTag(c.sensor) == nullptr) {
     apps::PrintErrorText(CalibrationErrorText(c.calibration, NoSensorError(cal, c.sensor)) +
                          fmt::format(" (nothing sent; {} not opened)", c.port));
@@ -200,8 +214,8 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
                                      CalibrationErrorText(c.calibration, w.error()), c.port));
     return apps::ExitCodeFor(w.error());
   }
-  OpenedRegistry registry = OpenRegistryOption(c.registry);
-  if (registry.exit_code != 0) return registry.exit_code;
+  Registry* reg = nullptr;
+  if (int rc = kExitOk; !registry->Get(&reg, &rc)) return rc;
   Result<std::unique_ptr<serial::SerialPort>> port = serial::SerialPort::Open(c.port);
   if (!port.ok()) {
     apps::PrintErrorText(port.error().ToString());
@@ -211,16 +225,56 @@ int RunPush(const PushCliOptions& c, std::string* outcome = nullptr) {
   }
   const blob::PushSummary s = PushOverPort(port.value().get(), cal, bo, expect.value(), c);
   PrintPushLink(s);
-  const int recorded = RecordPushResult(registry.registry.get(), cal, c.calibration, c.sensor, s,
-                                        expect.value(), c.port, c.registry);
+  const int recorded =
+      RecordPushResult(reg, cal, c.calibration, c.sensor, s, expect.value(), c.port, c.registry);
   if (outcome != nullptr) *outcome = PushOutcome(s);
   return FinishPush(s, c, recorded);
+}
+
+int RunPush(const PushCliOptions& c) {
+  if (c.all) return RunPushAll(c);
+  if (c.sensor < 1) {
+    apps::PrintErrorText("--sensor N names the tag in calibration.json (or --all for every tag)");
+    return kExitUsage;
+  }
+  std::optional<TagRegistry> tags;
+  Calibration cal;
+  if (!LoadPushInputs(c, &tags, &cal)) return kExitUsage;
+  PushRegistry registry(c.registry);
+  return PushTag(c, tags, cal, &registry, nullptr);
+}
+
+// --all: the one-tag options of every tag of calibration.json, each with its device ID; a tag
+// without one stops the run before the port is opened (false, said on stderr, the exit code
+// in *exit_code).
+bool EveryTagPush(const PushCliOptions& c, const std::optional<TagRegistry>& tags,
+                  const Calibration& cal, std::vector<PushCliOptions>* each, int* exit_code) {
+  for (const TagCalibration& t : cal.tags) {
+    Result<std::optional<uint64_t>> id = ResolveDeviceId("", tags, cal, t.sensor);
+    if (!id.ok() || !id.value()) {
+      const Error e = id.ok()
+                          ? MakeError(fmt::format("sensor {}: no device ID in the tags file or "
+                                                  "calibration.json (nothing sent; {} not opened)",
+                                                  t.sensor, c.port))
+                          : id.error().WithContext(fmt::format("sensor {}", t.sensor));
+      apps::PrintErrorText(id.ok() ? e.message : e.ToString() + " (nothing sent)");
+      *exit_code = apps::ExitCodeFor(e);
+      return false;
+    }
+    PushCliOptions one = c;
+    one.all = false;
+    one.sensor = t.sensor;
+    one.device_id = blob::FormatDeviceId(*id.value());
+    each->push_back(std::move(one));
+  }
+  return true;
 }
 
 // --all: every tag of calibration.json over the one port, in sensor order, each to its own
 // device (the central must have that tag selected, docs/calibration-blob.md 1.1; another tag
 // on the link is refused before anything is written), each read back; then a table. Tags
-// without a device ID stop the run before the port is opened.
+// without a device ID stop the run before the port is opened. calibration.json and the tags
+// file are read once.
 int RunPushAll(const PushCliOptions& c) {
   if (c.sensor != 0 || !c.device_id.empty() || c.any_device || c.seq != 0) {
     apps::PrintErrorText(
@@ -232,30 +286,15 @@ int RunPushAll(const PushCliOptions& c) {
   Calibration cal;
   if (!LoadPushInputs(c, &tags, &cal)) return kExitUsage;
   std::vector<PushCliOptions> each;
-  for (const TagCalibration& t : cal.tags) {
-    Result<std::optional<uint64_t>> id = ResolveDeviceId("", tags, cal, t.sensor);
-    if (!id.ok() || !id.value()) {
-      const Error e = id.ok()
-                          ? MakeError(fmt::format("sensor {}: no device ID in the tags file or "
-                                                  "calibration.json (nothing sent; {} not opened)",
-                                                  t.sensor, c.port))
-                          : id.error().WithContext(fmt::format("sensor {}", t.sensor));
-      apps::PrintErrorText(id.ok() ? e.message : e.ToString() + " (nothing sent)");
-      return apps::ExitCodeFor(e);
-    }
-    PushCliOptions one = c;
-    one.all = false;
-    one.sensor = t.sensor;
-    one.device_id = blob::FormatDeviceId(*id.value());
-    each.push_back(one);
-  }
+  if (int rc = kExitOk; !EveryTagPush(c, tags, cal, &each, &rc)) return rc;
+  PushRegistry registry(c.registry);
   int worst = kExitOk;
   std::string table =
       fmt::format("{:>6}  {:<16}  {:<16}  {}\n", "sensor", "name", "device", "result");
   for (const PushCliOptions& one : each) {
     apps::Note(fmt::format("== sensor {}, device {}\n", one.sensor, one.device_id));
     std::string outcome;
-    const int rc = RunPush(one, &outcome);
+    const int rc = PushTag(one, tags, cal, &registry, &outcome);
     if (outcome.empty()) outcome = rc == kExitUsage ? "refused (see above)" : "failed (see above)";
     worst = std::max(worst, rc);
     // One row per tag: the name is the tags file's data (escaped).

@@ -13,6 +13,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/tag_registry.hpp"
+#include "tags_names.hpp"
 
 namespace metro::calibrate_app {
 
@@ -22,6 +23,26 @@ inline Result<std::optional<TagRegistry>> LoadTagsOption(const std::string& path
   Result<TagRegistry> r = TagRegistry::Load(path);
   if (!r.ok()) return r.error();
   return std::optional<TagRegistry>(std::move(r).value());
+}
+
+// calibration.json and the tags file (--tags, may be empty), the tags' names and device IDs
+// applied to the calibration (apps/tags_names.hpp): a calibration made for another tag (its
+// device ID is not the one the file gives the sensor) is refused before anything is read or
+// written.
+inline Result<Calibration> LoadCalibrationWithTags(const std::string& calibration,
+                                                   const std::string& tags_path,
+                                                   std::optional<TagRegistry>* tags) {
+  Result<Calibration> cal = LoadCalibration(calibration);
+  if (!cal.ok()) return cal;
+  Result<std::optional<TagRegistry>> loaded = LoadTagsOption(tags_path);
+  if (!loaded.ok()) return loaded.error();
+  *tags = std::move(loaded).value();
+  if (*tags) {
+    if (Status s = apps::ApplyTagsToCalibration(**tags, tags_path, &cal.value()); !s.ok()) {
+      return s.error();
+    }
+  }
+  return cal;
 }
 
 // The device ID a command addresses for `sensor`: --device-id when given, else the tags file's,
