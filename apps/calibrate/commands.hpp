@@ -26,6 +26,7 @@ void AddPushCommand(CLI::App& app, int* exit_code);
 void AddRegistryCommand(CLI::App& app, int* exit_code);
 void AddExportCommand(CLI::App& app, int* exit_code);
 void AddImportCommand(CLI::App& app, int* exit_code);
+void AddStationCommand(CLI::App& app, int* exit_code);
 
 // An error about calibration.json `calibration` as printed: at the file:line:column of the
 // value when the library found it there (CalibrationErrorAt), else after the file's name.

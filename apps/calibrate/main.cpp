@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   app_ns::AddRegistryCommand(app, &exit_code);
   app_ns::AddExportCommand(app, &exit_code);
   app_ns::AddImportCommand(app, &exit_code);
+  app_ns::AddStationCommand(app, &exit_code);
   metro::apps::AddVersionFlag(app, "calibrate");
   metro::apps::AddQuietFlag(app);  // On the app and every subcommand (docs/unix.md).
   try {
