@@ -114,6 +114,9 @@ class Pty {
   bool Write(std::string_view text) {
     size_t done = 0;
     while (done < text.size()) {
+      // A signal after part of the text was written returns that count, not EINTR: look at
+      // g_stop before blocking again.
+      if (g_stop) return false;
       const ssize_t n = ::write(master_, text.data() + done, text.size() - done);
       if (n > 0) {
         done += static_cast<size_t>(n);

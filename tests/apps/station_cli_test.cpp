@@ -8,6 +8,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -155,6 +156,42 @@ TEST_CASE("calibrate station over a pseudo-terminal that disappears and returns"
   for (int i = 0; i < 100 && fs::is_symlink(link); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}
+
+// The terminal view (stdout a terminal): driven in tmux, its screen read with capture-pane.
+TEST_CASE("calibrate station draws its view on a terminal (tmux)", "[station][cli]") {
+  if (std::system("command -v tmux >/dev/null 2>&1") != 0) {
+    WARN("tmux not installed: the terminal view is not checked");
+    return;
+  }
+  const fs::path dir = Workdir("tmux");
+  const std::string stream = (dir / "stream.txt").string();
+  REQUIRE(RunProgram(kSimRawTag, "-o " + stream + " --demo --speed 0 --seed 4").exit_code == 0);
+  const std::string server = "-L metro_station_" + std::to_string(::getpid());
+  const std::string station = kCalibrate + " station --port " + stream +
+                              " --format raw --rate-hz 100 --tags " + (dir / "tags.json").string() +
+                              " --sensor 2 -o " + dir.string() +
+                              " --idle-timeout-s 1 2>/dev/null; echo EXIT=$?; sleep 60";
+  REQUIRE(std::system(
+              ("tmux " + server + " new-session -d -s v -x 120 -y 50 '" + station + "'").c_str()) ==
+          0);
+  std::string screen;
+  for (int i = 0; i < 300 && screen.find("EXIT=") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    screen = RunProgram("tmux", server + " capture-pane -p -t v").out;
+  }
+  const std::string colored = RunProgram("tmux", server + " capture-pane -p -e -t v").out;
+  std::system(("tmux " + server + " kill-server").c_str());
+  INFO(screen);
+  CHECK_THAT(screen, Catch::Contains("metro calibration station: six-face protocol, sensor 2"));
+  CHECK_THAT(screen, Catch::Contains("STOPPED: every target met"));
+  CHECK_THAT(screen, Catch::Contains("Coverage: "));
+  CHECK_THAT(screen, Catch::Contains("u (k = 1) against target:"));
+  CHECK_THAT(screen, Catch::Contains("accel.a_yz"));
+  CHECK_THAT(screen, Catch::Contains("EXIT=0"));
+  CHECK_THAT(colored, Catch::Contains("\x1b[32m"));  // Met targets in green.
   std::error_code ec;
   fs::remove_all(dir, ec);
 }
