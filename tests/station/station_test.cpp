@@ -312,3 +312,56 @@ TEST_CASE("Station done-when over 200 simulated operator sessions", "[station][s
   CHECK(short_holds > 0);
   CHECK(knocks > 0);
 }
+
+TEST_CASE("The sphere and Ferraris protocols guide to every target met", "[station]") {
+  for (Protocol p : {Protocol::kSphere, Protocol::kFerraris}) {
+    RawTagOptions to;
+    to.seed = 46;
+    SimulatedRawTag tag(to);
+    StationOptions o = Options();
+    o.protocol = p;
+    Station st(o, "simulated");
+    OperatorScript script;
+    script.seed = 12;
+    const OperatorRun run = RunOperator(script, &tag, &st);
+    INFO(ProtocolName(p));
+    REQUIRE(st.Done());
+    CHECK(st.TargetsMet());
+    CHECK(st.FitCalibration().ok());
+  }
+  // Ferraris names the faces in its fixed order and the turn between them.
+  const auto poses = ProtocolPoses(Protocol::kFerraris);
+  CHECK(poses[0].name == "Z up");
+  CHECK(poses[1].name == "X up");
+  CHECK(TurnInstruction(poses[0].up_body, poses[1].up_body) ==
+        "turn 90 deg about body -Y (right-hand)");
+  std::vector<Eigen::Vector3d> taken = {poses[0].up_body};
+  CHECK(ChooseNextPose(Protocol::kFerraris, poses, taken, 20) == 1);
+}
+
+TEST_CASE("The view shows the next pose, the hold and the coverage", "[station]") {
+  RawTagOptions to;
+  to.seed = 47;
+  SimulatedRawTag tag(to);
+  Station st(Options(), "simulated");
+  std::vector<RawTagSample> buf;
+  OperatorRun run;
+  tag.Hold(2.5, &buf);
+  tag.Move(Eigen::Vector3d::UnitX(), 1.5, &buf);
+  tag.Hold(0.9, &buf);
+  station_test::FeedSamples(buf, &st, &run);
+  const StationView v = st.View();
+  CHECK(v.holding);
+  CHECK(v.held_s > 0.3);
+  CHECK(v.dwell_s >= 1.5);
+  CHECK(v.taken.size() == 1);
+  CHECK(v.next_pose == "Z down");  // The first face not taken (X up is being held).
+  const std::string text = RenderStationView(v, "title", false);
+  CHECK_THAT(text, Catch::Contains("Next pose: Z down"));
+  CHECK_THAT(text, Catch::Contains("s left"));
+  CHECK_THAT(text, Catch::Contains("needs 9 more distinct orientations"));
+  // The map: Z up taken at the north pole, the next pose (Z down) at the south pole.
+  const auto map = CoverageMap(v, 9, 37);
+  CHECK(map.front()[18] == '#');
+  CHECK(map.back()[18] == '@');
+}
