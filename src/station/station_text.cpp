@@ -122,11 +122,10 @@ std::string RenderStationView(const StationView& v, const std::string& title, bo
   }
   int covered = 0;
   for (bool c : v.covered) covered += c ? 1 : 0;
-  out += fmt::format(
-      "\nCoverage: {} poses taken, {} of {} protocol poses covered "
-      "(# taken, @ next, . protocol; rows: elevation of the body's up, +90 .. -90 "
-      "deg; columns: azimuth -180 .. 180 deg)\n",
-      v.taken.size(), covered, v.poses.size());
+  out += fmt::format("\nCoverage: {} poses taken, {} of {} protocol poses covered\n",
+                     v.taken.size(), covered, v.poses.size());
+  out +=
+      "  (the body's up: elevation rows, azimuth -180 .. 180 deg; # taken, @ next, . protocol)\n";
   const std::vector<std::string> map = CoverageMap(v, 9, 37);
   for (size_t r = 0; r < map.size(); ++r) {
     out += fmt::format("  {:+4d} |{}|\n", 90 - static_cast<int>(r) * 180 / 8, map[r]);
