@@ -17,6 +17,7 @@
 #include "push_flags.hpp"
 #include "registry_flags.hpp"
 #include "report_flags.hpp"
+#include "station_flags.hpp"
 
 int main(int argc, char** argv) {
   // SIGINT/SIGTERM remove the temporaries of outputs being written; SIGXFSZ is ignored.
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
   app_ns::AddRegistryCommand(app, &exit_code);
   app_ns::AddExportCommand(app, &exit_code);
   app_ns::AddImportCommand(app, &exit_code);
+  app_ns::AddStationCommand(app, &exit_code);
   metro::apps::AddVersionFlag(app, "calibrate");
   metro::apps::AddQuietFlag(app);  // On the app and every subcommand (docs/unix.md).
   try {

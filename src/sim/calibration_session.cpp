@@ -276,16 +276,10 @@ void Sample(const SimulationOptions& o, const std::vector<Phase>& phases, pcg64*
     temp_c = std::round(temp_c * 340.0) / 340.0;  // MPU6050: 340 LSB/degC.
     const Eigen::Vector3d na = NormalVector(normal, rng);
     const Eigen::Vector3d ng = NormalVector(normal, rng);
-    Eigen::Vector3d ra = out->truth.accel.Invert(f_g + accel_sd_g * na, temp_c);
-    Eigen::Vector3d rg = out->truth.gyro.Invert(w_dps + gyro_sd_dps * ng, temp_c);
     bool sat = false;
-    for (int a = 0; a < 3; ++a) {
-      for (double* v : {&ra[a], &rg[a]}) {
-        *v = std::round(*v);
-        if (*v <= -32768.0 || *v >= 32767.0) sat = true;
-        *v = std::clamp(*v, -32768.0, 32767.0);
-      }
-    }
+    const Eigen::Vector3d ra = TruthToCounts(out->truth.accel, f_g + accel_sd_g * na, temp_c, &sat);
+    const Eigen::Vector3d rg =
+        TruthToCounts(out->truth.gyro, w_dps + gyro_sd_dps * ng, temp_c, &sat);
     out->saturated_samples += sat ? 1 : 0;
     tag->t_s.push_back(t);
     tag->line.push_back(static_cast<uint32_t>(k + 2));
@@ -326,6 +320,17 @@ void AssembleSession(const SimulationOptions& o, Tag tag, SimColumnsData* column
 }
 
 }  // namespace
+
+Eigen::Vector3d TruthToCounts(const SensorModel& truth, const Eigen::Vector3d& value, double temp_c,
+                              bool* saturated) {
+  Eigen::Vector3d raw = truth.Invert(value, temp_c);
+  for (int a = 0; a < 3; ++a) {
+    raw[a] = std::round(raw[a]);
+    if (raw[a] <= -32768.0 || raw[a] >= 32767.0) *saturated = true;
+    raw[a] = std::clamp(raw[a], -32768.0, 32767.0);
+  }
+  return raw;
+}
 
 Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& o) {
   std::string why;

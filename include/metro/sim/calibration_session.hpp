@@ -94,6 +94,12 @@ ImuTruth DrawImuTruth(uint64_t seed, double accel_fs_g, double gyro_fs_dps, bool
 
 Result<SimulatedSession> SimulateCalibrationSession(const SimulationOptions& options);
 
+// One reading through a sensor's truth, as the simulators make it: round(truth.Invert(value,
+// temp_c)) per axis [LSB], clamped to the int16 range; *saturated is set (never cleared) when
+// an axis reached -32768 or 32767. `value` is the true input plus noise (g or deg/s).
+Eigen::Vector3d TruthToCounts(const SensorModel& truth, const Eigen::Vector3d& value, double temp_c,
+                              bool* saturated);
+
 // The truth of a simulated session as JSON text ("metro.calibration-truth/1",
 // docs/simulator.md "Calibration sessions"): the options that shaped the record and, per
 // sensor, the constants the simulation used under calibration.json's keys (`bias` [LSB],
