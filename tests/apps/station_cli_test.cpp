@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "support/run_program.hpp"
+#include "support/sanitizer.hpp"
 
 namespace fs = std::filesystem;
 using metro::testing::RunProgram;
@@ -23,6 +24,9 @@ using metro::testing::RunProgram;
 namespace {
 
 const std::string kCalibrate = METRO_CALIBRATE_EXE;
+// Under the sanitizers the station's live fits run several times slower: its timeouts and the
+// test's waits are stretched, never its checks.
+constexpr int kSlowdown = METRO_UNDER_SANITIZER ? 4 : 1;
 const std::string kSimRawTag = METRO_SIM_RAW_TAG_EXE;
 
 std::string Slurp(const fs::path& p) {
@@ -142,7 +146,8 @@ TEST_CASE("calibrate station over a pseudo-terminal that disappears and returns"
   const auto r =
       RunProgram(kCalibrate, "station --port " + link + " --format raw --rate-hz 100 --tags " +
                                  (dir / "tags.json").string() + " --sensor 2 -o " + dir.string() +
-                                 " --idle-timeout-s 5 --reconnect-s 10");
+                                 " --idle-timeout-s " + std::to_string(5 * kSlowdown) +
+                                 " --reconnect-s " + std::to_string(10 * kSlowdown));
   ::kill(pid, SIGTERM);
   INFO(r.out << r.err << Slurp(sim_out));
   CHECK(r.exit_code == 0);
@@ -178,7 +183,7 @@ TEST_CASE("calibrate station draws its view on a terminal (tmux)", "[station][cl
               ("tmux " + server + " new-session -d -s v -x 120 -y 50 '" + station + "'").c_str()) ==
           0);
   std::string screen;
-  for (int i = 0; i < 300 && screen.find("EXIT=") == std::string::npos; ++i) {
+  for (int i = 0; i < 300 * kSlowdown && screen.find("EXIT=") == std::string::npos; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     screen = RunProgram("tmux", server + " capture-pane -p -t v").out;
   }
