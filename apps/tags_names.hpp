@@ -21,21 +21,6 @@
 
 namespace metro::apps {
 
-// The format a calibration's tags are named for (IsThesisTagFormat): a thesis tags' format
-// when any record is one or does not say (files written before metro recorded it), otherwise
-// the first record's (a calibration fitted only from other tools' files: imu_tk, EuRoC, ...).
-inline SessionFormat CalibrationRecordsFormat(const Calibration& cal) {
-  SessionFormat records = SessionFormat::kCsv;
-  for (size_t i = 0; i < cal.inputs.size(); ++i) {
-    SessionFormat f = SessionFormat::kCsv;
-    if (!ParseSessionFormat(cal.inputs[i].format, &f) || IsThesisTagFormat(f)) {
-      return SessionFormat::kCsv;
-    }
-    if (i == 0) records = f;
-  }
-  return records;
-}
-
 // Gives each tag of `cal` the tags file's name, its profile when the file names one, and its
 // device ID where calibration.json records none. A calibration fitted only from other tools'
 // files is not a thesis tag's: a default body-part name does not apply to it, and its tags keep

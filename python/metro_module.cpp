@@ -39,10 +39,12 @@
 #include "metro/calibration/imu_model.hpp"
 #include "metro/core/cancel.hpp"
 #include "metro/core/status.hpp"
+#include "metro/core/utc_time.hpp"
 #include "metro/core/version.hpp"
 #include "metro/io/columns.hpp"
 #include "metro/io/session.hpp"
 #include "metro/io/session_io.hpp"
+#include "metro/io/tag_registry.hpp"
 #include "metro/noise/allan.hpp"
 #include "metro/noise/allan_report.hpp"
 #include "metro/noise/noise_model.hpp"
@@ -231,6 +233,13 @@ py::object JsonLoads(const std::string& text) {
   return py::module_::import("json").attr("loads")(text);
 }
 
+// What the CLI prints as a warning, as RuntimeWarnings.
+void IssueWarnings(const std::vector<std::string>& lines) {
+  py::object warn = py::module_::import("warnings").attr("warn");
+  for (const std::string& line : lines)
+    warn(line, py::module_::import("builtins").attr("RuntimeWarning"), 2);
+}
+
 // --- Sessions -------------------------------------------------------------------------------
 
 using SessionPtr = std::shared_ptr<const Session>;
@@ -364,6 +373,11 @@ SessionPtr SessionFromArrays(py::handle t_obj, const py::dict& columns, int sens
   session->input.time_source = "t_s";
   session->input.header_line = 1;
   session->input.header_names = session->columns;
+  // yaw_deg, pitch_deg, roll_deg from qw..qz, as the loaders derive them.
+  if (std::string w = DeriveEulerIfAbsent(&tag); !w.empty()) {
+    session->input.warnings.push_back(w);
+    IssueWarnings({w});
+  }
   session->tags.push_back(std::move(tag));
   return session;
 }
@@ -413,12 +427,6 @@ py::dict NoiseTerms(const AllanReport& r) {
     d[py::str(NoiseTermKey(static_cast<NoiseTerm>(i)))] = r.noise[i];
   }
   return d;
-}
-
-void IssueWarnings(const std::vector<std::string>& lines) {
-  py::object warn = py::module_::import("warnings").attr("warn");
-  for (const std::string& line : lines)
-    warn(line, py::module_::import("builtins").attr("RuntimeWarning"), 2);
 }
 
 SessionAnalysisOptions MakeAnalysisOptions(
@@ -536,11 +544,12 @@ PyBudget EvaluateBudgetFrom(py::handle source) {
 
 // --- Calibration, blob, registry ------------------------------------------------------------
 
-// The sessions of `source`: a path, a metro.Session, or a list of them (loaded as the CLI
-// loads SESSION arguments, with the default options).
+// The sessions of `source`: a path, a metro.Session, an (ACC, GYRO) tuple of imu_tk files, or
+// a list of them (loaded as the CLI loads SESSION arguments and --imutk pairs, with the default
+// options).
 std::vector<SessionPtr> SessionsOf(py::handle source) {
   std::vector<py::object> items;
-  if (py::isinstance<py::list>(source) || py::isinstance<py::tuple>(source)) {
+  if (py::isinstance<py::list>(source)) {
     items = source.cast<std::vector<py::object>>();
   } else {
     items.push_back(py::reinterpret_borrow<py::object>(source));
@@ -549,6 +558,15 @@ std::vector<SessionPtr> SessionsOf(py::handle source) {
   for (const py::object& item : items) {
     if (py::isinstance<Session>(item)) {
       out.push_back(item.cast<std::shared_ptr<Session>>());
+    } else if (py::isinstance<py::tuple>(item)) {
+      const auto files = item.cast<std::vector<py::object>>();
+      if (files.size() != 2) {
+        throw py::value_error("sessions: a tuple of " + std::to_string(files.size()) +
+                              " items; an imu_tk input is (ACC, GYRO), two files");
+      }
+      const std::string acc = PathText(files[0]), gyro = PathText(files[1]);
+      out.push_back(
+          std::make_shared<Session>(Value(RunReleased([&] { return LoadImuTk(acc, gyro); }))));
     } else {
       const std::string path = PathText(item);
       out.push_back(std::make_shared<Session>(
@@ -570,28 +588,76 @@ Calibration CalibrationOf(py::handle source) {
   return Value(LoadCalibration(path));
 }
 
-PyCalibration Fit(py::handle sessions, const std::string& model, int sensor) {
+// A model keyword (model, accel_model, gyro_model) as `calibrate fit` takes it.
+ModelKind ModelKindOf(const std::string& arg, const std::string& value, const char* expected) {
+  const std::optional<ModelKind> kind = ParseModelKind(value);
+  if (!kind) Raise(MakeError(arg + "=" + value + ": expected " + expected));
+  return *kind;
+}
+
+// `calibrate fit`'s options from the keywords, as fit_flags.hpp maps the flags: `model` sets
+// both sensors' model unless accel_model / gyro_model names its own; accel_model "none" fits
+// no accelerometer (the gyroscope's bias at rest, with gyro_model "bias").
+CalibrationOptions FitOptionsOf(const std::string& model, int sensor,
+                                const std::optional<std::string>& accel_model,
+                                const std::optional<std::string>& gyro_model,
+                                const std::string& loss, double loss_scale, bool accel_only,
+                                std::optional<double> min_static_s) {
+  CalibrationOptions options;
+  options.compare_models = true;  // `calibrate fit` always compares the model ladder.
+  options.accel_auto = options.gyro_auto = model == "auto";
+  if (model != "auto") {
+    options.accel_model = options.gyro_model =
+        ModelKindOf("model", model, "auto, bias, scale or full");
+  }
+  if (accel_model) {
+    options.accel_auto = *accel_model == "auto";
+    if (*accel_model == "none") {
+      options.fit_accel = false;
+    } else if (*accel_model != "auto") {
+      options.accel_model =
+          ModelKindOf("accel_model", *accel_model, "auto, bias, scale, full or none");
+    }
+  }
+  if (gyro_model) {
+    options.gyro_auto = *gyro_model == "auto";
+    if (*gyro_model != "auto") {
+      options.gyro_model = ModelKindOf("gyro_model", *gyro_model, "auto, bias, scale or full");
+    }
+  }
+  const std::optional<LossKind> loss_kind = ParseLossKind(loss);
+  if (!loss_kind) Raise(MakeError("loss=" + loss + ": expected none, huber or cauchy"));
+  options.loss = *loss_kind;
+  options.loss_scale = loss_scale;
+  if (accel_only) options.fit_gyro = false;
+  if (min_static_s) options.segmentation.min_static_s = *min_static_s;
+  options.sensor = sensor;
+  return options;
+}
+
+PyCalibration Fit(py::handle sessions, const std::string& model, int sensor,
+                  const std::optional<std::string>& accel_model,
+                  const std::optional<std::string>& gyro_model, py::handle segments,
+                  const std::string& loss, double loss_scale, bool accel_only,
+                  std::optional<double> min_static_s, py::handle tags) {
+  const CalibrationOptions options =
+      Value(ResolveFitOptions(FitOptionsOf(model, sensor, accel_model, gyro_model, loss, loss_scale,
+                                           accel_only, min_static_s),
+                              segments.is_none() ? "" : PathText(segments)));
+  const std::optional<TagRegistry> tag_file =
+      tags.is_none() ? std::nullopt
+                     : std::optional<TagRegistry>(Value(TagRegistry::Load(PathText(tags))));
   const std::vector<SessionPtr> loaded = SessionsOf(sessions);
   std::vector<const Session*> ptrs;
   for (const SessionPtr& s : loaded) ptrs.push_back(s.get());
-  // `calibrate fit`'s defaults: --model auto, and the model ladder always compared.
-  CalibrationOptions options;
-  options.compare_models = true;
-  options.accel_auto = options.gyro_auto = model == "auto";
-  if (model != "auto") {
-    const std::optional<ModelKind> kind = ParseModelKind(model);
-    if (!kind) Raise(MakeError("model=" + model + ": expected auto, bias, scale or full"));
-    options.accel_model = options.gyro_model = *kind;
-  }
-  options.sensor = sensor;
-  std::string why;
-  if (!options.IsValid(&why)) Raise(MakeError(why));
   // Missing columns are bad input, named with the file before any fitting (as `calibrate fit`).
   Result<Calibration> cal = RunReleased([&]() -> Result<Calibration> {
     if (Status c = CheckCalibrationColumns(ptrs, options); !c.ok()) return c.error();
     return CalibrateSessions(ptrs, options);
   });
-  return PyCalibration{Value(std::move(cal))};
+  PyCalibration out{Value(std::move(cal))};
+  if (tag_file) NameFittedTags(*tag_file, &out.calibration);
+  return out;
 }
 
 std::shared_ptr<Session> Apply(py::handle session, py::handle calibration,
@@ -959,10 +1025,17 @@ void AddCalibration(py::module_& m) {
       "load", [](py::handle path) { return PyCalibration{CalibrationOf(path)}; }, py::arg("path"),
       "reads a calibration.json");
   calibrate.def("fit", &Fit, py::arg("sessions"), py::kw_only(), py::arg("model") = "auto",
-                py::arg("sensor") = 0,
-                "Fits every tag (or `sensor`) of the calibration session(s) (paths or "
-                "metro.Session), as `calibrate fit SESSION... [--model M] [--sensor N] -o "
-                "calibration.json` with its other options at their defaults");
+                py::arg("sensor") = 0, py::arg("accel_model") = py::none(),
+                py::arg("gyro_model") = py::none(), py::arg("segments") = py::none(),
+                py::arg("loss") = "none", py::arg("loss_scale") = 3.0,
+                py::arg("accel_only") = false, py::arg("min_static_s") = py::none(),
+                py::arg("tags") = py::none(),
+                "Fits every tag (or `sensor`) of the calibration session(s) (paths, "
+                "metro.Session, (ACC, GYRO) imu_tk pairs, or a list of them), as `calibrate fit "
+                "SESSION... -o calibration.json` with the flags --model, --sensor, "
+                "--accel-model (auto|bias|scale|full|none), --gyro-model, --segments FILE, "
+                "--loss (none|huber|cauchy), --loss-scale, --accel-only, --min-static-s, "
+                "--tags FILE and --imutk (the pairs)");
   calibrate.def("apply", &Apply, py::arg("session"), py::arg("calibration"), py::kw_only(),
                 py::arg("t_valid_min_c") = py::none(), py::arg("t_valid_max_c") = py::none(),
                 "A new session with the calibration applied, as `calibrate apply`");
@@ -1007,6 +1080,61 @@ void AddCalibration(py::module_& m) {
           py::arg("device_id"),
           "A device's calibrations, blobs and pushes: the dict `calibrate registry history "
           "--device-id ID --json` prints")
+      .def(
+          "drift",
+          [](PyRegistry& r, py::handle device_id) {
+            const uint64_t id = DeviceIdOf(device_id);
+            Registry& reg = r.Get();
+            const DriftResult d = Value(RunReleased([&] { return reg.Drift(id); }));
+            if (d.shared_inputs) {
+              IssueWarnings(
+                  {"the two calibrations share an input record (same SHA-256): their covariance "
+                   "is not 0, so u_change is overstated and |E_n| understated"});
+            }
+            return JsonLoads(ToJson(d));
+          },
+          py::arg("device_id"),
+          "The change of every constant between a device's last two calibrations: the dict "
+          "`calibrate registry drift --device-id ID --json` prints")
+      .def(
+          "due",
+          [](PyRegistry& r, double interval_days, std::optional<std::string> at_utc, bool all) {
+            if (!(interval_days > 0) || !std::isfinite(interval_days)) {
+              Raise(MakeError(
+                  "interval_days=" + py::str(py::float_(interval_days)).cast<std::string>() +
+                  ": expected a number > 0"));
+            }
+            const std::string now = at_utc ? *at_utc : UtcIso8601Now();
+            if (!ParseUtcIso8601(now)) {
+              Raise(MakeError("at_utc='" + now +
+                              "': expected ISO 8601 UTC, e.g. 2026-05-01T12:00:00Z"));
+            }
+            Registry& reg = r.Get();
+            Result<std::vector<DueDevice>> due =
+                RunReleased([&] { return reg.Due(interval_days, now, all); });
+            if (!due.ok()) Raise(due.error().WithKind(ErrorKind::kFailed));
+            return JsonLoads(DueToJson(now, interval_days, due.value()));
+          },
+          py::arg("interval_days") = kDefaultRecalibrationIntervalDays,
+          py::arg("at_utc") = py::none(), py::arg("all") = false,
+          "The devices due for recalibration at at_utc (ISO 8601; None: now), all=True every "
+          "device with its due date: the dict `calibrate registry due --interval-days D [--at "
+          "T] [--all] --json` prints")
+      .def(
+          "export",
+          [](PyRegistry& r, const std::string& format) -> py::object {
+            if (format != "csv" && format != "json") {
+              Raise(MakeError("format=" + format + ": expected csv or json"));
+            }
+            Registry& reg = r.Get();
+            Result<std::vector<RegistryCalibration>> all = RunReleased([&] { return reg.All(); });
+            if (!all.ok()) Raise(all.error().WithKind(ErrorKind::kFailed));
+            if (format == "json") return JsonLoads(ExportToJson(reg.schema_version(), all.value()));
+            return py::str(ExportToCsv(all.value()));
+          },
+          py::arg("format") = "csv",
+          "Every calibration: the CSV text (str) `calibrate registry export` writes, or for "
+          "format=\"json\" the dict of `calibrate registry export --format json`")
       .def("close", [](PyRegistry& r) { r.registry.reset(); })
       .def_property_readonly("closed", [](const PyRegistry& r) { return !r.registry; })
       .def("__enter__", [](py::object self) { return self; })

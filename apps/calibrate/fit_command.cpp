@@ -19,7 +19,6 @@
 #include "metro/report/certificate.hpp"
 #include "registry_hooks.hpp"
 #include "tags_cli.hpp"
-#include "tags_names.hpp"
 #include "unix_cli.hpp"
 
 namespace metro::calibrate_app {
@@ -89,36 +88,6 @@ int RunThermalFit(const FitOptions& f) {
   return kExitOk;
 }
 
-// The fit's options as the library takes them, checked: --accel-model none with what it
-// allows, --segments read, the options' own consistency. Errors are usage errors (exit 2).
-Result<CalibrationOptions> FitCalibrationOptions(const FitOptions& f) {
-  CalibrationOptions o = f.calibration;
-  const bool accel_none = !o.fit_accel;
-  if (accel_none && !o.fit_gyro) {
-    return MakeError("--accel-model none and --accel-only leave nothing to calibrate");
-  }
-  if (accel_none && (o.gyro_model != ModelKind::kBias || o.gyro_auto)) {
-    return MakeError(
-        "--accel-model none evaluates the gyroscope's bias at rest from one static record: give "
-        "--gyro-model bias (a scale or misalignment needs poses, rotations and the "
-        "accelerometer)");
-  }
-  if (accel_none && !f.segments.empty()) {
-    return MakeError(
-        "--segments does not apply to --accel-model none (the whole record is "
-        "the static pose)");
-  }
-  if (!f.segments.empty()) {
-    Result<std::vector<AnnotatedSegment>> given = ReadSegmentsFile(f.segments);
-    if (!given.ok()) return given.error();
-    o.annotated_segments = std::move(given).value();
-    o.segments_path = f.segments;
-  }
-  std::string why;
-  if (!o.IsValid(&why)) return MakeError(why);
-  return o;
-}
-
 // The inputs and outputs, checked before anything is read: imu_tk pairs, stdin read once, no
 // certificate to stdout, no output that names an input or the registry's files.
 Status CheckFitFiles(const FitOptions& f) {
@@ -155,19 +124,6 @@ Result<std::vector<Session>> LoadFitSessions(const FitOptions& f, TerminalProgre
     sessions.push_back(std::move(s).value());
   }
   return sessions;
-}
-
-// calibration.json carries each tag's device ID, name and profile from the tags file (a
-// default body-part name only for the thesis tags' own records: none for other tools').
-void NameTags(const std::optional<TagRegistry>& tags, Calibration* cal) {
-  const bool thesis_records = IsThesisTagFormat(apps::CalibrationRecordsFormat(*cal));
-  for (TagCalibration& t : cal->tags) {
-    const TagEntry* entry = tags ? tags->Find(t.sensor) : nullptr;
-    if (entry == nullptr) continue;
-    t.device_id = entry->device_id;
-    if (thesis_records || !entry->thesis_default) t.name = entry->name;
-    t.profile = entry->profile;
-  }
 }
 
 // The certificate of --html. Constants marked model_rejected are not certified without
@@ -257,7 +213,7 @@ Result<Calibration> Fit(const FitOptions& f, const CalibrationOptions& o) {
 
 int RunFit(const FitOptions& f) {
   if (f.thermal) return RunThermalFit(f);
-  Result<CalibrationOptions> o = FitCalibrationOptions(f);
+  Result<CalibrationOptions> o = ResolveFitOptions(f.calibration, f.segments);
   if (!o.ok()) return apps::PrintErrorExit(o.error());
   if (Status s = CheckFitFiles(f); !s.ok()) return apps::PrintErrorExit(s.error());
   Result<std::optional<TagRegistry>> tags = LoadTagsOption(f.tags);
@@ -268,7 +224,7 @@ int RunFit(const FitOptions& f) {
   if (registry.exit_code != 0) return registry.exit_code;
   Result<Calibration> cal = Fit(f, o.value());
   if (!cal.ok()) return apps::PrintErrorExit(cal.error());
-  NameTags(tags.value(), &cal.value());
+  if (tags.value()) NameFittedTags(*tags.value(), &cal.value());
   if (int rc = ApplySpec(spec.spec, &cal.value()); rc != kExitOk) return rc;
   Result<std::string> html = f.html.empty() ? std::string() : FitCertificate(cal.value(), f);
   if (!html.ok()) return apps::PrintErrorExit(html.error());

@@ -36,17 +36,6 @@ Result<uint64_t> DeviceId(const std::string& text) {
   return id;
 }
 
-// One CSV row per record and line: a field's control characters are escaped (a newline in a
-// station name is written as \n; the JSON export keeps the text exactly), then the field is
-// quoted when it holds a comma or a quote.
-std::string Csv(const std::string& data) {
-  const std::string field = EscapeControlChars(data);
-  if (field.find_first_of(",\"") == std::string::npos) return field;
-  std::string out = "\"";
-  for (char c : field) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
-
 // Prints `e` and returns its exit code (apps::ExitCodeFor).
 int Fail(const Error& e) { return apps::PrintErrorExit(e); }
 
@@ -169,20 +158,7 @@ int RunRegistryExport(const RegistryQueryOptions& o) {
   if (o.format == "json") {
     text = ExportToJson(r.value()->schema_version(), all.value()) + "\n";
   } else {
-    // One row per constant of each calibration (docs/registry.md "Export").
-    text =
-        "registry_id,certificate_id,sensor,date_utc,recorded_utc,station,operator,devices,"
-        "constant,value,u,unit\n";
-    for (const RegistryCalibration& c : all.value()) {
-      std::string devices;
-      for (uint64_t d : c.devices)
-        devices += (devices.empty() ? "" : " ") + blob::FormatDeviceId(d);
-      for (const RegistryConstant& k : c.constants) {
-        text += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{}\n", c.id, Csv(c.certificate_id),
-                            c.sensor, Csv(c.date_utc), Csv(c.recorded_utc), Csv(c.station),
-                            Csv(c.operator_name), devices, Csv(k.name), k.value, k.u, Csv(k.unit));
-      }
-    }
+    text = ExportToCsv(all.value());
   }
   if (Status w = apps::WriteOutput(o.output, text); !w.ok()) return Fail(w.error());
   return kExitOk;

@@ -792,4 +792,32 @@ Result<Calibration> CalibrateSessions(const std::vector<const Session*>& session
   return cal;
 }
 
+Result<CalibrationOptions> ResolveFitOptions(CalibrationOptions o,
+                                             const std::string& segments_path) {
+  const bool accel_none = !o.fit_accel;
+  if (accel_none && !o.fit_gyro) {
+    return MakeError("--accel-model none and --accel-only leave nothing to calibrate");
+  }
+  if (accel_none && (o.gyro_model != ModelKind::kBias || o.gyro_auto)) {
+    return MakeError(
+        "--accel-model none evaluates the gyroscope's bias at rest from one static record: give "
+        "--gyro-model bias (a scale or misalignment needs poses, rotations and the "
+        "accelerometer)");
+  }
+  if (accel_none && !segments_path.empty()) {
+    return MakeError(
+        "--segments does not apply to --accel-model none (the whole record is "
+        "the static pose)");
+  }
+  if (!segments_path.empty()) {
+    Result<std::vector<AnnotatedSegment>> given = ReadSegmentsFile(segments_path);
+    if (!given.ok()) return given.error();
+    o.annotated_segments = std::move(given).value();
+    o.segments_path = segments_path;
+  }
+  std::string why;
+  if (!o.IsValid(&why)) return MakeError(why);
+  return o;
+}
+
 }  // namespace metro

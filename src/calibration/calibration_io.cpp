@@ -478,4 +478,27 @@ Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* s
   return summary;
 }
 
+SessionFormat CalibrationRecordsFormat(const Calibration& cal) {
+  SessionFormat records = SessionFormat::kCsv;
+  for (size_t i = 0; i < cal.inputs.size(); ++i) {
+    SessionFormat f = SessionFormat::kCsv;
+    if (!ParseSessionFormat(cal.inputs[i].format, &f) || IsThesisTagFormat(f)) {
+      return SessionFormat::kCsv;
+    }
+    if (i == 0) records = f;
+  }
+  return records;
+}
+
+void NameFittedTags(const TagRegistry& tags, Calibration* cal) {
+  const bool thesis_records = IsThesisTagFormat(CalibrationRecordsFormat(*cal));
+  for (TagCalibration& t : cal->tags) {
+    const TagEntry* entry = tags.Find(t.sensor);
+    if (entry == nullptr) continue;
+    t.device_id = entry->device_id;
+    if (thesis_records || !entry->thesis_default) t.name = entry->name;
+    t.profile = entry->profile;
+  }
+}
+
 }  // namespace metro

@@ -266,6 +266,8 @@ void AddTextOrUnknownColumn(const std::string& name, bool unknown, const std::st
   tag->text_columns.push_back(TextColumn{name, std::move(values)});
 }
 
+}  // namespace internal
+
 std::string DeriveEulerIfAbsent(Tag* tag) {
   const Quantity* qw = tag->Find("qw");
   const Quantity* qx = tag->Find("qx");
@@ -307,8 +309,6 @@ std::string DeriveEulerIfAbsent(Tag* tag) {
       "the quaternions' scale (raw Q30 counts?)",
       tag->sensor, off, n, kNormTolerance, min_norm, max_norm);
 }
-
-}  // namespace internal
 
 namespace {
 
@@ -437,7 +437,7 @@ Result<Session> LoadSessionOrThrow(const std::string& path, const LoadOptions& o
   Session out = std::move(session).value();
   if (options.derive_euler) {
     for (Tag& tag : out.tags) {
-      if (std::string w = internal::DeriveEulerIfAbsent(&tag); !w.empty()) {
+      if (std::string w = DeriveEulerIfAbsent(&tag); !w.empty()) {
         out.input.warnings.push_back(std::move(w));
       }
     }

@@ -41,12 +41,6 @@ Result<Session> LoadRosSession(const std::string& path, SessionFormat format,
 void AddTextOrUnknownColumn(const std::string& name, bool unknown, const std::string& unit,
                             std::vector<std::string> values, Tag* tag);
 
-// Adds yaw_deg, pitch_deg, roll_deg (origin kDerived) from qw..qz when the tag has the
-// quaternion and none of the three angles.
-// Returns a warning when a quaternion's norm is more than 1 % from 1 (the angles, which do
-// not depend on the norm, are still derived), else "".
-std::string DeriveEulerIfAbsent(Tag* tag);
-
 // Tag::line keeps source lines as uint32_t: the error for a line beyond that, from every
 // loader (a file of more than 4,294,967,295 lines, some 40 GB at least).
 constexpr int64_t kMaxLineNumber = UINT32_MAX;

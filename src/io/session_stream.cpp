@@ -99,7 +99,7 @@ Result<Session> StreamFile(const std::string& path, const LoadOptions& options,
   const auto derive = [&](Session& group) {
     if (options.derive_euler) {
       for (Tag& tag : group.tags) {
-        std::string w = internal::DeriveEulerIfAbsent(&tag);
+        std::string w = DeriveEulerIfAbsent(&tag);
         if (!w.empty() && euler_warnings.count(tag.sensor) == 0) {
           euler_warnings[tag.sensor] = fmt::format(
               "{} (in the group of rows from line {}, streaming mode)", w, tag.line.front());

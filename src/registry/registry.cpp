@@ -19,6 +19,7 @@
 #include "metro/calibration/calibration_io.hpp"
 #include "metro/calibration/named_constants.hpp"
 #include "metro/core/file.hpp"
+#include "metro/core/terminal_text.hpp"
 #include "metro/core/utc_time.hpp"
 #include "schema.hpp"
 #include "sql_backend.hpp"
@@ -796,6 +797,35 @@ std::string DueToJson(const std::string& at_utc, double interval_days,
                             {"due", d.overdue_days > 0}});
   }
   return JsonText(j, 2);
+}
+
+namespace {
+
+std::string CsvField(const std::string& data) {
+  const std::string field = EscapeControlChars(data);
+  if (field.find_first_of(",\"") == std::string::npos) return field;
+  std::string out = "\"";
+  for (char c : field) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+}  // namespace
+
+std::string ExportToCsv(const std::vector<RegistryCalibration>& all) {
+  std::string text =
+      "registry_id,certificate_id,sensor,date_utc,recorded_utc,station,operator,devices,"
+      "constant,value,u,unit\n";
+  for (const RegistryCalibration& c : all) {
+    std::string devices;
+    for (uint64_t d : c.devices) devices += (devices.empty() ? "" : " ") + blob::FormatDeviceId(d);
+    for (const RegistryConstant& k : c.constants) {
+      text += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{}\n", c.id, CsvField(c.certificate_id),
+                          c.sensor, CsvField(c.date_utc), CsvField(c.recorded_utc),
+                          CsvField(c.station), CsvField(c.operator_name), devices, CsvField(k.name),
+                          k.value, k.u, CsvField(k.unit));
+    }
+  }
+  return text;
 }
 
 }  // namespace metro

@@ -181,6 +181,41 @@ def test_from_arrays_equals_loaded_session():
         assert a[name]["type_a"] == b[name]["type_a"], name
 
 
+def test_from_arrays_derives_euler_as_the_loaders(tmp_path):
+    # Quaternions (w, x, y, z) of known z-y-x angles, q = q_z(yaw) q_y(pitch) q_x(roll)
+    # (include/metro/core/angles.hpp, thesis eq. 4.41), in closed form.
+    rng = np.random.default_rng(7)
+    n = 50
+    yaw, pitch, roll = rng.uniform(-170, 170, n), rng.uniform(-80, 80, n), rng.uniform(-170, 170, n)
+    cy, sy = np.cos(np.radians(yaw) / 2), np.sin(np.radians(yaw) / 2)
+    cp, sp = np.cos(np.radians(pitch) / 2), np.sin(np.radians(pitch) / 2)
+    cr, sr = np.cos(np.radians(roll) / 2), np.sin(np.radians(roll) / 2)
+    q = {"qw": cr * cp * cy + sr * sp * sy, "qx": sr * cp * cy - cr * sp * sy,
+         "qy": cr * sp * cy + sr * cp * sy, "qz": cr * cp * sy - sr * sp * cy}
+    t = np.arange(n) * 0.01
+    built = metro.Session.from_arrays(t, {**q, "gx_dps": rng.normal(size=n)}).tag()
+    for name, truth in [("yaw_deg", yaw), ("pitch_deg", pitch), ("roll_deg", roll)]:
+        assert built.units[name] == "deg"
+        np.testing.assert_allclose(built[name], truth, atol=1e-9)
+    # The same rows as a session.csv: metro.load derives the same angles, bit for bit.
+    path = tmp_path / "q.csv"
+    rows = ["t_s,sensor,qw,qx,qy,qz,gx_dps"] + [
+        ",".join(repr(float(v)) if k != 1 else "1" for k, v in enumerate(
+            [t[i], 1, q["qw"][i], q["qx"][i], q["qy"][i], q["qz"][i], built["gx_dps"][i]]))
+        for i in range(n)]
+    path.write_text("\n".join(rows) + "\n")
+    loaded = metro.load(path).tag()
+    assert list(loaded.quantities) == list(built.quantities)
+    for name in ["yaw_deg", "pitch_deg", "roll_deg"]:
+        assert np.array_equal(loaded[name], built[name]), name
+    # Given angles are kept; quaternions far from unit norm are derived with the loaders' warning.
+    given = metro.Session.from_arrays(t, {**q, "yaw_deg": np.zeros(n)}).tag()
+    assert "pitch_deg" not in given.quantities and not given["yaw_deg"].any()
+    with pytest.warns(RuntimeWarning, match="50 of 50 quaternions have a norm more than"):
+        scaled = metro.Session.from_arrays(t, {k: 2 * v for k, v in q.items()}).tag()
+    np.testing.assert_allclose(scaled["yaw_deg"], yaw, atol=1e-9)
+
+
 # --- Bad input --------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("bad, what", [

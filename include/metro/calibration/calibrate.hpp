@@ -327,6 +327,14 @@ struct Calibration {
 Status CheckCalibrationColumns(const std::vector<const Session*>& sessions,
                                const CalibrationOptions& options);
 
+// The options of a `calibrate fit` (and metro.calibrate.fit) made whole and checked: with
+// fit_accel false (`--accel-model none`) only gyro_model kBias without auto and no segments
+// file (the whole record is the static pose); the annotated segments read from
+// `segments_path` when not empty (ReadSegmentsFile); then IsValid. Errors are input errors
+// (`calibrate fit` exits 2); the model and segments messages name the flags.
+Result<CalibrationOptions> ResolveFitOptions(CalibrationOptions options,
+                                             const std::string& segments_path);
+
 // Calibrates one tag from one or more records of it (e.g. a static multi-pose session and a
 // rotation-table session). Errors say what to collect.
 Result<TagCalibration> CalibrateTag(const std::vector<const Tag*>& records,

@@ -11,6 +11,7 @@
 #include "metro/calibration/calibrate.hpp"
 #include "metro/core/status.hpp"
 #include "metro/io/session.hpp"
+#include "metro/io/tag_registry.hpp"
 
 namespace metro {
 
@@ -177,5 +178,15 @@ struct ApplySummary {
 // temp_c column.
 Result<ApplySummary> ApplyCalibration(const Calibration& calibration, Session* session,
                                       const ApplyCalibrationOptions& options = {});
+
+// The format a calibration's tags are named for (IsThesisTagFormat): a thesis tags' format
+// when any record is one or does not say (files written before metro recorded it), otherwise
+// the first record's (a calibration fitted only from other tools' files: imu_tk, EuRoC, ...).
+SessionFormat CalibrationRecordsFormat(const Calibration& cal);
+
+// A fit's tags named from the tags file (`calibrate fit --tags FILE`): each tag the file has an
+// entry for gets the entry's device ID and profile, and its name where the name applies (a
+// default body-part name only for the thesis tags' own records, CalibrationRecordsFormat).
+void NameFittedTags(const TagRegistry& tags, Calibration* cal);
 
 }  // namespace metro

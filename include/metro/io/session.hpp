@@ -151,6 +151,12 @@ struct Tag {
   void KeepRows(size_t begin, size_t end);
 };
 
+// Adds yaw_deg, pitch_deg, roll_deg (origin kDerived) from qw..qz when the tag has the
+// quaternion and none of the three angles, as every loader does (LoadOptions::derive_euler).
+// Returns a warning when a quaternion's norm is more than 1 % from 1 (the angles, which do
+// not depend on the norm, are still derived), else "".
+std::string DeriveEulerIfAbsent(Tag* tag);
+
 struct Session {
   std::string path;    // As given by the user.
   std::string sha256;  // Of the file's bytes (of both files for imu_tk input, "a+b").

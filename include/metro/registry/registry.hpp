@@ -186,5 +186,11 @@ std::string ExportToJson(int schema_version, const std::vector<RegistryCalibrati
 std::string ToJson(const DriftResult& drift);
 std::string DueToJson(const std::string& at_utc, double interval_days,
                       const std::vector<DueDevice>& due);
+// `export --format csv` (docs/registry.md "Export"): a header, then one row per constant of each
+// calibration: registry_id,certificate_id,sensor,date_utc,recorded_utc,station,operator,
+// devices,constant,value,u,unit. A text field's control characters are escaped (a newline in a
+// station name is written as \n; the JSON export keeps the text exactly), then the field is
+// quoted when it holds a comma or a quote; devices are space-separated.
+std::string ExportToCsv(const std::vector<RegistryCalibration>& all);
 
 }  // namespace metro
