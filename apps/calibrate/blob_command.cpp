@@ -24,26 +24,6 @@
 namespace metro::calibrate_app {
 namespace {
 
-// "0x3B000" or "241664" -> address; a page-aligned slot A whose slot B (the next page) lies
-// in the nRF51's 256 KiB of flash.
-Result<uint32_t> ParseSlotAddress(const std::string& text) {
-  size_t used = 0;
-  unsigned long long v = 0;
-  try {
-    v = std::stoull(text, &used, 0);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || text.empty() || v % blob::kPageSize != 0 ||
-      v + 2 * blob::kPageSize > 0x40000) {
-    return MakeError(fmt::format(
-        "--slot-address '{}': expected a multiple of 0x400 below 0x3F800 (slot B is the next "
-        "page)",
-        text));
-  }
-  return static_cast<uint32_t>(v);
-}
-
 int RunBlobAll(const BlobOptions& b);
 
 // The chip the blob is bound to (docs/calibration-blob.md 1.1): --device-id, else the tags

@@ -38,22 +38,6 @@ Result<std::optional<uint64_t>> InspectDevice(const InspectCliOptions& c,
   return resolved;
 }
 
-// --slot-address: slot A's page (slot B is the next), both below the 256 KiB flash's end.
-Result<uint32_t> InspectSlotAddress(const InspectCliOptions& c) {
-  size_t used = 0;
-  unsigned long long a = 0;
-  try {
-    a = std::stoull(c.slot_address, &used, 0);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != c.slot_address.size() || a + 2 * blob::kPageSize > 0x40000) {
-    return MakeError(
-        fmt::format("--slot-address '{}': expected an address below 0x3F800", c.slot_address));
-  }
-  return static_cast<uint32_t>(a);
-}
-
 // Which tag of the fleet each valid blob is for (a note), or a warning when none. One line
 // each: the tag's name and the file's are data (escaped).
 void NoteFleetTags(const blob::InspectReport& report, const TagRegistry& tags,
@@ -82,7 +66,7 @@ int RunInspect(const InspectCliOptions& c) {
   if (!tags.ok()) return apps::PrintErrorExit(tags.error());
   Result<std::optional<uint64_t>> device = InspectDevice(c, tags.value());
   if (!device.ok()) return apps::PrintErrorExit(device.error());
-  Result<uint32_t> slot_a = InspectSlotAddress(c);
+  Result<uint32_t> slot_a = ParseSlotAddress(c.slot_address);
   if (!slot_a.ok()) return apps::PrintErrorExit(slot_a.error());
   blob::InspectOptions o;
   o.device_id = device.value();
